@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages scanplan needs (only the missing ones), then configures and
+# builds Release into build/. Idempotent: quiet when everything is already there.
+set -euo pipefail
+cd "$(dirname "$0")"
+
+packages=(
+  cmake g++ ninja-build pkg-config
+  libeigen3-dev libfcl-dev
+  libompl-dev libboost-serialization-dev libboost-filesystem-dev libboost-system-dev
+  libnlopt-dev libnlopt-cxx-dev libyaml-cpp-dev libembree-dev libassimp-dev
+  libcli11-dev libspdlog-dev libfmt-dev libtbb-dev libpng-dev libgtest-dev libgmock-dev
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed'; then
+    missing+=("$p")
+  fi
+done
+
+if ((${#missing[@]})); then
+  echo "bootstrap: installing ${missing[*]}"
+  sudo_cmd=()
+  if [ "$(id -u)" -ne 0 ]; then
+    command -v sudo >/dev/null || { echo "bootstrap: need root or sudo to install packages" >&2; exit 1; }
+    sudo_cmd=(sudo)
+  fi
+  export DEBIAN_FRONTEND=noninteractive
+  "${sudo_cmd[@]}" apt-get update -qq >/dev/null
+  "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+build_type=${SCANPLAN_BUILD_TYPE:-Release}
+extra=()
+[ "${CI:-}" = "true" ] && extra+=(-DSCANPLAN_WERROR=ON)
+if [ ! -f build/CMakeCache.txt ]; then
+  cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE="$build_type" "${extra[@]}" >/dev/null
+elif ((${#extra[@]})); then
+  cmake -S . -B build "${extra[@]}" >/dev/null
+fi
+jobs=$(nproc 2>/dev/null || echo 2)
+cmake --build build --parallel "$jobs" -- --quiet 2>&1 | grep -v '^ninja: no work to do' || true
+test "${PIPESTATUS[0]}" -eq 0

@@ -1,0 +1,112 @@
+#include "cli/app.h"
+
+#include <cstdio>
+#include <exception>
+#include <string>
+
+#include <CLI/CLI.hpp>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include "cli/commands.h"
+#include "kinematics/error.h"
+
+namespace scanplan::cli {
+namespace {
+
+void addRobotSource(CLI::App& cmd, RobotSource& source) {
+  auto* robot = cmd.add_option("--robot", source.robot_file, "Robot file (YAML)")
+                    ->check(CLI::ExistingFile);
+  auto* job = cmd.add_option("--job", source.job_file, "Job file: use its robot (and scanner)")
+                  ->check(CLI::ExistingFile);
+  robot->excludes(job);
+  cmd.callback([robot, job] {
+    if (robot->count() + job->count() == 0) {
+      throw CLI::RequiredError("--robot or --job");
+    }
+  });
+}
+
+void setUpLogging(int verbosity) {
+  auto logger = spdlog::stderr_color_mt("scanplan");
+  logger->set_pattern("scanplan: %^%l%$: %v");
+  logger->set_level(verbosity > 0 ? spdlog::level::debug
+                    : verbosity < 0 ? spdlog::level::err
+                                    : spdlog::level::info);
+  spdlog::set_default_logger(logger);
+}
+
+}  // namespace
+
+int run(int argc, char** argv) {
+  CLI::App app{
+      "scanplan — scanning path planner for a 6-axis arm with a laser line scanner and a rotary "
+      "table.\nUnits at the command line: mm and degrees."};
+  app.set_version_flag("--version", std::string("scanplan ") + SCANPLAN_VERSION);
+  app.require_subcommand(1);
+  int verbose = 0;
+  bool quiet = false;
+  app.add_flag("-v,--verbose", verbose, "More detail on stderr");
+  app.add_flag("-q,--quiet", quiet, "Only errors on stderr");
+
+  PlanOptions plan;
+  auto* plan_cmd = app.add_subcommand("plan", "Run a job: load and check the cell (the planning "
+                                              "pipeline grows here), write results to OUT");
+  plan_cmd->add_option("job", plan.job_file, "Job file (YAML)")->required()->check(CLI::ExistingFile);
+  plan_cmd->add_option("-o,--out", plan.out_dir, "Output folder (created)")->required();
+
+  auto* job_cmd = app.add_subcommand("job", "Inspect job files");
+  job_cmd->require_subcommand(1);
+  std::filesystem::path show_file;
+  auto* show_cmd = job_cmd->add_subcommand(
+      "show", "Print the fully resolved job as YAML: every default filled in, robot inline");
+  show_cmd->add_option("job", show_file, "Job file (YAML)")->required()->check(CLI::ExistingFile);
+
+  FkOptions fk;
+  auto* fk_cmd = app.add_subcommand("fk", "Forward kinematics: flange (and sensor) pose for joints");
+  addRobotSource(*fk_cmd, fk.source);
+  fk_cmd->add_option("--joints", fk.joints_deg, "Six joint angles in degrees: j1,j2,j3,j4,j5,j6 "
+                                                 "(write --joints=-10,… when j1 is negative)")
+      ->required();
+  fk_cmd->add_flag("--json", fk.json, "Print JSON instead of text");
+
+  IkOptions ik;
+  auto* ik_cmd = app.add_subcommand("ik", "Inverse kinematics: every joint solution for a flange pose");
+  addRobotSource(*ik_cmd, ik.source);
+  auto* trans = ik_cmd->add_option("--trans", ik.trans,
+                                   "Flange pose as V+ TRANS: x,y,z (mm), y,p,r (deg, ZYZ' Euler)");
+  auto* matrix = ik_cmd->add_option("--matrix", ik.matrix,
+                                    "Flange pose as a 4x4 matrix: 16 numbers, row-major, mm");
+  trans->excludes(matrix);
+  ik_cmd->add_flag("--within-limits", ik.within_limits_only, "List only solutions inside the joint limits");
+  ik_cmd->add_flag("--json", ik.json, "Print JSON instead of text");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? 0 : static_cast<int>(ExitCode::kUsage);
+  }
+  if (ik_cmd->parsed() && trans->count() + matrix->count() == 0) {
+    std::fprintf(stderr, "scanplan: error: ik needs --trans or --matrix\n");
+    return static_cast<int>(ExitCode::kUsage);
+  }
+
+  setUpLogging(quiet ? -1 : verbose);
+  try {
+    ExitCode code = ExitCode::kOk;
+    if (plan_cmd->parsed()) code = runPlan(plan);
+    if (show_cmd->parsed()) code = runJobShow(show_file);
+    if (fk_cmd->parsed()) code = runFk(fk);
+    if (ik_cmd->parsed()) code = runIk(ik);
+    return static_cast<int>(code);
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "scanplan: error: %s\n", e.what());
+    return static_cast<int>(ExitCode::kInput);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "scanplan: internal error: %s (please report this)\n", e.what());
+    return static_cast<int>(ExitCode::kInternal);
+  }
+}
+
+}  // namespace scanplan::cli

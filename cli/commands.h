@@ -1,0 +1,49 @@
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "cli/app.h"
+#include "cli/job.h"
+
+namespace scanplan::cli {
+
+/// Where a command gets its robot: a robot file, or the robot of a job.
+struct RobotSource {
+  std::filesystem::path robot_file;
+  std::filesystem::path job_file;
+};
+
+struct FkOptions {
+  RobotSource source;
+  std::string joints_deg;  ///< "j1,…,j6"
+  bool json = false;
+};
+
+struct IkOptions {
+  RobotSource source;
+  std::string trans;   ///< "x,y,z,y,p,r" (mm, V+ ZYZ' deg)
+  std::string matrix;  ///< 16 numbers row-major, mm
+  bool json = false;
+  bool within_limits_only = false;
+};
+
+struct PlanOptions {
+  std::filesystem::path job_file;
+  std::filesystem::path out_dir;
+};
+
+ExitCode runFk(const FkOptions& options);
+ExitCode runIk(const IkOptions& options);
+ExitCode runJobShow(const std::filesystem::path& job_file);
+ExitCode runPlan(const PlanOptions& options);
+
+/// Parses "a,b,c" into exactly `count` finite numbers; errors name the option.
+std::vector<double> parseNumberList(const std::string& text,
+                                    std::size_t count,
+                                    const std::string& option,
+                                    const std::string& what);
+
+}  // namespace scanplan::cli

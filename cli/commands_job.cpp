@@ -1,0 +1,83 @@
+#include <cstdio>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "cli/commands.h"
+#include "cli/format.h"
+#include "kinematics/mesh.h"
+#include "kinematics/units.h"
+
+namespace scanplan::cli {
+namespace {
+
+kinematics::LoadedMesh loadPart(const kinematics::CellModel& cell) {
+  kinematics::LoadedMesh part = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
+  for (const std::string& w : part.report.warnings) spdlog::warn("{}", w);
+  return part;
+}
+
+}  // namespace
+
+ExitCode runJobShow(const std::filesystem::path& job_file) {
+  const JobSpec job = loadJob(job_file);
+  buildCell(job);  // the robot model checks (OPW against DH) belong to "valid"
+  std::fputs(jobToYaml(job).c_str(), stdout);
+  return ExitCode::kOk;
+}
+
+ExitCode runPlan(const PlanOptions& options) {
+  const JobSpec job = loadJob(options.job_file);
+  const kinematics::CellModel cell = buildCell(job);
+  const kinematics::LoadedMesh part = loadPart(cell);
+
+  // What the cell looks like from the robot: the part's box on the table at θ = 0.
+  const Eigen::AlignedBox3d box = part.mesh.bounds();
+  const Eigen::Isometry3d X_WP = cell.table.X_WR(0.0) * cell.part.X_RP;
+  const Eigen::Vector3d top_centre_P(box.center().x(), box.center().y(), box.max().z());
+
+  // Reach check: the sensor 150 mm above the part's top centre, looking straight down, at
+  // every 30° of table angle. A first look at whether the cell is laid out sensibly.
+  constexpr double kStandoff = 0.15;
+  Eigen::Isometry3d X_PS = Eigen::Isometry3d::Identity();
+  X_PS.linear() = Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal();  // z_S points down
+  X_PS.translation() = top_centre_P + Eigen::Vector3d(0, 0, kStandoff);
+  int reachable = 0;
+  constexpr int kAngles = 12;
+  for (int k = 0; k < kAngles; ++k) {
+    const double theta = deg(30.0 * k);
+    kinematics::IkRequest request;
+    request.within_limits_only = true;
+    if (!cell.robot.ik(cell.flangeTarget(theta, X_PS), request).empty()) ++reachable;
+  }
+
+  std::string summary;
+  summary += fmt::format("job        {} ({})\n", job.name, job.source.string());
+  summary += fmt::format("robot      {}\n", cell.robot.name());
+  summary += fmt::format("table      radius {} mm, axis at ({:.1f}, {:.1f}, {:.1f}) mm, {}\n",
+                         job.table.radius_mm, toMm(cell.table.X_WA.translation().x()),
+                         toMm(cell.table.X_WA.translation().y()),
+                         toMm(cell.table.X_WA.translation().z()),
+                         job.table.continuous ? "continuous"
+                                              : fmt::format("{} … {} deg", job.table.min_deg,
+                                                            job.table.max_deg));
+  const Eigen::Vector3d size = box.sizes() * kMToMm;
+  summary += fmt::format("part       {}: {} triangles, {:.1f} x {:.1f} x {:.1f} mm, {}\n",
+                         job.part.mesh.as_written, part.mesh.triangles.size(), size.x(), size.y(),
+                         size.z(), part.mesh.isClosed() ? "closed" : "open (has holes)");
+  const Eigen::Vector3d top_W = X_WP * top_centre_P * kMToMm;
+  summary += fmt::format(
+      "reach      sensor 150 mm above the part top ({:.0f}, {:.0f}, {:.0f}) mm, looking down: "
+      "reachable at {}/{} table angles (every 30 deg)\n",
+      top_W.x(), top_W.y(), top_W.z(), reachable, kAngles);
+
+  std::filesystem::create_directories(options.out_dir);
+  writeFileAtomically(options.out_dir / "job.yaml", jobToYaml(job));
+  summary += fmt::format("wrote      {}\n", (options.out_dir / "job.yaml").string());
+  summary += "note       scan paths, configuration maps and planning are not built yet; this run "
+             "checks the cell only\n";
+  std::fputs(summary.c_str(), stdout);
+  return ExitCode::kOk;
+}
+
+}  // namespace scanplan::cli

@@ -1,0 +1,213 @@
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "cli/commands.h"
+#include "cli/format.h"
+#include "cli/robot_file.h"
+#include "kinematics/error.h"
+#include "kinematics/pose.h"
+#include "kinematics/units.h"
+
+namespace scanplan::cli {
+namespace {
+
+using kinematics::JointVector;
+
+struct LoadedRobot {
+  kinematics::RobotModel robot;
+  std::optional<Eigen::Isometry3d> X_FS;  ///< from a job, when one was given
+};
+
+LoadedRobot loadRobot(const RobotSource& source) {
+  if (!source.job_file.empty()) {
+    const JobSpec job = loadJob(source.job_file);
+    const kinematics::CellModel cell = buildCell(job);
+    return {cell.robot, cell.scanner.X_FS};
+  }
+  return {buildRobotModel(loadRobotFile(source.robot_file), source.robot_file.string()),
+          std::nullopt};
+}
+
+std::vector<double> toVector(const Eigen::VectorXd& v) { return {v.data(), v.data() + v.size()}; }
+
+std::vector<double> jointsDeg(const JointVector& q) { return toVector(q * kRadToDeg); }
+
+void writePose(JsonWriter& json, const Eigen::Isometry3d& X) {
+  json.numbers("position_mm", toVector(X.translation() * kMToMm));
+  json.beginArray("rotation_matrix");
+  for (int r = 0; r < 3; ++r) json.numbers({}, toVector(X.linear().row(r).transpose()));
+  json.endArray();
+  json.numbers("quaternion_wxyz", toVector(quaternionWxyz(X.linear())));
+  json.numbers("trans_zyz_deg", toVector(kinematics::zyzFromRotation(X.linear()) * kRadToDeg));
+}
+
+std::string poseText(const std::string& title, const Eigen::Isometry3d& X) {
+  const Eigen::Vector3d p = X.translation() * kMToMm;
+  const Eigen::Vector3d zyz = kinematics::zyzFromRotation(X.linear()) * kRadToDeg;
+  const Eigen::Vector4d q = quaternionWxyz(X.linear());
+  const Eigen::Matrix3d& R = X.linear();
+  std::string s = title + "\n";
+  s += fmt::format("  position_mm      {:10.4f} {:10.4f} {:10.4f}\n", p.x(), p.y(), p.z());
+  s += fmt::format("  trans_zyz_deg    {:10.4f} {:10.4f} {:10.4f}   (V+ TRANS y, p, r)\n", zyz.x(),
+                   zyz.y(), zyz.z());
+  s += fmt::format("  quaternion_wxyz  {:10.7f} {:10.7f} {:10.7f} {:10.7f}\n", q(0), q(1), q(2), q(3));
+  for (int r = 0; r < 3; ++r) {
+    s += fmt::format("  {:16} {:10.7f} {:10.7f} {:10.7f}\n", r == 0 ? "rotation_matrix" : "",
+                     R(r, 0), R(r, 1), R(r, 2));
+  }
+  return s;
+}
+
+}  // namespace
+
+std::vector<double> parseNumberList(const std::string& text,
+                                    std::size_t count,
+                                    const std::string& option,
+                                    const std::string& what) {
+  std::vector<double> values;
+  std::stringstream stream(text);
+  std::string item;
+  while (std::getline(stream, item, ',')) {
+    std::size_t used = 0;
+    double v = std::nan("");
+    try {
+      v = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    while (used < item.size() && std::isspace(static_cast<unsigned char>(item[used]))) ++used;
+    if (used == 0 || used != item.size() || !std::isfinite(v)) {
+      throw InputError(fmt::format("{}: '{}' in '{}' is not a finite number: expected {}", option,
+                                   item, text, what));
+    }
+    values.push_back(v);
+  }
+  if (values.size() != count) {
+    throw InputError(fmt::format("{}: '{}' has {} numbers: expected {}", option, text,
+                                 values.size(), what));
+  }
+  return values;
+}
+
+ExitCode runFk(const FkOptions& options) {
+  const LoadedRobot loaded = loadRobot(options.source);
+  const auto& robot = loaded.robot;
+  const auto values =
+      parseNumberList(options.joints_deg, 6, "--joints", "6 joint angles in degrees, j1,…,j6");
+  JointVector q;
+  for (int i = 0; i < 6; ++i) q(i) = deg(values[static_cast<std::size_t>(i)]);
+  const Eigen::Isometry3d X_BF = robot.fk(q);
+  const bool in_limits = robot.withinLimits(q);
+  const auto branch = robot.branchOf(q);
+  const auto sing = robot.singularity(q);
+
+  if (options.json) {
+    JsonWriter json;
+    json.beginObject();
+    json.value("robot", robot.name());
+    json.numbers("joints_deg", values);
+    writePose(json, X_BF);
+    if (loaded.X_FS) {
+      json.beginObject("sensor");
+      writePose(json, X_BF * *loaded.X_FS);
+      json.endObject();
+    }
+    json.value("within_limits", in_limits);
+    json.value("branch", branch.words());
+    json.beginObject("singularity");
+    json.value("wrist", sing.wrist).value("elbow", sing.elbow);
+    json.value("shoulder_mm", toMm(sing.shoulder)).value("manipulability", sing.manipulability);
+    json.endObject();
+    json.endObject();
+    std::fputs(json.str().c_str(), stdout);
+    return ExitCode::kOk;
+  }
+  std::string text = fmt::format("{}, joints (deg): {}\n", robot.name(), fmt::join(values, ", "));
+  text += poseText("flange X_BF (robot base frame)", X_BF);
+  if (loaded.X_FS) text += poseText("sensor X_BS (robot base frame)", X_BF * *loaded.X_FS);
+  text += fmt::format("within joint limits: {}   branch: {}\n", in_limits ? "yes" : "NO",
+                      branch.words());
+  text += fmt::format(
+      "singularity: wrist |sin q5| {:.4f}, elbow {:.4f}, shoulder {:.1f} mm, manipulability "
+      "{:.4f}\n",
+      sing.wrist, sing.elbow, toMm(sing.shoulder), sing.manipulability);
+  std::fputs(text.c_str(), stdout);
+  return ExitCode::kOk;
+}
+
+ExitCode runIk(const IkOptions& options) {
+  const LoadedRobot loaded = loadRobot(options.source);
+  const auto& robot = loaded.robot;
+  Eigen::Isometry3d X_BF = Eigen::Isometry3d::Identity();
+  if (!options.trans.empty()) {
+    const auto v = parseNumberList(options.trans, 6, "--trans",
+                                   "x,y,z in mm then y,p,r in degrees (V+ TRANS, ZYZ' Euler)");
+    X_BF.translation() = Eigen::Vector3d(v[0], v[1], v[2]) * kMmToM;
+    X_BF.linear() = kinematics::rotationFromZyz(Eigen::Vector3d(v[3], v[4], v[5]) * kDegToRad);
+  } else {
+    const auto v = parseNumberList(options.matrix, 16, "--matrix",
+                                   "16 numbers, a 4x4 pose row-major, translation in mm");
+    Eigen::Matrix4d M;
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) M(r, c) = v[static_cast<std::size_t>(4 * r + c)];
+    const Eigen::Matrix3d R = M.topLeftCorner<3, 3>();
+    const double ortho = (R.transpose() * R - Eigen::Matrix3d::Identity()).norm();
+    if (ortho > 1e-6 || R.determinant() < 0 || (M.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-9) {
+      throw InputError(fmt::format(
+          "--matrix: not a rigid transform (rotation orthonormality error {:.2e}, det {:.6f}, "
+          "last row [{}]): expected a rotation matrix with det +1 and last row 0,0,0,1",
+          ortho, R.determinant(), fmt::join(std::vector<double>(M.row(3).data(), M.row(3).data() + 4), ",")));
+    }
+    // Re-orthonormalise the printed digits so IK sees an exact rotation.
+    X_BF.linear() = Eigen::Quaterniond(R).normalized().toRotationMatrix();
+    X_BF.translation() = M.topRightCorner<3, 1>() * kMmToM;
+  }
+  kinematics::IkRequest request;
+  request.within_limits_only = options.within_limits_only;
+  const auto solutions = robot.ik(X_BF, request);
+
+  if (options.json) {
+    JsonWriter json;
+    json.beginObject();
+    json.value("robot", robot.name());
+    json.beginObject("target");
+    writePose(json, X_BF);
+    json.endObject();
+    json.value("reachable", !solutions.empty());
+    json.beginArray("solutions");
+    for (const auto& s : solutions) {
+      json.beginObject();
+      json.value("branch", s.branch.words());
+      json.numbers("joints_deg", jointsDeg(s.q));
+      json.value("within_limits", s.within_limits);
+      json.endObject();
+    }
+    json.endArray();
+    json.endObject();
+    std::fputs(json.str().c_str(), stdout);
+  } else if (solutions.empty()) {
+    std::fputs(fmt::format("{}: no solution: the pose is out of reach{}\n", robot.name(),
+                           options.within_limits_only ? " or outside the joint limits" : "")
+                   .c_str(),
+               stdout);
+  } else {
+    std::string text = poseText(robot.name() + ": flange target X_BF", X_BF);
+    text += fmt::format("{} solution(s), joints in degrees:\n", solutions.size());
+    text += fmt::format("  #  {:<21}{:>9}{:>9}{:>9}{:>9}{:>9}{:>9}  limits\n", "branch", "j1", "j2",
+                        "j3", "j4", "j5", "j6");
+    for (std::size_t i = 0; i < solutions.size(); ++i) {
+      const auto q = jointsDeg(solutions[i].q);
+      text += fmt::format("{:3}  {:<21}", i + 1, solutions[i].branch.words());
+      for (double v : q) text += fmt::format("{:9.3f}", v);
+      text += solutions[i].within_limits ? "  ok\n" : "  OUTSIDE\n";
+    }
+    std::fputs(text.c_str(), stdout);
+  }
+  return solutions.empty() ? ExitCode::kNoPlan : ExitCode::kOk;
+}
+
+}  // namespace scanplan::cli

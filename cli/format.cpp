@@ -1,0 +1,138 @@
+#include "cli/format.h"
+
+#include <cmath>
+#include <fstream>
+#include <system_error>
+
+#include <fmt/format.h>
+
+#include "cli/yaml_reader.h"
+#include "kinematics/error.h"
+
+namespace scanplan::cli {
+namespace {
+
+std::string quoted(const std::string& s) {
+  std::string out = "\"";
+  for (const char c : s) {
+    switch (c) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\t': out += "\\t"; break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20) {
+          out += fmt::format("\\u{:04x}", static_cast<int>(c));
+        } else {
+          out += c;
+        }
+    }
+  }
+  return out + "\"";
+}
+
+}  // namespace
+
+void JsonWriter::prefix(const std::string& key) {
+  if (!first_.back()) out_ += ",";
+  first_.back() = false;
+  if (depth_ > 0) out_ += "\n" + std::string(static_cast<std::size_t>(2 * depth_), ' ');
+  if (!key.empty()) out_ += quoted(key) + ": ";
+}
+
+JsonWriter& JsonWriter::beginObject(const std::string& key) {
+  prefix(key);
+  out_ += "{";
+  first_.push_back(true);
+  ++depth_;
+  return *this;
+}
+
+JsonWriter& JsonWriter::endObject() {
+  --depth_;
+  const bool empty = first_.back();
+  first_.pop_back();
+  if (!empty) out_ += "\n" + std::string(static_cast<std::size_t>(2 * depth_), ' ');
+  out_ += "}";
+  return *this;
+}
+
+JsonWriter& JsonWriter::beginArray(const std::string& key) {
+  prefix(key);
+  out_ += "[";
+  first_.push_back(true);
+  ++depth_;
+  return *this;
+}
+
+JsonWriter& JsonWriter::endArray() {
+  --depth_;
+  const bool empty = first_.back();
+  first_.pop_back();
+  if (!empty) out_ += "\n" + std::string(static_cast<std::size_t>(2 * depth_), ' ');
+  out_ += "]";
+  return *this;
+}
+
+JsonWriter& JsonWriter::value(const std::string& key, double v) {
+  prefix(key);
+  out_ += std::isfinite(v) ? formatNumber(v) : "null";
+  return *this;
+}
+
+JsonWriter& JsonWriter::value(const std::string& key, int v) {
+  prefix(key);
+  out_ += std::to_string(v);
+  return *this;
+}
+
+JsonWriter& JsonWriter::value(const std::string& key, bool v) {
+  prefix(key);
+  out_ += v ? "true" : "false";
+  return *this;
+}
+
+JsonWriter& JsonWriter::value(const std::string& key, const std::string& v) {
+  prefix(key);
+  out_ += quoted(v);
+  return *this;
+}
+
+JsonWriter& JsonWriter::numbers(const std::string& key, const std::vector<double>& v) {
+  prefix(key);
+  out_ += "[";
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    out_ += (i ? ", " : "") + (std::isfinite(v[i]) ? formatNumber(v[i]) : std::string("null"));
+  }
+  out_ += "]";
+  return *this;
+}
+
+void writeFileAtomically(const std::filesystem::path& file, const std::string& content) {
+  std::error_code ec;
+  if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path(), ec);
+  const std::filesystem::path tmp = file.string() + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out << content;
+    out.flush();
+    if (!out) {
+      std::filesystem::remove(tmp, ec);
+      throw InputError(fmt::format("{}: cannot write the file", file.string()));
+    }
+  }
+  std::filesystem::rename(tmp, file, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    throw InputError(fmt::format("{}: cannot move the finished file into place", file.string()));
+  }
+}
+
+Eigen::Vector4d quaternionWxyz(const Eigen::Matrix3d& R) {
+  Eigen::Quaterniond q(R);
+  q.normalize();
+  if (q.w() < 0) q.coeffs() *= -1.0;
+  return {q.w(), q.x(), q.y(), q.z()};
+}
+
+}  // namespace scanplan::cli

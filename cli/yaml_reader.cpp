@@ -1,0 +1,312 @@
+#include "cli/yaml_reader.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+
+#include <fmt/format.h>
+
+#include "kinematics/error.h"
+
+namespace scanplan::cli {
+namespace {
+
+std::string nodeText(const YAML::Node& node) {
+  if (!node.IsDefined() || node.IsNull()) return "(empty)";
+  if (node.IsScalar()) return "'" + node.Scalar() + "'";
+  if (node.IsSequence()) return "a list";
+  return "a mapping";
+}
+
+// Edit distance, for "did you mean" hints on misspelt keys.
+std::size_t editDistance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diag = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0u : 1u)});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
+
+bool parseDouble(const std::string& text, double& out) {
+  // YAML 1.2 spellings of the special values; they parse, then fail the finiteness check.
+  if (text == ".nan" || text == ".NaN" || text == ".NAN" || text == "nan" || text == "NaN") {
+    out = std::nan("");
+    return true;
+  }
+  if (text == ".inf" || text == "+.inf" || text == ".Inf" || text == "inf") {
+    out = HUGE_VAL;
+    return true;
+  }
+  if (text == "-.inf" || text == "-.Inf" || text == "-inf") {
+    out = -HUGE_VAL;
+    return true;
+  }
+  const char* begin = text.data();
+  const char* end = begin + text.size();
+  if (begin != end && *begin == '+') ++begin;
+  const auto [ptr, ec] = std::from_chars(begin, end, out);
+  return ec == std::errc() && ptr == end && begin != end;
+}
+
+}  // namespace
+
+bool Expect::accepts(double v) const {
+  if (!std::isfinite(v)) return false;
+  if (lo_open ? !(v > lo) : !(v >= lo)) return false;
+  if (hi_open ? !(v < hi) : !(v <= hi)) return false;
+  return true;
+}
+
+bool Expect::accepts(const std::string& v) const {
+  return choices.empty() || std::find(choices.begin(), choices.end(), v) != choices.end();
+}
+
+std::string Expect::describe(const char* kind) const {
+  if (!choices.empty()) {
+    std::string s = "one of";
+    for (std::size_t i = 0; i < choices.size(); ++i) s += (i ? ", " : " ") + choices[i];
+    return s;
+  }
+  std::string s = fmt::format("a finite {}", kind);
+  const bool has_lo = std::isfinite(lo), has_hi = std::isfinite(hi);
+  if (has_lo && has_hi) {
+    s += fmt::format(" in {}{}, {}{}", lo_open ? "(" : "[", formatNumber(lo), formatNumber(hi),
+                     hi_open ? ")" : "]");
+  } else if (has_lo) {
+    s += fmt::format(" {} {}", lo_open ? ">" : "≥", formatNumber(lo));
+  } else if (has_hi) {
+    s += fmt::format(" {} {}", hi_open ? "<" : "≤", formatNumber(hi));
+  }
+  return s;
+}
+
+std::string formatNumber(double v) {
+  char buf[64];
+  const auto [ptr, ec] = std::to_chars(buf, buf + sizeof buf, v);
+  return ec == std::errc() ? std::string(buf, ptr) : fmt::format("{}", v);
+}
+
+YAML::Node loadYamlFile(const std::filesystem::path& file) {
+  std::error_code ec;
+  if (!std::filesystem::exists(file, ec)) {
+    throw InputError(fmt::format("{}: file does not exist", file.string()));
+  }
+  if (std::filesystem::is_directory(file, ec)) {
+    throw InputError(fmt::format("{}: is a directory, expected a YAML file", file.string()));
+  }
+  std::ifstream in(file);
+  if (!in) throw InputError(fmt::format("{}: cannot be read", file.string()));
+  YAML::Node root;
+  try {
+    root = YAML::Load(in);
+  } catch (const YAML::Exception& e) {
+    throw InputError(fmt::format("{}:{}:{}: malformed YAML: {}", file.string(), e.mark.line + 1,
+                                 e.mark.column + 1, e.msg));
+  }
+  if (!root.IsMap()) {
+    throw InputError(fmt::format("{}: the file holds {}, expected a YAML mapping of keys",
+                                 file.string(), root.IsDefined() && !root.IsNull()
+                                                    ? nodeText(root)
+                                                    : std::string("nothing")));
+  }
+  return root;
+}
+
+YamlIn::YamlIn(YAML::Node node, std::string path, std::filesystem::path file)
+    : node_(std::move(node)), path_(std::move(path)), file_(std::move(file)) {}
+
+std::string YamlIn::where(const YAML::Node& node) const {
+  const YAML::Mark m = node.IsDefined() ? node.Mark() : node_.Mark();
+  if (m.is_null()) return file_.string();
+  return fmt::format("{}:{}:{}", file_.string(), m.line + 1, m.column + 1);
+}
+
+std::string YamlIn::fieldPath(const std::string& key) const {
+  if (key.empty()) return path_.empty() ? "(top level)" : path_;
+  return path_.empty() ? key : path_ + "." + key;
+}
+
+bool YamlIn::has(const char* key) const {
+  known_.emplace_back(key);
+  const YAML::Node n = node_[key];
+  return n.IsDefined() && !n.IsNull();
+}
+
+void YamlIn::require(const char* key) const {
+  if (!has(key)) {
+    throw InputError(fmt::format("{}: {}: required field is missing", where(node_),
+                                 fieldPath(key)));
+  }
+}
+
+void YamlIn::fail(const std::string& key,
+                  const std::string& value,
+                  const std::string& expected) const {
+  const YAML::Node n = key.empty() ? node_ : node_[key];
+  throw InputError(fmt::format("{}: {}: {}: expected {}", where(n), fieldPath(key), value,
+                               expected));
+}
+
+void YamlIn::field(const char* key, double& value, const Expect& expect) {
+  if (!has(key)) return;
+  const YAML::Node n = node_[key];
+  double v = 0.0;
+  if (!n.IsScalar() || !parseDouble(n.Scalar(), v)) {
+    std::string hint = "";
+    if (n.IsScalar() && n.Scalar().find_first_of("0123456789") != std::string::npos) {
+      hint = " (units belong in the key name, e.g. radius_mm: 250)";
+    }
+    fail(key, nodeText(n) + " is not a number", expect.describe("number") + hint);
+  }
+  if (!expect.accepts(v)) fail(key, formatNumber(v), expect.describe("number"));
+  value = v;
+}
+
+void YamlIn::field(const char* key, int& value, const Expect& expect) {
+  if (!has(key)) return;
+  const YAML::Node n = node_[key];
+  double v = 0.0;
+  if (!n.IsScalar() || !parseDouble(n.Scalar(), v) || std::floor(v) != v ||
+      std::abs(v) > 1e9) {
+    fail(key, nodeText(n), expect.describe("integer"));
+  }
+  if (!expect.accepts(v)) fail(key, formatNumber(v), expect.describe("integer"));
+  value = static_cast<int>(v);
+}
+
+void YamlIn::field(const char* key, bool& value, const Expect&) {
+  if (!has(key)) return;
+  const YAML::Node n = node_[key];
+  bool v = false;
+  if (!n.IsScalar() || !YAML::convert<bool>::decode(n, v)) {
+    fail(key, nodeText(n), "true or false");
+  }
+  value = v;
+}
+
+void YamlIn::field(const char* key, std::string& value, const Expect& expect) {
+  if (!has(key)) return;
+  const YAML::Node n = node_[key];
+  if (!n.IsScalar()) fail(key, nodeText(n), expect.choices.empty() ? "a text" : expect.describe(""));
+  if (!expect.accepts(n.Scalar())) fail(key, nodeText(n), expect.describe(""));
+  value = n.Scalar();
+}
+
+void YamlIn::field(const char* key, FilePath& value, const Expect&) {
+  if (!has(key)) return;
+  const YAML::Node n = node_[key];
+  if (!n.IsScalar() || n.Scalar().empty()) fail(key, nodeText(n), "a file path");
+  value.as_written = n.Scalar();
+  std::filesystem::path p(value.as_written);
+  if (p.is_relative()) p = file_.parent_path() / p;
+  value.resolved = std::filesystem::absolute(p).lexically_normal();
+}
+
+void YamlIn::numbers(const char* key,
+                     std::vector<double>& values,
+                     std::size_t count,
+                     const Expect& expect,
+                     bool integers) {
+  if (!has(key)) return;
+  const YAML::Node seq = node_[key];
+  const std::string kind = integers ? "integers" : "numbers";
+  if (!seq.IsSequence() || seq.size() != count) {
+    fail(key, nodeText(seq) + (seq.IsSequence() ? fmt::format(" of {}", seq.size()) : ""),
+         fmt::format("a list of {} {}, e.g. [{}]", count, kind,
+                     fmt::join(std::vector<std::string>(count, "0"), ", ")));
+  }
+  for (std::size_t i = 0; i < count; ++i) {
+    double v = 0.0;
+    const YAML::Node item = seq[i];
+    const std::string sub = fmt::format("{}[{}]", key, i);
+    if (!item.IsScalar() || !parseDouble(item.Scalar(), v) || (integers && std::floor(v) != v)) {
+      throw InputError(fmt::format("{}: {}: {} is not a number: expected {}", where(item),
+                                   fieldPath(sub), nodeText(item),
+                                   expect.describe(integers ? "integer" : "number")));
+    }
+    if (!expect.accepts(v)) {
+      throw InputError(fmt::format("{}: {}: {}: expected {}", where(item), fieldPath(sub),
+                                   formatNumber(v), expect.describe("number")));
+    }
+    values[i] = v;
+  }
+}
+
+void YamlIn::checkSequence(const char* key,
+                           const YAML::Node& seq,
+                           std::size_t min_size,
+                           std::size_t max_size) const {
+  if (!seq.IsSequence()) fail(key, nodeText(seq), "a list");
+  if (seq.size() < min_size || seq.size() > max_size) {
+    fail(key, fmt::format("a list of {}", seq.size()),
+         min_size == max_size ? fmt::format("exactly {} entries", min_size)
+                              : fmt::format("{} to {} entries", min_size, max_size));
+  }
+}
+
+YamlIn YamlIn::child_(const std::string& key,
+                      const YAML::Node& node,
+                      YAML::NodeType::value type,
+                      const char* what) const {
+  if (node.Type() != type) {
+    throw InputError(fmt::format("{}: {}: {}: expected {}", where(node), fieldPath(key),
+                                 nodeText(node), what));
+  }
+  return YamlIn(node, fieldPath(key), file_);
+}
+
+void YamlIn::finish() const {
+  for (auto it = node_.begin(); it != node_.end(); ++it) {
+    const std::string key = it->first.as<std::string>();
+    if (std::find(known_.begin(), known_.end(), key) != known_.end()) continue;
+    // Suggest only near misses: a unit suffix (radius_m for radius_mm) or a typo.
+    std::string best;
+    std::size_t best_d = std::max<std::size_t>(3, key.size() / 3) + 1;
+    for (const std::string& k : known_) {
+      const std::size_t d = editDistance(key, k);
+      if (d < best_d) {
+        best_d = d;
+        best = k;
+      }
+    }
+    std::vector<std::string> sorted = known_;
+    std::sort(sorted.begin(), sorted.end());
+    sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+    throw InputError(fmt::format(
+        "{}:{}:{}: {}: unknown key{}; expected one of: {}", file_.string(),
+        it->first.Mark().line + 1, it->first.Mark().column + 1, fieldPath(key),
+        best.empty() ? "" : fmt::format(" (did you mean '{}'?)", best), fmt::join(sorted, ", ")));
+  }
+}
+
+void YamlOut::writeScalar(double v) { out_ << formatNumber(v); }
+
+void YamlOut::field(const char* key, double value, const Expect&) {
+  out_ << YAML::Key << key << YAML::Value;
+  writeScalar(value);
+}
+void YamlOut::field(const char* key, int value, const Expect&) {
+  out_ << YAML::Key << key << YAML::Value << value;
+}
+void YamlOut::field(const char* key, bool value, const Expect&) {
+  out_ << YAML::Key << key << YAML::Value << value;
+}
+void YamlOut::field(const char* key, const std::string& value, const Expect&) {
+  out_ << YAML::Key << key << YAML::Value << value;
+}
+void YamlOut::field(const char* key, const FilePath& value, const Expect&) {
+  out_ << YAML::Key << key << YAML::Value << value.resolved.string();
+}
+void YamlOut::fail(const std::string&, const std::string&, const std::string&) const {
+  throw std::logic_error("YamlOut::fail: writing never validates");
+}
+
+}  // namespace scanplan::cli

@@ -1,0 +1,181 @@
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <filesystem>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+namespace scanplan::cli {
+
+/// What a value must satisfy; part of every error message ("expected …").
+struct Expect {
+  double lo = -std::numeric_limits<double>::infinity();
+  double hi = std::numeric_limits<double>::infinity();
+  bool lo_open = false;
+  bool hi_open = false;
+  std::vector<std::string> choices;
+
+  static Expect positive() { return {0.0, std::numeric_limits<double>::infinity(), true, false, {}}; }
+  static Expect nonNegative() { return {0.0, std::numeric_limits<double>::infinity(), false, false, {}}; }
+  static Expect range(double lo, double hi) { return {lo, hi, false, false, {}}; }
+  static Expect oneOf(std::vector<std::string> choices) {
+    Expect e;
+    e.choices = std::move(choices);
+    return e;
+  }
+  bool accepts(double v) const;
+  bool accepts(const std::string& v) const;
+  std::string describe(const char* kind) const;
+};
+
+/// A path as written in a YAML file and as resolved against that file's folder.
+struct FilePath {
+  std::string as_written;
+  std::filesystem::path resolved;
+};
+
+/// Reads one YAML mapping into a spec struct, field by field, validating as it goes.
+/// Every error names the file, line and column, the field path, the bad value and what was
+/// expected. finish() rejects keys nobody asked for. Spec structs hold their defaults, so a
+/// missing optional key keeps the default.
+class YamlIn {
+ public:
+  static constexpr bool kReading = true;
+
+  YamlIn(YAML::Node node, std::string path, std::filesystem::path file);
+
+  bool has(const char* key) const;
+  void field(const char* key, double& value, const Expect& expect = {});
+  void field(const char* key, int& value, const Expect& expect = {});
+  void field(const char* key, bool& value, const Expect& expect = {});
+  void field(const char* key, std::string& value, const Expect& expect = {});
+  void field(const char* key, FilePath& value, const Expect& expect = {});
+  template <std::size_t N>
+  void field(const char* key, std::array<double, N>& value, const Expect& expect = {}) {
+    std::vector<double> v(value.begin(), value.end());
+    numbers(key, v, N, expect);
+    std::copy(v.begin(), v.end(), value.begin());
+  }
+  template <std::size_t N>
+  void field(const char* key, std::array<int, N>& value, const Expect& expect = {}) {
+    std::vector<double> v(value.begin(), value.end());
+    numbers(key, v, N, expect, true);
+    for (std::size_t i = 0; i < N; ++i) value[i] = static_cast<int>(v[i]);
+  }
+  /// Marks a key as required: missing → error.
+  void require(const char* key) const;
+
+  /// A nested mapping, described by `describe(YamlIn&, S&)`.
+  template <class S>
+  void section(const char* key, S& spec) {
+    if (!has(key)) return;
+    YamlIn child = child_(key, node_[key], YAML::NodeType::Map, "a mapping");
+    describe(child, spec);
+    child.finish();
+  }
+  /// A sequence of mappings.
+  template <class S>
+  void list(const char* key, std::vector<S>& items, std::size_t min_size, std::size_t max_size) {
+    if (!has(key)) return;
+    const YAML::Node seq = node_[key];
+    checkSequence(key, seq, min_size, max_size);
+    items.assign(seq.size(), S{});
+    for (std::size_t i = 0; i < seq.size(); ++i) {
+      YamlIn child = child_(key + ("[" + std::to_string(i) + "]"), seq[i], YAML::NodeType::Map,
+                            "a mapping");
+      describe(child, items[i]);
+      child.finish();
+    }
+  }
+
+  /// Throws the standard error for `key` (or this mapping when key is empty).
+  [[noreturn]] void fail(const std::string& key,
+                         const std::string& value,
+                         const std::string& expected) const;
+  /// Rejects keys that no field() / section() / list() asked for.
+  void finish() const;
+
+  const std::filesystem::path& file() const { return file_; }
+  const std::string& path() const { return path_; }
+  const YAML::Node& node() const { return node_; }
+
+ private:
+  YamlIn child_(const std::string& key,
+                const YAML::Node& node,
+                YAML::NodeType::value type,
+                const char* what) const;
+  void numbers(const char* key,
+               std::vector<double>& values,
+               std::size_t count,
+               const Expect& expect,
+               bool integers = false);
+  void checkSequence(const char* key,
+                     const YAML::Node& seq,
+                     std::size_t min_size,
+                     std::size_t max_size) const;
+  std::string where(const YAML::Node& node) const;
+  std::string fieldPath(const std::string& key) const;
+
+  YAML::Node node_;
+  std::string path_;
+  std::filesystem::path file_;
+  mutable std::vector<std::string> known_;
+};
+
+/// Writes a spec struct back as YAML through the same describe() functions, so `job show`
+/// prints exactly the fields and defaults the reader used.
+class YamlOut {
+ public:
+  static constexpr bool kReading = false;
+
+  explicit YamlOut(YAML::Emitter& out) : out_(out) {}
+
+  bool has(const char*) const { return true; }
+  void field(const char* key, double value, const Expect& = {});
+  void field(const char* key, int value, const Expect& = {});
+  void field(const char* key, bool value, const Expect& = {});
+  void field(const char* key, const std::string& value, const Expect& = {});
+  void field(const char* key, const FilePath& value, const Expect& = {});
+  template <class T, std::size_t N>
+  void field(const char* key, const std::array<T, N>& value, const Expect& = {}) {
+    out_ << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
+    for (const T& v : value) writeScalar(static_cast<double>(v));
+    out_ << YAML::EndSeq;
+  }
+  void require(const char*) const {}
+  template <class S>
+  void section(const char* key, S& spec) {
+    out_ << YAML::Key << key << YAML::Value << YAML::BeginMap;
+    describe(*this, spec);
+    out_ << YAML::EndMap;
+  }
+  template <class S>
+  void list(const char* key, std::vector<S>& items, std::size_t, std::size_t) {
+    out_ << YAML::Key << key << YAML::Value << YAML::BeginSeq;
+    for (S& item : items) {
+      out_ << YAML::BeginMap;
+      describe(*this, item);
+      out_ << YAML::EndMap;
+    }
+    out_ << YAML::EndSeq;
+  }
+  [[noreturn]] void fail(const std::string&, const std::string&, const std::string&) const;
+  void finish() const {}
+
+ private:
+  void writeScalar(double v);
+  YAML::Emitter& out_;
+};
+
+/// Loads a YAML file (a mapping at the top), turning parse errors into InputError with
+/// file:line:column.
+YAML::Node loadYamlFile(const std::filesystem::path& file);
+
+/// Shortest round-trip decimal text of a number ("250", "0.1", "-1e-05").
+std::string formatNumber(double v);
+
+}  // namespace scanplan::cli

@@ -1,0 +1,542 @@
+#include "kinematics/mesh.h"
+
+#include "kinematics/error.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <limits>
+#include <map>
+#include <ostream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+// assimp 5.2's ASCII STL reader throws "Invalid number of vertices" after allocating its mesh
+// and node, and never frees them (twoVertices.ascii.stl below). Not ours to fix; keep
+// LeakSanitizer builds (SCANPLAN_SANITIZE) green. Unused without the sanitizer runtime.
+extern "C" const char* __lsan_default_suppressions() { return "leak:libassimp.so\n"; }
+
+namespace scanplan::kinematics {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Files store float32 coordinates (~6e-8 relative); the writers below print 9 significant
+// digits, which round-trips a float exactly, so only float rounding of inputs remains.
+constexpr double kFloatTol = 1e-6;
+
+const fs::path kSharedData = SCANPLAN_SHARED_DATA_DIR;
+
+struct Facet {
+  Eigen::Vector3d normal;
+  Eigen::Vector3d a, b, c;
+};
+
+struct Soup {
+  std::vector<Eigen::Vector3d> vertices;
+  std::vector<Eigen::Vector3i> triangles;
+};
+
+// Corner i of the cube [0, s]³ is (x, y, z) = bits (0, 1, 2) of i; every face is two
+// triangles counter-clockwise seen from outside (checked by hand: cross products point out).
+Soup cube(double s) {
+  Soup soup;
+  for (int i = 0; i < 8; ++i) {
+    soup.vertices.emplace_back(s * (i & 1), s * ((i >> 1) & 1), s * (i >> 2));
+  }
+  soup.triangles = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                    {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+  return soup;
+}
+
+// Unit corner tetrahedron: three right-angled faces of area 1/2 and one equilateral face of
+// side √2, area √3/2.
+Soup tetrahedron() {
+  Soup soup;
+  soup.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  soup.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  return soup;
+}
+const double kTetrahedronArea = 1.5 + std::sqrt(3.0) / 2.0;
+
+std::vector<Facet> facets(const Soup& soup) {
+  std::vector<Facet> out;
+  for (const auto& t : soup.triangles) {
+    const auto& a = soup.vertices[static_cast<std::size_t>(t[0])];
+    const auto& b = soup.vertices[static_cast<std::size_t>(t[1])];
+    const auto& c = soup.vertices[static_cast<std::size_t>(t[2])];
+    out.push_back({(b - a).cross(c - a).normalized(), a, b, c});
+  }
+  return out;
+}
+
+std::string asciiStl(const std::vector<Facet>& list) {
+  std::ostringstream s;
+  s.precision(9);
+  const auto vec = [&](const Eigen::Vector3d& v) { s << v.x() << ' ' << v.y() << ' ' << v.z(); };
+  s << "solid test\n";
+  for (const auto& f : list) {
+    s << " facet normal ";
+    vec(f.normal);
+    s << "\n  outer loop\n";
+    for (const auto* v : {&f.a, &f.b, &f.c}) {
+      s << "   vertex ";
+      vec(*v);
+      s << '\n';
+    }
+    s << "  endloop\n endfacet\n";
+  }
+  s << "endsolid test\n";
+  return s.str();
+}
+
+// Little-endian layout of binary STL: 80-byte header, uint32 count, 50 bytes per facet.
+std::string binaryStl(const std::vector<Facet>& list, std::uint32_t stated_count) {
+  std::string out(80, ' ');
+  out.replace(0, 11, "binary test");
+  const auto put = [&](const void* p, std::size_t n) {
+    out.append(static_cast<const char*>(p), n);
+  };
+  put(&stated_count, 4);
+  for (const auto& f : list) {
+    for (const auto* v : {&f.normal, &f.a, &f.b, &f.c}) {
+      for (int i = 0; i < 3; ++i) {
+        const auto x = static_cast<float>((*v)[i]);
+        put(&x, 4);
+      }
+    }
+    const std::uint16_t attributes = 0;
+    put(&attributes, 2);
+  }
+  return out;
+}
+
+std::string obj(const Soup& soup) {
+  std::ostringstream s;
+  s.precision(9);
+  for (const auto& v : soup.vertices) s << "v " << v.x() << ' ' << v.y() << ' ' << v.z() << '\n';
+  for (const auto& t : soup.triangles) {
+    s << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
+  }
+  return s.str();
+}
+
+std::string off(const Soup& soup) {
+  std::ostringstream s;
+  s.precision(9);
+  s << "OFF\n" << soup.vertices.size() << ' ' << soup.triangles.size() << " 0\n";
+  for (const auto& v : soup.vertices) s << v.x() << ' ' << v.y() << ' ' << v.z() << '\n';
+  for (const auto& t : soup.triangles) s << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
+  return s.str();
+}
+
+std::string asciiPly(const Soup& soup) {
+  std::ostringstream s;
+  s.precision(9);
+  s << "ply\nformat ascii 1.0\nelement vertex " << soup.vertices.size()
+    << "\nproperty float x\nproperty float y\nproperty float z\nelement face "
+    << soup.triangles.size() << "\nproperty list uchar int vertex_indices\nend_header\n";
+  for (const auto& v : soup.vertices) s << v.x() << ' ' << v.y() << ' ' << v.z() << '\n';
+  for (const auto& t : soup.triangles) s << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
+  return s.str();
+}
+
+::testing::AssertionResult containsAll(const std::string& text,
+                                       std::initializer_list<std::string> words) {
+  for (const auto& w : words) {
+    if (text.find(w) == std::string::npos) {
+      return ::testing::AssertionFailure() << "'" << w << "' not found in: " << text;
+    }
+  }
+  return ::testing::AssertionSuccess();
+}
+
+// The InputError message, or a failure marker when nothing (or something else) was thrown.
+std::string loadError(const fs::path& path, const MeshLoadOptions& options = {}) {
+  try {
+    loadMesh(path, options);
+  } catch (const InputError& e) {
+    return e.what();
+  } catch (const std::exception& e) {
+    return std::string("<unexpected exception> ") + e.what();
+  }
+  return "<no exception>";
+}
+
+::testing::AssertionResult boxNear(const Eigen::AlignedBox3d& actual,
+                                   const Eigen::AlignedBox3d& expected,
+                                   double tol) {
+  if ((actual.min() - expected.min()).norm() <= tol * expected.diagonal().norm() &&
+      (actual.max() - expected.max()).norm() <= tol * expected.diagonal().norm()) {
+    return ::testing::AssertionSuccess();
+  }
+  return ::testing::AssertionFailure()
+         << "bounds [" << actual.min().transpose() << "] – [" << actual.max().transpose()
+         << "], expected [" << expected.min().transpose() << "] – [" << expected.max().transpose()
+         << "]";
+}
+
+// Independent of isClosed(): counts undirected edge uses only, ignoring orientation.
+bool everyEdgeUsedTwice(const TriangleMesh& mesh) {
+  std::map<std::pair<int, int>, int> uses;
+  for (const auto& t : mesh.triangles) {
+    for (int i = 0; i < 3; ++i) {
+      const int a = t[i];
+      const int b = t[(i + 1) % 3];
+      ++uses[{std::min(a, b), std::max(a, b)}];
+    }
+  }
+  for (const auto& [edge, n] : uses) {
+    if (n != 2) return false;
+  }
+  return true;
+}
+
+class MeshLoadTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() /
+           ("scanplan_test_mesh_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  fs::path write(const std::string& name, const std::string& bytes) const {
+    const fs::path path = dir_ / name;
+    std::ofstream(path, std::ios::binary) << bytes;
+    return path;
+  }
+
+  fs::path dir_;
+};
+
+MeshLoadOptions inMetres(double scale = 1.0) { return {LengthUnit::kMetre, scale}; }
+
+TEST(TriangleMesh, EmptyMeshHasEmptyBoundsNoAreaAndIsNotClosed) {
+  const TriangleMesh mesh;
+  EXPECT_TRUE(mesh.bounds().isEmpty());
+  EXPECT_EQ(mesh.area(), 0.0);
+  EXPECT_FALSE(mesh.isClosed());
+}
+
+TEST(TriangleMesh, CubeWithOneFlippedTriangleIsNotClosed) {
+  const Soup soup = cube(1.0);
+  TriangleMesh mesh{soup.vertices, soup.triangles};
+  EXPECT_TRUE(mesh.isClosed());
+  std::swap(mesh.triangles[5][1], mesh.triangles[5][2]);
+  EXPECT_TRUE(everyEdgeUsedTwice(mesh));
+  EXPECT_FALSE(mesh.isClosed());
+}
+
+// 12 facets carry 36 corners; welding must leave the 8 cube corners. Area 6·s², s = 20 mm.
+TEST_F(MeshLoadTest, AsciiStlCubeWeldsToEightVerticesInMillimetres) {
+  const auto loaded = loadMesh(write("cube.stl", asciiStl(facets(cube(20.0)))));
+  EXPECT_EQ(loaded.mesh.vertices.size(), 8u);
+  EXPECT_EQ(loaded.mesh.triangles.size(), 12u);
+  EXPECT_TRUE(loaded.mesh.isClosed());
+  EXPECT_NEAR(loaded.mesh.area(), 6 * 0.02 * 0.02, kFloatTol * 6 * 0.02 * 0.02);
+  EXPECT_TRUE(boxNear(loaded.mesh.bounds(),
+                      {Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(0.02)}, kFloatTol));
+  EXPECT_TRUE(loaded.report.warnings.empty());
+}
+
+// Binary cube of side 1.5 in metres, scaled by 2: side 3 m, area 54 m².
+TEST_F(MeshLoadTest, BinaryStlCubeInMetresWithScale) {
+  const auto loaded =
+      loadMesh(write("cube_bin.stl", binaryStl(facets(cube(1.5)), 12)), inMetres(2.0));
+  EXPECT_EQ(loaded.mesh.vertices.size(), 8u);
+  EXPECT_EQ(loaded.mesh.triangles.size(), 12u);
+  EXPECT_TRUE(loaded.mesh.isClosed());
+  EXPECT_NEAR(loaded.mesh.area(), 54.0, kFloatTol * 54.0);
+  EXPECT_TRUE(boxNear(loaded.mesh.bounds(),
+                      {Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(3.0)}, kFloatTol));
+}
+
+TEST_F(MeshLoadTest, UnitsAndScaleMultiply) {
+  const auto path = write("cube.stl", asciiStl(facets(cube(10.0))));
+  const std::pair<MeshLoadOptions, double> cases[] = {{{LengthUnit::kMillimetre, 1.0}, 0.01},
+                                                      {{LengthUnit::kMetre, 1.0}, 10.0},
+                                                      {{LengthUnit::kMillimetre, 2.5}, 0.025},
+                                                      {{LengthUnit::kMetre, 0.1}, 1.0}};
+  for (const auto& [options, side] : cases) {
+    SCOPED_TRACE(side);
+    EXPECT_TRUE(boxNear(loadMesh(path, options).mesh.bounds(),
+                        {Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(side)}, kFloatTol));
+  }
+}
+
+// Welding, closedness and area must not depend on where the part sits (FCL's varying world
+// frames): the same cube under seeded random rigid poses.
+TEST_F(MeshLoadTest, CubeUnderVaryingPosesStaysWeldedAndClosed) {
+  std::mt19937 rng(20240611);
+  std::uniform_real_distribution<double> offset_mm(-500.0, 500.0);
+  std::normal_distribution<double> gauss;
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d axis = Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng)).normalized();
+    const Eigen::Matrix3d R_WC = Eigen::AngleAxisd(3.0 * gauss(rng), axis).toRotationMatrix();
+    const Eigen::Vector3d p_WC(offset_mm(rng), offset_mm(rng), offset_mm(rng));
+    Soup soup = cube(30.0);
+    for (auto& v : soup.vertices) v = R_WC * v + p_WC;
+    const auto loaded = loadMesh(write("posed.stl", asciiStl(facets(soup))));
+    SCOPED_TRACE(k);
+    EXPECT_EQ(loaded.mesh.vertices.size(), 8u);
+    EXPECT_EQ(loaded.mesh.triangles.size(), 12u);
+    EXPECT_TRUE(loaded.mesh.isClosed());
+    EXPECT_NEAR(loaded.mesh.area(), 6 * 0.03 * 0.03, 1e-5 * 6 * 0.03 * 0.03);
+  }
+}
+
+TEST_F(MeshLoadTest, TetrahedronInObjOffAndPly) {
+  const Soup tet = tetrahedron();
+  for (const auto& [name, text] : {std::pair{"tet.obj", obj(tet)}, std::pair{"tet.off", off(tet)},
+                                   std::pair{"tet.ply", asciiPly(tet)}}) {
+    SCOPED_TRACE(name);
+    const auto loaded = loadMesh(write(name, text), inMetres());
+    EXPECT_EQ(loaded.mesh.vertices.size(), 4u);
+    EXPECT_EQ(loaded.mesh.triangles.size(), 4u);
+    EXPECT_TRUE(loaded.mesh.isClosed());
+    EXPECT_NEAR(loaded.mesh.area(), kTetrahedronArea, kFloatTol);
+    EXPECT_TRUE(loaded.report.warnings.empty());
+  }
+}
+
+TEST_F(MeshLoadTest, ObjQuadsAreTriangulated) {
+  const std::string quads =
+      "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 0 0 1\nv 1 0 1\nv 0 1 1\nv 1 1 1\n"
+      "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+  const auto loaded = loadMesh(write("cube_quads.obj", quads), inMetres());
+  EXPECT_EQ(loaded.mesh.vertices.size(), 8u);
+  EXPECT_EQ(loaded.mesh.triangles.size(), 12u);
+  EXPECT_TRUE(loaded.mesh.isClosed());
+  EXPECT_NEAR(loaded.mesh.area(), 6.0, kFloatTol);
+}
+
+TEST_F(MeshLoadTest, ObjPointsAndLinesAreIgnoredWithAWarning) {
+  const auto loaded =
+      loadMesh(write("tet_extras.obj", obj(tetrahedron()) + "p 1\nl 1 2\n"), inMetres());
+  EXPECT_EQ(loaded.mesh.triangles.size(), 4u);
+  EXPECT_EQ(loaded.report.non_triangle_dropped, 2u);
+  ASSERT_EQ(loaded.report.warnings.size(), 1u);
+  EXPECT_TRUE(containsAll(loaded.report.warnings[0], {"tet_extras.obj", "2", "point/line"}));
+}
+
+TEST_F(MeshLoadTest, CubeWithoutTopFaceIsOpen) {
+  Soup soup = cube(1.0);
+  soup.triangles.erase(soup.triangles.begin() + 2, soup.triangles.begin() + 4);
+  const auto loaded = loadMesh(write("open.stl", asciiStl(facets(soup))), inMetres());
+  EXPECT_EQ(loaded.mesh.vertices.size(), 8u);
+  EXPECT_EQ(loaded.mesh.triangles.size(), 10u);
+  EXPECT_FALSE(loaded.mesh.isClosed());
+  EXPECT_NEAR(loaded.mesh.area(), 5.0, kFloatTol);
+}
+
+// A facet with two equal corners welds to a repeated index; a collinear facet has zero area
+// and references an edge midpoint nothing else uses, which must not stay as a dangling vertex.
+TEST_F(MeshLoadTest, DegenerateTrianglesAreDroppedAndCounted) {
+  auto list = facets(cube(1.0));
+  const Eigen::Vector3d o(0, 0, 0), x(1, 0, 0);
+  list.push_back({Eigen::Vector3d::UnitZ(), o, x, x});
+  list.push_back({Eigen::Vector3d::UnitZ(), o, Eigen::Vector3d(0.5, 0, 0), x});
+  const auto loaded = loadMesh(write("degenerate.stl", asciiStl(list)), inMetres());
+  EXPECT_EQ(loaded.report.degenerate_dropped, 2u);
+  EXPECT_EQ(loaded.mesh.vertices.size(), 8u);
+  EXPECT_EQ(loaded.mesh.triangles.size(), 12u);
+  EXPECT_TRUE(loaded.mesh.isClosed());
+  ASSERT_EQ(loaded.report.warnings.size(), 1u);
+  EXPECT_EQ(loaded.report.warnings[0], "degenerate.stl: dropped 2 degenerate triangles");
+}
+
+TEST_F(MeshLoadTest, StoredNormalAgainstTheWindingIsCountedAndWindingKept) {
+  auto list = facets(cube(1.0));
+  list[3].normal = -list[3].normal;
+  list[7].normal = Eigen::Vector3d::Zero();  // STL allows zero normals: not a disagreement
+  const auto loaded = loadMesh(write("flipped_normal.stl", asciiStl(list)), inMetres());
+  EXPECT_EQ(loaded.report.normals_disagreeing, 1u);
+  EXPECT_TRUE(loaded.mesh.isClosed());
+  ASSERT_EQ(loaded.report.warnings.size(), 1u);
+  EXPECT_TRUE(containsAll(loaded.report.warnings[0], {"flipped_normal.stl", "1", "normal"}));
+}
+
+TEST_F(MeshLoadTest, SameFileLoadsIdentically) {
+  const auto path = write("cube.stl", asciiStl(facets(cube(7.0))));
+  const auto first = loadMesh(path);
+  const auto second = loadMesh(path);
+  EXPECT_EQ(first.mesh.vertices, second.mesh.vertices);
+  EXPECT_EQ(first.mesh.triangles, second.mesh.triangles);
+}
+
+TEST_F(MeshLoadTest, MissingFileAndDirectoryAreInputErrors) {
+  EXPECT_TRUE(containsAll(loadError(dir_ / "nowhere.stl"), {"nowhere.stl", "does not exist"}));
+  fs::create_directory(dir_ / "folder.stl");
+  EXPECT_TRUE(containsAll(loadError(dir_ / "folder.stl"), {"folder.stl", "is a directory"}));
+}
+
+TEST_F(MeshLoadTest, EmptyFileIsAnInputError) {
+  EXPECT_TRUE(containsAll(loadError(write("nothing.stl", "")), {"nothing.stl", "is empty"}));
+}
+
+TEST_F(MeshLoadTest, UnsupportedExtensionListsTheSupportedOnes) {
+  EXPECT_TRUE(containsAll(loadError(write("part.step", "ISO-10303-21;\n")),
+                          {"part.step", "unsupported extension", ".stl .obj .ply .off"}));
+}
+
+// Header says 12 facets, the file holds 4: assimp cannot tell binary from ASCII any more.
+TEST_F(MeshLoadTest, TruncatedBinaryStlIsAnInputError) {
+  auto list = facets(cube(1.0));
+  list.resize(4);
+  EXPECT_TRUE(containsAll(loadError(write("truncated.stl", binaryStl(list, 12))),
+                          {"truncated.stl", "could not be read", "STL"}));
+}
+
+TEST_F(MeshLoadTest, GarbageAndFacelessFilesAreInputErrors) {
+  struct Case {
+    const char* name;
+    const char* text;
+    const char* says;
+  };
+  const Case cases[] = {
+      {"garbage.stl", "this is not a mesh at all, just some words\n", "could not be read"},
+      {"garbage_solid.stl", "solid x\n nonsense here\nendsolid x\n", "could not be read"},
+      {"garbage.off", "garbage\n", "could not be read"},
+      {"garbage.ply", "garbage\n", "could not be read"},
+      {"points_only.obj", "v 0 0 0\nv 1 0 0\np 1\nl 1 2\n", "no triangles"}};
+  for (const auto& c : cases) {
+    EXPECT_TRUE(containsAll(loadError(write(c.name, c.text)), {c.name, c.says}));
+  }
+}
+
+TEST_F(MeshLoadTest, NonFiniteCoordinatesAreInputErrors) {
+  const auto nan_path = write("nan.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  EXPECT_TRUE(containsAll(loadError(nan_path), {"nan.obj", "non-finite"}));
+  // 1e39 overflows the float32 assimp stores coordinates in.
+  const auto inf_path = write("inf.obj", "v 1e39 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  EXPECT_TRUE(containsAll(loadError(inf_path), {"inf.obj", "non-finite"}));
+}
+
+TEST_F(MeshLoadTest, BadScaleIsAnInputError) {
+  const auto path = write("cube.stl", asciiStl(facets(cube(1.0))));
+  for (double scale : {0.0, -1.0, std::numeric_limits<double>::quiet_NaN(),
+                       std::numeric_limits<double>::infinity()}) {
+    SCOPED_TRACE(scale);
+    EXPECT_TRUE(containsAll(loadError(path, {LengthUnit::kMillimetre, scale}),
+                            {"cube.stl", "scale", "finite number > 0"}));
+  }
+}
+
+// ---- Shared third-party data (skipped when ../shared/data is absent) ----
+
+struct SharedMesh {
+  const char* file;
+  LengthUnit units;
+  std::size_t triangles;
+  bool closed;
+  int genus;          // for closed meshes: V = 2 − 2g + F/2 checks the welding (Euler)
+  double extent_x_m;  // 0 when SOURCES.md gives no size
+};
+
+void PrintTo(const SharedMesh& c, std::ostream* os) { *os << c.file; }
+
+class SharedMeshTest : public ::testing::TestWithParam<SharedMesh> {};
+
+// Counts and sizes from shared/data/SOURCES.md; no degenerate triangles in any of them.
+TEST_P(SharedMeshTest, LoadsWithDocumentedTriangleCount) {
+  const fs::path dir = kSharedData / "meshes";
+  if (!fs::is_directory(dir)) GTEST_SKIP() << dir << " absent";
+  const SharedMesh& c = GetParam();
+  const auto loaded = loadMesh(dir / c.file, {c.units, 1.0});
+  EXPECT_EQ(loaded.mesh.triangles.size(), c.triangles);
+  EXPECT_EQ(loaded.report.degenerate_dropped, 0u);
+  EXPECT_TRUE(loaded.report.warnings.empty());
+  EXPECT_EQ(loaded.mesh.isClosed(), c.closed);
+  if (c.closed) {
+    EXPECT_EQ(static_cast<long>(loaded.mesh.vertices.size()),
+              2 - 2 * c.genus + static_cast<long>(c.triangles / 2));
+  }
+  if (c.extent_x_m > 0) {
+    EXPECT_NEAR(loaded.mesh.bounds().sizes().x(), c.extent_x_m, 1e-3 * c.extent_x_m);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Meshes,
+    SharedMeshTest,
+    ::testing::Values(
+        SharedMesh{"stlmodels_bunny.bin.stl", LengthUnit::kMetre, 69451, false, 0, 0.1557},
+        SharedMesh{"stlmodels_gearwheel.bin.stl", LengthUnit::kMillimetre, 2444, true, 1, 0.0417},
+        SharedMesh{"cgal_fandisk.off", LengthUnit::kMetre, 12946, true, 0, 0},
+        SharedMesh{"cgal_couplingdown.off", LengthUnit::kMetre, 3714, true, 9, 0},
+        SharedMesh{"openscad_example006.stl", LengthUnit::kMillimetre, 11884, true, 0, 0.1},
+        SharedMesh{"bunny_npm_3674.obj", LengthUnit::kMetre, 3674, true, 0, 0}),
+    [](const ::testing::TestParamInfo<SharedMesh>& param) {
+      std::string name = param.param.file;
+      for (char& ch : name) {
+        if (std::isalnum(static_cast<unsigned char>(ch)) == 0) ch = '_';
+      }
+      return name;
+    });
+
+TEST(SharedBrokenMeshes, EachThrowsOrWarnsAsAssimpAllows) {
+  const fs::path dir = kSharedData / "meshes" / "broken";
+  if (!fs::is_directory(dir)) GTEST_SKIP() << dir << " absent";
+
+  EXPECT_TRUE(containsAll(loadError(dir / "empty.stl"), {"empty.stl", "is empty"}));
+  // 66 facets stated, 4 held: the size fits neither layout, assimp refuses the file.
+  EXPECT_TRUE(containsAll(loadError(dir / "incorrectFaceCounter.bin.stl"),
+                          {"incorrectFaceCounter.bin.stl", "could not be read", "STL"}));
+  EXPECT_TRUE(containsAll(loadError(dir / "twoVertices.ascii.stl"),
+                          {"twoVertices.ascii.stl", "Invalid number of vertices"}));
+
+  // assimp keeps the first three corners of the 4-corner facet, which are collinear: the
+  // facet is dropped as degenerate, so the part loads open, with a warning.
+  const auto quad = loadMesh(dir / "quad.ascii.stl", inMetres());
+  EXPECT_EQ(quad.mesh.triangles.size(), 3u);
+  EXPECT_EQ(quad.report.degenerate_dropped, 1u);
+  EXPECT_EQ(quad.report.warnings.size(), 1u);
+  EXPECT_FALSE(quad.mesh.isClosed());
+
+  // Its normals are all zero, which STL permits; the winding is consistent, so it is a
+  // correct closed tetrahedron with nothing to report.
+  const auto wrong = loadMesh(dir / "wrongNormals.ascii.stl", inMetres());
+  EXPECT_EQ(wrong.mesh.triangles.size(), 4u);
+  EXPECT_EQ(wrong.report.normals_disagreeing, 0u);
+  EXPECT_TRUE(wrong.report.warnings.empty());
+  EXPECT_TRUE(wrong.mesh.isClosed());
+}
+
+// Viper s650 link meshes are ASCII STL in metres. Only link6 is a closed, consistently
+// oriented surface: link2 is watertight but 3 facets are wound inwards (SOURCES.md calls it
+// closed in the watertight sense), the others have holes or non-manifold edges.
+TEST(SharedRobotMeshes, ViperLinksLoadInMetres) {
+  const fs::path dir = kSharedData / "robots" / "viper_s650";
+  if (!fs::is_directory(dir)) GTEST_SKIP() << dir << " absent";
+  const std::size_t triangles[] = {2000, 1999, 2000, 2000, 2000, 1999, 580};
+  for (int k = 0; k <= 6; ++k) {
+    SCOPED_TRACE(k);
+    const auto loaded = loadMesh(dir / ("link" + std::to_string(k) + ".stl"), inMetres());
+    EXPECT_EQ(loaded.mesh.triangles.size(), triangles[k]);
+    EXPECT_TRUE(loaded.report.warnings.empty());
+    const double size = loaded.mesh.bounds().sizes().maxCoeff();
+    EXPECT_GT(size, 0.05);  // a link of a 650 mm-reach arm, not millimetres read as metres
+    EXPECT_LT(size, 0.5);
+    EXPECT_EQ(loaded.mesh.isClosed(), k == 6);
+    if (k == 2) {
+      EXPECT_TRUE(everyEdgeUsedTwice(loaded.mesh));
+    }
+  }
+}
+
+}  // namespace
+}  // namespace scanplan::kinematics
