@@ -84,8 +84,15 @@ int run(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    const int code = app.exit(e);
-    return code == 0 ? 0 : static_cast<int>(ExitCode::kUsage);
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    std::string message = e.what();
+    const auto known = app.get_subcommands([&](CLI::App* sub) { return argc > 1 && sub->check_name(argv[1]); });
+    if (argc > 1 && argv[1][0] != '-' && known.empty()) {
+      message = std::string("unknown command '") + argv[1] + "'; expected one of: plan, job, fk, ik";
+    }
+    std::fprintf(stderr, "scanplan: error: %s\nRun 'scanplan --help' (or 'scanplan COMMAND --help') for usage.\n",
+                 message.c_str());
+    return static_cast<int>(ExitCode::kUsage);
   }
   if (ik_cmd->parsed() && trans->count() + matrix->count() == 0) {
     std::fprintf(stderr, "scanplan: error: ik needs --trans or --matrix\n");

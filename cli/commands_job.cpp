@@ -5,16 +5,24 @@
 
 #include "cli/commands.h"
 #include "cli/format.h"
+#include "kinematics/error.h"
 #include "kinematics/mesh.h"
 #include "kinematics/units.h"
 
 namespace scanplan::cli {
 namespace {
 
-kinematics::LoadedMesh loadPart(const kinematics::CellModel& cell) {
-  kinematics::LoadedMesh part = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
-  for (const std::string& w : part.report.warnings) spdlog::warn("{}", w);
-  return part;
+kinematics::LoadedMesh loadPart(const JobSpec& job, const kinematics::CellModel& cell) {
+  try {
+    kinematics::LoadedMesh part =
+        kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
+    for (const std::string& w : part.report.warnings) {
+      spdlog::warn("{}: part.mesh: {}", job.source.filename().string(), w);
+    }
+    return part;
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("{}: part.mesh: {}", job.source.string(), e.what()));
+  }
 }
 
 }  // namespace
@@ -29,7 +37,7 @@ ExitCode runJobShow(const std::filesystem::path& job_file) {
 ExitCode runPlan(const PlanOptions& options) {
   const JobSpec job = loadJob(options.job_file);
   const kinematics::CellModel cell = buildCell(job);
-  const kinematics::LoadedMesh part = loadPart(cell);
+  const kinematics::LoadedMesh part = loadPart(job, cell);
 
   // What the cell looks like from the robot: the part's box on the table at θ = 0.
   const Eigen::AlignedBox3d box = part.mesh.bounds();
@@ -71,7 +79,7 @@ ExitCode runPlan(const PlanOptions& options) {
       "reachable at {}/{} table angles (every 30 deg)\n",
       top_W.x(), top_W.y(), top_W.z(), reachable, kAngles);
 
-  std::filesystem::create_directories(options.out_dir);
+  prepareOutputDir(options.out_dir);
   writeFileAtomically(options.out_dir / "job.yaml", jobToYaml(job));
   summary += fmt::format("wrote      {}\n", (options.out_dir / "job.yaml").string());
   summary += "note       scan paths, configuration maps and planning are not built yet; this run "

@@ -1,7 +1,6 @@
 #include <cmath>
 #include <cstdio>
 #include <optional>
-#include <sstream>
 
 #include <fmt/format.h>
 
@@ -69,9 +68,15 @@ std::vector<double> parseNumberList(const std::string& text,
                                     const std::string& option,
                                     const std::string& what) {
   std::vector<double> values;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) {
+  // Split keeping empty fields, so "1,2,3," and "1,,3" are errors rather than shorter lists.
+  std::vector<std::string> items;
+  for (std::size_t start = 0;;) {
+    const std::size_t comma = text.find(',', start);
+    items.push_back(text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  for (const std::string& item : items) {
     std::size_t used = 0;
     double v = std::nan("");
     try {

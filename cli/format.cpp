@@ -128,6 +128,19 @@ void writeFileAtomically(const std::filesystem::path& file, const std::string& c
   }
 }
 
+void prepareOutputDir(const std::filesystem::path& dir) {
+  std::error_code ec;
+  if (std::filesystem::exists(dir, ec) && !std::filesystem::is_directory(dir, ec)) {
+    throw InputError(fmt::format("{}: output folder is an existing file: expected a folder path",
+                                 dir.string()));
+  }
+  std::filesystem::create_directories(dir, ec);
+  if (ec) {
+    throw InputError(fmt::format("{}: cannot create the output folder: {}", dir.string(),
+                                 ec.message()));
+  }
+}
+
 Eigen::Vector4d quaternionWxyz(const Eigen::Matrix3d& R) {
   Eigen::Quaterniond q(R);
   q.normalize();

@@ -37,6 +37,9 @@ class JsonWriter {
 /// into place, so an interrupted run never leaves a half-written file.
 void writeFileAtomically(const std::filesystem::path& file, const std::string& content);
 
+/// Creates the output folder (and parents); an existing file in the way is an InputError.
+void prepareOutputDir(const std::filesystem::path& dir);
+
 /// Quaternion (w, x, y, z) with w ≥ 0.
 Eigen::Vector4d quaternionWxyz(const Eigen::Matrix3d& R);
 

@@ -101,7 +101,7 @@ std::string jobToYaml(const JobSpec& job) {
 kinematics::CellModel buildCell(const JobSpec& job) {
   const std::string robot_source =
       job.robot_file.resolved.empty() ? job.source.string() : job.robot_file.resolved.string();
-  kinematics::CellModel cell{job.name, buildRobotModel(job.robot, robot_source), {}, {}, {}, {}};
+  kinematics::CellModel cell(job.name, buildRobotModel(job.robot, robot_source));
   cell.X_WB = toIsometry(job.robot_base);
 
   const TableSpec& t = job.table;

@@ -208,6 +208,14 @@ void YamlIn::field(const char* key, FilePath& value, const Expect&) {
   std::filesystem::path p(value.as_written);
   if (p.is_relative()) p = file_.parent_path() / p;
   value.resolved = std::filesystem::absolute(p).lexically_normal();
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(value.resolved, ec)) {
+    fail(key, fmt::format("'{}' ({}) {}", value.as_written, value.resolved.string(),
+                          std::filesystem::exists(value.resolved, ec) ? "is not a regular file"
+                                                                      : "does not exist"),
+         "an existing file (relative paths start at the folder of " + file_.filename().string() +
+             ")");
+  }
 }
 
 void YamlIn::numbers(const char* key,

@@ -32,7 +32,8 @@ struct Expect {
   std::string describe(const char* kind) const;
 };
 
-/// A path as written in a YAML file and as resolved against that file's folder.
+/// A path as written in a YAML file and as resolved against that file's folder. Reading one
+/// checks that the file exists.
 struct FilePath {
   std::string as_written;
   std::filesystem::path resolved;

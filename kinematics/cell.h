@@ -1,6 +1,7 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -26,6 +27,9 @@ struct ScannerMount {
 
 /// The whole cell, built once from a validated job and never mutated.
 struct CellModel {
+  CellModel(std::string cell_name, RobotModel cell_robot)
+      : name(std::move(cell_name)), robot(std::move(cell_robot)) {}
+
   std::string name;
   RobotModel robot;
   Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();  ///< robot base in the world

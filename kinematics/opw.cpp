@@ -20,10 +20,18 @@ bool safeAcos(double x, double& angle) {
   return true;
 }
 
-// Rotation of the OPW "c" frame (after joints 1–3): Rz(q1) · Ry(q2 + q3).
-Eigen::Matrix3d armRotation(double q1, double q23) {
-  return rotZ(q1) * rotY(q23);
+// Rz(a) · Ry(b), written out: this is on the IK hot path (DESIGN.md §3.2: ~1 µs per solve).
+Eigen::Matrix3d rotZY(double a, double b) {
+  const double ca = std::cos(a), sa = std::sin(a), cb = std::cos(b), sb = std::sin(b);
+  Eigen::Matrix3d R;
+  R << ca * cb, -sa, ca * sb, sa * cb, ca, sa * sb, -sb, 0.0, cb;
+  return R;
 }
+
+// Rotation of the OPW "c" frame (after joints 1–3): Rz(q1) · Ry(q2 + q3).
+Eigen::Matrix3d armRotation(double q1, double q23) { return rotZY(q1, q23); }
+
+
 
 // Joints 4–6 from the wrist rotation R_ce = Rz(q4) · Ry(q5) · Rz(q6), both wrist solutions.
 // q6 is solved last from the full matrix, so a poorly conditioned q4 near q5 = 0 is absorbed
@@ -33,7 +41,7 @@ void solveWrist(const Eigen::Matrix3d& R_ce, JointVector& no_flip, JointVector& 
   const double q5 = std::atan2(s5, R_ce(2, 2));
   const double q4 = s5 > 1e-12 ? std::atan2(R_ce(1, 2), R_ce(0, 2)) : 0.0;
   const auto finish = [&](double a4, double a5, JointVector& q) {
-    const Eigen::Matrix3d rest = (rotZ(a4) * rotY(a5)).transpose() * R_ce;
+    const Eigen::Matrix3d rest = rotZY(a4, a5).transpose() * R_ce;
     q(3) = a4;
     q(4) = a5;
     q(5) = std::atan2(rest(1, 0), rest(0, 0));
@@ -43,6 +51,12 @@ void solveWrist(const Eigen::Matrix3d& R_ce, JointVector& no_flip, JointVector& 
 }
 
 }  // namespace
+
+bool elbowBelow(const Eigen::Vector2d& S, const Eigen::Vector2d& W, const Eigen::Vector2d& E) {
+  const Eigen::Vector2d d = W - S;
+  const double side = d.x() >= 0.0 ? 1.0 : -1.0;
+  return (E - S).dot(side * Eigen::Vector2d(-d.y(), d.x())) < 0.0;
+}
 
 Eigen::Isometry3d opwForward(const OpwParameters& p, const JointVector& q) {
   const double k = std::hypot(p.a2, p.c3);
@@ -60,7 +74,7 @@ Eigen::Isometry3d opwForward(const OpwParameters& p, const JointVector& q) {
 
 std::size_t opwInverse(const OpwParameters& p,
                        const Eigen::Isometry3d& X_tool,
-                       std::array<JointVector, 8>& out) {
+                       std::array<OpwSolution, 8>& out) {
   const Eigen::Matrix3d& R = X_tool.linear();
   const Eigen::Vector3d c = X_tool.translation() - p.c4 * R.col(2);  // wrist centre
 
@@ -83,15 +97,23 @@ std::size_t opwInverse(const OpwParameters& p,
   const double back_x = nx1 + 2.0 * p.a1;
   const double s2_sq = back_x * back_x + dz * dz;
 
+  const Eigen::Vector2d shoulder(p.a1, p.c1);
+  const double reach = std::sqrt(radial_sq);
   std::size_t n = 0;
-  const auto emit = [&](double t1, double t2, double t3) {
+  const auto emit = [&](double t1, double t2, double t3, bool back) {
     const Eigen::Matrix3d R_ce = armRotation(t1, t2 + t3).transpose() * R;
-    JointVector& a = out[n++];
-    JointVector& b = out[n++];
-    a(0) = b(0) = t1;
-    a(1) = b(1) = t2;
-    a(2) = b(2) = t3;
-    solveWrist(R_ce, a, b);
+    const Eigen::Vector2d wrist(back ? -reach : reach, c.z());
+    const Eigen::Vector2d elbow = shoulder + p.c2 * Eigen::Vector2d(std::sin(t2), std::cos(t2));
+    const bool below = elbowBelow(shoulder, wrist, elbow);
+    OpwSolution& a = out[n++];
+    OpwSolution& b = out[n++];
+    a.q(0) = b.q(0) = t1;
+    a.q(1) = b.q(1) = t2;
+    a.q(2) = b.q(2) = t3;
+    a.back = b.back = back;
+    a.below = b.below = below;
+    solveWrist(R_ce, a.q, b.q);
+    if (!a.q.allFinite() || !b.q.allFinite()) n -= 2;
   };
 
   double g2 = 0.0;
@@ -99,14 +121,15 @@ std::size_t opwInverse(const OpwParameters& p,
   if (safeAcos((s1_sq + c2_sq - kappa_sq) / (2.0 * std::sqrt(s1_sq) * p.c2), g2) &&
       safeAcos((s1_sq - c2_sq - kappa_sq) / (2.0 * p.c2 * kappa), g3)) {
     const double phi = std::atan2(nx1, dz);
-    emit(theta1_front, phi - g2, g3 - psi3);
-    emit(theta1_front, phi + g2, -g3 - psi3);
+    emit(theta1_front, phi - g2, g3 - psi3, false);
+    // At a stretched or folded elbow (g3 = 0 or π) the second solution repeats the first.
+    if (g2 != 0.0 || (g3 != 0.0 && g3 != kPi)) emit(theta1_front, phi + g2, -g3 - psi3, false);
   }
   if (safeAcos((s2_sq + c2_sq - kappa_sq) / (2.0 * std::sqrt(s2_sq) * p.c2), g2) &&
       safeAcos((s2_sq - c2_sq - kappa_sq) / (2.0 * p.c2 * kappa), g3)) {
     const double phi = std::atan2(back_x, dz);
-    emit(theta1_back, -phi - g2, g3 - psi3);
-    emit(theta1_back, -phi + g2, -g3 - psi3);
+    emit(theta1_back, -phi - g2, g3 - psi3, true);
+    if (g2 != 0.0 || (g3 != 0.0 && g3 != kPi)) emit(theta1_back, -phi + g2, -g3 - psi3, true);
   }
   return n;
 }

@@ -155,7 +155,11 @@ JointVector RobotModel::fromOpw(const JointVector& q_opw) const {
   JointVector out;
   for (std::size_t i = 0; i < kNumJoints; ++i) {
     const int k = static_cast<int>(i);
-    out(k) = wrapToPi(definition_.opw.signs[i] * (q_opw(k) + definition_.opw.offsets[i]));
+    // OPW angles lie within a turn or two of zero: a loop wraps faster than remainder().
+    double a = definition_.opw.signs[i] * (q_opw(k) + definition_.opw.offsets[i]);
+    while (a > std::numbers::pi) a -= kTwoPi;
+    while (a <= -std::numbers::pi) a += kTwoPi;
+    out(k) = a;
   }
   return out;
 }
@@ -180,14 +184,7 @@ IkBranch RobotModel::branchOf(const JointVector& q) const {
   const Eigen::Vector2d elbow = shoulder + p.c2 * Eigen::Vector2d(std::sin(qo(1)), std::cos(qo(1)));
   const Eigen::Vector3d c = rotZ(-qo(0)) * wristCentre(q);
   const Eigen::Vector2d wrist(c.x(), c.z());
-  IkBranch b;
-  b.lefty = wrist.x() < 0.0;
-  const Eigen::Vector2d d = wrist - shoulder;
-  const double side = d.x() >= 0.0 ? 1.0 : -1.0;  // "up" relative to the reach direction
-  const Eigen::Vector2d up = side * Eigen::Vector2d(-d.y(), d.x());
-  b.below = (elbow - shoulder).dot(up) < 0.0;
-  b.flip = q(4) < 0.0;
-  return b;
+  return {wrist.x() < 0.0, detail::elbowBelow(shoulder, wrist, elbow), q(4) < 0.0};
 }
 
 void RobotModel::appendTurnVariants(const JointVector& q,
@@ -237,19 +234,12 @@ std::vector<IkSolution> RobotModel::ik(const Eigen::Isometry3d& X_BF,
                                        const IkRequest& request) const {
   std::vector<IkSolution> solutions;
   if (!X_BF.matrix().allFinite()) return solutions;
-  std::array<JointVector, 8> raw;
+  std::array<detail::OpwSolution, 8> raw;
   const std::size_t n = detail::opwInverse(definition_.opw, X_BF * X_opwF_.inverse(), raw);
-  solutions.reserve(n + 2);
+  solutions.reserve(2 * n);
   for (std::size_t k = 0; k < n; ++k) {
-    if (!raw[k].allFinite()) continue;
-    const JointVector q = fromOpw(raw[k]);
-    // A stretched or folded elbow makes two branches coincide; keep one.
-    bool duplicate = false;
-    for (std::size_t m = 0; m < k && !duplicate; ++m) {
-      duplicate = raw[m].allFinite() && (fromOpw(raw[m]) - q).cwiseAbs().maxCoeff() < 1e-12;
-    }
-    if (duplicate) continue;
-    appendTurnVariants(q, branchOf(q), request, solutions);
+    const JointVector q = fromOpw(raw[k].q);
+    appendTurnVariants(q, {raw[k].back, raw[k].below, q(4) < 0.0}, request, solutions);
   }
   return solutions;
 }

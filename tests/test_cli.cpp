@@ -1,1 +1,468 @@
+// Black-box tests of the `scanplan` executable (ccache style): run it, check the exit code,
+// stdout and stderr. Golden files live in tests/golden/; SCANPLAN_UPDATE_GOLDEN=1 rewrites them.
 #include <gtest/gtest.h>
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+extern char** environ;
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kSourceDir = SCANPLAN_SOURCE_DIR;
+const std::string kViper = (kSourceDir / "data/robots/viper_s650.yaml").string();
+const std::string kDemoJob = (kSourceDir / "data/jobs/demo.yaml").string();
+
+// The JSON prints 17 significant digits and the DH chain is a handful of products of mm-sized
+// numbers, so the golden poses of DESIGN.md §3.1 come out within rounding noise (~1e-13 mm).
+constexpr double kPositionTolMm = 1e-9;
+constexpr double kRotationTol = 1e-9;  // unitless matrix entries, same reasoning
+constexpr double kAngleTolDeg = 1e-9;
+
+struct Result {
+  int exit_code = -1;
+  std::string out;
+  std::string err;
+};
+
+std::string readFile(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void writeFile(const fs::path& file, const std::string& text) {
+  std::ofstream(file, std::ios::binary | std::ios::trunc) << text;
+}
+
+// A scratch folder per test; ctest runs tests as separate processes, possibly in parallel.
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() / ("scanplan_test_cli_" + std::to_string(::getpid()) + "_" +
+                                        info->test_suite_name() + "_" + info->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  /// Runs scanplan with `args`, stdout and stderr captured through files in the scratch folder.
+  Result scanplan(const std::vector<std::string>& args) const {
+    std::vector<std::string> argv_text{SCANPLAN_BINARY};
+    argv_text.insert(argv_text.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (auto& a : argv_text) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    const fs::path out_file = dir_ / "stdout.txt";
+    const fs::path err_file = dir_ / "stderr.txt";
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 1, out_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                     0644);
+    posix_spawn_file_actions_addopen(&actions, 2, err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                     0644);
+    pid_t pid = 0;
+    const int spawned = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    Result run;
+    if (spawned != 0) {
+      ADD_FAILURE() << "cannot start " << argv[0] << ": error " << spawned;
+      return run;
+    }
+    int status = 0;
+    if (::waitpid(pid, &status, 0) == pid && WIFEXITED(status)) run.exit_code = WEXITSTATUS(status);
+    run.out = readFile(out_file);
+    run.err = readFile(err_file);
+    return run;
+  }
+
+  fs::path dir_;
+};
+
+std::string describe(const Result& run) {
+  return "exit " + std::to_string(run.exit_code) + "\n--- stdout\n" + run.out + "--- stderr\n" +
+         run.err;
+}
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+// Minimal JSON reading: every number between `"key": ` and the bracket that closes its value
+// (nested arrays such as rotation_matrix come out flattened, row by row).
+std::vector<std::vector<double>> allArrays(const std::string& json, const std::string& key) {
+  std::vector<std::vector<double>> arrays;
+  const std::string tag = "\"" + key + "\": [";
+  for (auto at = json.find(tag); at != std::string::npos; at = json.find(tag, at + 1)) {
+    std::vector<double> numbers;
+    int depth = 0;
+    for (std::size_t i = at + tag.size() - 1; i < json.size(); ++i) {
+      const char c = json[i];
+      if (c == '[') {
+        ++depth;
+      } else if (c == ']') {
+        if (--depth == 0) break;
+      } else if (c == '-' || (c >= '0' && c <= '9')) {
+        char* end = nullptr;
+        numbers.push_back(std::strtod(json.c_str() + i, &end));
+        i = static_cast<std::size_t>(end - json.c_str()) - 1;
+      }
+    }
+    arrays.push_back(numbers);
+  }
+  return arrays;
+}
+
+std::vector<double> array(const std::string& json, const std::string& key) {
+  const auto arrays = allArrays(json, key);
+  return arrays.empty() ? std::vector<double>{} : arrays.front();
+}
+
+std::vector<bool> allBools(const std::string& json, const std::string& key) {
+  std::vector<bool> values;
+  const std::string tag = "\"" + key + "\": ";
+  for (auto at = json.find(tag); at != std::string::npos; at = json.find(tag, at + 1)) {
+    values.push_back(json.compare(at + tag.size(), 4, "true") == 0);
+  }
+  return values;
+}
+
+std::string join(const std::vector<double>& v) {
+  std::ostringstream s;
+  s.precision(17);
+  for (std::size_t i = 0; i < v.size(); ++i) s << (i ? ", " : "") << v[i];
+  return "[" + s.str() + "]";
+}
+
+::testing::AssertionResult near(const std::vector<double>& actual,
+                                const std::vector<double>& expected,
+                                double tol) {
+  bool ok = actual.size() == expected.size();
+  for (std::size_t i = 0; ok && i < actual.size(); ++i)
+    ok = std::abs(actual[i] - expected[i]) <= tol;
+  if (ok) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "actual " << join(actual) << "\n  expected "
+                                       << join(expected) << " (tolerance " << tol << ")";
+}
+
+std::vector<double> column(const std::vector<double>& rotation_row_major, std::size_t c) {
+  if (rotation_row_major.size() != 9) return {};
+  return {rotation_row_major[c], rotation_row_major[3 + c], rotation_row_major[6 + c]};
+}
+
+std::string joinedDeg(const std::vector<double>& q) {
+  std::ostringstream s;
+  s.precision(17);
+  for (std::size_t i = 0; i < q.size(); ++i) s << (i ? "," : "") << q[i];
+  return s.str();
+}
+
+// Compares `actual` with tests/golden/<name>, or rewrites it under SCANPLAN_UPDATE_GOLDEN=1.
+::testing::AssertionResult matchesGolden(const std::string& actual, const std::string& name) {
+  const fs::path file = kSourceDir / "tests/golden" / name;
+  const char* update = std::getenv("SCANPLAN_UPDATE_GOLDEN");
+  if (update != nullptr && std::string(update) == "1") {
+    fs::create_directories(file.parent_path());
+    writeFile(file, actual);
+    return ::testing::AssertionSuccess() << "rewrote " << file;
+  }
+  if (!fs::exists(file)) {
+    return ::testing::AssertionFailure()
+           << file << " is missing: run with SCANPLAN_UPDATE_GOLDEN=1 to create it";
+  }
+  const std::string expected = readFile(file);
+  if (actual == expected) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "output differs from " << file << "\n--- expected\n"
+                                       << expected << "--- actual\n"
+                                       << actual << "(SCANPLAN_UPDATE_GOLDEN=1 rewrites the file)";
+}
+
+TEST_F(Cli, VersionPrintsNameAndSemanticVersion) {
+  const Result run = scanplan({"--version"});
+  EXPECT_EQ(run.exit_code, 0) << describe(run);
+  EXPECT_TRUE(std::regex_match(run.out, std::regex(R"(scanplan \d+\.\d+\.\d+\n)"))) << run.out;
+}
+
+TEST_F(Cli, HelpOnTheAppAndEverySubcommandNamesItsOptions) {
+  struct Case {
+    std::vector<std::string> args;
+    std::vector<std::string> mentions;
+  };
+  const std::vector<Case> cases = {
+      {{"--help"}, {"--version", "--verbose", "--quiet", "plan", "job", "fk", "ik"}},
+      {{"plan", "--help"}, {"--out", "job"}},
+      {{"job", "--help"}, {"show"}},
+      {{"job", "show", "--help"}, {"job", "Job file"}},
+      {{"fk", "--help"}, {"--robot", "--job", "--joints", "--json"}},
+      {{"ik", "--help"}, {"--robot", "--job", "--trans", "--matrix", "--within-limits", "--json"}},
+  };
+  for (const Case& c : cases) {
+    const Result run = scanplan(c.args);
+    std::string what;
+    for (const auto& a : c.args) what += a + " ";
+    EXPECT_EQ(run.exit_code, 0) << what << "\n" << describe(run);
+    for (const auto& m : c.mentions) EXPECT_TRUE(contains(run.out, m)) << what << " lacks " << m;
+  }
+}
+
+TEST_F(Cli, UsageErrorsExitTwo) {
+  const std::string q0 = "0,0,0,0,0,0";
+  Result run = scanplan({"bogus"});
+  EXPECT_EQ(run.exit_code, 2) << describe(run);
+  run = scanplan({"fk", "--robot", kViper});
+  EXPECT_EQ(run.exit_code, 2) << describe(run);
+  EXPECT_TRUE(contains(run.err, "--joints")) << run.err;
+  run = scanplan({"fk", "--joints", q0});
+  EXPECT_EQ(run.exit_code, 2) << describe(run);
+  EXPECT_TRUE(contains(run.err, "--robot")) << run.err;
+  run = scanplan({"fk", "--robot", kViper, "--job", kDemoJob, "--joints", q0});
+  EXPECT_EQ(run.exit_code, 2) << describe(run);
+  run = scanplan({"ik", "--robot", kViper});
+  EXPECT_EQ(run.exit_code, 2) << describe(run);
+  EXPECT_TRUE(contains(run.err, "scanplan: error:") && contains(run.err, "--trans") &&
+              contains(run.err, "--matrix"))
+      << run.err;
+}
+
+// DESIGN.md §3.1 (standard DH, zero offsets). q = 0: the α's of J1/J3 cancel, so the flange
+// sits at x = a1 + a2 + a3 = 75 + 270 − 90 = 255, z = d1 + d4 + d6 = 335 + 295 + 80 = 710 mm.
+// q2 = −90 stands the upper arm up (J3 at z = 335 + 270) and q3 = 180 points the forearm along
+// +x: wrist centre (75 + 295, 0, 605 + 90) = (370, 0, 695). q5 = 0 keeps the flange pointing
+// along +x → (450, 0, 695) = TRANS(…, 0, 90, 0); q5 = 90 turns it down → (370, 0, 615) with
+// z_F = −z_W.
+TEST_F(Cli, FkReproducesTheDesignGoldenPoses) {
+  Result run = scanplan({"fk", "--robot", kViper, "--joints", "0,0,0,0,0,0", "--json"});
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  EXPECT_TRUE(near(array(run.out, "position_mm"), {255, 0, 710}, kPositionTolMm));
+
+  run = scanplan({"fk", "--robot", kViper, "--joints", "0,-90,180,0,90,0", "--json"});
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  EXPECT_TRUE(near(array(run.out, "position_mm"), {370, 0, 615}, kPositionTolMm));
+  EXPECT_TRUE(near(column(array(run.out, "rotation_matrix"), 2), {0, 0, -1}, kRotationTol));
+
+  run = scanplan({"fk", "--robot", kViper, "--joints", "0,-90,180,0,0,0", "--json"});
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  EXPECT_TRUE(near(array(run.out, "position_mm"), {450, 0, 695}, kPositionTolMm));
+  EXPECT_TRUE(near(array(run.out, "trans_zyz_deg"), {0, 90, 0}, kAngleTolDeg));
+}
+
+TEST_F(Cli, FkJsonMatchesGoldenFile) {
+  const Result run =
+      scanplan({"fk", "--robot", kViper, "--joints", "10,-60,150,20,45,30", "--json"});
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  EXPECT_TRUE(matchesGolden(run.out, "fk_viper_10_-60_150_20_45_30.json"));
+}
+
+TEST_F(Cli, IkJsonMatchesGoldenFile) {
+  const Result run = scanplan({"ik", "--robot", kViper, "--trans", "450,0,695,0,90,0", "--json"});
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  EXPECT_TRUE(matchesGolden(run.out, "ik_viper_450_0_695_0_90_0.json"));
+}
+
+// FK(IK(X)) = X through the command line: every listed solution reaches the target pose.
+TEST_F(Cli, EveryIkSolutionFedBackToFkReachesTheTarget) {
+  for (const std::string trans : {"450,0,695,0,90,0", "-300,100,500,30,120,45"}) {
+    const Result ik = scanplan({"ik", "--robot", kViper, "--trans", trans, "--json"});
+    ASSERT_EQ(ik.exit_code, 0) << describe(ik);
+    const auto target_p = array(ik.out, "position_mm");
+    const auto target_R = array(ik.out, "rotation_matrix");
+    const auto solutions_at = ik.out.find("\"solutions\"");
+    ASSERT_NE(solutions_at, std::string::npos) << ik.out;
+    const auto solutions = allArrays(ik.out.substr(solutions_at), "joints_deg");
+    ASSERT_GE(solutions.size(), 2u) << trans;
+    for (const auto& q : solutions) {
+      ASSERT_EQ(q.size(), 6u);
+      const Result fk = scanplan({"fk", "--robot", kViper, "--joints=" + joinedDeg(q), "--json"});
+      ASSERT_EQ(fk.exit_code, 0) << describe(fk);
+      EXPECT_TRUE(near(array(fk.out, "position_mm"), target_p, kPositionTolMm))
+          << trans << " q " << join(q);
+      EXPECT_TRUE(near(array(fk.out, "rotation_matrix"), target_R, kRotationTol))
+          << trans << " q " << join(q);
+    }
+  }
+}
+
+TEST_F(Cli, IkOfAnUnreachablePoseExitsFourAndSaysNoSolution) {
+  Result run = scanplan({"ik", "--robot", kViper, "--trans", "2000,0,0,0,0,0"});
+  EXPECT_EQ(run.exit_code, 4) << describe(run);
+  EXPECT_TRUE(contains(run.out + run.err, "no solution")) << describe(run);
+  run = scanplan({"ik", "--robot", kViper, "--trans", "2000,0,0,0,0,0", "--json"});
+  EXPECT_EQ(run.exit_code, 4) << describe(run);
+  EXPECT_TRUE(contains(run.out, "\"reachable\": false")) << run.out;
+  EXPECT_TRUE(contains(run.out, "\"solutions\": []")) << run.out;
+}
+
+TEST_F(Cli, IkWithinLimitsListsOnlyTheInLimitSolutions) {
+  // Joint limits of DESIGN.md §3.1, an independent copy of the robot file's numbers.
+  constexpr std::array<std::array<double, 2>, 6> kLimitsDeg = {
+      {{-170, 170}, {-190, 45}, {-29, 256}, {-190, 190}, {-120, 120}, {-360, 360}}};
+  for (const std::string trans : {"450,0,695,0,90,0", "-300,100,500,30,120,45"}) {
+    const Result all = scanplan({"ik", "--robot", kViper, "--trans", trans, "--json"});
+    const Result in =
+        scanplan({"ik", "--robot", kViper, "--trans", trans, "--json", "--within-limits"});
+    ASSERT_EQ(all.exit_code, 0) << describe(all);
+    ASSERT_EQ(in.exit_code, 0) << describe(in);
+    const auto all_flags = allBools(all.out, "within_limits");
+    const auto in_flags = allBools(in.out, "within_limits");
+    const auto in_count =
+        static_cast<std::size_t>(std::count(all_flags.begin(), all_flags.end(), true));
+    ASSERT_LT(in_count, all_flags.size()) << trans << ": the case should have some out of limits";
+    EXPECT_EQ(in_flags, std::vector<bool>(in_count, true)) << in.out;
+    for (const auto& q : allArrays(in.out, "joints_deg")) {
+      for (std::size_t j = 0; j < q.size() && j < 6; ++j) {
+        EXPECT_TRUE(q[j] >= kLimitsDeg[j][0] && q[j] <= kLimitsDeg[j][1])
+            << "j" << j + 1 << " in " << join(q);
+      }
+    }
+  }
+}
+
+TEST_F(Cli, IkRejectsANonRigidMatrix) {
+  for (const std::string m : {"2,0,0,450,0,1,0,0,0,0,1,695,0,0,0,1",     // scaled x axis
+                              "1,0,0,450,0,1,0,0,0,0,-1,695,0,0,0,1",    // a mirror, det −1
+                              "1,0,0,450,0,1,0,0,0,0,1,695,0,0,1,1"}) {  // projective last row
+    const Result run = scanplan({"ik", "--robot", kViper, "--matrix", m});
+    EXPECT_EQ(run.exit_code, 3) << m << "\n" << describe(run);
+    EXPECT_TRUE(contains(run.err, "scanplan: error:") && contains(run.err, "--matrix")) << run.err;
+  }
+}
+
+TEST_F(Cli, FkRejectsBadJointNumbers) {
+  for (const std::string joints : {"1,2,x,4,5,6", "1,2,3,4,5", "1,2,3,4,5,6,7", "nan,0,0,0,0,0",
+                                   "0,0,0,inf,0,0", "1,,3,4,5,6", "1,2,3deg,4,5,6",
+                                   "1,2,3,4,5,6,"}) {
+    const Result run = scanplan({"fk", "--robot", kViper, "--joints", joints});
+    EXPECT_EQ(run.exit_code, 3) << joints << "\n" << describe(run);
+    EXPECT_TRUE(contains(run.err, "scanplan: error:") && contains(run.err, "--joints")) << run.err;
+  }
+}
+
+// demo.yaml mounts the laser frame at X_FS = T(0, 0, 110 mm): the sensor sits 110 mm along the
+// flange z axis and keeps the flange orientation.
+TEST_F(Cli, FkWithAJobAlsoPrintsTheSensorPoseOffsetByTheMount) {
+  const Result text = scanplan({"fk", "--job", kDemoJob, "--joints", "10,-60,150,20,45,30"});
+  ASSERT_EQ(text.exit_code, 0) << describe(text);
+  EXPECT_TRUE(contains(text.out, "flange") && contains(text.out, "sensor")) << text.out;
+
+  const Result run =
+      scanplan({"fk", "--job", kDemoJob, "--joints", "10,-60,150,20,45,30", "--json"});
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  const auto sensor_at = run.out.find("\"sensor\"");
+  ASSERT_NE(sensor_at, std::string::npos) << run.out;
+  const std::string flange = run.out.substr(0, sensor_at);
+  const std::string sensor = run.out.substr(sensor_at);
+  const auto p_F = array(flange, "position_mm");
+  const auto R_F = array(flange, "rotation_matrix");
+  const auto z_F = column(R_F, 2);
+  ASSERT_EQ(p_F.size(), 3u);
+  ASSERT_EQ(z_F.size(), 3u);
+  const std::vector<double> p_S = {p_F[0] + 110 * z_F[0], p_F[1] + 110 * z_F[1],
+                                   p_F[2] + 110 * z_F[2]};
+  EXPECT_TRUE(near(array(sensor, "position_mm"), p_S, kPositionTolMm));
+  EXPECT_TRUE(near(array(sensor, "rotation_matrix"), R_F, kRotationTol));
+}
+
+TEST_F(Cli, JobShowPrintsEverySection) {
+  const Result run = scanplan({"job", "show", kDemoJob});
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  for (const std::string line :
+       {"\nrobot:\n", "\n  dh:\n", "\ntable:\n", "\n  max_accel_deg_s2: 60\n", "\npart:\n",
+        "\n  mesh: ", "\nscanner:\n", "\n  mount:\n"}) {
+    EXPECT_TRUE(contains(run.out, line)) << "lacks '" << line << "'\n" << run.out;
+  }
+}
+
+// A copy of the demo job with absolute paths, so it can live in the scratch folder.
+std::string demoJobText(const std::string& mesh) {
+  std::string text = readFile(kDemoJob);
+  const auto replace = [&text](const std::string& from, const std::string& to) {
+    const auto at = text.find(from);
+    if (at != std::string::npos) text.replace(at, from.size(), to);
+    return at != std::string::npos;
+  };
+  EXPECT_TRUE(replace("../robots/viper_s650.yaml", kViper));
+  EXPECT_TRUE(replace("../parts/demo_block.stl", mesh));
+  return text;
+}
+
+TEST_F(Cli, JobWithAnUnknownKeyIsAnInputErrorNamingFileAndLine) {
+  std::string text = demoJobText((kSourceDir / "data/parts/demo_block.stl").string());
+  const auto at = text.find("  radius_mm: 200\n");
+  ASSERT_NE(at, std::string::npos);
+  text.insert(at, "  colour: red\n");
+  const auto line =
+      1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n');
+  const fs::path job = dir_ / "unknown_key.yaml";
+  writeFile(job, text);
+  const Result run = scanplan({"job", "show", job.string()});
+  EXPECT_EQ(run.exit_code, 3) << describe(run);
+  EXPECT_TRUE(contains(run.err, "scanplan: error:")) << run.err;
+  EXPECT_TRUE(contains(run.err, job.string() + ":" + std::to_string(line))) << run.err;
+  EXPECT_TRUE(contains(run.err, "colour")) << run.err;
+}
+
+std::vector<fs::path> tmpFiles(const fs::path& dir) {
+  std::vector<fs::path> found;
+  if (!fs::exists(dir)) return found;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) {
+    if (e.path().extension() == ".tmp") found.push_back(e.path());
+  }
+  return found;
+}
+
+TEST_F(Cli, PlanWritesTheResolvedJob) {
+  const fs::path out = dir_ / "out";
+  const Result run = scanplan({"plan", kDemoJob, "-o", out.string()});
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  ASSERT_TRUE(fs::exists(out / "job.yaml")) << describe(run);
+  EXPECT_TRUE(tmpFiles(out).empty());
+  // The written job is `job show`'s resolved YAML, and it loads again to the same job (only the
+  // "fully resolved from <file>" comment on the first line differs).
+  const Result shown = scanplan({"job", "show", kDemoJob});
+  EXPECT_EQ(readFile(out / "job.yaml"), shown.out);
+  const Result again = scanplan({"job", "show", (out / "job.yaml").string()});
+  EXPECT_EQ(again.exit_code, 0) << describe(again);
+  const auto body = [](const std::string& yaml) { return yaml.substr(yaml.find('\n') + 1); };
+  EXPECT_EQ(body(again.out), body(shown.out));
+}
+
+// An existing file where the output folder should go is the user's mistake, not a crash.
+TEST_F(Cli, PlanIntoAnExistingFileIsAnInputError) {
+  const fs::path not_a_dir = dir_ / "a_file";
+  writeFile(not_a_dir, "x");
+  const Result run = scanplan({"plan", kDemoJob, "-o", not_a_dir.string()});
+  EXPECT_EQ(run.exit_code, 3) << describe(run);
+  EXPECT_TRUE(contains(run.err, "scanplan: error:") && contains(run.err, not_a_dir.string()));
+}
+
+TEST_F(Cli, PlanWithAMissingMeshIsAnInputErrorAndLeavesNoTmpFiles) {
+  const fs::path mesh = dir_ / "no_such_part.stl";
+  const fs::path job = dir_ / "missing_mesh.yaml";
+  writeFile(job, demoJobText(mesh.string()));
+  const fs::path out = dir_ / "out";
+  fs::create_directories(out);
+  const Result run = scanplan({"plan", job.string(), "-o", out.string()});
+  EXPECT_EQ(run.exit_code, 3) << describe(run);
+  EXPECT_TRUE(contains(run.err, "scanplan: error:") && contains(run.err, mesh.string())) << run.err;
+  EXPECT_TRUE(tmpFiles(out).empty());
+  EXPECT_FALSE(fs::exists(out / "job.yaml"));
+}
+
+}  // namespace

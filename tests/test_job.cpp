@@ -1,1 +1,383 @@
+#include "cli/job.h"
+
+#include "cli/robot_file.h"
+#include "kinematics/error.h"
+
 #include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <string>
+#include <system_error>
+#include <variant>
+
+namespace scanplan::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kSource = SCANPLAN_SOURCE_DIR;
+
+// Lengths come out of mm → m conversions of small integers; 1e-12 m is far below any rounding
+// that could matter and far above double noise at this scale.
+constexpr double kLengthTol = 1e-12;
+
+// The Viper s650 kinematics of data/robots/viper_s650.yaml without links, so tests own their
+// robot files. Line 1 is `name:`, lines 3–8 the six DH rows, lines 10–11 the OPW mapping;
+// links appended by linksWith() start at line 12, so link 1's first shape is on line 16.
+const std::string kRobot = R"(name: test arm
+dh:
+  - {a_mm: 75,  d_mm: 335, alpha_deg: -90, min_deg: -170, max_deg: 170, max_speed_deg_s: 328}
+  - {a_mm: 270, d_mm: 0,   alpha_deg: 0,   min_deg: -190, max_deg: 45,  max_speed_deg_s: 300}
+  - {a_mm: -90, d_mm: 0,   alpha_deg: 90,  min_deg: -29,  max_deg: 256, max_speed_deg_s: 375}
+  - {a_mm: 0,   d_mm: 295, alpha_deg: -90, min_deg: -190, max_deg: 190, max_speed_deg_s: 375}
+  - {a_mm: 0,   d_mm: 0,   alpha_deg: 90,  min_deg: -120, max_deg: 120, max_speed_deg_s: 375}
+  - {a_mm: 0,   d_mm: 80,  alpha_deg: 0,   min_deg: -360, max_deg: 360, max_speed_deg_s: 600}
+opw:
+  {a1_mm: 75, a2_mm: -90, b_mm: 0, c1_mm: 335, c2_mm: 270, c3_mm: 295, c4_mm: 80,
+   offsets_deg: [0, -90, 90, 0, 0, 0], signs: [1, 1, 1, 1, 1, 1]}
+)";
+
+// Seven links; link 1 (index 1) carries the shapes under test.
+std::string linksWith(const std::string& link1_shapes) {
+  std::string s =
+      "links:\n  - {name: base, shapes: []}\n  - name: link1\n    shapes:\n" + link1_shapes;
+  for (int i = 2; i <= 6; ++i) s += "  - {name: link" + std::to_string(i) + "}\n";
+  return s;
+}
+
+// `text` with its one occurrence of `from` replaced; empty (so the test fails loudly) if absent.
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const std::size_t at = text.find(from);
+  if (at == std::string::npos) return "";
+  return text.replace(at, from.size(), to);
+}
+
+std::string indented(const std::string& text) {
+  std::string out = "  ";
+  for (char c : text) out += c == '\n' ? std::string("\n  ") : std::string(1, c);
+  return out;
+}
+
+// Passes when `run` throws InputError whose message holds every one of `parts`; prints the
+// actual message (or what happened instead) otherwise.
+template <class F>
+::testing::AssertionResult throwsInputError(F&& run, std::initializer_list<std::string> parts) {
+  try {
+    run();
+  } catch (const InputError& e) {
+    const std::string message = e.what();
+    for (const std::string& p : parts) {
+      if (message.find(p) == std::string::npos) {
+        return ::testing::AssertionFailure() << "'" << p << "' not in: " << message;
+      }
+    }
+    return ::testing::AssertionSuccess() << message;
+  } catch (const std::exception& e) {
+    return ::testing::AssertionFailure() << "threw a non-InputError: " << e.what();
+  }
+  return ::testing::AssertionFailure() << "no exception";
+}
+
+::testing::AssertionResult loadFails(const fs::path& job,
+                                     std::initializer_list<std::string> parts) {
+  return throwsInputError([&] { loadJob(job); }, parts);
+}
+
+class JobFile : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() /
+           ("scanplan_test_job_" + std::to_string(::getpid()) + "_" + info->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    write("part.stl", "solid empty\nendsolid empty\n");  // file paths must exist to load
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+
+  fs::path write(const std::string& relative, const std::string& text) const {
+    const fs::path file = (dir_ / relative).lexically_normal();
+    fs::create_directories(file.parent_path());
+    std::ofstream(file) << text;
+    return file;
+  }
+  // A job naming robot.yaml (written from `robot`) with `rest` appended.
+  fs::path writeJob(const std::string& rest, const std::string& robot = kRobot) const {
+    write("robot.yaml", robot);
+    return write("job.yaml", "robot: robot.yaml\npart: {mesh: part.stl}\n" + rest);
+  }
+  // "DIR/name:where", the start of an error message located in one of this test's files.
+  std::string at(const std::string& name, const std::string& where) const {
+    return (dir_ / name).lexically_normal().string() + ":" + where;
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(JobFile, BundledDemoJobAndRobotsLoadAndBuild) {
+  const JobSpec demo = loadJob(kSource / "data/jobs/demo.yaml");
+  EXPECT_EQ(demo.name, "demo");
+  EXPECT_EQ(demo.robot_file.resolved, (kSource / "data/robots/viper_s650.yaml").lexically_normal());
+  EXPECT_EQ(demo.part.mesh.resolved, (kSource / "data/parts/demo_block.stl").lexically_normal());
+  const kinematics::CellModel cell = buildCell(demo);
+  EXPECT_EQ(cell.robot.name(), "Adept Viper s650");
+  EXPECT_DOUBLE_EQ(cell.table.radius, 0.2);
+  ASSERT_EQ(cell.scanner.body.size(), 1u);
+
+  const fs::path kuka = kSource / "data/robots/kuka_kr6_r900_sixx.yaml";
+  const RobotSpec spec = loadRobotFile(kuka);
+  EXPECT_EQ(spec.dh.size(), 6u);
+  EXPECT_EQ(spec.links.size(), 7u);
+  EXPECT_EQ(buildRobotModel(spec, kuka.string()).name(), "KUKA KR6 R900 sixx");
+}
+
+// The comment line names the job the text was resolved from, so it differs between the two
+// files; everything after it must match byte for byte.
+TEST_F(JobFile, JobToYamlRoundTripsAndSpellsOutEveryDefault) {
+  const std::string first = jobToYaml(loadJob(kSource / "data/jobs/demo.yaml"));
+  for (const char* key : {"max_accel_deg_s2", "eccentricity_mm", "tilt_deg", "robot_base",
+                          "dh:", "opw:", "theta_offset_deg", "direction", "signs",
+                          "links:", "units: mm", "scale: 1", "continuous: true"}) {
+    EXPECT_NE(first.find(key), std::string::npos) << key << " missing from:\n" << first;
+  }
+  const fs::path resolved = write("resolved.yaml", first);
+  const JobSpec again = loadJob(resolved);
+  EXPECT_TRUE(again.robot_file.as_written.empty()) << "robot should be inline";
+  EXPECT_EQ(again.robot.dh.size(), 6u);
+  const std::string second = jobToYaml(again);
+  EXPECT_EQ(second.substr(second.find('\n')), first.substr(first.find('\n')));
+  EXPECT_NE(second.find(resolved.string()), std::string::npos);
+  EXPECT_NO_THROW(buildCell(again));
+}
+
+// Every writer branch: inline robot with mesh/sphere/box/length capsule shapes, odd names.
+TEST_F(JobFile, JobToYamlRoundTripsNonDefaultValues) {
+  const std::string shapes =
+      "      - {type: mesh, file: meshes/l1.stl, units: m, scale: 0.5}\n"
+      "      - {type: sphere, radius_mm: 12.5, pose: {xyz_mm: [1, 2, 3], rpy_deg: [0, 90, 0]}}\n"
+      "      - {type: capsule, radius_mm: 5, length_mm: 0}\n";
+  write("meshes/l1.stl", "");
+  const std::string robot = replaced(kRobot, "test arm", "'arm: #2'") + linksWith(shapes);
+  const fs::path job = write(
+      "job.yaml",
+      "name: 'yes'\n"
+      "robot:\n" +
+          indented(robot) +
+          "\n"
+          "robot_base: {xyz_mm: [0, 0, -0.25], rpy_deg: [0, 0, 180]}\n"
+          "table: {continuous: false, min_deg: -90, max_deg: 270, eccentricity_mm: [0.1, -1e-05],"
+          " tilt_deg: [0.01, 0]}\n"
+          "part: {mesh: part.stl, units: m, scale: 1000}\n"
+          "scanner: {body: [{type: box, size_mm: [1, 2, 3]}]}\n");
+  const JobSpec loaded = loadJob(job);
+  EXPECT_EQ(loaded.name, "yes");
+  EXPECT_EQ(loaded.robot.name, "arm: #2");
+  const std::string first = jobToYaml(loaded);
+  const JobSpec again = loadJob(write("resolved.yaml", first));
+  EXPECT_EQ(again.name, "yes");
+  EXPECT_EQ(again.robot.name, "arm: #2");
+  EXPECT_FALSE(again.table.continuous);
+  EXPECT_EQ(again.table.eccentricity_mm[1], -1e-05);
+  const std::string second = jobToYaml(again);
+  EXPECT_EQ(second.substr(second.find('\n')), first.substr(first.find('\n')));
+}
+
+TEST_F(JobFile, PathsResolveAgainstTheFileThatNamesThem) {
+  for (const char* mesh : {"meshes/l1.stl", "parts/p.stl", "jobs/l1.stl", "jobs/p.stl"}) {
+    write(mesh, "");
+  }
+  write("robots/x.yaml", kRobot + linksWith("      - {type: mesh, file: ../meshes/l1.stl}\n"));
+  const fs::path job =
+      write("jobs/job.yaml", "robot: ../robots/x.yaml\npart: {mesh: ../parts/p.stl}\n");
+  const JobSpec spec = loadJob(job);
+  EXPECT_EQ(spec.robot_file.as_written, "../robots/x.yaml");
+  EXPECT_EQ(spec.robot_file.resolved, dir_ / "robots/x.yaml");
+  const kinematics::CellModel cell = buildCell(spec);
+  EXPECT_EQ(cell.part.mesh.path, dir_ / "parts/p.stl");
+  const auto& links = cell.robot.definition().links;
+  EXPECT_EQ(std::get<kinematics::MeshFile>(links[1].shapes[0].geometry).path,
+            dir_ / "meshes/l1.stl");
+
+  // Inline, the robot's paths are relative to the job file.
+  const fs::path inline_job =
+      write("jobs/inline.yaml",
+            "robot:\n" + indented(kRobot + linksWith("      - {type: mesh, file: l1.stl}\n")) +
+                "\npart: {mesh: p.stl}\n");
+  const kinematics::CellModel inline_cell = buildCell(loadJob(inline_job));
+  const auto& inline_links = inline_cell.robot.definition().links;
+  EXPECT_EQ(std::get<kinematics::MeshFile>(inline_links[1].shapes[0].geometry).path,
+            dir_ / "jobs/l1.stl");
+  EXPECT_EQ(inline_cell.part.mesh.path, dir_ / "jobs/p.stl");
+}
+
+TEST_F(JobFile, MissingFilesNameTheFieldAndTheResolvedPath) {
+  EXPECT_TRUE(loadFails(
+      write("job.yaml", "robot: robots/nope.yaml\npart: {mesh: part.stl}\n"),
+      {at("job.yaml", "1:8: robot: 'robots/nope.yaml' ("),
+       (dir_ / "robots/nope.yaml").string() + ") does not exist", "expected an existing file"}));
+  EXPECT_TRUE(loadFails(writeJob("", kRobot + linksWith("      - {type: mesh, file: gone.stl}\n")),
+                        {at("robot.yaml", "16:"), "links[1].shapes[0].file: 'gone.stl'",
+                         "does not exist", "relative paths start at the folder of robot.yaml"}));
+  write("robot.yaml", kRobot);
+  EXPECT_TRUE(loadFails(write("job.yaml", "robot: robot.yaml\npart: {mesh: parts}\n"),
+                        {at("job.yaml", "2:14: part.mesh: 'parts'"), "does not exist"}));
+  EXPECT_TRUE(loadFails(write("job.yaml", "robot: .\npart: {mesh: part.stl}\n"),
+                        {at("job.yaml", "1:8: robot: '.'"), "is not a regular file"}));
+}
+
+TEST_F(JobFile, MalformedEmptyAndNonMappingFilesAreRejected) {
+  EXPECT_TRUE(
+      loadFails(writeJob("table: {radius_mm: [1, 2}\n"), {at("job.yaml", "3:"), "malformed YAML"}));
+  EXPECT_TRUE(loadFails(write("empty.yaml", ""),
+                        {at("empty.yaml", " the file holds nothing"), "expected a YAML mapping"}));
+  EXPECT_TRUE(loadFails(write("list.yaml", "- robot: r.yaml\n"),
+                        {at("list.yaml", " the file holds a list"), "mapping"}));
+}
+
+TEST_F(JobFile, UnknownKeysAreNamedWithLineAndSuggestion) {
+  EXPECT_TRUE(loadFails(writeJob("tabel: {}\n"), {at("job.yaml", "3:1: tabel: unknown key"),
+                                                  "did you mean 'table'", "scanner"}));
+  EXPECT_TRUE(
+      loadFails(writeJob("table:\n  radius_mm: 250\n  radius_m: 0.25\n"),
+                {at("job.yaml", "5:3: table.radius_m: unknown key"), "did you mean 'radius_mm'"}));
+  EXPECT_TRUE(loadFails(
+      write("job.yaml",
+            "robot:\n" + indented(kRobot + "payload_kg: 5\n") + "\npart: {mesh: part.stl}\n"),
+      {at("job.yaml", "13:3: robot.payload_kg: unknown key"), "expected one of: dh, links"}));
+}
+
+TEST_F(JobFile, WrongTypesSayWhatWasExpected) {
+  EXPECT_TRUE(loadFails(
+      writeJob("table: {radius_mm: abc}\n"),
+      {at("job.yaml", "3:20: table.radius_mm: 'abc' is not a number"), "a finite number > 0"}));
+  EXPECT_TRUE(loadFails(writeJob("table:\n  radius_mm: \"250 mm\"\n"),
+                        {at("job.yaml", "4:14: table.radius_mm: '250 mm' is not a number"),
+                         "units belong in the key name"}));
+  EXPECT_TRUE(
+      loadFails(writeJob("table: {continuous: maybe}\n"),
+                {at("job.yaml", "3:"), "table.continuous: 'maybe'", "expected true or false"}));
+  EXPECT_TRUE(
+      loadFails(writeJob("robot_base: {xyz_mm: [1, 2]}\n"),
+                {at("job.yaml", "3:"), "robot_base.xyz_mm: a list of 2", "a list of 3 numbers"}));
+  EXPECT_TRUE(loadFails(writeJob("table: {axis: 5}\n"),
+                        {at("job.yaml", "3:"), "table.axis: '5': expected a mapping"}));
+}
+
+TEST_F(JobFile, MissingRequiredFieldsAreNamed) {
+  write("robot.yaml", kRobot);
+  EXPECT_TRUE(loadFails(write("job.yaml", "robot: robot.yaml\n"),
+                        {at("job.yaml", "1:1: part: required field is missing")}));
+  EXPECT_TRUE(loadFails(writeJob("", replaced(kRobot, "  - {a_mm: 270, d_mm: 0,", "  - {d_mm: 0,")),
+                        {at("robot.yaml", "4:"), "dh[1].a_mm: required field is missing"}));
+  write("robot.yaml", kRobot);
+  EXPECT_TRUE(loadFails(write("job.yaml", "robot: robot.yaml\npart: {units: m}\n"),
+                        {at("job.yaml", "2:7: part.mesh: required field is missing")}));
+  EXPECT_TRUE(loadFails(write("job.yaml", "part: {mesh: part.stl}\n"),
+                        {at("job.yaml", "1:1: robot: required field is missing")}));
+  EXPECT_TRUE(loadFails(writeJob("scanner: {body: [{size_mm: [1, 1, 1]}]}\n"),
+                        {at("job.yaml", "3:"), "scanner.body[0].type: required field is missing"}));
+  EXPECT_TRUE(
+      loadFails(writeJob("scanner: {body: [{type: box}]}\n"),
+                {at("job.yaml", "3:"), "scanner.body[0].size_mm: required field is missing"}));
+}
+
+TEST_F(JobFile, OutOfRangeValuesAreRejected) {
+  EXPECT_TRUE(
+      loadFails(writeJob("table: {radius_mm: -5}\n"),
+                {at("job.yaml", "3:"), "table.radius_mm: -5: expected a finite number > 0"}));
+  EXPECT_TRUE(loadFails(
+      writeJob("table: {min_deg: 90, max_deg: 90}\n"),
+      {at("job.yaml", "3:"), "table.max_deg: 90: expected a limit greater than min_deg (90)"}));
+  EXPECT_TRUE(
+      loadFails(writeJob("table: {height_mm: .nan}\n"),
+                {at("job.yaml", "3:"), "table.height_mm: nan: expected a finite number > 0"}));
+  EXPECT_TRUE(
+      loadFails(writeJob("robot_base: {xyz_mm: [0, .inf, 0]}\n"),
+                {at("job.yaml", "3:"), "robot_base.xyz_mm[1]: inf: expected a finite number"}));
+  EXPECT_TRUE(loadFails(
+      writeJob("table: {tilt_deg: [0, 11]}\n"),
+      {at("job.yaml", "3:"), "table.tilt_deg[1]: 11: expected a finite number in [-10, 10]"}));
+  EXPECT_TRUE(
+      loadFails(writeJob("", replaced(kRobot, "max_deg: 45,", "max_deg: -190,")),
+                {at("robot.yaml", "4:"), "dh[1].max_deg: -190", "greater than min_deg (-190)"}));
+  write("robot.yaml", kRobot);
+  EXPECT_TRUE(loadFails(write("job.yaml", "robot: robot.yaml\npart: {mesh: part.stl, scale: 0}\n"),
+                        {at("job.yaml", "2:"), "part.scale: 0: expected a finite number > 0"}));
+  EXPECT_TRUE(
+      loadFails(write("job.yaml", "robot: robot.yaml\npart: {mesh: part.stl, units: inch}\n"),
+                {at("job.yaml", "2:31: part.units: 'inch': expected one of mm, m")}));
+  EXPECT_TRUE(loadFails(writeJob("scanner: {body: [{type: cone}]}\n"),
+                        {at("job.yaml", "3:"),
+                         "scanner.body[0].type: 'cone': expected one of box, sphere, cylinder, "
+                         "capsule, mesh"}));
+}
+
+// Changing c2 (upper arm length) in the OPW block alone moves the OPW flange 30 mm away from
+// the DH flange; the check runs when the model is built.
+TEST_F(JobFile, RobotFilesWhoseOpwDisagreesWithDhOrWithFiveRowsAreRejected) {
+  const std::string bad_opw = replaced(kRobot, "c2_mm: 270", "c2_mm: 300");
+  const fs::path robot = write("robot.yaml", bad_opw);
+  const JobSpec job = loadJob(write("job.yaml", "robot: robot.yaml\npart: {mesh: part.stl}\n"));
+  EXPECT_TRUE(throwsInputError(
+      [&] { buildCell(job); },
+      {robot.string() + ": robot 'test arm'", "the OPW parameters disagree with the DH chain"}));
+  // Inline, the job file is the source.
+  const JobSpec inline_job =
+      loadJob(write("inline.yaml", "robot:\n" + indented(bad_opw) + "\npart: {mesh: part.stl}\n"));
+  EXPECT_TRUE(throwsInputError([&] { buildCell(inline_job); },
+                               {at("inline.yaml", " robot 'test arm'"), "OPW", "disagree"}));
+
+  const std::size_t row6 = kRobot.find("  - {a_mm: 0,   d_mm: 80");
+  const std::string five_rows =
+      kRobot.substr(0, row6) + kRobot.substr(kRobot.find('\n', row6) + 1);
+  EXPECT_TRUE(
+      throwsInputError([&] { loadRobotFile(write("five.yaml", five_rows)); },
+                       {at("five.yaml", "3:3: dh: a list of 5"), "expected exactly 6 entries"}));
+}
+
+// from (0, 0, 0) → to (30, 40, 0) mm is a 3-4-5 triangle: length 50 mm, centred at (15, 20, 0)
+// with z along (0.6, 0.8, 0); the cylinder along z from 10 to 130 mm is 120 mm long.
+TEST_F(JobFile, EndPointShapesGetTheirLengthAndFrame) {
+  const std::string shapes =
+      "      - {type: capsule, radius_mm: 5, from_mm: [0, 0, 0], to_mm: [30, 40, 0]}\n"
+      "      - {type: cylinder, radius_mm: 7, from_mm: [0, 0, 10], to_mm: [0, 0, 130]}\n";
+  const kinematics::CellModel cell = buildCell(loadJob(writeJob("", kRobot + linksWith(shapes))));
+  const auto& link = cell.robot.definition().links[1];
+  EXPECT_EQ(link.name, "link1");
+  ASSERT_EQ(link.shapes.size(), 2u);
+  const auto& capsule = std::get<kinematics::Capsule>(link.shapes[0].geometry);
+  EXPECT_NEAR(capsule.radius, 0.005, kLengthTol);
+  EXPECT_NEAR(capsule.length, 0.05, kLengthTol);
+  EXPECT_TRUE(link.shapes[0].X_BG.translation().isApprox(Eigen::Vector3d(0.015, 0.02, 0.0)));
+  EXPECT_TRUE(link.shapes[0].X_BG.linear().col(2).isApprox(Eigen::Vector3d(0.6, 0.8, 0.0)));
+  const auto& cylinder = std::get<kinematics::Cylinder>(link.shapes[1].geometry);
+  EXPECT_NEAR(cylinder.length, 0.12, kLengthTol);
+  EXPECT_NEAR(link.shapes[1].X_BG.translation().z(), 0.07, kLengthTol);
+}
+
+TEST_F(JobFile, EndPointsTogetherWithLengthOrPoseAreRejected) {
+  const std::string both =
+      "      - {type: capsule, radius_mm: 5, from_mm: [0, 0, 0], to_mm: [0, 0, 1], length_mm: 1}\n";
+  EXPECT_TRUE(loadFails(
+      writeJob("", kRobot + linksWith(both)),
+      {at("robot.yaml", "16:"), "links[1].shapes[0].from_mm: given with length_mm or pose",
+       "either from_mm + to_mm or length_mm + pose"}));
+  const std::string zero =
+      "      - {type: cylinder, radius_mm: 5, from_mm: [1, 1, 1], to_mm: [1, 1, 1]}\n";
+  EXPECT_TRUE(loadFails(
+      writeJob("", kRobot + linksWith(zero)),
+      {at("robot.yaml", "16:"), "links[1].shapes[0].to_mm: equal to from_mm", "positive length"}));
+  EXPECT_TRUE(
+      loadFails(writeJob("", kRobot + linksWith("      - {type: capsule, radius_mm: 5, "
+                                                "from_mm: [0, 0, 0]}\n")),
+                {at("robot.yaml", "16:"), "links[1].shapes[0].to_mm: required field is missing"}));
+}
+
+}  // namespace
+}  // namespace scanplan::cli
