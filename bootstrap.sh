@@ -40,5 +40,12 @@ elif ((${#extra[@]})); then
   cmake -S . -B build "${extra[@]}" >/dev/null
 fi
 jobs=$(nproc 2>/dev/null || echo 2)
-cmake --build build --parallel "$jobs" -- --quiet 2>&1 | grep -v '^ninja: no work to do' || true
-test "${PIPESTATUS[0]}" -eq 0
+# Quiet when up to date; otherwise show only what went wrong.
+if ! ninja -C build -n 2>/dev/null | grep -q '^ninja: no work to do'; then
+  echo "bootstrap: building scanplan (Release) in build/ …"
+  if ! cmake --build build --parallel "$jobs" >build/last-build.log 2>&1; then
+    grep -E 'error|Error|FAILED' -A3 build/last-build.log | head -60 >&2
+    echo "bootstrap: build failed; full log in build/last-build.log" >&2
+    exit 1
+  fi
+fi

@@ -1,6 +1,7 @@
 #include "cli/yaml_reader.h"
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -121,7 +122,28 @@ YAML::Node loadYamlFile(const std::filesystem::path& file) {
 }
 
 YamlIn::YamlIn(YAML::Node node, std::string path, std::filesystem::path file)
-    : node_(std::move(node)), path_(std::move(path)), file_(std::move(file)) {}
+    : node_(std::move(node)), path_(std::move(path)), file_(std::move(file)) {
+  // yaml-cpp accepts repeated keys (first wins) and any node as a key; a job file must not.
+  std::vector<std::pair<std::string, YAML::Mark>> seen;
+  for (auto it = node_.begin(); it != node_.end(); ++it) {
+    const YAML::Mark mark = it->first.Mark();
+    if (!it->first.IsScalar() || it->first.Tag() == "tag:yaml.org,2002:null" ||
+        it->first.Scalar() == "~" || it->first.Scalar().empty()) {
+      throw InputError(fmt::format("{}:{}:{}: {}: {} used as a key: expected a plain key name",
+                                   file_.string(), mark.line + 1, mark.column + 1,
+                                   fieldPath(""), nodeText(it->first)));
+    }
+    const std::string key = it->first.Scalar();
+    for (const auto& [other, other_mark] : seen) {
+      if (other == key) {
+        throw InputError(fmt::format(
+            "{}:{}:{}: {}: duplicate key (first given on line {}): expected each key once",
+            file_.string(), mark.line + 1, mark.column + 1, fieldPath(key), other_mark.line + 1));
+      }
+    }
+    seen.emplace_back(key, mark);
+  }
+}
 
 std::string YamlIn::where(const YAML::Node& node) const {
   const YAML::Mark m = node.IsDefined() ? node.Mark() : node_.Mark();
@@ -137,7 +159,10 @@ std::string YamlIn::fieldPath(const std::string& key) const {
 bool YamlIn::has(const char* key) const {
   known_.emplace_back(key);
   const YAML::Node n = node_[key];
-  return n.IsDefined() && !n.IsNull();
+  if (n.IsDefined() && n.IsNull()) {
+    fail(key, "empty value", "a value (or leave the key out to use the default)");
+  }
+  return n.IsDefined();
 }
 
 void YamlIn::require(const char* key) const {
@@ -150,7 +175,13 @@ void YamlIn::require(const char* key) const {
 void YamlIn::fail(const std::string& key,
                   const std::string& value,
                   const std::string& expected) const {
-  const YAML::Node n = key.empty() ? node_ : node_[key];
+  YAML::Node n = key.empty() ? node_ : node_[key];
+  if (!key.empty() && (!n.IsDefined() || n.IsNull())) {
+    // An empty value has no position of its own (yaml-cpp marks the next line): point at its key.
+    for (auto it = node_.begin(); it != node_.end(); ++it) {
+      if (it->first.Scalar() == key) n = it->first;
+    }
+  }
   throw InputError(fmt::format("{}: {}: {}: expected {}", where(n), fieldPath(key), value,
                                expected));
 }
@@ -160,9 +191,16 @@ void YamlIn::field(const char* key, double& value, const Expect& expect) {
   const YAML::Node n = node_[key];
   double v = 0.0;
   if (!n.IsScalar() || !parseDouble(n.Scalar(), v)) {
-    std::string hint = "";
-    if (n.IsScalar() && n.Scalar().find_first_of("0123456789") != std::string::npos) {
-      hint = " (units belong in the key name, e.g. radius_mm: 250)";
+    // "250 mm", "250mm": a number followed by a unit word.
+    std::string hint;
+    if (n.IsScalar()) {
+      const std::string& text = n.Scalar();
+      const std::size_t end = text.find_first_not_of("+-0123456789.eE");
+      double leading = 0.0;
+      if (end != std::string::npos && end > 0 && parseDouble(text.substr(0, end), leading) &&
+          std::isalpha(static_cast<unsigned char>(text.back()))) {
+        hint = fmt::format(" (write the number alone: the unit is part of the key name, {})", key);
+      }
     }
     fail(key, nodeText(n) + " is not a number", expect.describe("number") + hint);
   }
@@ -174,9 +212,11 @@ void YamlIn::field(const char* key, int& value, const Expect& expect) {
   if (!has(key)) return;
   const YAML::Node n = node_[key];
   double v = 0.0;
-  if (!n.IsScalar() || !parseDouble(n.Scalar(), v) || std::floor(v) != v ||
-      std::abs(v) > 1e9) {
-    fail(key, nodeText(n), expect.describe("integer"));
+  if (!n.IsScalar() || !parseDouble(n.Scalar(), v)) {
+    fail(key, nodeText(n) + " is not a number", expect.describe("integer"));
+  }
+  if (std::floor(v) != v || std::abs(v) > 1e9) {
+    fail(key, nodeText(n) + " is not a whole number", expect.describe("integer"));
   }
   if (!expect.accepts(v)) fail(key, formatNumber(v), expect.describe("integer"));
   value = static_cast<int>(v);
@@ -235,9 +275,11 @@ void YamlIn::numbers(const char* key,
     double v = 0.0;
     const YAML::Node item = seq[i];
     const std::string sub = fmt::format("{}[{}]", key, i);
-    if (!item.IsScalar() || !parseDouble(item.Scalar(), v) || (integers && std::floor(v) != v)) {
-      throw InputError(fmt::format("{}: {}: {} is not a number: expected {}", where(item),
+    const bool number = item.IsScalar() && parseDouble(item.Scalar(), v);
+    if (!number || (integers && std::floor(v) != v)) {
+      throw InputError(fmt::format("{}: {}: {} is not a {}: expected {}", where(item),
                                    fieldPath(sub), nodeText(item),
+                                   number ? "whole number" : "number",
                                    expect.describe(integers ? "integer" : "number")));
     }
     if (!expect.accepts(v)) {
@@ -273,7 +315,7 @@ YamlIn YamlIn::child_(const std::string& key,
 
 void YamlIn::finish() const {
   for (auto it = node_.begin(); it != node_.end(); ++it) {
-    const std::string key = it->first.as<std::string>();
+    const std::string key = it->first.Scalar();
     if (std::find(known_.begin(), known_.end(), key) != known_.end()) continue;
     // Suggest only near misses: a unit suffix (radius_m for radius_mm) or a typo.
     std::string best;

@@ -258,7 +258,7 @@ TEST_F(JobFile, WrongTypesSayWhatWasExpected) {
       {at("job.yaml", "3:20: table.radius_mm: 'abc' is not a number"), "a finite number > 0"}));
   EXPECT_TRUE(loadFails(writeJob("table:\n  radius_mm: \"250 mm\"\n"),
                         {at("job.yaml", "4:14: table.radius_mm: '250 mm' is not a number"),
-                         "units belong in the key name"}));
+                         "the unit is part of the key name, radius_mm"}));
   EXPECT_TRUE(
       loadFails(writeJob("table: {continuous: maybe}\n"),
                 {at("job.yaml", "3:"), "table.continuous: 'maybe'", "expected true or false"}));
@@ -267,6 +267,32 @@ TEST_F(JobFile, WrongTypesSayWhatWasExpected) {
                 {at("job.yaml", "3:"), "robot_base.xyz_mm: a list of 2", "a list of 3 numbers"}));
   EXPECT_TRUE(loadFails(writeJob("table: {axis: 5}\n"),
                         {at("job.yaml", "3:"), "table.axis: '5': expected a mapping"}));
+}
+
+TEST_F(JobFile, YamlThatParsesButIsAmbiguousIsRejected) {
+  // yaml-cpp keeps the first of two equal keys; a job file must say which one it means.
+  EXPECT_TRUE(loadFails(writeJob("table: {radius_mm: 100, radius_mm: 300}\n"),
+                        {at("job.yaml", "3:"), "table.radius_mm: duplicate key", "line 3"}));
+  EXPECT_TRUE(loadFails(writeJob("part: {mesh: part.stl, scale: 0}\n"),
+                        {at("job.yaml", "3:1: part: duplicate key (first given on line 2)")}));
+  EXPECT_TRUE(loadFails(writeJob("[1, 2]: 3\n"),
+                        {at("job.yaml", "3:1:"), "a list used as a key", "a plain key name"}));
+  EXPECT_TRUE(loadFails(writeJob("table: {~: 1}\n"), {"table:", "used as a key"}));
+  // An empty value is not "use the default": the user wrote the key for a reason.
+  EXPECT_TRUE(loadFails(writeJob("table:\n  radius_mm:\n"),
+                        {at("job.yaml", "4:"), "table.radius_mm: empty value",
+                         "leave the key out to use the default"}));
+  // A fraction where a whole number belongs is a number, just not a whole one.
+  EXPECT_TRUE(throwsInputError(
+      [&] { loadRobotFile(write("r.yaml", replaced(kRobot, "signs: [1, 1,", "signs: [1, 1.5,"))); },
+      {"opw.signs[1]: '1.5' is not a whole number"}));
+  // Too large is out of range, not a unit problem.
+  EXPECT_TRUE(loadFails(writeJob("table: {radius_mm: 1e400}\n"), {"table.radius_mm"}));
+  try {
+    loadJob(writeJob("table: {radius_mm: 1e400}\n"));
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).find("unit"), std::string::npos) << e.what();
+  }
 }
 
 TEST_F(JobFile, MissingRequiredFieldsAreNamed) {
@@ -334,8 +360,7 @@ TEST_F(JobFile, RobotFilesWhoseOpwDisagreesWithDhOrWithFiveRowsAreRejected) {
                                {at("inline.yaml", " robot 'test arm'"), "OPW", "disagree"}));
 
   const std::size_t row6 = kRobot.find("  - {a_mm: 0,   d_mm: 80");
-  const std::string five_rows =
-      kRobot.substr(0, row6) + kRobot.substr(kRobot.find('\n', row6) + 1);
+  const std::string five_rows = kRobot.substr(0, row6) + kRobot.substr(kRobot.find('\n', row6) + 1);
   EXPECT_TRUE(
       throwsInputError([&] { loadRobotFile(write("five.yaml", five_rows)); },
                        {at("five.yaml", "3:3: dh: a list of 5"), "expected exactly 6 entries"}));
