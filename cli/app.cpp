@@ -62,6 +62,16 @@ int run(int argc, char** argv) {
       "show", "Print the fully resolved job as YAML: every default filled in, robot inline");
   show_cmd->add_option("job", show_file, "Job file (YAML)")->required()->check(CLI::ExistingFile);
 
+  CheckOptions check;
+  auto* check_cmd = app.add_subcommand(
+      "check", "Score one pose: every constraint factor, every pair's clearance, collision");
+  check_cmd->add_option("job", check.job_file, "Job file (YAML)")->required()->check(CLI::ExistingFile);
+  check_cmd->add_option("--table", check.table_deg, "Table angle, degrees")->required();
+  check_cmd->add_option("--joints", check.joints_deg,
+                        "Six joint angles in degrees: j1,…,j6 (write --joints=-10,… when j1 is negative)")
+      ->required();
+  check_cmd->add_flag("--json", check.json, "Print JSON instead of text");
+
   FkOptions fk;
   auto* fk_cmd = app.add_subcommand("fk", "Forward kinematics: flange (and sensor) pose for joints");
   addRobotSource(*fk_cmd, fk.source);
@@ -88,7 +98,7 @@ int run(int argc, char** argv) {
     std::string message = e.what();
     const auto known = app.get_subcommands([&](CLI::App* sub) { return argc > 1 && sub->check_name(argv[1]); });
     if (argc > 1 && argv[1][0] != '-' && known.empty()) {
-      message = std::string("unknown command '") + argv[1] + "'; expected one of: plan, job, fk, ik";
+      message = std::string("unknown command '") + argv[1] + "'; expected one of: plan, job, check, fk, ik";
     }
     std::fprintf(stderr, "scanplan: error: %s\nRun 'scanplan --help' (or 'scanplan COMMAND --help') for usage.\n",
                  message.c_str());
@@ -104,6 +114,7 @@ int run(int argc, char** argv) {
     ExitCode code = ExitCode::kOk;
     if (plan_cmd->parsed()) code = runPlan(plan);
     if (show_cmd->parsed()) code = runJobShow(show_file);
+    if (check_cmd->parsed()) code = runCheck(check);
     if (fk_cmd->parsed()) code = runFk(fk);
     if (ik_cmd->parsed()) code = runIk(ik);
     return static_cast<int>(code);

@@ -35,6 +35,14 @@ struct PlanOptions {
   std::filesystem::path out_dir;
 };
 
+struct CheckOptions {
+  std::filesystem::path job_file;
+  double table_deg = 0.0;
+  std::string joints_deg;
+  bool json = false;
+};
+
+ExitCode runCheck(const CheckOptions& options);
 ExitCode runFk(const FkOptions& options);
 ExitCode runIk(const IkOptions& options);
 ExitCode runJobShow(const std::filesystem::path& job_file);

@@ -43,6 +43,91 @@ void describeScanner(A& a, ScannerSpec& s) {
   a.list("body", s.body, 0, 64);
 }
 
+inline const std::vector<std::string> kCarriers = {"world", "table"};
+
+template <class A>
+void describeObstacle(A& a, ObstacleSpec& s) {
+  a.require("name");
+  a.field("name", s.name);
+  a.field("carrier", s.carrier, Expect::oneOf(kCarriers));
+  if constexpr (A::kReading) s.by_corner = a.has("corner_mm");
+  if (!s.by_corner) {
+    describe(a, s.shape);
+    return;
+  }
+  // Corner + size, as workcell tools write boxes: sizes may be negative (normalised later).
+  a.require("type");
+  a.require("size_mm");
+  a.field("type", s.shape.type, Expect::oneOf({"box"}));
+  a.field("corner_mm", s.corner_mm);
+  a.field("size_mm", s.shape.size_mm);
+  if constexpr (A::kReading) {
+    for (double v : s.shape.size_mm) {
+      if (v == 0.0) a.fail("size_mm", "a zero side", "non-zero sides (negative ones extend from the corner the other way)");
+    }
+    if (a.has("pose")) a.fail("pose", "given with corner_mm", "either corner_mm + size_mm or a centred box with pose");
+  }
+}
+
+template <class A>
+void describeRamp(A& a, RampSpec& s) {
+  a.field("low", s.low, Expect::range(0.0, 1.0));
+  a.field("high", s.high, Expect::range(0.0, 1.0));
+  a.field("gamma", s.gamma, Expect::positive());
+  if constexpr (A::kReading) {
+    if (!(s.low < s.high)) a.fail("high", formatNumber(s.high), "a value above low (" + formatNumber(s.low) + ")");
+  }
+}
+
+template <class A>
+void describeLengthRamp(A& a, LengthRampSpec& s) {
+  a.field("low_mm", s.low_mm, Expect::nonNegative());
+  a.field("high_mm", s.high_mm, Expect::positive());
+  a.field("gamma", s.gamma, Expect::positive());
+  if constexpr (A::kReading) {
+    if (!(s.low_mm < s.high_mm)) a.fail("high_mm", formatNumber(s.high_mm), "a value above low_mm (" + formatNumber(s.low_mm) + ")");
+  }
+}
+
+template <class A>
+void describePairRule(A& a, PairRuleSpec& s) {
+  a.require("a");
+  a.require("b");
+  a.field("a", s.a);
+  a.field("b", s.b);
+  a.field("exclude", s.exclude);
+  a.field("include", s.include);
+  if constexpr (A::kReading) {
+    if (s.exclude && s.include) a.fail("include", "true together with exclude", "at most one of exclude, include");
+  }
+  if (!A::kReading && s.d_low_mm < 0.0 && s.d_high_mm < 0.0 && s.gamma < 0.0) return;
+  if (A::kReading || s.d_low_mm >= 0.0) a.field("d_low_mm", s.d_low_mm, Expect::nonNegative());
+  if (A::kReading || s.d_high_mm >= 0.0) a.field("d_high_mm", s.d_high_mm, Expect::positive());
+  if (A::kReading || s.gamma >= 0.0) a.field("gamma", s.gamma, Expect::positive());
+}
+
+template <class A>
+void describeClearance(A& a, ClearanceSpec& s) {
+  a.field("d_low_mm", s.d_low_mm, Expect::nonNegative());
+  a.field("d_high_mm", s.d_high_mm, Expect::positive());
+  a.field("gamma", s.gamma, Expect::positive());
+  a.list("pairs", s.pairs, 0, 1000);
+  if constexpr (A::kReading) {
+    if (!(s.d_low_mm < s.d_high_mm)) {
+      a.fail("d_high_mm", formatNumber(s.d_high_mm), "a distance above d_low_mm (" + formatNumber(s.d_low_mm) + ")");
+    }
+  }
+}
+
+template <class A>
+void describeConstraints(A& a, ConstraintsSpec& s) {
+  a.field("joint_limit_gamma", s.joint_limit_gamma, Expect::positive());
+  a.section("wrist", s.wrist);
+  a.section("elbow", s.elbow);
+  a.section("shoulder", s.shoulder);
+  a.section("clearance", s.clearance);
+}
+
 template <class A>
 void describeJob(A& a, JobSpec& s) {
   a.field("name", s.name);
@@ -66,6 +151,8 @@ void describeJob(A& a, JobSpec& s) {
   a.require("part");
   a.section("part", s.part);
   a.section("scanner", s.scanner);
+  a.list("obstacles", s.obstacles, 0, 10000);
+  a.section("constraints", s.constraints);
 }
 
 }  // namespace
@@ -76,6 +163,18 @@ void describe(YamlIn& a, PartSpec& s) { describePart(a, s); }
 void describe(YamlOut& a, PartSpec& s) { describePart(a, s); }
 void describe(YamlIn& a, ScannerSpec& s) { describeScanner(a, s); }
 void describe(YamlOut& a, ScannerSpec& s) { describeScanner(a, s); }
+void describe(YamlIn& a, ObstacleSpec& s) { describeObstacle(a, s); }
+void describe(YamlOut& a, ObstacleSpec& s) { describeObstacle(a, s); }
+void describe(YamlIn& a, RampSpec& s) { describeRamp(a, s); }
+void describe(YamlOut& a, RampSpec& s) { describeRamp(a, s); }
+void describe(YamlIn& a, LengthRampSpec& s) { describeLengthRamp(a, s); }
+void describe(YamlOut& a, LengthRampSpec& s) { describeLengthRamp(a, s); }
+void describe(YamlIn& a, PairRuleSpec& s) { describePairRule(a, s); }
+void describe(YamlOut& a, PairRuleSpec& s) { describePairRule(a, s); }
+void describe(YamlIn& a, ClearanceSpec& s) { describeClearance(a, s); }
+void describe(YamlOut& a, ClearanceSpec& s) { describeClearance(a, s); }
+void describe(YamlIn& a, ConstraintsSpec& s) { describeConstraints(a, s); }
+void describe(YamlOut& a, ConstraintsSpec& s) { describeConstraints(a, s); }
 
 JobSpec loadJob(const std::filesystem::path& file) {
   JobSpec job;
@@ -121,7 +220,53 @@ kinematics::CellModel buildCell(const JobSpec& job) {
 
   cell.scanner.X_FS = toIsometry(job.scanner.mount);
   for (const ShapeSpec& shape : job.scanner.body) cell.scanner.body.push_back(toShape(shape));
+
+  for (const ObstacleSpec& o : job.obstacles) {
+    kinematics::Obstacle obstacle;
+    obstacle.name = o.name;
+    obstacle.carrier = o.carrier == "table" ? kinematics::Carrier::kTable : kinematics::Carrier::kWorld;
+    if (o.by_corner) {
+      const Eigen::Vector3d corner = Eigen::Vector3d(o.corner_mm.data()) * kMmToM;
+      const Eigen::Vector3d size = Eigen::Vector3d(o.shape.size_mm.data()) * kMmToM;
+      kinematics::Shape box;
+      box.geometry = kinematics::Box{size.cwiseAbs()};
+      box.X_BG.translation() = corner + 0.5 * size;  // the centre, whichever way sizes point
+      obstacle.shapes.push_back(box);
+    } else {
+      obstacle.shapes.push_back(toShape(o.shape));
+    }
+    cell.obstacles.push_back(std::move(obstacle));
+  }
   return cell;
+}
+
+collision::ClearanceConfig clearanceConfig(const JobSpec& job) {
+  const ClearanceSpec& c = job.constraints.clearance;
+  collision::ClearanceConfig config;
+  config.defaults = {mm(c.d_low_mm), mm(c.d_high_mm), c.gamma};
+  for (const PairRuleSpec& r : c.pairs) {
+    collision::PairRule rule;
+    rule.a = r.a;
+    rule.b = r.b;
+    rule.action = r.exclude   ? collision::PairRule::Action::kExclude
+                  : r.include ? collision::PairRule::Action::kInclude
+                              : collision::PairRule::Action::kSet;
+    rule.d_low = r.d_low_mm >= 0.0 ? mm(r.d_low_mm) : -1.0;
+    rule.d_high = r.d_high_mm >= 0.0 ? mm(r.d_high_mm) : -1.0;
+    rule.gamma = r.gamma > 0.0 ? r.gamma : -1.0;
+    config.rules.push_back(rule);
+  }
+  return config;
+}
+
+planner::ConstraintSettings constraintSettings(const JobSpec& job) {
+  const ConstraintsSpec& c = job.constraints;
+  planner::ConstraintSettings s;
+  s.joint_gamma = c.joint_limit_gamma;
+  s.wrist = {c.wrist.low, c.wrist.high, c.wrist.gamma};
+  s.elbow = {c.elbow.low, c.elbow.high, c.elbow.gamma};
+  s.shoulder = {mm(c.shoulder.low_mm), mm(c.shoulder.high_mm), c.shoulder.gamma};
+  return s;
 }
 
 }  // namespace scanplan::cli

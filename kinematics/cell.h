@@ -25,6 +25,17 @@ struct ScannerMount {
   std::vector<Shape> body;
 };
 
+/// What carries a body: it stays put in the world, or turns with the table.
+enum class Carrier { kWorld, kTable };
+
+/// A fixture or obstacle in the cell. Its shapes are in the carrier's frame: the world frame
+/// for kWorld, the table-top frame R for kTable.
+struct Obstacle {
+  std::string name;
+  Carrier carrier = Carrier::kWorld;
+  std::vector<Shape> shapes;
+};
+
 /// The whole cell, built once from a validated job and never mutated.
 struct CellModel {
   CellModel(std::string cell_name, RobotModel cell_robot)
@@ -36,6 +47,7 @@ struct CellModel {
   RotaryTableModel table;
   PartModel part;
   ScannerMount scanner;
+  std::vector<Obstacle> obstacles;
 
   /// Flange target X_BF for a sensor pose X_PS (part frame) with the table at θ (rad).
   Eigen::Isometry3d flangeTarget(double theta, const Eigen::Isometry3d& X_PS) const {

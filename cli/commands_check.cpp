@@ -1,0 +1,115 @@
+#include <cstdio>
+
+#include <fmt/format.h>
+
+#include "cli/commands.h"
+#include "cli/format.h"
+#include "collision/scene.h"
+#include "kinematics/units.h"
+#include "planner/constraints.h"
+
+namespace scanplan::cli {
+namespace {
+
+std::vector<double> mmVector(const Eigen::Vector3d& p) { return {toMm(p.x()), toMm(p.y()), toMm(p.z())}; }
+
+}  // namespace
+
+ExitCode runCheck(const CheckOptions& options) {
+  const JobSpec job = loadJob(options.job_file);
+  const collision::Scene scene(buildCell(job), clearanceConfig(job));
+  const auto& robot = scene.cell().robot;
+  const auto joints = parseNumberList(options.joints_deg, 6, "--joints",
+                                      "6 joint angles in degrees, j1,…,j6");
+  kinematics::JointVector q;
+  for (int i = 0; i < 6; ++i) q(i) = deg(joints[static_cast<std::size_t>(i)]);
+  const double theta = deg(options.table_deg);
+
+  planner::PoseEvaluator evaluator(scene, constraintSettings(job));
+  const planner::PoseScore s = evaluator.score(theta, q);
+  const auto& bodies = scene.bodies();
+  const auto pairName = [&](const collision::PairInfo& p) {
+    return bodies[static_cast<std::size_t>(p.a)].name + " - " + bodies[static_cast<std::size_t>(p.b)].name;
+  };
+
+  if (options.json) {
+    JsonWriter json;
+    json.beginObject();
+    json.value("job", job.name);
+    json.value("table_deg", options.table_deg);
+    json.numbers("joints_deg", joints);
+    json.value("branch", robot.branchOf(q).words());
+    json.numbers("joint_factors", std::vector<double>(s.joint.begin(), s.joint.end()));
+    json.beginObject("singularity");
+    json.value("wrist", s.singularity.wrist).value("wrist_factor", s.wrist);
+    json.value("elbow", s.singularity.elbow).value("elbow_factor", s.elbow);
+    json.value("shoulder_mm", toMm(s.singularity.shoulder)).value("shoulder_factor", s.shoulder);
+    json.value("manipulability", s.singularity.manipulability);
+    json.endObject();
+    json.beginArray("pairs");
+    for (std::size_t i = 0; i < scene.pairs().size(); ++i) {
+      const auto& p = scene.pairs()[i];
+      const auto& c = s.clearance.pairs[i];
+      json.beginObject();
+      json.value("a", bodies[static_cast<std::size_t>(p.a)].name);
+      json.value("b", bodies[static_cast<std::size_t>(p.b)].name);
+      json.value("distance_mm", toMm(c.distance));
+      json.value("beyond_d_high", c.beyond_bound);
+      json.value("penetrating", c.penetrating);
+      json.value("d_low_mm", toMm(p.thresholds.d_low));
+      json.value("d_high_mm", toMm(p.thresholds.d_high));
+      json.value("gamma", p.thresholds.gamma);
+      json.value("factor", c.factor);
+      if (!c.beyond_bound) {
+        json.numbers("witness_a_mm", mmVector(c.p_a));
+        json.numbers("witness_b_mm", mmVector(c.p_b));
+      }
+      json.endObject();
+    }
+    json.endArray();
+    json.value("clearance_factor", s.clearance.factor);
+    json.value("collision", s.clearance.collision);
+    json.value("f", s.total);
+    json.value("limiting", s.limiting);
+    json.endObject();
+    std::fputs(json.str().c_str(), stdout);
+  } else {
+    std::string t;
+    t += fmt::format("pose         table {} deg, joints {} deg  [{}{}]\n", options.table_deg,
+                     fmt::join(joints, ", "), robot.branchOf(q).words(),
+                     robot.withinLimits(q) ? "" : ", OUTSIDE the joint limits");
+    t += "joint limits";
+    for (int j = 0; j < 6; ++j) t += fmt::format("  f{}={:.3f}", j + 1, s.joint[static_cast<std::size_t>(j)]);
+    t += "   (Eq. 7)\n";
+    t += fmt::format(
+        "singularity  wrist |sin q5| {:.3f} -> f {:.3f}   elbow {:.3f} -> f {:.3f}   shoulder "
+        "{:.1f} mm -> f {:.3f}   (manipulability {:.3f})\n",
+        s.singularity.wrist, s.wrist, s.singularity.elbow, s.elbow, toMm(s.singularity.shoulder),
+        s.shoulder, s.singularity.manipulability);
+    t += fmt::format("clearance    {} pairs (Eq. 8); distances beyond d_high are shown as >\n",
+                     scene.pairs().size());
+    t += fmt::format("  {:<24} {:>11} {:>7} {:>7} {:>7}\n", "pair", "distance_mm", "d_low", "d_high", "f_C");
+    for (std::size_t i = 0; i < scene.pairs().size(); ++i) {
+      const auto& p = scene.pairs()[i];
+      const auto& c = s.clearance.pairs[i];
+      const std::string d = c.penetrating    ? "CONTACT"
+                            : c.beyond_bound ? fmt::format("> {:.1f}", toMm(c.distance))
+                                             : fmt::format("{:.3f}", toMm(c.distance));
+      t += fmt::format("  {:<24} {:>11} {:>7.1f} {:>7.1f} {:>7.3f}\n", pairName(p), d,
+                       toMm(p.thresholds.d_low), toMm(p.thresholds.d_high), c.factor);
+    }
+    t += fmt::format("collision    {}\n", s.clearance.collision ? "YES" : "no");
+    t += fmt::format("f            {:.4f}   limiting: {}\n", s.total, s.limiting);
+    if (s.clearance.limiting_pair >= 0) {
+      const auto& c = s.clearance.pairs[static_cast<std::size_t>(s.clearance.limiting_pair)];
+      const auto a = mmVector(c.p_a), b = mmVector(c.p_b);
+      t += fmt::format("closest      {}: {:.3f} mm between ({:.1f}, {:.1f}, {:.1f}) and ({:.1f}, {:.1f}, {:.1f}) mm (world)\n",
+                       pairName(scene.pairs()[static_cast<std::size_t>(s.clearance.limiting_pair)]),
+                       toMm(c.distance), a[0], a[1], a[2], b[0], b[1], b[2]);
+    }
+    std::fputs(t.c_str(), stdout);
+  }
+  return s.total > 0.0 ? ExitCode::kOk : ExitCode::kNoPlan;
+}
+
+}  // namespace scanplan::cli

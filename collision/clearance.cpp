@@ -1,0 +1,104 @@
+#include "collision/clearance.h"
+
+#include <limits>
+
+#include "collision/fcl_geometry.h"
+#include "kinematics/ramp.h"
+
+namespace scanplan::collision {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Minimum over the shape pairs of two bodies. Bounded: each shape pair is asked only for
+// distances below the best found so far (initially d_high), and a bounding-sphere test skips
+// shape pairs that cannot come closer than that.
+detail::ShapeDistance bodyDistance(const detail::BodyGeometry& a,
+                                   const Eigen::Isometry3d& X_Wa,
+                                   const detail::BodyGeometry& b,
+                                   const Eigen::Isometry3d& X_Wb,
+                                   double bound,
+                                   bool exact,
+                                   bool witness) {
+  detail::ShapeDistance best;
+  best.distance = bound;
+  best.beyond = true;
+  for (const detail::CollisionShape& sa : a.shapes) {
+    const Eigen::Isometry3d X_Wsa = X_Wa * sa.X_BG;
+    for (const detail::CollisionShape& sb : b.shapes) {
+      const Eigen::Isometry3d X_Wsb = X_Wb * sb.X_BG;
+      if (exact) {
+        const detail::ShapeDistance d = detail::exactShapeDistance(sa, X_Wsa, sb, X_Wsb);
+        if (best.beyond || d.distance < best.distance) best = d;
+        continue;
+      }
+      const double centres = (X_Wsa * sa.centre_G - X_Wsb * sb.centre_G).norm();
+      if (centres - sa.radius - sb.radius >= best.distance) continue;  // broad phase
+      const detail::ShapeDistance d =
+          detail::shapeDistance(sa, X_Wsa, sb, X_Wsb, best.distance, witness);
+      if (!d.beyond) best = d;
+      if (best.penetrating) return best;
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+ClearanceResult ClearanceEvaluator::evaluate(double theta,
+                                             const kinematics::JointVector& q,
+                                             const ClearanceRequest& request) {
+  const Scene& scene = *scene_;
+  scene.bodyPoses(theta, q, X_W_);
+  const auto& bodies = scene.geometry().bodies;
+  ClearanceResult result;
+  result.pairs.resize(scene.pairs().size());
+  double worst_factor = 2.0, worst_distance = kInf;
+  for (std::size_t i = 0; i < scene.pairs().size(); ++i) {
+    const PairInfo& pair = scene.pairs()[i];
+    const auto a = static_cast<std::size_t>(pair.a), b = static_cast<std::size_t>(pair.b);
+    const detail::ShapeDistance d =
+        bodyDistance(bodies[a], X_W_[a], bodies[b], X_W_[b],
+                     request.bounded ? pair.thresholds.d_high : kInf, !request.bounded,
+                     request.witness_points);
+    PairClearance& out = result.pairs[i];
+    out.distance = d.distance;
+    out.beyond_bound = d.beyond;
+    out.penetrating = d.penetrating;
+    out.factor = out.beyond_bound ? 1.0
+                                  : rampFactor(d.distance, pair.thresholds.d_low,
+                                               pair.thresholds.d_high, pair.thresholds.gamma);
+    if (!out.beyond_bound) {
+      out.p_a = d.p_a;
+      out.p_b = d.p_b;
+    }
+    result.factor *= out.factor;
+    result.collision = result.collision || out.penetrating;
+    if (!out.beyond_bound &&
+        (out.factor < worst_factor || (out.factor == worst_factor && out.distance < worst_distance))) {
+      worst_factor = out.factor;
+      worst_distance = out.distance;
+      result.limiting_pair = static_cast<int>(i);
+    }
+  }
+  return result;
+}
+
+double ClearanceEvaluator::factor(double theta, const kinematics::JointVector& q) {
+  const Scene& scene = *scene_;
+  scene.bodyPoses(theta, q, X_W_);
+  const auto& bodies = scene.geometry().bodies;
+  double f = 1.0;
+  for (const PairInfo& pair : scene.pairs()) {
+    const auto a = static_cast<std::size_t>(pair.a), b = static_cast<std::size_t>(pair.b);
+    const detail::ShapeDistance d = bodyDistance(bodies[a], X_W_[a], bodies[b], X_W_[b],
+                                                 pair.thresholds.d_high, false, false);
+    if (d.beyond) continue;
+    f *= rampFactor(d.distance, pair.thresholds.d_low, pair.thresholds.d_high,
+                    pair.thresholds.gamma);
+    if (f == 0.0) return 0.0;
+  }
+  return f;
+}
+
+}  // namespace scanplan::collision

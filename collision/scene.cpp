@@ -1,0 +1,174 @@
+#include "collision/scene.h"
+
+#include <fnmatch.h>
+
+#include <algorithm>
+#include <set>
+
+#include "collision/fcl_geometry.h"
+#include "kinematics/error.h"
+#include "kinematics/units.h"
+
+namespace scanplan::collision {
+namespace {
+
+bool matches(const std::string& pattern, const BodyInfo& body) {
+  if (pattern == "robot") return body.motion == BodyMotion::kRobotLink;
+  if (pattern == "obstacles") {
+    return (body.motion == BodyMotion::kWorld || body.motion == BodyMotion::kTable) &&
+           body.name != "table" && body.name != "part";
+  }
+  return fnmatch(pattern.c_str(), body.name.c_str(), 0) == 0;
+}
+
+// Which rigid group a body belongs to for the default pair set: bodies of one group never move
+// relative to each other (seed §4.1). The robot base is fixed in the world.
+int rigidGroup(const BodyInfo& body) {
+  switch (body.motion) {
+    case BodyMotion::kWorld: return -1;
+    case BodyMotion::kTable: return -2;
+    case BodyMotion::kRobotLink: return body.link == 0 ? -1 : body.link;
+    case BodyMotion::kScanner: return 6;
+  }
+  return -3;
+}
+
+bool pairByDefault(const BodyInfo& a, const BodyInfo& b) {
+  const int ga = rigidGroup(a), gb = rigidGroup(b);
+  if (ga == gb) return false;
+  const bool a_arm = a.link >= 1, b_arm = b.link >= 1;  // the base (link 0) stays put
+  if (!a_arm && !b_arm) return false;  // neither moves with the arm: the robot cannot change it
+  if (a.link >= 0 && b.link >= 0 && std::abs(a.link - b.link) <= 1) return false;  // consecutive
+  return true;
+}
+
+}  // namespace
+
+Scene::Scene(const kinematics::CellModel& cell, const ClearanceConfig& config)
+    : cell_(cell), geometry_(std::make_unique<detail::SceneGeometry>()) {
+  const auto add = [&](std::string name, BodyMotion motion, int link,
+                       const std::vector<kinematics::Shape>& shapes) {
+    if (shapes.empty()) return;
+    detail::BodyGeometry body;
+    BodyInfo info{std::move(name), motion, link, shapes.size(), 0};
+    for (const kinematics::Shape& shape : shapes) {
+      body.shapes.push_back(detail::makeCollisionShape(shape));
+      info.triangles += body.shapes.back().triangles;
+    }
+    if (bodyIndex(info.name) >= 0) {
+      throw InputError("collision scene: two bodies are named '" + info.name +
+                       "': expected unique names (robot links, scanner, table, part, obstacles)");
+    }
+    bodies_.push_back(std::move(info));
+    geometry_->bodies.push_back(std::move(body));
+  };
+
+  const auto& robot = cell.robot.definition();
+  for (int k = 0; k <= kinematics::kNumJoints; ++k) {
+    const auto& link = robot.links[static_cast<std::size_t>(k)];
+    const std::string fallback = k == 0 ? std::string("base") : "link" + std::to_string(k);
+    add(link.name.empty() ? fallback : link.name, BodyMotion::kRobotLink, k, link.shapes);
+  }
+  add("scanner", BodyMotion::kScanner, 6, cell.scanner.body);
+
+  kinematics::Shape table_shape;
+  table_shape.geometry = kinematics::Cylinder{cell.table.radius, cell.table.height};
+  table_shape.X_BG.translation() << 0.0, 0.0, -0.5 * cell.table.height;  // top at z = 0
+  add("table", BodyMotion::kTable, -1, {table_shape});
+
+  kinematics::Shape part_shape;
+  part_shape.geometry = cell.part.mesh;
+  part_shape.X_BG = cell.part.X_RP;
+  add("part", BodyMotion::kTable, -1, {part_shape});
+
+  for (const kinematics::Obstacle& o : cell.obstacles) {
+    add(o.name, o.carrier == kinematics::Carrier::kTable ? BodyMotion::kTable : BodyMotion::kWorld,
+        -1, o.shapes);
+  }
+
+  // Default pairs, then the job's rules in order.
+  struct Candidate {
+    bool enabled;
+    PairThresholds t;
+  };
+  const int n = static_cast<int>(bodies_.size());
+  std::vector<Candidate> candidates;
+  for (int a = 0; a < n; ++a) {
+    for (int b = a + 1; b < n; ++b) {
+      candidates.push_back({pairByDefault(bodies_[static_cast<std::size_t>(a)],
+                                          bodies_[static_cast<std::size_t>(b)]),
+                            config.defaults});
+    }
+  }
+  for (const PairRule& rule : config.rules) {
+    bool any = false;
+    std::size_t c = 0;
+    for (int a = 0; a < n; ++a) {
+      for (int b = a + 1; b < n; ++b, ++c) {
+        const BodyInfo& A = bodies_[static_cast<std::size_t>(a)];
+        const BodyInfo& B = bodies_[static_cast<std::size_t>(b)];
+        if (!((matches(rule.a, A) && matches(rule.b, B)) || (matches(rule.a, B) && matches(rule.b, A)))) {
+          continue;
+        }
+        any = true;
+        Candidate& cand = candidates[c];
+        if (rule.action == PairRule::Action::kExclude) cand.enabled = false;
+        if (rule.action == PairRule::Action::kInclude) cand.enabled = true;
+        if (rule.d_low >= 0.0) cand.t.d_low = rule.d_low;
+        if (rule.d_high >= 0.0) cand.t.d_high = rule.d_high;
+        if (rule.gamma > 0.0) cand.t.gamma = rule.gamma;
+      }
+    }
+    if (!any) {
+      throw InputError("constraints.clearance.pairs: rule [" + rule.a + ", " + rule.b +
+                       "] matches no pair of bodies: expected body names, globs, 'robot' or "
+                       "'obstacles'");
+    }
+  }
+  std::size_t c = 0;
+  for (int a = 0; a < n; ++a) {
+    for (int b = a + 1; b < n; ++b, ++c) {
+      if (!candidates[c].enabled) continue;
+      const PairThresholds& t = candidates[c].t;
+      if (!(t.d_low < t.d_high)) {
+        throw InputError("constraints.clearance: pair " + bodies_[static_cast<std::size_t>(a)].name +
+                         " ↔ " + bodies_[static_cast<std::size_t>(b)].name + ": d_low " +
+                         std::to_string(toMm(t.d_low)) + " mm is not below d_high " +
+                         std::to_string(toMm(t.d_high)) + " mm: expected d_low < d_high");
+      }
+      pairs_.push_back({a, b, t});
+    }
+  }
+}
+
+Scene::~Scene() = default;
+Scene::Scene(Scene&&) noexcept = default;
+Scene& Scene::operator=(Scene&&) noexcept = default;
+
+int Scene::bodyIndex(const std::string& name) const {
+  for (std::size_t i = 0; i < bodies_.size(); ++i) {
+    if (bodies_[i].name == name) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+void Scene::bodyPoses(double theta,
+                      const kinematics::JointVector& q,
+                      std::vector<Eigen::Isometry3d>& X_W) const {
+  X_W.resize(bodies_.size());
+  const auto frames = cell_.robot.linkFrames(q);
+  const Eigen::Isometry3d X_WR = cell_.table.X_WR(theta);
+  for (std::size_t i = 0; i < bodies_.size(); ++i) {
+    const BodyInfo& body = bodies_[i];
+    switch (body.motion) {
+      case BodyMotion::kWorld: X_W[i].setIdentity(); break;
+      case BodyMotion::kTable: X_W[i] = X_WR; break;
+      case BodyMotion::kRobotLink:
+        X_W[i] = cell_.X_WB * frames[static_cast<std::size_t>(body.link)];
+        break;
+      case BodyMotion::kScanner: X_W[i] = cell_.X_WB * frames[6] * cell_.scanner.X_FS; break;
+    }
+  }
+}
+
+}  // namespace scanplan::collision

@@ -1,0 +1,92 @@
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "kinematics/cell.h"
+#include "kinematics/robot_model.h"
+
+namespace scanplan::collision {
+
+/// Eq. 8 thresholds for one pair of bodies: f_C = 0 below d_low, 1 at and above d_high (m).
+struct PairThresholds {
+  double d_low = 0.005;
+  double d_high = 0.030;
+  double gamma = 1.0;
+};
+
+/// A job's pair rule, applied in order after the default pair set. Patterns: a body name, a
+/// glob (`link*`, `*`), or a group (`robot`: base and links; `obstacles`). A rule matches a
+/// pair when its two patterns match the two bodies in either order.
+struct PairRule {
+  enum class Action { kSet, kExclude, kInclude };
+  std::string a;
+  std::string b;
+  Action action = Action::kSet;
+  double d_low = -1.0;   ///< m; negative: keep the value in force
+  double d_high = -1.0;  ///< m; negative: keep
+  double gamma = -1.0;   ///< negative: keep
+};
+
+struct ClearanceConfig {
+  PairThresholds defaults;
+  std::vector<PairRule> rules;
+};
+
+/// What moves a body.
+enum class BodyMotion { kWorld, kTable, kRobotLink, kScanner };
+
+struct BodyInfo {
+  std::string name;
+  BodyMotion motion = BodyMotion::kWorld;
+  int link = -1;  ///< robot link index 0..6, 6 for the scanner; -1 otherwise
+  std::size_t shapes = 0;
+  std::size_t triangles = 0;  ///< mesh triangles over all shapes
+};
+
+struct PairInfo {
+  int a = 0;
+  int b = 0;
+  PairThresholds thresholds;
+};
+
+namespace detail {
+struct SceneGeometry;
+}
+
+/// The cell's collision scene, built once per job: FCL geometry for every body (BVH models,
+/// OBBRSS, for meshes; FCL primitives for primitives) and the set of body pairs to check with
+/// their thresholds (DESIGN.md §4, seed §4.1). Immutable and safe to share across threads.
+class Scene {
+ public:
+  /// Loads meshes and builds the geometry. Throws InputError for a broken mesh or a rule that
+  /// names no body.
+  Scene(const kinematics::CellModel& cell, const ClearanceConfig& config);
+  ~Scene();
+  Scene(Scene&&) noexcept;
+  Scene& operator=(Scene&&) noexcept;
+
+  const kinematics::CellModel& cell() const { return cell_; }
+  const std::vector<BodyInfo>& bodies() const { return bodies_; }
+  const std::vector<PairInfo>& pairs() const { return pairs_; }
+  /// Index of a body by name, -1 when absent.
+  int bodyIndex(const std::string& name) const;
+
+  /// World pose of every body frame for table angle θ (rad) and arm joints q (rad).
+  void bodyPoses(double theta,
+                 const kinematics::JointVector& q,
+                 std::vector<Eigen::Isometry3d>& X_W) const;
+
+  const detail::SceneGeometry& geometry() const { return *geometry_; }
+
+ private:
+  kinematics::CellModel cell_;
+  std::vector<BodyInfo> bodies_;
+  std::vector<PairInfo> pairs_;
+  std::unique_ptr<detail::SceneGeometry> geometry_;
+};
+
+}  // namespace scanplan::collision
