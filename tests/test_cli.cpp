@@ -465,4 +465,45 @@ TEST_F(Cli, PlanWithAMissingMeshIsAnInputErrorAndLeavesNoTmpFiles) {
   EXPECT_FALSE(fs::exists(out / "job.yaml"));
 }
 
+
+TEST_F(Cli, CheckScoresAPoseAndListsEveryPair) {
+  const Result run = scanplan({"check", kDemoJob, "--table", "30", "--joints=-20,-40,120,0,40,0", "--json"});
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  EXPECT_EQ(array(run.out, "joint_factors").size(), 6u);
+  const auto factors = allArrays(run.out, "witness_a_mm");  // only pairs closer than d_high
+  const auto beyond = allBools(run.out, "beyond_d_high");
+  EXPECT_GT(beyond.size(), 20u);
+  EXPECT_EQ(factors.size(), static_cast<std::size_t>(std::count(beyond.begin(), beyond.end(), false)));
+  EXPECT_TRUE(contains(run.out, "\"collision\": false")) << run.out;
+  EXPECT_TRUE(contains(run.out, "\"limiting\": ")) << run.out;
+  const Result text = scanplan({"check", kDemoJob, "--table", "30", "--joints=-20,-40,120,0,40,0"});
+  ASSERT_EQ(text.exit_code, 0) << describe(text);
+  EXPECT_TRUE(contains(text.out, "scanner - part")) << text.out;
+  EXPECT_TRUE(contains(text.out, "collision    no")) << text.out;
+}
+
+TEST_F(Cli, CheckReportsASelfCollisionAsAForbiddenPose) {
+  // The scanner folded back into link 1 (joints 2 and 3 near their limits).
+  const Result run = scanplan({"check", kDemoJob, "--table", "0", "--joints", "0,-150,250,0,90,0"});
+  EXPECT_EQ(run.exit_code, 4) << describe(run);
+  EXPECT_TRUE(contains(run.out, "collision    YES")) << run.out;
+  EXPECT_TRUE(contains(run.out, "link1 - scanner")) << run.out;
+  EXPECT_TRUE(contains(run.out, "CONTACT")) << run.out;
+}
+
+TEST_F(Cli, CheckRejectsBadJointsAndBadPairRules) {
+  const Result joints = scanplan({"check", kDemoJob, "--table", "0", "--joints", "0,0,0"});
+  EXPECT_EQ(joints.exit_code, 3) << describe(joints);
+  EXPECT_TRUE(contains(joints.err, "--joints")) << joints.err;
+  const fs::path job = dir_ / "rule.yaml";
+  writeFile(job, "robot: " + (kSourceDir / "data/robots/viper_s650.yaml").string() +
+                     "\npart: {mesh: " + (kSourceDir / "data/parts/demo_block.stl").string() +
+                     "}\nconstraints:\n  clearance:\n    pairs:\n      - {a: scaner, b: part, exclude: true}\n");
+  const Result rule = scanplan({"check", job.string(), "--table", "0", "--joints", "0,-60,150,0,60,0"});
+  EXPECT_EQ(rule.exit_code, 3) << describe(rule);
+  EXPECT_TRUE(contains(rule.err, "constraints.clearance.pairs")) << rule.err;
+  EXPECT_TRUE(contains(rule.err, "scaner")) << rule.err;
+}
+
 }  // namespace
+
