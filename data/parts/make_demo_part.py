@@ -38,7 +38,7 @@ RB, ZB, FIL = 58.0, 100.0, 8.0                      # body radius, body top, fla
 RH, ZH = 46.0, 110.0                                # hub radius, hub top
 RS, ZS, RBORE = 31.0, 92.0, 24.0                    # bearing seat radius / bottom, through bore radius
 RR, ZR = 45.0, 30.0                                 # cast recess radius / height
-RIBS, RIB_HW, RIB_GAP, RIB_FOOT, RIB_TOP = (0.0, math.pi), 5.0, 1.0, 84.0, 63.25
+RIBS, RIB_HW, RIB_GAP, RIB_FOOT, RIB_TOP = (0.0, math.pi), 5.0, 1.5, 84.0, 63.25
 N_COLS = 160                                        # columns of the lathe grid (2.25 deg)
 WALL_Z = [24.0, 29.0] + [34.0 + 3.25 * i for i in range(17)] + [89.0, 92.0, 95.0, 98.0]
 S4 = (0.0, 0.25, 0.5, 0.75, 1.0)
@@ -214,7 +214,7 @@ def flange_hole(cx, cy, half, r=6.75, ch=1.0):
     chain(upper + bore + lower[::-1])
 
 
-def hub_hole(theta, rc=38.25, half=math.radians(25), r=2.5, depth=12.0):
+def hub_hole(theta, rc=38.25, half=math.radians(15), r=2.5, depth=12.0):
     """Blind tap-drill hole in the hub top: chamfer, bore, drill-point cone."""
     cx, cy, k = rc * math.cos(theta), rc * math.sin(theta), marks["hub_top"]
     ids = ids_of(block(k, k + 4, theta, half))
@@ -257,7 +257,7 @@ def boss(theta, z_lo, z_hi, half, rb, fil, x_face, r_hole, depth, ch):
 
 
 for sx, sy in ((1, 1), (-1, 1), (-1, -1), (1, -1)):
-    flange_hole(sx * (FA - FRC), sy * (FB - FRC), math.radians(26))
+    flange_hole(sx * (FA - FRC), sy * (FB - FRC), math.radians(22))
 for i in range(4):
     hub_hole(math.radians(45 + 90 * i))
 for th in (math.pi / 2, -math.pi / 2):  # ports
