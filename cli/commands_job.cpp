@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cstdio>
 
 #include <fmt/format.h>
@@ -7,7 +8,9 @@
 #include "cli/format.h"
 #include "kinematics/error.h"
 #include "kinematics/mesh.h"
+#include "collision/scene.h"
 #include "kinematics/units.h"
+#include "planner/constraints.h"
 
 namespace scanplan::cli {
 namespace {
@@ -50,13 +53,28 @@ ExitCode runPlan(const PlanOptions& options) {
   Eigen::Isometry3d X_PS = Eigen::Isometry3d::Identity();
   X_PS.linear() = Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal();  // z_S points down
   X_PS.translation() = top_centre_P + Eigen::Vector3d(0, 0, kStandoff);
-  int reachable = 0;
+  // Score the best in-limit IK solution at each angle against every constraint (Eq. 6).
+  const collision::Scene scene(cell, clearanceConfig(job));
+  planner::PoseEvaluator evaluator(scene, constraintSettings(job));
+  int reachable = 0, feasible = 0;
+  double best_f = 0.0;
+  std::string best_limit;
   constexpr int kAngles = 12;
   for (int k = 0; k < kAngles; ++k) {
     const double theta = deg(30.0 * k);
-    kinematics::IkRequest request;
-    request.within_limits_only = true;
-    if (!cell.robot.ik(cell.flangeTarget(theta, X_PS), request).empty()) ++reachable;
+    const auto solutions = cell.robot.ik(cell.flangeTarget(theta, X_PS), {.within_limits_only = true});
+    if (solutions.empty()) continue;
+    ++reachable;
+    double angle_best = 0.0;
+    for (const auto& s : solutions) {
+      const planner::PoseScore score = evaluator.score(theta, s.q);
+      angle_best = std::max(angle_best, score.total);
+      if (score.total > best_f) {
+        best_f = score.total;
+        best_limit = score.limiting;
+      }
+    }
+    feasible += angle_best > 0.0 ? 1 : 0;
   }
 
   std::string summary;
@@ -76,8 +94,10 @@ ExitCode runPlan(const PlanOptions& options) {
   const Eigen::Vector3d top_W = X_WP * top_centre_P * kMToMm;
   summary += fmt::format(
       "reach      sensor 150 mm above the part top ({:.0f}, {:.0f}, {:.0f}) mm, looking down: "
-      "reachable at {}/{} table angles (every 30 deg)\n",
-      top_W.x(), top_W.y(), top_W.z(), reachable, kAngles);
+      "reachable at {}/{} table angles (every 30 deg), collision-free and feasible at {}\n",
+      top_W.x(), top_W.y(), top_W.z(), reachable, kAngles, feasible);
+  summary += fmt::format("score      best f = {:.3f} over those poses (limited by {}); {} body pairs checked\n",
+                         best_f, best_limit.empty() ? "-" : best_limit, scene.pairs().size());
 
   prepareOutputDir(options.out_dir);
   writeFileAtomically(options.out_dir / "job.yaml", jobToYaml(job));

@@ -68,7 +68,7 @@ ClearanceResult ClearanceEvaluator::evaluate(double theta,
     out.factor = out.beyond_bound ? 1.0
                                   : rampFactor(d.distance, pair.thresholds.d_low,
                                                pair.thresholds.d_high, pair.thresholds.gamma);
-    if (!out.beyond_bound) {
+    if (!out.beyond_bound && request.witness_points) {
       out.p_a = d.p_a;
       out.p_b = d.p_b;
     }

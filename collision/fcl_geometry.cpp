@@ -17,13 +17,28 @@ using Solver = fcl::detail::GJKSolver_libccd<double>;
 // fcl::distance's default tolerance, so the bounded and the plain query run the same GJK.
 const fcl::DistanceRequestd kDefaultRequest;
 
+// The traversal may skip a subtree whose bounding volume is within this of the best distance
+// so far (FCL's abs_err/rel_err, honoured by the traversal-node API): results stay within
+// 0.5 nm of the exact distance, and tied triangles on parallel faces are not all visited.
+constexpr double kPruneTolerance = 5e-10;  // m
+
+template <class Node>
+void allowTolerance(Node& node, double bound) {
+  node.abs_err = kPruneTolerance;
+  node.rel_err = std::isfinite(bound) && bound > 0.0 ? kPruneTolerance / bound : 0.0;
+}
+
 Solver makeSolver() {
   Solver solver;
   solver.distance_tolerance = kDefaultRequest.distance_tolerance;
   return solver;
 }
 
-ShapeDistance finish(double d, double bound, const Eigen::Vector3d& pa, const Eigen::Vector3d& pb) {
+ShapeDistance finish(double d,
+                     double bound,
+                     bool witness,
+                     const Eigen::Vector3d& pa,
+                     const Eigen::Vector3d& pb) {
   ShapeDistance out;
   if (d >= bound) {
     out.distance = bound;
@@ -34,8 +49,10 @@ ShapeDistance finish(double d, double bound, const Eigen::Vector3d& pa, const Ei
   } else {
     out.distance = d;
   }
-  out.p_a = pa;
-  out.p_b = pb;
+  if (witness) {  // FCL leaves nearest points uninitialised unless they were asked for
+    out.p_a = pa;
+    out.p_b = pb;
+  }
   return out;
 }
 
@@ -80,8 +97,10 @@ ShapeDistance meshShape(const MeshModel& mesh,
   result.min_distance = bound;
   fcl::detail::MeshShapeDistanceTraversalNodeOBBRSS<Shape, Solver> node;
   fcl::detail::initialize(node, mesh, X_mesh, shape, X_shape, &solver, request, result);
+  allowTolerance(node, bound);
   if (node.BVTesting(0, 0) < bound) fcl::detail::distanceRecurse(&node, 0, 0, nullptr);
-  ShapeDistance d = finish(result.min_distance, bound, result.nearest_points[0], result.nearest_points[1]);
+  ShapeDistance d = finish(result.min_distance, bound, witness, result.nearest_points[0],
+                           result.nearest_points[1]);
   if (witness) toWorldWitnesses(d, X_mesh, X_shape);
   return d;
 }
@@ -98,9 +117,11 @@ ShapeDistance meshMesh(const MeshModel& a,
   result.min_distance = bound;
   fcl::detail::MeshDistanceTraversalNodeOBBRSS<double> node;
   fcl::detail::initialize(node, a, X_a, b, X_b, request, result);
+  allowTolerance(node, bound);
   if (node.BVTesting(0, 0) < bound) fcl::detail::distanceRecurse(&node, 0, 0, nullptr);
   node.postprocess();  // nearest points from mesh a's frame into the world
-  return finish(result.min_distance, bound, result.nearest_points[0], result.nearest_points[1]);
+  return finish(result.min_distance, bound, witness, result.nearest_points[0],
+                result.nearest_points[1]);
 }
 
 template <class A, class B>
@@ -108,13 +129,14 @@ ShapeDistance shapeShape(const A& a,
                          const fcl::Transform3d& X_a,
                          const B& b,
                          const fcl::Transform3d& X_b,
-                         double bound) {
+                         double bound,
+                         bool witness) {
   const Solver solver = makeSolver();
   double d = 0.0;
   Eigen::Vector3d pa = Eigen::Vector3d::Zero(), pb = Eigen::Vector3d::Zero();
   if (!solver.shapeDistance(a, X_a, b, X_b, &d, &pa, &pb)) d = 0.0;  // false: in contact
-  ShapeDistance out = finish(d, bound, pa, pb);
-  toWorldWitnesses(out, X_a, X_b);
+  ShapeDistance out = finish(d, bound, witness, pa, pb);
+  if (witness) toWorldWitnesses(out, X_a, X_b);
   return out;
 }
 
@@ -135,6 +157,24 @@ bool isMesh(const fcl::CollisionGeometryd& g) { return g.getObjectType() == fcl:
 ShapeDistance swapped(ShapeDistance d) {
   std::swap(d.p_a, d.p_b);
   return d;
+}
+
+// A box's surface, two counter-clockwise (outward) triangles per face. (Subdividing the faces
+// to tighten FCL's leaf bounding volumes was measured: no gain, the part's leaves dominate.)
+kinematics::TriangleMesh boxSurface(const Eigen::Vector3d& size) {
+  kinematics::TriangleMesh mesh;
+  for (int i = 0; i < 8; ++i) {  // vertex i: bit 0 = +x, bit 1 = +y, bit 2 = +z
+    mesh.vertices.push_back(0.5 * Eigen::Vector3d((i & 1) ? size.x() : -size.x(),
+                                                  (i & 2) ? size.y() : -size.y(),
+                                                  (i & 4) ? size.z() : -size.z()));
+  }
+  const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& f : faces) {
+    mesh.triangles.emplace_back(f[0], f[1], f[2]);
+    mesh.triangles.emplace_back(f[0], f[2], f[3]);
+  }
+  return mesh;
 }
 
 }  // namespace
@@ -163,6 +203,7 @@ CollisionShape makeCollisionShape(const kinematics::Shape& shape) {
     void operator()(const kinematics::Box& b) const {
       out.geometry = std::make_shared<fcl::Boxd>(b.size);
       out.radius = 0.5 * b.size.norm();
+      out.polyhedron = makeMeshModel(boxSurface(b.size));
     }
     void operator()(const kinematics::Sphere& s) const {
       // A zero-length capsule, not fcl::Sphere: FCL 0.7's sphere–triangle distance with
@@ -203,9 +244,10 @@ ShapeDistance shapeDistance(const CollisionShape& a,
                             bool witness_points) {
   const fcl::Transform3d X_a(X_Wa.matrix()), X_b(X_Wb.matrix());
   const bool mesh_a = isMesh(*a.geometry), mesh_b = isMesh(*b.geometry);
-  if (mesh_a && mesh_b) {
-    return meshMesh(static_cast<const MeshModel&>(*a.geometry), X_a,
-                    static_cast<const MeshModel&>(*b.geometry), X_b, bound, witness_points);
+  if ((mesh_a || mesh_b) && (mesh_a || a.polyhedron) && (mesh_b || b.polyhedron)) {
+    return meshMesh(mesh_a ? static_cast<const MeshModel&>(*a.geometry) : *a.polyhedron, X_a,
+                    mesh_b ? static_cast<const MeshModel&>(*b.geometry) : *b.polyhedron, X_b,
+                    bound, witness_points);
   }
   if (mesh_a) {
     return withPrimitive(*b.geometry, [&](const auto& shape) {
@@ -220,7 +262,7 @@ ShapeDistance shapeDistance(const CollisionShape& a,
     }));
   }
   return withPrimitive(*a.geometry, [&](const auto& sa) {
-    return withPrimitive(*b.geometry, [&](const auto& sb) { return shapeShape(sa, X_a, sb, X_b, bound); });
+    return withPrimitive(*b.geometry, [&](const auto& sb) { return shapeShape(sa, X_a, sb, X_b, bound, witness_points); });
   });
 }
 
@@ -228,15 +270,21 @@ ShapeDistance exactShapeDistance(const CollisionShape& a,
                                  const Eigen::Isometry3d& X_Wa,
                                  const CollisionShape& b,
                                  const Eigen::Isometry3d& X_Wb) {
-  const fcl::CollisionObjectd oa(a.geometry, fcl::Transform3d(X_Wa.matrix()));
-  const fcl::CollisionObjectd ob(b.geometry, fcl::Transform3d(X_Wb.matrix()));
+  // Against a mesh, a box is its polyhedron in both queries, so they compare like for like.
+  const bool meshes = isMesh(*a.geometry) || isMesh(*b.geometry);
+  const auto geometry = [meshes](const CollisionShape& s) -> const fcl::CollisionGeometryd* {
+    return meshes && s.polyhedron ? s.polyhedron.get() : s.geometry.get();
+  };
+  const fcl::Transform3d X_a(X_Wa.matrix()), X_b(X_Wb.matrix());
   fcl::DistanceRequestd request;
   request.enable_nearest_points = true;
   fcl::DistanceResultd result;
-  fcl::distance(&oa, &ob, request, result);
-  ShapeDistance d = finish(result.min_distance, std::numeric_limits<double>::infinity(),
+  // The geometry-and-transform overload: constructing fcl::CollisionObject would recompute
+  // (write) the shared geometry's local AABB, a data race between threads.
+  fcl::distance(geometry(a), X_a, geometry(b), X_b, request, result);
+  ShapeDistance d = finish(result.min_distance, std::numeric_limits<double>::infinity(), true,
                            result.nearest_points[0], result.nearest_points[1]);
-  toWorldWitnesses(d, oa.getTransform(), ob.getTransform());
+  toWorldWitnesses(d, X_a, X_b);
   return d;
 }
 

@@ -398,12 +398,12 @@ std::string demoJobText(const std::string& mesh) {
     return at != std::string::npos;
   };
   EXPECT_TRUE(replace("../robots/viper_s650.yaml", kViper));
-  EXPECT_TRUE(replace("../parts/demo_block.stl", mesh));
+  EXPECT_TRUE(replace("../parts/demo_housing.stl", mesh));
   return text;
 }
 
 TEST_F(Cli, JobWithAnUnknownKeyIsAnInputErrorNamingFileAndLine) {
-  std::string text = demoJobText((kSourceDir / "data/parts/demo_block.stl").string());
+  std::string text = demoJobText((kSourceDir / "data/parts/demo_housing.stl").string());
   const auto at = text.find("  radius_mm: 200\n");
   ASSERT_NE(at, std::string::npos);
   text.insert(at, "  colour: red\n");
@@ -497,7 +497,7 @@ TEST_F(Cli, CheckRejectsBadJointsAndBadPairRules) {
   EXPECT_TRUE(contains(joints.err, "--joints")) << joints.err;
   const fs::path job = dir_ / "rule.yaml";
   writeFile(job, "robot: " + (kSourceDir / "data/robots/viper_s650.yaml").string() +
-                     "\npart: {mesh: " + (kSourceDir / "data/parts/demo_block.stl").string() +
+                     "\npart: {mesh: " + (kSourceDir / "data/parts/demo_housing.stl").string() +
                      "}\nconstraints:\n  clearance:\n    pairs:\n      - {a: scaner, b: part, exclude: true}\n");
   const Result rule = scanplan({"check", job.string(), "--table", "0", "--joints", "0,-60,150,0,60,0"});
   EXPECT_EQ(rule.exit_code, 3) << describe(rule);

@@ -124,7 +124,7 @@ TEST_F(JobFile, BundledDemoJobAndRobotsLoadAndBuild) {
   const JobSpec demo = loadJob(kSource / "data/jobs/demo.yaml");
   EXPECT_EQ(demo.name, "demo");
   EXPECT_EQ(demo.robot_file.resolved, (kSource / "data/robots/viper_s650.yaml").lexically_normal());
-  EXPECT_EQ(demo.part.mesh.resolved, (kSource / "data/parts/demo_block.stl").lexically_normal());
+  EXPECT_EQ(demo.part.mesh.resolved, (kSource / "data/parts/demo_housing.stl").lexically_normal());
   const kinematics::CellModel cell = buildCell(demo);
   EXPECT_EQ(cell.robot.name(), "Adept Viper s650");
   EXPECT_DOUBLE_EQ(cell.table.radius, 0.2);
