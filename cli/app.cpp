@@ -55,6 +55,16 @@ int run(int argc, char** argv) {
   plan_cmd->add_option("job", plan.job_file, "Job file (YAML)")->required()->check(CLI::ExistingFile);
   plan_cmd->add_option("-o,--out", plan.out_dir, "Output folder (created)")->required();
 
+  PlanOptions path;
+  auto* path_cmd = app.add_subcommand("path", "Generate the scan path: OUT/path.csv and a picture of it around the part");
+  path_cmd->add_option("job", path.job_file, "Job file (YAML)")->required()->check(CLI::ExistingFile);
+  path_cmd->add_option("-o,--out", path.out_dir, "Output folder (created)")->required();
+
+  PlanOptions map;
+  auto* map_cmd = app.add_subcommand("map", "Build the configuration maps over table angle x time: npy layers, json, images");
+  map_cmd->add_option("job", map.job_file, "Job file (YAML)")->required()->check(CLI::ExistingFile);
+  map_cmd->add_option("-o,--out", map.out_dir, "Output folder (created)")->required();
+
   auto* job_cmd = app.add_subcommand("job", "Inspect job files");
   job_cmd->require_subcommand(1);
   std::filesystem::path show_file;
@@ -98,7 +108,7 @@ int run(int argc, char** argv) {
     std::string message = e.what();
     const auto known = app.get_subcommands([&](CLI::App* sub) { return argc > 1 && sub->check_name(argv[1]); });
     if (argc > 1 && argv[1][0] != '-' && known.empty()) {
-      message = std::string("unknown command '") + argv[1] + "'; expected one of: plan, job, check, fk, ik";
+      message = std::string("unknown command '") + argv[1] + "'; expected one of: plan, path, map, check, job, fk, ik";
     }
     std::fprintf(stderr, "scanplan: error: %s\nRun 'scanplan --help' (or 'scanplan COMMAND --help') for usage.\n",
                  message.c_str());
@@ -115,6 +125,8 @@ int run(int argc, char** argv) {
     if (plan_cmd->parsed()) code = runPlan(plan);
     if (show_cmd->parsed()) code = runJobShow(show_file);
     if (check_cmd->parsed()) code = runCheck(check);
+    if (path_cmd->parsed()) code = runPath(path);
+    if (map_cmd->parsed()) code = runMap(map);
     if (fk_cmd->parsed()) code = runFk(fk);
     if (ik_cmd->parsed()) code = runIk(ik);
     return static_cast<int>(code);

@@ -7,6 +7,7 @@
 
 #include "cli/app.h"
 #include "cli/job.h"
+#include "planner/config_map.h"
 
 namespace scanplan::cli {
 
@@ -43,6 +44,10 @@ struct CheckOptions {
 };
 
 ExitCode runCheck(const CheckOptions& options);
+ExitCode runPath(const PlanOptions& options);
+ExitCode runMap(const PlanOptions& options);
+/// The map files of `scanplan map` (npy layers, json, images) into `dir`.
+void writeMapOutputs(const std::filesystem::path& dir, const JobSpec& job, const planner::ConfigMap& map);
 ExitCode runFk(const FkOptions& options);
 ExitCode runIk(const IkOptions& options);
 ExitCode runJobShow(const std::filesystem::path& job_file);

@@ -1,5 +1,9 @@
 #include "cli/job.h"
 
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
 #include <fmt/format.h>
 
 #include "kinematics/error.h"
@@ -38,9 +42,97 @@ void describePart(A& a, PartSpec& s) {
 }
 
 template <class A>
+void describeOptics(A& a, OpticsSpec& s) {
+  a.field("a_mm", s.a_mm, Expect::positive());
+  a.field("b_mm", s.b_mm);
+  a.field("phi_deg", s.phi_deg, Expect{0.0, 90.0, true, true, {}});
+  a.field("gamma_deg", s.gamma_deg, Expect{0.0, 45.0, true, true, {}});
+  if constexpr (A::kReading) {
+    if (!(s.gamma_deg < s.phi_deg) || !(s.phi_deg + s.gamma_deg < 90.0)) {
+      a.fail("gamma_deg", formatNumber(s.gamma_deg),
+             "0 < gamma_deg < phi_deg and phi_deg + gamma_deg < 90 (Eq. 5 needs both view edges "
+             "to cross the laser plane)");
+    }
+    const double z_min = s.a_mm / std::tan(deg(s.phi_deg + s.gamma_deg)) + s.b_mm;
+    if (!(z_min > 0.0)) {
+      a.fail("b_mm", formatNumber(s.b_mm), "a value that puts the depth window in front of the scanner (z_min > 0)");
+    }
+  }
+}
+
+template <class A>
 void describeScanner(A& a, ScannerSpec& s) {
   a.section("mount", s.mount);
   a.list("body", s.body, 0, 64);
+  a.section("optics", s.optics);
+}
+
+inline const std::vector<std::string> kPathTypes = {"ring", "raster", "waypoints", "file"};
+
+template <class A>
+void describeWaypoint(A& a, WaypointSpec& s) {
+  a.require("xyz_mm");
+  a.field("xyz_mm", s.xyz_mm);
+  a.field("rpy_deg", s.rpy_deg);
+  a.field("speed_mm_s", s.speed_mm_s, Expect::positive());
+  a.field("rotation_speed_deg_s", s.rotation_speed_deg_s, Expect::positive());
+  a.field("scanning", s.scanning);
+}
+
+template <class A>
+void describePathElement(A& a, PathElementSpec& s) {
+  a.require("type");
+  a.field("type", s.type, Expect::oneOf(kPathTypes));
+  if (s.type == "ring") {
+    a.require("height_mm");
+    a.field("height_mm", s.height_mm);
+    a.field("tilt_deg", s.tilt_deg, Expect::range(-80.0, 80.0));
+    a.field("start_deg", s.start_deg);
+    a.field("extent_deg", s.extent_deg, Expect::range(-3600.0, 3600.0));
+    a.field("speed_deg_s", s.speed_deg_s, Expect::positive());
+    if (A::kReading || s.distance_mm > 0.0) a.field("distance_mm", s.distance_mm, Expect::positive());
+    if constexpr (A::kReading) {
+      s.has_axis = a.has("axis_xy_mm");
+      if (s.extent_deg == 0.0) a.fail("extent_deg", "0", "a non-zero angle");
+    }
+    if (s.has_axis) a.field("axis_xy_mm", s.axis_xy_mm);
+  } else if (s.type == "raster") {
+    a.field("view", s.view);
+    a.field("pass_direction", s.pass_direction);
+    a.field("overlap", s.overlap, Expect{0.0, 0.95, false, false, {}});
+    a.field("lead_mm", s.lead_mm, Expect::nonNegative());
+    a.field("speed_mm_s", s.speed_mm_s, Expect::positive());
+    if constexpr (A::kReading) {
+      if (Eigen::Vector3d(s.view.data()).norm() < 1e-9) a.fail("view", "[0, 0, 0]", "a non-zero direction");
+    }
+  } else if (s.type == "waypoints") {
+    a.require("points");
+    a.list("points", s.points, 2, 100000);
+  } else {
+    a.require("file");
+    a.field("file", s.file);
+  }
+}
+
+template <class A>
+void describeScan(A& a, ScanSpec& s) {
+  a.field("dt_s", s.dt_s, Expect{0.001, 10.0, false, false, {}});
+  a.field("transfer_speed_mm_s", s.transfer_speed_mm_s, Expect::positive());
+  a.field("retreat_mm", s.retreat_mm, Expect::nonNegative());
+  a.list("paths", s.paths, 0, 1000);
+}
+
+template <class A>
+void describeMap(A& a, MapSpec& s) {
+  a.field("angle_step_deg", s.angle_step_deg, Expect{0.01, 90.0, false, false, {}});
+  a.field("branch", s.branch);
+  a.field("memory_limit_mb", s.memory_limit_mb, Expect::positive());
+  if constexpr (A::kReading) {
+    if (s.branch != "auto" && !parseBranch(s.branch)) {
+      a.fail("branch", "'" + s.branch + "'",
+             "auto or three V+ words, e.g. 'RIGHTY ABOVE NOFLIP' (LEFTY/RIGHTY, ABOVE/BELOW, FLIP/NOFLIP)");
+    }
+  }
 }
 
 inline const std::vector<std::string> kCarriers = {"world", "table"};
@@ -153,6 +245,8 @@ void describeJob(A& a, JobSpec& s) {
   a.section("scanner", s.scanner);
   a.list("obstacles", s.obstacles, 0, 10000);
   a.section("constraints", s.constraints);
+  a.section("scan", s.scan);
+  a.section("map", s.map);
 }
 
 }  // namespace
@@ -175,6 +269,16 @@ void describe(YamlIn& a, ClearanceSpec& s) { describeClearance(a, s); }
 void describe(YamlOut& a, ClearanceSpec& s) { describeClearance(a, s); }
 void describe(YamlIn& a, ConstraintsSpec& s) { describeConstraints(a, s); }
 void describe(YamlOut& a, ConstraintsSpec& s) { describeConstraints(a, s); }
+void describe(YamlIn& a, OpticsSpec& s) { describeOptics(a, s); }
+void describe(YamlOut& a, OpticsSpec& s) { describeOptics(a, s); }
+void describe(YamlIn& a, WaypointSpec& s) { describeWaypoint(a, s); }
+void describe(YamlOut& a, WaypointSpec& s) { describeWaypoint(a, s); }
+void describe(YamlIn& a, PathElementSpec& s) { describePathElement(a, s); }
+void describe(YamlOut& a, PathElementSpec& s) { describePathElement(a, s); }
+void describe(YamlIn& a, ScanSpec& s) { describeScan(a, s); }
+void describe(YamlOut& a, ScanSpec& s) { describeScan(a, s); }
+void describe(YamlIn& a, MapSpec& s) { describeMap(a, s); }
+void describe(YamlOut& a, MapSpec& s) { describeMap(a, s); }
 
 JobSpec loadJob(const std::filesystem::path& file) {
   JobSpec job;
@@ -267,6 +371,83 @@ planner::ConstraintSettings constraintSettings(const JobSpec& job) {
   s.elbow = {c.elbow.low, c.elbow.high, c.elbow.gamma};
   s.shoulder = {mm(c.shoulder.low_mm), mm(c.shoulder.high_mm), c.shoulder.gamma};
   return s;
+}
+
+}  // namespace scanplan::cli
+
+namespace scanplan::cli {
+
+std::optional<kinematics::IkBranch> parseBranch(const std::string& words) {
+  std::istringstream in(words);
+  std::string w;
+  kinematics::IkBranch b;
+  int seen = 0;
+  while (in >> w) {
+    if (w == "LEFTY" || w == "RIGHTY") {
+      b.lefty = w == "LEFTY";
+      seen |= 1;
+    } else if (w == "ABOVE" || w == "BELOW") {
+      b.below = w == "BELOW";
+      seen |= 2;
+    } else if (w == "FLIP" || w == "NOFLIP") {
+      b.flip = w == "FLIP";
+      seen |= 4;
+    } else {
+      return std::nullopt;
+    }
+  }
+  if (seen != 7) return std::nullopt;
+  return b;
+}
+
+scanner::LaserOptics laserOptics(const JobSpec& job) {
+  const OpticsSpec& o = job.scanner.optics;
+  return {mm(o.a_mm), mm(o.b_mm), deg(o.phi_deg), deg(o.gamma_deg)};
+}
+
+scanner::PathRequest pathRequest(const JobSpec& job) {
+  scanner::PathRequest request;
+  request.dt = job.scan.dt_s;
+  request.transfer_speed = mm(job.scan.transfer_speed_mm_s);
+  request.retreat = mm(job.scan.retreat_mm);
+  for (const PathElementSpec& e : job.scan.paths) {
+    if (e.type == "ring") {
+      scanner::RingSpec ring;
+      ring.height = mm(e.height_mm);
+      ring.tilt = deg(e.tilt_deg);
+      ring.start = deg(e.start_deg);
+      ring.extent = deg(e.extent_deg);
+      ring.speed = deg(e.speed_deg_s);
+      if (e.distance_mm > 0.0) ring.distance = mm(e.distance_mm);
+      if (e.has_axis) ring.axis_xy = Eigen::Vector2d(e.axis_xy_mm[0], e.axis_xy_mm[1]) * kMmToM;
+      request.elements.emplace_back(ring);
+    } else if (e.type == "raster") {
+      scanner::RasterSpec raster;
+      raster.view = Eigen::Vector3d(e.view.data());
+      raster.pass_direction = Eigen::Vector3d(e.pass_direction.data());
+      raster.overlap = e.overlap;
+      raster.lead = mm(e.lead_mm);
+      raster.speed = mm(e.speed_mm_s);
+      request.elements.emplace_back(raster);
+    } else if (e.type == "waypoints") {
+      scanner::WaypointSpec points;
+      for (const WaypointSpec& w : e.points) {
+        scanner::Waypoint p;
+        p.X_PS = toIsometry({w.xyz_mm, w.rpy_deg});
+        p.speed = mm(w.speed_mm_s);
+        p.rotation_speed = deg(w.rotation_speed_deg_s);
+        p.scanning = w.scanning;
+        points.points.push_back(p);
+      }
+      request.elements.emplace_back(points);
+    } else {
+      std::ifstream in(e.file.resolved, std::ios::binary);
+      std::ostringstream text;
+      text << in.rdbuf();
+      request.elements.emplace_back(scanner::parsePathCsv(text.str(), e.file.resolved.string()));
+    }
+  }
+  return request;
 }
 
 }  // namespace scanplan::cli

@@ -2,6 +2,7 @@
 
 #include <array>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -10,6 +11,8 @@
 #include "collision/scene.h"
 #include "kinematics/cell.h"
 #include "planner/constraints.h"
+#include "scanner/laser_model.h"
+#include "scanner/path_generators.h"
 
 namespace scanplan::cli {
 
@@ -36,10 +39,67 @@ struct PartSpec {
   PoseSpec pose;
 };
 
-/// `scanner`: the laser frame on the flange (X_FS) and the housing's shapes in that frame.
+/// `scanner.optics`: Eq. 5 camera geometry (seed §5.3).
+struct OpticsSpec {
+  double a_mm = 100.0;
+  double b_mm = 100.0;
+  double phi_deg = 60.0;
+  double gamma_deg = 10.0;
+};
+
+/// `scanner`: the laser frame on the flange (X_FS), the housing's shapes in that frame, optics.
 struct ScannerSpec {
   PoseSpec mount{{0.0, 0.0, 100.0}, {0.0, 0.0, 0.0}};
   std::vector<ShapeSpec> body;
+  OpticsSpec optics;
+};
+
+/// `scan.paths[].points[]`.
+struct WaypointSpec {
+  std::array<double, 3> xyz_mm{};
+  std::array<double, 3> rpy_deg{};
+  double speed_mm_s = 50.0;
+  double rotation_speed_deg_s = 30.0;
+  bool scanning = true;
+};
+
+/// `scan.paths[]`: one element of the scan path (ring, raster, waypoints or file).
+struct PathElementSpec {
+  std::string type = "ring";
+  // ring
+  double height_mm = 50.0;
+  double tilt_deg = 20.0;
+  double start_deg = 0.0;
+  double extent_deg = 360.0;
+  double speed_deg_s = 20.0;
+  double distance_mm = -1.0;        ///< negative: auto (from the part mesh)
+  bool has_axis = false;
+  std::array<double, 2> axis_xy_mm{};
+  // raster
+  std::array<double, 3> view{0.0, 0.0, -1.0};
+  std::array<double, 3> pass_direction{1.0, 0.0, 0.0};
+  double overlap = 0.2;
+  double lead_mm = 20.0;
+  double speed_mm_s = 30.0;
+  // waypoints
+  std::vector<WaypointSpec> points;
+  // file
+  FilePath file;
+};
+
+/// `scan`: the scan path and its sampling.
+struct ScanSpec {
+  double dt_s = 0.1;
+  double transfer_speed_mm_s = 100.0;
+  double retreat_mm = 50.0;
+  std::vector<PathElementSpec> paths;
+};
+
+/// `map`: the configuration map grid.
+struct MapSpec {
+  double angle_step_deg = 1.0;
+  std::string branch = "auto";
+  double memory_limit_mb = 4096.0;
 };
 
 /// `obstacles[]`: a fixture or obstacle: a shape (as in robot files) carried by the world or
@@ -105,6 +165,8 @@ struct JobSpec {
   ScannerSpec scanner;
   std::vector<ObstacleSpec> obstacles;
   ConstraintsSpec constraints;
+  ScanSpec scan;
+  MapSpec map;
   std::filesystem::path source;  ///< the job file itself
 };
 
@@ -119,5 +181,11 @@ kinematics::CellModel buildCell(const JobSpec& job);
 collision::ClearanceConfig clearanceConfig(const JobSpec& job);
 /// The job's pose constraints (Eq. 7, singularity ramps), SI.
 planner::ConstraintSettings constraintSettings(const JobSpec& job);
+/// "RIGHTY ABOVE NOFLIP" → branch; nullopt unless exactly one word of each pair is given.
+std::optional<kinematics::IkBranch> parseBranch(const std::string& words);
+/// The scanner optics, SI.
+scanner::LaserOptics laserOptics(const JobSpec& job);
+/// The scan path request (reads path files), SI.
+scanner::PathRequest pathRequest(const JobSpec& job);
 
 }  // namespace scanplan::cli

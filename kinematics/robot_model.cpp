@@ -244,7 +244,7 @@ std::vector<IkSolution> RobotModel::ik(const Eigen::Isometry3d& X_BF,
   return solutions;
 }
 
-SingularityMeasures RobotModel::singularity(const JointVector& q) const {
+SingularityMeasures RobotModel::singularity(const JointVector& q, bool with_manipulability) const {
   const auto& p = definition_.opw;
   const JointVector qo = toOpw(q);
   SingularityMeasures m;
@@ -253,6 +253,7 @@ SingularityMeasures RobotModel::singularity(const JointVector& q) const {
   m.elbow = std::abs(std::sin(qo(2) + std::atan2(p.a2, p.c3)));
   const Eigen::Vector3d c = wristCentre(q);
   m.shoulder = std::hypot(c.x(), c.y());
+  if (!with_manipulability) return m;
   const Jacobian J = jacobian(q);
   m.manipulability = std::sqrt(std::max(0.0, (J * J.transpose()).determinant())) *
                      manipulability_scale_;

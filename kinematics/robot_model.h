@@ -113,7 +113,9 @@ class RobotModel {
 
   bool withinLimits(const JointVector& q) const;
   IkBranch branchOf(const JointVector& q) const;
-  SingularityMeasures singularity(const JointVector& q) const;
+  /// The measures of DESIGN.md §3.3; manipulability (a Jacobian and a determinant) only when
+  /// asked for, the rest is a few trigonometric terms.
+  SingularityMeasures singularity(const JointVector& q, bool with_manipulability = true) const;
 
  private:
   JointVector toOpw(const JointVector& q) const;

@@ -1,0 +1,331 @@
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <numbers>
+#include <cmath>
+#include <cstdio>
+#include <mutex>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "cli/commands.h"
+#include "cli/format.h"
+#include "cli/image_io.h"
+#include "collision/scene.h"
+#include "kinematics/error.h"
+#include "kinematics/mesh.h"
+#include "kinematics/units.h"
+#include "planner/config_map.h"
+#include "scanner/path_generators.h"
+#include "scanner/raycaster.h"
+
+namespace scanplan::cli {
+namespace {
+
+constexpr int kMaxImageWidth = 2000;
+constexpr int kMaxImageHeight = 1200;
+
+// A progress line on stderr, only on a terminal (scripts and CI logs stay clean).
+class Progress {
+ public:
+  explicit Progress(std::string label) : label_(std::move(label)), enabled_(isatty(STDERR_FILENO) != 0) {}
+  void operator()(std::size_t done, std::size_t total) {
+    if (!enabled_) return;
+    const std::lock_guard<std::mutex> lock(mutex_);
+    const int percent = static_cast<int>(100 * done / std::max<std::size_t>(total, 1));
+    if (percent == last_ && done != total) return;
+    last_ = percent;
+    std::fprintf(stderr, "\r%s %3d%% (%zu / %zu)%s", label_.c_str(), percent, done, total, done == total ? "\n" : "");
+    std::fflush(stderr);
+  }
+
+ private:
+  std::string label_;
+  bool enabled_;
+  std::mutex mutex_;
+  int last_ = -1;
+};
+
+std::uint64_t fnv1a(const std::string& text) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (const char c : text) {
+    h ^= static_cast<unsigned char>(c);
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+struct PathContext {
+  kinematics::LoadedMesh part;
+  scanner::LaserWindow window;
+  scanner::GeneratedPath generated;
+};
+
+PathContext buildPath(const JobSpec& job, const kinematics::CellModel& cell) {
+  if (job.scan.paths.empty()) {
+    throw InputError(job.source.string() + ": scan.paths: empty: expected at least one path element (ring, raster, waypoints or file)");
+  }
+  PathContext context;
+  context.part = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
+  for (const std::string& w : context.part.report.warnings) spdlog::warn("part.mesh: {}", w);
+  context.window = scanner::laserWindow(laserOptics(job));
+  const scanner::Raycaster raycaster(context.part.mesh);
+  try {
+    context.generated = scanner::generatePath(pathRequest(job), context.part.mesh, raycaster, context.window);
+  } catch (const InputError& e) {
+    throw InputError(job.source.string() + ": " + e.what());
+  }
+  return context;
+}
+
+std::string pathSummary(const PathContext& c) {
+  std::string s = fmt::format("scanner    depth window {:.1f} … {:.1f} mm, line {:.1f} mm near, {:.1f} mm far (Eq. 5)\n",
+                              toMm(c.window.z_min), toMm(c.window.z_max), 2 * toMm(c.window.y_near), 2 * toMm(c.window.y_far));
+  for (std::size_t i = 0; i < c.generated.elements.size(); ++i) {
+    const auto& e = c.generated.elements[i];
+    s += fmt::format("path[{}]    {:<9} t = {:.1f} … {:.1f} s, surface depth {:.1f} … {:.1f} mm, {:.0f}% of probes in the window{}\n",
+                     i, e.kind, e.start_time, e.start_time + e.duration, toMm(e.depth_min), toMm(e.depth_max),
+                     100.0 * e.coverage_in_window, e.note.empty() ? "" : "; " + e.note);
+  }
+  s += fmt::format("samples    {} every {} s ({:.1f} s)\n", c.generated.path.samples.size(), c.generated.path.dt,
+                   c.generated.path.duration());
+  return s;
+}
+
+// Three views of the path around the part (iso, top, front), side by side.
+RgbImage pathPicture(const PathContext& c) {
+  constexpr int kView = 480;
+  RgbImage out = RgbImage::filled(3 * kView, kView, {255, 255, 255});
+  const Eigen::Matrix3d iso = (Eigen::Matrix3d() << 0.7071, -0.7071, 0, 0.4082, 0.4082, 0.8165, -0.5774, -0.5774, 0.5774).finished();
+  const Eigen::Matrix3d top = Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d front = (Eigen::Matrix3d() << 1, 0, 0, 0, 0, 1, 0, -1, 0).finished();
+  int column = 0;
+  for (const Eigen::Matrix3d& R : {iso, top, front}) {
+    RenderRequest r;
+    r.width = kView;
+    r.height = kView;
+    r.R_view = R;
+    r.vertices = c.part.mesh.vertices;
+    r.triangles = c.part.mesh.triangles;
+    for (const auto& s : c.generated.path.samples) r.polyline.push_back(s.X_PS.translation());
+    if (!r.polyline.empty()) {
+      r.markers.push_back({r.polyline.front(), categoryColour(2)});
+      r.markers.push_back({r.polyline.back(), categoryColour(5)});
+    }
+    const RgbImage view = renderScene(r);
+    for (int y = 0; y < kView; ++y)
+      for (int x = 0; x < kView; ++x) out.set(column * kView + x, y, view.at(x, y));
+    ++column;
+  }
+  return out;
+}
+
+// Min-pooled map image for one branch: time left → right, angle bottom → top.
+template <class Colour>
+RgbImage mapImage(const planner::ConfigMap& map, std::size_t branch, Colour colour) {
+  const int nt = static_cast<int>(map.times.size()), na = static_cast<int>(map.angles.size());
+  const int w = std::min(nt, kMaxImageWidth), h = std::min(na, kMaxImageHeight);
+  RgbImage image = RgbImage::filled(w, h);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      // The block of cells behind this pixel; the worst cell represents it (forbidden bands
+      // must not vanish when a map is shrunk).
+      const int a0 = (h - 1 - y) * na / h, a1 = std::max(a0 + 1, (h - y) * na / h);
+      const int t0 = x * nt / w, t1 = std::max(t0 + 1, (x + 1) * nt / w);
+      std::size_t worst = map.index(branch, static_cast<std::size_t>(a0), static_cast<std::size_t>(t0));
+      for (int a = a0; a < a1; ++a)
+        for (int t = t0; t < t1; ++t) {
+          const std::size_t i = map.index(branch, static_cast<std::size_t>(a), static_cast<std::size_t>(t));
+          if (map.f[i] < map.f[worst]) worst = i;
+        }
+      image.set(x, y, colour(worst));
+    }
+  }
+  return image;
+}
+
+// Fig. 6(b): the map wrapped on a cylinder (axis = time), seen from the side; the front half
+// (table angles around 0°) above, the back half (around 180°) below.
+RgbImage cylinderImage(const planner::ConfigMap& map, std::size_t branch) {
+  const int nt = static_cast<int>(map.times.size());
+  const int w = std::min(nt, kMaxImageWidth), half = 240, gap = 12;
+  RgbImage image = RgbImage::filled(w, 2 * half + gap, {255, 255, 255});
+  const double step = map.angles.size() > 1 ? map.angles[1] - map.angles[0] : 1.0;
+  for (int view = 0; view < 2; ++view) {
+    const double centre = view == 0 ? 0.0 : std::numbers::pi;
+    for (int y = 0; y < half; ++y) {
+      const double v = 1.0 - 2.0 * (y + 0.5) / half;
+      const double alpha = std::asin(v);  // angle on the cylinder seen at this row
+      double theta = std::fmod(centre + alpha + 4.0 * std::numbers::pi, 2.0 * std::numbers::pi);
+      if (theta < map.angles.front() - 1e-9 || theta > map.angles.back() + step) continue;
+      const auto a = std::min(map.angles.size() - 1,
+                              static_cast<std::size_t>(std::max(0.0, std::floor((theta - map.angles.front()) / step))));
+      const double shade = 0.35 + 0.65 * std::cos(alpha);
+      for (int x = 0; x < w; ++x) {
+        const auto t = static_cast<std::size_t>(x * nt / w);
+        const double f = map.f[map.index(branch, a, t)];
+        image.set(x, view * (half + gap) + y, grey(shade * f));
+      }
+    }
+  }
+  return image;
+}
+
+void writeFigure(const std::filesystem::path& dir, const std::string& stem, const RgbImage& image,
+                 const planner::ConfigMap& map, const std::string& title,
+                 std::vector<std::pair<Rgb, std::string>> legend) {
+  writePng(dir / (stem + ".png"), image);
+  SvgFigure figure;
+  figure.png_file = stem + ".png";
+  figure.png_width = image.width;
+  figure.png_height = image.height;
+  figure.title = title;
+  figure.x_label = "time [s]";
+  figure.y_label = "table angle [deg]";
+  figure.x_min = map.times.front();
+  figure.x_max = map.times.back();
+  const double step = map.angles.size() > 1 ? map.angles[1] - map.angles[0] : 0.0;
+  figure.y_min = toDeg(map.angles.front());
+  figure.y_max = toDeg(map.angles.back() + step);
+  figure.legend = std::move(legend);
+  writeFileAtomically(dir / (stem + ".svg"), svgFigure(figure));
+}
+
+std::vector<kinematics::IkBranch> mapBranches(const JobSpec& job) {
+  if (job.map.branch != "auto") return {*parseBranch(job.map.branch)};
+  std::vector<kinematics::IkBranch> all;
+  for (int i = 0; i < 8; ++i) all.push_back(kinematics::IkBranch::fromIndex(i));
+  return all;
+}
+
+}  // namespace
+
+ExitCode runPath(const PlanOptions& options) {
+  const JobSpec job = loadJob(options.job_file);
+  const kinematics::CellModel cell = buildCell(job);
+  const PathContext context = buildPath(job, cell);
+  prepareOutputDir(options.out_dir);
+  writeFileAtomically(options.out_dir / "path.csv", scanner::pathToCsv(context.generated.path));
+  writePng(options.out_dir / "path.png", pathPicture(context));
+  std::string text = pathSummary(context);
+  text += fmt::format("wrote      {} (path.csv, path.png: iso, top and front views; green start, red end)\n",
+                      options.out_dir.string());
+  std::fputs(text.c_str(), stdout);
+  return ExitCode::kOk;
+}
+
+ExitCode runMap(const PlanOptions& options) {
+  const JobSpec job = loadJob(options.job_file);
+  const kinematics::CellModel cell = buildCell(job);
+  const PathContext context = buildPath(job, cell);
+  const collision::Scene scene(cell, clearanceConfig(job));
+  planner::MapRequest request;
+  request.angle_step = deg(job.map.angle_step_deg);
+  request.branches = mapBranches(job);
+  request.memory_limit_bytes = static_cast<std::size_t>(job.map.memory_limit_mb * 1024.0 * 1024.0);
+  prepareOutputDir(options.out_dir);
+  Progress progress("map");
+  const auto start = std::chrono::steady_clock::now();
+  const planner::ConfigMap map = planner::buildConfigMap(scene, constraintSettings(job), context.generated.path, request,
+                                                         [&progress](std::size_t d, std::size_t t) { progress(d, t); });
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  writeMapOutputs(options.out_dir, job, map);
+
+  std::string text = pathSummary(context);
+  const std::size_t cells = map.cellsPerBranch();
+  text += fmt::format("map        {} angles x {} samples x {} branch(es) = {} cells in {:.1f} s ({:.0f} cells/s)\n",
+                      map.angles.size(), map.times.size(), map.branches.size(), cells * map.branches.size(), seconds,
+                      static_cast<double>(cells) / seconds);
+  for (std::size_t b = 0; b < map.branches.size(); ++b) {
+    std::size_t feasible = 0;
+    double sum = 0.0;
+    for (std::size_t i = b * cells; i < (b + 1) * cells; ++i) {
+      feasible += map.f[i] > 0.0f ? 1u : 0u;
+      sum += map.f[i];
+    }
+    text += fmt::format("  {:<21} feasible {:5.1f}% of cells, mean f {:.3f}\n", map.branches[b].words(),
+                        100.0 * static_cast<double>(feasible) / static_cast<double>(cells), sum / static_cast<double>(cells));
+  }
+  text += fmt::format("wrote      {} (configmap.npy + layers, configmap.json, configmap.png/.svg, configmap_cylinder.png, configmap_why.png/.svg)\n",
+                      options.out_dir.string());
+  std::fputs(text.c_str(), stdout);
+  return ExitCode::kOk;
+}
+
+std::size_t bestBranch(const planner::ConfigMap& map) {
+  std::size_t best = 0;
+  double best_score = -1.0;
+  const std::size_t cells = map.cellsPerBranch();
+  for (std::size_t b = 0; b < map.branches.size(); ++b) {
+    double feasible = 0.0;
+    for (std::size_t i = b * cells; i < (b + 1) * cells; ++i) feasible += map.f[i] > 0.0f ? 1.0 : 0.0;
+    if (feasible > best_score) {
+      best_score = feasible;
+      best = b;
+    }
+  }
+  return best;
+}
+
+void writeMapOutputs(const std::filesystem::path& dir, const JobSpec& job, const planner::ConfigMap& map) {
+  const std::vector<std::size_t> shape{map.branches.size(), map.angles.size(), map.times.size()};
+  writeNpy(dir / "configmap.npy", map.f, shape);
+  writeNpy(dir / "configmap_joint.npy", map.joint, shape);
+  writeNpy(dir / "configmap_singularity.npy", map.singularity, shape);
+  writeNpy(dir / "configmap_clearance.npy", map.clearance, shape);
+  writeNpy(dir / "configmap_limit.npy", map.limit, shape);
+
+  const std::size_t shown = bestBranch(map);
+  std::string yaml = jobToYaml(job);
+  yaml = yaml.substr(yaml.find('\n') + 1);  // drop the comment naming the file's location
+  JsonWriter json;
+  json.beginObject();
+  json.value("format", "scanplan configuration map 1");
+  json.value("job", job.name);
+  json.value("job_hash", fmt::format("{:016x}", fnv1a(yaml)));
+  json.beginArray("shape");
+  for (std::size_t n : shape) json.element(static_cast<double>(n));
+  json.endArray();
+  json.beginArray("axes");
+  json.value({}, "branch").value({}, "angle_deg").value({}, "time_s");
+  json.endArray();
+  json.beginArray("branch");
+  for (const auto& b : map.branches) json.value({}, b.words());
+  json.endArray();
+  std::vector<double> angles;
+  for (double a : map.angles) angles.push_back(toDeg(a));
+  json.numbers("angle_deg", angles);
+  json.numbers("time_s", map.times);
+  json.beginObject("layers");
+  json.value("f", "configmap.npy");
+  json.value("joint", "configmap_joint.npy");
+  json.value("singularity", "configmap_singularity.npy");
+  json.value("clearance", "configmap_clearance.npy");
+  json.value("limit", "configmap_limit.npy");
+  json.endObject();
+  json.beginObject("limit_codes");
+  for (int k = 0; k < planner::kLimitCount; ++k) json.value(std::to_string(k), planner::limitName(static_cast<planner::Limit>(k)));
+  json.endObject();
+  json.value("images_branch", map.branches[shown].words());
+  json.endObject();
+  writeFileAtomically(dir / "configmap.json", json.str());
+
+  const std::string branch = map.branches[shown].words();
+  writeFigure(dir, "configmap", mapImage(map, shown, [&](std::size_t i) { return grey(map.f[i]); }), map,
+              "Configuration map f (Eq. 6), " + branch + ": white = free, black = forbidden", {});
+  // Colour by the limiting constraint, brighter where f is higher.
+  std::vector<std::pair<Rgb, std::string>> legend;
+  for (int k = 0; k < planner::kLimitCount; ++k) legend.push_back({categoryColour(k + 1), planner::limitName(static_cast<planner::Limit>(k))});
+  writeFigure(dir, "configmap_why",
+              mapImage(map, shown, [&](std::size_t i) {
+                const Rgb c = categoryColour(map.limit[i] + 1);
+                const double s = 0.45 + 0.55 * std::clamp(static_cast<double>(map.f[i]), 0.0, 1.0);
+                return Rgb{static_cast<std::uint8_t>(c.r * s), static_cast<std::uint8_t>(c.g * s), static_cast<std::uint8_t>(c.b * s)};
+              }),
+              map, "Limiting constraint per cell, " + branch + " (darker = lower f)", legend);
+  writePng(dir / "configmap_cylinder.png", cylinderImage(map, shown));
+}
+
+}  // namespace scanplan::cli

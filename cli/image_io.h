@@ -1,0 +1,103 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace scanplan::cli {
+
+/// An 8-bit sRGB colour.
+struct Rgb {
+  std::uint8_t r = 0, g = 0, b = 0;
+  friend bool operator==(const Rgb&, const Rgb&) = default;
+};
+
+/// An 8-bit RGB raster: row-major, top row first, 3 bytes per pixel.
+struct RgbImage {
+  int width = 0, height = 0;
+  std::vector<std::uint8_t> rgb;
+
+  /// A width × height image filled with `fill`.
+  static RgbImage filled(int w, int h, Rgb fill = {});
+  /// Pixel (x, y), x to the right and y down from the top-left corner; no bounds check.
+  void set(int x, int y, Rgb c);
+  Rgb at(int x, int y) const;
+};
+
+/// PNG bytes (8-bit RGB, no text or time chunks, fixed compression): the same image always
+/// gives the same bytes. Throws InputError for an empty or inconsistent image.
+std::string encodePng(const RgbImage& image);
+/// Decodes any PNG libpng reads, converted to 8-bit RGB; throws InputError on bad data.
+RgbImage decodePng(const std::string& bytes);
+/// encodePng written atomically to `file`; errors name the file.
+void writePng(const std::filesystem::path& file, const RgbImage& image);
+
+/// Writes a NumPy .npy file, format 1.0, C order, byte for byte as numpy.save writes it
+/// (dtype '<f4' or '|u1'). Throws InputError when data.size() ≠ the product of `shape`.
+void writeNpy(const std::filesystem::path& file,
+              const std::vector<float>& data,
+              const std::vector<std::size_t>& shape);
+void writeNpy(const std::filesystem::path& file,
+              const std::vector<std::uint8_t>& data,
+              const std::vector<std::size_t>& shape);
+
+/// A .npy file as stored: dtype descriptor (e.g. "<f4"), shape and the raw data bytes.
+struct NpyArray {
+  std::string descr;
+  std::vector<std::size_t> shape;
+  std::string raw;
+};
+/// Reads a C-order .npy file, format 1.0; throws InputError naming the file.
+NpyArray readNpy(const std::filesystem::path& file);
+
+/// Grey level for a fraction: 0 → black, 1 → white, clamped; NaN → dark red (kNanColour).
+Rgb grey(double f);
+inline constexpr Rgb kNanColour{139, 0, 0};
+/// Okabe–Ito colour-blind-safe palette, k modulo 8 (orange, sky blue, bluish green, yellow,
+/// blue, vermillion, reddish purple, black).
+Rgb categoryColour(int k);
+
+/// A standalone SVG figure around a PNG map image.
+struct SvgFigure {
+  /// href of the PNG relative to the SVG file (not embedded).
+  std::string png_file;
+  /// PNG size in pixels.
+  int png_width = 0, png_height = 0;
+  std::string title;
+  std::string x_label, y_label;
+  /// Axis values at the image's left and right edges, and at its bottom and top edges.
+  double x_min = 0, x_max = 1, y_min = 0, y_max = 1;
+  /// Swatch colour and text, listed to the right of the plot.
+  std::vector<std::pair<Rgb, std::string>> legend;
+};
+/// SVG text: the image scaled to fit a plot area of about 720 × 480 px with pixelated
+/// rendering, a frame with "nice" ticks (1, 2, 5 × 10^k), axis titles, title and legend.
+std::string svgFigure(const SvgFigure& figure);
+
+/// An orthographic picture of a mesh and a path.
+struct RenderRequest {
+  int width = 800, height = 600;
+  /// Rows: the screen x (right), screen y (up) and depth (toward the viewer) directions,
+  /// expressed in the frame of the points below.
+  Eigen::Matrix3d R_view = Eigen::Matrix3d::Identity();
+  /// Mesh in any frame (same frame as the polyline and markers); any length unit.
+  std::vector<Eigen::Vector3d> vertices;
+  std::vector<Eigen::Vector3i> triangles;
+  /// Drawn 2 px wide on top of the mesh; lighter where the mesh hides it.
+  std::vector<Eigen::Vector3d> polyline;
+  Rgb polyline_colour{0, 114, 178};
+  /// Small squares drawn on top of everything.
+  std::vector<std::pair<Eigen::Vector3d, Rgb>> markers;
+  Rgb background{255, 255, 255};
+};
+/// Fits the view to the bounding box of mesh, polyline and markers with a margin, and draws
+/// the mesh Lambert-shaded in grey (light from the viewer) with a z-buffer. Deterministic.
+/// Throws InputError for a non-positive size or a triangle index out of range.
+RgbImage renderScene(const RenderRequest& request);
+
+}  // namespace scanplan::cli

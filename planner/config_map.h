@@ -1,0 +1,85 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "collision/scene.h"
+#include "kinematics/robot_model.h"
+#include "kinematics/scan_path.h"
+#include "planner/constraints.h"
+
+namespace scanplan::planner {
+
+/// Which constraint limits a map cell (the lowest factor group).
+enum class Limit : std::uint8_t {
+  kNone = 0,         ///< every factor is 1
+  kUnreachable = 1,  ///< no IK solution on this branch
+  kJointLimit = 2,   ///< Eq. 7
+  kSingularity = 3,  ///< wrist, elbow, shoulder ramps
+  kClearance = 4,    ///< Eq. 8 (collision included)
+};
+inline constexpr int kLimitCount = 5;
+const char* limitName(Limit limit);
+
+struct MapRequest {
+  double angle_step = 0.017453292519943295;  ///< rad
+  std::vector<kinematics::IkBranch> branches;  ///< one map per branch
+  std::size_t memory_limit_bytes = std::size_t{4096} << 20;
+  /// Plain fcl::distance for every pair instead of the bounded query (the benchmark's
+  /// reference); the maps must come out identical.
+  bool exact_distances = false;
+};
+
+/// Configuration maps over table angle × time (seed §7.2, Fig. 6), one per IK branch. Each
+/// layer is float32 in [branch][angle][time] order; `limit` says which constraint is lowest.
+struct ConfigMap {
+  std::vector<double> angles;  ///< rad
+  std::vector<double> times;   ///< s
+  std::vector<kinematics::IkBranch> branches;
+  std::vector<float> f;            ///< Eq. 6, the product
+  std::vector<float> joint;        ///< Π f_j
+  std::vector<float> singularity;  ///< wrist · elbow · shoulder
+  std::vector<float> clearance;    ///< Π f_C (1 where not evaluated because f was already 0)
+  std::vector<std::uint8_t> limit;
+
+  std::size_t index(std::size_t branch, std::size_t angle, std::size_t time) const {
+    return (branch * angles.size() + angle) * times.size() + time;
+  }
+  std::size_t cellsPerBranch() const { return angles.size() * times.size(); }
+};
+
+/// Bytes a map of this size needs (all layers).
+std::size_t mapBytes(std::size_t branches, std::size_t angles, std::size_t times);
+
+/// The table angles of the grid: a full turn [0, 360°) for a continuous table, [min, max] for a
+/// limited one, every `step`.
+std::vector<double> mapAngles(const kinematics::RotaryTableModel& table, double step);
+
+/// Called now and then from worker threads (serialise inside): cells done, cells in all.
+using ProgressFn = std::function<void(std::size_t, std::size_t)>;
+
+/// Builds the maps in parallel (TBB); the result does not depend on the thread count. Throws
+/// InputError when the map would exceed the memory limit, before computing anything.
+ConfigMap buildConfigMap(const collision::Scene& scene,
+                         const ConstraintSettings& settings,
+                         const kinematics::ScanPath& path,
+                         const MapRequest& request,
+                         const ProgressFn& progress = {});
+
+/// Scores one cell the way the map does (exposed for tests and `check --time`).
+struct CellScore {
+  float f = 0.0f, joint = 0.0f, singularity = 0.0f, clearance = 1.0f;
+  Limit limit = Limit::kUnreachable;
+  kinematics::JointVector q = kinematics::JointVector::Zero();
+};
+CellScore scoreCell(const collision::Scene& scene,
+                    const ConstraintSettings& settings,
+                    collision::ClearanceEvaluator& clearance,
+                    const std::vector<kinematics::IkSolution>& solutions,
+                    const kinematics::IkBranch& branch,
+                    double theta,
+                    bool exact_distances);
+
+}  // namespace scanplan::planner

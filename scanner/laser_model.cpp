@@ -1,0 +1,33 @@
+#include "scanner/laser_model.h"
+
+#include <cmath>
+
+namespace scanplan::scanner {
+
+LaserWindow laserWindow(const LaserOptics& o) {
+  LaserWindow w;
+  w.z_min = o.a / std::tan(o.phi + o.gamma) + o.b;
+  w.z_max = o.a / std::tan(o.phi - o.gamma) + o.b;
+  w.y_near = o.a * std::tan(o.gamma) / std::sin(o.phi + o.gamma);
+  w.y_far = o.a * std::tan(o.gamma) / std::sin(o.phi - o.gamma);
+  return w;
+}
+
+double LaserWindow::halfWidth(double z) const {
+  const double s = (z - z_min) / (z_max - z_min);
+  return y_near + s * (y_far - y_near);
+}
+
+bool LaserWindow::contains(double y, double z) const {
+  return z >= z_min && z <= z_max && std::abs(y) <= halfWidth(z);
+}
+
+void triangulate(const LaserOptics& o, double image_height_px, double p_x, double p_y,
+                 double& y, double& z) {
+  const double f = image_height_px / (2.0 * std::tan(o.gamma));
+  const double angle = o.phi - std::atan(p_y / f);
+  y = o.a * p_x / (f * std::sin(angle));
+  z = o.a / std::tan(angle) + o.b;
+}
+
+}  // namespace scanplan::scanner

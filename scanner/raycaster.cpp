@@ -1,0 +1,70 @@
+#include "scanner/raycaster.h"
+
+#include <embree3/rtcore.h>
+
+#include <cmath>
+#include <stdexcept>
+
+namespace scanplan::scanner {
+
+struct Raycaster::Impl {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  ~Impl() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
+};
+
+Raycaster::Raycaster(const kinematics::TriangleMesh& mesh) : impl_(std::make_unique<Impl>()) {
+  impl_->device = rtcNewDevice("threads=1");  // we parallelise over rays ourselves
+  if (!impl_->device) throw std::runtime_error("Embree: cannot create a device");
+  impl_->scene = rtcNewScene(impl_->device);
+  rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
+  RTCGeometry geometry = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
+      geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.vertices.size()));
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+    for (int k = 0; k < 3; ++k) vertices[3 * i + static_cast<std::size_t>(k)] = static_cast<float>(mesh.vertices[i](k));
+  }
+  auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+      geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), mesh.triangles.size()));
+  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
+    for (int k = 0; k < 3; ++k) indices[3 * i + static_cast<std::size_t>(k)] = static_cast<unsigned>(mesh.triangles[i](k));
+  }
+  rtcCommitGeometry(geometry);
+  rtcAttachGeometry(impl_->scene, geometry);
+  rtcReleaseGeometry(geometry);
+  rtcCommitScene(impl_->scene);
+}
+
+Raycaster::~Raycaster() = default;
+
+std::optional<RayHit> Raycaster::cast(const Eigen::Vector3d& origin,
+                                      const Eigen::Vector3d& direction,
+                                      double t_near,
+                                      double t_far) const {
+  const Eigen::Vector3d d = direction.normalized();
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit rh{};
+  rh.ray.org_x = static_cast<float>(origin.x());
+  rh.ray.org_y = static_cast<float>(origin.y());
+  rh.ray.org_z = static_cast<float>(origin.z());
+  rh.ray.dir_x = static_cast<float>(d.x());
+  rh.ray.dir_y = static_cast<float>(d.y());
+  rh.ray.dir_z = static_cast<float>(d.z());
+  rh.ray.tnear = static_cast<float>(t_near);
+  rh.ray.tfar = std::isfinite(t_far) ? static_cast<float>(t_far) : std::numeric_limits<float>::infinity();
+  rh.ray.mask = 0xFFFFFFFFu;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(impl_->scene, &context, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+  RayHit hit;
+  hit.distance = static_cast<double>(rh.ray.tfar);
+  hit.normal = Eigen::Vector3d(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z).normalized();
+  hit.triangle = rh.hit.primID;
+  return hit;
+}
+
+}  // namespace scanplan::scanner

@@ -1,0 +1,39 @@
+#pragma once
+
+#include <memory>
+#include <limits>
+#include <optional>
+
+#include <Eigen/Geometry>
+
+#include "kinematics/mesh.h"
+
+namespace scanplan::scanner {
+
+struct RayHit {
+  double distance = 0.0;                                ///< along the ray, m
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();     ///< geometric normal, unit, mesh frame
+  unsigned triangle = 0;
+};
+
+/// Embree 3 ray casting against one triangle mesh (its own frame, m). The scene is built once;
+/// cast() is const and safe to call from many threads.
+class Raycaster {
+ public:
+  explicit Raycaster(const kinematics::TriangleMesh& mesh);
+  ~Raycaster();
+  Raycaster(const Raycaster&) = delete;
+  Raycaster& operator=(const Raycaster&) = delete;
+
+  /// Nearest hit along origin + s·d̂ for s in [t_near, t_far] (m), d̂ = direction normalised.
+  std::optional<RayHit> cast(const Eigen::Vector3d& origin,
+                             const Eigen::Vector3d& direction,
+                             double t_near = 0.0,
+                             double t_far = std::numeric_limits<double>::infinity()) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace scanplan::scanner
