@@ -77,9 +77,11 @@ int run(int argc, char** argv) {
       "check", "Score one pose: every constraint factor, every pair's clearance, collision");
   check_cmd->add_option("job", check.job_file, "Job file (YAML)")->required()->check(CLI::ExistingFile);
   check_cmd->add_option("--table", check.table_deg, "Table angle, degrees")->required();
-  check_cmd->add_option("--joints", check.joints_deg,
-                        "Six joint angles in degrees: j1,…,j6 (write --joints=-10,… when j1 is negative)")
-      ->required();
+  auto* check_joints = check_cmd->add_option(
+      "--joints", check.joints_deg, "Six joint angles in degrees: j1,…,j6 (write --joints=-10,… when j1 is negative)");
+  auto* check_time = check_cmd->add_option(
+      "--time", check.time_s, "A time on the job's scan path, s: the pose is solved by IK (the job's map.branch, or the best)");
+  check_joints->excludes(check_time);
   check_cmd->add_flag("--json", check.json, "Print JSON instead of text");
 
   FkOptions fk;
@@ -112,6 +114,10 @@ int run(int argc, char** argv) {
     }
     std::fprintf(stderr, "scanplan: error: %s\nRun 'scanplan --help' (or 'scanplan COMMAND --help') for usage.\n",
                  message.c_str());
+    return static_cast<int>(ExitCode::kUsage);
+  }
+  if (check_cmd->parsed() && check_joints->count() + check_time->count() == 0) {
+    std::fprintf(stderr, "scanplan: error: check needs --joints or --time\n");
     return static_cast<int>(ExitCode::kUsage);
   }
   if (ik_cmd->parsed() && trans->count() + matrix->count() == 0) {

@@ -39,13 +39,18 @@ struct PlanOptions {
 struct CheckOptions {
   std::filesystem::path job_file;
   double table_deg = 0.0;
-  std::string joints_deg;
+  std::string joints_deg;  ///< empty: use time_s
+  double time_s = -1.0;
   bool json = false;
 };
 
 ExitCode runCheck(const CheckOptions& options);
 ExitCode runPath(const PlanOptions& options);
 ExitCode runMap(const PlanOptions& options);
+/// The job's scan path (loads the part, casts rays for the standoff); errors name the job.
+scanner::GeneratedPath generateScanPath(const JobSpec& job, const kinematics::CellModel& cell);
+/// Path, maps and their files into `out`; returns the summary lines.
+std::string buildAndWriteMaps(const JobSpec& job, const kinematics::CellModel& cell, const std::filesystem::path& out);
 /// The map files of `scanplan map` (npy layers, json, images) into `dir`.
 void writeMapOutputs(const std::filesystem::path& dir, const JobSpec& job, const planner::ConfigMap& map);
 ExitCode runFk(const FkOptions& options);

@@ -1,10 +1,13 @@
+#include <cmath>
 #include <cstdio>
+#include <optional>
 
 #include <fmt/format.h>
 
 #include "cli/commands.h"
 #include "cli/format.h"
 #include "collision/scene.h"
+#include "kinematics/error.h"
 #include "kinematics/units.h"
 #include "planner/constraints.h"
 
@@ -19,13 +22,43 @@ ExitCode runCheck(const CheckOptions& options) {
   const JobSpec job = loadJob(options.job_file);
   const collision::Scene scene(buildCell(job), clearanceConfig(job));
   const auto& robot = scene.cell().robot;
-  const auto joints = parseNumberList(options.joints_deg, 6, "--joints",
-                                      "6 joint angles in degrees, j1,…,j6");
-  kinematics::JointVector q;
-  for (int i = 0; i < 6; ++i) q(i) = deg(joints[static_cast<std::size_t>(i)]);
   const double theta = deg(options.table_deg);
-
   planner::PoseEvaluator evaluator(scene, constraintSettings(job));
+  kinematics::JointVector q = kinematics::JointVector::Zero();
+  std::string origin;
+  if (!options.joints_deg.empty()) {
+    const auto values = parseNumberList(options.joints_deg, 6, "--joints", "6 joint angles in degrees, j1,…,j6");
+    for (int i = 0; i < 6; ++i) q(i) = deg(values[static_cast<std::size_t>(i)]);
+  } else {
+    // The scan-path sample nearest --time, solved on the job's branch (or the best of all).
+    const kinematics::ScanPath path = generateScanPath(job, scene.cell()).path;
+    if (!(options.time_s >= 0.0) || options.time_s > path.duration() + 0.5 * path.dt) {
+      throw InputError(fmt::format("--time: {} s: expected a time within the scan path, 0 … {:.2f} s",
+                                   options.time_s, path.duration()));
+    }
+    const auto k = std::min(path.samples.size() - 1, static_cast<std::size_t>(std::llround(options.time_s / path.dt)));
+    const auto& sample = path.samples[k];
+    const auto solutions = robot.ik(scene.cell().flangeTarget(theta, sample.X_PS));
+    const std::optional<kinematics::IkBranch> wanted =
+        job.map.branch == "auto" ? std::nullopt : parseBranch(job.map.branch);
+    double best = -1.0;
+    for (const auto& solution : solutions) {
+      if (wanted && !(solution.branch == *wanted)) continue;
+      const double f = evaluator.score(theta, solution.q).total;
+      if (f > best) {
+        best = f;
+        q = solution.q;
+      }
+    }
+    if (best < 0.0) {
+      std::fputs(fmt::format("table {} deg, t = {:.2f} s: the scan pose is out of reach{}\n", options.table_deg,
+                             sample.t, wanted ? " on " + wanted->words() : "").c_str(), stdout);
+      return ExitCode::kNoPlan;
+    }
+    origin = fmt::format(" (scan sample t = {:.2f} s{})", sample.t, sample.scanning ? "" : ", not scanning");
+  }
+  std::vector<double> joints;
+  for (int i = 0; i < 6; ++i) joints.push_back(toDeg(q(i)));
   const planner::PoseScore s = evaluator.score(theta, q);
   const auto& bodies = scene.bodies();
   const auto pairName = [&](const collision::PairInfo& p) {
@@ -75,9 +108,9 @@ ExitCode runCheck(const CheckOptions& options) {
     std::fputs(json.str().c_str(), stdout);
   } else {
     std::string t;
-    t += fmt::format("pose         table {} deg, joints {} deg  [{}{}]\n", options.table_deg,
+    t += fmt::format("pose         table {} deg, joints {:.3f} deg  [{}{}]{}\n", options.table_deg,
                      fmt::join(joints, ", "), robot.branchOf(q).words(),
-                     robot.withinLimits(q) ? "" : ", OUTSIDE the joint limits");
+                     robot.withinLimits(q) ? "" : ", OUTSIDE the joint limits", origin);
     t += "joint limits";
     for (int j = 0; j < 6; ++j) t += fmt::format("  f{}={:.3f}", j + 1, s.joint[static_cast<std::size_t>(j)]);
     t += "   (Eq. 7)\n";

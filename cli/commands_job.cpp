@@ -28,32 +28,16 @@ kinematics::LoadedMesh loadPart(const JobSpec& job, const kinematics::CellModel&
   }
 }
 
-}  // namespace
-
-ExitCode runJobShow(const std::filesystem::path& job_file) {
-  const JobSpec job = loadJob(job_file);
-  buildCell(job);  // the robot model checks (OPW against DH) belong to "valid"
-  std::fputs(jobToYaml(job).c_str(), stdout);
-  return ExitCode::kOk;
-}
-
-ExitCode runPlan(const PlanOptions& options) {
-  const JobSpec job = loadJob(options.job_file);
-  const kinematics::CellModel cell = buildCell(job);
-  const kinematics::LoadedMesh part = loadPart(job, cell);
-
-  // What the cell looks like from the robot: the part's box on the table at θ = 0.
+// Without a scan path: can the sensor reach 150 mm above the part top, looking down, as the
+// table turns? A first look at whether the cell is laid out sensibly.
+std::string reachCheck(const JobSpec& job, const kinematics::CellModel& cell, const kinematics::LoadedMesh& part) {
   const Eigen::AlignedBox3d box = part.mesh.bounds();
   const Eigen::Isometry3d X_WP = cell.table.X_WR(0.0) * cell.part.X_RP;
   const Eigen::Vector3d top_centre_P(box.center().x(), box.center().y(), box.max().z());
-
-  // Reach check: the sensor 150 mm above the part's top centre, looking straight down, at
-  // every 30° of table angle. A first look at whether the cell is laid out sensibly.
   constexpr double kStandoff = 0.15;
   Eigen::Isometry3d X_PS = Eigen::Isometry3d::Identity();
   X_PS.linear() = Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal();  // z_S points down
   X_PS.translation() = top_centre_P + Eigen::Vector3d(0, 0, kStandoff);
-  // Score the best in-limit IK solution at each angle against every constraint (Eq. 6).
   const collision::Scene scene(cell, clearanceConfig(job));
   planner::PoseEvaluator evaluator(scene, constraintSettings(job));
   int reachable = 0, feasible = 0;
@@ -76,6 +60,29 @@ ExitCode runPlan(const PlanOptions& options) {
     }
     feasible += angle_best > 0.0 ? 1 : 0;
   }
+  const Eigen::Vector3d top_W = X_WP * top_centre_P * kMToMm;
+  std::string s = fmt::format(
+      "reach      no scan path in the job; sensor 150 mm above the part top ({:.0f}, {:.0f}, {:.0f}) mm, looking down: "
+      "reachable at {}/{} table angles (every 30 deg), collision-free and feasible at {}\n",
+      top_W.x(), top_W.y(), top_W.z(), reachable, kAngles, feasible);
+  s += fmt::format("score      best f = {:.3f} over those poses (limited by {}); {} body pairs checked\n", best_f,
+                   best_limit.empty() ? "-" : best_limit, scene.pairs().size());
+  return s;
+}
+
+}  // namespace
+
+ExitCode runJobShow(const std::filesystem::path& job_file) {
+  const JobSpec job = loadJob(job_file);
+  buildCell(job);  // the robot model checks (OPW against DH) belong to "valid"
+  std::fputs(jobToYaml(job).c_str(), stdout);
+  return ExitCode::kOk;
+}
+
+ExitCode runPlan(const PlanOptions& options) {
+  const JobSpec job = loadJob(options.job_file);
+  const kinematics::CellModel cell = buildCell(job);
+  const kinematics::LoadedMesh part = loadPart(job, cell);
 
   std::string summary;
   summary += fmt::format("job        {} ({})\n", job.name, job.source.string());
@@ -87,23 +94,20 @@ ExitCode runPlan(const PlanOptions& options) {
                          job.table.continuous ? "continuous"
                                               : fmt::format("{} … {} deg", job.table.min_deg,
                                                             job.table.max_deg));
-  const Eigen::Vector3d size = box.sizes() * kMToMm;
+  const Eigen::Vector3d size = part.mesh.bounds().sizes() * kMToMm;
   summary += fmt::format("part       {}: {} triangles, {:.1f} x {:.1f} x {:.1f} mm, {}\n",
                          job.part.mesh.as_written, part.mesh.triangles.size(), size.x(), size.y(),
                          size.z(), part.mesh.isClosed() ? "closed" : "open (has holes)");
-  const Eigen::Vector3d top_W = X_WP * top_centre_P * kMToMm;
-  summary += fmt::format(
-      "reach      sensor 150 mm above the part top ({:.0f}, {:.0f}, {:.0f}) mm, looking down: "
-      "reachable at {}/{} table angles (every 30 deg), collision-free and feasible at {}\n",
-      top_W.x(), top_W.y(), top_W.z(), reachable, kAngles, feasible);
-  summary += fmt::format("score      best f = {:.3f} over those poses (limited by {}); {} body pairs checked\n",
-                         best_f, best_limit.empty() ? "-" : best_limit, scene.pairs().size());
-
   prepareOutputDir(options.out_dir);
   writeFileAtomically(options.out_dir / "job.yaml", jobToYaml(job));
+  if (job.scan.paths.empty()) {
+    summary += reachCheck(job, cell, part);
+  } else {
+    summary += buildAndWriteMaps(job, cell, options.out_dir);
+  }
   summary += fmt::format("wrote      {}\n", (options.out_dir / "job.yaml").string());
-  summary += "note       scan paths, configuration maps and planning are not built yet; this run "
-             "checks the cell only\n";
+  summary += "note       planning (Ray Shooting, DP, OMPL), validation, scanner simulation and robot "
+             "programs are not built yet: this run writes the scan path and the configuration maps\n";
   std::fputs(summary.c_str(), stdout);
   return ExitCode::kOk;
 }

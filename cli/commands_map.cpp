@@ -202,6 +202,10 @@ std::vector<kinematics::IkBranch> mapBranches(const JobSpec& job) {
 
 }  // namespace
 
+scanner::GeneratedPath generateScanPath(const JobSpec& job, const kinematics::CellModel& cell) {
+  return buildPath(job, cell).generated;
+}
+
 ExitCode runPath(const PlanOptions& options) {
   const JobSpec job = loadJob(options.job_file);
   const kinematics::CellModel cell = buildCell(job);
@@ -216,22 +220,22 @@ ExitCode runPath(const PlanOptions& options) {
   return ExitCode::kOk;
 }
 
-ExitCode runMap(const PlanOptions& options) {
-  const JobSpec job = loadJob(options.job_file);
-  const kinematics::CellModel cell = buildCell(job);
+std::string buildAndWriteMaps(const JobSpec& job, const kinematics::CellModel& cell, const std::filesystem::path& out) {
   const PathContext context = buildPath(job, cell);
   const collision::Scene scene(cell, clearanceConfig(job));
   planner::MapRequest request;
   request.angle_step = deg(job.map.angle_step_deg);
   request.branches = mapBranches(job);
   request.memory_limit_bytes = static_cast<std::size_t>(job.map.memory_limit_mb * 1024.0 * 1024.0);
-  prepareOutputDir(options.out_dir);
+  prepareOutputDir(out);
   Progress progress("map");
   const auto start = std::chrono::steady_clock::now();
   const planner::ConfigMap map = planner::buildConfigMap(scene, constraintSettings(job), context.generated.path, request,
                                                          [&progress](std::size_t d, std::size_t t) { progress(d, t); });
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  writeMapOutputs(options.out_dir, job, map);
+  writeFileAtomically(out / "path.csv", scanner::pathToCsv(context.generated.path));
+  writePng(out / "path.png", pathPicture(context));
+  writeMapOutputs(out, job, map);
 
   std::string text = pathSummary(context);
   const std::size_t cells = map.cellsPerBranch();
@@ -248,9 +252,16 @@ ExitCode runMap(const PlanOptions& options) {
     text += fmt::format("  {:<21} feasible {:5.1f}% of cells, mean f {:.3f}\n", map.branches[b].words(),
                         100.0 * static_cast<double>(feasible) / static_cast<double>(cells), sum / static_cast<double>(cells));
   }
-  text += fmt::format("wrote      {} (configmap.npy + layers, configmap.json, configmap.png/.svg, configmap_cylinder.png, configmap_why.png/.svg)\n",
-                      options.out_dir.string());
-  std::fputs(text.c_str(), stdout);
+  text += fmt::format("wrote      {}: path.csv, path.png, configmap.npy (+ _joint, _singularity, _clearance, _limit), "
+                      "configmap.json, configmap.png/.svg, configmap_why.png/.svg, configmap_cylinder.png\n",
+                      out.string());
+  return text;
+}
+
+ExitCode runMap(const PlanOptions& options) {
+  const JobSpec job = loadJob(options.job_file);
+  const kinematics::CellModel cell = buildCell(job);
+  std::fputs(buildAndWriteMaps(job, cell, options.out_dir).c_str(), stdout);
   return ExitCode::kOk;
 }
 
