@@ -99,7 +99,7 @@ struct ScanSpec {
 struct MapSpec {
   double angle_step_deg = 1.0;
   std::string branch = "auto";
-  double memory_limit_mb = 4096.0;
+  double memory_limit_mb = 8192.0;
 };
 
 /// `obstacles[]`: a fixture or obstacle: a shape (as in robot files) carried by the world or

@@ -26,7 +26,7 @@ const char* limitName(Limit limit);
 struct MapRequest {
   double angle_step = 0.017453292519943295;  ///< rad
   std::vector<kinematics::IkBranch> branches;  ///< one map per branch
-  std::size_t memory_limit_bytes = std::size_t{4096} << 20;
+  std::size_t memory_limit_bytes = std::size_t{8192} << 20;
   /// Plain fcl::distance for every pair instead of the bounded query (the benchmark's
   /// reference); the maps must come out identical.
   bool exact_distances = false;
