@@ -48,15 +48,6 @@ class Progress {
   int last_ = -1;
 };
 
-std::uint64_t fnv1a(const std::string& text) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (const char c : text) {
-    h ^= static_cast<unsigned char>(c);
-    h *= 1099511628211ull;
-  }
-  return h;
-}
-
 struct PathContext {
   kinematics::LoadedMesh part;
   scanner::LaserWindow window;
@@ -289,13 +280,11 @@ void writeMapOutputs(const std::filesystem::path& dir, const JobSpec& job, const
   writeNpy(dir / "configmap_limit.npy", map.limit, shape);
 
   const std::size_t shown = bestBranch(map);
-  std::string yaml = jobToYaml(job);
-  yaml = yaml.substr(yaml.find('\n') + 1);  // drop the comment naming the file's location
   JsonWriter json;
   json.beginObject();
   json.value("format", "scanplan configuration map 1");
   json.value("job", job.name);
-  json.value("job_hash", fmt::format("{:016x}", fnv1a(yaml)));
+  json.value("job_hash", jobHash(job));
   json.beginArray("shape");
   for (std::size_t n : shape) json.element(static_cast<double>(n));
   json.endArray();

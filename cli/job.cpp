@@ -301,6 +301,21 @@ std::string jobToYaml(const JobSpec& job) {
   return std::string(out.c_str()) + "\n";
 }
 
+std::string jobHash(const JobSpec& job) {
+  JobSpec copy = job;
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  YamlOut writer(out, true);
+  describeJob(writer, copy);
+  out << YAML::EndMap;
+  std::uint64_t h = 1469598103934665603ull;  // FNV-1a
+  for (const char c : std::string(out.c_str())) {
+    h ^= static_cast<unsigned char>(c);
+    h *= 1099511628211ull;
+  }
+  return fmt::format("{:016x}", h);
+}
+
 kinematics::CellModel buildCell(const JobSpec& job) {
   const std::string robot_source =
       job.robot_file.resolved.empty() ? job.source.string() : job.robot_file.resolved.string();

@@ -174,6 +174,9 @@ struct JobSpec {
 JobSpec loadJob(const std::filesystem::path& file);
 /// The fully resolved job as YAML (robot inline, paths absolute, every default present).
 std::string jobToYaml(const JobSpec& job);
+/// A stable identity of the job's content: a hash of the resolved job with file paths as
+/// written (so it does not depend on where the files live), hex.
+std::string jobHash(const JobSpec& job);
 /// Builds the cell model: robot kinematics (OPW checked against DH), table, part, scanner,
 /// obstacles.
 kinematics::CellModel buildCell(const JobSpec& job);

@@ -353,7 +353,8 @@ void YamlOut::field(const char* key, const std::string& value, const Expect&) {
   out_ << YAML::Key << key << YAML::Value << value;
 }
 void YamlOut::field(const char* key, const FilePath& value, const Expect&) {
-  out_ << YAML::Key << key << YAML::Value << value.resolved.string();
+  out_ << YAML::Key << key << YAML::Value
+       << (paths_as_written_ ? value.as_written : value.resolved.string());
 }
 void YamlOut::fail(const std::string&, const std::string&, const std::string&) const {
   throw std::logic_error("YamlOut::fail: writing never validates");

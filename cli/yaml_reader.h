@@ -133,7 +133,10 @@ class YamlOut {
  public:
   static constexpr bool kReading = false;
 
-  explicit YamlOut(YAML::Emitter& out) : out_(out) {}
+  /// `paths_as_written`: file paths as the job file wrote them, not resolved (for a hash that
+  /// does not depend on where the checkout lives).
+  explicit YamlOut(YAML::Emitter& out, bool paths_as_written = false)
+      : out_(out), paths_as_written_(paths_as_written) {}
 
   bool has(const char*) const { return true; }
   void field(const char* key, double value, const Expect& = {});
@@ -170,6 +173,7 @@ class YamlOut {
  private:
   void writeScalar(double v);
   YAML::Emitter& out_;
+  bool paths_as_written_ = false;
 };
 
 /// Loads a YAML file (a mapping at the top), turning parse errors into InputError with
