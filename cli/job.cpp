@@ -398,18 +398,21 @@ std::optional<kinematics::IkBranch> parseBranch(const std::string& words) {
   kinematics::IkBranch b;
   int seen = 0;
   while (in >> w) {
+    int bit = 0;
     if (w == "LEFTY" || w == "RIGHTY") {
       b.lefty = w == "LEFTY";
-      seen |= 1;
+      bit = 1;
     } else if (w == "ABOVE" || w == "BELOW") {
       b.below = w == "BELOW";
-      seen |= 2;
+      bit = 2;
     } else if (w == "FLIP" || w == "NOFLIP") {
       b.flip = w == "FLIP";
-      seen |= 4;
+      bit = 4;
     } else {
       return std::nullopt;
     }
+    if (seen & bit) return std::nullopt;  // two words of one pair
+    seen |= bit;
   }
   if (seen != 7) return std::nullopt;
   return b;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <string>
 
+#include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -106,12 +107,11 @@ ConfigMap buildConfigMap(const collision::Scene& scene,
   const std::size_t nb = map.branches.size(), na = map.angles.size(), nt = map.times.size();
   const std::size_t bytes = mapBytes(nb, na, nt);
   if (bytes > request.memory_limit_bytes) {
-    throw InputError("map: " + std::to_string(nb) + " branch(es) x " + std::to_string(na) +
-                     " angles x " + std::to_string(nt) + " time samples need " +
-                     std::to_string(bytes >> 20) + " MB, over map.memory_limit_mb (" +
-                     std::to_string(request.memory_limit_bytes >> 20) +
-                     "): expected a coarser map.angle_step_deg, a larger scan.dt_s, a fixed "
-                     "map.branch or a higher limit");
+    const auto mb = [](std::size_t b) { return fmt::format("{:.1f}", static_cast<double>(b) / (1 << 20)); };
+    throw InputError(fmt::format(
+        "map: {} branch(es) x {} angles x {} time samples need {} MB, over map.memory_limit_mb ({}): expected a "
+        "coarser map.angle_step_deg, a larger scan.dt_s, a fixed map.branch or a higher limit",
+        nb, na, nt, mb(bytes), mb(request.memory_limit_bytes)));
   }
   const std::size_t cells = na * nt;
   map.f.assign(nb * cells, 0.0f);

@@ -53,8 +53,9 @@ struct ConfigMap {
 /// Bytes a map of this size needs (all layers).
 std::size_t mapBytes(std::size_t branches, std::size_t angles, std::size_t times);
 
-/// The table angles of the grid: a full turn [0, 360°) for a continuous table, [min, max] for a
-/// limited one, every `step`.
+/// The table angles of the grid: a full turn [0, 360°) in n = round(360° / step) equal steps
+/// for a continuous table (so the grid closes on itself), [min, max] every `step` for a limited
+/// one.
 std::vector<double> mapAngles(const kinematics::RotaryTableModel& table, double step);
 
 /// Called now and then from worker threads (serialise inside): cells done, cells in all.

@@ -5,6 +5,8 @@
 #include <limits>
 #include <sstream>
 
+#include <fmt/format.h>
+
 #include "kinematics/error.h"
 #include "kinematics/units.h"
 
@@ -191,12 +193,15 @@ std::vector<Key> rasterKeys(const RasterSpec& raster,
     }
     const bool forward = k % 2 == 0;
     const Eigen::Vector3d motion = forward ? u : Eigen::Vector3d(-u);
+    double s_prev = 0.0;
     for (int n = 0; n < samples; n += 5) {  // keys every 10 mm; positions every 2 mm were probed
       const int i = forward ? n : samples - 1 - n;
       const double s = u_min - raster.lead + step * i;
       const double p = smooth[static_cast<std::size_t>(i)];
       const Eigen::Isometry3d X = frame(s * u + wk * w + p * v, v, motion);
-      const bool on_part = s >= u_min && s <= u_max;
+      // The move from the previous key acquires when it overlaps the part's extent at all.
+      const bool on_part = std::max(s, s_prev) >= u_min && std::min(s, s_prev) <= u_max;
+      s_prev = s;
       if (keys.empty()) {
         keys.push_back({0.0, X, false});
       } else if (n == 0) {
@@ -228,7 +233,7 @@ std::vector<Key> rasterKeys(const RasterSpec& raster,
   report.depth_min = depth_min;
   report.depth_max = depth_max;
   report.coverage_in_window = probed ? static_cast<double>(in_window) / static_cast<double>(probed) : 0.0;
-  report.note = std::to_string(passes) + " passes, " + std::to_string(toMm(spacing)).substr(0, 5) + " mm apart";
+  report.note = fmt::format("{} passes, {:.1f} mm apart", passes, toMm((w_max - w_min) / passes));
   return keys;
 }
 

@@ -29,8 +29,9 @@ struct RingSpec {
 };
 
 /// Parallel passes over the part seen from `view` (part frame, the scanner's +z), along
-/// `pass_direction`, spaced by the near line length × (1 − overlap); the scanner height follows
-/// the surface so it stays in the depth window; `lead` before and after each pass.
+/// `pass_direction`, spread evenly across the part at most the near line length × (1 − overlap)
+/// apart; the scanner height follows the surface so it stays in the depth window; `lead` before
+/// and after each pass.
 struct RasterSpec {
   Eigen::Vector3d view = -Eigen::Vector3d::UnitZ();
   Eigen::Vector3d pass_direction = Eigen::Vector3d::UnitX();
