@@ -17,7 +17,10 @@ struct Raycaster::Impl {
 };
 
 Raycaster::Raycaster(const kinematics::TriangleMesh& mesh) : impl_(std::make_unique<Impl>()) {
-  impl_->device = rtcNewDevice("threads=1");  // we parallelise over rays ourselves
+  // No "threads=N" in the config: with it, Embree's TBB back end installs a process-wide
+  // tbb::global_control for the device's lifetime, and every parallel loop of ours (the maps)
+  // silently ran on one thread while a Raycaster existed.
+  impl_->device = rtcNewDevice(nullptr);
   if (!impl_->device) throw std::runtime_error("Embree: cannot create a device");
   impl_->scene = rtcNewScene(impl_->device);
   rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);

@@ -2,6 +2,7 @@
 // values, Embree against a brute-force ray–triangle loop, the path generators (ring, raster,
 // waypoints, file) against the geometry they promise, and the job-level errors of `scan`.
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <fcntl.h>
 #include <spawn.h>
@@ -942,3 +943,21 @@ TEST_F(ScanJob, ARingThatNeverSeesThePartNamesItsElement) {
 }
 
 }  // namespace
+
+namespace scanplan::scanner {
+namespace {
+
+TEST(RaycasterThreads, AliveRaycasterDoesNotThrottleOurParallelLoops) {
+  // Embree's TBB back end, given "threads=N", installs a process-wide tbb::global_control for
+  // the device's lifetime: the maps then ran on one thread while a Raycaster was alive.
+  const std::size_t before =
+      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
+  kinematics::TriangleMesh mesh;
+  mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  mesh.triangles = {{0, 1, 2}};
+  const Raycaster raycaster(mesh);
+  EXPECT_EQ(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism), before);
+}
+
+}  // namespace
+}  // namespace scanplan::scanner
