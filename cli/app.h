@@ -7,8 +7,8 @@ enum class ExitCode : int {
   kOk = 0,
   kInternal = 1,   ///< a bug: please report
   kUsage = 2,      ///< bad command line
-  kInput = 3,      ///< bad job, robot or mesh file, or a bad value
-  kNoPlan = 4,     ///< the input is valid but no feasible plan / pose exists
+  kNoPlan = 3,     ///< the input is valid but no feasible plan / pose exists
+  kInput = 4,      ///< bad job, robot or mesh file, or a bad value
 };
 
 /// The whole command-line application; main() only forwards to it.

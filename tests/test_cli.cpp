@@ -299,12 +299,12 @@ TEST_F(Cli, EveryIkSolutionFedBackToFkReachesTheTarget) {
   }
 }
 
-TEST_F(Cli, IkOfAnUnreachablePoseExitsFourAndSaysNoSolution) {
+TEST_F(Cli, IkOfAnUnreachablePoseExitsThreeAndSaysNoSolution) {
   Result run = scanplan({"ik", "--robot", kViper, "--trans", "2000,0,0,0,0,0"});
-  EXPECT_EQ(run.exit_code, 4) << describe(run);
+  EXPECT_EQ(run.exit_code, 3) << describe(run);
   EXPECT_TRUE(contains(run.out + run.err, "no solution")) << describe(run);
   run = scanplan({"ik", "--robot", kViper, "--trans", "2000,0,0,0,0,0", "--json"});
-  EXPECT_EQ(run.exit_code, 4) << describe(run);
+  EXPECT_EQ(run.exit_code, 3) << describe(run);
   EXPECT_TRUE(contains(run.out, "\"reachable\": false")) << run.out;
   EXPECT_TRUE(contains(run.out, "\"solutions\": []")) << run.out;
 }
@@ -339,7 +339,7 @@ TEST_F(Cli, IkRejectsANonRigidMatrix) {
                               "1,0,0,450,0,1,0,0,0,0,-1,695,0,0,0,1",    // a mirror, det −1
                               "1,0,0,450,0,1,0,0,0,0,1,695,0,0,1,1"}) {  // projective last row
     const Result run = scanplan({"ik", "--robot", kViper, "--matrix", m});
-    EXPECT_EQ(run.exit_code, 3) << m << "\n" << describe(run);
+    EXPECT_EQ(run.exit_code, 4) << m << "\n" << describe(run);
     EXPECT_TRUE(contains(run.err, "scanplan: error:") && contains(run.err, "--matrix")) << run.err;
   }
 }
@@ -349,7 +349,7 @@ TEST_F(Cli, FkRejectsBadJointNumbers) {
                                    "0,0,0,inf,0,0", "1,,3,4,5,6", "1,2,3deg,4,5,6",
                                    "1,2,3,4,5,6,"}) {
     const Result run = scanplan({"fk", "--robot", kViper, "--joints", joints});
-    EXPECT_EQ(run.exit_code, 3) << joints << "\n" << describe(run);
+    EXPECT_EQ(run.exit_code, 4) << joints << "\n" << describe(run);
     EXPECT_TRUE(contains(run.err, "scanplan: error:") && contains(run.err, "--joints")) << run.err;
   }
 }
@@ -412,7 +412,7 @@ TEST_F(Cli, JobWithAnUnknownKeyIsAnInputErrorNamingFileAndLine) {
   const fs::path job = dir_ / "unknown_key.yaml";
   writeFile(job, text);
   const Result run = scanplan({"job", "show", job.string()});
-  EXPECT_EQ(run.exit_code, 3) << describe(run);
+  EXPECT_EQ(run.exit_code, 4) << describe(run);
   EXPECT_TRUE(contains(run.err, "scanplan: error:")) << run.err;
   EXPECT_TRUE(contains(run.err, job.string() + ":" + std::to_string(line))) << run.err;
   EXPECT_TRUE(contains(run.err, "colour")) << run.err;
@@ -448,7 +448,7 @@ TEST_F(Cli, PlanIntoAnExistingFileIsAnInputError) {
   const fs::path not_a_dir = dir_ / "a_file";
   writeFile(not_a_dir, "x");
   const Result run = scanplan({"plan", kDemoJob, "-o", not_a_dir.string()});
-  EXPECT_EQ(run.exit_code, 3) << describe(run);
+  EXPECT_EQ(run.exit_code, 4) << describe(run);
   EXPECT_TRUE(contains(run.err, "scanplan: error:") && contains(run.err, not_a_dir.string()));
 }
 
@@ -459,7 +459,7 @@ TEST_F(Cli, PlanWithAMissingMeshIsAnInputErrorAndLeavesNoTmpFiles) {
   const fs::path out = dir_ / "out";
   fs::create_directories(out);
   const Result run = scanplan({"plan", job.string(), "-o", out.string()});
-  EXPECT_EQ(run.exit_code, 3) << describe(run);
+  EXPECT_EQ(run.exit_code, 4) << describe(run);
   EXPECT_TRUE(contains(run.err, "scanplan: error:") && contains(run.err, mesh.string())) << run.err;
   EXPECT_TRUE(tmpFiles(out).empty());
   EXPECT_FALSE(fs::exists(out / "job.yaml"));
@@ -485,7 +485,7 @@ TEST_F(Cli, CheckScoresAPoseAndListsEveryPair) {
 TEST_F(Cli, CheckReportsASelfCollisionAsAForbiddenPose) {
   // The scanner folded back into link 1 (joints 2 and 3 near their limits).
   const Result run = scanplan({"check", kDemoJob, "--table", "0", "--joints", "0,-150,250,0,90,0"});
-  EXPECT_EQ(run.exit_code, 4) << describe(run);
+  EXPECT_EQ(run.exit_code, 3) << describe(run);
   EXPECT_TRUE(contains(run.out, "collision    YES")) << run.out;
   EXPECT_TRUE(contains(run.out, "link1 - scanner")) << run.out;
   EXPECT_TRUE(contains(run.out, "CONTACT")) << run.out;
@@ -493,14 +493,14 @@ TEST_F(Cli, CheckReportsASelfCollisionAsAForbiddenPose) {
 
 TEST_F(Cli, CheckRejectsBadJointsAndBadPairRules) {
   const Result joints = scanplan({"check", kDemoJob, "--table", "0", "--joints", "0,0,0"});
-  EXPECT_EQ(joints.exit_code, 3) << describe(joints);
+  EXPECT_EQ(joints.exit_code, 4) << describe(joints);
   EXPECT_TRUE(contains(joints.err, "--joints")) << joints.err;
   const fs::path job = dir_ / "rule.yaml";
   writeFile(job, "robot: " + (kSourceDir / "data/robots/viper_s650.yaml").string() +
                      "\npart: {mesh: " + (kSourceDir / "data/parts/demo_housing.stl").string() +
                      "}\nconstraints:\n  clearance:\n    pairs:\n      - {a: scaner, b: part, exclude: true}\n");
   const Result rule = scanplan({"check", job.string(), "--table", "0", "--joints", "0,-60,150,0,60,0"});
-  EXPECT_EQ(rule.exit_code, 3) << describe(rule);
+  EXPECT_EQ(rule.exit_code, 4) << describe(rule);
   EXPECT_TRUE(contains(rule.err, "constraints.clearance.pairs")) << rule.err;
   EXPECT_TRUE(contains(rule.err, "scaner")) << rule.err;
 }

@@ -936,7 +936,7 @@ TEST_F(ScanJob, ARingThatNeverSeesThePartNamesItsElement) {
   int status = 0;
   ASSERT_EQ(::waitpid(pid, &status, 0), pid);
   ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 3);
+  EXPECT_EQ(WEXITSTATUS(status), 4);
   std::ifstream in(err);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("scanplan: error: " + file.string() + ": scan.paths[1]"), std::string::npos) << text;
