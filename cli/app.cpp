@@ -4,9 +4,9 @@
 #include <exception>
 #include <string>
 
-#include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
+#include <CLI/CLI.hpp>
 
 #include "cli/commands.h"
 #include "kinematics/error.h"
@@ -15,8 +15,8 @@ namespace scanplan::cli {
 namespace {
 
 void addRobotSource(CLI::App& cmd, RobotSource& source) {
-  auto* robot = cmd.add_option("--robot", source.robot_file, "Robot file (YAML)")
-                    ->check(CLI::ExistingFile);
+  auto* robot =
+      cmd.add_option("--robot", source.robot_file, "Robot file (YAML)")->check(CLI::ExistingFile);
   auto* job = cmd.add_option("--job", source.job_file, "Job file: use its robot (and scanner)")
                   ->check(CLI::ExistingFile);
   robot->excludes(job);
@@ -30,7 +30,7 @@ void addRobotSource(CLI::App& cmd, RobotSource& source) {
 void setUpLogging(int verbosity) {
   auto logger = spdlog::stderr_color_mt("scanplan");
   logger->set_pattern("scanplan: %^%l%$: %v");
-  logger->set_level(verbosity > 0 ? spdlog::level::debug
+  logger->set_level(verbosity > 0   ? spdlog::level::debug
                     : verbosity < 0 ? spdlog::level::err
                                     : spdlog::level::info);
   spdlog::set_default_logger(logger);
@@ -50,18 +50,25 @@ int run(int argc, char** argv) {
   app.add_flag("-q,--quiet", quiet, "Only errors on stderr");
 
   PlanOptions plan;
-  auto* plan_cmd = app.add_subcommand("plan", "Run a job: load and check the cell (the planning "
-                                              "pipeline grows here), write results to OUT");
-  plan_cmd->add_option("job", plan.job_file, "Job file (YAML)")->required()->check(CLI::ExistingFile);
+  auto* plan_cmd = app.add_subcommand("plan",
+                                      "Run a job: load and check the cell (the planning "
+                                      "pipeline grows here), write results to OUT");
+  plan_cmd->add_option("job", plan.job_file, "Job file (YAML)")
+      ->required()
+      ->check(CLI::ExistingFile);
   plan_cmd->add_option("-o,--out", plan.out_dir, "Output folder (created)")->required();
 
   PlanOptions path;
-  auto* path_cmd = app.add_subcommand("path", "Generate the scan path: OUT/path.csv and a picture of it around the part");
-  path_cmd->add_option("job", path.job_file, "Job file (YAML)")->required()->check(CLI::ExistingFile);
+  auto* path_cmd = app.add_subcommand(
+      "path", "Generate the scan path: OUT/path.csv and a picture of it around the part");
+  path_cmd->add_option("job", path.job_file, "Job file (YAML)")
+      ->required()
+      ->check(CLI::ExistingFile);
   path_cmd->add_option("-o,--out", path.out_dir, "Output folder (created)")->required();
 
   PlanOptions map;
-  auto* map_cmd = app.add_subcommand("map", "Build the configuration maps over table angle x time: npy layers, json, images");
+  auto* map_cmd = app.add_subcommand(
+      "map", "Build the configuration maps over table angle x time: npy layers, json, images");
   map_cmd->add_option("job", map.job_file, "Job file (YAML)")->required()->check(CLI::ExistingFile);
   map_cmd->add_option("-o,--out", map.out_dir, "Output folder (created)")->required();
 
@@ -75,32 +82,41 @@ int run(int argc, char** argv) {
   CheckOptions check;
   auto* check_cmd = app.add_subcommand(
       "check", "Score one pose: every constraint factor, every pair's clearance, collision");
-  check_cmd->add_option("job", check.job_file, "Job file (YAML)")->required()->check(CLI::ExistingFile);
+  check_cmd->add_option("job", check.job_file, "Job file (YAML)")
+      ->required()
+      ->check(CLI::ExistingFile);
   check_cmd->add_option("--table", check.table_deg, "Table angle, degrees")->required();
   auto* check_joints = check_cmd->add_option(
-      "--joints", check.joints_deg, "Six joint angles in degrees: j1,…,j6 (write --joints=-10,… when j1 is negative)");
-  auto* check_time = check_cmd->add_option(
-      "--time", check.time_s, "A time on the job's scan path, s: the pose is solved by IK (the job's map.branch, or the best)");
+      "--joints", check.joints_deg,
+      "Six joint angles in degrees: j1,…,j6 (write --joints=-10,… when j1 is negative)");
+  auto* check_time = check_cmd->add_option("--time", check.time_s,
+                                           "A time on the job's scan path, s: the pose is solved "
+                                           "by IK (the job's map.branch, or the best)");
   check_joints->excludes(check_time);
   check_cmd->add_flag("--json", check.json, "Print JSON instead of text");
 
   FkOptions fk;
-  auto* fk_cmd = app.add_subcommand("fk", "Forward kinematics: flange (and sensor) pose for joints");
+  auto* fk_cmd =
+      app.add_subcommand("fk", "Forward kinematics: flange (and sensor) pose for joints");
   addRobotSource(*fk_cmd, fk.source);
-  fk_cmd->add_option("--joints", fk.joints_deg, "Six joint angles in degrees: j1,j2,j3,j4,j5,j6 "
-                                                 "(write --joints=-10,… when j1 is negative)")
+  fk_cmd
+      ->add_option("--joints", fk.joints_deg,
+                   "Six joint angles in degrees: j1,j2,j3,j4,j5,j6 "
+                   "(write --joints=-10,… when j1 is negative)")
       ->required();
   fk_cmd->add_flag("--json", fk.json, "Print JSON instead of text");
 
   IkOptions ik;
-  auto* ik_cmd = app.add_subcommand("ik", "Inverse kinematics: every joint solution for a flange pose");
+  auto* ik_cmd =
+      app.add_subcommand("ik", "Inverse kinematics: every joint solution for a flange pose");
   addRobotSource(*ik_cmd, ik.source);
   auto* trans = ik_cmd->add_option("--trans", ik.trans,
                                    "Flange pose as V+ TRANS: x,y,z (mm), y,p,r (deg, ZYZ' Euler)");
   auto* matrix = ik_cmd->add_option("--matrix", ik.matrix,
                                     "Flange pose as a 4x4 matrix: 16 numbers, row-major, mm");
   trans->excludes(matrix);
-  ik_cmd->add_flag("--within-limits", ik.within_limits_only, "List only solutions inside the joint limits");
+  ik_cmd->add_flag("--within-limits", ik.within_limits_only,
+                   "List only solutions inside the joint limits");
   ik_cmd->add_flag("--json", ik.json, "Print JSON instead of text");
 
   try {
@@ -108,12 +124,16 @@ int run(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
     std::string message = e.what();
-    const auto known = app.get_subcommands([&](CLI::App* sub) { return argc > 1 && sub->check_name(argv[1]); });
+    const auto known =
+        app.get_subcommands([&](CLI::App* sub) { return argc > 1 && sub->check_name(argv[1]); });
     if (argc > 1 && argv[1][0] != '-' && known.empty()) {
-      message = std::string("unknown command '") + argv[1] + "'; expected one of: plan, path, map, check, job, fk, ik";
+      message = std::string("unknown command '") + argv[1] +
+                "'; expected one of: plan, path, map, check, job, fk, ik";
     }
-    std::fprintf(stderr, "scanplan: error: %s\nRun 'scanplan --help' (or 'scanplan COMMAND --help') for usage.\n",
-                 message.c_str());
+    std::fprintf(
+        stderr,
+        "scanplan: error: %s\nRun 'scanplan --help' (or 'scanplan COMMAND --help') for usage.\n",
+        message.c_str());
     return static_cast<int>(ExitCode::kUsage);
   }
   if (check_cmd->parsed() && check_joints->count() + check_time->count() == 0) {

@@ -5,10 +5,10 @@ namespace scanplan::cli {
 /// Exit codes, stable for scripts.
 enum class ExitCode : int {
   kOk = 0,
-  kInternal = 1,   ///< a bug: please report
-  kUsage = 2,      ///< bad command line
-  kNoPlan = 3,     ///< the input is valid but no feasible plan / pose exists
-  kInput = 4,      ///< bad job, robot or mesh file, or a bad value
+  kInternal = 1,  ///< a bug: please report
+  kUsage = 2,     ///< bad command line
+  kNoPlan = 3,    ///< the input is valid but no feasible plan / pose exists
+  kInput = 4,     ///< bad job, robot or mesh file, or a bad value
 };
 
 /// The whole command-line application; main() only forwards to it.

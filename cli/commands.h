@@ -50,9 +50,13 @@ ExitCode runMap(const PlanOptions& options);
 /// The job's scan path (loads the part, casts rays for the standoff); errors name the job.
 scanner::GeneratedPath generateScanPath(const JobSpec& job, const kinematics::CellModel& cell);
 /// Path, maps and their files into `out`; returns the summary lines.
-std::string buildAndWriteMaps(const JobSpec& job, const kinematics::CellModel& cell, const std::filesystem::path& out);
+std::string buildAndWriteMaps(const JobSpec& job,
+                              const kinematics::CellModel& cell,
+                              const std::filesystem::path& out);
 /// The map files of `scanplan map` (npy layers, json, images) into `dir`.
-void writeMapOutputs(const std::filesystem::path& dir, const JobSpec& job, const planner::ConfigMap& map);
+void writeMapOutputs(const std::filesystem::path& dir,
+                     const JobSpec& job,
+                     const planner::ConfigMap& map);
 ExitCode runFk(const FkOptions& options);
 ExitCode runIk(const IkOptions& options);
 ExitCode runJobShow(const std::filesystem::path& job_file);

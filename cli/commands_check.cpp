@@ -14,7 +14,9 @@
 namespace scanplan::cli {
 namespace {
 
-std::vector<double> mmVector(const Eigen::Vector3d& p) { return {toMm(p.x()), toMm(p.y()), toMm(p.z())}; }
+std::vector<double> mmVector(const Eigen::Vector3d& p) {
+  return {toMm(p.x()), toMm(p.y()), toMm(p.z())};
+}
 
 }  // namespace
 
@@ -27,16 +29,19 @@ ExitCode runCheck(const CheckOptions& options) {
   kinematics::JointVector q = kinematics::JointVector::Zero();
   std::string origin;
   if (!options.joints_deg.empty()) {
-    const auto values = parseNumberList(options.joints_deg, 6, "--joints", "6 joint angles in degrees, j1,…,j6");
+    const auto values =
+        parseNumberList(options.joints_deg, 6, "--joints", "6 joint angles in degrees, j1,…,j6");
     for (int i = 0; i < 6; ++i) q(i) = deg(values[static_cast<std::size_t>(i)]);
   } else {
     // The scan-path sample nearest --time, solved on the job's branch (or the best of all).
     const kinematics::ScanPath path = generateScanPath(job, scene.cell()).path;
     if (!(options.time_s >= 0.0) || options.time_s > path.duration() + 0.5 * path.dt) {
-      throw InputError(fmt::format("--time: {} s: expected a time within the scan path, 0 … {:.2f} s",
-                                   options.time_s, path.duration()));
+      throw InputError(
+          fmt::format("--time: {} s: expected a time within the scan path, 0 … {:.2f} s",
+                      options.time_s, path.duration()));
     }
-    const auto k = std::min(path.samples.size() - 1, static_cast<std::size_t>(std::llround(options.time_s / path.dt)));
+    const auto k = std::min(path.samples.size() - 1,
+                            static_cast<std::size_t>(std::llround(options.time_s / path.dt)));
     const auto& sample = path.samples[k];
     const auto solutions = robot.ik(scene.cell().flangeTarget(theta, sample.X_PS));
     const std::optional<kinematics::IkBranch> wanted =
@@ -51,18 +56,22 @@ ExitCode runCheck(const CheckOptions& options) {
       }
     }
     if (best < 0.0) {
-      std::fputs(fmt::format("table {} deg, t = {:.2f} s: the scan pose is out of reach{}\n", options.table_deg,
-                             sample.t, wanted ? " on " + wanted->words() : "").c_str(), stdout);
+      std::fputs(fmt::format("table {} deg, t = {:.2f} s: the scan pose is out of reach{}\n",
+                             options.table_deg, sample.t, wanted ? " on " + wanted->words() : "")
+                     .c_str(),
+                 stdout);
       return ExitCode::kNoPlan;
     }
-    origin = fmt::format(" (scan sample t = {:.2f} s{})", sample.t, sample.scanning ? "" : ", not scanning");
+    origin = fmt::format(" (scan sample t = {:.2f} s{})", sample.t,
+                         sample.scanning ? "" : ", not scanning");
   }
   std::vector<double> joints;
   for (int i = 0; i < 6; ++i) joints.push_back(toDeg(q(i)));
   const planner::PoseScore s = evaluator.score(theta, q);
   const auto& bodies = scene.bodies();
   const auto pairName = [&](const collision::PairInfo& p) {
-    return bodies[static_cast<std::size_t>(p.a)].name + " - " + bodies[static_cast<std::size_t>(p.b)].name;
+    return bodies[static_cast<std::size_t>(p.a)].name + " - " +
+           bodies[static_cast<std::size_t>(p.b)].name;
   };
 
   if (options.json) {
@@ -112,7 +121,8 @@ ExitCode runCheck(const CheckOptions& options) {
                      fmt::join(joints, ", "), robot.branchOf(q).words(),
                      robot.withinLimits(q) ? "" : ", OUTSIDE the joint limits", origin);
     t += "joint limits";
-    for (int j = 0; j < 6; ++j) t += fmt::format("  f{}={:.3f}", j + 1, s.joint[static_cast<std::size_t>(j)]);
+    for (int j = 0; j < 6; ++j)
+      t += fmt::format("  f{}={:.3f}", j + 1, s.joint[static_cast<std::size_t>(j)]);
     t += "   (Eq. 7)\n";
     t += fmt::format(
         "singularity  wrist |sin q5| {:.3f} -> f {:.3f}   elbow {:.3f} -> f {:.3f}   shoulder "
@@ -121,7 +131,8 @@ ExitCode runCheck(const CheckOptions& options) {
         s.shoulder, s.singularity.manipulability);
     t += fmt::format("clearance    {} pairs (Eq. 8); distances beyond d_high are shown as >\n",
                      scene.pairs().size());
-    t += fmt::format("  {:<24} {:>11} {:>7} {:>7} {:>7}\n", "pair", "distance_mm", "d_low", "d_high", "f_C");
+    t += fmt::format("  {:<24} {:>11} {:>7} {:>7} {:>7}\n", "pair", "distance_mm", "d_low",
+                     "d_high", "f_C");
     for (std::size_t i = 0; i < scene.pairs().size(); ++i) {
       const auto& p = scene.pairs()[i];
       const auto& c = s.clearance.pairs[i];
@@ -136,9 +147,11 @@ ExitCode runCheck(const CheckOptions& options) {
     if (s.clearance.limiting_pair >= 0) {
       const auto& c = s.clearance.pairs[static_cast<std::size_t>(s.clearance.limiting_pair)];
       const auto a = mmVector(c.p_a), b = mmVector(c.p_b);
-      t += fmt::format("closest      {}: {:.3f} mm between ({:.1f}, {:.1f}, {:.1f}) and ({:.1f}, {:.1f}, {:.1f}) mm (world)\n",
-                       pairName(scene.pairs()[static_cast<std::size_t>(s.clearance.limiting_pair)]),
-                       toMm(c.distance), a[0], a[1], a[2], b[0], b[1], b[2]);
+      t += fmt::format(
+          "closest      {}: {:.3f} mm between ({:.1f}, {:.1f}, {:.1f}) and ({:.1f}, {:.1f}, "
+          "{:.1f}) mm (world)\n",
+          pairName(scene.pairs()[static_cast<std::size_t>(s.clearance.limiting_pair)]),
+          toMm(c.distance), a[0], a[1], a[2], b[0], b[1], b[2]);
     }
     std::fputs(t.c_str(), stdout);
   }

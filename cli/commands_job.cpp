@@ -6,9 +6,9 @@
 
 #include "cli/commands.h"
 #include "cli/format.h"
+#include "collision/scene.h"
 #include "kinematics/error.h"
 #include "kinematics/mesh.h"
-#include "collision/scene.h"
 #include "kinematics/units.h"
 #include "planner/constraints.h"
 
@@ -17,8 +17,7 @@ namespace {
 
 kinematics::LoadedMesh loadPart(const JobSpec& job, const kinematics::CellModel& cell) {
   try {
-    kinematics::LoadedMesh part =
-        kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
+    kinematics::LoadedMesh part = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
     for (const std::string& w : part.report.warnings) {
       spdlog::warn("{}: part.mesh: {}", job.source.filename().string(), w);
     }
@@ -30,7 +29,9 @@ kinematics::LoadedMesh loadPart(const JobSpec& job, const kinematics::CellModel&
 
 // Without a scan path: can the sensor reach 150 mm above the part top, looking down, as the
 // table turns? A first look at whether the cell is laid out sensibly.
-std::string reachCheck(const JobSpec& job, const kinematics::CellModel& cell, const kinematics::LoadedMesh& part) {
+std::string reachCheck(const JobSpec& job,
+                       const kinematics::CellModel& cell,
+                       const kinematics::LoadedMesh& part) {
   const Eigen::AlignedBox3d box = part.mesh.bounds();
   const Eigen::Isometry3d X_WP = cell.table.X_WR(0.0) * cell.part.X_RP;
   const Eigen::Vector3d top_centre_P(box.center().x(), box.center().y(), box.max().z());
@@ -46,7 +47,8 @@ std::string reachCheck(const JobSpec& job, const kinematics::CellModel& cell, co
   constexpr int kAngles = 12;
   for (int k = 0; k < kAngles; ++k) {
     const double theta = deg(30.0 * k);
-    const auto solutions = cell.robot.ik(cell.flangeTarget(theta, X_PS), {.within_limits_only = true});
+    const auto solutions =
+        cell.robot.ik(cell.flangeTarget(theta, X_PS), {.within_limits_only = true});
     if (solutions.empty()) continue;
     ++reachable;
     double angle_best = 0.0;
@@ -62,11 +64,13 @@ std::string reachCheck(const JobSpec& job, const kinematics::CellModel& cell, co
   }
   const Eigen::Vector3d top_W = X_WP * top_centre_P * kMToMm;
   std::string s = fmt::format(
-      "reach      no scan path in the job; sensor 150 mm above the part top ({:.0f}, {:.0f}, {:.0f}) mm, looking down: "
+      "reach      no scan path in the job; sensor 150 mm above the part top ({:.0f}, {:.0f}, "
+      "{:.0f}) mm, looking down: "
       "reachable at {}/{} table angles (every 30 deg), collision-free and feasible at {}\n",
       top_W.x(), top_W.y(), top_W.z(), reachable, kAngles, feasible);
-  s += fmt::format("score      best f = {:.3f} over those poses (limited by {}); {} body pairs checked\n", best_f,
-                   best_limit.empty() ? "-" : best_limit, scene.pairs().size());
+  s += fmt::format(
+      "score      best f = {:.3f} over those poses (limited by {}); {} body pairs checked\n",
+      best_f, best_limit.empty() ? "-" : best_limit, scene.pairs().size());
   return s;
 }
 
@@ -87,13 +91,12 @@ ExitCode runPlan(const PlanOptions& options) {
   std::string summary;
   summary += fmt::format("job        {} ({})\n", job.name, job.source.string());
   summary += fmt::format("robot      {}\n", cell.robot.name());
-  summary += fmt::format("table      radius {} mm, axis at ({:.1f}, {:.1f}, {:.1f}) mm, {}\n",
-                         job.table.radius_mm, toMm(cell.table.X_WA.translation().x()),
-                         toMm(cell.table.X_WA.translation().y()),
-                         toMm(cell.table.X_WA.translation().z()),
-                         job.table.continuous ? "continuous"
-                                              : fmt::format("{} … {} deg", job.table.min_deg,
-                                                            job.table.max_deg));
+  summary += fmt::format(
+      "table      radius {} mm, axis at ({:.1f}, {:.1f}, {:.1f}) mm, {}\n", job.table.radius_mm,
+      toMm(cell.table.X_WA.translation().x()), toMm(cell.table.X_WA.translation().y()),
+      toMm(cell.table.X_WA.translation().z()),
+      job.table.continuous ? "continuous"
+                           : fmt::format("{} … {} deg", job.table.min_deg, job.table.max_deg));
   const Eigen::Vector3d size = part.mesh.bounds().sizes() * kMToMm;
   summary += fmt::format("part       {}: {} triangles, {:.1f} x {:.1f} x {:.1f} mm, {}\n",
                          job.part.mesh.as_written, part.mesh.triangles.size(), size.x(), size.y(),
@@ -106,8 +109,9 @@ ExitCode runPlan(const PlanOptions& options) {
     summary += buildAndWriteMaps(job, cell, options.out_dir);
   }
   summary += fmt::format("wrote      {}\n", (options.out_dir / "job.yaml").string());
-  summary += "note       planning (Ray Shooting, DP, OMPL), validation, scanner simulation and robot "
-             "programs are not built yet: this run writes the scan path and the configuration maps\n";
+  summary +=
+      "note       planning (Ray Shooting, DP, OMPL), validation, scanner simulation and robot "
+      "programs are not built yet: this run writes the scan path and the configuration maps\n";
   std::fputs(summary.c_str(), stdout);
   return ExitCode::kOk;
 }

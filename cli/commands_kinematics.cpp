@@ -53,7 +53,8 @@ std::string poseText(const std::string& title, const Eigen::Isometry3d& X) {
   s += fmt::format("  position_mm      {:10.4f} {:10.4f} {:10.4f}\n", p.x(), p.y(), p.z());
   s += fmt::format("  trans_zyz_deg    {:10.4f} {:10.4f} {:10.4f}   (V+ TRANS y, p, r)\n", zyz.x(),
                    zyz.y(), zyz.z());
-  s += fmt::format("  quaternion_wxyz  {:10.7f} {:10.7f} {:10.7f} {:10.7f}\n", q(0), q(1), q(2), q(3));
+  s += fmt::format("  quaternion_wxyz  {:10.7f} {:10.7f} {:10.7f} {:10.7f}\n", q(0), q(1), q(2),
+                   q(3));
   for (int r = 0; r < 3; ++r) {
     s += fmt::format("  {:16} {:10.7f} {:10.7f} {:10.7f}\n", r == 0 ? "rotation_matrix" : "",
                      R(r, 0), R(r, 1), R(r, 2));
@@ -72,7 +73,8 @@ std::vector<double> parseNumberList(const std::string& text,
   std::vector<std::string> items;
   for (std::size_t start = 0;;) {
     const std::size_t comma = text.find(',', start);
-    items.push_back(text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    items.push_back(
+        text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
     if (comma == std::string::npos) break;
     start = comma + 1;
   }
@@ -92,8 +94,8 @@ std::vector<double> parseNumberList(const std::string& text,
     values.push_back(v);
   }
   if (values.size() != count) {
-    throw InputError(fmt::format("{}: '{}' has {} numbers: expected {}", option, text,
-                                 values.size(), what));
+    throw InputError(
+        fmt::format("{}: '{}' has {} numbers: expected {}", option, text, values.size(), what));
   }
   return values;
 }
@@ -161,11 +163,13 @@ ExitCode runIk(const IkOptions& options) {
       for (int c = 0; c < 4; ++c) M(r, c) = v[static_cast<std::size_t>(4 * r + c)];
     const Eigen::Matrix3d R = M.topLeftCorner<3, 3>();
     const double ortho = (R.transpose() * R - Eigen::Matrix3d::Identity()).norm();
-    if (ortho > 1e-6 || R.determinant() < 0 || (M.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-9) {
+    if (ortho > 1e-6 || R.determinant() < 0 ||
+        (M.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-9) {
       throw InputError(fmt::format(
           "--matrix: not a rigid transform (rotation orthonormality error {:.2e}, det {:.6f}, "
           "last row [{}]): expected a rotation matrix with det +1 and last row 0,0,0,1",
-          ortho, R.determinant(), fmt::join(std::vector<double>(M.row(3).data(), M.row(3).data() + 4), ",")));
+          ortho, R.determinant(),
+          fmt::join(std::vector<double>(M.row(3).data(), M.row(3).data() + 4), ",")));
     }
     // Re-orthonormalise the printed digits so IK sees an exact rotation.
     X_BF.linear() = Eigen::Quaterniond(R).normalized().toRotationMatrix();

@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <chrono>
-#include <numbers>
 #include <cmath>
 #include <cstdio>
 #include <mutex>
+#include <numbers>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -30,14 +30,16 @@ constexpr int kMaxImageHeight = 1200;
 // A progress line on stderr, only on a terminal (scripts and CI logs stay clean).
 class Progress {
  public:
-  explicit Progress(std::string label) : label_(std::move(label)), enabled_(isatty(STDERR_FILENO) != 0) {}
+  explicit Progress(std::string label)
+      : label_(std::move(label)), enabled_(isatty(STDERR_FILENO) != 0) {}
   void operator()(std::size_t done, std::size_t total) {
     if (!enabled_) return;
     const std::lock_guard<std::mutex> lock(mutex_);
     const int percent = static_cast<int>(100 * done / std::max<std::size_t>(total, 1));
     if (percent == last_ && done != total) return;
     last_ = percent;
-    std::fprintf(stderr, "\r%s %3d%% (%zu / %zu)%s", label_.c_str(), percent, done, total, done == total ? "\n" : "");
+    std::fprintf(stderr, "\r%s %3d%% (%zu / %zu)%s", label_.c_str(), percent, done, total,
+                 done == total ? "\n" : "");
     std::fflush(stderr);
   }
 
@@ -56,7 +58,9 @@ struct PathContext {
 
 PathContext buildPath(const JobSpec& job, const kinematics::CellModel& cell) {
   if (job.scan.paths.empty()) {
-    throw InputError(job.source.string() + ": scan.paths: empty: expected at least one path element (ring, raster, waypoints or file)");
+    throw InputError(job.source.string() +
+                     ": scan.paths: empty: expected at least one path element (ring, raster, "
+                     "waypoints or file)");
   }
   PathContext context;
   context.part = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
@@ -64,7 +68,8 @@ PathContext buildPath(const JobSpec& job, const kinematics::CellModel& cell) {
   context.window = scanner::laserWindow(laserOptics(job));
   const scanner::Raycaster raycaster(context.part.mesh);
   try {
-    context.generated = scanner::generatePath(pathRequest(job), context.part.mesh, raycaster, context.window);
+    context.generated =
+        scanner::generatePath(pathRequest(job), context.part.mesh, raycaster, context.window);
   } catch (const InputError& e) {
     throw InputError(job.source.string() + ": " + e.what());
   }
@@ -72,16 +77,20 @@ PathContext buildPath(const JobSpec& job, const kinematics::CellModel& cell) {
 }
 
 std::string pathSummary(const PathContext& c) {
-  std::string s = fmt::format("scanner    depth window {:.1f} … {:.1f} mm, line {:.1f} mm near, {:.1f} mm far (Eq. 5)\n",
-                              toMm(c.window.z_min), toMm(c.window.z_max), 2 * toMm(c.window.y_near), 2 * toMm(c.window.y_far));
+  std::string s = fmt::format(
+      "scanner    depth window {:.1f} … {:.1f} mm, line {:.1f} mm near, {:.1f} mm far (Eq. 5)\n",
+      toMm(c.window.z_min), toMm(c.window.z_max), 2 * toMm(c.window.y_near),
+      2 * toMm(c.window.y_far));
   for (std::size_t i = 0; i < c.generated.elements.size(); ++i) {
     const auto& e = c.generated.elements[i];
-    s += fmt::format("path[{}]    {:<9} t = {:.1f} … {:.1f} s, surface depth {:.1f} … {:.1f} mm, {:.0f}% of probes in the window{}\n",
-                     i, e.kind, e.start_time, e.start_time + e.duration, toMm(e.depth_min), toMm(e.depth_max),
-                     100.0 * e.coverage_in_window, e.note.empty() ? "" : "; " + e.note);
+    s += fmt::format(
+        "path[{}]    {:<9} t = {:.1f} … {:.1f} s, surface depth {:.1f} … {:.1f} mm, {:.0f}% of "
+        "probes in the window{}\n",
+        i, e.kind, e.start_time, e.start_time + e.duration, toMm(e.depth_min), toMm(e.depth_max),
+        100.0 * e.coverage_in_window, e.note.empty() ? "" : "; " + e.note);
   }
-  s += fmt::format("samples    {} every {} s ({:.1f} s)\n", c.generated.path.samples.size(), c.generated.path.dt,
-                   c.generated.path.duration());
+  s += fmt::format("samples    {} every {} s ({:.1f} s)\n", c.generated.path.samples.size(),
+                   c.generated.path.dt, c.generated.path.duration());
   return s;
 }
 
@@ -89,7 +98,9 @@ std::string pathSummary(const PathContext& c) {
 RgbImage pathPicture(const PathContext& c) {
   constexpr int kView = 480;
   RgbImage out = RgbImage::filled(3 * kView, kView, {255, 255, 255});
-  const Eigen::Matrix3d iso = (Eigen::Matrix3d() << 0.7071, -0.7071, 0, 0.4082, 0.4082, 0.8165, -0.5774, -0.5774, 0.5774).finished();
+  const Eigen::Matrix3d iso =
+      (Eigen::Matrix3d() << 0.7071, -0.7071, 0, 0.4082, 0.4082, 0.8165, -0.5774, -0.5774, 0.5774)
+          .finished();
   const Eigen::Matrix3d top = Eigen::Matrix3d::Identity();
   const Eigen::Matrix3d front = (Eigen::Matrix3d() << 1, 0, 0, 0, 0, 1, 0, -1, 0).finished();
   int column = 0;
@@ -125,10 +136,12 @@ RgbImage mapImage(const planner::ConfigMap& map, std::size_t branch, Colour colo
       // must not vanish when a map is shrunk).
       const int a0 = (h - 1 - y) * na / h, a1 = std::max(a0 + 1, (h - y) * na / h);
       const int t0 = x * nt / w, t1 = std::max(t0 + 1, (x + 1) * nt / w);
-      std::size_t worst = map.index(branch, static_cast<std::size_t>(a0), static_cast<std::size_t>(t0));
+      std::size_t worst =
+          map.index(branch, static_cast<std::size_t>(a0), static_cast<std::size_t>(t0));
       for (int a = a0; a < a1; ++a)
         for (int t = t0; t < t1; ++t) {
-          const std::size_t i = map.index(branch, static_cast<std::size_t>(a), static_cast<std::size_t>(t));
+          const std::size_t i =
+              map.index(branch, static_cast<std::size_t>(a), static_cast<std::size_t>(t));
           if (map.f[i] < map.f[worst]) worst = i;
         }
       image.set(x, y, colour(worst));
@@ -151,8 +164,9 @@ RgbImage cylinderImage(const planner::ConfigMap& map, std::size_t branch) {
       const double alpha = std::asin(v);  // angle on the cylinder seen at this row
       double theta = std::fmod(centre + alpha + 4.0 * std::numbers::pi, 2.0 * std::numbers::pi);
       if (theta < map.angles.front() - 1e-9 || theta > map.angles.back() + step) continue;
-      const auto a = std::min(map.angles.size() - 1,
-                              static_cast<std::size_t>(std::max(0.0, std::floor((theta - map.angles.front()) / step))));
+      const auto a = std::min(
+          map.angles.size() - 1,
+          static_cast<std::size_t>(std::max(0.0, std::floor((theta - map.angles.front()) / step))));
       const double shade = 0.35 + 0.65 * std::cos(alpha);
       for (int x = 0; x < w; ++x) {
         const auto t = static_cast<std::size_t>(x * nt / w);
@@ -164,8 +178,11 @@ RgbImage cylinderImage(const planner::ConfigMap& map, std::size_t branch) {
   return image;
 }
 
-void writeFigure(const std::filesystem::path& dir, const std::string& stem, const RgbImage& image,
-                 const planner::ConfigMap& map, const std::string& title,
+void writeFigure(const std::filesystem::path& dir,
+                 const std::string& stem,
+                 const RgbImage& image,
+                 const planner::ConfigMap& map,
+                 const std::string& title,
                  std::vector<std::pair<Rgb, std::string>> legend) {
   writePng(dir / (stem + ".png"), image);
   SvgFigure figure;
@@ -205,13 +222,16 @@ ExitCode runPath(const PlanOptions& options) {
   writeFileAtomically(options.out_dir / "path.csv", scanner::pathToCsv(context.generated.path));
   writePng(options.out_dir / "path.png", pathPicture(context));
   std::string text = pathSummary(context);
-  text += fmt::format("wrote      {} (path.csv, path.png: iso, top and front views; green start, red end)\n",
-                      options.out_dir.string());
+  text += fmt::format(
+      "wrote      {} (path.csv, path.png: iso, top and front views; green start, red end)\n",
+      options.out_dir.string());
   std::fputs(text.c_str(), stdout);
   return ExitCode::kOk;
 }
 
-std::string buildAndWriteMaps(const JobSpec& job, const kinematics::CellModel& cell, const std::filesystem::path& out) {
+std::string buildAndWriteMaps(const JobSpec& job,
+                              const kinematics::CellModel& cell,
+                              const std::filesystem::path& out) {
   const PathContext context = buildPath(job, cell);
   const collision::Scene scene(cell, clearanceConfig(job));
   planner::MapRequest request;
@@ -221,18 +241,21 @@ std::string buildAndWriteMaps(const JobSpec& job, const kinematics::CellModel& c
   prepareOutputDir(out);
   Progress progress("map");
   const auto start = std::chrono::steady_clock::now();
-  const planner::ConfigMap map = planner::buildConfigMap(scene, constraintSettings(job), context.generated.path, request,
-                                                         [&progress](std::size_t d, std::size_t t) { progress(d, t); });
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const planner::ConfigMap map =
+      planner::buildConfigMap(scene, constraintSettings(job), context.generated.path, request,
+                              [&progress](std::size_t d, std::size_t t) { progress(d, t); });
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   writeFileAtomically(out / "path.csv", scanner::pathToCsv(context.generated.path));
   writePng(out / "path.png", pathPicture(context));
   writeMapOutputs(out, job, map);
 
   std::string text = pathSummary(context);
   const std::size_t cells = map.cellsPerBranch();
-  text += fmt::format("map        {} angles x {} samples x {} branch(es) = {} cells in {:.1f} s ({:.0f} cells/s)\n",
-                      map.angles.size(), map.times.size(), map.branches.size(), cells * map.branches.size(), seconds,
-                      static_cast<double>(cells) / seconds);
+  text += fmt::format(
+      "map        {} angles x {} samples x {} branch(es) = {} cells in {:.1f} s ({:.0f} cells/s)\n",
+      map.angles.size(), map.times.size(), map.branches.size(), cells * map.branches.size(),
+      seconds, static_cast<double>(cells) / seconds);
   for (std::size_t b = 0; b < map.branches.size(); ++b) {
     std::size_t feasible = 0;
     double sum = 0.0;
@@ -240,12 +263,16 @@ std::string buildAndWriteMaps(const JobSpec& job, const kinematics::CellModel& c
       feasible += map.f[i] > 0.0f ? 1u : 0u;
       sum += map.f[i];
     }
-    text += fmt::format("  {:<21} feasible {:5.1f}% of cells, mean f {:.3f}\n", map.branches[b].words(),
-                        100.0 * static_cast<double>(feasible) / static_cast<double>(cells), sum / static_cast<double>(cells));
+    text +=
+        fmt::format("  {:<21} feasible {:5.1f}% of cells, mean f {:.3f}\n", map.branches[b].words(),
+                    100.0 * static_cast<double>(feasible) / static_cast<double>(cells),
+                    sum / static_cast<double>(cells));
   }
-  text += fmt::format("wrote      {}: path.csv, path.png, configmap.npy (+ _joint, _singularity, _clearance, _limit), "
-                      "configmap.json, configmap.png/.svg, configmap_why.png/.svg, configmap_cylinder.png\n",
-                      out.string());
+  text += fmt::format(
+      "wrote      {}: path.csv, path.png, configmap.npy (+ _joint, _singularity, _clearance, "
+      "_limit), "
+      "configmap.json, configmap.png/.svg, configmap_why.png/.svg, configmap_cylinder.png\n",
+      out.string());
   return text;
 }
 
@@ -262,7 +289,8 @@ std::size_t bestBranch(const planner::ConfigMap& map) {
   const std::size_t cells = map.cellsPerBranch();
   for (std::size_t b = 0; b < map.branches.size(); ++b) {
     double feasible = 0.0;
-    for (std::size_t i = b * cells; i < (b + 1) * cells; ++i) feasible += map.f[i] > 0.0f ? 1.0 : 0.0;
+    for (std::size_t i = b * cells; i < (b + 1) * cells; ++i)
+      feasible += map.f[i] > 0.0f ? 1.0 : 0.0;
     if (feasible > best_score) {
       best_score = feasible;
       best = b;
@@ -271,7 +299,9 @@ std::size_t bestBranch(const planner::ConfigMap& map) {
   return best;
 }
 
-void writeMapOutputs(const std::filesystem::path& dir, const JobSpec& job, const planner::ConfigMap& map) {
+void writeMapOutputs(const std::filesystem::path& dir,
+                     const JobSpec& job,
+                     const planner::ConfigMap& map) {
   const std::vector<std::size_t> shape{map.branches.size(), map.angles.size(), map.times.size()};
   writeNpy(dir / "configmap.npy", map.f, shape);
   writeNpy(dir / "configmap_joint.npy", map.joint, shape);
@@ -306,25 +336,31 @@ void writeMapOutputs(const std::filesystem::path& dir, const JobSpec& job, const
   json.value("limit", "configmap_limit.npy");
   json.endObject();
   json.beginObject("limit_codes");
-  for (int k = 0; k < planner::kLimitCount; ++k) json.value(std::to_string(k), planner::limitName(static_cast<planner::Limit>(k)));
+  for (int k = 0; k < planner::kLimitCount; ++k)
+    json.value(std::to_string(k), planner::limitName(static_cast<planner::Limit>(k)));
   json.endObject();
   json.value("images_branch", map.branches[shown].words());
   json.endObject();
   writeFileAtomically(dir / "configmap.json", json.str());
 
   const std::string branch = map.branches[shown].words();
-  writeFigure(dir, "configmap", mapImage(map, shown, [&](std::size_t i) { return grey(map.f[i]); }), map,
-              "Configuration map f (Eq. 6), " + branch + ": white = free, black = forbidden", {});
+  writeFigure(dir, "configmap", mapImage(map, shown, [&](std::size_t i) { return grey(map.f[i]); }),
+              map, "Configuration map f (Eq. 6), " + branch + ": white = free, black = forbidden",
+              {});
   // Colour by the limiting constraint, brighter where f is higher.
   std::vector<std::pair<Rgb, std::string>> legend;
-  for (int k = 0; k < planner::kLimitCount; ++k) legend.push_back({categoryColour(k + 1), planner::limitName(static_cast<planner::Limit>(k))});
-  writeFigure(dir, "configmap_why",
-              mapImage(map, shown, [&](std::size_t i) {
-                const Rgb c = categoryColour(map.limit[i] + 1);
-                const double s = 0.45 + 0.55 * std::clamp(static_cast<double>(map.f[i]), 0.0, 1.0);
-                return Rgb{static_cast<std::uint8_t>(c.r * s), static_cast<std::uint8_t>(c.g * s), static_cast<std::uint8_t>(c.b * s)};
-              }),
-              map, "Limiting constraint per cell, " + branch + " (darker = lower f)", legend);
+  for (int k = 0; k < planner::kLimitCount; ++k)
+    legend.push_back({categoryColour(k + 1), planner::limitName(static_cast<planner::Limit>(k))});
+  writeFigure(
+      dir, "configmap_why",
+      mapImage(map, shown,
+               [&](std::size_t i) {
+                 const Rgb c = categoryColour(map.limit[i] + 1);
+                 const double s = 0.45 + 0.55 * std::clamp(static_cast<double>(map.f[i]), 0.0, 1.0);
+                 return Rgb{static_cast<std::uint8_t>(c.r * s), static_cast<std::uint8_t>(c.g * s),
+                            static_cast<std::uint8_t>(c.b * s)};
+               }),
+      map, "Limiting constraint per cell, " + branch + " (darker = lower f)", legend);
   writePng(dir / "configmap_cylinder.png", cylinderImage(map, shown));
 }
 

@@ -16,10 +16,18 @@ std::string quoted(const std::string& s) {
   std::string out = "\"";
   for (const char c : s) {
     switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\t':
+        out += "\\t";
+        break;
       default:
         if (static_cast<unsigned char>(c) < 0x20) {
           out += fmt::format("\\u{:04x}", static_cast<int>(c));
@@ -131,13 +139,13 @@ void writeFileAtomically(const std::filesystem::path& file, const std::string& c
 void prepareOutputDir(const std::filesystem::path& dir) {
   std::error_code ec;
   if (std::filesystem::exists(dir, ec) && !std::filesystem::is_directory(dir, ec)) {
-    throw InputError(fmt::format("{}: output folder is an existing file: expected a folder path",
-                                 dir.string()));
+    throw InputError(
+        fmt::format("{}: output folder is an existing file: expected a folder path", dir.string()));
   }
   std::filesystem::create_directories(dir, ec);
   if (ec) {
-    throw InputError(fmt::format("{}: cannot create the output folder: {}", dir.string(),
-                                 ec.message()));
+    throw InputError(
+        fmt::format("{}: cannot create the output folder: {}", dir.string(), ec.message()));
   }
 }
 

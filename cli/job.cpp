@@ -55,7 +55,8 @@ void describeOptics(A& a, OpticsSpec& s) {
     }
     const double z_min = s.a_mm / std::tan(deg(s.phi_deg + s.gamma_deg)) + s.b_mm;
     if (!(z_min > 0.0)) {
-      a.fail("b_mm", formatNumber(s.b_mm), "a value that puts the depth window in front of the scanner (z_min > 0)");
+      a.fail("b_mm", formatNumber(s.b_mm),
+             "a value that puts the depth window in front of the scanner (z_min > 0)");
     }
   }
 }
@@ -90,7 +91,8 @@ void describePathElement(A& a, PathElementSpec& s) {
     a.field("start_deg", s.start_deg);
     a.field("extent_deg", s.extent_deg, Expect::range(-3600.0, 3600.0));
     a.field("speed_deg_s", s.speed_deg_s, Expect::positive());
-    if (A::kReading || s.distance_mm > 0.0) a.field("distance_mm", s.distance_mm, Expect::positive());
+    if (A::kReading || s.distance_mm > 0.0)
+      a.field("distance_mm", s.distance_mm, Expect::positive());
     if constexpr (A::kReading) {
       s.has_axis = a.has("axis_xy_mm");
       if (s.extent_deg == 0.0) a.fail("extent_deg", "0", "a non-zero angle");
@@ -103,7 +105,8 @@ void describePathElement(A& a, PathElementSpec& s) {
     a.field("lead_mm", s.lead_mm, Expect::nonNegative());
     a.field("speed_mm_s", s.speed_mm_s, Expect::positive());
     if constexpr (A::kReading) {
-      if (Eigen::Vector3d(s.view.data()).norm() < 1e-9) a.fail("view", "[0, 0, 0]", "a non-zero direction");
+      if (Eigen::Vector3d(s.view.data()).norm() < 1e-9)
+        a.fail("view", "[0, 0, 0]", "a non-zero direction");
     }
   } else if (s.type == "waypoints") {
     a.require("points");
@@ -130,7 +133,8 @@ void describeMap(A& a, MapSpec& s) {
   if constexpr (A::kReading) {
     if (s.branch != "auto" && !parseBranch(s.branch)) {
       a.fail("branch", "'" + s.branch + "'",
-             "auto or three V+ words, e.g. 'RIGHTY ABOVE NOFLIP' (LEFTY/RIGHTY, ABOVE/BELOW, FLIP/NOFLIP)");
+             "auto or three V+ words, e.g. 'RIGHTY ABOVE NOFLIP' (LEFTY/RIGHTY, ABOVE/BELOW, "
+             "FLIP/NOFLIP)");
     }
   }
 }
@@ -155,9 +159,13 @@ void describeObstacle(A& a, ObstacleSpec& s) {
   a.field("size_mm", s.shape.size_mm);
   if constexpr (A::kReading) {
     for (double v : s.shape.size_mm) {
-      if (v == 0.0) a.fail("size_mm", "a zero side", "non-zero sides (negative ones extend from the corner the other way)");
+      if (v == 0.0)
+        a.fail("size_mm", "a zero side",
+               "non-zero sides (negative ones extend from the corner the other way)");
     }
-    if (a.has("pose")) a.fail("pose", "given with corner_mm", "either corner_mm + size_mm or a centred box with pose");
+    if (a.has("pose"))
+      a.fail("pose", "given with corner_mm",
+             "either corner_mm + size_mm or a centred box with pose");
   }
 }
 
@@ -167,7 +175,8 @@ void describeRamp(A& a, RampSpec& s) {
   a.field("high", s.high, Expect::range(0.0, 1.0));
   a.field("gamma", s.gamma, Expect::positive());
   if constexpr (A::kReading) {
-    if (!(s.low < s.high)) a.fail("high", formatNumber(s.high), "a value above low (" + formatNumber(s.low) + ")");
+    if (!(s.low < s.high))
+      a.fail("high", formatNumber(s.high), "a value above low (" + formatNumber(s.low) + ")");
   }
 }
 
@@ -177,7 +186,9 @@ void describeLengthRamp(A& a, LengthRampSpec& s) {
   a.field("high_mm", s.high_mm, Expect::positive());
   a.field("gamma", s.gamma, Expect::positive());
   if constexpr (A::kReading) {
-    if (!(s.low_mm < s.high_mm)) a.fail("high_mm", formatNumber(s.high_mm), "a value above low_mm (" + formatNumber(s.low_mm) + ")");
+    if (!(s.low_mm < s.high_mm))
+      a.fail("high_mm", formatNumber(s.high_mm),
+             "a value above low_mm (" + formatNumber(s.low_mm) + ")");
   }
 }
 
@@ -190,7 +201,8 @@ void describePairRule(A& a, PairRuleSpec& s) {
   a.field("exclude", s.exclude);
   a.field("include", s.include);
   if constexpr (A::kReading) {
-    if (s.exclude && s.include) a.fail("include", "true together with exclude", "at most one of exclude, include");
+    if (s.exclude && s.include)
+      a.fail("include", "true together with exclude", "at most one of exclude, include");
   }
   if (!A::kReading && s.d_low_mm < 0.0 && s.d_high_mm < 0.0 && s.gamma < 0.0) return;
   if (A::kReading || s.d_low_mm >= 0.0) a.field("d_low_mm", s.d_low_mm, Expect::nonNegative());
@@ -206,7 +218,8 @@ void describeClearance(A& a, ClearanceSpec& s) {
   a.list("pairs", s.pairs, 0, 1000);
   if constexpr (A::kReading) {
     if (!(s.d_low_mm < s.d_high_mm)) {
-      a.fail("d_high_mm", formatNumber(s.d_high_mm), "a distance above d_low_mm (" + formatNumber(s.d_low_mm) + ")");
+      a.fail("d_high_mm", formatNumber(s.d_high_mm),
+             "a distance above d_low_mm (" + formatNumber(s.d_low_mm) + ")");
     }
   }
 }
@@ -343,7 +356,8 @@ kinematics::CellModel buildCell(const JobSpec& job) {
   for (const ObstacleSpec& o : job.obstacles) {
     kinematics::Obstacle obstacle;
     obstacle.name = o.name;
-    obstacle.carrier = o.carrier == "table" ? kinematics::Carrier::kTable : kinematics::Carrier::kWorld;
+    obstacle.carrier =
+        o.carrier == "table" ? kinematics::Carrier::kTable : kinematics::Carrier::kWorld;
     if (o.by_corner) {
       const Eigen::Vector3d corner = Eigen::Vector3d(o.corner_mm.data()) * kMmToM;
       const Eigen::Vector3d size = Eigen::Vector3d(o.shape.size_mm.data()) * kMmToM;

@@ -72,7 +72,7 @@ struct PathElementSpec {
   double start_deg = 0.0;
   double extent_deg = 360.0;
   double speed_deg_s = 20.0;
-  double distance_mm = -1.0;        ///< negative: auto (from the part mesh)
+  double distance_mm = -1.0;  ///< negative: auto (from the part mesh)
   bool has_axis = false;
   std::array<double, 2> axis_xy_mm{};
   // raster

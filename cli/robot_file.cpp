@@ -106,17 +106,17 @@ kinematics::RobotModel buildRobotModel(const RobotSpec& spec, const std::string&
   def.name = spec.name;
   for (std::size_t i = 0; i < kinematics::kNumJoints; ++i) {
     const JointSpec& j = spec.dh[i];
-    def.joints[i] = {mm(j.a_mm),          mm(j.d_mm),       deg(j.alpha_deg),
-                     deg(j.theta_offset_deg), j.direction,  deg(j.min_deg),
-                     deg(j.max_deg),      deg(j.max_speed_deg_s)};
+    def.joints[i] = {mm(j.a_mm),  mm(j.d_mm),     deg(j.alpha_deg), deg(j.theta_offset_deg),
+                     j.direction, deg(j.min_deg), deg(j.max_deg),   deg(j.max_speed_deg_s)};
   }
   const OpwSpec& o = spec.opw;
-  def.opw = {mm(o.a1_mm), mm(o.a2_mm), mm(o.b_mm), mm(o.c1_mm), mm(o.c2_mm), mm(o.c3_mm),
-             mm(o.c4_mm), {}, o.signs};
+  def.opw = {mm(o.a1_mm), mm(o.a2_mm), mm(o.b_mm), mm(o.c1_mm), mm(o.c2_mm),
+             mm(o.c3_mm), mm(o.c4_mm), {},         o.signs};
   for (std::size_t i = 0; i < 6; ++i) def.opw.offsets[i] = deg(o.offsets_deg[i]);
   for (std::size_t i = 0; i < spec.links.size(); ++i) {
     def.links[i].name = spec.links[i].name;
-    for (const ShapeSpec& shape : spec.links[i].shapes) def.links[i].shapes.push_back(toShape(shape));
+    for (const ShapeSpec& shape : spec.links[i].shapes)
+      def.links[i].shapes.push_back(toShape(shape));
   }
   try {
     return kinematics::RobotModel(std::move(def));

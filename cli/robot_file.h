@@ -25,8 +25,7 @@ struct JointSpec {
 
 /// OPW parameters of a robot file (DESIGN.md §3.2), mm and degrees.
 struct OpwSpec {
-  double a1_mm = 0.0, a2_mm = 0.0, b_mm = 0.0, c1_mm = 0.0, c2_mm = 0.0, c3_mm = 0.0,
-         c4_mm = 0.0;
+  double a1_mm = 0.0, a2_mm = 0.0, b_mm = 0.0, c1_mm = 0.0, c2_mm = 0.0, c3_mm = 0.0, c4_mm = 0.0;
   std::array<double, 6> offsets_deg{};
   std::array<int, 6> signs{1, 1, 1, 1, 1, 1};
 };

@@ -45,7 +45,8 @@ kinematics::Shape toShape(const ShapeSpec& spec) {
       shape.X_BG.translation() = 0.5 * (from + to);
       if (length > 0.0) {
         shape.X_BG.linear() =
-            Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), to - from).toRotationMatrix();
+            Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), to - from)
+                .toRotationMatrix();
       }
     }
     if (spec.type == "cylinder") {

@@ -67,9 +67,11 @@ void describe(A& a, ShapeSpec& s) {
       a.field("to_mm", s.to_mm);
       if constexpr (A::kReading) {
         if (a.has("length_mm") || a.has("pose")) {
-          a.fail("from_mm", "given with length_mm or pose", "either from_mm + to_mm or length_mm + pose");
+          a.fail("from_mm", "given with length_mm or pose",
+                 "either from_mm + to_mm or length_mm + pose");
         }
-        const Eigen::Vector3d d = Eigen::Vector3d(s.to_mm.data()) - Eigen::Vector3d(s.from_mm.data());
+        const Eigen::Vector3d d =
+            Eigen::Vector3d(s.to_mm.data()) - Eigen::Vector3d(s.from_mm.data());
         if (d.norm() <= 0.0 && s.type == "cylinder") {
           a.fail("to_mm", "equal to from_mm", "a cylinder with positive length");
         }
@@ -77,7 +79,8 @@ void describe(A& a, ShapeSpec& s) {
       return;
     }
     a.require("length_mm");
-    a.field("length_mm", s.length_mm, s.type == "cylinder" ? Expect::positive() : Expect::nonNegative());
+    a.field("length_mm", s.length_mm,
+            s.type == "cylinder" ? Expect::positive() : Expect::nonNegative());
   } else {
     a.require("file");
     a.field("file", s.file);

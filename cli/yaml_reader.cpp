@@ -113,10 +113,9 @@ YAML::Node loadYamlFile(const std::filesystem::path& file) {
                                  e.mark.column + 1, e.msg));
   }
   if (!root.IsMap()) {
-    throw InputError(fmt::format("{}: the file holds {}, expected a YAML mapping of keys",
-                                 file.string(), root.IsDefined() && !root.IsNull()
-                                                    ? nodeText(root)
-                                                    : std::string("nothing")));
+    throw InputError(
+        fmt::format("{}: the file holds {}, expected a YAML mapping of keys", file.string(),
+                    root.IsDefined() && !root.IsNull() ? nodeText(root) : std::string("nothing")));
   }
   return root;
 }
@@ -130,8 +129,8 @@ YamlIn::YamlIn(YAML::Node node, std::string path, std::filesystem::path file)
     if (!it->first.IsScalar() || it->first.Tag() == "tag:yaml.org,2002:null" ||
         it->first.Scalar() == "~" || it->first.Scalar().empty()) {
       throw InputError(fmt::format("{}:{}:{}: {}: {} used as a key: expected a plain key name",
-                                   file_.string(), mark.line + 1, mark.column + 1,
-                                   fieldPath(""), nodeText(it->first)));
+                                   file_.string(), mark.line + 1, mark.column + 1, fieldPath(""),
+                                   nodeText(it->first)));
     }
     const std::string key = it->first.Scalar();
     for (const auto& [other, other_mark] : seen) {
@@ -167,8 +166,8 @@ bool YamlIn::has(const char* key) const {
 
 void YamlIn::require(const char* key) const {
   if (!has(key)) {
-    throw InputError(fmt::format("{}: {}: required field is missing", where(node_),
-                                 fieldPath(key)));
+    throw InputError(
+        fmt::format("{}: {}: required field is missing", where(node_), fieldPath(key)));
   }
 }
 
@@ -182,8 +181,8 @@ void YamlIn::fail(const std::string& key,
       if (it->first.Scalar() == key) n = it->first;
     }
   }
-  throw InputError(fmt::format("{}: {}: {}: expected {}", where(n), fieldPath(key), value,
-                               expected));
+  throw InputError(
+      fmt::format("{}: {}: {}: expected {}", where(n), fieldPath(key), value, expected));
 }
 
 void YamlIn::field(const char* key, double& value, const Expect& expect) {
@@ -235,7 +234,8 @@ void YamlIn::field(const char* key, bool& value, const Expect&) {
 void YamlIn::field(const char* key, std::string& value, const Expect& expect) {
   if (!has(key)) return;
   const YAML::Node n = node_[key];
-  if (!n.IsScalar()) fail(key, nodeText(n), expect.choices.empty() ? "a text" : expect.describe(""));
+  if (!n.IsScalar())
+    fail(key, nodeText(n), expect.choices.empty() ? "a text" : expect.describe(""));
   if (!expect.accepts(n.Scalar())) fail(key, nodeText(n), expect.describe(""));
   value = n.Scalar();
 }
@@ -250,9 +250,10 @@ void YamlIn::field(const char* key, FilePath& value, const Expect&) {
   value.resolved = std::filesystem::absolute(p).lexically_normal();
   std::error_code ec;
   if (!std::filesystem::is_regular_file(value.resolved, ec)) {
-    fail(key, fmt::format("'{}' ({}) {}", value.as_written, value.resolved.string(),
-                          std::filesystem::exists(value.resolved, ec) ? "is not a regular file"
-                                                                      : "does not exist"),
+    fail(key,
+         fmt::format("'{}' ({}) {}", value.as_written, value.resolved.string(),
+                     std::filesystem::exists(value.resolved, ec) ? "is not a regular file"
+                                                                 : "does not exist"),
          "an existing file (relative paths start at the folder of " + file_.filename().string() +
              ")");
   }
@@ -277,10 +278,9 @@ void YamlIn::numbers(const char* key,
     const std::string sub = fmt::format("{}[{}]", key, i);
     const bool number = item.IsScalar() && parseDouble(item.Scalar(), v);
     if (!number || (integers && std::floor(v) != v)) {
-      throw InputError(fmt::format("{}: {}: {} is not a {}: expected {}", where(item),
-                                   fieldPath(sub), nodeText(item),
-                                   number ? "whole number" : "number",
-                                   expect.describe(integers ? "integer" : "number")));
+      throw InputError(fmt::format(
+          "{}: {}: {} is not a {}: expected {}", where(item), fieldPath(sub), nodeText(item),
+          number ? "whole number" : "number", expect.describe(integers ? "integer" : "number")));
     }
     if (!expect.accepts(v)) {
       throw InputError(fmt::format("{}: {}: {}: expected {}", where(item), fieldPath(sub),
@@ -307,8 +307,8 @@ YamlIn YamlIn::child_(const std::string& key,
                       YAML::NodeType::value type,
                       const char* what) const {
   if (node.Type() != type) {
-    throw InputError(fmt::format("{}: {}: {}: expected {}", where(node), fieldPath(key),
-                                 nodeText(node), what));
+    throw InputError(
+        fmt::format("{}: {}: {}: expected {}", where(node), fieldPath(key), nodeText(node), what));
   }
   return YamlIn(node, fieldPath(key), file_);
 }

@@ -19,8 +19,12 @@ struct Expect {
   bool hi_open = false;
   std::vector<std::string> choices;
 
-  static Expect positive() { return {0.0, std::numeric_limits<double>::infinity(), true, false, {}}; }
-  static Expect nonNegative() { return {0.0, std::numeric_limits<double>::infinity(), false, false, {}}; }
+  static Expect positive() {
+    return {0.0, std::numeric_limits<double>::infinity(), true, false, {}};
+  }
+  static Expect nonNegative() {
+    return {0.0, std::numeric_limits<double>::infinity(), false, false, {}};
+  }
   static Expect range(double lo, double hi) { return {lo, hi, false, false, {}}; }
   static Expect oneOf(std::vector<std::string> choices) {
     Expect e;
@@ -86,8 +90,8 @@ class YamlIn {
     checkSequence(key, seq, min_size, max_size);
     items.assign(seq.size(), S{});
     for (std::size_t i = 0; i < seq.size(); ++i) {
-      YamlIn child = child_(key + ("[" + std::to_string(i) + "]"), seq[i], YAML::NodeType::Map,
-                            "a mapping");
+      YamlIn child =
+          child_(key + ("[" + std::to_string(i) + "]"), seq[i], YAML::NodeType::Map, "a mapping");
       describe(child, items[i]);
       child.finish();
     }

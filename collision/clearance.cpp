@@ -57,10 +57,9 @@ ClearanceResult ClearanceEvaluator::evaluate(double theta,
   for (std::size_t i = 0; i < scene.pairs().size(); ++i) {
     const PairInfo& pair = scene.pairs()[i];
     const auto a = static_cast<std::size_t>(pair.a), b = static_cast<std::size_t>(pair.b);
-    const detail::ShapeDistance d =
-        bodyDistance(bodies[a], X_W_[a], bodies[b], X_W_[b],
-                     request.bounded ? pair.thresholds.d_high : kInf, !request.bounded,
-                     request.witness_points);
+    const detail::ShapeDistance d = bodyDistance(bodies[a], X_W_[a], bodies[b], X_W_[b],
+                                                 request.bounded ? pair.thresholds.d_high : kInf,
+                                                 !request.bounded, request.witness_points);
     PairClearance& out = result.pairs[i];
     out.distance = d.distance;
     out.beyond_bound = d.beyond;
@@ -74,8 +73,8 @@ ClearanceResult ClearanceEvaluator::evaluate(double theta,
     }
     result.factor *= out.factor;
     result.collision = result.collision || out.penetrating;
-    if (!out.beyond_bound &&
-        (out.factor < worst_factor || (out.factor == worst_factor && out.distance < worst_distance))) {
+    if (!out.beyond_bound && (out.factor < worst_factor ||
+                              (out.factor == worst_factor && out.distance < worst_distance))) {
       worst_factor = out.factor;
       worst_distance = out.distance;
       result.limiting_pair = static_cast<int>(i);
@@ -91,8 +90,8 @@ double ClearanceEvaluator::factor(double theta, const kinematics::JointVector& q
   double f = 1.0;
   for (const PairInfo& pair : scene.pairs()) {
     const auto a = static_cast<std::size_t>(pair.a), b = static_cast<std::size_t>(pair.b);
-    const detail::ShapeDistance d = bodyDistance(bodies[a], X_W_[a], bodies[b], X_W_[b],
-                                                 pair.thresholds.d_high, false, false);
+    const detail::ShapeDistance d =
+        bodyDistance(bodies[a], X_W_[a], bodies[b], X_W_[b], pair.thresholds.d_high, false, false);
     if (d.beyond) continue;
     f *= rampFactor(d.distance, pair.thresholds.d_low, pair.thresholds.d_high,
                     pair.thresholds.gamma);

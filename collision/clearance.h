@@ -17,7 +17,7 @@ struct ClearanceRequest {
 };
 
 struct PairClearance {
-  double distance = 0.0;  ///< m; equals the pair's d_high when beyond_bound
+  double distance = 0.0;      ///< m; equals the pair's d_high when beyond_bound
   bool beyond_bound = false;  ///< only known to be ≥ d_high (bounded requests)
   bool penetrating = false;   ///< in contact or overlapping; distance is 0
   double factor = 1.0;        ///< f_C, Eq. 8 (monotone ramp)

@@ -34,11 +34,8 @@ Solver makeSolver() {
   return solver;
 }
 
-ShapeDistance finish(double d,
-                     double bound,
-                     bool witness,
-                     const Eigen::Vector3d& pa,
-                     const Eigen::Vector3d& pb) {
+ShapeDistance finish(
+    double d, double bound, bool witness, const Eigen::Vector3d& pa, const Eigen::Vector3d& pb) {
   ShapeDistance out;
   if (d >= bound) {
     out.distance = bound;
@@ -143,11 +140,16 @@ ShapeDistance shapeShape(const A& a,
 template <class F>
 auto withPrimitive(const fcl::CollisionGeometryd& g, F&& f) {
   switch (g.getNodeType()) {
-    case fcl::GEOM_BOX: return f(static_cast<const fcl::Boxd&>(g));
-    case fcl::GEOM_SPHERE: return f(static_cast<const fcl::Sphered&>(g));
-    case fcl::GEOM_CYLINDER: return f(static_cast<const fcl::Cylinderd&>(g));
-    case fcl::GEOM_CAPSULE: return f(static_cast<const fcl::Capsuled&>(g));
-    default: break;
+    case fcl::GEOM_BOX:
+      return f(static_cast<const fcl::Boxd&>(g));
+    case fcl::GEOM_SPHERE:
+      return f(static_cast<const fcl::Sphered&>(g));
+    case fcl::GEOM_CYLINDER:
+      return f(static_cast<const fcl::Cylinderd&>(g));
+    case fcl::GEOM_CAPSULE:
+      return f(static_cast<const fcl::Capsuled&>(g));
+    default:
+      break;
   }
   throw std::logic_error("collision: unexpected FCL geometry type");
 }
@@ -226,7 +228,8 @@ CollisionShape makeCollisionShape(const kinematics::Shape& shape) {
       const Eigen::AlignedBox3d box = loaded.mesh.bounds();
       out.centre_G = box.center();
       double r = 0.0;
-      for (const Eigen::Vector3d& v : loaded.mesh.vertices) r = std::max(r, (v - out.centre_G).norm());
+      for (const Eigen::Vector3d& v : loaded.mesh.vertices)
+        r = std::max(r, (v - out.centre_G).norm());
       out.radius = r;
       out.triangles = loaded.mesh.triangles.size();
       out.geometry = makeMeshModel(loaded.mesh);
@@ -246,8 +249,8 @@ ShapeDistance shapeDistance(const CollisionShape& a,
   const bool mesh_a = isMesh(*a.geometry), mesh_b = isMesh(*b.geometry);
   if ((mesh_a || mesh_b) && (mesh_a || a.polyhedron) && (mesh_b || b.polyhedron)) {
     return meshMesh(mesh_a ? static_cast<const MeshModel&>(*a.geometry) : *a.polyhedron, X_a,
-                    mesh_b ? static_cast<const MeshModel&>(*b.geometry) : *b.polyhedron, X_b,
-                    bound, witness_points);
+                    mesh_b ? static_cast<const MeshModel&>(*b.geometry) : *b.polyhedron, X_b, bound,
+                    witness_points);
   }
   if (mesh_a) {
     return withPrimitive(*b.geometry, [&](const auto& shape) {
@@ -262,7 +265,9 @@ ShapeDistance shapeDistance(const CollisionShape& a,
     }));
   }
   return withPrimitive(*a.geometry, [&](const auto& sa) {
-    return withPrimitive(*b.geometry, [&](const auto& sb) { return shapeShape(sa, X_a, sb, X_b, bound, witness_points); });
+    return withPrimitive(*b.geometry, [&](const auto& sb) {
+      return shapeShape(sa, X_a, sb, X_b, bound, witness_points);
+    });
   });
 }
 

@@ -4,13 +4,13 @@
 #include <memory>
 #include <vector>
 
-#include <Eigen/Geometry>
 #include <fcl/geometry/bvh/BVH_model.h>
 #include <fcl/geometry/shape/box.h>
 #include <fcl/geometry/shape/capsule.h>
 #include <fcl/geometry/shape/cylinder.h>
 #include <fcl/geometry/shape/sphere.h>
 #include <fcl/math/bv/OBBRSS.h>
+#include <Eigen/Geometry>
 
 #include "collision/scene.h"
 #include "kinematics/mesh.h"

@@ -25,10 +25,14 @@ bool matches(const std::string& pattern, const BodyInfo& body) {
 // relative to each other (seed §4.1). The robot base is fixed in the world.
 int rigidGroup(const BodyInfo& body) {
   switch (body.motion) {
-    case BodyMotion::kWorld: return -1;
-    case BodyMotion::kTable: return -2;
-    case BodyMotion::kRobotLink: return body.link == 0 ? -1 : body.link;
-    case BodyMotion::kScanner: return 6;
+    case BodyMotion::kWorld:
+      return -1;
+    case BodyMotion::kTable:
+      return -2;
+    case BodyMotion::kRobotLink:
+      return body.link == 0 ? -1 : body.link;
+    case BodyMotion::kScanner:
+      return 6;
   }
   return -3;
 }
@@ -107,7 +111,8 @@ Scene::Scene(const kinematics::CellModel& cell, const ClearanceConfig& config)
       for (int b = a + 1; b < n; ++b, ++c) {
         const BodyInfo& A = bodies_[static_cast<std::size_t>(a)];
         const BodyInfo& B = bodies_[static_cast<std::size_t>(b)];
-        if (!((matches(rule.a, A) && matches(rule.b, B)) || (matches(rule.a, B) && matches(rule.b, A)))) {
+        if (!((matches(rule.a, A) && matches(rule.b, B)) ||
+              (matches(rule.a, B) && matches(rule.b, A)))) {
           continue;
         }
         any = true;
@@ -131,8 +136,9 @@ Scene::Scene(const kinematics::CellModel& cell, const ClearanceConfig& config)
       if (!candidates[c].enabled) continue;
       const PairThresholds& t = candidates[c].t;
       if (!(t.d_low < t.d_high)) {
-        throw InputError("constraints.clearance: pair " + bodies_[static_cast<std::size_t>(a)].name +
-                         " ↔ " + bodies_[static_cast<std::size_t>(b)].name + ": d_low " +
+        throw InputError("constraints.clearance: pair " +
+                         bodies_[static_cast<std::size_t>(a)].name + " ↔ " +
+                         bodies_[static_cast<std::size_t>(b)].name + ": d_low " +
                          std::to_string(toMm(t.d_low)) + " mm is not below d_high " +
                          std::to_string(toMm(t.d_high)) + " mm: expected d_low < d_high");
       }
@@ -161,12 +167,18 @@ void Scene::bodyPoses(double theta,
   for (std::size_t i = 0; i < bodies_.size(); ++i) {
     const BodyInfo& body = bodies_[i];
     switch (body.motion) {
-      case BodyMotion::kWorld: X_W[i].setIdentity(); break;
-      case BodyMotion::kTable: X_W[i] = X_WR; break;
+      case BodyMotion::kWorld:
+        X_W[i].setIdentity();
+        break;
+      case BodyMotion::kTable:
+        X_W[i] = X_WR;
+        break;
       case BodyMotion::kRobotLink:
         X_W[i] = cell_.X_WB * frames[static_cast<std::size_t>(body.link)];
         break;
-      case BodyMotion::kScanner: X_W[i] = cell_.X_WB * frames[6] * cell_.scanner.X_FS; break;
+      case BodyMotion::kScanner:
+        X_W[i] = cell_.X_WB * frames[6] * cell_.scanner.X_FS;
+        break;
     }
   }
 }

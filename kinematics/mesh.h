@@ -35,10 +35,10 @@ struct MeshLoadOptions {
 
 /// What the loader noticed but repaired; the caller decides how to report it.
 struct MeshLoadReport {
-  std::size_t degenerate_dropped = 0;        ///< zero-area or repeated-index triangles removed
-  std::size_t non_triangle_dropped = 0;      ///< points / lines in the file, ignored
-  std::size_t normals_disagreeing = 0;       ///< stored facet normals opposite to the winding
-  std::vector<std::string> warnings;         ///< one human-readable line per issue noticed
+  std::size_t degenerate_dropped = 0;    ///< zero-area or repeated-index triangles removed
+  std::size_t non_triangle_dropped = 0;  ///< points / lines in the file, ignored
+  std::size_t normals_disagreeing = 0;   ///< stored facet normals opposite to the winding
+  std::vector<std::string> warnings;     ///< one human-readable line per issue noticed
 };
 
 struct LoadedMesh {

@@ -31,8 +31,6 @@ Eigen::Matrix3d rotZY(double a, double b) {
 // Rotation of the OPW "c" frame (after joints 1–3): Rz(q1) · Ry(q2 + q3).
 Eigen::Matrix3d armRotation(double q1, double q23) { return rotZY(q1, q23); }
 
-
-
 // Joints 4–6 from the wrist rotation R_ce = Rz(q4) · Ry(q5) · Rz(q6), both wrist solutions.
 // q6 is solved last from the full matrix, so a poorly conditioned q4 near q5 = 0 is absorbed
 // and the composed rotation stays exact.

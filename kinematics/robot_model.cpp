@@ -101,8 +101,8 @@ RobotModel::RobotModel(RobotDefinition definition) : definition_(std::move(defin
     if (dp > kConsistencyPosTol || dr > kConsistencyRotTol) {
       std::ostringstream s;
       s << "the OPW parameters disagree with the DH chain: at q = " << formatJoints(q)
-        << " the flange positions differ by " << toMm(dp) << " mm and orientations by "
-        << toDeg(dr) << " deg; expected identical forward kinematics (check a1, a2, b, c1–c4, "
+        << " the flange positions differ by " << toMm(dp) << " mm and orientations by " << toDeg(dr)
+        << " deg; expected identical forward kinematics (check a1, a2, b, c1–c4, "
         << "offsets and signs against the DH table)";
       throw InputError(s.str());
     }
@@ -255,8 +255,8 @@ SingularityMeasures RobotModel::singularity(const JointVector& q, bool with_mani
   m.shoulder = std::hypot(c.x(), c.y());
   if (!with_manipulability) return m;
   const Jacobian J = jacobian(q);
-  m.manipulability = std::sqrt(std::max(0.0, (J * J.transpose()).determinant())) *
-                     manipulability_scale_;
+  m.manipulability =
+      std::sqrt(std::max(0.0, (J * J.transpose()).determinant())) * manipulability_scale_;
   return m;
 }
 

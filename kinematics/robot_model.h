@@ -62,7 +62,9 @@ struct IkBranch {
 
   /// 0..7, bit 2 = lefty, bit 1 = below, bit 0 = flip.
   int index() const { return (lefty ? 4 : 0) | (below ? 2 : 0) | (flip ? 1 : 0); }
-  static IkBranch fromIndex(int index) { return {(index & 4) != 0, (index & 2) != 0, (index & 1) != 0}; }
+  static IkBranch fromIndex(int index) {
+    return {(index & 4) != 0, (index & 2) != 0, (index & 1) != 0};
+  }
   /// "RIGHTY ABOVE NOFLIP" style.
   std::string words() const;
   bool operator==(const IkBranch&) const = default;

@@ -10,15 +10,16 @@ namespace scanplan::kinematics {
 /// tilted on it; both turn with the table.
 struct RotaryTableModel {
   Eigen::Isometry3d X_WA = Eigen::Isometry3d::Identity();  ///< axis frame in the world, m
-  Eigen::Vector2d eccentricity = Eigen::Vector2d::Zero();  ///< top centre off the axis, in R at θ, m
-  Eigen::Vector2d tilt = Eigen::Vector2d::Zero();          ///< top tilt about x then y, rad
-  double radius = 0.25;                                    ///< m
-  double height = 0.1;                                     ///< below the top, m
-  bool continuous = true;                                  ///< turns without end stops
-  double min = -3.141592653589793;                         ///< rad, used when not continuous
-  double max = 3.141592653589793;                          ///< rad
-  double max_speed = 0.0;                                  ///< rad/s
-  double max_accel = 0.0;                                  ///< rad/s²
+  Eigen::Vector2d eccentricity =
+      Eigen::Vector2d::Zero();                     ///< top centre off the axis, in R at θ, m
+  Eigen::Vector2d tilt = Eigen::Vector2d::Zero();  ///< top tilt about x then y, rad
+  double radius = 0.25;                            ///< m
+  double height = 0.1;                             ///< below the top, m
+  bool continuous = true;                          ///< turns without end stops
+  double min = -3.141592653589793;                 ///< rad, used when not continuous
+  double max = 3.141592653589793;                  ///< rad
+  double max_speed = 0.0;                          ///< rad/s
+  double max_accel = 0.0;                          ///< rad/s²
 
   /// The axis error transform: top frame R in the ideally rotated frame.
   Eigen::Isometry3d axisError() const;

@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <atomic>
-#include <numbers>
 #include <cmath>
+#include <numbers>
 #include <string>
 
 #include <fmt/format.h>
@@ -19,11 +19,16 @@ namespace scanplan::planner {
 
 const char* limitName(Limit limit) {
   switch (limit) {
-    case Limit::kNone: return "none";
-    case Limit::kUnreachable: return "unreachable";
-    case Limit::kJointLimit: return "joint limit";
-    case Limit::kSingularity: return "singularity";
-    case Limit::kClearance: return "clearance";
+    case Limit::kNone:
+      return "none";
+    case Limit::kUnreachable:
+      return "unreachable";
+    case Limit::kJointLimit:
+      return "joint limit";
+    case Limit::kSingularity:
+      return "singularity";
+    case Limit::kClearance:
+      return "clearance";
   }
   return "?";
 }
@@ -36,7 +41,8 @@ std::vector<double> mapAngles(const kinematics::RotaryTableModel& table, double 
   std::vector<double> angles;
   if (table.continuous) {
     const auto n = static_cast<std::size_t>(std::llround(2.0 * std::numbers::pi / step));
-    for (std::size_t i = 0; i < n; ++i) angles.push_back(static_cast<double>(i) * 2.0 * std::numbers::pi / static_cast<double>(n));
+    for (std::size_t i = 0; i < n; ++i)
+      angles.push_back(static_cast<double>(i) * 2.0 * std::numbers::pi / static_cast<double>(n));
   } else {
     const auto n = static_cast<std::size_t>(std::floor((table.max - table.min) / step + 1e-9)) + 1;
     for (std::size_t i = 0; i < n; ++i) angles.push_back(table.min + static_cast<double>(i) * step);
@@ -61,7 +67,8 @@ CellScore scoreCell(const collision::Scene& scene,
     double joint = 1.0;
     for (int j = 0; j < kinematics::kNumJoints; ++j) {
       const auto& limits = robot.joint(j);
-      joint *= jointLimitFactor(s.q(j), limits.min, limits.max, settings.joint_gamma[static_cast<std::size_t>(j)]);
+      joint *= jointLimitFactor(s.q(j), limits.min, limits.max,
+                                settings.joint_gamma[static_cast<std::size_t>(j)]);
     }
     if (!any || joint > best.joint) {
       best.joint = static_cast<float>(joint);
@@ -76,9 +83,11 @@ CellScore scoreCell(const collision::Scene& scene,
     return best;
   }
   const kinematics::SingularityMeasures m = robot.singularity(best.q, false);
-  const double sing = rampFactor(m.wrist, settings.wrist.low, settings.wrist.high, settings.wrist.gamma) *
-                      rampFactor(m.elbow, settings.elbow.low, settings.elbow.high, settings.elbow.gamma) *
-                      rampFactor(m.shoulder, settings.shoulder.low, settings.shoulder.high, settings.shoulder.gamma);
+  const double sing =
+      rampFactor(m.wrist, settings.wrist.low, settings.wrist.high, settings.wrist.gamma) *
+      rampFactor(m.elbow, settings.elbow.low, settings.elbow.high, settings.elbow.gamma) *
+      rampFactor(m.shoulder, settings.shoulder.low, settings.shoulder.high,
+                 settings.shoulder.gamma);
   best.singularity = static_cast<float>(sing);
   double c = 1.0;
   if (sing > 0.0) {
@@ -88,10 +97,10 @@ CellScore scoreCell(const collision::Scene& scene,
   best.clearance = static_cast<float>(c);
   best.f = static_cast<float>(static_cast<double>(best.joint) * sing * c);
   const float lowest = std::min({best.joint, best.singularity, best.clearance});
-  best.limit = lowest >= 1.0f                ? Limit::kNone
-               : best.joint == lowest        ? Limit::kJointLimit
-               : best.singularity == lowest  ? Limit::kSingularity
-                                             : Limit::kClearance;
+  best.limit = lowest >= 1.0f               ? Limit::kNone
+               : best.joint == lowest       ? Limit::kJointLimit
+               : best.singularity == lowest ? Limit::kSingularity
+                                            : Limit::kClearance;
   return best;
 }
 
@@ -107,9 +116,12 @@ ConfigMap buildConfigMap(const collision::Scene& scene,
   const std::size_t nb = map.branches.size(), na = map.angles.size(), nt = map.times.size();
   const std::size_t bytes = mapBytes(nb, na, nt);
   if (bytes > request.memory_limit_bytes) {
-    const auto mb = [](std::size_t b) { return fmt::format("{:.1f}", static_cast<double>(b) / (1 << 20)); };
+    const auto mb = [](std::size_t b) {
+      return fmt::format("{:.1f}", static_cast<double>(b) / (1 << 20));
+    };
     throw InputError(fmt::format(
-        "map: {} branch(es) x {} angles x {} time samples need {} MB, over map.memory_limit_mb ({}): expected a "
+        "map: {} branch(es) x {} angles x {} time samples need {} MB, over map.memory_limit_mb "
+        "({}): expected a "
         "coarser map.angle_step_deg, a larger scan.dt_s, a fixed map.branch or a higher limit",
         nb, na, nt, mb(bytes), mb(request.memory_limit_bytes)));
   }
@@ -124,26 +136,27 @@ ConfigMap buildConfigMap(const collision::Scene& scene,
   tbb::enumerable_thread_specific<collision::ClearanceEvaluator> evaluators(std::cref(scene));
   std::atomic<std::size_t> done{0};
   const std::size_t report_every = std::max<std::size_t>(1, cells / 200);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells, 64), [&](const tbb::blocked_range<std::size_t>& r) {
-    collision::ClearanceEvaluator& evaluator = evaluators.local();
-    for (std::size_t c = r.begin(); c != r.end(); ++c) {
-      const std::size_t a = c / nt, t = c % nt;
-      const double theta = map.angles[a];
-      const auto solutions = cell.robot.ik(cell.flangeTarget(theta, path.samples[t].X_PS));
-      for (std::size_t b = 0; b < nb; ++b) {
-        const CellScore s = scoreCell(scene, settings, evaluator, solutions, map.branches[b], theta,
-                                      request.exact_distances);
-        const std::size_t i = map.index(b, a, t);
-        map.f[i] = s.f;
-        map.joint[i] = s.joint;
-        map.singularity[i] = s.singularity;
-        map.clearance[i] = s.clearance;
-        map.limit[i] = static_cast<std::uint8_t>(s.limit);
-      }
-      const std::size_t n = done.fetch_add(1, std::memory_order_relaxed) + 1;
-      if (progress && (n % report_every == 0 || n == cells)) progress(n, cells);
-    }
-  });
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, cells, 64), [&](const tbb::blocked_range<std::size_t>& r) {
+        collision::ClearanceEvaluator& evaluator = evaluators.local();
+        for (std::size_t c = r.begin(); c != r.end(); ++c) {
+          const std::size_t a = c / nt, t = c % nt;
+          const double theta = map.angles[a];
+          const auto solutions = cell.robot.ik(cell.flangeTarget(theta, path.samples[t].X_PS));
+          for (std::size_t b = 0; b < nb; ++b) {
+            const CellScore s = scoreCell(scene, settings, evaluator, solutions, map.branches[b],
+                                          theta, request.exact_distances);
+            const std::size_t i = map.index(b, a, t);
+            map.f[i] = s.f;
+            map.joint[i] = s.joint;
+            map.singularity[i] = s.singularity;
+            map.clearance[i] = s.clearance;
+            map.limit[i] = static_cast<std::uint8_t>(s.limit);
+          }
+          const std::size_t n = done.fetch_add(1, std::memory_order_relaxed) + 1;
+          if (progress && (n % report_every == 0 || n == cells)) progress(n, cells);
+        }
+      });
   return map;
 }
 

@@ -24,7 +24,7 @@ inline constexpr int kLimitCount = 5;
 const char* limitName(Limit limit);
 
 struct MapRequest {
-  double angle_step = 0.017453292519943295;  ///< rad
+  double angle_step = 0.017453292519943295;    ///< rad
   std::vector<kinematics::IkBranch> branches;  ///< one map per branch
   std::size_t memory_limit_bytes = std::size_t{8192} << 20;
   /// Plain fcl::distance for every pair instead of the bounded query (the benchmark's

@@ -23,7 +23,9 @@ PoseScore PoseEvaluator::score(double theta, const kinematics::JointVector& q) {
     consider(s.joint[k], "joint " + std::to_string(j + 1));
   }
   s.singularity = robot.singularity(q);
-  const auto ramp = [](double x, const RampSettings& r) { return rampFactor(x, r.low, r.high, r.gamma); };
+  const auto ramp = [](double x, const RampSettings& r) {
+    return rampFactor(x, r.low, r.high, r.gamma);
+  };
   s.wrist = ramp(s.singularity.wrist, settings_.wrist);
   s.elbow = ramp(s.singularity.elbow, settings_.elbow);
   s.shoulder = ramp(s.singularity.shoulder, settings_.shoulder);

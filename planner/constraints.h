@@ -19,9 +19,9 @@ struct RampSettings {
 /// The static constraints of a pose (seed §7.2, Eq. 6–8), in SI units.
 struct ConstraintSettings {
   std::array<double, kinematics::kNumJoints> joint_gamma{0.2, 0.2, 0.2, 0.2, 0.2, 0.2};  ///< Eq. 7
-  RampSettings wrist{0.05, 0.25, 1.0};      ///< on |sin q5|
-  RampSettings elbow{0.05, 0.25, 1.0};      ///< on the elbow measure
-  RampSettings shoulder{0.03, 0.12, 1.0};   ///< on the wrist centre's distance from J1, m
+  RampSettings wrist{0.05, 0.25, 1.0};     ///< on |sin q5|
+  RampSettings elbow{0.05, 0.25, 1.0};     ///< on the elbow measure
+  RampSettings shoulder{0.03, 0.12, 1.0};  ///< on the wrist centre's distance from J1, m
 };
 
 /// Every factor of one pose; f = Π of all (Eq. 6).
@@ -33,7 +33,8 @@ struct PoseScore {
   kinematics::SingularityMeasures singularity;
   collision::ClearanceResult clearance;
   double total = 0.0;
-  std::string limiting;  ///< the lowest factor's name: "joint 3", "wrist", "clearance scanner ↔ part"
+  std::string
+      limiting;  ///< the lowest factor's name: "joint 3", "wrist", "clearance scanner ↔ part"
 };
 
 /// Scores poses of one cell. Holds a clearance evaluator: one per thread.

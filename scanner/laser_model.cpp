@@ -22,8 +22,8 @@ bool LaserWindow::contains(double y, double z) const {
   return z >= z_min && z <= z_max && std::abs(y) <= halfWidth(z);
 }
 
-void triangulate(const LaserOptics& o, double image_height_px, double p_x, double p_y,
-                 double& y, double& z) {
+void triangulate(
+    const LaserOptics& o, double image_height_px, double p_x, double p_y, double& y, double& z) {
   const double f = image_height_px / (2.0 * std::tan(o.gamma));
   const double angle = o.phi - std::atan(p_y / f);
   y = o.a * p_x / (f * std::sin(angle));

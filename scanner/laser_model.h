@@ -8,7 +8,7 @@ namespace scanplan::scanner {
 struct LaserOptics {
   double a = 0.1;
   double b = 0.1;
-  double phi = 1.0471975511965976;   // 60°
+  double phi = 1.0471975511965976;     // 60°
   double gamma = 0.17453292519943295;  // 10°
 };
 
@@ -31,7 +31,11 @@ LaserWindow laserWindow(const LaserOptics& optics);
 
 /// Eq. 4 in the consistent form of DESIGN.md §6: pixel (p_x, p_y) → laser-plane point (y, z),
 /// f = H / (2 tan γ) in pixels for an image H pixels high.
-void triangulate(const LaserOptics& optics, double image_height_px, double p_x, double p_y,
-                 double& y, double& z);
+void triangulate(const LaserOptics& optics,
+                 double image_height_px,
+                 double p_x,
+                 double p_y,
+                 double& y,
+                 double& z);
 
 }  // namespace scanplan::scanner

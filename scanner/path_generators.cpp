@@ -26,7 +26,9 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 std::string where(std::size_t index) { return "scan.paths[" + std::to_string(index) + "]"; }
 
-Eigen::Isometry3d frame(const Eigen::Vector3d& p, const Eigen::Vector3d& z, const Eigen::Vector3d& x) {
+Eigen::Isometry3d frame(const Eigen::Vector3d& p,
+                        const Eigen::Vector3d& z,
+                        const Eigen::Vector3d& x) {
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
   const Eigen::Vector3d zn = z.normalized();
   const Eigen::Vector3d xn = (x - x.dot(zn) * zn).normalized();
@@ -42,7 +44,11 @@ double rotationAngle(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
 }
 
 // Appends a straight move to `to` at `speed` (m/s), orientation limited to `rot_speed` (rad/s).
-void moveTo(std::vector<Key>& keys, const Eigen::Isometry3d& to, double speed, double rot_speed, bool scanning) {
+void moveTo(std::vector<Key>& keys,
+            const Eigen::Isometry3d& to,
+            double speed,
+            double rot_speed,
+            bool scanning) {
   const Key& from = keys.back();
   const double dt = std::max({(to.translation() - from.X.translation()).norm() / speed,
                               rotationAngle(from.X, to) / rot_speed, 1e-6});
@@ -61,7 +67,8 @@ std::vector<Key> ringKeys(const RingSpec& ring,
   const double sign = ring.extent >= 0.0 ? 1.0 : -1.0;
   const auto view = [&](double phi) -> Eigen::Vector3d {
     const Eigen::Vector3d radial(std::cos(phi), std::sin(phi), 0.0);
-    return Eigen::Vector3d(-std::cos(ring.tilt) * radial - std::sin(ring.tilt) * Eigen::Vector3d::UnitZ());
+    return Eigen::Vector3d(-std::cos(ring.tilt) * radial -
+                           std::sin(ring.tilt) * Eigen::Vector3d::UnitZ());
   };
   const auto tangent = [&](double phi) -> Eigen::Vector3d {
     return Eigen::Vector3d(-std::sin(phi), std::cos(phi), 0.0) * sign;
@@ -79,14 +86,16 @@ std::vector<Key> ringKeys(const RingSpec& ring,
     const Eigen::Vector3d z = view(phi);
     const Eigen::Vector3d y = z.cross(tangent(phi));
     for (double o : {-half_line, 0.0, half_line}) {
-      if (const auto hit = raycaster.cast(aim - far * z + o * y, z)) depths.push_back(hit->distance);
+      if (const auto hit = raycaster.cast(aim - far * z + o * y, z))
+        depths.push_back(hit->distance);
     }
   }
   if (depths.empty()) {
     throw InputError(where(index) + ": ring at height " + std::to_string(toMm(ring.height)) +
                      " mm, tilt " + std::to_string(toDeg(ring.tilt)) +
                      " deg never sees the part: expected a height and tilt whose view meets it "
-                     "(part z spans " + std::to_string(toMm(box.min().z())) + " … " +
+                     "(part z spans " +
+                     std::to_string(toMm(box.min().z())) + " … " +
                      std::to_string(toMm(box.max().z())) + " mm)");
   }
   // Place the window over the most probes (a sliding window over the sorted depths), centred
@@ -111,7 +120,9 @@ std::vector<Key> ringKeys(const RingSpec& ring,
   });
   report.coverage_in_window = static_cast<double>(in_window) / static_cast<double>(depths.size());
   if (report.depth_max - report.depth_min > window.z_max - window.z_min) {
-    report.note = "the surface depth varies by more than the depth window; parts of the ring are out of range";
+    report.note =
+        "the surface depth varies by more than the depth window; parts of the ring are out of "
+        "range";
   }
 
   std::vector<Key> keys;
@@ -119,7 +130,8 @@ std::vector<Key> ringKeys(const RingSpec& ring,
   for (int i = 0; i < steps; ++i) {
     const double phi = ring.start + ring.extent * i / (steps - 1);
     const Eigen::Vector3d z = view(phi);
-    keys.push_back({std::abs(phi - ring.start) / ring.speed, frame(aim - L * z, z, tangent(phi)), true});
+    keys.push_back(
+        {std::abs(phi - ring.start) / ring.speed, frame(aim - L * z, z, tangent(phi)), true});
   }
   return keys;
 }
@@ -133,7 +145,9 @@ std::vector<Key> rasterKeys(const RasterSpec& raster,
   const Eigen::Vector3d v = raster.view.normalized();
   Eigen::Vector3d u = raster.pass_direction - raster.pass_direction.dot(v) * v;
   if (u.norm() < 1e-6) {
-    throw InputError(where(index) + ": raster pass_direction is parallel to the view: expected a direction across the view");
+    throw InputError(
+        where(index) +
+        ": raster pass_direction is parallel to the view: expected a direction across the view");
   }
   u.normalize();
   const Eigen::Vector3d w = v.cross(u);
@@ -173,7 +187,8 @@ std::vector<Key> rasterKeys(const RasterSpec& raster,
       }
       if (near > 1e8) continue;
       seen[static_cast<std::size_t>(i)] = {near, farthest};
-      pv[static_cast<std::size_t>(i)] = std::min(v0 + 0.5 * (near + farthest) - z_mid, v0 + near - window.z_min);
+      pv[static_cast<std::size_t>(i)] =
+          std::min(v0 + 0.5 * (near + farthest) - z_mid, v0 + near - window.z_min);
     }
     if (std::all_of(pv.begin(), pv.end(), [](double x) { return std::isnan(x); })) continue;
     // Smooth: the most conservative (farthest back) position within ±15 mm, so the surface
@@ -185,7 +200,8 @@ std::vector<Key> rasterKeys(const RasterSpec& raster,
     std::vector<double> smooth(pv.size());
     for (int i = 0; i < samples; ++i) {
       double m = 1e9;
-      for (int j = std::max(0, i - window_steps); j <= std::min(samples - 1, i + window_steps); ++j) {
+      for (int j = std::max(0, i - window_steps); j <= std::min(samples - 1, i + window_steps);
+           ++j) {
         const double x = pv[static_cast<std::size_t>(j)];
         m = std::min(m, std::isnan(x) ? fallback : x);
       }
@@ -228,11 +244,14 @@ std::vector<Key> rasterKeys(const RasterSpec& raster,
     }
   }
   if (keys.size() < 2) {
-    throw InputError(where(index) + ": raster finds no part surface under the passes: expected a view direction that meets the part");
+    throw InputError(where(index) +
+                     ": raster finds no part surface under the passes: expected a view direction "
+                     "that meets the part");
   }
   report.depth_min = depth_min;
   report.depth_max = depth_max;
-  report.coverage_in_window = probed ? static_cast<double>(in_window) / static_cast<double>(probed) : 0.0;
+  report.coverage_in_window =
+      probed ? static_cast<double>(in_window) / static_cast<double>(probed) : 0.0;
   report.note = fmt::format("{} passes, {:.1f} mm apart", passes, toMm((w_max - w_min) / passes));
   return keys;
 }
@@ -256,7 +275,8 @@ std::vector<Key> fileKeys(const FileSpec& spec, std::size_t index) {
                      " row(s): expected at least 2");
   }
   std::vector<Key> keys;
-  for (const ScanSample& s : spec.samples) keys.push_back({s.t - spec.samples.front().t, s.X_PS, s.scanning});
+  for (const ScanSample& s : spec.samples)
+    keys.push_back({s.t - spec.samples.front().t, s.X_PS, s.scanning});
   return keys;
 }
 
@@ -317,7 +337,8 @@ GeneratedPath generatePath(const PathRequest& request,
     const Key& a = all[k];
     const Key& b = all[std::min(k + 1, all.size() - 1)];
     const double s = b.t > a.t ? std::clamp((t - a.t) / (b.t - a.t), 0.0, 1.0) : 0.0;
-    out.path.samples.push_back({t, kinematics::interpolatePose(a.X, b.X, s), i == 0 ? a.scanning : b.scanning});
+    out.path.samples.push_back(
+        {t, kinematics::interpolatePose(a.X, b.X, s), i == 0 ? a.scanning : b.scanning});
   }
   return out;
 }
@@ -341,14 +362,16 @@ FileSpec parsePathCsv(const std::string& text, const std::string& source) {
       const double x = std::strtod(cell.c_str(), &end);
       while (end && *end == ' ') ++end;
       if (cell.empty() || end == cell.c_str() || (end && *end != '\0') || !std::isfinite(x)) {
-        throw InputError(source + ":" + std::to_string(number) + ": '" + cell +
-                         "' is not a finite number: expected t_s, x_mm, y_mm, z_mm, qw, qx, qy, qz[, scanning]");
+        throw InputError(
+            source + ":" + std::to_string(number) + ": '" + cell +
+            "' is not a finite number: expected t_s, x_mm, y_mm, z_mm, qw, qx, qy, qz[, scanning]");
       }
       v.push_back(x);
     }
     if (v.size() != 8 && v.size() != 9) {
-      throw InputError(source + ":" + std::to_string(number) + ": " + std::to_string(v.size()) +
-                       " columns: expected 8 or 9 (t_s, x_mm, y_mm, z_mm, qw, qx, qy, qz[, scanning])");
+      throw InputError(
+          source + ":" + std::to_string(number) + ": " + std::to_string(v.size()) +
+          " columns: expected 8 or 9 (t_s, x_mm, y_mm, z_mm, qw, qx, qy, qz[, scanning])");
     }
     if (!(v[0] > last_t)) {
       throw InputError(source + ":" + std::to_string(number) + ": t_s " + std::to_string(v[0]) +

@@ -42,8 +42,8 @@ struct RasterSpec {
 
 struct Waypoint {
   Eigen::Isometry3d X_PS = Eigen::Isometry3d::Identity();
-  double speed = 0.05;            ///< m/s to reach this point from the previous one
-  double rotation_speed = 0.5;    ///< rad/s limit for the orientation change
+  double speed = 0.05;          ///< m/s to reach this point from the previous one
+  double rotation_speed = 0.5;  ///< rad/s limit for the orientation change
   bool scanning = true;
 };
 

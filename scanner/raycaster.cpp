@@ -25,15 +25,19 @@ Raycaster::Raycaster(const kinematics::TriangleMesh& mesh) : impl_(std::make_uni
   impl_->scene = rtcNewScene(impl_->device);
   rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
   RTCGeometry geometry = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
-      geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.vertices.size()));
+  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                               RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                                               mesh.vertices.size()));
   for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
-    for (int k = 0; k < 3; ++k) vertices[3 * i + static_cast<std::size_t>(k)] = static_cast<float>(mesh.vertices[i](k));
+    for (int k = 0; k < 3; ++k)
+      vertices[3 * i + static_cast<std::size_t>(k)] = static_cast<float>(mesh.vertices[i](k));
   }
-  auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-      geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), mesh.triangles.size()));
+  auto* indices = static_cast<unsigned*>(
+      rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                              3 * sizeof(unsigned), mesh.triangles.size()));
   for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
-    for (int k = 0; k < 3; ++k) indices[3 * i + static_cast<std::size_t>(k)] = static_cast<unsigned>(mesh.triangles[i](k));
+    for (int k = 0; k < 3; ++k)
+      indices[3 * i + static_cast<std::size_t>(k)] = static_cast<unsigned>(mesh.triangles[i](k));
   }
   rtcCommitGeometry(geometry);
   rtcAttachGeometry(impl_->scene, geometry);
@@ -58,7 +62,8 @@ std::optional<RayHit> Raycaster::cast(const Eigen::Vector3d& origin,
   rh.ray.dir_y = static_cast<float>(d.y());
   rh.ray.dir_z = static_cast<float>(d.z());
   rh.ray.tnear = static_cast<float>(t_near);
-  rh.ray.tfar = std::isfinite(t_far) ? static_cast<float>(t_far) : std::numeric_limits<float>::infinity();
+  rh.ray.tfar =
+      std::isfinite(t_far) ? static_cast<float>(t_far) : std::numeric_limits<float>::infinity();
   rh.ray.mask = 0xFFFFFFFFu;
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(impl_->scene, &context, &rh);

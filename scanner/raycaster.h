@@ -1,7 +1,7 @@
 #pragma once
 
-#include <memory>
 #include <limits>
+#include <memory>
 #include <optional>
 
 #include <Eigen/Geometry>
@@ -11,8 +11,8 @@
 namespace scanplan::scanner {
 
 struct RayHit {
-  double distance = 0.0;                                ///< along the ray, m
-  Eigen::Vector3d normal = Eigen::Vector3d::Zero();     ///< geometric normal, unit, mesh frame
+  double distance = 0.0;                             ///< along the ray, m
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  ///< geometric normal, unit, mesh frame
   unsigned triangle = 0;
 };
 

@@ -345,9 +345,9 @@ TEST_F(Cli, IkRejectsANonRigidMatrix) {
 }
 
 TEST_F(Cli, FkRejectsBadJointNumbers) {
-  for (const std::string joints : {"1,2,x,4,5,6", "1,2,3,4,5", "1,2,3,4,5,6,7", "nan,0,0,0,0,0",
-                                   "0,0,0,inf,0,0", "1,,3,4,5,6", "1,2,3deg,4,5,6",
-                                   "1,2,3,4,5,6,"}) {
+  for (const std::string joints :
+       {"1,2,x,4,5,6", "1,2,3,4,5", "1,2,3,4,5,6,7", "nan,0,0,0,0,0", "0,0,0,inf,0,0", "1,,3,4,5,6",
+        "1,2,3deg,4,5,6", "1,2,3,4,5,6,"}) {
     const Result run = scanplan({"fk", "--robot", kViper, "--joints", joints});
     EXPECT_EQ(run.exit_code, 4) << joints << "\n" << describe(run);
     EXPECT_TRUE(contains(run.err, "scanplan: error:") && contains(run.err, "--joints")) << run.err;
@@ -465,15 +465,16 @@ TEST_F(Cli, PlanWithAMissingMeshIsAnInputErrorAndLeavesNoTmpFiles) {
   EXPECT_FALSE(fs::exists(out / "job.yaml"));
 }
 
-
 TEST_F(Cli, CheckScoresAPoseAndListsEveryPair) {
-  const Result run = scanplan({"check", kDemoJob, "--table", "30", "--joints=-20,-40,120,0,40,0", "--json"});
+  const Result run =
+      scanplan({"check", kDemoJob, "--table", "30", "--joints=-20,-40,120,0,40,0", "--json"});
   ASSERT_EQ(run.exit_code, 0) << describe(run);
   EXPECT_EQ(array(run.out, "joint_factors").size(), 6u);
   const auto factors = allArrays(run.out, "witness_a_mm");  // only pairs closer than d_high
   const auto beyond = allBools(run.out, "beyond_d_high");
   EXPECT_GT(beyond.size(), 20u);
-  EXPECT_EQ(factors.size(), static_cast<std::size_t>(std::count(beyond.begin(), beyond.end(), false)));
+  EXPECT_EQ(factors.size(),
+            static_cast<std::size_t>(std::count(beyond.begin(), beyond.end(), false)));
   EXPECT_TRUE(contains(run.out, "\"collision\": false")) << run.out;
   EXPECT_TRUE(contains(run.out, "\"limiting\": ")) << run.out;
   const Result text = scanplan({"check", kDemoJob, "--table", "30", "--joints=-20,-40,120,0,40,0"});
@@ -498,12 +499,13 @@ TEST_F(Cli, CheckRejectsBadJointsAndBadPairRules) {
   const fs::path job = dir_ / "rule.yaml";
   writeFile(job, "robot: " + (kSourceDir / "data/robots/viper_s650.yaml").string() +
                      "\npart: {mesh: " + (kSourceDir / "data/parts/demo_housing.stl").string() +
-                     "}\nconstraints:\n  clearance:\n    pairs:\n      - {a: scaner, b: part, exclude: true}\n");
-  const Result rule = scanplan({"check", job.string(), "--table", "0", "--joints", "0,-60,150,0,60,0"});
+                     "}\nconstraints:\n  clearance:\n    pairs:\n      - {a: scaner, b: part, "
+                     "exclude: true}\n");
+  const Result rule =
+      scanplan({"check", job.string(), "--table", "0", "--joints", "0,-60,150,0,60,0"});
   EXPECT_EQ(rule.exit_code, 4) << describe(rule);
   EXPECT_TRUE(contains(rule.err, "constraints.clearance.pairs")) << rule.err;
   EXPECT_TRUE(contains(rule.err, "scaner")) << rule.err;
 }
 
 }  // namespace
-

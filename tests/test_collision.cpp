@@ -86,8 +86,10 @@ class AnalyticPrimitives : public ::testing::TestWithParam<int> {
     std::mt19937 rng(static_cast<unsigned>(GetParam()));
     return GetParam() == 0 ? Eigen::Isometry3d::Identity() : randomPose(rng, 2.0);
   }
-  double distance(const detail::CollisionShape& a, const Eigen::Isometry3d& X_a,
-                  const detail::CollisionShape& b, const Eigen::Isometry3d& X_b) const {
+  double distance(const detail::CollisionShape& a,
+                  const Eigen::Isometry3d& X_a,
+                  const detail::CollisionShape& b,
+                  const Eigen::Isometry3d& X_b) const {
     const auto bounded = detail::shapeDistance(a, G() * X_a, b, G() * X_b, 1.0, true);
     const auto exact = detail::exactShapeDistance(a, G() * X_a, b, G() * X_b);
     EXPECT_NEAR(bounded.distance, exact.distance, kSameTol);
@@ -98,7 +100,9 @@ class AnalyticPrimitives : public ::testing::TestWithParam<int> {
 
 TEST_P(AnalyticPrimitives, SphereSphere) {
   // |c1 − c2| − r1 − r2 = √(0.3² + 0.4²) − 0.1 − 0.15 = 0.25.
-  EXPECT_NEAR(distance(primitive(kinematics::Sphere{0.1}), at(0, 0, 0), primitive(kinematics::Sphere{0.15}), at(0.3, 0.4, 0)), 0.25, kGjkTol);
+  EXPECT_NEAR(distance(primitive(kinematics::Sphere{0.1}), at(0, 0, 0),
+                       primitive(kinematics::Sphere{0.15}), at(0.3, 0.4, 0)),
+              0.25, kGjkTol);
 }
 
 TEST_P(AnalyticPrimitives, BoxBoxAcrossAFaceAnEdgeAndACorner) {
@@ -126,15 +130,17 @@ TEST_P(AnalyticPrimitives, CapsuleEndAboveASphere) {
 }
 
 TEST_P(AnalyticPrimitives, OverlapIsContactAtZero) {
-  const auto bounded = detail::shapeDistance(primitive(kinematics::Sphere{0.1}), G() * at(0, 0, 0),
-                                             primitive(kinematics::Sphere{0.1}), G() * at(0.15, 0, 0), 0.03, false);
+  const auto bounded =
+      detail::shapeDistance(primitive(kinematics::Sphere{0.1}), G() * at(0, 0, 0),
+                            primitive(kinematics::Sphere{0.1}), G() * at(0.15, 0, 0), 0.03, false);
   EXPECT_TRUE(bounded.penetrating);
   EXPECT_EQ(bounded.distance, 0.0);
 }
 
 TEST_P(AnalyticPrimitives, FarPairsAreOnlyReportedBeyondTheBound) {
-  const auto bounded = detail::shapeDistance(primitive(kinematics::Sphere{0.1}), G() * at(0, 0, 0),
-                                             primitive(kinematics::Sphere{0.1}), G() * at(0.5, 0, 0), 0.03, false);
+  const auto bounded =
+      detail::shapeDistance(primitive(kinematics::Sphere{0.1}), G() * at(0, 0, 0),
+                            primitive(kinematics::Sphere{0.1}), G() * at(0.5, 0, 0), 0.03, false);
   EXPECT_TRUE(bounded.beyond);
   EXPECT_EQ(bounded.distance, 0.03);
 }
@@ -155,12 +161,13 @@ struct DemoCell {
     const auto& e = exact.pairs[i];
     const double d_high = scene.pairs()[i].thresholds.d_high;
     const std::string name = scene.bodies()[static_cast<std::size_t>(scene.pairs()[i].a)].name +
-                             " - " + scene.bodies()[static_cast<std::size_t>(scene.pairs()[i].b)].name;
+                             " - " +
+                             scene.bodies()[static_cast<std::size_t>(scene.pairs()[i].b)].name;
     if (e.distance < d_high) {
       if (b.beyond_bound || std::abs(b.distance - e.distance) > kSameTol || b.factor != e.factor) {
-        return ::testing::AssertionFailure() << name << ": exact " << e.distance << " (f " << e.factor
-                                             << "), bounded " << b.distance << " (f " << b.factor
-                                             << (b.beyond_bound ? ", beyond" : "") << ")";
+        return ::testing::AssertionFailure()
+               << name << ": exact " << e.distance << " (f " << e.factor << "), bounded "
+               << b.distance << " (f " << b.factor << (b.beyond_bound ? ", beyond" : "") << ")";
       }
     } else if (!b.beyond_bound || b.factor != 1.0) {
       return ::testing::AssertionFailure() << name << ": exact " << e.distance << " ≥ d_high "
@@ -184,7 +191,8 @@ TEST(Clearance, BoundedEqualsExactOnTheDemoCellAlongRandomPaths) {
     for (int k = 0; k < 12; ++k, q += step) {
       const ClearanceResult bounded = evaluator.evaluate(theta, q, {.bounded = true});
       const ClearanceResult exact = evaluator.evaluate(theta, q, {.bounded = false});
-      ASSERT_TRUE(boundedMatchesExact(demo.scene, bounded, exact)) << "path " << path << " step " << k;
+      ASSERT_TRUE(boundedMatchesExact(demo.scene, bounded, exact))
+          << "path " << path << " step " << k;
       ASSERT_EQ(bounded.factor, exact.factor);
       ASSERT_EQ(evaluator.factor(theta, q), exact.factor);
       for (const auto& p : exact.pairs) near += p.distance < 0.03 ? 1 : 0;
@@ -205,7 +213,8 @@ TEST(Clearance, BoundedEqualsExactWithTheScannerJustAboveThePart) {
     X_PS.linear() = Eigen::Vector3d(1, -1, -1).asDiagonal();
     X_PS.translation() << 0.03 * std::sin(k), 0.03 * std::cos(0.7 * k), 0.110 + 0.00125 * k;
     const double theta = 0.3 * k;
-    const auto solutions = cell.robot.ik(cell.flangeTarget(theta, X_PS), {.within_limits_only = true});
+    const auto solutions =
+        cell.robot.ik(cell.flangeTarget(theta, X_PS), {.within_limits_only = true});
     if (solutions.empty()) continue;
     const ClearanceResult bounded = evaluator.evaluate(theta, solutions[0].q);
     const ClearanceResult exact = evaluator.evaluate(theta, solutions[0].q, {.bounded = false});
@@ -235,7 +244,8 @@ TEST(Clearance, DefaultPairsSkipRigidAndConsecutiveBodies) {
   };
   for (int i = 0; i < 6; ++i) {
     const std::string li = i == 0 ? "base" : "link" + std::to_string(i);
-    EXPECT_FALSE(has(li, "link" + std::to_string(i + 1))) << "consecutive links are always in contact";
+    EXPECT_FALSE(has(li, "link" + std::to_string(i + 1)))
+        << "consecutive links are always in contact";
   }
   EXPECT_FALSE(has("scanner", "link6"));  // rigidly mounted
   EXPECT_FALSE(has("scanner", "link5"));  // consecutive with its carrier link
@@ -305,7 +315,9 @@ TEST(Clearance, ScannerFoldedIntoLinkOneIsACollision) {
 }
 
 // Distance from a world point to a body of the scene (a small probe sphere against each shape).
-double pointToBody(const Scene& scene, int body, const std::vector<Eigen::Isometry3d>& X_W,
+double pointToBody(const Scene& scene,
+                   int body,
+                   const std::vector<Eigen::Isometry3d>& X_W,
                    const Eigen::Vector3d& p) {
   constexpr double kProbe = 1e-4;
   const auto probe = primitive(kinematics::Sphere{kProbe});
@@ -334,8 +346,8 @@ TEST(Clearance, WitnessPointsLieOnTheirBodiesAndAreTheReportedDistanceApart) {
       EXPECT_LT(pointToBody(demo.scene, demo.scene.pairs()[i].a, X_W, p.p_a), kWitnessTol);
       EXPECT_LT(pointToBody(demo.scene, demo.scene.pairs()[i].b, X_W, p.p_b), kWitnessTol)
           << demo.scene.bodies()[static_cast<std::size_t>(demo.scene.pairs()[i].a)].name << " - "
-          << demo.scene.bodies()[static_cast<std::size_t>(demo.scene.pairs()[i].b)].name << " d " << p.distance
-          << " pb " << p.p_b.transpose();
+          << demo.scene.bodies()[static_cast<std::size_t>(demo.scene.pairs()[i].b)].name << " d "
+          << p.distance << " pb " << p.p_b.transpose();
     }
     for (std::size_t i = 0; i < r.pairs.size(); ++i) {
       const auto& p = r.pairs[i];
@@ -353,7 +365,8 @@ TEST(Clearance, ThreadsSharingOneSceneGetIdenticalResults) {
   DemoCell demo;
   std::mt19937 rng(31);
   std::vector<std::pair<double, JointVector>> poses;
-  for (int k = 0; k < 300; ++k) poses.emplace_back(0.1 * k, test::randomJoints(demo.scene.cell().robot, rng));
+  for (int k = 0; k < 300; ++k)
+    poses.emplace_back(0.1 * k, test::randomJoints(demo.scene.cell().robot, rng));
   const auto run = [&](std::vector<double>& out) {
     ClearanceEvaluator evaluator(demo.scene);
     for (const auto& [theta, q] : poses) {
@@ -372,20 +385,24 @@ TEST(Clearance, ThreadsSharingOneSceneGetIdenticalResults) {
 }
 
 TEST(Scene, CornerBoxesWithNegativeSizesAreNormalised) {
-  const fs::path dir = fs::temp_directory_path() / ("scanplan_test_scene_" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("scanplan_test_scene_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const fs::path job = dir / "job.yaml";
-  std::ofstream(job) << "robot: " << (test::sourceDir() / "data/robots/viper_s650.yaml").string()
-                     << "\npart: {mesh: " << (test::sourceDir() / "data/parts/demo_housing.stl").string()
-                     << "}\nobstacles:\n"
-                        "  - {name: post, type: box, corner_mm: [300, 300, 0], size_mm: [-100, -50, 200]}\n"
-                        "  - {name: jig, carrier: table, type: sphere, radius_mm: 20, pose: {xyz_mm: [0, 150, 0]}}\n";
+  std::ofstream(job)
+      << "robot: " << (test::sourceDir() / "data/robots/viper_s650.yaml").string()
+      << "\npart: {mesh: " << (test::sourceDir() / "data/parts/demo_housing.stl").string()
+      << "}\nobstacles:\n"
+         "  - {name: post, type: box, corner_mm: [300, 300, 0], size_mm: [-100, -50, 200]}\n"
+         "  - {name: jig, carrier: table, type: sphere, radius_mm: 20, pose: {xyz_mm: [0, 150, "
+         "0]}}\n";
   const cli::JobSpec spec = cli::loadJob(job);
   const kinematics::CellModel cell = cli::buildCell(spec);
   ASSERT_EQ(cell.obstacles.size(), 2u);
   const auto& box = std::get<kinematics::Box>(cell.obstacles[0].shapes[0].geometry);
   EXPECT_TRUE(box.size.isApprox(Eigen::Vector3d(0.1, 0.05, 0.2), 1e-12));
-  EXPECT_TRUE(cell.obstacles[0].shapes[0].X_BG.translation().isApprox(Eigen::Vector3d(0.25, 0.275, 0.1), 1e-12));
+  EXPECT_TRUE(cell.obstacles[0].shapes[0].X_BG.translation().isApprox(
+      Eigen::Vector3d(0.25, 0.275, 0.1), 1e-12));
   EXPECT_EQ(cell.obstacles[1].carrier, kinematics::Carrier::kTable);
   const Scene scene(cell, cli::clearanceConfig(spec));
   EXPECT_GE(scene.bodyIndex("post"), 0);
@@ -395,14 +412,16 @@ TEST(Scene, CornerBoxesWithNegativeSizesAreNormalised) {
 
 TEST(Scene, SharedViperLinkMeshesAndTheBunnyKeepBoundedEqualToExact) {
   const fs::path data = test::sharedDataDir();
-  if (!fs::exists(data / "robots/viper_s650/link0.stl") || !fs::exists(data / "meshes/stlmodels_bunny.bin.stl")) {
+  if (!fs::exists(data / "robots/viper_s650/link0.stl") ||
+      !fs::exists(data / "meshes/stlmodels_bunny.bin.stl")) {
     GTEST_SKIP() << "shared test data not present";
   }
   kinematics::RobotDefinition def = test::bundledRobot("viper_s650").definition();
   for (int k = 0; k <= 6; ++k) {
     kinematics::Shape mesh;
-    mesh.geometry = kinematics::MeshFile{data / "robots/viper_s650" / ("link" + std::to_string(k) + ".stl"),
-                                         {kinematics::LengthUnit::kMetre, 1.0}};
+    mesh.geometry =
+        kinematics::MeshFile{data / "robots/viper_s650" / ("link" + std::to_string(k) + ".stl"),
+                             {kinematics::LengthUnit::kMetre, 1.0}};
     // SOURCES.md: meshes 3, 4, 5 are Rz(180°) from their DH frames.
     if (k >= 3 && k <= 5) mesh.X_BG.linear() = kinematics::rotZ(std::numbers::pi);
     def.links[static_cast<std::size_t>(k)].shapes = {mesh};

@@ -143,9 +143,10 @@ Expected recompute(const collision::Scene& scene,
   const kinematics::CellModel& cell = scene.cell();
   const kinematics::RobotModel& robot = cell.robot;
   // X_BF = X_WB⁻¹ · X_WA · Rz(θ) · X_RP · X_PS · X_FS⁻¹ (no eccentricity or tilt in these cells).
-  const Eigen::Isometry3d X_BF = cell.X_WB.inverse() * cell.table.X_WA *
-                                 Eigen::Isometry3d(Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitZ())) *
-                                 cell.part.X_RP * X_PS * cell.scanner.X_FS.inverse();
+  const Eigen::Isometry3d X_BF =
+      cell.X_WB.inverse() * cell.table.X_WA *
+      Eigen::Isometry3d(Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitZ())) * cell.part.X_RP *
+      X_PS * cell.scanner.X_FS.inverse();
   Expected e;
   for (const kinematics::IkSolution& s : robot.ik(X_BF)) {
     if (!(s.branch == branch)) continue;
@@ -177,9 +178,11 @@ Expected recompute(const collision::Scene& scene,
   EXPECT_NEAR(m.wrist, wrist_measure, 1e-12);
   EXPECT_NEAR(m.elbow, elbow_measure, 1e-9);
   EXPECT_NEAR(m.shoulder, shoulder_measure, 1e-9);
-  e.singularity = ramp(wrist_measure, settings.wrist.low, settings.wrist.high, settings.wrist.gamma) *
-                  ramp(elbow_measure, settings.elbow.low, settings.elbow.high, settings.elbow.gamma) *
-                  ramp(shoulder_measure, settings.shoulder.low, settings.shoulder.high, settings.shoulder.gamma);
+  e.singularity =
+      ramp(wrist_measure, settings.wrist.low, settings.wrist.high, settings.wrist.gamma) *
+      ramp(elbow_measure, settings.elbow.low, settings.elbow.high, settings.elbow.gamma) *
+      ramp(shoulder_measure, settings.shoulder.low, settings.shoulder.high,
+           settings.shoulder.gamma);
   if (e.singularity > 0.0) {
     planner::PoseEvaluator evaluator(scene, settings);
     e.clearance = evaluator.score(theta, e.q).clearance.factor;
@@ -194,7 +197,8 @@ Expected recompute(const collision::Scene& scene,
   return e;
 }
 
-void expectCell(const ConfigMap& map, std::size_t b, std::size_t a, std::size_t t, const Expected& e) {
+void expectCell(
+    const ConfigMap& map, std::size_t b, std::size_t a, std::size_t t, const Expected& e) {
   const std::size_t i = map.index(b, a, t);
   SCOPED_TRACE(fmt::format("branch {}, angle {} deg, t = {} s", map.branches[b].words(),
                            toDeg(map.angles[a]), map.times[t]));
@@ -226,9 +230,11 @@ std::vector<int> checkCells(const ConfigMap& map,
   }
   EXPECT_FALSE(reachable.empty());
   for (int k = 0; k < random && !reachable.empty(); ++k) {
-    cells.push_back(reachable[std::uniform_int_distribution<std::size_t>(0, reachable.size() - 1)(rng)]);
+    cells.push_back(
+        reachable[std::uniform_int_distribution<std::size_t>(0, reachable.size() - 1)(rng)]);
   }
-  for (int k = 0; k < random / 5; ++k) cells.push_back(std::uniform_int_distribution<std::size_t>(0, n - 1)(rng));
+  for (int k = 0; k < random / 5; ++k)
+    cells.push_back(std::uniform_int_distribution<std::size_t>(0, n - 1)(rng));
   std::vector<int> per_code(planner::kLimitCount, 0);
   for (std::size_t i = 0; i < n; ++i) {
     if (per_code[map.limit[i]]++ < 3) cells.push_back(i);
@@ -236,7 +242,8 @@ std::vector<int> checkCells(const ConfigMap& map,
   for (std::size_t i : cells) {
     const std::size_t t = i % map.times.size(), a = (i / map.times.size()) % map.angles.size(),
                       b = i / map.cellsPerBranch();
-    expectCell(map, b, a, t, recompute(scene, settings, map.angles[a], path.samples[t].X_PS, map.branches[b]));
+    expectCell(map, b, a, t,
+               recompute(scene, settings, map.angles[a], path.samples[t].X_PS, map.branches[b]));
   }
   return per_code;
 }
@@ -247,7 +254,8 @@ TEST(ConfigMap, RandomCellsMatchAnIndependentRecomputation) {
   ASSERT_EQ(map.angles.size(), 36u);
   ASSERT_EQ(map.times.size(), 10u);
   ASSERT_EQ(map.branches.size(), 8u);
-  for (std::size_t t = 0; t < map.times.size(); ++t) EXPECT_DOUBLE_EQ(map.times[t], demo.path.samples[t].t);
+  for (std::size_t t = 0; t < map.times.size(); ++t)
+    EXPECT_DOUBLE_EQ(map.times[t], demo.path.samples[t].t);
   const std::vector<int> codes = checkCells(map, *demo.scene, demo.settings, demo.path, 50, 31);
   EXPECT_GT(codes[static_cast<std::size_t>(Limit::kUnreachable)], 0);
   EXPECT_GT(codes[static_cast<std::size_t>(Limit::kJointLimit)], 0);
@@ -268,8 +276,8 @@ TEST(ConfigMap, CellsNearTheWristSingularityMatchAnIndependentRecomputation) {
     q << 0.0, deg(-90.0), deg(180.0), 0.0, deg(q5), 0.0;
     kinematics::ScanSample s;
     s.t = k++;
-    s.X_PS = (cell.X_WB.inverse() * cell.table.X_WR(0.0) * cell.part.X_RP).inverse() * cell.robot.fk(q) *
-             cell.scanner.X_FS;
+    s.X_PS = (cell.X_WB.inverse() * cell.table.X_WR(0.0) * cell.part.X_RP).inverse() *
+             cell.robot.fk(q) * cell.scanner.X_FS;
     path.samples.push_back(s);
   }
   const ConfigMap map = planner::buildConfigMap(*demo.scene, demo.settings, path, demo.request);
@@ -285,7 +293,9 @@ TEST(ConfigMap, LayersAreFactorsOfF) {
       ASSERT_GE(v, 0.0f);
       ASSERT_LE(v, 1.0f);
     }
-    ASSERT_NEAR(map.f[i], static_cast<double>(map.joint[i]) * map.singularity[i] * map.clearance[i], 1e-6) << i;
+    ASSERT_NEAR(map.f[i], static_cast<double>(map.joint[i]) * map.singularity[i] * map.clearance[i],
+                1e-6)
+        << i;
     if (map.limit[i] == static_cast<std::uint8_t>(Limit::kUnreachable)) {
       ASSERT_EQ(map.f[i], 0.0f);
     }
@@ -338,12 +348,15 @@ class MapJob : public ::testing::Test {
   fs::path dir_;
 };
 
-std::string yamlList(const Eigen::Vector3d& v) { return fmt::format("[{:.17g}, {:.17g}, {:.17g}]", v.x(), v.y(), v.z()); }
+std::string yamlList(const Eigen::Vector3d& v) {
+  return fmt::format("[{:.17g}, {:.17g}, {:.17g}]", v.x(), v.y(), v.z());
+}
 
 std::string yamlPose(const Eigen::Isometry3d& X) {
   const cli::PoseSpec p = cli::toPoseSpec(X);
-  return fmt::format("{{xyz_mm: [{:.17g}, {:.17g}, {:.17g}], rpy_deg: [{:.17g}, {:.17g}, {:.17g}]}}", p.xyz_mm[0],
-                     p.xyz_mm[1], p.xyz_mm[2], p.rpy_deg[0], p.rpy_deg[1], p.rpy_deg[2]);
+  return fmt::format(
+      "{{xyz_mm: [{:.17g}, {:.17g}, {:.17g}], rpy_deg: [{:.17g}, {:.17g}, {:.17g}]}}", p.xyz_mm[0],
+      p.xyz_mm[1], p.xyz_mm[2], p.rpy_deg[0], p.rpy_deg[1], p.rpy_deg[2]);
 }
 
 // A sphere of radius 30 mm around the laser origin is the scanner body; the only pairs checked
@@ -375,35 +388,48 @@ TEST_F(MapJob, ClearanceBandOfAWorldPostAndTheConstantOfATableLidAreAnalytic) {
   const Eigen::Vector3d post = axis + Eigen::AngleAxisd(theta0, Eigen::Vector3d::UnitZ()) * p_PS;
   const Eigen::Vector3d lid = p_PS + Eigen::Vector3d(0.0, 0.0, 0.06);
 
-  const fs::path file = write(
-      "job.yaml",
-      "name: synthetic\n"
-      "robot: " + (src / "data/robots/viper_s650.yaml").string() + "\n"
-      "table: {axis: {xyz_mm: [520, 0, 0], rpy_deg: [0, 0, 0]}, radius_mm: 200, height_mm: 150}\n"
-      "part: {mesh: " + (src / "data/parts/demo_housing.stl").string() + "}\n"
-      "scanner:\n"
-      "  mount: {xyz_mm: [0, 0, 110], rpy_deg: [0, 0, 0]}\n"
-      "  body: [{type: sphere, radius_mm: 30}]\n"
-      "obstacles:\n"
-      "  - {name: post, carrier: world, type: sphere, radius_mm: 20, pose: {xyz_mm: " + yamlList(post * 1e3) + "}}\n"
-      "  - {name: lid, carrier: table, type: sphere, radius_mm: 20, pose: {xyz_mm: " + yamlList(lid * 1e3) + "}}\n"
-      "constraints:\n"
-      "  clearance:\n"
-      "    d_low_mm: 5\n"
-      "    d_high_mm: 30\n"
-      "    pairs:\n"
-      "      - {a: '*', b: '*', exclude: true}\n"
-      "      - {a: scanner, b: post, include: true}\n"
-      "      - {a: scanner, b: lid, include: true}\n"
-      "scan:\n"
-      "  dt_s: 0.1\n"
-      "  paths:\n"
-      "    - type: waypoints\n"
-      "      points:\n"
-      "        - " + yamlPose(X_PS) + "\n"
-      "        - {xyz_mm: " + yamlList(X_PS2.translation() * 1e3) + ", rpy_deg: " +
-          yamlList(Eigen::Vector3d(cli::toPoseSpec(X_PS).rpy_deg.data())) + ", speed_mm_s: 50}\n"
-      "map: {angle_step_deg: 1}\n");
+  const fs::path file =
+      write("job.yaml",
+            "name: synthetic\n"
+            "robot: " +
+                (src / "data/robots/viper_s650.yaml").string() +
+                "\n"
+                "table: {axis: {xyz_mm: [520, 0, 0], rpy_deg: [0, 0, 0]}, radius_mm: 200, "
+                "height_mm: 150}\n"
+                "part: {mesh: " +
+                (src / "data/parts/demo_housing.stl").string() +
+                "}\n"
+                "scanner:\n"
+                "  mount: {xyz_mm: [0, 0, 110], rpy_deg: [0, 0, 0]}\n"
+                "  body: [{type: sphere, radius_mm: 30}]\n"
+                "obstacles:\n"
+                "  - {name: post, carrier: world, type: sphere, radius_mm: 20, pose: {xyz_mm: " +
+                yamlList(post * 1e3) +
+                "}}\n"
+                "  - {name: lid, carrier: table, type: sphere, radius_mm: 20, pose: {xyz_mm: " +
+                yamlList(lid * 1e3) +
+                "}}\n"
+                "constraints:\n"
+                "  clearance:\n"
+                "    d_low_mm: 5\n"
+                "    d_high_mm: 30\n"
+                "    pairs:\n"
+                "      - {a: '*', b: '*', exclude: true}\n"
+                "      - {a: scanner, b: post, include: true}\n"
+                "      - {a: scanner, b: lid, include: true}\n"
+                "scan:\n"
+                "  dt_s: 0.1\n"
+                "  paths:\n"
+                "    - type: waypoints\n"
+                "      points:\n"
+                "        - " +
+                yamlPose(X_PS) +
+                "\n"
+                "        - {xyz_mm: " +
+                yamlList(X_PS2.translation() * 1e3) +
+                ", rpy_deg: " + yamlList(Eigen::Vector3d(cli::toPoseSpec(X_PS).rpy_deg.data())) +
+                ", speed_mm_s: 50}\n"
+                "map: {angle_step_deg: 1}\n");
   const cli::JobSpec job = cli::loadJob(file);
   const kinematics::CellModel cell = cli::buildCell(job);
   const kinematics::ScanPath path = jobPath(job, cell);
@@ -431,7 +457,8 @@ TEST_F(MapJob, ClearanceBandOfAWorldPostAndTheConstantOfATableLidAreAnalytic) {
           continue;
         }
         const Eigen::Isometry3d& X = path.samples[t].X_PS;
-        const Eigen::Vector3d c = axis + Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitZ()) * X.translation();
+        const Eigen::Vector3d c =
+            axis + Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitZ()) * X.translation();
         const double d_post = (c - post).norm() - 0.05;
         const double d_lid = (X.translation() - lid).norm() - 0.05;
         const double expected = ramp(d_post, 0.005, 0.03, 1.0) * ramp(d_lid, 0.005, 0.03, 1.0);
@@ -442,11 +469,13 @@ TEST_F(MapJob, ClearanceBandOfAWorldPostAndTheConstantOfATableLidAreAnalytic) {
         const double f_lid = std::sin(0.5 * std::numbers::pi * 5.0 / 25.0);
         if (off < 2.0 * std::asin(55.0 / 400.0) - 1e-9) {
           ++in_band;
-          EXPECT_EQ(map.clearance[i], 0.0f) << "θ = " << toDeg(theta) << "°: inside the post's band";
+          EXPECT_EQ(map.clearance[i], 0.0f)
+              << "θ = " << toDeg(theta) << "°: inside the post's band";
           EXPECT_EQ(map.limit[i], static_cast<std::uint8_t>(Limit::kClearance));
         } else if (off >= 2.0 * std::asin(80.0 / 400.0) + 1e-9) {
           ++clear;
-          EXPECT_NEAR(map.clearance[i], f_lid, kTol) << "θ = " << toDeg(theta) << "°: only the lid counts";
+          EXPECT_NEAR(map.clearance[i], f_lid, kTol)
+              << "θ = " << toDeg(theta) << "°: only the lid counts";
         } else {
           ++on_ramp;
           EXPECT_GT(map.clearance[i], 0.0f);
@@ -472,8 +501,10 @@ TEST(ConfigMap, ContinuousTableAnglesCoverAFullTurnWithoutRepeating360) {
     const auto angles = planner::mapAngles(table, deg(step_deg));
     ASSERT_EQ(angles.size(), static_cast<std::size_t>(std::llround(360.0 / step_deg)));
     EXPECT_EQ(angles.front(), 0.0);
-    for (std::size_t i = 1; i < angles.size(); ++i) EXPECT_NEAR(angles[i] - angles[i - 1], deg(step_deg), 1e-12);
-    EXPECT_NEAR(angles.back() + deg(step_deg), 2.0 * std::numbers::pi, 1e-12) << "the last angle's neighbour is 360° = 0°";
+    for (std::size_t i = 1; i < angles.size(); ++i)
+      EXPECT_NEAR(angles[i] - angles[i - 1], deg(step_deg), 1e-12);
+    EXPECT_NEAR(angles.back() + deg(step_deg), 2.0 * std::numbers::pi, 1e-12)
+        << "the last angle's neighbour is 360° = 0°";
     EXPECT_LT(angles.back(), 2.0 * std::numbers::pi - 0.5 * deg(step_deg));
   }
 }
@@ -511,7 +542,8 @@ TEST(ConfigMap, RowZeroAndTheRowAfterTheLastAreTheSameTableAngle) {
     for (std::size_t a = 0; a < na; ++a) {
       for (std::size_t t = 0; t < map.times.size(); ++t) {
         const std::size_t i = shifted.index(b, a, t), j = map.index(b, (a + 1) % na, t);
-        ASSERT_NEAR(shifted.f[i], map.f[j], kTol) << "row " << a << ", t " << t << ", " << map.branches[b].words();
+        ASSERT_NEAR(shifted.f[i], map.f[j], kTol)
+            << "row " << a << ", t " << t << ", " << map.branches[b].words();
         ASSERT_EQ(shifted.limit[i], map.limit[j]) << "row " << a << ", t " << t;
       }
     }
@@ -519,10 +551,12 @@ TEST(ConfigMap, RowZeroAndTheRowAfterTheLastAreTheSameTableAngle) {
   // And the cell at 360° scores like the cell at 0°.
   collision::ClearanceEvaluator evaluator(*demo.scene);
   for (std::size_t t = 0; t < map.times.size(); ++t) {
-    const auto solutions = demo.cell.robot.ik(demo.cell.flangeTarget(2.0 * std::numbers::pi, demo.path.samples[t].X_PS));
+    const auto solutions = demo.cell.robot.ik(
+        demo.cell.flangeTarget(2.0 * std::numbers::pi, demo.path.samples[t].X_PS));
     for (std::size_t b = 0; b < map.branches.size(); ++b) {
-      const planner::CellScore s = planner::scoreCell(*demo.scene, demo.settings, evaluator, solutions,
-                                                      map.branches[b], 2.0 * std::numbers::pi, false);
+      const planner::CellScore s =
+          planner::scoreCell(*demo.scene, demo.settings, evaluator, solutions, map.branches[b],
+                             2.0 * std::numbers::pi, false);
       EXPECT_NEAR(s.f, map.f[map.index(b, 0, t)], kTol);
     }
   }
@@ -575,10 +609,11 @@ TEST(ConfigMap, AMapOverTheMemoryLimitIsRefusedBeforeComputing) {
   // At the limit exactly it goes ahead and reports progress up to every cell.
   request.memory_limit_bytes = planner::mapBytes(8, 36, 10);
   std::size_t last = 0, total = 0;
-  planner::buildConfigMap(*demo.scene, demo.settings, demo.path, request, [&](std::size_t d, std::size_t n) {
-    last = std::max(last, d);
-    total = n;
-  });
+  planner::buildConfigMap(*demo.scene, demo.settings, demo.path, request,
+                          [&](std::size_t d, std::size_t n) {
+                            last = std::max(last, d);
+                            total = n;
+                          });
   EXPECT_EQ(total, 360u);
   EXPECT_EQ(last, 360u);
 }
@@ -596,16 +631,17 @@ TEST(ConfigMap, BranchWordsParseInAnyOrderAndBadWordsAreRejected) {
     const kinematics::IkBranch b = kinematics::IkBranch::fromIndex(i);
     EXPECT_EQ(cli::parseBranch(b.words()), b) << b.words();
   }
-  for (const char* bad : {"", "RIGHTY ABOVE", "RIGHTY ABOVE NOFLIP EXTRA", "FOO", "RIGHTY ABOVE NOFLIP,",
-                          "righty above noflip", "RIGHTY-ABOVE-NOFLIP", "auto"}) {
+  for (const char* bad :
+       {"", "RIGHTY ABOVE", "RIGHTY ABOVE NOFLIP EXTRA", "FOO", "RIGHTY ABOVE NOFLIP,",
+        "righty above noflip", "RIGHTY-ABOVE-NOFLIP", "auto"}) {
     EXPECT_FALSE(cli::parseBranch(bad)) << "'" << bad << "'";
   }
 }
 
 // Exactly one word of each pair: "RIGHTY LEFTY ABOVE NOFLIP" is ambiguous and must be refused.
 TEST(ConfigMap, BranchWordsGivingBothWordsOfAPairAreRejected) {
-  for (const char* bad : {"RIGHTY LEFTY ABOVE NOFLIP", "RIGHTY ABOVE BELOW NOFLIP", "RIGHTY ABOVE FLIP NOFLIP",
-                          "RIGHTY RIGHTY ABOVE NOFLIP"}) {
+  for (const char* bad : {"RIGHTY LEFTY ABOVE NOFLIP", "RIGHTY ABOVE BELOW NOFLIP",
+                          "RIGHTY ABOVE FLIP NOFLIP", "RIGHTY RIGHTY ABOVE NOFLIP"}) {
     EXPECT_FALSE(cli::parseBranch(bad)) << "'" << bad << "'";
   }
 }
@@ -619,8 +655,10 @@ std::string demoJobText() {
     const auto at = text.find(from);
     if (at != std::string::npos) text.replace(at, from.size(), to);
   };
-  replace("../robots/viper_s650.yaml", (test::sourceDir() / "data/robots/viper_s650.yaml").string());
-  replace("../parts/demo_housing.stl", (test::sourceDir() / "data/parts/demo_housing.stl").string());
+  replace("../robots/viper_s650.yaml",
+          (test::sourceDir() / "data/robots/viper_s650.yaml").string());
+  replace("../parts/demo_housing.stl",
+          (test::sourceDir() / "data/parts/demo_housing.stl").string());
   return text.substr(0, text.find("\nscan:")) + "\n";  // the cell, without scan and map
 }
 
@@ -628,7 +666,8 @@ const char* kShortScan =
     "scan:\n"
     "  dt_s: 0.25\n"
     "  paths:\n"
-    "    - {type: ring, height_mm: 50, tilt_deg: 20, start_deg: 0, extent_deg: 90, speed_deg_s: 40}\n";
+    "    - {type: ring, height_mm: 50, tilt_deg: 20, start_deg: 0, extent_deg: 90, speed_deg_s: "
+    "40}\n";
 
 TEST_F(MapJob, MapBranchMustBeAutoOrThreeWords) {
   const fs::path job = write("job.yaml", demoJobText() + kShortScan + "map: {branch: FOO}\n");
@@ -641,7 +680,8 @@ TEST_F(MapJob, MapBranchMustBeAutoOrThreeWords) {
     EXPECT_NE(message.find("map.branch: 'FOO'"), std::string::npos) << message;
     EXPECT_NE(message.find("RIGHTY ABOVE NOFLIP"), std::string::npos) << message;
   }
-  const cli::JobSpec ok = cli::loadJob(write("ok.yaml", demoJobText() + kShortScan + "map: {branch: LEFTY BELOW FLIP}\n"));
+  const cli::JobSpec ok = cli::loadJob(
+      write("ok.yaml", demoJobText() + kShortScan + "map: {branch: LEFTY BELOW FLIP}\n"));
   EXPECT_EQ(ok.map.branch, "LEFTY BELOW FLIP");
 }
 
@@ -689,8 +729,9 @@ std::string readText(const fs::path& file) {
 }
 
 TEST_F(MapJob, MapCommandWritesLayersJsonAndImages) {
-  const fs::path job = write("job.yaml", demoJobText() + kShortScan +
-                                             "map: {angle_step_deg: 10, branch: RIGHTY ABOVE NOFLIP}\n");
+  const fs::path job =
+      write("job.yaml", demoJobText() + kShortScan +
+                            "map: {angle_step_deg: 10, branch: RIGHTY ABOVE NOFLIP}\n");
   const fs::path out = dir_ / "out";
   const CliRun run = scanplan({"map", job.string(), "-o", out.string()}, dir_);
   ASSERT_EQ(run.exit_code, 0) << run.err;
@@ -702,14 +743,16 @@ TEST_F(MapJob, MapCommandWritesLayersJsonAndImages) {
   const cli::NpyArray limit = cli::readNpy(out / "configmap_limit.npy");
   EXPECT_EQ(limit.descr, "|u1");
   EXPECT_EQ(limit.shape, f.shape);
-  for (const char* layer : {"configmap_joint.npy", "configmap_singularity.npy", "configmap_clearance.npy"}) {
+  for (const char* layer :
+       {"configmap_joint.npy", "configmap_singularity.npy", "configmap_clearance.npy"}) {
     EXPECT_EQ(cli::readNpy(out / layer).shape, f.shape) << layer;
   }
   // The same job in-process, branch RIGHTY ABOVE NOFLIP = index 0 of the 8-branch map: the
   // file holds exactly its f layer.
   const ConfigMap& map = demoMap().map;
   ASSERT_EQ(map.branches[0].words(), "RIGHTY ABOVE NOFLIP");
-  EXPECT_EQ(std::memcmp(f.raw.data(), map.f.data(), f.raw.size()), 0) << "configmap.npy differs from the library's map";
+  EXPECT_EQ(std::memcmp(f.raw.data(), map.f.data(), f.raw.size()), 0)
+      << "configmap.npy differs from the library's map";
 
   const std::string json = readText(out / "configmap.json");
   EXPECT_NE(json.find("RIGHTY ABOVE NOFLIP"), std::string::npos) << json;

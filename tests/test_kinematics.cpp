@@ -33,8 +33,10 @@ JointVector degrees(std::initializer_list<double> values) {
   const double dp = (A.translation() - B.translation()).norm();
   const double dr = rotationDistance(A.linear(), B.linear());
   if (dp <= kPositionTol && dr <= kRotationTol) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "position differs by " << dp << " m, rotation by " << dr
-                                       << " rad\nA=\n" << A.matrix() << "\nB=\n" << B.matrix();
+  return ::testing::AssertionFailure()
+         << "position differs by " << dp << " m, rotation by " << dr << " rad\nA=\n"
+         << A.matrix() << "\nB=\n"
+         << B.matrix();
 }
 
 bool sameJointsModTurn(const JointVector& a, const JointVector& b) {
@@ -48,7 +50,9 @@ TEST(ViperFk, GoldenValuesFromDesignDoc) {
   const RobotModel robot = bundledRobot("viper_s650");
   // DESIGN.md §3.1: q = 0 puts the flange at (255, 0, 710) mm: x = a1 + a2 + a3 = 75 + 270 − 90,
   // z = d1 + d4 + d6 = 335 + 295 + 80 (upper arm horizontal, forearm vertical).
-  EXPECT_TRUE(robot.fk(JointVector::Zero()).translation().isApprox(Eigen::Vector3d(0.255, 0, 0.710), 1e-12));
+  EXPECT_TRUE(robot.fk(JointVector::Zero())
+                  .translation()
+                  .isApprox(Eigen::Vector3d(0.255, 0, 0.710), 1e-12));
 
   const Eigen::Isometry3d down = robot.fk(degrees({0, -90, 180, 0, 90, 0}));
   EXPECT_NEAR((down.translation() - Eigen::Vector3d(0.370, 0, 0.615)).norm(), 0.0, 1e-12);
@@ -191,7 +195,9 @@ TEST_P(BundledRobot, RandomPosesInABoxNeverGiveNaNOrWrongSolutions) {
   EXPECT_LT(reachable, 5000);
 }
 
-INSTANTIATE_TEST_SUITE_P(Robots, BundledRobot, ::testing::Values("viper_s650", "kuka_kr6_r900_sixx"));
+INSTANTIATE_TEST_SUITE_P(Robots,
+                         BundledRobot,
+                         ::testing::Values("viper_s650", "kuka_kr6_r900_sixx"));
 
 TEST(ViperIk, WristSingularityStillReproducesThePose) {
   const RobotModel robot = bundledRobot("viper_s650");
@@ -201,7 +207,8 @@ TEST(ViperIk, WristSingularityStillReproducesThePose) {
     const Eigen::Isometry3d X = robot.fk(q);
     const auto solutions = robot.ik(X);
     ASSERT_FALSE(solutions.empty()) << "q5 = " << q5;
-    for (const IkSolution& s : solutions) EXPECT_TRUE(posesMatch(robot.fk(s.q), X)) << "q5 = " << q5;
+    for (const IkSolution& s : solutions)
+      EXPECT_TRUE(posesMatch(robot.fk(s.q), X)) << "q5 = " << q5;
     EXPECT_LT(robot.singularity(q).wrist, std::abs(q5) + 1e-12);
   }
 }
@@ -220,7 +227,8 @@ TEST(ViperIk, StretchedElbowStillReproducesThePose) {
     const Eigen::Isometry3d X = robot.fk(q);
     const auto solutions = robot.ik(X);
     ASSERT_FALSE(solutions.empty()) << "eps = " << eps;
-    for (const IkSolution& s : solutions) EXPECT_TRUE(posesMatch(robot.fk(s.q), X)) << "eps = " << eps;
+    for (const IkSolution& s : solutions)
+      EXPECT_TRUE(posesMatch(robot.fk(s.q), X)) << "eps = " << eps;
   }
 }
 
@@ -282,7 +290,8 @@ TEST(Pose, EulerConventionsRoundTrip) {
     EXPECT_LT(rotationDistance(rotationFromRpy(rpyFromRotation(R)), R), 1e-12);
   }
   // Degenerate ZYZ (p = 0 and p = π) still round-trips.
-  for (const Eigen::Matrix3d& R : {rotZ(0.3), Eigen::Matrix3d(rotZ(0.3) * rotY(std::numbers::pi))}) {
+  for (const Eigen::Matrix3d& R :
+       {rotZ(0.3), Eigen::Matrix3d(rotZ(0.3) * rotY(std::numbers::pi))}) {
     EXPECT_LT(rotationDistance(rotationFromZyz(zyzFromRotation(R)), R), 1e-12);
   }
   EXPECT_NEAR(rotationDistance(rotX(0.0), rotX(1e-8)), 1e-8, 1e-20);

@@ -43,8 +43,9 @@ TEST(RotaryTable, ChainEqualsTheHandComposedProduct) {
                             X_PS = randomPose(rng, 0.3), X_FS = randomPose(rng, 0.1);
     const double theta = std::uniform_real_distribution<double>(-4, 4)(rng);
 
-    const Eigen::Matrix4d turn = homogeneous(
-        Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitZ()).toRotationMatrix(), Eigen::Vector3d::Zero());
+    const Eigen::Matrix4d turn =
+        homogeneous(Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitZ()).toRotationMatrix(),
+                    Eigen::Vector3d::Zero());
     const Eigen::Matrix4d error = homogeneous(
         Eigen::AngleAxisd(table.tilt.y(), Eigen::Vector3d::UnitY()).toRotationMatrix() *
             Eigen::AngleAxisd(table.tilt.x(), Eigen::Vector3d::UnitX()).toRotationMatrix(),
@@ -123,7 +124,8 @@ TEST(CellChain, IkOfTheChainPutsTheSensorOnTheRequestedPartPose) {
   int solved = 0;
   for (double theta_deg = 0; theta_deg < 360; theta_deg += 15) {
     const double theta = deg(theta_deg);
-    for (const IkSolution& s : cell.robot.ik(cell.flangeTarget(theta, X_PS), {.within_limits_only = true})) {
+    for (const IkSolution& s :
+         cell.robot.ik(cell.flangeTarget(theta, X_PS), {.within_limits_only = true})) {
       const Eigen::Isometry3d X_PS_back = (cell.table.X_WR(theta) * cell.part.X_RP).inverse() *
                                           cell.X_WB * cell.robot.fk(s.q) * cell.scanner.X_FS;
       ASSERT_LT((X_PS_back.matrix() - X_PS.matrix()).cwiseAbs().maxCoeff(), 1e-9);

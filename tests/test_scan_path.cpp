@@ -141,7 +141,8 @@ BruteResult bruteCast(const TriangleMesh& mesh,
     const double t = e2.dot(q) / det;
     const double margin = std::min({u, v, 1.0 - u - v});
     if (margin < -kEdgeMargin || t < t_near - 1e-6 || t > t_far + 1e-6) continue;
-    const bool grazing = margin < kEdgeMargin || std::abs(t - t_near) < 1e-6 || std::abs(t - t_far) < 1e-6;
+    const bool grazing =
+        margin < kEdgeMargin || std::abs(t - t_near) < 1e-6 || std::abs(t - t_far) < 1e-6;
     std::optional<BruteHit>& slot = grazing ? graze : clear;
     if (!slot || t < slot->distance) slot = BruteHit{t, static_cast<unsigned>(k), n};
   }
@@ -178,8 +179,8 @@ class ScanJob : public ::testing::Test {
   fs::path writeJob(const std::string& rest) const {
     const fs::path src = test::sourceDir();
     return write("job.yaml", "robot: " + (src / "data/robots/viper_s650.yaml").string() +
-                                 "\npart: {mesh: " + (src / "data/parts/demo_housing.stl").string() +
-                                 "}\n" + rest);
+                                 "\npart: {mesh: " +
+                                 (src / "data/parts/demo_housing.stl").string() + "}\n" + rest);
   }
 
   fs::path dir_;
@@ -292,8 +293,8 @@ std::vector<RayCase> randomRays(const Eigen::AlignedBox3d& box, int count, std::
     if (i % 5 == 0) {
       r.direction = Eigen::Vector3d(unit(rng), unit(rng), unit(rng));  // anywhere
     } else {
-      const Eigen::Vector3d target =
-          box.min() + box.sizes().cwiseProduct(Eigen::Vector3d(fraction(rng), fraction(rng), fraction(rng)));
+      const Eigen::Vector3d target = box.min() + box.sizes().cwiseProduct(Eigen::Vector3d(
+                                                     fraction(rng), fraction(rng), fraction(rng)));
       r.direction = target - r.origin;
     }
     if (r.direction.norm() < 1e-3) r.direction = Eigen::Vector3d::UnitZ();
@@ -302,23 +303,27 @@ std::vector<RayCase> randomRays(const Eigen::AlignedBox3d& box, int count, std::
   return rays;
 }
 
-::testing::AssertionResult sameHit(const std::optional<scanner::RayHit>& embree, const BruteResult& brute) {
+::testing::AssertionResult sameHit(const std::optional<scanner::RayHit>& embree,
+                                   const BruteResult& brute) {
   if (embree.has_value() != brute.hit.has_value()) {
     return ::testing::AssertionFailure()
-           << "Embree " << (embree ? "hits at " + std::to_string(embree->distance) : std::string("misses"))
-           << ", brute force " << (brute.hit ? "hits at " + std::to_string(brute.hit->distance) : std::string("misses"));
+           << "Embree "
+           << (embree ? "hits at " + std::to_string(embree->distance) : std::string("misses"))
+           << ", brute force "
+           << (brute.hit ? "hits at " + std::to_string(brute.hit->distance)
+                         : std::string("misses"));
   }
   if (!embree) return ::testing::AssertionSuccess();
   if (std::abs(embree->distance - brute.hit->distance) > kEmbreeTol) {
-    return ::testing::AssertionFailure() << "distance: Embree " << embree->distance << " m, brute force "
-                                         << brute.hit->distance << " m";
+    return ::testing::AssertionFailure() << "distance: Embree " << embree->distance
+                                         << " m, brute force " << brute.hit->distance << " m";
   }
   // The normal is the hit triangle's plane normal (either sign: the header promises a unit
   // geometric normal, not an orientation).
   const double alignment = std::abs(embree->normal.dot(brute.hit->normal));
   if (std::abs(embree->normal.norm() - 1.0) > 1e-6 || alignment < 1.0 - 1e-5) {
-    return ::testing::AssertionFailure() << "normal " << embree->normal.transpose() << " vs triangle normal "
-                                         << brute.hit->normal.transpose();
+    return ::testing::AssertionFailure() << "normal " << embree->normal.transpose()
+                                         << " vs triangle normal " << brute.hit->normal.transpose();
   }
   return ::testing::AssertionSuccess();
 }
@@ -388,7 +393,9 @@ TEST(Raycaster, DistancesDoNotDependOnTheMeshFrame) {
   const auto rays = randomRays(sphere.bounds(), 400, rng);
   for (int pose = 0; pose < 3; ++pose) {
     Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-    X.linear() = Eigen::Quaterniond(unit(rng), unit(rng), unit(rng), unit(rng)).normalized().toRotationMatrix();
+    X.linear() = Eigen::Quaterniond(unit(rng), unit(rng), unit(rng), unit(rng))
+                     .normalized()
+                     .toRotationMatrix();
     X.translation() = Eigen::Vector3d(unit(rng), unit(rng), unit(rng));
     TriangleMesh moved = sphere;
     for (auto& v : moved.vertices) v = X * v;
@@ -454,7 +461,8 @@ TEST(RingPath, DemoRingsKeepTheCentralRayInTheDepthWindowAsOftenAsReported) {
     for (std::size_t i : elementSamples(g, e)) {
       const ScanSample& s = g.path.samples[i];
       EXPECT_TRUE(s.scanning) << "t = " << s.t;
-      const BruteResult ray = bruteCast(demo.part.mesh, s.X_PS.translation(), s.X_PS.linear().col(2));
+      const BruteResult ray =
+          bruteCast(demo.part.mesh, s.X_PS.translation(), s.X_PS.linear().col(2));
       if (!ray.hit) continue;
       ++hits;
       const double z = ray.hit->distance;
@@ -467,8 +475,8 @@ TEST(RingPath, DemoRingsKeepTheCentralRayInTheDepthWindowAsOftenAsReported) {
     // The report counts 3 probes across the line every 2°; the central rays alone must do at
     // least as well (one sample of slack for the different sampling).
     EXPECT_GE(fraction, report.coverage_in_window - 1.0 / hits)
-        << "ring " << e << ": " << inside << " of " << hits << " central rays in the window, report says "
-        << report.coverage_in_window;
+        << "ring " << e << ": " << inside << " of " << hits
+        << " central rays in the window, report says " << report.coverage_in_window;
     EXPECT_GT(report.coverage_in_window, 0.9) << "ring " << e;
   }
 }
@@ -495,7 +503,8 @@ TEST(RingPath, DemoRingsLookAtTheAxisAndMovePerpendicularToTheLaserPlane) {
       const Eigen::Vector3d p = X.translation(), z = X.linear().col(2);
       const Eigen::Vector2d radial = (p.head<2>() - axis).normalized();
       // z_S = −cos(tilt) · radial − sin(tilt) · ẑ: inward and down by the tilt.
-      EXPECT_NEAR(z.head<2>().dot(radial), -std::cos(tilt), 1e-6) << "ring " << e << " sample " << k;
+      EXPECT_NEAR(z.head<2>().dot(radial), -std::cos(tilt), 1e-6)
+          << "ring " << e << " sample " << k;
       EXPECT_NEAR(z.z(), -std::sin(tilt), 1e-6);
       EXPECT_NEAR(z.head<2>().x() * radial.y() - z.head<2>().y() * radial.x(), 0.0, 1e-6);
       // The central ray passes through the aim point on the axis, at the same standoff.
@@ -511,7 +520,8 @@ TEST(RingPath, DemoRingsLookAtTheAxisAndMovePerpendicularToTheLaserPlane) {
       const Eigen::Vector3d x_mid = (X.linear().col(0) + Y.linear().col(0)).normalized();
       ASSERT_GT(step.norm(), 1e-4);
       EXPECT_GT(std::abs(step.normalized().dot(x_mid)), std::cos(deg(0.5)))
-          << "ring " << e << " sample " << k << ": step " << step.transpose() << ", x_S " << x_mid.transpose();
+          << "ring " << e << " sample " << k << ": step " << step.transpose() << ", x_S "
+          << x_mid.transpose();
       // |step| = 2 L cos(tilt) sin(Δφ / 2) with Δφ = speed · dt.
       const double expected = 2.0 * L * std::cos(tilt) * std::sin(0.5 * deg(spec.speed_deg_s) * dt);
       EXPECT_NEAR(step.norm(), expected, 1e-4);
@@ -551,7 +561,8 @@ TEST(RingPath, ClockwiseRingWithExplicitDistanceAndAxis) {
     EXPECT_GT(to_aim.dot(X.linear().col(2)), 1.0 - 1e-8) << i << ": z_S looks at the aim point";
     if (i + 1 == g.path.samples.size()) break;
     const Eigen::Vector3d step = g.path.samples[i + 1].X_PS.translation() - X.translation();
-    EXPECT_GT(step.normalized().dot(X.linear().col(0)), std::cos(deg(2.0))) << i << ": moving along +x_S";
+    EXPECT_GT(step.normalized().dot(X.linear().col(0)), std::cos(deg(2.0)))
+        << i << ": moving along +x_S";
     // Clockwise seen from above: the angle around the axis decreases.
     const Eigen::Vector2d r0 = X.translation().head<2>() - aim.head<2>();
     const Eigen::Vector2d r1 = g.path.samples[i + 1].X_PS.translation().head<2>() - aim.head<2>();
@@ -576,8 +587,10 @@ struct RasterFixture {
 // x in [15 mm, half_length], z up to 45 mm.
 RasterFixture rasterOnSteppedBox(double half_length = 0.05) {
   RasterFixture r;
-  appendBox(r.part, Eigen::Vector3d(-half_length, -0.04, 0.0), Eigen::Vector3d(half_length, 0.04, 0.03), 4);
-  appendBox(r.part, Eigen::Vector3d(0.015, -0.04, 0.03), Eigen::Vector3d(half_length, 0.04, 0.045), 4);
+  appendBox(r.part, Eigen::Vector3d(-half_length, -0.04, 0.0),
+            Eigen::Vector3d(half_length, 0.04, 0.03), 4);
+  appendBox(r.part, Eigen::Vector3d(0.015, -0.04, 0.03), Eigen::Vector3d(half_length, 0.04, 0.045),
+            4);
   const scanner::Raycaster raycaster(r.part);
   scanner::PathRequest request;
   request.elements.emplace_back(r.spec);
@@ -592,12 +605,14 @@ TEST(RasterPath, CentralRayStaysInTheDepthWindowWhileScanning) {
   int checked = 0;
   for (const ScanSample& s : r.generated.path.samples) {
     const Eigen::Vector3d z = s.X_PS.linear().col(2);
-    EXPECT_NEAR(z.dot(-Eigen::Vector3d::UnitZ()), 1.0, 1e-9) << "t = " << s.t << ": z_S is the view";
+    EXPECT_NEAR(z.dot(-Eigen::Vector3d::UnitZ()), 1.0, 1e-9)
+        << "t = " << s.t << ": z_S is the view";
     if (!s.scanning) continue;
     const BruteResult ray = bruteCast(r.part, s.X_PS.translation(), z);
     const double x = s.X_PS.translation().x();
     if (!ray.hit) {
-      EXPECT_TRUE(x < -0.05 + 1e-3 || x > 0.05 - 1e-3) << "t = " << s.t << ": no surface under a pass at x = " << x;
+      EXPECT_TRUE(x < -0.05 + 1e-3 || x > 0.05 - 1e-3)
+          << "t = " << s.t << ": no surface under a pass at x = " << x;
       continue;
     }
     ++checked;
@@ -623,7 +638,8 @@ TEST(RasterPath, PassesAreSpacedByTheNearLineAndCoverTheWidth) {
   for (const ScanSample& s : r.generated.path.samples) {
     if (s.scanning && !in_run) pass_y.push_back(s.X_PS.translation().y());
     if (s.scanning) {
-      EXPECT_NEAR(s.X_PS.translation().y(), pass_y.back(), 1e-9) << "t = " << s.t << ": a pass is straight";
+      EXPECT_NEAR(s.X_PS.translation().y(), pass_y.back(), 1e-9)
+          << "t = " << s.t << ": a pass is straight";
     }
     in_run = s.scanning;
   }
@@ -663,19 +679,22 @@ void checkScanningFlags(double half_length) {
   const RasterFixture r = rasterOnSteppedBox(half_length);
   const auto& samples = r.generated.path.samples;
   ASSERT_FALSE(samples.front().scanning);
-  EXPECT_NEAR(samples.front().X_PS.translation().x(), -half_length - r.spec.lead, 1e-9) << "the lead-in starts the path";
-  const double key_spacing = 0.01;  // keys every 10 mm: the motion arriving at a key on the part scans
+  EXPECT_NEAR(samples.front().X_PS.translation().x(), -half_length - r.spec.lead, 1e-9)
+      << "the lead-in starts the path";
+  const double key_spacing =
+      0.01;  // keys every 10 mm: the motion arriving at a key on the part scans
   std::vector<double> pass_y;
   for (const ScanSample& s : samples) {
-    if (s.scanning && (pass_y.empty() || std::abs(pass_y.back() - s.X_PS.translation().y()) > 1e-9)) {
+    if (s.scanning &&
+        (pass_y.empty() || std::abs(pass_y.back() - s.X_PS.translation().y()) > 1e-9)) {
       pass_y.push_back(s.X_PS.translation().y());
     }
   }
   int over_part = 0;
   for (const ScanSample& s : samples) {
     const Eigen::Vector3d p = s.X_PS.translation();
-    const bool on_pass_line =
-        std::any_of(pass_y.begin(), pass_y.end(), [&](double y) { return std::abs(p.y() - y) < 1e-9; });
+    const bool on_pass_line = std::any_of(pass_y.begin(), pass_y.end(),
+                                          [&](double y) { return std::abs(p.y() - y) < 1e-9; });
     if (!on_pass_line) {
       EXPECT_FALSE(s.scanning) << "t = " << s.t << ": scanning during a transfer at y = " << p.y();
       continue;
@@ -685,9 +704,11 @@ void checkScanningFlags(double half_length) {
     }
     // On the pass line, over the part, at the scanning height (not a transfer's back-off).
     const BruteResult ray = bruteCast(r.part, p, s.X_PS.linear().col(2));
-    if (p.x() >= -half_length && p.x() <= half_length && ray.hit && ray.hit->distance <= r.window.z_max) {
+    if (p.x() >= -half_length && p.x() <= half_length && ray.hit &&
+        ray.hit->distance <= r.window.z_max) {
       ++over_part;
-      EXPECT_TRUE(s.scanning) << "t = " << s.t << ": not scanning over the part at x = " << p.x() * 1e3
+      EXPECT_TRUE(s.scanning) << "t = " << s.t
+                              << ": not scanning over the part at x = " << p.x() * 1e3
                               << " mm, y = " << p.y() * 1e3 << " mm";
     }
   }
@@ -712,8 +733,12 @@ Eigen::Isometry3d pose(const Eigen::Vector3d& p, const Eigen::Matrix3d& R) {
   return X;
 }
 
-Eigen::Matrix3d rotZ(double a) { return Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()).toRotationMatrix(); }
-Eigen::Matrix3d rotX(double a) { return Eigen::AngleAxisd(a, Eigen::Vector3d::UnitX()).toRotationMatrix(); }
+Eigen::Matrix3d rotZ(double a) {
+  return Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+}
+Eigen::Matrix3d rotX(double a) {
+  return Eigen::AngleAxisd(a, Eigen::Vector3d::UnitX()).toRotationMatrix();
+}
 
 double angleBetween(const Eigen::Matrix3d& A, const Eigen::Matrix3d& B) {
   return Eigen::AngleAxisd(A.transpose() * B).angle();
@@ -728,11 +753,13 @@ TEST(WaypointPath, TimingIsDistanceOverSpeedOrRotationOverRotationSpeed) {
   // 2: 10 mm at 50 mm/s = 0.2 s, but a 90° turn at 0.5 rad/s needs π s: rotation governs.
   spec.points.push_back({pose({0.1, 0.0, 0.2}, Eigen::Matrix3d::Identity()), 0.05, 0.5, false});
   spec.points.push_back({pose({0.1, 0.1, 0.2}, rotZ(deg(30.0))), 0.05, 0.5, true});
-  spec.points.push_back({pose({0.11, 0.1, 0.2}, rotZ(deg(30.0)) * rotX(deg(90.0))), 0.05, 0.5, false});
+  spec.points.push_back(
+      {pose({0.11, 0.1, 0.2}, rotZ(deg(30.0)) * rotX(deg(90.0))), 0.05, 0.5, false});
   scanner::PathRequest request;
   request.elements.emplace_back(spec);
   request.dt = 0.05;
-  const auto g = scanner::generatePath(request, part, raycaster, scanner::laserWindow(scanner::LaserOptics{}));
+  const auto g =
+      scanner::generatePath(request, part, raycaster, scanner::laserWindow(scanner::LaserOptics{}));
   const double t1 = 2.0, t2 = 2.0 + std::numbers::pi;
   EXPECT_NEAR(g.elements.front().duration, t2, 1e-9);
   ASSERT_EQ(g.path.samples.size(), static_cast<std::size_t>(std::floor(t2 / 0.05)) + 1);
@@ -740,13 +767,17 @@ TEST(WaypointPath, TimingIsDistanceOverSpeedOrRotationOverRotationSpeed) {
   for (const ScanSample& s : g.path.samples) {
     if (s.t <= t1 + 1e-9) {
       const double u = s.t / t1;  // fraction of segment 1
-      EXPECT_NEAR((s.X_PS.translation() - Eigen::Vector3d(0.1, 0.1 * u, 0.2)).norm(), 0.0, 1e-12) << "t = " << s.t;
+      EXPECT_NEAR((s.X_PS.translation() - Eigen::Vector3d(0.1, 0.1 * u, 0.2)).norm(), 0.0, 1e-12)
+          << "t = " << s.t;
       EXPECT_NEAR(angleBetween(s.X_PS.linear(), rotZ(deg(30.0) * u)), 0.0, 1e-9) << "t = " << s.t;
-      EXPECT_EQ(s.scanning, s.t > 0.0) << "t = " << s.t << ": segment 1 scans, the start point does not";
+      EXPECT_EQ(s.scanning, s.t > 0.0)
+          << "t = " << s.t << ": segment 1 scans, the start point does not";
     } else {
       const double u = (s.t - t1) / (t2 - t1);
-      EXPECT_NEAR((s.X_PS.translation() - Eigen::Vector3d(0.1 + 0.01 * u, 0.1, 0.2)).norm(), 0.0, 1e-12);
-      EXPECT_NEAR(angleBetween(s.X_PS.linear(), rotZ(deg(30.0)) * rotX(deg(90.0) * u)), 0.0, 1e-9) << "t = " << s.t;
+      EXPECT_NEAR((s.X_PS.translation() - Eigen::Vector3d(0.1 + 0.01 * u, 0.1, 0.2)).norm(), 0.0,
+                  1e-12);
+      EXPECT_NEAR(angleBetween(s.X_PS.linear(), rotZ(deg(30.0)) * rotX(deg(90.0) * u)), 0.0, 1e-9)
+          << "t = " << s.t;
       EXPECT_FALSE(s.scanning) << "t = " << s.t;
     }
   }
@@ -761,12 +792,15 @@ TEST(WaypointPath, InterpolationSlerpsTheShortWayAndIsLinearInPosition) {
   const Eigen::Isometry3d a = pose({0.0, 0.0, 0.0}, rotZ(deg(170.0)));
   const Eigen::Isometry3d b = pose({0.2, -0.4, 0.6}, rotZ(deg(-170.0)));
   const Eigen::Isometry3d m = kinematics::interpolatePose(a, b, 0.5);
-  EXPECT_NEAR(angleBetween(m.linear(), rotZ(deg(180.0))), 0.0, 1e-12) << "20° the short way, not 340°";
+  EXPECT_NEAR(angleBetween(m.linear(), rotZ(deg(180.0))), 0.0, 1e-12)
+      << "20° the short way, not 340°";
   EXPECT_NEAR((m.translation() - Eigen::Vector3d(0.1, -0.2, 0.3)).norm(), 0.0, 1e-15);
   const Eigen::Isometry3d q = kinematics::interpolatePose(a, b, 0.25);
   EXPECT_NEAR(angleBetween(q.linear(), rotZ(deg(175.0))), 0.0, 1e-12);
-  EXPECT_NEAR(angleBetween(kinematics::interpolatePose(a, b, 0.0).linear(), a.linear()), 0.0, 1e-12);
-  EXPECT_NEAR(angleBetween(kinematics::interpolatePose(a, b, 1.0).linear(), b.linear()), 0.0, 1e-12);
+  EXPECT_NEAR(angleBetween(kinematics::interpolatePose(a, b, 0.0).linear(), a.linear()), 0.0,
+              1e-12);
+  EXPECT_NEAR(angleBetween(kinematics::interpolatePose(a, b, 1.0).linear(), b.linear()), 0.0,
+              1e-12);
 }
 
 // Two elements: a transfer backs off along −z_S, crosses and approaches, without scanning.
@@ -776,14 +810,17 @@ TEST(WaypointPath, TransfersBetweenElementsRetreatAndDoNotScan) {
   const scanner::Raycaster raycaster(part);
   const Eigen::Matrix3d down = rotX(deg(180.0));  // z_S = −z
   scanner::WaypointSpec first, second;
-  first.points = {{pose({0.0, 0.0, 0.2}, down), 0.05, 0.5, true}, {pose({0.05, 0.0, 0.2}, down), 0.05, 0.5, true}};
-  second.points = {{pose({0.05, 0.1, 0.2}, down), 0.05, 0.5, true}, {pose({0.0, 0.1, 0.2}, down), 0.05, 0.5, true}};
+  first.points = {{pose({0.0, 0.0, 0.2}, down), 0.05, 0.5, true},
+                  {pose({0.05, 0.0, 0.2}, down), 0.05, 0.5, true}};
+  second.points = {{pose({0.05, 0.1, 0.2}, down), 0.05, 0.5, true},
+                   {pose({0.0, 0.1, 0.2}, down), 0.05, 0.5, true}};
   scanner::PathRequest request;
   request.elements = {first, second};
   request.dt = 0.05;
   request.transfer_speed = 0.1;
   request.retreat = 0.05;
-  const auto g = scanner::generatePath(request, part, raycaster, scanner::laserWindow(scanner::LaserOptics{}));
+  const auto g =
+      scanner::generatePath(request, part, raycaster, scanner::laserWindow(scanner::LaserOptics{}));
   ASSERT_EQ(g.elements.size(), 2u);
   // Element 1: 1 s. Transfer: 50 mm up, 100 mm across, 50 mm down at 100 mm/s = 2 s.
   EXPECT_NEAR(g.elements[0].duration, 1.0, 1e-12);
@@ -810,7 +847,9 @@ TEST(PathFile, CsvRoundTripsWithinThePrintedPrecision) {
     ScanSample s;
     s.t = 0.1 * i;
     s.X_PS.translation() = Eigen::Vector3d(unit(rng), unit(rng), unit(rng)) * 0.4;
-    s.X_PS.linear() = Eigen::Quaterniond(unit(rng), unit(rng), unit(rng), unit(rng)).normalized().toRotationMatrix();
+    s.X_PS.linear() = Eigen::Quaterniond(unit(rng), unit(rng), unit(rng), unit(rng))
+                          .normalized()
+                          .toRotationMatrix();
     s.scanning = i % 3 != 0;
     path.samples.push_back(s);
   }
@@ -847,9 +886,11 @@ TEST(PathFile, EightColumnsScanAndFileTimesAreShiftedAndResampled) {
   scanner::PathRequest request;
   request.elements.emplace_back(spec);
   request.dt = 0.25;
-  const auto g = scanner::generatePath(request, part, raycaster, scanner::laserWindow(scanner::LaserOptics{}));
+  const auto g =
+      scanner::generatePath(request, part, raycaster, scanner::laserWindow(scanner::LaserOptics{}));
   ASSERT_EQ(g.path.samples.size(), 9u);  // 0 … 2 s every 0.25 s
-  EXPECT_NEAR((g.path.samples[2].X_PS.translation() - Eigen::Vector3d(0.15, 0.0, 0.2)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((g.path.samples[2].X_PS.translation() - Eigen::Vector3d(0.15, 0.0, 0.2)).norm(), 0.0,
+              1e-12);
   EXPECT_NEAR(angleBetween(g.path.samples[6].X_PS.linear(), rotZ(deg(90.0))), 0.0, 1e-9);
   EXPECT_EQ(g.elements.front().kind, "file");
 }
@@ -857,18 +898,29 @@ TEST(PathFile, EightColumnsScanAndFileTimesAreShiftedAndResampled) {
 TEST(PathFile, BadRowsNameTheSourceAndTheLine) {
   const std::string header = "t_s,x_mm,y_mm,z_mm,qw,qx,qy,qz,scanning\n";
   const std::string good = "0,1,2,3,1,0,0,0,1\n";
-  const auto parse = [](const std::string& text) { return [text] { scanner::parsePathCsv(text, "bad.csv"); }; };
-  EXPECT_TRUE(throwsInputError(parse(header + good + "0.1,1,abc,3,1,0,0,0,1\n"), {"bad.csv:3", "'abc'", "not a finite number"}));
-  EXPECT_TRUE(throwsInputError(parse(header + good + "0.1,1,nan,3,1,0,0,0,1\n"), {"bad.csv:3", "'nan'"}));
+  const auto parse = [](const std::string& text) {
+    return [text] { scanner::parsePathCsv(text, "bad.csv"); };
+  };
+  EXPECT_TRUE(throwsInputError(parse(header + good + "0.1,1,abc,3,1,0,0,0,1\n"),
+                               {"bad.csv:3", "'abc'", "not a finite number"}));
+  EXPECT_TRUE(
+      throwsInputError(parse(header + good + "0.1,1,nan,3,1,0,0,0,1\n"), {"bad.csv:3", "'nan'"}));
   EXPECT_TRUE(throwsInputError(parse(header + good + "0.1,1,,3,1,0,0,0,1\n"), {"bad.csv:3"}));
-  EXPECT_TRUE(throwsInputError(parse(header + good + "0.1,1,2,3,1,0,0\n"), {"bad.csv:3", "7 columns", "expected 8 or 9"}));
-  EXPECT_TRUE(throwsInputError(parse(header + good + "0.1,1,2,3,1,0,0,0,1,1\n"), {"bad.csv:3", "10 columns"}));
-  EXPECT_TRUE(throwsInputError(parse(header + good + "0,1,2,3,1,0,0,0,1\n"), {"bad.csv:3", "does not increase"}));
-  EXPECT_TRUE(throwsInputError(parse(header + good + "-1,1,2,3,1,0,0,0,1\n"), {"bad.csv:3", "does not increase"}));
-  EXPECT_TRUE(throwsInputError(parse(header + good + "0.1,1,2,3,1,1,0,0,1\n"), {"bad.csv:3", "quaternion norm", "unit quaternion"}));
-  EXPECT_TRUE(throwsInputError(parse(header + "# comment\n\n" + good + "0.2,1,2,3,0,0,0,0\n"), {"bad.csv:5", "quaternion"}));
+  EXPECT_TRUE(throwsInputError(parse(header + good + "0.1,1,2,3,1,0,0\n"),
+                               {"bad.csv:3", "7 columns", "expected 8 or 9"}));
+  EXPECT_TRUE(throwsInputError(parse(header + good + "0.1,1,2,3,1,0,0,0,1,1\n"),
+                               {"bad.csv:3", "10 columns"}));
+  EXPECT_TRUE(throwsInputError(parse(header + good + "0,1,2,3,1,0,0,0,1\n"),
+                               {"bad.csv:3", "does not increase"}));
+  EXPECT_TRUE(throwsInputError(parse(header + good + "-1,1,2,3,1,0,0,0,1\n"),
+                               {"bad.csv:3", "does not increase"}));
+  EXPECT_TRUE(throwsInputError(parse(header + good + "0.1,1,2,3,1,1,0,0,1\n"),
+                               {"bad.csv:3", "quaternion norm", "unit quaternion"}));
+  EXPECT_TRUE(throwsInputError(parse(header + "# comment\n\n" + good + "0.2,1,2,3,0,0,0,0\n"),
+                               {"bad.csv:5", "quaternion"}));
   // Unit within the tolerance of printed digits is fine.
-  EXPECT_NO_THROW(scanner::parsePathCsv(header + good + "0.1,1,2,3,0.70710678,0.70710678,0,0,0\n", "ok.csv"));
+  EXPECT_NO_THROW(
+      scanner::parsePathCsv(header + good + "0.1,1,2,3,0.70710678,0.70710678,0,0,0\n", "ok.csv"));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -876,34 +928,40 @@ TEST(PathFile, BadRowsNameTheSourceAndTheLine) {
 
 TEST_F(ScanJob, BadScanDefinitionsAreRejectedWithTheFieldPath) {
   const auto load = [](const fs::path& job) { return [job] { cli::loadJob(job); }; };
-  EXPECT_TRUE(throwsInputError(load(writeJob("scan:\n  paths:\n    - {type: spiral}\n")),
-                               {"scan.paths[0].type", "'spiral'", "ring, raster, waypoints, file"}));
-  EXPECT_TRUE(throwsInputError(
-      load(writeJob("scan:\n  paths:\n    - {type: ring, height_mm: 50}\n    - {type: ring, height_mm: 50, extent_deg: 0}\n")),
-      {"scan.paths[1].extent_deg", "non-zero"}));
-  EXPECT_TRUE(throwsInputError(load(writeJob("scan:\n  paths:\n    - {type: raster, view: [0, 0, 0]}\n")),
-                               {"scan.paths[0].view", "non-zero direction"}));
-  EXPECT_TRUE(throwsInputError(
-      load(writeJob("scan:\n  paths:\n    - type: waypoints\n      points:\n        - {xyz_mm: [0, 0, 300]}\n")),
-      {"scan.paths[0].points", "2"}));
-  EXPECT_TRUE(throwsInputError(load(writeJob("scan:\n  paths:\n    - {type: file, file: nowhere.csv}\n")),
-                               {"scan.paths[0].file", "nowhere.csv", "does not exist"}));
+  EXPECT_TRUE(
+      throwsInputError(load(writeJob("scan:\n  paths:\n    - {type: spiral}\n")),
+                       {"scan.paths[0].type", "'spiral'", "ring, raster, waypoints, file"}));
+  EXPECT_TRUE(throwsInputError(load(writeJob("scan:\n  paths:\n    - {type: ring, height_mm: 50}\n "
+                                             "   - {type: ring, height_mm: 50, extent_deg: 0}\n")),
+                               {"scan.paths[1].extent_deg", "non-zero"}));
+  EXPECT_TRUE(
+      throwsInputError(load(writeJob("scan:\n  paths:\n    - {type: raster, view: [0, 0, 0]}\n")),
+                       {"scan.paths[0].view", "non-zero direction"}));
+  EXPECT_TRUE(throwsInputError(load(writeJob("scan:\n  paths:\n    - type: waypoints\n      "
+                                             "points:\n        - {xyz_mm: [0, 0, 300]}\n")),
+                               {"scan.paths[0].points", "2"}));
+  EXPECT_TRUE(
+      throwsInputError(load(writeJob("scan:\n  paths:\n    - {type: file, file: nowhere.csv}\n")),
+                       {"scan.paths[0].file", "nowhere.csv", "does not exist"}));
   EXPECT_TRUE(throwsInputError(load(writeJob("scanner:\n  optics: {phi_deg: 30, gamma_deg: 30}\n")),
                                {"scanner.optics.gamma_deg", "30", "phi_deg"}));
   EXPECT_TRUE(throwsInputError(load(writeJob("scanner:\n  optics: {phi_deg: 30, gamma_deg: 40}\n")),
                                {"scanner.optics.gamma_deg"}));
   EXPECT_TRUE(throwsInputError(load(writeJob("scanner:\n  optics: {phi_deg: 50, gamma_deg: 40}\n")),
                                {"scanner.optics.gamma_deg", "phi_deg + gamma_deg < 90"}));
-  EXPECT_TRUE(throwsInputError(load(writeJob("scan:\n  paths:\n    - {type: ring, height_mm: 50, view: [0, 0, -1]}\n")),
-                               {"scan.paths[0].view", "unknown key"}));
+  EXPECT_TRUE(throwsInputError(
+      load(writeJob("scan:\n  paths:\n    - {type: ring, height_mm: 50, view: [0, 0, -1]}\n")),
+      {"scan.paths[0].view", "unknown key"}));
   EXPECT_TRUE(throwsInputError(load(writeJob("scan:\n  paths:\n    - {type: ring}\n")),
                                {"scan.paths[0].height_mm", "required"}));
 }
 
 TEST_F(ScanJob, ABadPathFileIsReportedWithItsNameAndLine) {
   write("path.csv", "t_s,x_mm,y_mm,z_mm,qw,qx,qy,qz\n0,0,0,300,1,0,0,0\n0,0,0,300,1,0,0,0\n");
-  const cli::JobSpec job = cli::loadJob(writeJob("scan:\n  paths:\n    - {type: file, file: path.csv}\n"));
-  EXPECT_TRUE(throwsInputError([&] { cli::pathRequest(job); }, {(dir_ / "path.csv").string() + ":3", "does not increase"}));
+  const cli::JobSpec job =
+      cli::loadJob(writeJob("scan:\n  paths:\n    - {type: file, file: path.csv}\n"));
+  EXPECT_TRUE(throwsInputError([&] { cli::pathRequest(job); },
+                               {(dir_ / "path.csv").string() + ":3", "does not increase"}));
 }
 
 // A ring far above the part (tilt 0: horizontal rays) never sees it: the error names the element.
@@ -917,12 +975,16 @@ TEST_F(ScanJob, ARingThatNeverSeesThePartNamesItsElement) {
   const scanner::Raycaster raycaster(part.mesh);
   const scanner::PathRequest request = cli::pathRequest(job);
   EXPECT_TRUE(throwsInputError(
-      [&] { scanner::generatePath(request, part.mesh, raycaster, scanner::laserWindow(cli::laserOptics(job))); },
+      [&] {
+        scanner::generatePath(request, part.mesh, raycaster,
+                              scanner::laserWindow(cli::laserOptics(job)));
+      },
       {"scan.paths[1]", "never sees the part", "2000"}));
 
   // Through the CLI: input-error exit code, the job file and the element on stderr.
   const fs::path err = dir_ / "stderr.txt";
-  std::vector<std::string> args{SCANPLAN_BINARY, "path", file.string(), "-o", (dir_ / "out").string()};
+  std::vector<std::string> args{SCANPLAN_BINARY, "path", file.string(), "-o",
+                                (dir_ / "out").string()};
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
@@ -939,7 +1001,8 @@ TEST_F(ScanJob, ARingThatNeverSeesThePartNamesItsElement) {
   EXPECT_EQ(WEXITSTATUS(status), 4);
   std::ifstream in(err);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  EXPECT_NE(text.find("scanplan: error: " + file.string() + ": scan.paths[1]"), std::string::npos) << text;
+  EXPECT_NE(text.find("scanplan: error: " + file.string() + ": scan.paths[1]"), std::string::npos)
+      << text;
 }
 
 }  // namespace
@@ -956,7 +1019,8 @@ TEST(RaycasterThreads, AliveRaycasterDoesNotThrottleOurParallelLoops) {
   mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
   mesh.triangles = {{0, 1, 2}};
   const Raycaster raycaster(mesh);
-  EXPECT_EQ(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism), before);
+  EXPECT_EQ(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism),
+            before);
 }
 
 }  // namespace

@@ -18,7 +18,8 @@ inline kinematics::RobotModel bundledRobot(const std::string& name) {
   return cli::buildRobotModel(cli::loadRobotFile(file), file.string());
 }
 
-inline kinematics::JointVector randomJoints(const kinematics::RobotModel& robot, std::mt19937& rng) {
+inline kinematics::JointVector randomJoints(const kinematics::RobotModel& robot,
+                                            std::mt19937& rng) {
   kinematics::JointVector q;
   for (int i = 0; i < kinematics::kNumJoints; ++i) {
     q(i) = std::uniform_real_distribution<double>(robot.joint(i).min, robot.joint(i).max)(rng);

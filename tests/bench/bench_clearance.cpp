@@ -30,7 +30,9 @@ struct Pose {
 
 // Ring paths around the part: the laser frame at radius r from the part axis, height h,
 // z_S pointing at the axis (tilted down by `tilt`), while the table turns.
-std::vector<Pose> ringPaths(const kinematics::CellModel& cell, const Eigen::AlignedBox3d& box, int paths) {
+std::vector<Pose> ringPaths(const kinematics::CellModel& cell,
+                            const Eigen::AlignedBox3d& box,
+                            int paths) {
   std::vector<Pose> poses;
   const int steps = 60;
   for (int p = 0; p < paths; ++p) {
@@ -38,7 +40,8 @@ std::vector<Pose> ringPaths(const kinematics::CellModel& cell, const Eigen::Alig
     const double height = box.min().z() + box.sizes().z() * (0.15 + 0.8 * u);
     // Laser origin 0–60 mm outside a circle inscribed in the part's footprint: the scanner
     // body (behind the laser origin) passes within d_high of the part on most steps.
-    const double radius = 0.5 * box.sizes().head<2>().minCoeff() + 0.02 + 0.06 * std::fmod(3.7 * p, 1.0);
+    const double radius =
+        0.5 * box.sizes().head<2>().minCoeff() + 0.02 + 0.06 * std::fmod(3.7 * p, 1.0);
     const double tilt = kinematics::wrapToPi(0.2 + 0.6 * std::fmod(1.3 * p, 1.0));
     const double theta0 = 0.7 * p;
     bool have_prev = false;
@@ -48,14 +51,16 @@ std::vector<Pose> ringPaths(const kinematics::CellModel& cell, const Eigen::Alig
       const double theta = theta0 + 0.8 * k / steps;
       const Eigen::Vector3d radial(std::cos(phi), std::sin(phi), 0.0);
       Eigen::Isometry3d X_PS = Eigen::Isometry3d::Identity();
-      X_PS.translation() = Eigen::Vector3d(box.center().x(), box.center().y(), height) + radius * radial +
-                           Eigen::Vector3d(0, 0, radius * std::sin(tilt));
-      const Eigen::Vector3d z = (-radial * std::cos(tilt) - Eigen::Vector3d::UnitZ() * std::sin(tilt)).normalized();
+      X_PS.translation() = Eigen::Vector3d(box.center().x(), box.center().y(), height) +
+                           radius * radial + Eigen::Vector3d(0, 0, radius * std::sin(tilt));
+      const Eigen::Vector3d z =
+          (-radial * std::cos(tilt) - Eigen::Vector3d::UnitZ() * std::sin(tilt)).normalized();
       const Eigen::Vector3d x = Eigen::Vector3d::UnitZ().cross(z).normalized();
       X_PS.linear().col(0) = x;
       X_PS.linear().col(1) = z.cross(x);
       X_PS.linear().col(2) = z;
-      const auto solutions = cell.robot.ik(cell.flangeTarget(theta, X_PS), {.within_limits_only = true});
+      const auto solutions =
+          cell.robot.ik(cell.flangeTarget(theta, X_PS), {.within_limits_only = true});
       if (solutions.empty()) {
         have_prev = false;
         continue;
@@ -91,21 +96,25 @@ int main(int argc, char** argv) {
   const int paths = argc > 2 ? std::max(1, std::atoi(argv[2])) : 60;
   const cli::JobSpec job = cli::loadJob(job_file);
   const kinematics::CellModel cell = cli::buildCell(job);
-  const kinematics::LoadedMesh part = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
+  const kinematics::LoadedMesh part =
+      kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
   const auto build_start = Clock::now();
   const collision::Scene scene(cell, cli::clearanceConfig(job));
-  const double build_ms = std::chrono::duration<double, std::milli>(Clock::now() - build_start).count();
+  const double build_ms =
+      std::chrono::duration<double, std::milli>(Clock::now() - build_start).count();
 
   const std::vector<Pose> poses = ringPaths(cell, part.mesh.bounds(), paths);
   const int scanner = scene.bodyIndex("scanner"), part_body = scene.bodyIndex("part");
   int scanner_part_pair = -1;
   for (std::size_t i = 0; i < scene.pairs().size(); ++i) {
     const auto& p = scene.pairs()[i];
-    if ((p.a == scanner && p.b == part_body) || (p.a == part_body && p.b == scanner)) scanner_part_pair = static_cast<int>(i);
+    if ((p.a == scanner && p.b == part_body) || (p.a == part_body && p.b == scanner))
+      scanner_part_pair = static_cast<int>(i);
   }
 
   collision::ClearanceEvaluator evaluator(scene);
-  std::vector<double> exact_us, bounded_us, factor_us, near_bounded_us, near_factor_us, near_exact_us;
+  std::vector<double> exact_us, bounded_us, factor_us, near_bounded_us, near_factor_us,
+      near_exact_us;
   int mismatches = 0, near = 0, collisions = 0;
   double checksum = 0.0;
   for (const Pose& pose : poses) {
@@ -122,9 +131,10 @@ int main(int argc, char** argv) {
     if (exact.factor != bounded.factor || exact.factor != f) ++mismatches;
     collisions += exact.collision ? 1 : 0;
     checksum += f;
-    const bool is_near = scanner_part_pair >= 0 &&
-                         exact.pairs[static_cast<std::size_t>(scanner_part_pair)].distance <
-                             scene.pairs()[static_cast<std::size_t>(scanner_part_pair)].thresholds.d_high;
+    const bool is_near =
+        scanner_part_pair >= 0 &&
+        exact.pairs[static_cast<std::size_t>(scanner_part_pair)].distance <
+            scene.pairs()[static_cast<std::size_t>(scanner_part_pair)].thresholds.d_high;
     if (is_near) {
       ++near;
       near_exact_us.push_back(exact_us.back());
@@ -140,7 +150,8 @@ int main(int argc, char** argv) {
     collision::ClearanceConfig one = cli::clearanceConfig(job);
     one.rules.push_back({"*", "*", collision::PairRule::Action::kExclude});
     one.rules.push_back({scene.bodies()[static_cast<std::size_t>(p.a)].name,
-                         scene.bodies()[static_cast<std::size_t>(p.b)].name, collision::PairRule::Action::kInclude});
+                         scene.bodies()[static_cast<std::size_t>(p.b)].name,
+                         collision::PairRule::Action::kInclude});
     const collision::Scene single(cell, one);
     collision::ClearanceEvaluator e(single);
     double total = 0.0;
@@ -157,27 +168,36 @@ int main(int argc, char** argv) {
 
   std::size_t triangles = 0;
   for (const auto& b : scene.bodies()) triangles += b.triangles;
-  std::printf("bench_clearance: %s, %zu bodies, %zu pairs, %zu mesh triangles (part %zu), scene built in %.1f ms\n",
-              job_file.c_str(), scene.bodies().size(), scene.pairs().size(), triangles,
-              part.mesh.triangles.size(), build_ms);
-  std::printf("%zu poses on %d ring paths, %d with the scanner within d_high of the part, %d in collision; one thread\n",
-              poses.size(), paths, near, collisions);
+  std::printf(
+      "bench_clearance: %s, %zu bodies, %zu pairs, %zu mesh triangles (part %zu), scene built in "
+      "%.1f ms\n",
+      job_file.c_str(), scene.bodies().size(), scene.pairs().size(), triangles,
+      part.mesh.triangles.size(), build_ms);
+  std::printf(
+      "%zu poses on %d ring paths, %d with the scanner within d_high of the part, %d in collision; "
+      "one thread\n",
+      poses.size(), paths, near, collisions);
   std::printf("factors identical (exact vs bounded vs factor()): %s (%d mismatches)\n",
               mismatches == 0 ? "yes" : "NO", mismatches);
   std::printf("%-34s %12s %12s %12s\n", "per pose", "exact", "bounded", "factor()");
-  std::printf("%-34s %10.1f us %10.1f us %10.1f us\n", "all poses, mean", mean(exact_us), mean(bounded_us), mean(factor_us));
-  std::printf("%-34s %10.1f us %10.1f us %10.1f us\n", "scanner near part, mean", mean(near_exact_us),
-              mean(near_bounded_us), mean(near_factor_us));
-  std::printf("%-34s %10.1f us %10.1f us %10.1f us\n", "scanner near part, p95", percentile(near_exact_us, 0.95),
-              percentile(near_bounded_us, 0.95), percentile(near_factor_us, 0.95));
-  std::printf("speed-up vs exact, all poses:      bounded %.1fx, factor() %.1fx   (target >= 20x: %s)\n",
-              mean(exact_us) / mean(bounded_us), mean(exact_us) / mean(factor_us),
-              mean(exact_us) / mean(factor_us) >= 20.0 ? "met" : "MISSED");
-  std::printf("scanner near part, factor() mean:  %.1f us   (target <= 50 us: %s)   checksum %.6f\n",
-              mean(near_factor_us), mean(near_factor_us) <= 50.0 ? "met" : "MISSED", checksum);
+  std::printf("%-34s %10.1f us %10.1f us %10.1f us\n", "all poses, mean", mean(exact_us),
+              mean(bounded_us), mean(factor_us));
+  std::printf("%-34s %10.1f us %10.1f us %10.1f us\n", "scanner near part, mean",
+              mean(near_exact_us), mean(near_bounded_us), mean(near_factor_us));
+  std::printf("%-34s %10.1f us %10.1f us %10.1f us\n", "scanner near part, p95",
+              percentile(near_exact_us, 0.95), percentile(near_bounded_us, 0.95),
+              percentile(near_factor_us, 0.95));
+  std::printf(
+      "speed-up vs exact, all poses:      bounded %.1fx, factor() %.1fx   (target >= 20x: %s)\n",
+      mean(exact_us) / mean(bounded_us), mean(exact_us) / mean(factor_us),
+      mean(exact_us) / mean(factor_us) >= 20.0 ? "met" : "MISSED");
+  std::printf(
+      "scanner near part, factor() mean:  %.1f us   (target <= 50 us: %s)   checksum %.6f\n",
+      mean(near_factor_us), mean(near_factor_us) <= 50.0 ? "met" : "MISSED", checksum);
   std::printf("costliest pairs (factor(), mean over all poses):");
   for (std::size_t i = 0; i < std::min<std::size_t>(5, per_pair.size()); ++i) {
-    std::printf("  %s %.1f us%s", per_pair[i].second.c_str(), per_pair[i].first, i + 1 < 5 ? "," : "\n");
+    std::printf("  %s %.1f us%s", per_pair[i].second.c_str(), per_pair[i].first,
+                i + 1 < 5 ? "," : "\n");
   }
   return mismatches == 0 ? 0 : 1;
 }

@@ -51,10 +51,11 @@ void bench(const char* file, int repeats) {
     for (int r = 0; r < repeats; ++r)
       for (const auto& X : poses) solutions += robot.ik(X, {.within_limits_only = true}).size();
   });
-  std::printf("%-22s  FK %6.3f us (%5.2f M/s)   IK all %6.3f us (%4.2f M/s)   IK in-limits %6.3f us"
-              "   IK/FK %4.1fx   IK vs %.0f us target: %4.2fx %s\n",
-              robot.name().c_str(), fk_us, 1.0 / fk_us, ik_us, 1.0 / ik_us, ik_limits_us,
-              ik_us / fk_us, kTargetIkUs, ik_us / kTargetIkUs, ik_us <= kTargetIkUs ? "OK" : "MISSED");
+  std::printf(
+      "%-22s  FK %6.3f us (%5.2f M/s)   IK all %6.3f us (%4.2f M/s)   IK in-limits %6.3f us"
+      "   IK/FK %4.1fx   IK vs %.0f us target: %4.2fx %s\n",
+      robot.name().c_str(), fk_us, 1.0 / fk_us, ik_us, 1.0 / ik_us, ik_limits_us, ik_us / fk_us,
+      kTargetIkUs, ik_us / kTargetIkUs, ik_us <= kTargetIkUs ? "OK" : "MISSED");
   std::printf("%-22s  (%.1f solutions per pose on average; checksum %.3f)\n", "",
               static_cast<double>(solutions) / (2.0 * static_cast<double>(calls)), sink);
 }

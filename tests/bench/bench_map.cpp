@@ -44,10 +44,13 @@ int main(int argc, char** argv) {
 
   const cli::JobSpec job = cli::loadJob(job_file);
   const kinematics::CellModel cell = cli::buildCell(job);
-  const kinematics::LoadedMesh part = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
+  const kinematics::LoadedMesh part =
+      kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
   const scanner::Raycaster raycaster(part.mesh);
   const kinematics::ScanPath path =
-      scanner::generatePath(cli::pathRequest(job), part.mesh, raycaster, scanner::laserWindow(cli::laserOptics(job))).path;
+      scanner::generatePath(cli::pathRequest(job), part.mesh, raycaster,
+                            scanner::laserWindow(cli::laserOptics(job)))
+          .path;
   const collision::Scene scene(cell, cli::clearanceConfig(job));
   const planner::ConstraintSettings settings = cli::constraintSettings(job);
 
@@ -64,16 +67,20 @@ int main(int argc, char** argv) {
   const std::size_t cells = full.cellsPerBranch();
   std::printf("bench_map: %s, part %zu triangles, %zu pairs, 2 threads\n", job_file.c_str(),
               part.mesh.triangles.size(), scene.pairs().size());
-  std::printf("full map: %zu angles x %zu samples = %zu cells, %zu branch(es): %.2f s = %.0f cells/s (%.0f branch-cells/s)   target >= 20000 cells/s: %s\n",
-              full.angles.size(), full.times.size(), cells, full.branches.size(), full_s,
-              static_cast<double>(cells) / full_s, static_cast<double>(cells * full.branches.size()) / full_s,
-              static_cast<double>(cells) / full_s >= 20000.0 ? "met" : "MISSED");
+  std::printf(
+      "full map: %zu angles x %zu samples = %zu cells, %zu branch(es): %.2f s = %.0f cells/s (%.0f "
+      "branch-cells/s)   target >= 20000 cells/s: %s\n",
+      full.angles.size(), full.times.size(), cells, full.branches.size(), full_s,
+      static_cast<double>(cells) / full_s,
+      static_cast<double>(cells * full.branches.size()) / full_s,
+      static_cast<double>(cells) / full_s >= 20000.0 ? "met" : "MISSED");
 
   // Exact distances cost ~35 ms a pose on this part: compare on every `subsample`-th time
   // sample, one branch (the job's, or the first).
   kinematics::ScanPath sub;
   sub.dt = path.dt * subsample;
-  for (std::size_t i = 0; i < path.samples.size(); i += static_cast<std::size_t>(subsample)) sub.samples.push_back(path.samples[i]);
+  for (std::size_t i = 0; i < path.samples.size(); i += static_cast<std::size_t>(subsample))
+    sub.samples.push_back(path.samples[i]);
   planner::MapRequest one = request;
   one.branches = {request.branches.front()};
   start = Clock::now();
@@ -84,9 +91,11 @@ int main(int argc, char** argv) {
   const planner::ConfigMap exact = planner::buildConfigMap(scene, settings, sub, one);
   const double exact_s = seconds(start);
   const std::size_t sub_cells = ours.cellsPerBranch();
-  std::printf("comparison map (every %d-th sample, %s): %zu cells; bounded %.2f s (%.0f cells/s), exact %.1f s (%.0f cells/s)\n",
-              subsample, one.branches.front().words().c_str(), sub_cells, ours_s,
-              static_cast<double>(sub_cells) / ours_s, exact_s, static_cast<double>(sub_cells) / exact_s);
+  std::printf(
+      "comparison map (every %d-th sample, %s): %zu cells; bounded %.2f s (%.0f cells/s), exact "
+      "%.1f s (%.0f cells/s)\n",
+      subsample, one.branches.front().words().c_str(), sub_cells, ours_s,
+      static_cast<double>(sub_cells) / ours_s, exact_s, static_cast<double>(sub_cells) / exact_s);
   std::printf("speed-up over the exact-distance map: %.1fx   target >= 10x: %s\n", exact_s / ours_s,
               exact_s / ours_s >= 10.0 ? "met" : "MISSED");
   const bool same = identical(ours, exact);
