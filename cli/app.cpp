@@ -51,8 +51,8 @@ int run(int argc, char** argv) {
 
   PlanOptions plan;
   auto* plan_cmd = app.add_subcommand("plan",
-                                      "Run a job: load and check the cell (the planning "
-                                      "pipeline grows here), write results to OUT");
+                                      "Run a job: check the cell, build the scan path and the "
+                                      "configuration maps, write everything to OUT");
   plan_cmd->add_option("job", plan.job_file, "Job file (YAML)")
       ->required()
       ->check(CLI::ExistingFile);
