@@ -1,0 +1,205 @@
+#include "planner/dp_planner.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+namespace scanplan::planner {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+using Index = std::ptrdiff_t;
+
+}  // namespace
+
+PlanResult planDp(const ConfigMap& map,
+                  std::size_t branch,
+                  const PlannerSettings& settings,
+                  bool continuous,
+                  std::optional<double> start_theta) {
+  const auto clock_start = std::chrono::steady_clock::now();
+  const detail::Grid g = detail::gridOf(map, branch, continuous);
+  if (!(settings.omega_max >= 0.0) || !(settings.alpha_max >= 0.0)) {
+    throw std::logic_error("planDp: omega_max and alpha_max must be >= 0");
+  }
+  const auto na = static_cast<Index>(map.angles.size());
+  const auto nt = static_cast<Index>(map.times.size());
+  const double dt = g.dt, h = g.angle_step;
+  // Bounds in grid steps. The 1e-12 only absorbs the rounding of the ratio, so every DP move
+  // stays inside what evaluate() accepts (kBoundTolerance = 1e-9).
+  const auto steps = [&](double ratio, Index cap) {
+    return static_cast<Index>(
+        std::min(std::floor(ratio * (1.0 + 1e-12)), static_cast<double>(cap)));
+  };
+  const Index D = steps(settings.omega_max * dt / h, na - 1);
+  const Index A = steps(settings.alpha_max * dt * dt / h, 2 * D);
+  const Index W = 2 * D + 1;
+  if (W > std::numeric_limits<std::uint16_t>::max()) throw std::logic_error("planDp: W too large");
+  const auto uW = static_cast<std::size_t>(W);
+
+  PlanResult result;
+  result.branch = branch;
+  const auto finish = [&](PlanResult& r) -> PlanResult& {
+    r.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
+    return r;
+  };
+  const auto cellF = [&](Index a, Index k) {
+    return static_cast<double>(
+        map.f[map.index(branch, static_cast<std::size_t>(a), static_cast<std::size_t>(k))]);
+  };
+  const auto cellCost = [&](Index a, Index k) {
+    const double f = cellF(a, k);
+    return f > 0.0 ? -std::log(f) * dt : kInf;
+  };
+
+  // Per-step speed and acceleration costs (the evaluate() terms for a grid move).
+  std::vector<double> omega_cost(uW), alpha_cost(static_cast<std::size_t>(2 * A + 1));
+  for (Index j = 0; j < W; ++j) {
+    const double omega = static_cast<double>(j - D) * h / dt;
+    omega_cost[static_cast<std::size_t>(j)] = settings.k_omega * omega * omega * dt;
+  }
+  for (Index j = 0; j <= 2 * A; ++j) {
+    const double alpha = static_cast<double>(j - A) * h / (dt * dt);
+    alpha_cost[static_cast<std::size_t>(j)] = settings.k_alpha * alpha * alpha * dt;
+  }
+
+  // value[a·W + j]: best cost of a path up to sample k ending at angle a with last step j − D.
+  // back[(k·N + a)·W + j]: the previous sample's step index.
+  std::vector<double> prev(static_cast<std::size_t>(na) * uW, kInf), cur(prev.size(), kInf);
+  std::vector<std::uint16_t> back(static_cast<std::size_t>(nt) * prev.size(), 0);
+  const auto at = [&](Index a, Index j) { return static_cast<std::size_t>(a * W + j); };
+
+  Index start_step = 0;  // unwrapped grid index of a fixed start
+  if (start_theta) {
+    start_step = static_cast<Index>(std::llround((*start_theta - g.angle0) / h));
+    if (!continuous && (start_step < 0 || start_step >= na)) {
+      result.reason =
+          fmt::format("time sample 0: start angle {} rad is outside the table range", *start_theta);
+      return finish(result);
+    }
+  }
+  const auto wrap = [&](Index i) { return ((i % na) + na) % na; };
+  for (Index a = 0; a < na; ++a) {
+    if (!start_theta || a == wrap(start_step)) prev[at(a, D)] = cellCost(a, 0);
+  }
+
+  const auto noPath = [&](Index k) {
+    Index open = 0;
+    for (Index a = 0; a < na; ++a) open += cellF(a, k) > 0.0 ? 1 : 0;
+    const std::string where = fmt::format("no feasible path reaches time sample {} (t = {} s): ", k,
+                                          map.times[static_cast<std::size_t>(k)]);
+    if (open == 0) return where + "f = 0 at every table angle";
+    if (k == 0) return where + "f = 0 at the start angle";
+    return where + fmt::format(
+                       "{} of {} angles have f > 0 but none is reachable within |omega| <= {} "
+                       "rad/s and |alpha| <= {} rad/s^2 (at most {} grid steps per sample, "
+                       "step changes of at most {})",
+                       open, na, settings.omega_max, settings.alpha_max, D, A);
+  };
+  const auto anyFinite = [](const std::vector<double>& v) {
+    return std::any_of(v.begin(), v.end(), [](double x) { return x < kInf; });
+  };
+  if (!anyFinite(prev)) {
+    result.reason = noPath(0);
+    return finish(result);
+  }
+
+  // Each (a, j) reads only the previous layer: the parallel loop is deterministic.
+  const auto grain = static_cast<std::size_t>(std::max<Index>(1, 4096 / (W * (2 * A + 1))));
+  for (Index k = 1; k < nt; ++k) {
+    std::uint16_t* back_k = back.data() + static_cast<std::size_t>(k * na) * uW;
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, static_cast<std::size_t>(na), grain),
+        [&](const tbb::blocked_range<std::size_t>& range) noexcept {
+          for (auto ua = range.begin(); ua != range.end(); ++ua) {
+            const auto a = static_cast<Index>(ua);
+            const double c = cellCost(a, k);
+            for (Index j = 0; j < W; ++j) {
+              Index p = a - (j - D);  // the previous angle
+              if (continuous) p = wrap(p);
+              double best = kInf;
+              Index best_j = D;
+              if (c < kInf && p >= 0 && p < na) {
+                if (k == 1) {
+                  best = prev[at(p, D)];  // the first step is free of the acceleration bound
+                } else {
+                  for (Index jp = std::max<Index>(0, j - A); jp <= std::min(W - 1, j + A); ++jp) {
+                    const double v =
+                        prev[at(p, jp)] + alpha_cost[static_cast<std::size_t>(j - jp + A)];
+                    if (v < best) {
+                      best = v;
+                      best_j = jp;
+                    }
+                  }
+                }
+              }
+              cur[at(a, j)] = best + c + omega_cost[static_cast<std::size_t>(j)];
+              back_k[at(a, j)] = static_cast<std::uint16_t>(best_j);
+            }
+          }
+        });
+    if (!anyFinite(cur)) {
+      result.reason = noPath(k);
+      return finish(result);
+    }
+    std::swap(prev, cur);
+  }
+
+  // Backtrack from the best final state, then rebuild the unwrapped path and its terms.
+  const auto best_it = std::min_element(prev.begin(), prev.end());
+  const double best_value = *best_it;
+  std::vector<Index> angle(static_cast<std::size_t>(nt)), step(static_cast<std::size_t>(nt));
+  auto cell = static_cast<Index>(best_it - prev.begin());
+  angle.back() = cell / W;
+  step.back() = cell % W;
+  for (Index k = nt - 1; k >= 1; --k) {
+    const auto uk = static_cast<std::size_t>(k);
+    step[uk - 1] = back[static_cast<std::size_t>(k * na) * uW + at(angle[uk], step[uk])];
+    angle[uk - 1] = wrap(angle[uk] - (step[uk] - D));
+  }
+  ObjectiveTerms& t = result.terms;
+  t.min_f = kInf;
+  Index s = start_theta ? start_step : angle[0];
+  result.theta.resize(static_cast<std::size_t>(nt));
+  for (Index k = 0; k < nt; ++k) {
+    const auto uk = static_cast<std::size_t>(k);
+    const Index d = step[uk] - D;
+    if (k >= 1) {
+      s += d;
+      t.cost_omega += omega_cost[static_cast<std::size_t>(step[uk])];
+      t.max_abs_omega = std::max(t.max_abs_omega, static_cast<double>(std::abs(d)) * h / dt);
+    }
+    if (k >= 2) {
+      const Index dd = step[uk] - step[uk - 1];
+      t.cost_alpha += alpha_cost[static_cast<std::size_t>(dd + A)];
+      t.max_abs_alpha =
+          std::max(t.max_abs_alpha, static_cast<double>(std::abs(dd)) * h / (dt * dt));
+    }
+    t.cost_f += cellCost(angle[uk], k);
+    if (cellF(angle[uk], k) < t.min_f) {
+      t.min_f = cellF(angle[uk], k);
+      t.min_f_sample = uk;
+    }
+    result.theta[uk] = continuous ? g.angle0 + static_cast<double>(s) * h
+                                  : map.angles[static_cast<std::size_t>(s)];
+  }
+  t.total = t.cost_f + t.cost_omega + t.cost_alpha;
+  t.feasible = true;
+  if (!(std::abs(t.total - best_value) <= 1e-9 * std::max(1.0, std::abs(best_value)))) {
+    throw std::logic_error("planDp: backtracked path does not reproduce the optimum");
+  }
+  result.status = PlanResult::Status::kSolved;
+  return finish(result);
+}
+
+}  // namespace scanplan::planner

@@ -1,0 +1,46 @@
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "planner/config_map.h"
+#include "planner/objective.h"
+
+namespace scanplan::planner {
+
+/// A planner's answer. A partial path is never returned: `theta` is empty unless kSolved.
+struct PlanResult {
+  enum class Status { kSolved, kNoPath } status = Status::kNoPath;
+  std::vector<double> theta;  ///< rad, one per time sample, unwrapped (see evaluate())
+  ObjectiveTerms terms;       ///< of `theta` (kSolved only)
+  double seconds = 0.0;       ///< wall time spent planning
+  std::size_t branch = 0;     ///< the map branch planned on
+  std::string reason;         ///< kNoPath: the first time sample no feasible path reaches, and why
+};
+
+/// The exact optimum of the discretised problem (DESIGN.md §5.2): dynamic programming over
+/// (grid angle, previous step). The path sits on grid angles and moves an integer number d_k of
+/// grid steps Δθ per time sample, with |d_k|·Δθ/Δt ≤ ω_max and, from the second step on,
+/// |d_k − d_{k−1}|·Δθ/Δt² ≤ α_max (the first step is free, as in evaluate()). Cost per time
+/// sample N_θ·W·(2A+1) ≤ N_θ·W², W = 2D+1, D = floor(ω_max·Δt/Δθ), A = floor(α_max·Δt²/Δθ).
+///
+/// Resolution caveat: when α_max·Δt²/Δθ < 1 (A = 0) no speed change is representable on the
+/// grid, so the only paths are constant-speed ones (d_k = d_1 for every k); the bounds are never
+/// relaxed to compensate — refine the angle grid or coarsen Δt instead. Likewise D = 0 leaves
+/// only standing still.
+///
+/// A continuous table's grid wraps (the returned path is unwrapped by accumulating steps); a
+/// limited table's path stays within [angles.front(), angles.back()]. Steps are limited to less
+/// than one grid turn (|d| ≤ N_θ − 1). `start_theta` (rad), when given, fixes the first sample
+/// to the nearest grid angle (for a continuous table on the same turn as start_theta). The
+/// returned terms are the DP's own and equal evaluate() of the path up to summation order.
+/// Deterministic (TBB over angles, each cell computed independently).
+PlanResult planDp(const ConfigMap& map,
+                  std::size_t branch,
+                  const PlannerSettings& settings,
+                  bool continuous,
+                  std::optional<double> start_theta = {});
+
+}  // namespace scanplan::planner

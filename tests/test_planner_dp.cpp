@@ -1,0 +1,337 @@
+// The planning objective (DESIGN.md §5) and the exact DP baseline (§5.2) on hand-built maps:
+// a hand-computed J, interpolation and wrap-around, corridors with known answers, a blocked
+// time column, and DP against brute-force enumeration of every grid path on tiny maps.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <numbers>
+#include <random>
+#include <vector>
+
+#include <tbb/global_control.h>
+
+#include "planner/config_map.h"
+#include "planner/dp_planner.h"
+#include "planner/objective.h"
+
+namespace {
+
+using namespace scanplan::planner;
+constexpr double kPi = std::numbers::pi;
+using Status = PlanResult::Status;
+
+// DP and evaluate() sum the same terms in a different order.
+constexpr double kSumRel = 1e-9;
+
+::testing::AssertionResult closeRel(double actual, double expected, const char* what) {
+  if (std::abs(actual - expected) <= kSumRel * std::max(1.0, std::abs(expected))) {
+    return ::testing::AssertionSuccess();
+  }
+  return ::testing::AssertionFailure() << what << ": " << actual << " vs expected " << expected;
+}
+
+// One branch; continuous: na angles over [0, 2π); limited: [-1, -1 + (na − 1)·step] rad.
+ConfigMap makeMap(std::size_t na,
+                  std::size_t nt,
+                  double dt,
+                  bool continuous,
+                  const std::function<float(std::size_t, std::size_t)>& f,
+                  double step = 0.1) {
+  ConfigMap map;
+  for (std::size_t i = 0; i < na; ++i) {
+    map.angles.push_back(continuous ? static_cast<double>(i) * 2.0 * kPi / static_cast<double>(na)
+                                    : -1.0 + static_cast<double>(i) * step);
+  }
+  for (std::size_t k = 0; k < nt; ++k) map.times.push_back(static_cast<double>(k) * dt);
+  map.branches.resize(1);
+  map.f.resize(na * nt);
+  for (std::size_t a = 0; a < na; ++a) {
+    for (std::size_t k = 0; k < nt; ++k) map.f[map.index(0, a, k)] = f(a, k);
+  }
+  return map;
+}
+
+double angleStep(const ConfigMap& map) { return map.angles[1] - map.angles[0]; }
+
+// DP's own terms must be evaluate()'s, and the path feasible.
+void expectConsistent(const ConfigMap& map,
+                      const PlanResult& r,
+                      const PlannerSettings& s,
+                      bool continuous) {
+  ASSERT_EQ(r.status, Status::kSolved) << r.reason;
+  ASSERT_EQ(r.theta.size(), map.times.size());
+  const ObjectiveTerms e = evaluate(map, 0, r.theta, s, continuous);
+  EXPECT_TRUE(e.feasible) << "max|w| " << e.max_abs_omega << " max|a| " << e.max_abs_alpha
+                          << " min f " << e.min_f;
+  EXPECT_GT(e.min_f, 0.0);
+  EXPECT_TRUE(closeRel(r.terms.total, e.total, "total"));
+  EXPECT_TRUE(closeRel(r.terms.cost_f, e.cost_f, "cost_f"));
+  EXPECT_TRUE(closeRel(r.terms.cost_omega, e.cost_omega, "cost_omega"));
+  EXPECT_TRUE(closeRel(r.terms.cost_alpha, e.cost_alpha, "cost_alpha"));
+  EXPECT_TRUE(closeRel(r.terms.max_abs_omega, e.max_abs_omega, "max_abs_omega"));
+  EXPECT_TRUE(closeRel(r.terms.max_abs_alpha, e.max_abs_alpha, "max_abs_alpha"));
+  EXPECT_EQ(r.terms.min_f, e.min_f);
+  EXPECT_EQ(r.terms.min_f_sample, e.min_f_sample);
+}
+
+// 4 angles (step π/2), Δt = 0.5 s, path θ = {0, π/2, 3π/4}:
+//   f: 0.5 (grid), 0.75 (grid), 0.5 (halfway between 0.25 and 0.75)
+//   cost_f = −(ln 0.5 + ln 0.75 + ln 0.5)·0.5
+//   ω1 = (π/2)/0.5 = π, ω2 = (π/4)/0.5 = π/2  → cost_ω = k_ω·(π² + π²/4)·0.5
+//   α2 = (π/2 − π)/0.5 = −π                   → cost_α = k_a·π²·0.5
+TEST(Objective, ThreeSamplePathMatchesHandComputedJ) {
+  const ConfigMap map = makeMap(4, 3, 0.5, true, [](std::size_t a, std::size_t k) {
+    if (k == 0 && a == 0) return 0.5f;
+    if (k == 1 && a == 1) return 0.75f;
+    if (k == 2) return a == 1 ? 0.25f : a == 2 ? 0.75f : 0.0f;
+    return 0.0f;
+  });
+  PlannerSettings s;
+  s.k_omega = 1.0;
+  s.k_alpha = 0.1;
+  s.omega_max = 4.0;
+  s.alpha_max = 4.0;
+  const ObjectiveTerms t = evaluate(map, 0, {0.0, kPi / 2, 3 * kPi / 4}, s, true);
+  const double cost_f = -(std::log(0.5) + std::log(0.75) + std::log(0.5)) * 0.5;
+  const double cost_omega = 1.0 * (kPi * kPi + kPi * kPi / 4) * 0.5;
+  const double cost_alpha = 0.1 * kPi * kPi * 0.5;
+  EXPECT_TRUE(closeRel(t.cost_f, cost_f, "cost_f"));
+  EXPECT_TRUE(closeRel(t.cost_omega, cost_omega, "cost_omega"));
+  EXPECT_TRUE(closeRel(t.cost_alpha, cost_alpha, "cost_alpha"));
+  EXPECT_TRUE(closeRel(t.total, cost_f + cost_omega + cost_alpha, "total"));
+  EXPECT_DOUBLE_EQ(t.min_f, 0.5);
+  EXPECT_EQ(t.min_f_sample, 0u);  // the first of the two 0.5s
+  EXPECT_DOUBLE_EQ(t.max_abs_omega, kPi);
+  EXPECT_DOUBLE_EQ(t.max_abs_alpha, kPi);
+  EXPECT_TRUE(t.feasible);
+
+  s.omega_max = 3.0;  // < π
+  EXPECT_FALSE(evaluate(map, 0, {0.0, kPi / 2, 3 * kPi / 4}, s, true).feasible);
+  s.omega_max = 4.0;
+  s.alpha_max = 3.0;  // < π
+  EXPECT_FALSE(evaluate(map, 0, {0.0, kPi / 2, 3 * kPi / 4}, s, true).feasible);
+
+  // f = 0 anywhere: J = +inf, infeasible.
+  const ObjectiveTerms blocked = evaluate(map, 0, {0.0, 0.0, 0.0}, s, true);
+  EXPECT_TRUE(std::isinf(blocked.total));
+  EXPECT_FALSE(blocked.feasible);
+  EXPECT_EQ(blocked.min_f, 0.0);
+  EXPECT_EQ(blocked.min_f_sample, 1u);
+}
+
+TEST(Objective, MapValueInterpolatesAndWraps) {
+  // Continuous, 4 angles: f(a) = 0.1·(a + 1) at time 0.
+  const ConfigMap c = makeMap(
+      4, 2, 1.0, true, [](std::size_t a, std::size_t) { return 0.1f * static_cast<float>(a + 1); });
+  const auto fa = [&](std::size_t a) { return static_cast<double>(c.f[c.index(0, a, 0)]); };
+  EXPECT_DOUBLE_EQ(mapValue(c, 0, kPi / 2, 0, true), fa(1));
+  EXPECT_DOUBLE_EQ(mapValue(c, 0, kPi / 4, 0, true), 0.5 * (fa(0) + fa(1)));
+  EXPECT_DOUBLE_EQ(mapValue(c, 0, kPi / 8, 0, true), 0.75 * fa(0) + 0.25 * fa(1));
+  // Across the seam: −π/4 lies halfway between angle 3 (3π/2) and angle 0 (2π).
+  EXPECT_DOUBLE_EQ(mapValue(c, 0, -kPi / 4, 0, true), 0.5 * (fa(3) + fa(0)));
+  EXPECT_DOUBLE_EQ(mapValue(c, 0, 7 * kPi / 4, 0, true), 0.5 * (fa(3) + fa(0)));
+  // Whole turns away reads the same cell.
+  EXPECT_DOUBLE_EQ(mapValue(c, 0, 4 * kPi + kPi / 2, 0, true), fa(1));
+  EXPECT_DOUBLE_EQ(mapValue(c, 0, -6 * kPi, 0, true), fa(0));
+
+  // Limited, angles −1, −0.9, …, −0.6.
+  const ConfigMap l = makeMap(5, 2, 1.0, false, [](std::size_t a, std::size_t) {
+    return 0.2f * static_cast<float>(a + 1);
+  });
+  const auto fl = [&](std::size_t a) { return static_cast<double>(l.f[l.index(0, a, 0)]); };
+  EXPECT_DOUBLE_EQ(mapValue(l, 0, -1.0, 0, false), fl(0));
+  EXPECT_DOUBLE_EQ(mapValue(l, 0, -0.6, 0, false), fl(4));
+  EXPECT_NEAR(mapValue(l, 0, -0.85, 0, false), 0.5 * (fl(1) + fl(2)), 1e-12);
+  EXPECT_EQ(mapValue(l, 0, -1.01, 0, false), 0.0);
+  EXPECT_EQ(mapValue(l, 0, -0.59, 0, false), 0.0);
+  EXPECT_EQ(mapValue(l, 0, -1.0 + 2 * kPi, 0, false), 0.0);  // no wrap on a limited table
+}
+
+// f = 1 on angles 10..12, 0.01 elsewhere: the optimum stands still inside the band (J = 0).
+TEST(DpPlanner, StraightCorridorStandsStillInside) {
+  for (const bool continuous : {true, false}) {
+    const ConfigMap map = makeMap(36, 50, 0.1, continuous, [](std::size_t a, std::size_t) {
+      return a >= 10 && a <= 12 ? 1.0f : 0.01f;
+    });
+    PlannerSettings s;
+    s.omega_max = 3 * angleStep(map) / 0.1;
+    s.alpha_max = 1 * angleStep(map) / 0.01;
+    const PlanResult r = planDp(map, 0, s, continuous);
+    expectConsistent(map, r, s, continuous);
+    for (const double theta : r.theta) {
+      EXPECT_EQ(theta, r.theta.front());
+      EXPECT_GE(theta, map.angles[10] - 1e-12);
+      EXPECT_LE(theta, map.angles[12] + 1e-12);
+    }
+    EXPECT_EQ(r.terms.total, 0.0);
+    EXPECT_EQ(r.terms.max_abs_omega, 0.0);
+  }
+}
+
+// A one-cell corridor (f = 0 elsewhere) that holds, moves one grid step per sample for four
+// samples, then holds: the only feasible path. On the continuous table it starts two steps
+// below the seam, so the unwrapped path passes 2π.
+TEST(DpPlanner, ShiftingCorridorIsFollowedWithinBounds) {
+  for (const bool continuous : {true, false}) {
+    const std::size_t na = 36, start = continuous ? 34 : 5;
+    const auto centre = [&](std::size_t k) {
+      return start + std::clamp<std::size_t>(k, 10, 14) - 10;
+    };
+    const ConfigMap map = makeMap(na, 30, 0.1, continuous, [&](std::size_t a, std::size_t k) {
+      return a == centre(k) % na ? 0.8f : 0.0f;
+    });
+    const double h = continuous ? 2 * kPi / 36 : angleStep(map);
+    PlannerSettings s;
+    s.omega_max = 2.5 * h / 0.1;   // D = 2
+    s.alpha_max = 1.5 * h / 0.01;  // A = 1: a step change of one grid step per sample
+    const PlanResult r = planDp(map, 0, s, continuous);
+    expectConsistent(map, r, s, continuous);
+    for (std::size_t k = 0; k < r.theta.size(); ++k) {
+      const double expected =
+          continuous ? static_cast<double>(centre(k)) * h : map.angles[centre(k)];
+      EXPECT_NEAR(r.theta[k], expected, 1e-12) << "sample " << k;
+    }
+    if (continuous) {
+      EXPECT_GT(r.theta.back(), 2 * kPi);
+    }
+    EXPECT_NEAR(r.terms.max_abs_omega, h / 0.1, 1e-12);
+    EXPECT_NEAR(r.terms.max_abs_alpha, h / 0.01, 1e-9);
+
+    // Resolution caveat: α_max·Δt²/Δθ < 1 leaves only constant speed. The free first step must
+    // be 0 to stay in the corridor, so the first move (sample 11) is out of reach.
+    s.alpha_max = 0.9 * h / 0.01;
+    const PlanResult slow = planDp(map, 0, s, continuous);
+    EXPECT_EQ(slow.status, Status::kNoPath);
+    EXPECT_TRUE(slow.theta.empty());
+    EXPECT_NE(slow.reason.find("time sample 11 "), std::string::npos) << slow.reason;
+  }
+}
+
+TEST(DpPlanner, BlockedTimeColumnIsNoPath) {
+  const ConfigMap map =
+      makeMap(24, 20, 0.1, true, [](std::size_t, std::size_t k) { return k == 7 ? 0.0f : 0.5f; });
+  PlannerSettings s;
+  const PlanResult r = planDp(map, 0, s, true);
+  EXPECT_EQ(r.status, Status::kNoPath);
+  EXPECT_TRUE(r.theta.empty());
+  EXPECT_NE(r.reason.find("time sample 7 "), std::string::npos) << r.reason;
+  EXPECT_NE(r.reason.find("f = 0 at every table angle"), std::string::npos) << r.reason;
+}
+
+TEST(DpPlanner, FixedStartIsKept) {
+  // f rises with the angle index, so the free optimum would start and stay at angle 35.
+  const ConfigMap map = makeMap(36, 10, 0.1, true, [](std::size_t a, std::size_t) {
+    return 0.1f + 0.02f * static_cast<float>(a);
+  });
+  const double h = 2 * kPi / 36;
+  PlannerSettings s;
+  s.k_omega = 1e-3;  // cheap motion, so climbing pays
+  s.k_alpha = 1e-4;
+  s.omega_max = 1.5 * h / 0.1;
+  s.alpha_max = 1.5 * h / 0.01;
+  const double start = 2 * kPi + 3 * h + 0.2 * h;  // next turn, snaps to grid angle 3
+  const PlanResult r = planDp(map, 0, s, true, start);
+  expectConsistent(map, r, s, true);
+  EXPECT_NEAR(r.theta.front(), 2 * kPi + 3 * h, 1e-12);
+  // The best cell (angle 35, f = 0.8) is four steps down across the seam; at one step per
+  // sample it is reached at sample 4 and held, on the turn the start was given on.
+  EXPECT_NEAR(r.theta.back(), 2 * kPi - h, 1e-12);
+
+  const ConfigMap limited =
+      makeMap(10, 5, 0.1, false, [](std::size_t, std::size_t) { return 1.0f; });
+  const PlanResult outside = planDp(limited, 0, s, false, 2.0);
+  EXPECT_EQ(outside.status, Status::kNoPath);
+  EXPECT_NE(outside.reason.find("time sample 0"), std::string::npos) << outside.reason;
+}
+
+// Every grid path on a 6 × 5 map (steps up to one more than the speed bound allows, filtered by
+// evaluate()), against DP, for random f (with zeros) and random bounds away from grid multiples.
+TEST(DpPlanner, EqualsBruteForceOnTinyMaps) {
+  constexpr std::size_t kAngles = 6, kTimes = 5;
+  constexpr double kDt = 0.2;
+  std::mt19937 rng(20240605);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int solved = 0, no_path = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const bool continuous = trial % 2 == 0;
+    const double zero_fraction = trial % 4 < 2 ? 0.15 : 0.4;
+    std::vector<float> values(kAngles * kTimes);
+    for (float& v : values) {
+      v = unit(rng) < zero_fraction ? 0.0f : static_cast<float>(0.05 + 0.95 * unit(rng));
+    }
+    const ConfigMap map =
+        makeMap(kAngles, kTimes, kDt, continuous,
+                [&](std::size_t a, std::size_t k) { return values[a * kTimes + k]; });
+    const double h = continuous ? 2 * kPi / kAngles : angleStep(map);
+    const int d_bound = 1 + trial % 2 + (trial / 8) % 2;  // 1 or 2 or 3
+    PlannerSettings s;
+    s.k_omega = 2.0 * unit(rng);
+    s.k_alpha = 2.0 * unit(rng);
+    s.omega_max = (d_bound + 0.05 + 0.9 * unit(rng)) * h / kDt;
+    s.alpha_max = (static_cast<double>(trial % 3) + 0.05 + 0.9 * unit(rng)) * h / (kDt * kDt);
+
+    double best = std::numeric_limits<double>::infinity();
+    const int d_max = d_bound + 1;
+    const int w = 2 * d_max + 1;
+    std::vector<double> theta(kTimes);
+    for (std::size_t a0 = 0; a0 < kAngles; ++a0) {
+      for (int code = 0; code < w * w * w * w; ++code) {
+        int s_k = static_cast<int>(a0), rest = code;
+        theta[0] = map.angles[a0];
+        for (std::size_t k = 1; k < kTimes; ++k) {
+          s_k += rest % w - d_max;
+          rest /= w;
+          theta[k] = map.angles[0] + static_cast<double>(s_k) * h;
+        }
+        const ObjectiveTerms t = evaluate(map, 0, theta, s, continuous);
+        if (t.feasible) best = std::min(best, t.total);
+      }
+    }
+    const PlanResult r = planDp(map, 0, s, continuous);
+    if (std::isinf(best)) {
+      ++no_path;
+      EXPECT_EQ(r.status, Status::kNoPath) << "trial " << trial;
+      EXPECT_NE(r.reason.find("time sample"), std::string::npos);
+    } else {
+      ++solved;
+      SCOPED_TRACE("trial " + std::to_string(trial));
+      expectConsistent(map, r, s, continuous);
+      EXPECT_TRUE(closeRel(r.terms.total, best, "DP J vs brute force"));
+    }
+  }
+  // Both outcomes exercised.
+  EXPECT_GT(solved, 10);
+  EXPECT_GT(no_path, 2);
+}
+
+// Larger random smooth maps: bounds and f > 0 hold, terms match evaluate(), and the result does
+// not depend on the thread count.
+TEST(DpPlanner, RespectsBoundsAndIsDeterministic) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int trial = 0; trial < 4; ++trial) {
+    const bool continuous = trial % 2 == 0;
+    const double p1 = 2 * kPi * unit(rng), p2 = 2 * kPi * unit(rng);
+    // Lobes drifting about one grid step per sample, f = 0 between them.
+    const auto fill = [&](std::size_t a, std::size_t k) {
+      const double x = static_cast<double>(a) * kPi / 360, t = static_cast<double>(k);
+      const double v = 0.6 + 0.5 * std::sin(3.0 * x + p1 + 0.02 * t) * std::cos(x + p2 - 0.01 * t);
+      return v > 0.2 ? static_cast<float>(std::min(v, 1.0)) : 0.0f;
+    };
+    const ConfigMap map = makeMap(720, 40, 0.1, continuous, fill, 0.5 * kPi / 180);
+    const double h = continuous ? kPi / 360 : angleStep(map);
+    PlannerSettings s;
+    s.omega_max = (3.0 + unit(rng)) * h / 0.1;
+    s.alpha_max = (1.0 + 2.0 * unit(rng)) * h / 0.01;
+    const PlanResult parallel = planDp(map, 0, s, continuous);
+    expectConsistent(map, parallel, s, continuous);
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    const PlanResult serial = planDp(map, 0, s, continuous);
+    EXPECT_EQ(serial.theta, parallel.theta);
+    EXPECT_EQ(serial.terms.total, parallel.terms.total);
+  }
+}
+
+}  // namespace
