@@ -30,7 +30,16 @@ Grid gridOf(const ConfigMap& map, std::size_t branch, bool continuous) {
 
 double mapValue(
     const ConfigMap& map, std::size_t branch, double theta, std::size_t t, bool continuous) {
-  const detail::Grid g = detail::gridOf(map, branch, continuous);
+  return detail::mapValue(map, detail::gridOf(map, branch, continuous), branch, theta, t,
+                          continuous);
+}
+
+double detail::mapValue(const ConfigMap& map,
+                        const Grid& g,
+                        std::size_t branch,
+                        double theta,
+                        std::size_t t,
+                        bool continuous) noexcept {
   const std::size_t na = map.angles.size();
   const double n = static_cast<double>(na);
   double u = (theta - g.angle0) / g.angle_step;  // in grid steps

@@ -58,6 +58,13 @@ struct Grid {
 };
 /// Checks the map and branch (throws std::logic_error on a broken invariant).
 Grid gridOf(const ConfigMap& map, std::size_t branch, bool continuous);
+/// mapValue() with the grid already derived and checked: the planners' inner loops.
+double mapValue(const ConfigMap& map,
+                const Grid& grid,
+                std::size_t branch,
+                double theta,
+                std::size_t t,
+                bool continuous) noexcept;
 }  // namespace detail
 
 }  // namespace scanplan::planner

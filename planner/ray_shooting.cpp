@@ -55,7 +55,7 @@ PlanResult planRayShooting(const ConfigMap& map,
   });
 
   const auto fAt = [&](double theta, std::size_t k) {
-    return mapValue(map, branch, theta, k, continuous);
+    return detail::mapValue(map, g, branch, theta, k, continuous);
   };
 
   // Rolls one ray out from (theta, omega) at sample k for h steps.
