@@ -202,4 +202,58 @@ PlanResult planDp(const ConfigMap& map,
   return finish(result);
 }
 
+int autoAngleSubdivisions(const ConfigMap& map,
+                          std::size_t branch,
+                          const PlannerSettings& settings,
+                          bool continuous,
+                          int accel_steps,
+                          int max_subdivisions) {
+  const detail::Grid g = detail::gridOf(map, branch, continuous);
+  const double per_step = settings.alpha_max * g.dt * g.dt / g.angle_step;  // A at r = 1
+  for (int r = 1; r < max_subdivisions; ++r) {
+    if (std::floor(per_step * r * (1.0 + 1e-12)) >= accel_steps) return r;
+  }
+  return std::max(1, max_subdivisions);
+}
+
+PlanResult planDpRefined(const ConfigMap& map,
+                         std::size_t branch,
+                         const PlannerSettings& settings,
+                         bool continuous,
+                         int subdivisions,
+                         std::optional<double> start_theta) {
+  if (subdivisions < 1) throw std::logic_error("planDpRefined: subdivisions must be >= 1");
+  if (subdivisions == 1) return planDp(map, branch, settings, continuous, start_theta);
+  const auto clock_start = std::chrono::steady_clock::now();
+  const detail::Grid g = detail::gridOf(map, branch, continuous);
+  const auto r = static_cast<std::size_t>(subdivisions);
+  const std::size_t na = map.angles.size(), nt = map.times.size();
+  ConfigMap fine;
+  fine.times = map.times;
+  fine.branches = {map.branches[branch]};
+  const std::size_t nf = continuous ? na * r : (na - 1) * r + 1;
+  const double h = g.angle_step / static_cast<double>(r);
+  fine.angles.resize(nf);
+  for (std::size_t i = 0; i < nf; ++i) fine.angles[i] = g.angle0 + static_cast<double>(i) * h;
+  fine.f.resize(nf * nt);
+  tbb::parallel_for(std::size_t{0}, nf, [&](std::size_t i) {
+    for (std::size_t k = 0; k < nt; ++k) {
+      // Cells on the original grid copy exactly; the others interpolate as mapValue() does.
+      fine.f[fine.index(0, i, k)] =
+          i % r == 0
+              ? map.f[map.index(branch, i / r, k)]
+              : static_cast<float>(detail::mapValue(map, g, branch, fine.angles[i], k, continuous));
+    }
+  });
+  PlanResult result = planDp(fine, 0, settings, continuous, start_theta);
+  result.branch = branch;
+  if (result.status == PlanResult::Status::kSolved) {
+    result.terms = evaluate(map, branch, result.theta, settings, continuous);
+    if (!result.terms.feasible) throw std::logic_error("planDpRefined: infeasible optimum");
+  }
+  result.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
+  return result;
+}
+
 }  // namespace scanplan::planner

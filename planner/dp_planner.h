@@ -18,6 +18,10 @@ struct PlanResult {
   double seconds = 0.0;       ///< wall time spent planning
   std::size_t branch = 0;     ///< the map branch planned on
   std::string reason;         ///< kNoPath: the first time sample no feasible path reaches, and why
+  bool approximate = false;   ///< kNoPath from a sampling planner (OMPL): it ended with only an
+                              ///< approximate (partial) solution, not returned
+  std::string detail;         ///< planner-specific notes, e.g. OMPL's planner, exact/approximate,
+                              ///< iterations and tree size (empty for DP and Ray Shooting)
 };
 
 /// The exact optimum of the discretised problem (DESIGN.md §5.2): dynamic programming over
@@ -42,5 +46,27 @@ PlanResult planDp(const ConfigMap& map,
                   const PlannerSettings& settings,
                   bool continuous,
                   std::optional<double> start_theta = {});
+
+/// The smallest angle-grid subdivision r (1 ≤ r ≤ max_subdivisions) for which the grid step
+/// Δθ/r resolves at least `accel_steps` acceleration levels each way (A ≥ accel_steps in
+/// planDp's terms); max_subdivisions when none does.
+int autoAngleSubdivisions(const ConfigMap& map,
+                          std::size_t branch,
+                          const PlannerSettings& settings,
+                          bool continuous,
+                          int accel_steps = 3,
+                          int max_subdivisions = 16);
+
+/// planDp on a finer angle grid: every map step Δθ split into `subdivisions` equal steps, f on
+/// the new grid angles read with mapValue() (the same linear interpolation every planner and
+/// evaluate() use), so the optimum is exact for the finer discretisation and its J is the J of
+/// evaluate() on the original map. subdivisions = 1 is planDp itself. The returned terms are
+/// evaluate()'s on `map`.
+PlanResult planDpRefined(const ConfigMap& map,
+                         std::size_t branch,
+                         const PlannerSettings& settings,
+                         bool continuous,
+                         int subdivisions,
+                         std::optional<double> start_theta = {});
 
 }  // namespace scanplan::planner

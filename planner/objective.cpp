@@ -44,8 +44,8 @@ double detail::mapValue(const ConfigMap& map,
   const double n = static_cast<double>(na);
   double u = (theta - g.angle0) / g.angle_step;  // in grid steps
   if (continuous) {
-    u = std::fmod(u, n);
-    if (u < 0.0) u += n;
+    if (u < 0.0 || u >= n) u -= n * std::floor(u / n);  // cheaper than fmod in the hot loop
+    if (u >= n) u = 0.0;                                // u just below 0 can round up to n
   } else if (u < -1e-9 || u > n - 1.0 + 1e-9) {
     return 0.0;
   }

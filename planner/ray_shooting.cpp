@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -14,14 +16,22 @@ namespace scanplan::planner {
 
 namespace {
 
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+constexpr std::size_t kMergeEvery = 10;  // samples between checks for runs that met
+
 // One run from one start angle: the path so far and, when it stopped early, where and why.
 struct Run {
   std::vector<double> theta;  // rad, unwrapped; complete when it has one angle per time sample
-  std::string why;            // empty when complete
+  std::string why;            // why it stopped early; empty while it goes on
+  double omega = 0.0;         // rad/s, from rest
+  double cost = 0.0;          // s, the objective terms of the applied steps
+  std::size_t last_i = 0;     // the ray applied last
+  bool merged = false;        // dropped: another run reached the same state more cheaply
 };
 
 struct RayScore {
   bool blocked_first = true;  // f = 0 on the first step: the ray can never be applied
+  bool pruned = false;        // stopped early: already costlier than the best ray so far
   double cost = 0.0;          // s
 };
 
@@ -58,8 +68,10 @@ PlanResult planRayShooting(const ConfigMap& map,
     return detail::mapValue(map, g, branch, theta, k, continuous);
   };
 
-  // Rolls one ray out from (theta, omega) at sample k for h steps.
-  const auto shoot = [&](double theta, double omega, std::size_t k, std::size_t h, double a) {
+  // Rolls one ray out from (theta, omega) at sample k for h steps. Every term is >= 0, so a ray
+  // whose partial cost already exceeds `bound` cannot win: it stops there (exact pruning).
+  const auto shoot = [&](double theta, double omega, std::size_t k, std::size_t h, double a,
+                         double bound) {
     RayScore s;
     for (std::size_t j = 1; j <= h; ++j) {
       const double w = std::clamp(omega + a * dt, -w_max, w_max);
@@ -74,44 +86,62 @@ PlanResult planRayShooting(const ConfigMap& map,
       s.blocked_first = false;
       s.cost += (-std::log(f) + settings.k_omega * w * w) * dt;
       if (k + j >= 2) s.cost += settings.k_alpha * alpha * alpha * dt;  // as evaluate()
+      if (s.cost > bound) {
+        s.pruned = true;
+        return s;
+      }
     }
     return s;
   };
 
-  const auto runFrom = [&](double theta0) {
-    Run run;
-    run.theta.reserve(nt);
-    run.theta.push_back(theta0);
-    double omega = 0.0;  // from rest
-    for (std::size_t k = 0; k + 1 < nt; ++k) {
+  // Advances a run from its last sample to sample k_end (or until it is blocked).
+  const auto advance = [&](Run& run, std::size_t k_end) {
+    double& omega = run.omega;
+    std::size_t& last_i = run.last_i;
+    for (std::size_t k = run.theta.size() - 1; k < k_end; ++k) {
       const std::size_t h = std::min(static_cast<std::size_t>(rs.horizon), nt - 1 - k);
       const double theta = run.theta.back();
+      // The previous step's ray first: it usually stays best, and its cost bounds the others.
+      // Candidates are ranked by (cost, position in `accel`), so the order of trial does not
+      // change the choice.
       RayScore best;
-      double best_a = 0.0;
-      bool first = true;
-      for (const double a : accel) {
-        const RayScore s = shoot(theta, omega, k, h, a);
+      std::size_t best_i = n_rays;
+      const auto tryRay = [&](std::size_t i) {
+        const double bound = best.blocked_first ? kInfinity : best.cost;
+        const RayScore s = shoot(theta, omega, k, h, accel[i], bound);
+        if (s.pruned) return;
         const bool better =
-            s.blocked_first != best.blocked_first ? !s.blocked_first : s.cost < best.cost;
-        if (first || better) {
+            best_i == n_rays || (s.blocked_first != best.blocked_first
+                                     ? !s.blocked_first
+                                     : s.cost < best.cost || (s.cost == best.cost && i < best_i));
+        if (better) {
           best = s;
-          best_a = a;
-          first = false;
+          best_i = i;
         }
+      };
+      tryRay(last_i);
+      for (std::size_t i = 0; i < n_rays; ++i) {
+        if (i != last_i) tryRay(i);
       }
+      last_i = best_i;
+      const double best_a = accel[best_i];
       if (best.blocked_first) {
         run.why = fmt::format(
             "time sample {} (t = {} s): f = 0 wherever the speed and acceleration bounds allow "
             "from theta = {} rad, omega = {} rad/s",
             k + 1, map.times[k + 1], theta, omega);
-        return run;
+        return;
       }
       const double w = std::clamp(omega + best_a * dt, -w_max, w_max);
       run.theta.push_back(theta + w * dt);
       // Carry evaluate()'s finite difference so its rounding does not accumulate.
-      omega = (run.theta.back() - theta) / dt;
+      const double omega_new = (run.theta.back() - theta) / dt;
+      const double alpha = (omega_new - omega) / dt;
+      run.cost +=
+          (-std::log(fAt(run.theta.back(), k + 1)) + settings.k_omega * omega_new * omega_new) * dt;
+      if (k >= 1) run.cost += settings.k_alpha * alpha * alpha * dt;
+      omega = omega_new;
     }
-    return run;
   };
 
   PlanResult result;
@@ -139,9 +169,38 @@ PlanResult planRayShooting(const ConfigMap& map,
     return finish();
   }
 
+  // The runs advance in lockstep, kMergeEvery samples at a time. In between, a run that has come
+  // within half a grid step and half an acceleration step of another run's state, at a higher
+  // cost so far, is dropped: from (nearly) the same state both would shoot (nearly) the same
+  // rays, so most starts collapse into the few corridors of the map after a while.
   std::vector<Run> runs(starts.size());
-  tbb::parallel_for(std::size_t{0}, starts.size(),
-                    [&](std::size_t i) { runs[i] = runFrom(starts[i]); });
+  for (std::size_t i = 0; i < starts.size(); ++i) {
+    runs[i].theta.reserve(nt);
+    runs[i].theta.push_back(starts[i]);
+    runs[i].cost = -std::log(fAt(starts[i], 0)) * dt;
+  }
+  const auto going = [&](const Run& r) {
+    return !r.merged && r.why.empty() && r.theta.size() < nt;
+  };
+  const double theta_near = 0.5 * g.angle_step, omega_near = 0.5 * settings.alpha_max * dt;
+  for (std::size_t k_end = 0; k_end + 1 < nt;) {
+    k_end = std::min(nt - 1, k_end + kMergeEvery);
+    tbb::parallel_for(std::size_t{0}, runs.size(), [&](std::size_t i) {
+      if (going(runs[i])) advance(runs[i], k_end);
+    });
+    const auto alive = [](const Run& r) { return !r.merged && r.why.empty(); };
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+      for (std::size_t j = i + 1; j < runs.size() && alive(runs[i]); ++j) {
+        if (!alive(runs[j])) continue;
+        double d = runs[i].theta.back() - runs[j].theta.back();
+        if (continuous) d = std::remainder(d, 2.0 * std::numbers::pi);
+        if (std::abs(d) > theta_near || std::abs(runs[i].omega - runs[j].omega) > omega_near) {
+          continue;
+        }
+        (runs[j].cost < runs[i].cost ? runs[i] : runs[j]).merged = true;
+      }
+    }
+  }
 
   // Combine in start order: the lowest feasible J wins; otherwise the furthest run explains why.
   std::size_t furthest = 0;
@@ -162,7 +221,9 @@ PlanResult planRayShooting(const ConfigMap& map,
           "{} rad/s^2",
           terms.min_f, terms.min_f_sample, terms.max_abs_omega, terms.max_abs_alpha);
     }
-    if (run.theta.size() > runs[furthest].theta.size()) furthest = i;
+    if (!run.merged && (runs[furthest].merged || run.theta.size() > runs[furthest].theta.size())) {
+      furthest = i;
+    }
   }
   if (result.status != PlanResult::Status::kSolved) {
     result.reason = fmt::format(

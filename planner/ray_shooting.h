@@ -29,7 +29,11 @@ struct RayShootingSettings {
 /// Each run starts from rest (ω_0 = 0). With `start_theta` (rad) one run starts there; otherwise
 /// up to `starts` runs start from grid angles spread evenly over the first column's cells with
 /// f > 0, and the feasible path with the lowest J = evaluate() wins (ties: the lower start angle
-/// index). kSolved only when evaluate() calls the path feasible; otherwise kNoPath with the reason
+/// index). The runs advance in lockstep; every 10 samples a run that has come within half a grid
+/// step (θ) and half an acceleration step (α_max·Δt, ω) of another run's state at a higher cost
+/// so far is dropped — from nearly the same state both would shoot nearly the same rays — so
+/// starts that collapse into one corridor cost one run. Each ray stops as soon as its partial
+/// cost exceeds the best complete ray's (every term is ≥ 0), which does not change the choice. kSolved only when evaluate() calls the path feasible; otherwise kNoPath with the reason
 /// (the furthest time sample any run reached, and why it stopped). Deterministic: the runs are
 /// independent (TBB over starts) and combined in start order.
 PlanResult planRayShooting(const ConfigMap& map,

@@ -334,4 +334,68 @@ TEST(DpPlanner, RespectsBoundsAndIsDeterministic) {
   }
 }
 
+// The finer grid holds every path of the map grid (a coarse step is r fine steps, and the bounds
+// allow at least r times the steps), so its optimum is never worse; where the map grid cannot
+// change speed (A = 0) it is strictly better on a drifting corridor.
+TEST(DpPlanner, RefinedGridIsNeverWorseAndResolvesAcceleration) {
+  const double dt = 0.1;
+  // A corridor 3 cells wide whose centre drifts by a quarter turn over the run, f peaked in it.
+  const std::size_t na = 72, nt = 60;
+  const auto fill = [&](std::size_t a, std::size_t k) {
+    const double centre = 10.0 + 8.0 * std::sin(static_cast<double>(k) * 0.08);
+    const double d = std::abs(static_cast<double>(a) - centre);
+    return d > 3.0 ? 0.0f : static_cast<float>(1.0 - 0.2 * d);
+  };
+  for (const bool continuous : {true, false}) {
+    SCOPED_TRACE(continuous ? "continuous" : "limited");
+    const ConfigMap map = makeMap(na, nt, dt, continuous, fill, 2 * kPi / na);
+    PlannerSettings s;
+    s.omega_max = 3.0 * angleStep(map) / dt;
+    s.alpha_max = 0.6 * angleStep(map) / (dt * dt);  // A = 0 on the map grid
+    ASSERT_EQ(autoAngleSubdivisions(map, 0, s, continuous, 1), 2);
+    ASSERT_EQ(autoAngleSubdivisions(map, 0, s, continuous, 3), 5);
+    const PlanResult coarse = planDp(map, 0, s, continuous);
+    const PlanResult fine = planDpRefined(map, 0, s, continuous, 5);
+    expectConsistent(map, fine, s, continuous);
+    ASSERT_EQ(coarse.status, Status::kNoPath) << "constant speed cannot follow the corridor";
+    // With subdivisions 1 the refined planner is planDp itself.
+    const PlanResult same = planDpRefined(map, 0, s, continuous, 1);
+    EXPECT_EQ(same.status, coarse.status);
+    // And on a map the coarse grid can solve, the finer optimum is never worse.
+    PlannerSettings loose = s;
+    loose.alpha_max = 1.5 * angleStep(map) / (dt * dt);
+    const PlanResult c2 = planDp(map, 0, loose, continuous);
+    const PlanResult f2 = planDpRefined(map, 0, loose, continuous, 3);
+    expectConsistent(map, c2, loose, continuous);
+    expectConsistent(map, f2, loose, continuous);
+    EXPECT_LE(f2.terms.total, c2.terms.total + 1e-9);
+  }
+}
+
+// The refined optimum equals planDp on a map built directly at the finer resolution with the same
+// interpolated values (the resampling is mapValue(), nothing else).
+TEST(DpPlanner, RefinedEqualsDpOnTheResampledMap) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(0.2, 1.0);
+  const std::size_t na = 24, nt = 12, r = 3;
+  std::vector<float> values(na * nt);
+  for (float& v : values) v = static_cast<float>(unit(rng));
+  const ConfigMap map =
+      makeMap(na, nt, 0.1, true, [&](std::size_t a, std::size_t k) { return values[a * nt + k]; });
+  const ConfigMap fine = makeMap(na * r, nt, 0.1, true, [&](std::size_t a, std::size_t k) {
+    return static_cast<float>(
+        mapValue(map, 0, 2 * kPi * static_cast<double>(a) / static_cast<double>(na * r), k, true));
+  });
+  PlannerSettings s;
+  s.alpha_max = 2.0 * angleStep(fine) / 0.01;
+  s.omega_max = 4.0 * angleStep(fine) / 0.1;
+  const PlanResult a = planDpRefined(map, 0, s, true, static_cast<int>(r));
+  const PlanResult b = planDp(fine, 0, s, true);
+  ASSERT_EQ(a.status, Status::kSolved) << a.reason;
+  ASSERT_EQ(b.status, Status::kSolved) << b.reason;
+  ASSERT_EQ(a.theta.size(), b.theta.size());
+  for (std::size_t k = 0; k < a.theta.size(); ++k) EXPECT_NEAR(a.theta[k], b.theta[k], 1e-12);
+  EXPECT_NEAR(a.terms.total, b.terms.total, 1e-6 * b.terms.total);
+}
+
 }  // namespace
