@@ -36,6 +36,14 @@ void setUpLogging(int verbosity) {
   spdlog::set_default_logger(logger);
 }
 
+void addOverrides(CLI::App& cmd, std::vector<std::string>& overrides) {
+  cmd.add_option("--set", overrides,
+                 "Override a job value, as if the file said so: key.path=value (repeatable), e.g. "
+                 "--set planner.ray.horizon=20 --set scan.paths[0].height_mm=60")
+      ->type_name("KEY=VALUE")
+      ->allow_extra_args(false);
+}
+
 }  // namespace
 
 int run(int argc, char** argv) {
@@ -57,6 +65,18 @@ int run(int argc, char** argv) {
       ->required()
       ->check(CLI::ExistingFile);
   plan_cmd->add_option("-o,--out", plan.out_dir, "Output folder (created)")->required();
+  plan_cmd
+      ->add_option(
+          "--planner", plan.planner,
+          "Table-angle search: ray (Ray Shooting), dp (exact optimum on the grid) or ompl; "
+          "default: the job's planner.method")
+      ->check(CLI::IsMember({"ray", "dp", "ompl"}));
+  plan_cmd->add_flag("--compare", plan.compare,
+                     "Also run the other planners on the chosen branch: J side by side, every path "
+                     "drawn in configmap_path.png");
+  plan_cmd->add_flag("--refine", plan.refine,
+                     "Smooth the path with NLopt (planner.refine.enabled: true does the same)");
+  addOverrides(*plan_cmd, plan.overrides);
 
   PlanOptions path;
   auto* path_cmd = app.add_subcommand(
@@ -65,12 +85,14 @@ int run(int argc, char** argv) {
       ->required()
       ->check(CLI::ExistingFile);
   path_cmd->add_option("-o,--out", path.out_dir, "Output folder (created)")->required();
+  addOverrides(*path_cmd, path.overrides);
 
   PlanOptions map;
   auto* map_cmd = app.add_subcommand(
       "map", "Build the configuration maps over table angle x time: npy layers, json, images");
   map_cmd->add_option("job", map.job_file, "Job file (YAML)")->required()->check(CLI::ExistingFile);
   map_cmd->add_option("-o,--out", map.out_dir, "Output folder (created)")->required();
+  addOverrides(*map_cmd, map.overrides);
 
   auto* job_cmd = app.add_subcommand("job", "Inspect job files");
   job_cmd->require_subcommand(1);

@@ -5,8 +5,12 @@
 #include <string>
 #include <vector>
 
+#include <mutex>
+
 #include "cli/app.h"
+#include "cli/image_io.h"
 #include "cli/job.h"
+#include "kinematics/mesh.h"
 #include "planner/config_map.h"
 
 namespace scanplan::cli {
@@ -34,7 +38,47 @@ struct IkOptions {
 struct PlanOptions {
   std::filesystem::path job_file;
   std::filesystem::path out_dir;
+  std::vector<std::string> overrides;  ///< --set key.path=value
+  std::string planner;                 ///< --planner: empty = the job's planner.method
+  bool compare = false;                ///< --compare: run every planner, draw every path
+  bool refine = false;                 ///< --refine: NLopt refinement whatever the job says
 };
+
+/// A progress line on stderr, only on a terminal (scripts and CI logs stay clean). Callable
+/// from worker threads.
+class Progress {
+ public:
+  explicit Progress(std::string label);
+  void operator()(std::size_t done, std::size_t total);
+
+ private:
+  std::string label_;
+  bool enabled_;
+  std::mutex mutex_;
+  int last_ = -1;
+};
+
+/// The part, the laser window and the generated scan path of a job.
+struct PathContext {
+  kinematics::LoadedMesh part;
+  scanner::LaserWindow window;
+  scanner::GeneratedPath generated;
+};
+/// Loads the part and generates the scan path; errors name the job.
+PathContext buildPath(const JobSpec& job, const kinematics::CellModel& cell);
+/// The scanner window and path elements, one line each.
+std::string pathSummary(const PathContext& context);
+/// Three views of the path around the part.
+RgbImage pathPicture(const PathContext& context);
+/// The f layer of one branch, min-pooled to at most 2000 x 1200 px (time →, angle ↑).
+RgbImage mapGreyImage(const planner::ConfigMap& map, std::size_t branch);
+/// `stem`.png and `stem`.svg (the PNG framed with axes, title and legend).
+void writeFigure(const std::filesystem::path& dir,
+                 const std::string& stem,
+                 const RgbImage& image,
+                 const planner::ConfigMap& map,
+                 const std::string& title,
+                 std::vector<std::pair<Rgb, std::string>> legend);
 
 struct CheckOptions {
   std::filesystem::path job_file;
@@ -49,6 +93,21 @@ ExitCode runPath(const PlanOptions& options);
 ExitCode runMap(const PlanOptions& options);
 /// The job's scan path (loads the part, casts rays for the standoff); errors name the job.
 scanner::GeneratedPath generateScanPath(const JobSpec& job, const kinematics::CellModel& cell);
+/// A configuration map and how long it took.
+struct MapRun {
+  planner::ConfigMap map;
+  double seconds = 0.0;
+};
+/// The job's maps (every branch the job asks for) over the scan path, progress on a terminal.
+MapRun computeMap(const JobSpec& job,
+                  const collision::Scene& scene,
+                  const kinematics::ScanPath& path);
+/// One line for the map, one per branch.
+std::string mapSummary(const MapRun& run);
+/// path.csv and path.png into `dir`.
+void writePathOutputs(const std::filesystem::path& dir, const PathContext& context);
+/// The file list of writePathOutputs() + writeMapOutputs(), for summaries.
+extern const char* const kMapFilesNote;
 /// Path, maps and their files into `out`; returns the summary lines.
 std::string buildAndWriteMaps(const JobSpec& job,
                               const kinematics::CellModel& cell,
@@ -60,6 +119,12 @@ void writeMapOutputs(const std::filesystem::path& dir,
 ExitCode runFk(const FkOptions& options);
 ExitCode runIk(const IkOptions& options);
 ExitCode runJobShow(const std::filesystem::path& job_file);
+/// The job's part mesh; errors name the job and the field.
+kinematics::LoadedMesh loadPart(const JobSpec& job, const kinematics::CellModel& cell);
+/// Without a scan path: can the sensor reach a pose above the part as the table turns?
+std::string reachCheck(const JobSpec& job,
+                       const kinematics::CellModel& cell,
+                       const kinematics::LoadedMesh& part);
 ExitCode runPlan(const PlanOptions& options);
 
 /// Parses "a,b,c" into exactly `count` finite numbers; errors name the option.

@@ -13,7 +13,6 @@
 #include "planner/constraints.h"
 
 namespace scanplan::cli {
-namespace {
 
 kinematics::LoadedMesh loadPart(const JobSpec& job, const kinematics::CellModel& cell) {
   try {
@@ -74,45 +73,10 @@ std::string reachCheck(const JobSpec& job,
   return s;
 }
 
-}  // namespace
-
 ExitCode runJobShow(const std::filesystem::path& job_file) {
   const JobSpec job = loadJob(job_file);
   buildCell(job);  // the robot model checks (OPW against DH) belong to "valid"
   std::fputs(jobToYaml(job).c_str(), stdout);
-  return ExitCode::kOk;
-}
-
-ExitCode runPlan(const PlanOptions& options) {
-  const JobSpec job = loadJob(options.job_file);
-  const kinematics::CellModel cell = buildCell(job);
-  const kinematics::LoadedMesh part = loadPart(job, cell);
-
-  std::string summary;
-  summary += fmt::format("job        {} ({})\n", job.name, job.source.string());
-  summary += fmt::format("robot      {}\n", cell.robot.name());
-  summary += fmt::format(
-      "table      radius {} mm, axis at ({:.1f}, {:.1f}, {:.1f}) mm, {}\n", job.table.radius_mm,
-      toMm(cell.table.X_WA.translation().x()), toMm(cell.table.X_WA.translation().y()),
-      toMm(cell.table.X_WA.translation().z()),
-      job.table.continuous ? "continuous"
-                           : fmt::format("{} … {} deg", job.table.min_deg, job.table.max_deg));
-  const Eigen::Vector3d size = part.mesh.bounds().sizes() * kMToMm;
-  summary += fmt::format("part       {}: {} triangles, {:.1f} x {:.1f} x {:.1f} mm, {}\n",
-                         job.part.mesh.as_written, part.mesh.triangles.size(), size.x(), size.y(),
-                         size.z(), part.mesh.isClosed() ? "closed" : "open (has holes)");
-  prepareOutputDir(options.out_dir);
-  writeFileAtomically(options.out_dir / "job.yaml", jobToYaml(job));
-  if (job.scan.paths.empty()) {
-    summary += reachCheck(job, cell, part);
-  } else {
-    summary += buildAndWriteMaps(job, cell, options.out_dir);
-  }
-  summary += fmt::format("wrote      {}\n", (options.out_dir / "job.yaml").string());
-  summary +=
-      "note       planning (Ray Shooting, DP, OMPL), validation, scanner simulation and robot "
-      "programs are not built yet: this run writes the scan path and the configuration maps\n";
-  std::fputs(summary.c_str(), stdout);
   return ExitCode::kOk;
 }
 

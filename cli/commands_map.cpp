@@ -27,34 +27,110 @@ namespace {
 constexpr int kMaxImageWidth = 2000;
 constexpr int kMaxImageHeight = 1200;
 
-// A progress line on stderr, only on a terminal (scripts and CI logs stay clean).
-class Progress {
- public:
-  explicit Progress(std::string label)
-      : label_(std::move(label)), enabled_(isatty(STDERR_FILENO) != 0) {}
-  void operator()(std::size_t done, std::size_t total) {
-    if (!enabled_) return;
-    const std::lock_guard<std::mutex> lock(mutex_);
-    const int percent = static_cast<int>(100 * done / std::max<std::size_t>(total, 1));
-    if (percent == last_ && done != total) return;
-    last_ = percent;
-    std::fprintf(stderr, "\r%s %3d%% (%zu / %zu)%s", label_.c_str(), percent, done, total,
-                 done == total ? "\n" : "");
-    std::fflush(stderr);
+// Min-pooled map image for one branch: time left → right, angle bottom → top.
+template <class Colour>
+RgbImage mapImage(const planner::ConfigMap& map, std::size_t branch, Colour colour) {
+  const int nt = static_cast<int>(map.times.size()), na = static_cast<int>(map.angles.size());
+  const int w = std::min(nt, kMaxImageWidth), h = std::min(na, kMaxImageHeight);
+  RgbImage image = RgbImage::filled(w, h);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      // The block of cells behind this pixel; the worst cell represents it (forbidden bands
+      // must not vanish when a map is shrunk).
+      const int a0 = (h - 1 - y) * na / h, a1 = std::max(a0 + 1, (h - y) * na / h);
+      const int t0 = x * nt / w, t1 = std::max(t0 + 1, (x + 1) * nt / w);
+      std::size_t worst =
+          map.index(branch, static_cast<std::size_t>(a0), static_cast<std::size_t>(t0));
+      for (int a = a0; a < a1; ++a)
+        for (int t = t0; t < t1; ++t) {
+          const std::size_t i =
+              map.index(branch, static_cast<std::size_t>(a), static_cast<std::size_t>(t));
+          if (map.f[i] < map.f[worst]) worst = i;
+        }
+      image.set(x, y, colour(worst));
+    }
   }
+  return image;
+}
 
- private:
-  std::string label_;
-  bool enabled_;
-  std::mutex mutex_;
-  int last_ = -1;
-};
+// Fig. 6(b): the map wrapped on a cylinder (axis = time), seen from the side; the front half
+// (table angles around 0°) above, the back half (around 180°) below.
+RgbImage cylinderImage(const planner::ConfigMap& map, std::size_t branch) {
+  const int nt = static_cast<int>(map.times.size());
+  const int w = std::min(nt, kMaxImageWidth), half = 240, gap = 12;
+  RgbImage image = RgbImage::filled(w, 2 * half + gap, {255, 255, 255});
+  const double step = map.angles.size() > 1 ? map.angles[1] - map.angles[0] : 1.0;
+  for (int view = 0; view < 2; ++view) {
+    const double centre = view == 0 ? 0.0 : std::numbers::pi;
+    for (int y = 0; y < half; ++y) {
+      const double v = 1.0 - 2.0 * (y + 0.5) / half;
+      const double alpha = std::asin(v);  // angle on the cylinder seen at this row
+      double theta = std::fmod(centre + alpha + 4.0 * std::numbers::pi, 2.0 * std::numbers::pi);
+      if (theta < map.angles.front() - 1e-9 || theta > map.angles.back() + step) continue;
+      const auto a = std::min(
+          map.angles.size() - 1,
+          static_cast<std::size_t>(std::max(0.0, std::floor((theta - map.angles.front()) / step))));
+      const double shade = 0.35 + 0.65 * std::cos(alpha);
+      for (int x = 0; x < w; ++x) {
+        const auto t = static_cast<std::size_t>(x * nt / w);
+        const double f = map.f[map.index(branch, a, t)];
+        image.set(x, view * (half + gap) + y, grey(shade * f));
+      }
+    }
+  }
+  return image;
+}
 
-struct PathContext {
-  kinematics::LoadedMesh part;
-  scanner::LaserWindow window;
-  scanner::GeneratedPath generated;
-};
+std::vector<kinematics::IkBranch> mapBranches(const JobSpec& job) {
+  if (job.map.branch != "auto") return {*parseBranch(job.map.branch)};
+  std::vector<kinematics::IkBranch> all;
+  for (int i = 0; i < 8; ++i) all.push_back(kinematics::IkBranch::fromIndex(i));
+  return all;
+}
+
+}  // namespace
+
+void writeFigure(const std::filesystem::path& dir,
+                 const std::string& stem,
+                 const RgbImage& image,
+                 const planner::ConfigMap& map,
+                 const std::string& title,
+                 std::vector<std::pair<Rgb, std::string>> legend) {
+  writePng(dir / (stem + ".png"), image);
+  SvgFigure figure;
+  figure.png_file = stem + ".png";
+  figure.png_width = image.width;
+  figure.png_height = image.height;
+  figure.title = title;
+  figure.x_label = "time [s]";
+  figure.y_label = "table angle [deg]";
+  figure.x_min = map.times.front();
+  figure.x_max = map.times.back();
+  const double step = map.angles.size() > 1 ? map.angles[1] - map.angles[0] : 0.0;
+  figure.y_min = toDeg(map.angles.front());
+  figure.y_max = toDeg(map.angles.back() + step);
+  figure.legend = std::move(legend);
+  writeFileAtomically(dir / (stem + ".svg"), svgFigure(figure));
+}
+
+RgbImage mapGreyImage(const planner::ConfigMap& map, std::size_t branch) {
+  return mapImage(map, branch, [&](std::size_t i) { return grey(map.f[i]); });
+}
+
+// A progress line on stderr, only on a terminal (scripts and CI logs stay clean).
+Progress::Progress(std::string label)
+    : label_(std::move(label)), enabled_(isatty(STDERR_FILENO) != 0) {}
+
+void Progress::operator()(std::size_t done, std::size_t total) {
+  if (!enabled_) return;
+  const std::lock_guard<std::mutex> lock(mutex_);
+  const int percent = static_cast<int>(100 * done / std::max<std::size_t>(total, 1));
+  if (percent == last_ && done != total) return;
+  last_ = percent;
+  std::fprintf(stderr, "\r%s %3d%% (%zu / %zu)%s", label_.c_str(), percent, done, total,
+               done == total ? "\n" : "");
+  std::fflush(stderr);
+}
 
 PathContext buildPath(const JobSpec& job, const kinematics::CellModel& cell) {
   if (job.scan.paths.empty()) {
@@ -124,98 +200,12 @@ RgbImage pathPicture(const PathContext& c) {
   return out;
 }
 
-// Min-pooled map image for one branch: time left → right, angle bottom → top.
-template <class Colour>
-RgbImage mapImage(const planner::ConfigMap& map, std::size_t branch, Colour colour) {
-  const int nt = static_cast<int>(map.times.size()), na = static_cast<int>(map.angles.size());
-  const int w = std::min(nt, kMaxImageWidth), h = std::min(na, kMaxImageHeight);
-  RgbImage image = RgbImage::filled(w, h);
-  for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
-      // The block of cells behind this pixel; the worst cell represents it (forbidden bands
-      // must not vanish when a map is shrunk).
-      const int a0 = (h - 1 - y) * na / h, a1 = std::max(a0 + 1, (h - y) * na / h);
-      const int t0 = x * nt / w, t1 = std::max(t0 + 1, (x + 1) * nt / w);
-      std::size_t worst =
-          map.index(branch, static_cast<std::size_t>(a0), static_cast<std::size_t>(t0));
-      for (int a = a0; a < a1; ++a)
-        for (int t = t0; t < t1; ++t) {
-          const std::size_t i =
-              map.index(branch, static_cast<std::size_t>(a), static_cast<std::size_t>(t));
-          if (map.f[i] < map.f[worst]) worst = i;
-        }
-      image.set(x, y, colour(worst));
-    }
-  }
-  return image;
-}
-
-// Fig. 6(b): the map wrapped on a cylinder (axis = time), seen from the side; the front half
-// (table angles around 0°) above, the back half (around 180°) below.
-RgbImage cylinderImage(const planner::ConfigMap& map, std::size_t branch) {
-  const int nt = static_cast<int>(map.times.size());
-  const int w = std::min(nt, kMaxImageWidth), half = 240, gap = 12;
-  RgbImage image = RgbImage::filled(w, 2 * half + gap, {255, 255, 255});
-  const double step = map.angles.size() > 1 ? map.angles[1] - map.angles[0] : 1.0;
-  for (int view = 0; view < 2; ++view) {
-    const double centre = view == 0 ? 0.0 : std::numbers::pi;
-    for (int y = 0; y < half; ++y) {
-      const double v = 1.0 - 2.0 * (y + 0.5) / half;
-      const double alpha = std::asin(v);  // angle on the cylinder seen at this row
-      double theta = std::fmod(centre + alpha + 4.0 * std::numbers::pi, 2.0 * std::numbers::pi);
-      if (theta < map.angles.front() - 1e-9 || theta > map.angles.back() + step) continue;
-      const auto a = std::min(
-          map.angles.size() - 1,
-          static_cast<std::size_t>(std::max(0.0, std::floor((theta - map.angles.front()) / step))));
-      const double shade = 0.35 + 0.65 * std::cos(alpha);
-      for (int x = 0; x < w; ++x) {
-        const auto t = static_cast<std::size_t>(x * nt / w);
-        const double f = map.f[map.index(branch, a, t)];
-        image.set(x, view * (half + gap) + y, grey(shade * f));
-      }
-    }
-  }
-  return image;
-}
-
-void writeFigure(const std::filesystem::path& dir,
-                 const std::string& stem,
-                 const RgbImage& image,
-                 const planner::ConfigMap& map,
-                 const std::string& title,
-                 std::vector<std::pair<Rgb, std::string>> legend) {
-  writePng(dir / (stem + ".png"), image);
-  SvgFigure figure;
-  figure.png_file = stem + ".png";
-  figure.png_width = image.width;
-  figure.png_height = image.height;
-  figure.title = title;
-  figure.x_label = "time [s]";
-  figure.y_label = "table angle [deg]";
-  figure.x_min = map.times.front();
-  figure.x_max = map.times.back();
-  const double step = map.angles.size() > 1 ? map.angles[1] - map.angles[0] : 0.0;
-  figure.y_min = toDeg(map.angles.front());
-  figure.y_max = toDeg(map.angles.back() + step);
-  figure.legend = std::move(legend);
-  writeFileAtomically(dir / (stem + ".svg"), svgFigure(figure));
-}
-
-std::vector<kinematics::IkBranch> mapBranches(const JobSpec& job) {
-  if (job.map.branch != "auto") return {*parseBranch(job.map.branch)};
-  std::vector<kinematics::IkBranch> all;
-  for (int i = 0; i < 8; ++i) all.push_back(kinematics::IkBranch::fromIndex(i));
-  return all;
-}
-
-}  // namespace
-
 scanner::GeneratedPath generateScanPath(const JobSpec& job, const kinematics::CellModel& cell) {
   return buildPath(job, cell).generated;
 }
 
 ExitCode runPath(const PlanOptions& options) {
-  const JobSpec job = loadJob(options.job_file);
+  const JobSpec job = loadJob(options.job_file, options.overrides);
   const kinematics::CellModel cell = buildCell(job);
   const PathContext context = buildPath(job, cell);
   prepareOutputDir(options.out_dir);
@@ -229,33 +219,29 @@ ExitCode runPath(const PlanOptions& options) {
   return ExitCode::kOk;
 }
 
-std::string buildAndWriteMaps(const JobSpec& job,
-                              const kinematics::CellModel& cell,
-                              const std::filesystem::path& out) {
-  const PathContext context = buildPath(job, cell);
-  const collision::Scene scene(cell, clearanceConfig(job));
+MapRun computeMap(const JobSpec& job,
+                  const collision::Scene& scene,
+                  const kinematics::ScanPath& path) {
   planner::MapRequest request;
   request.angle_step = deg(job.map.angle_step_deg);
   request.branches = mapBranches(job);
   request.memory_limit_bytes = static_cast<std::size_t>(job.map.memory_limit_mb * 1024.0 * 1024.0);
-  prepareOutputDir(out);
   Progress progress("map");
   const auto start = std::chrono::steady_clock::now();
-  const planner::ConfigMap map =
-      planner::buildConfigMap(scene, constraintSettings(job), context.generated.path, request,
-                              [&progress](std::size_t d, std::size_t t) { progress(d, t); });
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  writeFileAtomically(out / "path.csv", scanner::pathToCsv(context.generated.path));
-  writePng(out / "path.png", pathPicture(context));
-  writeMapOutputs(out, job, map);
+  MapRun run;
+  run.map = planner::buildConfigMap(scene, constraintSettings(job), path, request,
+                                    [&progress](std::size_t d, std::size_t t) { progress(d, t); });
+  run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return run;
+}
 
-  std::string text = pathSummary(context);
+std::string mapSummary(const MapRun& run) {
+  const planner::ConfigMap& map = run.map;
   const std::size_t cells = map.cellsPerBranch();
-  text += fmt::format(
+  std::string text = fmt::format(
       "map        {} angles x {} samples x {} branch(es) = {} cells in {:.1f} s ({:.0f} cells/s)\n",
       map.angles.size(), map.times.size(), map.branches.size(), cells * map.branches.size(),
-      seconds, static_cast<double>(cells) / seconds);
+      run.seconds, static_cast<double>(cells) / run.seconds);
   for (std::size_t b = 0; b < map.branches.size(); ++b) {
     std::size_t feasible = 0;
     double sum = 0.0;
@@ -268,16 +254,33 @@ std::string buildAndWriteMaps(const JobSpec& job,
                     100.0 * static_cast<double>(feasible) / static_cast<double>(cells),
                     sum / static_cast<double>(cells));
   }
-  text += fmt::format(
-      "wrote      {}: path.csv, path.png, configmap.npy (+ _joint, _singularity, _clearance, "
-      "_limit), "
-      "configmap.json, configmap.png/.svg, configmap_why.png/.svg, configmap_cylinder.png\n",
-      out.string());
   return text;
 }
 
+void writePathOutputs(const std::filesystem::path& dir, const PathContext& context) {
+  writeFileAtomically(dir / "path.csv", scanner::pathToCsv(context.generated.path));
+  writePng(dir / "path.png", pathPicture(context));
+}
+
+const char* const kMapFilesNote =
+    "path.csv, path.png, configmap.npy (+ _joint, _singularity, _clearance, _limit), "
+    "configmap.json, configmap.png/.svg, configmap_why.png/.svg, configmap_cylinder.png";
+
+std::string buildAndWriteMaps(const JobSpec& job,
+                              const kinematics::CellModel& cell,
+                              const std::filesystem::path& out) {
+  const PathContext context = buildPath(job, cell);
+  const collision::Scene scene(cell, clearanceConfig(job));
+  prepareOutputDir(out);
+  const MapRun run = computeMap(job, scene, context.generated.path);
+  writePathOutputs(out, context);
+  writeMapOutputs(out, job, run.map);
+  return pathSummary(context) + mapSummary(run) +
+         fmt::format("wrote      {}: {}\n", out.string(), kMapFilesNote);
+}
+
 ExitCode runMap(const PlanOptions& options) {
-  const JobSpec job = loadJob(options.job_file);
+  const JobSpec job = loadJob(options.job_file, options.overrides);
   const kinematics::CellModel cell = buildCell(job);
   std::fputs(buildAndWriteMaps(job, cell, options.out_dir).c_str(), stdout);
   return ExitCode::kOk;
@@ -344,9 +347,8 @@ void writeMapOutputs(const std::filesystem::path& dir,
   writeFileAtomically(dir / "configmap.json", json.str());
 
   const std::string branch = map.branches[shown].words();
-  writeFigure(dir, "configmap", mapImage(map, shown, [&](std::size_t i) { return grey(map.f[i]); }),
-              map, "Configuration map f (Eq. 6), " + branch + ": white = free, black = forbidden",
-              {});
+  writeFigure(dir, "configmap", mapGreyImage(map, shown), map,
+              "Configuration map f (Eq. 6), " + branch + ": white = free, black = forbidden", {});
   // Colour by the limiting constraint, brighter where f is higher.
   std::vector<std::pair<Rgb, std::string>> legend;
   for (int k = 0; k < planner::kLimitCount; ++k)

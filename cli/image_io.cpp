@@ -301,6 +301,30 @@ Rgb grey(double f) {
   return {v, v, v};
 }
 
+RgbImage upscale(const RgbImage& image, int factor) {
+  factor = std::max(factor, 1);
+  RgbImage out = RgbImage::filled(image.width * factor, image.height * factor);
+  for (int y = 0; y < out.height; ++y)
+    for (int x = 0; x < out.width; ++x) out.set(x, y, image.at(x / factor, y / factor));
+  return out;
+}
+
+void drawLine(RgbImage& image, double x0, double y0, double x1, double y1, Rgb colour, int width) {
+  const double length = std::hypot(x1 - x0, y1 - y0);
+  const int steps = std::max(1, static_cast<int>(std::ceil(2.0 * length)));
+  const int half = std::max(width, 1) / 2, extra = std::max(width, 1) % 2 == 0 ? 1 : 0;
+  for (int i = 0; i <= steps; ++i) {
+    const double s = static_cast<double>(i) / steps;
+    const int cx = static_cast<int>(std::floor(x0 + s * (x1 - x0)));
+    const int cy = static_cast<int>(std::floor(y0 + s * (y1 - y0)));
+    for (int dy = -half; dy <= half - extra; ++dy)
+      for (int dx = -half; dx <= half - extra; ++dx) {
+        const int x = cx + dx, y = cy + dy;
+        if (x >= 0 && y >= 0 && x < image.width && y < image.height) image.set(x, y, colour);
+      }
+  }
+}
+
 Rgb categoryColour(int k) {
   // Okabe & Ito (2008), "Color Universal Design"; black last, since maps are mostly grey.
   static constexpr std::array<Rgb, 8> kPalette{{{230, 159, 0},

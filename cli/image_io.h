@@ -29,6 +29,12 @@ struct RgbImage {
   Rgb at(int x, int y) const;
 };
 
+/// Nearest-neighbour enlargement by an integer factor ≥ 1.
+RgbImage upscale(const RgbImage& image, int factor);
+/// A straight segment from (x0, y0) to (x1, y1) (pixel units, pixel centres at +0.5), `width`
+/// pixels wide, clipped to the image.
+void drawLine(RgbImage& image, double x0, double y0, double x1, double y1, Rgb colour, int width);
+
 /// PNG bytes (8-bit RGB, no text or time chunks, fixed compression): the same image always
 /// gives the same bytes. Throws InputError for an empty or inconsistent image.
 std::string encodePng(const RgbImage& image);

@@ -1,6 +1,7 @@
 #include "cli/job.h"
 
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
@@ -139,6 +140,58 @@ void describeMap(A& a, MapSpec& s) {
   }
 }
 
+std::optional<double> parseFiniteNumber(const std::string& text) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(v)) return std::nullopt;
+  return v;
+}
+
+inline const std::vector<std::string> kPlannerMethods = {"ray", "dp", "ompl"};
+
+template <class A>
+void describeRay(A& a, RaySpec& s) {
+  a.field("rays", s.rays, Expect::range(1, 401));
+  a.field("horizon", s.horizon, Expect::range(1, 1000));
+  a.field("starts", s.starts, Expect::range(1, 100000));
+  a.field("blocked_penalty_s", s.blocked_penalty_s, Expect::nonNegative());
+}
+
+template <class A>
+void describeDp(A& a, DpSpec& s) {
+  a.field("angle_subdivisions", s.angle_subdivisions, Expect::range(0, 64));
+}
+
+template <class A>
+void describeOmpl(A& a, OmplSpec& s) {
+  a.field("time_limit_s", s.time_limit_s, Expect{0.01, 3600.0, false, false, {}});
+  a.field("seed", s.seed, Expect::range(0, 2147483647));
+}
+
+template <class A>
+void describeRefine(A& a, RefineSpec& s) {
+  a.field("enabled", s.enabled);
+  a.field("time_limit_s", s.time_limit_s, Expect{0.01, 3600.0, false, false, {}});
+}
+
+template <class A>
+void describePlanner(A& a, PlannerSpec& s) {
+  a.field("method", s.method, Expect::oneOf(kPlannerMethods));
+  a.field("k_omega", s.k_omega, Expect::nonNegative());
+  a.field("k_alpha", s.k_alpha, Expect::nonNegative());
+  a.field("start_deg", s.start_deg);
+  a.field("dp_gap", s.dp_gap);
+  a.section("ray", s.ray);
+  a.section("dp", s.dp);
+  a.section("ompl", s.ompl);
+  a.section("refine", s.refine);
+  if constexpr (A::kReading) {
+    if (s.start_deg != "auto" && !parseFiniteNumber(s.start_deg)) {
+      a.fail("start_deg", "'" + s.start_deg + "'", "auto or a table angle in degrees");
+    }
+  }
+}
+
 inline const std::vector<std::string> kCarriers = {"world", "table"};
 
 template <class A>
@@ -260,6 +313,7 @@ void describeJob(A& a, JobSpec& s) {
   a.section("constraints", s.constraints);
   a.section("scan", s.scan);
   a.section("map", s.map);
+  a.section("planner", s.planner);
 }
 
 }  // namespace
@@ -291,12 +345,103 @@ void describe(YamlOut& a, PathElementSpec& s) { describePathElement(a, s); }
 void describe(YamlIn& a, ScanSpec& s) { describeScan(a, s); }
 void describe(YamlOut& a, ScanSpec& s) { describeScan(a, s); }
 void describe(YamlIn& a, MapSpec& s) { describeMap(a, s); }
+void describe(YamlIn& a, RaySpec& s) { describeRay(a, s); }
+void describe(YamlOut& a, RaySpec& s) { describeRay(a, s); }
+void describe(YamlIn& a, DpSpec& s) { describeDp(a, s); }
+void describe(YamlOut& a, DpSpec& s) { describeDp(a, s); }
+void describe(YamlIn& a, OmplSpec& s) { describeOmpl(a, s); }
+void describe(YamlOut& a, OmplSpec& s) { describeOmpl(a, s); }
+void describe(YamlIn& a, RefineSpec& s) { describeRefine(a, s); }
+void describe(YamlOut& a, RefineSpec& s) { describeRefine(a, s); }
+void describe(YamlIn& a, PlannerSpec& s) { describePlanner(a, s); }
+void describe(YamlOut& a, PlannerSpec& s) { describePlanner(a, s); }
 void describe(YamlOut& a, MapSpec& s) { describeMap(a, s); }
 
-JobSpec loadJob(const std::filesystem::path& file) {
+namespace {
+
+// "planner.ray.horizon=20", "scan.paths[0].height_mm=60": sets that value in the YAML tree
+// (creating mappings on the way), so the reader validates it like any value of the file.
+void applyOverride(YAML::Node root, const std::string& text) {
+  const auto bad = [&](const std::string& why) {
+    throw InputError(
+        fmt::format("--set '{}': {}: expected key.path=value, e.g. "
+                    "planner.ray.horizon=20 or scan.paths[0].height_mm=60",
+                    text, why));
+  };
+  const std::size_t eq = text.find('=');
+  if (eq == std::string::npos || eq == 0) bad("no key");
+  const std::string value = text.substr(eq + 1);
+  std::vector<std::pair<std::string, int>> steps;  // key, or index (key empty)
+  std::stringstream keys(text.substr(0, eq));
+  std::string segment;
+  while (std::getline(keys, segment, '.')) {
+    std::string key = segment;
+    std::vector<int> indices;
+    const std::size_t bracket = segment.find('[');
+    if (bracket != std::string::npos) {
+      key = segment.substr(0, bracket);
+      std::string rest = segment.substr(bracket);
+      while (!rest.empty()) {
+        const std::size_t close = rest.find(']');
+        if (rest[0] != '[' || close == std::string::npos) bad("'" + segment + "' is malformed");
+        const auto index = parseFiniteNumber(rest.substr(1, close - 1));
+        if (!index || *index < 0 || *index != std::floor(*index)) {
+          bad("'" + segment + "' has a bad list index");
+        }
+        indices.push_back(static_cast<int>(*index));
+        rest = rest.substr(close + 1);
+      }
+    }
+    if (key.empty()) bad("an empty key in '" + text.substr(0, eq) + "'");
+    steps.emplace_back(key, -1);
+    for (int i : indices) steps.emplace_back("", i);
+  }
+  YAML::Node node = root;
+  std::string where;
+  for (std::size_t i = 0; i + 1 < steps.size(); ++i) {
+    const auto& [key, index] = steps[i];
+    YAML::Node next;
+    if (key.empty()) {
+      if (!node.IsSequence() || static_cast<std::size_t>(index) >= node.size()) {
+        bad(fmt::format("{} has no item [{}]", where, index));
+      }
+      next.reset(node[static_cast<std::size_t>(index)]);
+      where += fmt::format("[{}]", index);
+    } else {
+      if (node.IsDefined() && !node.IsNull() && !node.IsMap()) bad(where + " is not a mapping");
+      if (!node[key].IsDefined()) node[key] = YAML::Node(YAML::NodeType::Map);
+      next.reset(node[key]);
+      where += (where.empty() ? "" : ".") + key;
+    }
+    node.reset(next);
+  }
+  const auto& [key, index] = steps.back();
+  YAML::Node v;
+  try {
+    v = !value.empty() && (value[0] == '[' || value[0] == '{') ? YAML::Load(value)
+                                                               : YAML::Node(value);
+  } catch (const YAML::Exception& e) {
+    bad("the value is malformed YAML: " + e.msg);
+  }
+  if (key.empty()) {
+    if (!node.IsSequence() || static_cast<std::size_t>(index) >= node.size()) {
+      bad(fmt::format("{} has no item [{}]", where, index));
+    }
+    node[static_cast<std::size_t>(index)] = v;
+  } else {
+    if (node.IsDefined() && !node.IsNull() && !node.IsMap()) bad(where + " is not a mapping");
+    node[key] = v;
+  }
+}
+
+}  // namespace
+
+JobSpec loadJob(const std::filesystem::path& file, const std::vector<std::string>& overrides) {
   JobSpec job;
   job.source = std::filesystem::absolute(file).lexically_normal();
-  YamlIn in(loadYamlFile(file), "", file);
+  YAML::Node root = loadYamlFile(file);
+  for (const std::string& o : overrides) applyOverride(root, o);
+  YamlIn in(root, "", file);
   describeJob(in, job);
   in.finish();
   return job;
@@ -480,6 +625,20 @@ scanner::PathRequest pathRequest(const JobSpec& job) {
     }
   }
   return request;
+}
+
+planner::PlannerSettings plannerSettings(const JobSpec& job) {
+  planner::PlannerSettings p;
+  p.k_omega = job.planner.k_omega;
+  p.k_alpha = job.planner.k_alpha;
+  p.omega_max = deg(job.table.max_speed_deg_s);
+  p.alpha_max = deg(job.table.max_accel_deg_s2);
+  return p;
+}
+
+std::optional<double> startAngle(const JobSpec& job) {
+  if (job.planner.start_deg == "auto") return std::nullopt;
+  return deg(*parseFiniteNumber(job.planner.start_deg));
 }
 
 }  // namespace scanplan::cli

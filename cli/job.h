@@ -11,6 +11,7 @@
 #include "collision/scene.h"
 #include "kinematics/cell.h"
 #include "planner/constraints.h"
+#include "planner/objective.h"
 #include "scanner/laser_model.h"
 #include "scanner/path_generators.h"
 
@@ -102,6 +103,45 @@ struct MapSpec {
   double memory_limit_mb = 8192.0;
 };
 
+/// `planner.ray`: Ray Shooting (DESIGN.md §5.1).
+struct RaySpec {
+  int rays = 21;
+  int horizon = 15;
+  int starts = 36;
+  double blocked_penalty_s = 1000.0;
+};
+
+/// `planner.dp`: the exact baseline's angle grid.
+struct DpSpec {
+  int angle_subdivisions = 0;  ///< 0: auto (fine enough for 3 acceleration steps each way)
+};
+
+/// `planner.ompl`: the OMPL search.
+struct OmplSpec {
+  double time_limit_s = 2.0;
+  int seed = 1;
+};
+
+/// `planner.refine`: NLopt smoothing of the chosen path.
+struct RefineSpec {
+  bool enabled = false;
+  double time_limit_s = 2.0;
+};
+
+/// `planner`: which search, the objective's weights and the start. The table's speed and
+/// acceleration bounds come from `table.max_speed_deg_s` / `table.max_accel_deg_s2`.
+struct PlannerSpec {
+  std::string method = "ray";      ///< ray | dp | ompl
+  double k_omega = 1.0;            ///< s²/rad², weight of ω² in J
+  double k_alpha = 0.1;            ///< s⁴/rad², weight of α² in J
+  std::string start_deg = "auto";  ///< "auto" (search the first column) or a table angle
+  bool dp_gap = true;  ///< also run DP on the chosen branch and report the gap to the optimum
+  RaySpec ray;
+  DpSpec dp;
+  OmplSpec ompl;
+  RefineSpec refine;
+};
+
 /// `obstacles[]`: a fixture or obstacle: a shape (as in robot files) carried by the world or
 /// the table. Boxes may be given by `corner_mm` + `size_mm` instead of a centred pose (sizes
 /// may then be negative, as workcell tools write them).
@@ -167,11 +207,14 @@ struct JobSpec {
   ConstraintsSpec constraints;
   ScanSpec scan;
   MapSpec map;
+  PlannerSpec planner;
   std::filesystem::path source;  ///< the job file itself
 };
 
-/// Loads and validates a job file (and the robot file it names).
-JobSpec loadJob(const std::filesystem::path& file);
+/// Loads and validates a job file (and the robot file it names). Each override "key.path=value"
+/// (e.g. "planner.ray.horizon=20", "scan.paths[0].height_mm=60") replaces or adds that value
+/// before validation, as if the file said so; errors in it name the override.
+JobSpec loadJob(const std::filesystem::path& file, const std::vector<std::string>& overrides = {});
 /// The fully resolved job as YAML (robot inline, paths absolute, every default present).
 std::string jobToYaml(const JobSpec& job);
 /// A stable identity of the job's content: a hash of the resolved job with file paths as
@@ -188,6 +231,10 @@ planner::ConstraintSettings constraintSettings(const JobSpec& job);
 std::optional<kinematics::IkBranch> parseBranch(const std::string& words);
 /// The scanner optics, SI.
 scanner::LaserOptics laserOptics(const JobSpec& job);
+/// The table-angle problem's weights and bounds (planner section + table dynamics), SI.
+planner::PlannerSettings plannerSettings(const JobSpec& job);
+/// The fixed start angle (rad), or nullopt for "auto".
+std::optional<double> startAngle(const JobSpec& job);
 /// The scan path request (reads path files), SI.
 scanner::PathRequest pathRequest(const JobSpec& job);
 

@@ -46,4 +46,18 @@ struct Shape {
 /// Short human-readable kind name ("box", "mesh", …).
 std::string shapeKindName(const ShapeGeometry& geometry);
 
+/// How finely round primitives are tessellated into triangles.
+struct TessellationOptions {
+  /// Largest distance between a round surface and its chords, m.
+  double chord_tolerance = 1e-4;
+  int min_segments = 12;   ///< around the axis, at least
+  int max_segments = 256;  ///< around the axis, at most
+};
+
+/// The shape's surface as a closed triangle mesh (counter-clockwise seen from outside) in its
+/// body frame B (X_BG applied), m. Boxes are exact (12 triangles); spheres, cylinders and
+/// capsules are inscribed polyhedra within `chord_tolerance` of the true surface; mesh files
+/// are loaded (loadMesh, with their options; throws InputError as loadMesh does).
+TriangleMesh shapeSurface(const Shape& shape, const TessellationOptions& options = {});
+
 }  // namespace scanplan::kinematics

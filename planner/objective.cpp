@@ -58,7 +58,11 @@ double detail::mapValue(const ConfigMap& map,
   const double f0 = map.f[map.index(branch, i0, t)];
   if (w == 0.0) return f0;
   const std::size_t i1 = (i0 + 1) % na;  // i0 < na − 1 here for a limited table
-  return (1.0 - w) * f0 + w * static_cast<double>(map.f[map.index(branch, i1, t)]);
+  const double f1 = map.f[map.index(branch, i1, t)];
+  // Between a feasible and a forbidden cell nothing is known (the pose may already collide or be
+  // unreachable): only the span between two feasible cells is interpolated.
+  if (!(f0 > 0.0) || !(f1 > 0.0)) return 0.0;
+  return (1.0 - w) * f0 + w * f1;
 }
 
 ObjectiveTerms evaluate(const ConfigMap& map,

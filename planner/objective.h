@@ -22,8 +22,10 @@ inline constexpr double kBoundTolerance = 1e-9;
 
 /// f of `branch` at table angle `theta` (rad) and time sample `t`, linearly interpolated between
 /// the two neighbouring grid angles (an angle within 1e-9 grid steps of a grid angle reads that
-/// cell exactly). A continuous table's grid wraps modulo 2π; for a limited table an angle
-/// outside [angles.front(), angles.back()] reads 0.
+/// cell exactly). Between a cell with f > 0 and a cell with f = 0 it reads 0: the map says
+/// nothing about the poses in between (they may already be unreachable or colliding), so paths
+/// only leave grid angles between two feasible cells. A continuous table's grid wraps modulo 2π;
+/// for a limited table an angle outside [angles.front(), angles.back()] reads 0.
 double mapValue(
     const ConfigMap& map, std::size_t branch, double theta, std::size_t t, bool continuous);
 

@@ -111,8 +111,9 @@ TEST(RayShooting, FollowsACorridorDriftingBelowTheSpeedBound) {
 }
 
 TEST(RayShooting, SwervesAroundABlockAndComesBack) {
-  // Wide band (f = 0.5 everywhere on a limited table) with a preferred lane at θ = 0 (f = 1) that
-  // is blocked for samples 20..29: the path must leave the lane and return, within the bounds.
+  // A lane at θ = 0 (f = 1, ±0.02 rad) on a limited table, blocked for samples 20..29; a bypass
+  // (f = 0.5, up to ±0.3 rad) is open only for samples 10..39. The path must leave the lane and
+  // be back in it by sample 40, within the bounds.
   const double dt = 0.1, step = 0.01;
   const std::size_t na = 201, nt = 80, lane = 100;  // angles −1 .. 1 rad, lane at 0 rad
   const ConfigMap map = makeMap(
@@ -120,7 +121,8 @@ TEST(RayShooting, SwervesAroundABlockAndComesBack) {
       [&](std::size_t a, std::size_t k) {
         const std::size_t d = a > lane ? a - lane : lane - a;
         if (k >= 20 && k < 30 && d <= 10) return 0.0f;  // ±0.1 rad block
-        return d <= 2 ? 1.0f : 0.5f;
+        if (d <= 2) return 1.0f;
+        return k >= 10 && k < 40 && d <= 30 ? 0.5f : 0.0f;
       },
       step);
   const PlannerSettings s;
@@ -128,6 +130,7 @@ TEST(RayShooting, SwervesAroundABlockAndComesBack) {
   ASSERT_TRUE(solvedAndFeasible(map, r, s, false));
   EXPECT_DOUBLE_EQ(r.theta.front(), 0.0);
   EXPECT_NEAR(r.theta.back(), 0.0, 0.02 + 1e-12);  // back in the lane
+  EXPECT_GT(std::abs(r.theta[25]), 0.1);             // around the block
 }
 
 TEST(RayShooting, BlockedTimeColumnIsNoPathNamingTheSample) {

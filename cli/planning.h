@@ -1,0 +1,54 @@
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "cli/job.h"
+#include "planner/config_map.h"
+#include "planner/dp_planner.h"
+#include "planner/refine.h"
+
+namespace scanplan::cli {
+
+/// One planner run over the map: every branch tried, the best solved one kept.
+struct PlannerOutcome {
+  std::string method;                         ///< ray | dp | ompl
+  planner::PlanResult result;                 ///< the best branch's (kSolved), or a kNoPath
+  std::vector<planner::PlanResult> branches;  ///< per map branch (status kNoPath when skipped)
+  double seconds = 0.0;                       ///< all branches
+};
+
+/// The planning stage of `plan`: the chosen planner, refinement, the DP yardstick, comparisons.
+struct PlanningOutcome {
+  PlannerOutcome chosen;
+  std::optional<planner::RefineResult> refine;  ///< when refinement ran
+  std::vector<double> theta;                    ///< the final path (refined when that helped)
+  planner::ObjectiveTerms terms;                ///< evaluate() of `theta`
+  std::optional<planner::PlanResult> dp;        ///< DP on the chosen branch (the yardstick)
+  int dp_subdivisions = 1;                      ///< DP's angle grid: map step / this
+  std::vector<PlannerOutcome> others;           ///< --compare: the other planners, same branch
+  bool solved() const { return chosen.result.status == planner::PlanResult::Status::kSolved; }
+  /// (J − J_dp) / J_dp of the final path, when DP solved; negative when the continuous path beats
+  /// DP's grid.
+  std::optional<double> dpGap() const;
+};
+
+/// The planners' map settings: "continuous" comes from the job's table.
+bool continuousTable(const JobSpec& job);
+
+/// Runs `method` on `branch` (or on every branch of the map when nullopt, keeping the lowest J).
+PlannerOutcome runPlanner(const std::string& method,
+                          const planner::ConfigMap& map,
+                          const JobSpec& job,
+                          std::optional<std::size_t> branch = {});
+
+/// The whole planning stage. `method` empty: the job's. Refinement when `refine` or the job says.
+PlanningOutcome planJob(const planner::ConfigMap& map,
+                        const JobSpec& job,
+                        std::string method,
+                        bool compare,
+                        bool refine);
+
+}  // namespace scanplan::cli

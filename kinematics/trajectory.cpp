@@ -1,0 +1,137 @@
+#include "kinematics/trajectory.h"
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <sstream>
+
+#include "kinematics/error.h"
+#include "kinematics/units.h"
+
+namespace scanplan::kinematics {
+
+namespace {
+
+constexpr const char* kColumns[] = {"t_s",    "table_deg", "j1_deg", "j2_deg",   "j3_deg", "j4_deg",
+                                    "j5_deg", "j6_deg",    "f",      "scanning", "px_mm",  "py_mm",
+                                    "pz_mm",  "qw",        "qx",     "qy",       "qz",     "limit"};
+constexpr std::size_t kNumeric = 17;  // every column but `limit`
+
+std::string number(double v) {
+  if (std::isnan(v)) return "nan";
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.12g", v == 0.0 ? 0.0 : v);  // no "-0"
+  return buffer;
+}
+
+std::vector<std::string> splitCells(const std::string& line) {
+  std::vector<std::string> cells;
+  std::string cell;
+  std::stringstream row(line);
+  while (std::getline(row, cell, ',')) {
+    const auto b = cell.find_first_not_of(" \t");
+    const auto e = cell.find_last_not_of(" \t");
+    cells.push_back(b == std::string::npos ? std::string() : cell.substr(b, e - b + 1));
+  }
+  if (!line.empty() && line.back() == ',') cells.emplace_back();
+  return cells;
+}
+
+std::string header(std::size_t columns) {
+  std::string h;
+  for (std::size_t i = 0; i < columns; ++i) h += (i ? "," : "") + std::string(kColumns[i]);
+  return h;
+}
+
+}  // namespace
+
+std::string trajectoryToCsv(const Trajectory& trajectory) {
+  std::string out = header(std::size(kColumns)) + "\n";
+  for (const TrajectorySample& s : trajectory.samples) {
+    Eigen::Quaterniond q(s.X_PS.linear());
+    q.normalize();
+    if (q.w() < 0.0) q.coeffs() *= -1.0;
+    const Eigen::Vector3d p = s.X_PS.translation() * kMToMm;
+    out += number(s.t) + ',' + number(s.theta * kRadToDeg);
+    for (int j = 0; j < kNumJoints; ++j) out += ',' + number(s.q(j) * kRadToDeg);
+    out += ',' + number(s.f) + ',' + (s.scanning ? "1" : "0");
+    out += ',' + number(p.x()) + ',' + number(p.y()) + ',' + number(p.z());
+    out += ',' + number(q.w()) + ',' + number(q.x()) + ',' + number(q.y()) + ',' + number(q.z());
+    std::string limit = s.limit;
+    for (char& c : limit) c = c == ',' ? ';' : c;  // keep the row's column count
+    out += ',' + limit + '\n';
+  }
+  return out;
+}
+
+Trajectory parseTrajectoryCsv(const std::string& text, const std::string& source) {
+  Trajectory trajectory;
+  std::istringstream in(text);
+  std::string line;
+  int number_of_line = 0;
+  std::size_t columns = 0;  // from the header: 17 or 18
+  const auto fail = [&](const std::string& what) {
+    throw InputError(source + ":" + std::to_string(number_of_line) + ": " + what);
+  };
+  while (std::getline(in, line)) {
+    ++number_of_line;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.find_first_not_of(" \t") == std::string::npos || line[0] == '#') continue;
+    const std::vector<std::string> cells = splitCells(line);
+    if (columns == 0) {
+      for (const std::size_t n : {std::size(kColumns), kNumeric}) {
+        if (line == header(n)) columns = n;
+      }
+      if (columns == 0) {
+        fail("header '" + line + "': expected '" + header(std::size(kColumns)) +
+             "' (the limit column may be left out)");
+      }
+      continue;
+    }
+    if (cells.size() != columns) {
+      fail(std::to_string(cells.size()) + " columns: expected " + std::to_string(columns) + " (" +
+           header(columns) + ")");
+    }
+    double v[kNumeric];
+    for (std::size_t c = 0; c < kNumeric; ++c) {
+      const std::string& cell = cells[c];
+      const bool unknown_f = c == 8 && (cell.empty() || cell == "nan" || cell == "NaN");
+      if (unknown_f) {
+        v[c] = std::numeric_limits<double>::quiet_NaN();
+        continue;
+      }
+      char* end = nullptr;
+      v[c] = std::strtod(cell.c_str(), &end);
+      if (cell.empty() || end != cell.c_str() + cell.size() || !std::isfinite(v[c])) {
+        fail("column " + std::string(kColumns[c]) + ": '" + cell + "' is not a finite number" +
+             (c == 8 ? " (or empty / nan for unknown)" : ""));
+      }
+    }
+    TrajectorySample s;
+    s.t = v[0];
+    if (!trajectory.samples.empty() && !(s.t > trajectory.samples.back().t)) {
+      fail("column t_s: " + cells[0] + " s is not after the previous sample's " +
+           number(trajectory.samples.back().t) + " s: expected strictly increasing times");
+    }
+    s.theta = v[1] * kDegToRad;
+    for (int j = 0; j < kNumJoints; ++j) s.q(j) = v[2 + j] * kDegToRad;
+    s.f = v[8];
+    if (v[9] != 0.0 && v[9] != 1.0) fail("column scanning: '" + cells[9] + "': expected 0 or 1");
+    s.scanning = v[9] == 1.0;
+    const Eigen::Quaterniond q(v[13], v[14], v[15], v[16]);
+    if (std::abs(q.norm() - 1.0) > 1e-6) {
+      fail("columns qw,qx,qy,qz: quaternion norm " + number(q.norm()) +
+           ": expected a unit quaternion (within 1e-6)");
+    }
+    s.X_PS.linear() = q.normalized().toRotationMatrix();
+    s.X_PS.translation() = Eigen::Vector3d(v[10], v[11], v[12]) * kMmToM;
+    if (columns == std::size(kColumns)) s.limit = cells[kNumeric];
+    trajectory.samples.push_back(std::move(s));
+  }
+  if (columns == 0) fail("empty file: expected the header '" + header(std::size(kColumns)) + "'");
+  if (trajectory.samples.empty()) fail("no samples after the header");
+  return trajectory;
+}
+
+}  // namespace scanplan::kinematics

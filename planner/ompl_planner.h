@@ -1,0 +1,70 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+
+#include "planner/config_map.h"
+#include "planner/dp_planner.h"
+#include "planner/objective.h"
+
+namespace scanplan::planner {
+
+/// Which OMPL control planner searches (DESIGN.md §5.3).
+enum class OmplPlanner {
+  kSst,  ///< ompl::control::SST: asymptotically near-optimal, keeps improving J until stopped
+  kRrt,  ///< ompl::control::RRT: feasibility only (J is scored, not optimised); stops when solved
+};
+
+/// Parameters of the OMPL search. Distances in OMPL's state space (the SST radii) are in
+/// "steps": one time sample = 1, an angle difference of ω_max·Δt = 1 (one sample at full speed),
+/// a speed difference of α_max·Δt = 1 (one sample at full acceleration), summed (weighted L1).
+struct OmplSettings {
+  double time_limit_s = 1.0;  ///< s, wall-clock budget of OMPL's solve()
+  /// Seed of OMPL's random numbers (0 is used as 1: OMPL rejects a zero seed).
+  std::uint32_t seed = 1;
+  /// Cap on planner iterations, 0 = none. With a cap reached before the clock the result is a
+  /// function of (map, settings, seed) only; a run cut by the clock depends on machine speed.
+  std::size_t max_iterations = 0;
+  OmplPlanner planner = OmplPlanner::kSst;
+  int max_steps = 10;         ///< a control (α) is held for 1..max_steps time samples
+  std::size_t starts = 36;    ///< start cells spread over the first column's f > 0 (0 = all)
+  double goal_bias = 0.05;    ///< share of samples drawn on the last time sample
+  double selection_radius = 5.0;  ///< SST δ_BN, steps (see above)
+  double pruning_radius = 2.0;    ///< SST δ_s, steps; must stay below a control's reach
+  bool stop_at_first_solution = false;  ///< SST: stop at the first exact solution
+};
+
+/// The planning problem (DESIGN.md §5) as an OMPL control problem (§5.3). State: table angle θ
+/// (SO(2) for a continuous table, [angles.front(), angles.back()] for a limited one), speed
+/// ω ∈ [−ω_max, ω_max], time sample k, and the objective accumulated so far (not part of the
+/// distance). Control: u ∈ [−1, 1], held for 1..max_steps samples of Δt each; one sample steps
+/// ω' = clamp(ω + u·α_max·Δt, ±ω_max), θ' = θ + ω'·Δt, k' = k + 1 — except the first sample
+/// from k = 0, where ω' = u·ω_max (evaluate() puts no bound on the first speed change). So ω and
+/// α are exactly evaluate()'s finite differences. Valid: |ω| ≤ ω_max and f(θ, k) > 0
+/// (mapValue()). Goal: k = the last time sample. Cost of a motion: the J terms of its samples
+/// (including −ln f of the start sample), so the OMPL path cost is J.
+///
+/// Starts: `start_theta` (rad) when given, else `starts` grid angles of the first column with
+/// f > 0 (several start states of one problem). A time column with f = 0 everywhere (or a
+/// blocked start) is reported before OMPL runs.
+///
+/// kSolved only with an exact OMPL solution whose per-sample path (one angle per time sample,
+/// unwrapped, first = the start) evaluate() calls feasible; `terms` = evaluate() of it. Otherwise
+/// kNoPath, `theta` empty, `reason` naming the first time sample not reached; `approximate` says
+/// OMPL ended with only an approximate solution (the furthest sample it reached is in `reason`),
+/// `detail` the planner, iterations and tree size.
+///
+/// Determinism: OMPL draws every seed from one process-wide generator, so calls are serialised
+/// (a process-wide mutex) and the generator is reseeded with `seed` before anything is built.
+/// With `max_iterations` ending the search the result repeats exactly, in one process or across
+/// processes; OMPL used elsewhere in the process at the same time would break that. OMPL's
+/// console output is silenced during the call (the log level is restored afterwards).
+PlanResult planOmpl(const ConfigMap& map,
+                    std::size_t branch,
+                    const PlannerSettings& settings,
+                    bool continuous,
+                    const OmplSettings& os,
+                    std::optional<double> start_theta = {});
+
+}  // namespace scanplan::planner

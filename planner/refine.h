@@ -1,0 +1,135 @@
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "planner/config_map.h"
+#include "planner/objective.h"
+
+namespace scanplan::planner {
+
+/// Budget and tolerances of refinePath(). The defaults refine a 1000-sample path in well under
+/// a second; the evaluation budget, not the clock, is meant to stop a run (see time_limit_s).
+struct RefineSettings {
+  /// Objective evaluations over all augmented-Lagrangian rounds (each costs O(N)). >= 1.
+  int max_evaluations = 20000;
+  /// s, wall-clock backstop (0: none). A run it stops depends on the machine's speed, so it is
+  /// not reproducible; `stop_reason` says when that happened.
+  double time_limit_s = 5.0;
+  /// Relative change of the merit function, and of θ, that ends one L-BFGS run.
+  double ftol_rel = 1e-12;
+  double xtol_rel = 1e-12;
+  /// Largest bound violation accepted at the end of a round, relative to ω_max, α_max (the
+  /// optimiser works on bounds tightened by 1e-6 relative, so this stays well inside them).
+  double constraint_tol = 1e-7;
+  /// Hold θ_0 at the input's value (a path planned from a fixed start angle).
+  bool keep_start = false;
+};
+
+/// What refinePath() did. `theta` is either a strictly better feasible path or the input itself.
+struct RefineResult {
+  std::vector<double> theta;  ///< rad, unwrapped, one per time sample (see evaluate())
+  ObjectiveTerms before;      ///< evaluate() of the input
+  ObjectiveTerms after;       ///< evaluate() of `theta` (== before when !improved)
+  bool improved = false;      ///< after.total < before.total (and theta differs from the input)
+  int evaluations = 0;        ///< objective evaluations spent
+  double seconds = 0.0;       ///< wall time
+  std::string algorithm;      ///< the optimiser, for reports
+  std::string stop_reason;    ///< why the optimiser stopped, and why the input was kept if it was
+};
+
+/// Refinement (DESIGN.md §5.4): moves a feasible path off the grid to lower
+/// J = evaluate(map, branch, theta, settings, continuous).total in continuous θ (f read with
+/// mapValue(), ω and α the finite differences of evaluate()), keeping |ω_k| ≤ ω_max,
+/// |α_k| ≤ α_max and f(θ_k, t_k) > 0.
+///
+/// Method: each θ_k is boxed to the run of consecutive grid angles with f > 0 (at time t_k) that
+/// holds the input's θ_k, so f > 0 holds by construction and the path keeps its way through the
+/// forbidden regions (refinement is local). The speed and acceleration bounds, tightened by 1e-6
+/// relative, are 4N sparse linear inequality constraints handled by an augmented Lagrangian
+/// (Powell–Hestenes–Rockafellar) that costs O(N) per evaluation; each round minimises it with
+/// NLopt's LD_LBFGS (box constraints) from the previous round's point, then updates the
+/// multipliers and, when the violation did not shrink enough, the penalty. −ln f is piecewise
+/// smooth in θ (kinks at grid angles); L-BFGS uses its one-sided derivative there.
+///
+/// Guarantees: the result is judged by evaluate() alone. It is returned only when evaluate()
+/// calls it feasible and its J is strictly lower than the input's; otherwise the input comes back
+/// unchanged with improved = false and the reason in stop_reason. So J never increases and the
+/// result is always feasible. Deterministic: the same inputs give bit-identical `theta` unless
+/// the time limit stops the run. Throws std::invalid_argument when the input path is infeasible
+/// per evaluate() or not finite, or the settings are out of range, and std::logic_error (from
+/// evaluate()) when `theta` does not have one angle per time sample or the map/branch is broken.
+RefineResult refinePath(const ConfigMap& map,
+                        std::size_t branch,
+                        const std::vector<double>& theta,
+                        const PlannerSettings& settings,
+                        bool continuous,
+                        const RefineSettings& rs = {});
+
+namespace detail {
+
+/// The smooth problem refinePath() hands to NLopt, exposed for the gradient tests. Variables:
+/// θ_0..θ_{N−1} (rad). Constraints g_i(θ) ≤ 0, dimensionless, in this order:
+///   for k = 1..N−1:  (±ω_k − ω̄)/ω_max, "+" first   (ω̄ = (1 − margin)·ω_max)
+///   for k = 2..N−1:  (±α_k − ᾱ)/α_max, "+" first   (ᾱ = (1 − margin)·α_max)
+/// (a zero bound scales by 1 instead), with ω_k, α_k formed as in evaluate().
+class RefineProblem {
+ public:
+  struct JacobianEntry {
+    std::size_t constraint, variable;
+    double value;
+  };
+
+  /// `f_floor` > 0: below it −ln f is continued by its second-order Taylor polynomial
+  /// −ln f_floor − (f − f_floor)/f_floor + (f − f_floor)²/(2 f_floor²), so the merit stays
+  /// finite where f = 0 (a guard: refinePath() picks it below every f inside the boxes).
+  RefineProblem(const ConfigMap& map,
+                std::size_t branch,
+                const PlannerSettings& settings,
+                bool continuous,
+                std::size_t samples,
+                double f_floor,
+                double bound_margin);
+
+  std::size_t size() const { return n_; }
+  std::size_t constraintCount() const;
+
+  /// f = mapValue() at θ (rad), time sample k, and ∂f/∂θ (1/rad): the slope of the grid cell
+  /// above θ (one-sided at a grid angle; from below at a limited table's last angle), 0 where
+  /// f = 0.
+  void fAndSlope(double theta, std::size_t k, double& f, double& slope) const noexcept;
+  /// The run of grid angles with f > 0 at sample k around θ (rad) as an interval [lo, hi] in
+  /// θ's turn (±infinity when a continuous table's whole column is open), widened to contain
+  /// θ, and the lowest f over it. Requires f(θ, k) > 0.
+  void feasibleInterval(
+      double theta, std::size_t k, double& lo, double& hi, double& f_min) const noexcept;
+  /// J of evaluate() (with the continuation below f_floor) and its gradient when non-null.
+  double objective(const double* theta, double* grad) const noexcept;
+  /// g (constraintCount() values) and, when non-null, the non-zero Jacobian entries ∂g_i/∂θ_j.
+  void constraints(const double* theta,
+                   double* g,
+                   std::vector<JacobianEntry>* jacobian = nullptr) const;
+  /// PHR augmented Lagrangian: objective + Σ_i (max(0, λ_i + ρ g_i)² − λ_i²)/(2ρ); gradient
+  /// when non-null. `lambda` has constraintCount() entries ≥ 0, ρ > 0.
+  double merit(const double* theta, const double* lambda, double rho, double* grad) const noexcept;
+  /// λ_i ← max(0, λ_i + ρ g_i); returns max_i max(0, g_i) at θ (the violation before the update).
+  double updateMultipliers(const double* theta, double* lambda, double rho) const noexcept;
+
+ private:
+  template <class Visit>
+  void visitConstraints(const double* theta, Visit&& visit) const noexcept;
+  double cell(std::ptrdiff_t angle, std::size_t k) const noexcept;  // 0 off a limited table
+
+  const ConfigMap& map_;
+  Grid grid_;
+  std::size_t branch_;
+  PlannerSettings settings_;
+  bool continuous_;
+  std::size_t n_;
+  double f_floor_, omega_bar_, alpha_bar_, omega_scale_, alpha_scale_;
+};
+
+}  // namespace detail
+
+}  // namespace scanplan::planner

@@ -1,0 +1,40 @@
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "collision/scene.h"
+#include "kinematics/robot_model.h"
+#include "kinematics/scan_path.h"
+#include "kinematics/trajectory.h"
+#include "planner/constraints.h"
+
+namespace scanplan::planner {
+
+/// A planned table path turned into the 7-DOF trajectory, with the true score of every pose.
+struct TrajectoryBuild {
+  kinematics::Trajectory trajectory;  ///< complete only when `ok`
+  bool ok = false;                    ///< every sample reachable on the branch, joints continuous
+  double min_f = 0.0;                 ///< lowest true f (Eq. 6, exact distances below d_high)
+  std::size_t min_f_sample = 0;
+  double min_clearance = 0.0;  ///< m, smallest pair distance seen below its d_high (else inf)
+  std::string reason;          ///< !ok: the first sample that fails, and why
+};
+
+/// IK at every sample of `path` with the table at theta[k] (rad), on `branch` only. Among the
+/// branch's solutions (they differ by whole turns of joints whose range exceeds 2π) the joints
+/// are kept continuous: each sample takes the solution nearest the previous one, and every
+/// solution of the first sample is tried as a start, keeping the track whose worst joint-limit
+/// factor is best. A step of more than 90° in any joint between samples is a discontinuity (the
+/// IK branch flips), reported as not ok. Each pose is then scored in full (PoseEvaluator, in
+/// parallel, deterministic): f and the limiting constraint go into the samples. A pose with
+/// f = 0 leaves ok = true but min_f = 0 — the caller decides (the map's interpolation said f > 0
+/// there).
+TrajectoryBuild buildTrajectory(const collision::Scene& scene,
+                                const ConstraintSettings& settings,
+                                const kinematics::ScanPath& path,
+                                const std::vector<double>& theta,
+                                const kinematics::IkBranch& branch);
+
+}  // namespace scanplan::planner

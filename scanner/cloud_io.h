@@ -1,0 +1,52 @@
+#pragma once
+
+#include <cstddef>
+#include <istream>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "kinematics/mesh.h"
+#include "scanner/coverage.h"
+#include "scanner/simulator.h"
+
+namespace scanplan::scanner {
+
+/// Writes cloud.ply: PLY 1.0, binary little-endian, one `vertex` element per point with
+///   float x, y, z        part frame, mm
+///   float time           acquisition time, s
+///   uint profile         profile (frame) index
+///   float range_mm       laser origin to the point along the ray, mm
+///   float incidence_deg  angle between the ray and the surface normal, degrees
+/// The stream must be binary; the caller owns the file (write to a temporary name and rename).
+void writeCloudPly(std::ostream& out, const std::vector<CloudPoint>& points);
+
+/// Writes coverage.ply: the part mesh (part frame, mm), PLY 1.0 binary little-endian, coloured
+/// by point density (densityColour). Each triangle gets its own three vertices (float x, y, z;
+/// uchar red, green, blue), so any viewer shows the face colours exactly; the `face` element
+/// has `vertex_indices` (list uchar int), the same colour, `uint points` and
+/// `float density_per_mm2`. `max_per_mm2` ≤ 0 puts the top of the colour scale at the
+/// coverage's p95 density.
+void writeCoveragePly(std::ostream& out,
+                      const kinematics::TriangleMesh& part,
+                      const PartCoverage& coverage,
+                      const CoverageSettings& settings = {},
+                      double max_per_mm2 = 0.0);
+
+/// The scalar properties of a PLY file's `vertex` element, as columns of doubles.
+struct PlyVertices {
+  std::string format;              ///< "ascii", "binary_little_endian" or "binary_big_endian"
+  std::vector<std::string> names;  ///< property names, in file order
+  std::vector<std::vector<double>> columns;
+  std::size_t count = 0;
+
+  /// The column of a property; throws std::out_of_range when there is none.
+  const std::vector<double>& column(const std::string& name) const;
+};
+
+/// Reads the `vertex` element of a PLY file (any of the three formats; scalar properties of
+/// the standard types; list properties and other elements are skipped). Throws InputError
+/// naming `source` for anything malformed or truncated.
+PlyVertices readPlyVertices(std::istream& in, const std::string& source);
+
+}  // namespace scanplan::scanner

@@ -1,0 +1,640 @@
+#include "scanner/simulator.h"
+
+#include <embree3/rtcore.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cassert>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <random>
+#include <stdexcept>
+#include <utility>
+
+namespace scanplan::scanner {
+namespace {
+
+// Occlusion rays start this far off the hit triangle, on the lit side, so that Embree's float
+// arithmetic cannot report the hit triangle itself (coordinates are O(1 m): 1e-5 m is ~170
+// float ulps there, and far below anything a camera resolves).
+constexpr double kOcclusionOffset = 1e-5;  // m
+// The profile's bounding box grows by this much before the groups' spheres are tested.
+constexpr double kCullMargin = 1e-3;  // m
+
+enum class GroupKind { kTable, kWorld, kLink };
+
+// One triangle mesh of a rigid group, in the group's frame, in double: Embree finds the hit
+// triangle, these give the exact hit point and normal.
+struct GroupMesh {
+  kinematics::TriangleMesh mesh;
+  bool is_part = false;
+};
+
+// A rigid group: everything in it moves together.
+struct Group {
+  GroupKind kind = GroupKind::kWorld;
+  int link = -1;  // arm link 1…6 for kLink
+  std::vector<GroupMesh> meshes;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // bounding sphere, group frame, m
+  double radius = 0.0;
+  RTCScene scene = nullptr;  // Embree back end
+  // Brute-force back end: per mesh, per triangle v0, e1 = v1 − v0, e2 = v2 − v0.
+  std::vector<std::vector<std::array<Eigen::Vector3d, 3>>> edges;
+};
+
+struct Hit {
+  int slot = -1;  // index into the profile's active groups
+  unsigned mesh = 0;
+  unsigned triangle = 0;
+  double t = 0.0;
+};
+
+// A fan ray's hit that lies in the trapezoid, waiting for the camera test.
+struct Candidate {
+  std::uint32_t ray = 0;
+  Hit hit;
+  double t = 0.0;  // refined
+  Eigen::Vector3d p_S = Eigen::Vector3d::Zero();
+  Eigen::Vector3d n_S = Eigen::Vector3d::Zero();  // unit, towards the laser
+  double incidence = 0.0;
+  bool visible = false;
+};
+
+// A group taking part in one profile: the scanner frame in the group frame.
+struct ActiveGroup {
+  int index = 0;
+  Eigen::Isometry3d X_GS = Eigen::Isometry3d::Identity();
+};
+
+struct Scratch {
+  std::vector<RTCRayHit> rayhits;
+  std::vector<RTCRay> rays;
+  std::vector<Hit> best;
+  std::vector<Candidate> candidates;
+  std::vector<std::size_t> pending;
+  std::vector<char> blocked;
+  std::vector<char> seen;
+  std::vector<char> seen_other;
+  std::vector<Eigen::Vector3d> origins;
+  std::vector<Eigen::Vector3d> towards;
+  std::vector<double> lengths;
+  std::vector<ActiveGroup> active;
+};
+
+// Settings shared by every profile of a run.
+struct RunSetup {
+  LaserWindow window;
+  std::vector<Eigen::Vector3d> directions;  // fan, scanner frame, unit
+  std::vector<double> t_far;                // beyond it a hit cannot be in the trapezoid
+  std::vector<Eigen::Vector3d> cameras;     // C+ first when present
+  Eigen::AlignedBox3d reach;                // every ray of a profile lies in it, scanner frame
+  kinematics::RotaryTableModel true_table;
+  const SimulationSettings* settings = nullptr;
+};
+
+// SplitMix64 (Steele et al.): decorrelates the per-profile noise seeds.
+std::uint64_t mix(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+
+// Uniform in (0, 1) from 53 random bits; std::normal_distribution is not specified across
+// standard libraries, this is, so a seed gives the same cloud everywhere.
+double uniformOpen(std::mt19937_64& rng) {
+  return (static_cast<double>(rng() >> 11) + 0.5) * 0x1.0p-53;
+}
+
+// Two independent standard normal deviates (Box–Muller).
+std::pair<double, double> gaussianPair(std::mt19937_64& rng) {
+  const double r = std::sqrt(-2.0 * std::log(uniformOpen(rng)));
+  const double a = 2.0 * std::numbers::pi * uniformOpen(rng);
+  return {r * std::cos(a), r * std::sin(a)};
+}
+
+Eigen::Vector3d triangleNormal(const kinematics::TriangleMesh& mesh, unsigned triangle) {
+  const Eigen::Vector3i& f = mesh.triangles[triangle];
+  const Eigen::Vector3d& v0 = mesh.vertices[static_cast<std::size_t>(f(0))];
+  const Eigen::Vector3d& v1 = mesh.vertices[static_cast<std::size_t>(f(1))];
+  const Eigen::Vector3d& v2 = mesh.vertices[static_cast<std::size_t>(f(2))];
+  return (v1 - v0).cross(v2 - v0);
+}
+
+// Möller–Trumbore in double, both faces; the hit distance in [t_near, t_far] or nothing.
+std::optional<double> intersect(const std::array<Eigen::Vector3d, 3>& tri,
+                                const Eigen::Vector3d& o,
+                                const Eigen::Vector3d& d,
+                                double t_far) noexcept {
+  const Eigen::Vector3d p = d.cross(tri[2]);
+  const double det = tri[1].dot(p);
+  if (det == 0.0) return std::nullopt;
+  const double inv = 1.0 / det;
+  const Eigen::Vector3d s = o - tri[0];
+  const double u = s.dot(p) * inv;
+  if (u < 0.0 || u > 1.0) return std::nullopt;
+  const Eigen::Vector3d q = s.cross(tri[1]);
+  const double v = d.dot(q) * inv;
+  if (v < 0.0 || u + v > 1.0) return std::nullopt;
+  const double t = tri[2].dot(q) * inv;
+  if (t < 0.0 || t > t_far) return std::nullopt;
+  return t;
+}
+
+void fillRay(RTCRay& ray, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_far) {
+  ray.org_x = static_cast<float>(o.x());
+  ray.org_y = static_cast<float>(o.y());
+  ray.org_z = static_cast<float>(o.z());
+  ray.dir_x = static_cast<float>(d.x());
+  ray.dir_y = static_cast<float>(d.y());
+  ray.dir_z = static_cast<float>(d.z());
+  ray.tnear = 0.0f;
+  ray.tfar = static_cast<float>(t_far);
+  ray.time = 0.0f;
+  ray.mask = 0xFFFFFFFFu;
+  ray.id = 0;
+  ray.flags = 0;
+}
+
+}  // namespace
+
+struct ScanSimulator::Impl {
+  const kinematics::CellModel cell;
+  RayBackend backend = RayBackend::kEmbree;
+  RTCDevice device = nullptr;
+  std::vector<Group> groups;
+  mutable tbb::enumerable_thread_specific<Scratch> scratch;
+
+  explicit Impl(const kinematics::CellModel& c) : cell(c) {}
+  ~Impl() {
+    for (Group& g : groups) {
+      if (g.scene) rtcReleaseScene(g.scene);
+    }
+    if (device) rtcReleaseDevice(device);
+  }
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
+
+  void addGroup(Group group);
+  void castFan(const RunSetup& setup, Scratch& s) const;
+  void cameraPass(const Eigen::Vector3d& camera,
+                  Scratch& s,
+                  std::vector<char>& test,
+                  SimulationStats& stats) const;
+  void profile(const ScanFrame& frame,
+               std::uint32_t index,
+               const RunSetup& setup,
+               Scratch& s,
+               std::vector<CloudPoint>& out,
+               SimulationStats& stats) const;
+};
+
+void ScanSimulator::Impl::addGroup(Group group) {
+  Eigen::AlignedBox3d box;
+  std::size_t count = 0;
+  for (const GroupMesh& m : group.meshes) {
+    for (const Eigen::Vector3d& v : m.mesh.vertices) box.extend(v);
+    count += m.mesh.triangles.size();
+  }
+  if (count == 0) return;
+  group.centre = box.center();
+  for (const GroupMesh& m : group.meshes) {
+    for (const Eigen::Vector3d& v : m.mesh.vertices) {
+      group.radius = std::max(group.radius, (v - group.centre).norm());
+    }
+  }
+  if (backend == RayBackend::kEmbree) {
+    group.scene = rtcNewScene(device);
+    rtcSetSceneBuildQuality(group.scene, RTC_BUILD_QUALITY_HIGH);
+    for (std::size_t i = 0; i < group.meshes.size(); ++i) {
+      const kinematics::TriangleMesh& mesh = group.meshes[i].mesh;
+      RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+      auto* vertices = static_cast<float*>(
+          rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                  3 * sizeof(float), mesh.vertices.size()));
+      for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
+        for (int k = 0; k < 3; ++k) {
+          vertices[3 * v + static_cast<std::size_t>(k)] = static_cast<float>(mesh.vertices[v](k));
+        }
+      }
+      auto* indices = static_cast<unsigned*>(
+          rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                  3 * sizeof(unsigned), mesh.triangles.size()));
+      for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+        for (int k = 0; k < 3; ++k) {
+          indices[3 * t + static_cast<std::size_t>(k)] =
+              static_cast<unsigned>(mesh.triangles[t](k));
+        }
+      }
+      rtcCommitGeometry(geometry);
+      rtcAttachGeometryByID(group.scene, geometry, static_cast<unsigned>(i));
+      rtcReleaseGeometry(geometry);
+    }
+    rtcCommitScene(group.scene);
+  } else {
+    for (const GroupMesh& m : group.meshes) {
+      auto& edges = group.edges.emplace_back();
+      edges.reserve(m.mesh.triangles.size());
+      for (const Eigen::Vector3i& f : m.mesh.triangles) {
+        const Eigen::Vector3d& v0 = m.mesh.vertices[static_cast<std::size_t>(f(0))];
+        edges.push_back({v0, m.mesh.vertices[static_cast<std::size_t>(f(1))] - v0,
+                         m.mesh.vertices[static_cast<std::size_t>(f(2))] - v0});
+      }
+    }
+  }
+  groups.push_back(std::move(group));
+}
+
+// Every fan ray against every active group; s.best keeps the nearest hit so far, and each
+// group's rays only reach as far as that hit.
+void ScanSimulator::Impl::castFan(const RunSetup& setup, Scratch& s) const {
+  const std::size_t n = setup.directions.size();
+  for (int slot = 0; slot < static_cast<int>(s.active.size()); ++slot) {
+    const ActiveGroup& a = s.active[static_cast<std::size_t>(slot)];
+    const Group& g = groups[static_cast<std::size_t>(a.index)];
+    const Eigen::Vector3d o = a.X_GS.translation();
+    if (backend == RayBackend::kEmbree) {
+      for (std::size_t k = 0; k < n; ++k) {
+        RTCRayHit& rh = s.rayhits[k];
+        fillRay(rh.ray, o, a.X_GS.linear() * setup.directions[k], s.best[k].t);
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+      }
+      RTCIntersectContext context;
+      rtcInitIntersectContext(&context);
+      context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+      rtcIntersect1M(g.scene, &context, s.rayhits.data(), static_cast<unsigned>(n),
+                     sizeof(RTCRayHit));
+      for (std::size_t k = 0; k < n; ++k) {
+        const RTCRayHit& rh = s.rayhits[k];
+        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+        s.best[k] = {slot, rh.hit.geomID, rh.hit.primID, static_cast<double>(rh.ray.tfar)};
+      }
+    } else {
+      for (std::size_t k = 0; k < n; ++k) {
+        const Eigen::Vector3d d = a.X_GS.linear() * setup.directions[k];
+        for (std::size_t m = 0; m < g.edges.size(); ++m) {
+          for (std::size_t t = 0; t < g.edges[m].size(); ++t) {
+            if (const auto hit = intersect(g.edges[m][t], o, d, s.best[k].t)) {
+              s.best[k] = {slot, static_cast<unsigned>(m), static_cast<unsigned>(t), *hit};
+            }
+          }
+        }
+      }
+    }
+  }
+}
+
+// Which of the candidates flagged in `test` the camera sees; clears the flag of the others.
+// A camera on the far side of the hit triangle's plane cannot see the point (the surface
+// itself hides it); otherwise the segment from the hit to the camera centre must be clear.
+void ScanSimulator::Impl::cameraPass(const Eigen::Vector3d& camera,
+                                     Scratch& s,
+                                     std::vector<char>& test,
+                                     SimulationStats& stats) const {
+  s.pending.clear();
+  for (std::size_t i = 0; i < s.candidates.size(); ++i) {
+    if (!test[i]) continue;
+    const Candidate& c = s.candidates[i];
+    if (c.n_S.dot(camera - c.p_S) > 0.0) {
+      s.pending.push_back(i);
+    } else {
+      test[i] = 0;
+    }
+  }
+  const std::size_t n = s.pending.size();
+  stats.occlusion_rays += n;
+  s.blocked.assign(n, 0);
+  s.rays.resize(std::max(s.rays.size(), n));
+  s.origins.resize(n);
+  s.towards.resize(n);
+  s.lengths.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Candidate& c = s.candidates[s.pending[i]];
+    s.origins[i] = c.p_S + kOcclusionOffset * c.n_S;
+    const Eigen::Vector3d to_camera = camera - s.origins[i];
+    s.lengths[i] = to_camera.norm();
+    s.towards[i] = to_camera / s.lengths[i];
+  }
+  for (const ActiveGroup& a : s.active) {
+    const Group& g = groups[static_cast<std::size_t>(a.index)];
+    if (backend == RayBackend::kEmbree) {
+      for (std::size_t i = 0; i < n; ++i) {
+        RTCRay& ray = s.rays[i];
+        fillRay(ray, a.X_GS * s.origins[i], a.X_GS.linear() * s.towards[i], s.lengths[i]);
+        if (s.blocked[i]) {  // inactive: tnear > tfar
+          ray.tnear = 1.0f;
+          ray.tfar = 0.0f;
+        }
+      }
+      RTCIntersectContext context;
+      rtcInitIntersectContext(&context);
+      context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+      rtcOccluded1M(g.scene, &context, s.rays.data(), static_cast<unsigned>(n), sizeof(RTCRay));
+      for (std::size_t i = 0; i < n; ++i) {
+        if (!s.blocked[i] && s.rays[i].tfar < 0.0f) s.blocked[i] = 1;
+      }
+    } else {
+      for (std::size_t i = 0; i < n; ++i) {
+        if (s.blocked[i]) continue;
+        const Eigen::Vector3d o = a.X_GS * s.origins[i];
+        const Eigen::Vector3d d = a.X_GS.linear() * s.towards[i];
+        for (std::size_t k = 0; k < g.edges.size() && !s.blocked[i]; ++k) {
+          for (const auto& tri : g.edges[k]) {
+            if (intersect(tri, o, d, s.lengths[i])) {
+              s.blocked[i] = 1;
+              break;
+            }
+          }
+        }
+      }
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (s.blocked[i]) test[s.pending[i]] = 0;
+  }
+}
+
+void ScanSimulator::Impl::profile(const ScanFrame& frame,
+                                  std::uint32_t index,
+                                  const RunSetup& setup,
+                                  Scratch& s,
+                                  std::vector<CloudPoint>& out,
+                                  SimulationStats& stats) const {
+  const SimulationSettings& settings = *setup.settings;
+  const auto link_frames = cell.robot.linkFrames(frame.q);
+  const Eigen::Isometry3d X_WS = cell.X_WB * link_frames[6] * cell.scanner.X_FS;
+
+  // Groups whose bounding sphere reaches the profile's rays, with the rays' frame in theirs.
+  s.active.clear();
+  for (std::size_t i = 0; i < groups.size(); ++i) {
+    const Group& g = groups[i];
+    Eigen::Isometry3d X_GS;
+    switch (g.kind) {
+      case GroupKind::kTable:
+        X_GS = setup.true_table.X_WR(frame.theta).inverse() * X_WS;
+        break;
+      case GroupKind::kWorld:
+        X_GS = X_WS;
+        break;
+      case GroupKind::kLink:
+        X_GS = (cell.X_WB * link_frames[static_cast<std::size_t>(g.link)]).inverse() * X_WS;
+        break;
+    }
+    const Eigen::Vector3d centre_S = X_GS.inverse() * g.centre;
+    if (setup.reach.exteriorDistance(centre_S) <= g.radius) {
+      s.active.push_back({static_cast<int>(i), X_GS});
+    }
+  }
+
+  const std::size_t n = setup.directions.size();
+  stats.laser_rays += n;
+  s.best.resize(n);
+  s.rayhits.resize(n);
+  for (std::size_t k = 0; k < n; ++k) s.best[k] = Hit{-1, 0, 0, setup.t_far[k]};
+  castFan(setup, s);
+
+  s.candidates.clear();
+  for (std::size_t k = 0; k < n; ++k) {
+    const Hit& hit = s.best[k];
+    if (hit.slot < 0) continue;
+    ++stats.hits;
+    const ActiveGroup& a = s.active[static_cast<std::size_t>(hit.slot)];
+    const Group& g = groups[static_cast<std::size_t>(a.index)];
+    const kinematics::TriangleMesh& mesh = g.meshes[hit.mesh].mesh;
+    // Embree's distance is float; the hit triangle's plane gives it in double (the point then
+    // lies on the triangle to ~1e-16 relative, whatever the frames).
+    const Eigen::Vector3d& d_S = setup.directions[k];
+    const Eigen::Vector3d n_G = triangleNormal(mesh, hit.triangle).normalized();
+    const Eigen::Vector3d d_G = a.X_GS.linear() * d_S;
+    const Eigen::Vector3d& v0 =
+        mesh.vertices[static_cast<std::size_t>(mesh.triangles[hit.triangle](0))];
+    const double cos_nd = n_G.dot(d_G);
+    double t = hit.t;
+    if (std::abs(cos_nd) > 1e-9) t = n_G.dot(v0 - a.X_GS.translation()) / cos_nd;
+    const Eigen::Vector3d p_S = t * d_S;
+    if (!setup.window.contains(p_S.y(), p_S.z())) {
+      ++stats.outside_window;
+      continue;
+    }
+    Candidate c;
+    c.ray = static_cast<std::uint32_t>(k);
+    c.hit = hit;
+    c.t = t;
+    c.p_S = p_S;
+    c.n_S = a.X_GS.linear().transpose() * n_G;
+    if (c.n_S.dot(d_S) > 0.0) c.n_S = -c.n_S;
+    c.incidence = std::acos(std::min(1.0, std::abs(cos_nd)));
+    s.candidates.push_back(c);
+  }
+
+  // The camera rule (CameraRule): each pass tests the candidates still in question against
+  // one camera.
+  const std::size_t m = s.candidates.size();
+  switch (settings.cameras) {
+    case CameraRule::kPositive:
+    case CameraRule::kNegative:
+      s.seen.assign(m, 1);
+      cameraPass(setup.cameras[0], s, s.seen, stats);
+      break;
+    case CameraRule::kBoth:
+      s.seen.assign(m, 1);
+      cameraPass(setup.cameras[0], s, s.seen, stats);
+      cameraPass(setup.cameras[1], s, s.seen, stats);  // only those C+ sees
+      break;
+    case CameraRule::kEither:
+      s.seen.assign(m, 1);
+      cameraPass(setup.cameras[0], s, s.seen, stats);
+      s.seen_other.resize(m);
+      for (std::size_t i = 0; i < m; ++i) s.seen_other[i] = s.seen[i] ? 0 : 1;
+      cameraPass(setup.cameras[1], s, s.seen_other, stats);  // only those C+ does not see
+      for (std::size_t i = 0; i < m; ++i) s.seen[i] = s.seen[i] || s.seen_other[i];
+      break;
+  }
+  for (std::size_t i = 0; i < m; ++i) s.candidates[i].visible = s.seen[i] != 0;
+
+  const bool noisy = settings.sigma_longitudinal > 0.0 || settings.sigma_orthogonal > 0.0;
+  std::mt19937_64 rng(mix(settings.seed ^ mix(index)));
+  const Eigen::Isometry3d X_PS = (cell.table.X_WR(frame.theta) * cell.part.X_RP).inverse() * X_WS;
+  for (const Candidate& c : s.candidates) {
+    if (!c.visible) {
+      ++stats.occluded;
+      continue;
+    }
+    CloudPoint p;
+    p.t = frame.t;
+    p.profile = index;
+    p.ray = c.ray;
+    p.range = c.t;
+    p.incidence = c.incidence;
+    Eigen::Vector3d p_S = c.p_S;
+    if (noisy) {
+      // Along the ray and across it within the laser plane (a triangulating head measures in
+      // its plane): d = (0, sin α, cos α), u = (0, cos α, −sin α).
+      const Eigen::Vector3d& d = setup.directions[c.ray];
+      const Eigen::Vector3d u(0.0, d.z(), -d.y());
+      const auto [g_l, g_o] = gaussianPair(rng);
+      const double e_l = settings.sigma_longitudinal * g_l;
+      p_S += e_l * d + settings.sigma_orthogonal * g_o * u;
+      p.range += e_l;
+    }
+    p.p_P = X_PS * p_S;
+    const Group& g =
+        groups[static_cast<std::size_t>(s.active[static_cast<std::size_t>(c.hit.slot)].index)];
+    if (g.meshes[c.hit.mesh].is_part) p.part_triangle = static_cast<std::int32_t>(c.hit.triangle);
+    out.push_back(p);
+  }
+  stats.points += out.size();
+}
+
+std::vector<double> fanAngles(const LaserWindow& window, int rays_per_profile) {
+  std::vector<double> angles;
+  if (rays_per_profile <= 0) return angles;
+  if (rays_per_profile == 1) return {0.0};
+  const double alpha_max =
+      std::max(std::atan2(window.y_near, window.z_min), std::atan2(window.y_far, window.z_max));
+  angles.reserve(static_cast<std::size_t>(rays_per_profile));
+  for (int k = 0; k < rays_per_profile; ++k) {
+    angles.push_back(-alpha_max + 2.0 * alpha_max * k / (rays_per_profile - 1));
+  }
+  return angles;
+}
+
+std::vector<Eigen::Vector3d> cameraCentres(const LaserOptics& optics, CameraRule rule) {
+  const Eigen::Vector3d plus(optics.a, 0.0, optics.b), minus(-optics.a, 0.0, optics.b);
+  switch (rule) {
+    case CameraRule::kPositive:
+      return {plus};
+    case CameraRule::kNegative:
+      return {minus};
+    case CameraRule::kBoth:
+    case CameraRule::kEither:
+      return {plus, minus};
+  }
+  return {};
+}
+
+ScanSimulator::ScanSimulator(const kinematics::CellModel& cell,
+                             const kinematics::TriangleMesh& part,
+                             const SimulatorOptions& options)
+    : impl_(std::make_unique<Impl>(cell)) {
+  impl_->backend = options.backend;
+  if (options.backend == RayBackend::kEmbree) {
+    // No "threads=N" in the config: with it, Embree's TBB back end installs a process-wide
+    // tbb::global_control for the device's lifetime (see raycaster.cpp).
+    impl_->device = rtcNewDevice(nullptr);
+    if (!impl_->device) throw std::runtime_error("Embree: cannot create a device");
+  }
+  const auto surfaces = [&](const std::vector<kinematics::Shape>& shapes,
+                            const Eigen::Isometry3d& X) {
+    std::vector<GroupMesh> out;
+    for (const kinematics::Shape& shape : shapes) {
+      GroupMesh m{kinematics::shapeSurface(shape, options.tessellation), false};
+      for (Eigen::Vector3d& v : m.mesh.vertices) v = X * v;
+      out.push_back(std::move(m));
+    }
+    return out;
+  };
+
+  // The table group (frame R): the part first, so that its geometry index is 0.
+  Group table;
+  table.kind = GroupKind::kTable;
+  GroupMesh part_mesh{part, true};
+  for (Eigen::Vector3d& v : part_mesh.mesh.vertices) v = cell.part.X_RP * v;
+  table.meshes.push_back(std::move(part_mesh));
+  kinematics::Shape top;
+  top.geometry = kinematics::Cylinder{cell.table.radius, cell.table.height};
+  top.X_BG.translation() << 0.0, 0.0, -0.5 * cell.table.height;  // top face at z = 0
+  for (GroupMesh& m : surfaces({top}, Eigen::Isometry3d::Identity())) {
+    table.meshes.push_back(std::move(m));
+  }
+  Group world;
+  world.kind = GroupKind::kWorld;
+  world.meshes = surfaces(cell.robot.definition().links[0].shapes, cell.X_WB);
+  for (const kinematics::Obstacle& o : cell.obstacles) {
+    Group& g = o.carrier == kinematics::Carrier::kTable ? table : world;
+    for (GroupMesh& m : surfaces(o.shapes, Eigen::Isometry3d::Identity())) {
+      g.meshes.push_back(std::move(m));
+    }
+  }
+  impl_->addGroup(std::move(table));
+  impl_->addGroup(std::move(world));
+  for (int k = 1; k <= kinematics::kNumJoints; ++k) {
+    Group link;
+    link.kind = GroupKind::kLink;
+    link.link = k;
+    link.meshes = surfaces(cell.robot.definition().links[static_cast<std::size_t>(k)].shapes,
+                           Eigen::Isometry3d::Identity());
+    impl_->addGroup(std::move(link));
+  }
+}
+
+ScanSimulator::~ScanSimulator() = default;
+
+std::size_t ScanSimulator::triangleCount() const {
+  std::size_t count = 0;
+  for (const Group& g : impl_->groups) {
+    for (const GroupMesh& m : g.meshes) count += m.mesh.triangles.size();
+  }
+  return count;
+}
+
+SimulatedCloud ScanSimulator::simulate(const std::vector<ScanFrame>& frames,
+                                       const LaserOptics& optics,
+                                       const SimulationSettings& settings) const {
+  assert(settings.rays_per_profile >= 1);
+  RunSetup setup;
+  setup.settings = &settings;
+  setup.window = laserWindow(optics);
+  setup.true_table = settings.simulated_table.value_or(impl_->cell.table);
+  setup.cameras = cameraCentres(optics, settings.cameras);
+  const std::vector<double> angles = fanAngles(setup.window, settings.rays_per_profile);
+  for (const double alpha : angles) {
+    setup.directions.emplace_back(0.0, std::sin(alpha), std::cos(alpha));
+    // A hit beyond the far edge z_max cannot be in the trapezoid.
+    setup.t_far.push_back(setup.window.z_max / std::cos(alpha) + kCullMargin);
+  }
+  // Fan rays end within z ≤ z_max, |y| ≤ z_max·tan α_max; camera rays run from there to the
+  // camera centres: all inside this box (scanner frame).
+  const double y_reach = setup.window.z_max * std::tan(std::abs(angles.front()));
+  setup.reach.extend(Eigen::Vector3d(0.0, -y_reach, 0.0));
+  setup.reach.extend(Eigen::Vector3d(0.0, y_reach, setup.window.z_max + kCullMargin));
+  for (const Eigen::Vector3d& c : setup.cameras) setup.reach.extend(c);
+  setup.reach.min().array() -= kCullMargin;
+  setup.reach.max().array() += kCullMargin;
+
+  const std::size_t n = frames.size();
+  std::vector<std::vector<CloudPoint>> per_profile(n);
+  std::vector<SimulationStats> per_stats(n);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      Scratch& s = impl_->scratch.local();
+                      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                        impl_->profile(frames[i], static_cast<std::uint32_t>(i), setup, s,
+                                       per_profile[i], per_stats[i]);
+                      }
+                    });
+
+  SimulatedCloud cloud;
+  std::size_t total = 0;
+  for (const auto& p : per_profile) total += p.size();
+  cloud.points.reserve(total);
+  for (std::size_t i = 0; i < n; ++i) {
+    cloud.points.insert(cloud.points.end(), per_profile[i].begin(), per_profile[i].end());
+    const SimulationStats& st = per_stats[i];
+    cloud.stats.laser_rays += st.laser_rays;
+    cloud.stats.occlusion_rays += st.occlusion_rays;
+    cloud.stats.hits += st.hits;
+    cloud.stats.outside_window += st.outside_window;
+    cloud.stats.occluded += st.occluded;
+    cloud.stats.points += st.points;
+  }
+  cloud.stats.profiles = n;
+  return cloud;
+}
+
+}  // namespace scanplan::scanner

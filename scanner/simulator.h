@@ -1,0 +1,143 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "kinematics/cell.h"
+#include "kinematics/mesh.h"
+#include "kinematics/robot_model.h"
+#include "kinematics/rotary_table.h"
+#include "kinematics/shape.h"
+#include "scanner/laser_model.h"
+
+namespace scanplan::scanner {
+
+/// One profile acquisition: the time, the table angle and the arm joints at that instant.
+struct ScanFrame {
+  double t = 0.0;                                               ///< s
+  double theta = 0.0;                                           ///< table angle, rad
+  kinematics::JointVector q = kinematics::JointVector::Zero();  ///< arm joints, rad
+};
+
+/// Which camera(s) must see a lit point for it to be measured. The head's camera geometry
+/// (DESIGN.md §6, Eq. 4–5) in the scanner frame S: the laser leaves the origin in the plane
+/// X = 0 (the fan spreads about +Z); a camera centre sits at C± = (±a, 0, b), its optical axis
+/// in the XZ plane at the angle φ to the laser's +Z, looking back at the plane. A single-camera
+/// head has only C+.
+enum class CameraRule {
+  kPositive,  ///< one camera, at C+ = (+a, 0, b)
+  kNegative,  ///< one camera, at C− = (−a, 0, b)
+  kBoth,      ///< two cameras; a point counts only when both see it
+  kEither,    ///< two cameras; a point counts when at least one sees it
+};
+
+/// What one simulation run does (the job's scanner settings, SI).
+struct SimulationSettings {
+  int rays_per_profile = 200;  ///< fan rays per profile, spread evenly in angle (≥ 1)
+  CameraRule cameras = CameraRule::kPositive;
+  /// Gaussian measurement noise (DESIGN.md §6): along the ray (σ_l) and across it in the laser
+  /// plane (σ_o), m. Zero: no noise.
+  double sigma_longitudinal = 0.0;
+  double sigma_orthogonal = 0.0;
+  std::uint64_t seed = 1;  ///< noise seed; each profile draws from its own stream
+  /// The table as it really is in the simulated cell (eccentricity, tilt, …), when it differs
+  /// from the planner's model in the cell. The part scene is posed on this table, while points
+  /// are mapped into the part frame with the planner's model, as the real system would: the
+  /// difference shows in the cloud (seed §5.6).
+  std::optional<kinematics::RotaryTableModel> simulated_table;
+};
+
+/// A measured point.
+struct CloudPoint {
+  Eigen::Vector3d p_P = Eigen::Vector3d::Zero();  ///< part frame, m (noise included)
+  double t = 0.0;                                 ///< acquisition time, s
+  std::uint32_t profile = 0;                      ///< index of the frame that took it
+  std::uint32_t ray = 0;                          ///< fan ray index within the profile
+  double range = 0.0;      ///< laser origin to the point along the ray (with σ_l noise), m
+  double incidence = 0.0;  ///< angle between the ray and the surface normal, rad, [0, π/2]
+  std::int32_t part_triangle = -1;  ///< hit triangle of the part mesh; −1 on another body
+};
+
+/// Counters of one run; rays are counted once however many rigid groups they visit.
+struct SimulationStats {
+  std::size_t profiles = 0;
+  std::size_t laser_rays = 0;      ///< fan rays cast
+  std::size_t occlusion_rays = 0;  ///< hit → camera rays cast
+  std::size_t hits = 0;            ///< fan rays whose nearest hit lies within the ray's range
+  std::size_t outside_window = 0;  ///< nearest hits outside the trapezoid (Eq. 5)
+  std::size_t occluded = 0;        ///< in the trapezoid but not seen by the camera rule
+  std::size_t points = 0;
+};
+
+struct SimulatedCloud {
+  std::vector<CloudPoint> points;  ///< in profile order, then fan ray order
+  SimulationStats stats;
+};
+
+/// The ray-casting back end.
+enum class RayBackend {
+  kEmbree,      ///< Embree 3 BVHs (the product)
+  kBruteForce,  ///< every triangle for every ray, in double: the reference for tests and bench
+};
+
+struct SimulatorOptions {
+  RayBackend backend = RayBackend::kEmbree;
+  kinematics::TessellationOptions tessellation;  ///< for the primitives (table, links, …)
+};
+
+/// The fan of one profile (Eq. 5 window): ray k leaves the laser origin along
+/// (0, sin α_k, cos α_k) in the scanner frame, α_k evenly spaced over [−α_max, α_max] where
+/// α_max is the widest corner angle of the trapezoid, atan(y/z) over its corners (α = 0 for a
+/// single ray).
+std::vector<double> fanAngles(const LaserWindow& window, int rays_per_profile);
+
+/// The camera centre(s) of the rule, scanner frame, m (see CameraRule).
+std::vector<Eigen::Vector3d> cameraCentres(const LaserOptics& optics, CameraRule rule);
+
+/// Geometric laser scanner simulation (DESIGN.md §6, seed §5.2–5.6) of a whole cell.
+///
+/// The scene is built once, one rigid group at a time, and the rays are moved into each group's
+/// frame instead of moving geometry: the table group (table cylinder, part, table-carried
+/// obstacles; frame R), the world group (robot base, world obstacles; frame W) and one group
+/// per moving arm link 1…6 (its DH frame). The scanner's own housing is not in the scene: the
+/// laser leaves through it and the cameras look out of it. Per profile the fan is cast against
+/// every group whose bounding sphere reaches the profile's rays; each ray keeps its nearest hit,
+/// refined in double precision on the hit triangle's plane, and the hit becomes a point when it
+/// lies in the trapezoid (LaserWindow::contains) and the camera rule is met: a camera sees the
+/// hit when it is on the lit side of the hit triangle and nothing blocks the segment from the
+/// hit to its centre. Noise is drawn after these decisions, so it never changes which rays
+/// yield points.
+///
+/// Immutable once built; simulate() is const, runs profiles in parallel (TBB) and returns the
+/// same cloud for any thread count.
+class ScanSimulator {
+ public:
+  /// `part` is the cell's part mesh, loaded (part frame P, m). Obstacle and link meshes are
+  /// loaded here; throws InputError for a broken one.
+  ScanSimulator(const kinematics::CellModel& cell,
+                const kinematics::TriangleMesh& part,
+                const SimulatorOptions& options = {});
+  ~ScanSimulator();
+  ScanSimulator(const ScanSimulator&) = delete;
+  ScanSimulator& operator=(const ScanSimulator&) = delete;
+
+  /// One profile per frame; profile i is frames[i]. Precondition: the optics are valid
+  /// (LaserOptics) and settings.rays_per_profile ≥ 1.
+  SimulatedCloud simulate(const std::vector<ScanFrame>& frames,
+                          const LaserOptics& optics,
+                          const SimulationSettings& settings) const;
+
+  /// Scene size: triangles over all groups.
+  std::size_t triangleCount() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace scanplan::scanner
