@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -158,6 +159,16 @@ std::string reportJson(const JobSpec& job,
     if (const auto gap = planning.dpGap()) json.value("gap_percent", 100.0 * *gap);
     json.endObject();
   }
+  if (!planning.rejected.empty()) {
+    json.beginArray("rejected");
+    for (const auto& [b, why] : planning.rejected) {
+      json.beginObject();
+      json.value("branch", map.branches[b].words());
+      json.value("reason", why);
+      json.endObject();
+    }
+    json.endArray();
+  }
   json.beginArray("branches");
   for (std::size_t b = 0; b < planning.chosen.branches.size(); ++b) {
     const planner::PlanResult& r = planning.chosen.branches[b];
@@ -256,9 +267,29 @@ ExitCode runPlan(const PlanOptions& options) {
   writeMapOutputs(options.out_dir, job, run.map);
   summary += pathSummary(context) + mapSummary(run);
 
+  // Each candidate path is turned into joint motion before it is accepted: the map scores every
+  // cell on its own, but a path must also be followable continuously (joints such as J4 and J6
+  // cannot wrap past their limits) and keep f > 0 between the grid angles.
+  std::optional<planner::TrajectoryBuild> candidate;
+  const auto check = [&](std::size_t b, const std::vector<double>& theta) -> std::string {
+    const auto t = Clock::now();
+    candidate =
+        planner::buildTrajectory(scene, constraintSettings(job), path, theta, run.map.branches[b]);
+    times.trajectory += since(t);
+    if (!candidate->ok) return candidate->reason;
+    if (!(candidate->min_f > 0.0)) {
+      const auto& s = candidate->trajectory.samples[candidate->min_f_sample];
+      return fmt::format(
+          "time sample {} (t = {:.2f} s, table {:.2f} deg): f = 0 ({}) between the map's grid "
+          "angles; a finer map.angle_step_deg resolves it",
+          candidate->min_f_sample, s.t, toDeg(s.theta), s.limit);
+    }
+    return {};
+  };
   t0 = Clock::now();
-  const PlanningOutcome planning = planJob(run.map, job, method, options.compare, options.refine);
-  times.plan = since(t0);
+  const PlanningOutcome planning =
+      planJob(run.map, job, method, options.compare, options.refine, check);
+  times.plan = since(t0) - times.trajectory;
   const auto finish = [&](const std::string& status, const std::string& reason,
                           const planner::TrajectoryBuild* trajectory) {
     times.total = since(start);
@@ -267,7 +298,8 @@ ExitCode runPlan(const PlanOptions& options) {
         reportJson(job, cell, run.map, planning, trajectory, status, reason, times));
   };
   if (!planning.solved()) {
-    finish("no_path", planning.chosen.result.reason, nullptr);
+    finish(planning.rejected.empty() ? "no_path" : "no_executable_path",
+           planning.chosen.result.reason, nullptr);
     summary += fmt::format("plan       NO PATH ({}): {}\n", method, planning.chosen.result.reason);
     summary += fmt::format("wrote      {}: job.yaml, report.json, {}\n", options.out_dir.string(),
                            kMapFilesNote);
@@ -275,21 +307,7 @@ ExitCode runPlan(const PlanOptions& options) {
     return ExitCode::kNoPlan;
   }
   const std::size_t branch = planning.chosen.result.branch;
-
-  t0 = Clock::now();
-  const planner::TrajectoryBuild trajectory = planner::buildTrajectory(
-      scene, constraintSettings(job), path, planning.theta, run.map.branches[branch]);
-  times.trajectory = since(t0);
-  std::string failure;
-  if (!trajectory.ok) {
-    failure = trajectory.reason;
-  } else if (!(trajectory.min_f > 0.0)) {
-    const auto& s = trajectory.trajectory.samples[trajectory.min_f_sample];
-    failure = fmt::format(
-        "time sample {} (t = {:.2f} s, table {:.2f} deg): f = 0 ({}) between the map's grid "
-        "angles; use a finer map.angle_step_deg",
-        trajectory.min_f_sample, s.t, toDeg(s.theta), s.limit);
-  }
+  const planner::TrajectoryBuild& trajectory = *candidate;  // the accepted branch's, checked last
   std::vector<std::pair<std::string, std::vector<double>>> drawn{{method, planning.theta}};
   std::vector<std::string> labels{fmt::format(
       "{}{} J {:.2f} s", method, planning.refine ? " + refine" : "", planning.terms.total)};
@@ -299,12 +317,6 @@ ExitCode runPlan(const PlanOptions& options) {
     labels.push_back(fmt::format("{} J {:.2f} s", o.method, o.result.terms.total));
   }
   writePathFigure(options.out_dir, run.map, branch, drawn, labels);
-  if (!failure.empty()) {
-    finish("infeasible_trajectory", failure, &trajectory);
-    summary += fmt::format("plan       NO VALID TRAJECTORY ({}): {}\n", method, failure);
-    std::fputs(summary.c_str(), stdout);
-    return ExitCode::kNoPlan;
-  }
   writeFileAtomically(options.out_dir / "trajectory.csv",
                       kinematics::trajectoryToCsv(trajectory.trajectory));
   finish("planned", "", &trajectory);
@@ -314,6 +326,9 @@ ExitCode runPlan(const PlanOptions& options) {
       "plan       {} on {}: J = {:.3f} s (f {:.3f}, omega {:.3f}, alpha {:.3f}) in {:.2f} s\n",
       method, run.map.branches[branch].words(), t.total, t.cost_f, t.cost_omega, t.cost_alpha,
       planning.chosen.seconds);
+  for (const auto& [b, why] : planning.rejected) {
+    summary += fmt::format("  rejected {} (lower J): {}\n", run.map.branches[b].words(), why);
+  }
   if (planning.refine) {
     summary += fmt::format("refine     J {:.3f} -> {:.3f} s ({})\n", planning.refine->before.total,
                            planning.refine->after.total,

@@ -1,5 +1,6 @@
 #include "cli/planning.h"
 
+#include <algorithm>
 #include <chrono>
 
 #include <fmt/format.h>
@@ -114,26 +115,59 @@ PlanningOutcome planJob(const planner::ConfigMap& map,
                         const JobSpec& job,
                         std::string method,
                         bool compare,
-                        bool refine) {
+                        bool refine,
+                        const PathCheck& check) {
   if (method.empty()) method = job.planner.method;
   PlanningOutcome out;
   out.chosen = runPlanner(method, map, job);
   if (!out.solved()) return out;
-  const std::size_t branch = out.chosen.result.branch;
   const planner::PlannerSettings settings = plannerSettings(job);
   const bool continuous = continuousTable(job);
-  out.theta = out.chosen.result.theta;
-  out.terms = out.chosen.result.terms;
-  out.dp_subdivisions = dpSubdivisions(map, branch, job, settings);
 
-  if (refine || job.planner.refine.enabled) {
-    planner::RefineSettings rs;
-    rs.time_limit_s = job.planner.refine.time_limit_s;
-    rs.keep_start = startAngle(job).has_value();
-    out.refine = planner::refinePath(map, branch, out.theta, settings, continuous, rs);
-    out.theta = out.refine->theta;
-    out.terms = out.refine->after;
+  std::vector<std::size_t> order;
+  for (std::size_t b = 0; b < out.chosen.branches.size(); ++b) {
+    if (out.chosen.branches[b].status == Status::kSolved) order.push_back(b);
   }
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return out.chosen.branches[a].terms.total < out.chosen.branches[b].terms.total;
+  });
+  bool accepted = false;
+  for (const std::size_t b : order) {
+    const planner::PlanResult& r = out.chosen.branches[b];
+    out.theta = r.theta;
+    out.terms = r.terms;
+    out.refine.reset();
+    if (refine || job.planner.refine.enabled) {
+      planner::RefineSettings rs;
+      rs.time_limit_s = job.planner.refine.time_limit_s;
+      rs.keep_start = startAngle(job).has_value();
+      out.refine = planner::refinePath(map, b, out.theta, settings, continuous, rs);
+      out.theta = out.refine->theta;
+      out.terms = out.refine->after;
+    }
+    const std::string why = check ? check(b, out.theta) : std::string();
+    if (why.empty()) {
+      out.chosen.result = r;
+      accepted = true;
+      break;
+    }
+    out.rejected.emplace_back(b, why);
+  }
+  if (!accepted) {
+    std::string reasons;
+    for (const auto& [b, why] : out.rejected) {
+      reasons += fmt::format("\n  {}: {}", map.branches[b].words(), why);
+    }
+    out.chosen.result = planner::PlanResult{};
+    out.chosen.result.reason =
+        fmt::format("{} found a path on {} branch(es) but none can be executed:{}", method,
+                    order.size(), reasons);
+    out.theta.clear();
+    out.refine.reset();
+    return out;
+  }
+  const std::size_t branch = out.chosen.result.branch;
+  out.dp_subdivisions = dpSubdivisions(map, branch, job, settings);
   if (method == "dp") {
     out.dp = out.chosen.result;
   } else if (job.planner.dp_gap || compare) {

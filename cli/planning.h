@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -29,6 +30,8 @@ struct PlanningOutcome {
   std::optional<planner::PlanResult> dp;        ///< DP on the chosen branch (the yardstick)
   int dp_subdivisions = 1;                      ///< DP's angle grid: map step / this
   std::vector<PlannerOutcome> others;           ///< --compare: the other planners, same branch
+  /// Branches whose path the check turned down, best J first, with the reason.
+  std::vector<std::pair<std::size_t, std::string>> rejected;
   bool solved() const { return chosen.result.status == planner::PlanResult::Status::kSolved; }
   /// (J − J_dp) / J_dp of the final path, when DP solved; negative when the continuous path beats
   /// DP's grid.
@@ -44,11 +47,18 @@ PlannerOutcome runPlanner(const std::string& method,
                           const JobSpec& job,
                           std::optional<std::size_t> branch = {});
 
-/// The whole planning stage. `method` empty: the job's. Refinement when `refine` or the job says.
+/// Judges a planned path on a map branch before it is accepted: empty when the path can be
+/// executed, otherwise why not (e.g. a joint would have to pass its limit to follow it).
+using PathCheck = std::function<std::string(std::size_t branch, const std::vector<double>& theta)>;
+
+/// The whole planning stage. `method` empty: the job's. The solved branches are taken in order
+/// of J: refined (when `refine` or the job says) and checked; the first that passes is chosen.
+/// Then the DP yardstick and, with `compare`, the other planners run on the chosen branch.
 PlanningOutcome planJob(const planner::ConfigMap& map,
                         const JobSpec& job,
                         std::string method,
                         bool compare,
-                        bool refine);
+                        bool refine,
+                        const PathCheck& check = {});
 
 }  // namespace scanplan::cli

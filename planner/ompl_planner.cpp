@@ -19,6 +19,7 @@
 #include <ompl/base/spaces/RealVectorStateSpace.h>
 #include <ompl/base/spaces/SO2StateSpace.h>
 #include <ompl/control/PathControl.h>
+#include <ompl/control/ControlSampler.h>
 #include <ompl/control/SpaceInformation.h>
 #include <ompl/control/planners/rrt/RRT.h>
 #include <ompl/control/planners/sst/SST.h>
@@ -48,11 +49,14 @@ struct Problem {
   double f(double theta, std::size_t k) const noexcept {
     return detail::mapValue(*map, grid, branch, theta, k, continuous);
   }
-  // One sample of the dynamics (header): the speed after a step with control u from speed
-  // `omega` at sample k.
+  // One sample of the dynamics (header): the speed after a step with control u (target speed
+  // u·ω_max) from speed `omega` at sample k. The first step reaches the target: evaluate() bounds
+  // no acceleration into sample 1.
   double nextOmega(double omega, std::size_t k, double u) const noexcept {
-    const double w_max = settings.omega_max;
-    return k == 0 ? u * w_max : std::clamp(omega + u * settings.alpha_max * grid.dt, -w_max, w_max);
+    const double w_max = settings.omega_max, target = u * w_max;
+    if (k == 0) return target;
+    const double dw = settings.alpha_max * grid.dt;
+    return std::clamp(omega + std::clamp(target - omega, -dw, dw), -w_max, w_max);
   }
   // The J terms a step adds (evaluate()'s, Eq. in objective.h), the start sample's own −ln f
   // included on the first step. Infinite when f = 0 at the new sample.
@@ -157,6 +161,22 @@ class LogLevelGuard {
   ompl::msg::LogLevel previous_;
 };
 
+// Uniform target speeds, and with probability `p_stop` exactly 0: standing still is often the
+// cheapest motion and the only one that fits a corridor one grid step wide, and a uniform sample
+// never hits it.
+class StopBiasedSampler : public oc::ControlSampler {
+ public:
+  StopBiasedSampler(const oc::ControlSpace* space, double p_stop)
+      : oc::ControlSampler(space), p_stop_(p_stop) {}
+  void sample(oc::Control* control) override {
+    double& u = control->as<oc::RealVectorControlSpace::ControlType>()->values[0];
+    u = rng_.uniform01() < p_stop_ ? 0.0 : rng_.uniformReal(-1.0, 1.0);
+  }
+
+ private:
+  double p_stop_;
+};
+
 const char* plannerName(OmplPlanner p) { return p == OmplPlanner::kSst ? "SST" : "RRT"; }
 
 }  // namespace
@@ -171,9 +191,10 @@ PlanResult planOmpl(const ConfigMap& map,
   const detail::Grid g = detail::gridOf(map, branch, continuous);
   if (!(settings.omega_max >= 0.0) || !(settings.alpha_max >= 0.0) ||
       !(os.time_limit_s > 0.0) || os.max_steps < 1 || !(os.goal_bias >= 0.0) ||
-      !(os.goal_bias <= 1.0) || !(os.selection_radius > 0.0) || !(os.pruning_radius > 0.0)) {
+      !(os.goal_bias <= 1.0) || !(os.stop_probability >= 0.0) || !(os.stop_probability <= 1.0) || !(os.selection_radius > 0.0) || !(os.pruning_radius > 0.0)) {
     throw std::logic_error(
-        "planOmpl: bounds >= 0; time limit, radii > 0; max_steps >= 1; goal_bias in [0, 1]");
+        "planOmpl: bounds >= 0; time limit, radii > 0; max_steps >= 1; goal_bias, stop_probability "
+        "in [0, 1]");
   }
   const std::size_t na = map.angles.size(), nt = map.times.size();
   const double dt = g.dt;
@@ -254,6 +275,9 @@ PlanResult planOmpl(const ConfigMap& map,
   u_bounds.setLow(-1.0);
   u_bounds.setHigh(1.0);
   controls->setBounds(u_bounds);
+  controls->setControlSamplerAllocator([p = os.stop_probability](const oc::ControlSpace* cs) {
+    return std::make_shared<StopBiasedSampler>(cs, p);
+  });
 
   auto si = std::make_shared<oc::SpaceInformation>(space, controls);
   si->setPropagationStepSize(dt);
@@ -327,7 +351,7 @@ PlanResult planOmpl(const ConfigMap& map,
   const std::size_t cap = os.max_iterations;
   const ob::PlannerTerminationCondition ptc = ob::plannerOrTerminationCondition(
       ob::timedPlannerTerminationCondition(os.time_limit_s),
-      ob::PlannerTerminationCondition([&iterations, cap] { return cap != 0 && ++iterations > cap; }));
+      ob::PlannerTerminationCondition([&iterations, cap] { return ++iterations > cap && cap != 0; }));
   const auto solve_start = std::chrono::steady_clock::now();
   const ob::PlannerStatus status = planner->solve(ptc);
   const double solve_s =
@@ -341,9 +365,8 @@ PlanResult planOmpl(const ConfigMap& map,
                               : approximate ? "approximate solution"
                                             : status.asString(),
                               solve_s,
-                              cap != 0 ? fmt::format(" ({} of {} iterations)",
-                                                     std::min(iterations, cap), cap)
-                                       : std::string(),
+                              fmt::format(" ({} iterations)", cap != 0 ? std::min(iterations, cap)
+                                                                       : iterations),
                               starts.size(), starts.size() == 1 ? "" : "s");
 
   if (!exact && !approximate) {

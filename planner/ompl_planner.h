@@ -27,21 +27,27 @@ struct OmplSettings {
   /// function of (map, settings, seed) only; a run cut by the clock depends on machine speed.
   std::size_t max_iterations = 0;
   OmplPlanner planner = OmplPlanner::kSst;
-  int max_steps = 10;         ///< a control (α) is held for 1..max_steps time samples
+  int max_steps = 50;         ///< a control (target speed) is held for 1..max_steps samples
   std::size_t starts = 36;    ///< start cells spread over the first column's f > 0 (0 = all)
   double goal_bias = 0.05;    ///< share of samples drawn on the last time sample
-  double selection_radius = 5.0;  ///< SST δ_BN, steps (see above)
-  double pruning_radius = 2.0;    ///< SST δ_s, steps; must stay below a control's reach
+  double stop_probability = 0.2;  ///< share of sampled controls with target speed exactly 0
+  /// SST δ_BN, steps (see above): the cheapest tree node this close to a sample is extended.
+  double selection_radius = 40.0;
+  /// SST δ_s, steps: one active node per witness ball. Large radii prune hard and pay off on long
+  /// horizons; narrow corridors need a radius below their width.
+  double pruning_radius = 10.0;
   bool stop_at_first_solution = false;  ///< SST: stop at the first exact solution
 };
 
 /// The planning problem (DESIGN.md §5) as an OMPL control problem (§5.3). State: table angle θ
 /// (SO(2) for a continuous table, [angles.front(), angles.back()] for a limited one), speed
 /// ω ∈ [−ω_max, ω_max], time sample k, and the objective accumulated so far (not part of the
-/// distance). Control: u ∈ [−1, 1], held for 1..max_steps samples of Δt each; one sample steps
-/// ω' = clamp(ω + u·α_max·Δt, ±ω_max), θ' = θ + ω'·Δt, k' = k + 1 — except the first sample
-/// from k = 0, where ω' = u·ω_max (evaluate() puts no bound on the first speed change). So ω and
-/// α are exactly evaluate()'s finite differences. Valid: |ω| ≤ ω_max and f(θ, k) > 0
+/// distance). Control: a target speed u·ω_max, u ∈ [−1, 1], held for 1..max_steps samples of Δt
+/// each and tracked at full acceleration: one sample steps ω' = ω + clamp(u·ω_max − ω,
+/// ±α_max·Δt), θ' = θ + ω'·Δt, k' = k + 1 — except the first sample from k = 0, where
+/// ω' = u·ω_max (evaluate() bounds no speed change into sample 1). So ω and α are exactly
+/// evaluate()'s finite differences, and holding a control reaches and keeps a constant speed
+/// (standing still included), which a held acceleration would not. Valid: |ω| ≤ ω_max and f(θ, k) > 0
 /// (mapValue()). Goal: k = the last time sample. Cost of a motion: the J terms of its samples
 /// (including −ln f of the start sample), so the OMPL path cost is J.
 ///

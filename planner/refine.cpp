@@ -44,14 +44,22 @@ RefineProblem::RefineProblem(const ConfigMap& map,
       omega_bar_((1.0 - bound_margin) * settings.omega_max),
       alpha_bar_((1.0 - bound_margin) * settings.alpha_max),
       omega_scale_(settings.omega_max > 0.0 ? settings.omega_max : 1.0),
-      alpha_scale_(settings.alpha_max > 0.0 ? settings.alpha_max : 1.0) {
-  if (samples != map.times.size() || !(f_floor > 0.0)) {
-    throw std::logic_error("RefineProblem: one variable per time sample and f_floor > 0");
+      alpha_scale_(settings.alpha_max > 0.0 ? settings.alpha_max : 1.0),
+      lo_(samples, -std::numeric_limits<double>::infinity()),
+      hi_(samples, std::numeric_limits<double>::infinity()) {
+  if (samples != map.times.size() || samples < 2 || !(f_floor > 0.0)) {
+    throw std::logic_error("RefineProblem: one variable per time sample (>= 2), f_floor > 0");
   }
 }
 
+void RefineProblem::setBoxes(std::vector<double> lo, std::vector<double> hi) {
+  if (lo.size() != n_ || hi.size() != n_) throw std::logic_error("RefineProblem: one box per sample");
+  lo_ = std::move(lo);
+  hi_ = std::move(hi);
+}
+
 std::size_t RefineProblem::constraintCount() const {
-  return 2 * (n_ - 1) + (n_ >= 2 ? 2 * (n_ - 2) : 0);
+  return 2 * (n_ - 1) + 2 * (n_ - 2) + 2 * n_;
 }
 
 double RefineProblem::cell(std::ptrdiff_t angle, std::size_t k) const noexcept {
@@ -179,6 +187,12 @@ void RefineProblem::visitConstraints(const double* theta, Visit&& visit) const n
     visit(i++, (alpha - alpha_bar_) / alpha_scale_, up.data(), up.size());
     visit(i++, (-alpha - alpha_bar_) / alpha_scale_, down.data(), down.size());
   }
+  const double db = 1.0 / grid_.angle_step;
+  for (std::size_t k = 0; k < n_; ++k) {
+    const std::array<Term, 1> up{{{k, db}}}, down{{{k, -db}}};
+    visit(i++, (theta[k] - hi_[k]) * db, up.data(), up.size());
+    visit(i++, (lo_[k] - theta[k]) * db, down.data(), down.size());
+  }
 }
 
 void RefineProblem::constraints(const double* theta,
@@ -197,16 +211,63 @@ double RefineProblem::merit(const double* theta,
                             const double* lambda,
                             double rho,
                             double* grad) const noexcept {
-  double value = objective(theta, grad);
   double penalty = 0.0;
+  const double value = objective(theta, grad);
   visitConstraints(theta, [&](std::size_t i, double g, const Term* t, std::size_t count) {
     const double m = std::max(0.0, lambda[i] + rho * g);
     if (m == 0.0 && lambda[i] == 0.0) return;
     penalty += (m * m - lambda[i] * lambda[i]) / (2.0 * rho);
     for (std::size_t c = 0; grad != nullptr && c < count; ++c) grad[t[c].j] += m * t[c].d;
   });
-  value += penalty;
-  return value;
+  return value + penalty;
+}
+
+RefineProblem::Band RefineProblem::meritHessian(const double* theta,
+                                                const double* lambda,
+                                                double rho) const {
+  Band h{std::vector<double>(n_, 0.0), std::vector<double>(n_, 0.0),
+         std::vector<double>(n_, 0.0)};
+  const double dt = grid_.dt;
+  // −ln f: f is linear in θ within a cell, so ∂²/∂θ² = c''(f)·slope²·Δt with c'' = 1/f² (and
+  // 1/f_floor² on the continuation).
+  for (std::size_t k = 0; k < n_; ++k) {
+    double f = 0.0, slope = 0.0;
+    fAndSlope(theta[k], k, f, slope);
+    const double fc = std::max(f, f_floor_);
+    h.diag[k] += slope * slope / (fc * fc) * dt;
+  }
+  // k_ω Σ (Δθ)²/Δt and k_a Σ (Δ²θ)²/Δt³: 2k_ω/Δt·D1ᵀD1 + 2k_a/Δt³·D2ᵀD2.
+  const double cw = 2.0 * settings_.k_omega / dt, ca = 2.0 * settings_.k_alpha / (dt * dt * dt);
+  for (std::size_t k = 1; k < n_; ++k) {
+    h.diag[k] += cw;
+    h.diag[k - 1] += cw;
+    h.sub1[k] -= cw;
+  }
+  for (std::size_t k = 2; k < n_; ++k) {
+    h.diag[k] += ca;
+    h.diag[k - 1] += 4.0 * ca;
+    h.diag[k - 2] += ca;
+    h.sub1[k] -= 2.0 * ca;
+    h.sub1[k - 1] -= 2.0 * ca;
+    h.sub2[k] += ca;
+  }
+  // The active penalty terms: ρ ∇g∇gᵀ (each g is linear and spans at most three neighbours).
+  visitConstraints(theta, [&](std::size_t i, double g, const Term* t, std::size_t count) {
+    if (!(lambda[i] + rho * g > 0.0)) return;
+    for (std::size_t a = 0; a < count; ++a) {
+      for (std::size_t b = 0; b < count; ++b) {
+        const std::size_t r = t[a].j, c = t[b].j;
+        if (r == c) {
+          h.diag[r] += rho * t[a].d * t[b].d;
+        } else if (r == c + 1) {
+          h.sub1[r] += rho * t[a].d * t[b].d;
+        } else if (r == c + 2) {
+          h.sub2[r] += rho * t[a].d * t[b].d;
+        }
+      }
+    }
+  });
+  return h;
 }
 
 double RefineProblem::updateMultipliers(const double* theta,
@@ -224,40 +285,122 @@ double RefineProblem::updateMultipliers(const double* theta,
 
 namespace {
 
-// The optimiser works on bounds this much (relative) inside ω_max, α_max, so a point that meets
-// them to constraint_tol ≪ this still passes evaluate()'s check.
+// The optimiser works on bounds and boxes this much (relative) inside the real ones, so a point
+// that meets them to constraint_tol ≪ this still passes evaluate()'s check and reads f > 0.
 constexpr double kBoundMargin = 1e-6;
 // The continuation of −ln f starts at this fraction of the lowest f inside the boxes: never
-// reached inside them, it only keeps the merit finite should a trial point leave them.
+// reached inside them, it only keeps the merit finite where a trial point leaves them.
 constexpr double kFloorFraction = 0.5;
-// Augmented-Lagrangian schedule (Nocedal & Wright, Alg. 17.4 in spirit): the penalty grows ×10
-// whenever a round did not cut the violation to a quarter.
-constexpr double kRho0 = 1.0, kRhoGrowth = 10.0, kRhoMax = 1e10, kViolationShrink = 0.25;
+// Augmented-Lagrangian schedule (Nocedal & Wright §17.4): the penalty grows ×10 whenever a round
+// did not cut the violation to a quarter. The preconditioner carries the penalty's curvature, so
+// a large penalty does not stall L-BFGS.
+constexpr double kRho0 = 10.0, kRhoGrowth = 10.0, kRhoMax = 1e12, kViolationShrink = 0.25;
 constexpr int kMaxRounds = 30;
+// NLopt's default L-BFGS memory is MEMAVAIL/n vectors (thousands for n = 1000), which makes an
+// iteration cost O(n·memory); preconditioned, a few vectors suffice.
 constexpr unsigned kLbfgsMemory = 10;
-// Two rounds whose J differ by less than this (relative) with the bounds met end the run.
-constexpr double kRoundJTol = 1e-10;
+// Rounds whose J differ by less than this (relative), with the bounds met, end the run.
+constexpr double kRoundJTol = 1e-12;
+// Regularisation of the preconditioner, relative to its mean diagonal: keeps the factor
+// positive definite where the Hessian is singular (f flat in θ and a path at rest).
+constexpr double kPrecondRegularisation = 1e-9;
 
+// Cholesky factor L of a symmetric positive-definite pentadiagonal matrix (in place: diag, sub1,
+// sub2 become L(k,k), L(k,k−1), L(k,k−2)), and the two triangular solves.
+struct BandCholesky {
+  std::vector<double> d0, d1, d2;
+
+  void factor(double floor) {
+    const std::size_t n = d0.size();
+    for (std::size_t k = 0; k < n; ++k) {
+      if (k >= 2) d2[k] /= d0[k - 2];
+      if (k >= 1) d1[k] = (d1[k] - (k >= 2 ? d2[k] * d1[k - 1] : 0.0)) / d0[k - 1];
+      const double r = d0[k] - (k >= 1 ? d1[k] * d1[k] : 0.0) - (k >= 2 ? d2[k] * d2[k] : 0.0);
+      d0[k] = std::sqrt(std::max(r, floor));  // rounding only: the matrix is regularised
+    }
+  }
+  // v ← L⁻¹ v
+  void solveLower(double* v) const noexcept {
+    for (std::size_t k = 0; k < d0.size(); ++k) {
+      double s = v[k];
+      if (k >= 1) s -= d1[k] * v[k - 1];
+      if (k >= 2) s -= d2[k] * v[k - 2];
+      v[k] = s / d0[k];
+    }
+  }
+  // v ← L⁻ᵀ v
+  void solveUpper(double* v) const noexcept {
+    const std::size_t n = d0.size();
+    for (std::size_t k = n; k-- > 0;) {
+      double s = v[k];
+      if (k + 1 < n) s -= d1[k + 1] * v[k + 1];
+      if (k + 2 < n) s -= d2[k + 2] * v[k + 2];
+      v[k] = s / d0[k];
+    }
+  }
+};
+
+// One round's preconditioned problem: θ = base + Pᵀ L⁻ᵀ y over the free samples (P picks them).
 struct Context {
   const detail::RefineProblem* problem = nullptr;
   const double* lambda = nullptr;
   double rho = 1.0;
+  const std::vector<std::size_t>* free = nullptr;
+  BandCholesky chol;
+  std::vector<double> base, theta, grad, scratch;
   int evaluations = 0;
+  int max_evaluations = 0;
+  nlopt::opt* opt = nullptr;
   double best = std::numeric_limits<double>::infinity();
   std::vector<double> best_theta;
 };
 
-double meritCallback(unsigned n, const double* x, double* grad, void* data) {
+double meritCallback(unsigned n, const double* y, double* grad_y, void* data) {
   auto& c = *static_cast<Context*>(data);
-  ++c.evaluations;
-  const double v = c.problem->merit(x, c.lambda, c.rho, grad);
+  const std::vector<std::size_t>& free = *c.free;
+  std::copy(y, y + n, c.scratch.begin());
+  c.chol.solveUpper(c.scratch.data());
+  c.theta = c.base;
+  for (std::size_t i = 0; i < n; ++i) c.theta[free[i]] += c.scratch[i];
+  const double v =
+      c.problem->merit(c.theta.data(), c.lambda, c.rho, grad_y != nullptr ? c.grad.data() : nullptr);
+  if (grad_y != nullptr) {
+    for (std::size_t i = 0; i < n; ++i) grad_y[i] = c.grad[free[i]];
+    c.chol.solveLower(grad_y);
+  }
   // Keep the best point of the round ourselves: NLopt's x after a line-search failure is not
   // documented to be the best one seen.
   if (v < c.best) {
     c.best = v;
-    std::copy(x, x + n, c.best_theta.begin());
+    c.best_theta = c.theta;
   }
+  // NLopt's L-BFGS checks maxeval only between line searches; the budget is a hard cap here.
+  if (++c.evaluations >= c.max_evaluations) c.opt->force_stop();
   return v;
+}
+
+// Pentadiagonal Hessian restricted to the free samples (still pentadiagonal: dropping indices
+// only brings neighbours closer), regularised and factored.
+void precondition(const detail::RefineProblem::Band& h,
+                  const std::vector<std::size_t>& free,
+                  BandCholesky& chol) {
+  const std::size_t m = free.size();
+  chol.d0.assign(m, 0.0);
+  chol.d1.assign(m, 0.0);
+  chol.d2.assign(m, 0.0);
+  const auto entry = [&](std::size_t r, std::size_t c) {  // r > c, original indices
+    return r - c == 1 ? h.sub1[r] : r - c == 2 ? h.sub2[r] : 0.0;
+  };
+  double mean = 0.0;
+  for (std::size_t i = 0; i < m; ++i) {
+    chol.d0[i] = h.diag[free[i]];
+    mean += chol.d0[i] / static_cast<double>(m);
+    if (i >= 1) chol.d1[i] = entry(free[i], free[i - 1]);
+    if (i >= 2) chol.d2[i] = entry(free[i], free[i - 2]);
+  }
+  const double reg = kPrecondRegularisation * std::max(mean, 1e-300);
+  for (double& d : chol.d0) d += reg;
+  chol.factor(reg);
 }
 
 }  // namespace
@@ -289,7 +432,7 @@ RefineResult refinePath(const ConfigMap& map,
   }
 
   RefineResult result;
-  result.algorithm = "augmented Lagrangian (PHR, sparse) over NLopt LD_LBFGS";
+  result.algorithm = "augmented Lagrangian (PHR, sparse) over NLopt LD_LBFGS, banded preconditioner";
   result.theta = theta;
   result.before = evaluate(map, branch, theta, settings, continuous);
   result.after = result.before;
@@ -302,48 +445,65 @@ RefineResult refinePath(const ConfigMap& map,
   }
 
   const std::size_t n = theta.size();
-  // Boxes first (they do not depend on f_floor), then the problem with the floor below them.
-  std::vector<double> lb(n), ub(n);
+  // Boxes: the open run around each input angle, shrunk by the margin; a run too short for that
+  // (a lone open grid angle) or the held start fixes the sample at its input value.
+  std::vector<double> box_lo(n), box_hi(n);
+  std::vector<std::size_t> free;
   double f_min = std::numeric_limits<double>::infinity();
   {
     const detail::RefineProblem probe(map, branch, settings, continuous, n, 1.0, kBoundMargin);
+    const double shrink = kBoundMargin * probe.angleStep();
     for (std::size_t k = 0; k < n; ++k) {
-      double box_f_min = 0.0;
-      probe.feasibleInterval(theta[k], k, lb[k], ub[k], box_f_min);
+      double lo = 0.0, hi = 0.0, box_f_min = 0.0;
+      probe.feasibleInterval(theta[k], k, lo, hi, box_f_min);
       f_min = std::min(f_min, box_f_min);
+      if (hi - lo <= 2.0 * shrink || (rs.keep_start && k == 0)) {
+        box_lo[k] = box_hi[k] = theta[k];
+      } else {
+        // A sample on a run's end angle starts just outside: the penalty pulls it in.
+        box_lo[k] = lo + shrink;
+        box_hi[k] = hi - shrink;
+        free.push_back(k);
+      }
     }
   }
-  if (rs.keep_start) lb[0] = ub[0] = theta[0];
-  const detail::RefineProblem problem(map, branch, settings, continuous, n, kFloorFraction * f_min,
-                                      kBoundMargin);
+  if (free.empty()) {
+    result.stop_reason = "every sample is fixed (lone open grid angles); input kept";
+    result.seconds = elapsed();
+    return result;
+  }
+  detail::RefineProblem problem(map, branch, settings, continuous, n, kFloorFraction * f_min,
+                                kBoundMargin);
+  problem.setBoxes(box_lo, box_hi);
   std::vector<double> lambda(problem.constraintCount(), 0.0);
+
+  nlopt::opt opt(nlopt::LD_LBFGS, static_cast<unsigned>(free.size()));
   Context ctx;
   ctx.problem = &problem;
-  ctx.best_theta.resize(n);
-
-  nlopt::opt opt(std::getenv("REFINE_ALG") ? static_cast<nlopt::algorithm>(std::atoi(std::getenv("REFINE_ALG"))) : nlopt::LD_LBFGS, static_cast<unsigned>(n));
+  ctx.free = &free;
+  ctx.scratch.resize(free.size());
+  ctx.grad.resize(n);
+  ctx.max_evaluations = rs.max_evaluations;
+  ctx.opt = &opt;
   opt.set_min_objective(meritCallback, &ctx);
   opt.set_ftol_rel(rs.ftol_rel);
   opt.set_xtol_rel(rs.xtol_rel);
-  // NLopt's default L-BFGS memory is MEMAVAIL/n vectors (thousands for n = 1000), which makes each
-  // iteration cost O(n·memory) instead of O(n).
   opt.set_vector_storage(kLbfgsMemory);
-  opt.set_lower_bounds(lb);
-  opt.set_upper_bounds(ub);
 
   std::vector<double> x = theta;
+  // The best round end evaluate() accepts: a later round cut short by the budget cannot undo it.
+  std::vector<double> best = theta;
+  ObjectiveTerms best_terms = result.before;
   double rho = kRho0;
   double prev_violation = std::numeric_limits<double>::infinity();
   double prev_j = problem.objective(x.data(), nullptr);
   std::string stop;
   int round = 0;
   for (;; ++round) {
-    const int left = rs.max_evaluations - ctx.evaluations;
-    if (left <= 0) {
+    if (ctx.evaluations >= rs.max_evaluations) {
       stop = fmt::format("evaluation budget ({}) spent", rs.max_evaluations);
       break;
     }
-    opt.set_maxeval(left);
     if (rs.time_limit_s > 0.0) {
       const double remaining = rs.time_limit_s - elapsed();
       if (remaining <= 0.0) {
@@ -354,21 +514,38 @@ RefineResult refinePath(const ConfigMap& map,
     }
     ctx.lambda = lambda.data();
     ctx.rho = rho;
+    ctx.base = x;
     ctx.best = std::numeric_limits<double>::infinity();
+    precondition(problem.meritHessian(x.data(), lambda.data(), rho), free, ctx.chol);
+    std::vector<double> y(free.size(), 0.0);
     nlopt::result status = nlopt::FAILURE;
-    std::string failure;
     try {
       double value = 0.0;
-      status = opt.optimize(x, value);
-    } catch (const std::runtime_error& e) {  // roundoff_limited, forced_stop, failure
-      failure = e.what();
+      status = opt.optimize(y, value);
+    } catch (const nlopt::forced_stop&) {
+      status = nlopt::FORCED_STOP;
+    } catch (const nlopt::roundoff_limited&) {
+      status = nlopt::ROUNDOFF_LIMITED;  // a kink of −ln f: the best point so far stands
+    } catch (const std::runtime_error&) {
+      status = nlopt::FAILURE;
     }
     if (ctx.best < std::numeric_limits<double>::infinity()) x = ctx.best_theta;
     const double violation = problem.updateMultipliers(x.data(), lambda.data(), rho);
     const double j = problem.objective(x.data(), nullptr);
-    const bool met = violation <= rs.constraint_tol;
-    if (std::getenv("REFINE_DEBUG")) fmt::print(stderr, "round {} rho {:g} evals {} status {} {} viol {:g} J {:.9f}\n", round, rho, ctx.evaluations, static_cast<int>(status), failure, violation, j);
-    if (status == nlopt::MAXEVAL_REACHED) {
+    if (violation <= rs.constraint_tol) {
+      const ObjectiveTerms terms = evaluate(map, branch, x, settings, continuous);
+      if (terms.feasible && terms.total < best_terms.total) {
+        best = x;
+        best_terms = terms;
+      }
+    }
+    if (std::getenv("REFINE_DEBUG")) {
+      std::vector<double> gv(problem.constraintCount());
+      problem.constraints(x.data(), gv.data());
+      for (std::size_t i = 0; i < gv.size(); ++i) if (gv[i] > 0.5 * violation && gv[i] > 0) fmt::print(stderr, "   g[{}] = {:g} lambda {:g} (omega/alpha/box split {} {})\n", i, gv[i], lambda[i], 2*(n-1), 2*(n-1)+2*(n-2));
+    }
+    if (std::getenv("REFINE_DEBUG")) fmt::print(stderr, "round {} rho {:g} evals {} status {} viol {:g} J {:.9f}\n", round, rho, ctx.evaluations, static_cast<int>(status), violation, j);
+    if (status == nlopt::FORCED_STOP || ctx.evaluations >= rs.max_evaluations) {
       stop = fmt::format("evaluation budget ({}) spent", rs.max_evaluations);
       break;
     }
@@ -376,9 +553,10 @@ RefineResult refinePath(const ConfigMap& map,
       stop = fmt::format("time limit ({} s) reached", rs.time_limit_s);
       break;
     }
-    // Round 0 starts with zero multipliers: if its minimiser already meets the bounds, it is the
-    // constrained minimiser. Later rounds stop once J settles with the bounds met.
-    if (met && (round == 0 || std::abs(j - prev_j) <= kRoundJTol * std::max(1.0, std::abs(j)))) {
+    // Round 0 starts with zero multipliers: if its minimiser already meets the constraints, it
+    // is the constrained minimiser. Later rounds stop once J settles with the constraints met.
+    if (violation <= rs.constraint_tol &&
+        (round == 0 || std::abs(j - prev_j) <= kRoundJTol * std::max(1.0, std::abs(j)))) {
       stop = "converged";
       break;
     }
@@ -389,24 +567,15 @@ RefineResult refinePath(const ConfigMap& map,
     if (violation > kViolationShrink * prev_violation) rho = std::min(rho * kRhoGrowth, kRhoMax);
     prev_violation = violation;
     prev_j = j;
-    (void)failure;
   }
   result.evaluations = ctx.evaluations;
   stop += fmt::format(" after {} round(s), {} evaluations", round + 1, ctx.evaluations);
-
-  const ObjectiveTerms after = evaluate(map, branch, x, settings, continuous);
-  if (!after.feasible) {
-    stop += fmt::format(
-        "; input kept: the refined path is infeasible (min f {}, max |omega| {} rad/s, max "
-        "|alpha| {} rad/s^2)",
-        after.min_f, after.max_abs_omega, after.max_abs_alpha);
-  } else if (!(after.total < result.before.total)) {
-    stop += fmt::format("; input kept: refined J {} s is not below the input's {} s", after.total,
-                        result.before.total);
-  } else {
-    result.theta = std::move(x);
-    result.after = after;
+  if (best_terms.total < result.before.total) {
+    result.theta = std::move(best);
+    result.after = best_terms;
     result.improved = true;
+  } else {
+    stop += "; input kept: no round ended feasible with a lower J";
   }
   result.stop_reason = std::move(stop);
   result.seconds = elapsed();

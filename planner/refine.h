@@ -45,13 +45,15 @@ struct RefineResult {
 /// |α_k| ≤ α_max and f(θ_k, t_k) > 0.
 ///
 /// Method: each θ_k is boxed to the run of consecutive grid angles with f > 0 (at time t_k) that
-/// holds the input's θ_k, so f > 0 holds by construction and the path keeps its way through the
-/// forbidden regions (refinement is local). The speed and acceleration bounds, tightened by 1e-6
-/// relative, are 4N sparse linear inequality constraints handled by an augmented Lagrangian
-/// (Powell–Hestenes–Rockafellar) that costs O(N) per evaluation; each round minimises it with
-/// NLopt's LD_LBFGS (box constraints) from the previous round's point, then updates the
-/// multipliers and, when the violation did not shrink enough, the penalty. −ln f is piecewise
-/// smooth in θ (kinks at grid angles); L-BFGS uses its one-sided derivative there.
+/// holds the input's θ_k, so f > 0 holds inside and the path keeps its way between the forbidden
+/// regions (refinement is local). The speed and acceleration bounds and the boxes, each tightened
+/// by 1e-6 relative, are sparse linear inequality constraints handled by an augmented Lagrangian
+/// (Powell–Hestenes–Rockafellar) that costs O(N) per evaluation. Each round minimises it with
+/// NLopt's LD_LBFGS in preconditioned variables y, θ = θ_round + L⁻ᵀy, with L the banded Cholesky
+/// factor of the merit's Hessian at θ_round (pentadiagonal: −ln f is diagonal in θ, the ω and α
+/// terms are first and second differences), then updates the multipliers and, when the violation
+/// did not shrink enough, the penalty. −ln f is piecewise smooth in θ (kinks at grid angles);
+/// its one-sided derivative is used there.
 ///
 /// Guarantees: the result is judged by evaluate() alone. It is returned only when evaluate()
 /// calls it feasible and its J is strictly lower than the input's; otherwise the input comes back
@@ -69,21 +71,28 @@ RefineResult refinePath(const ConfigMap& map,
 
 namespace detail {
 
-/// The smooth problem refinePath() hands to NLopt, exposed for the gradient tests. Variables:
+/// The smooth problem refinePath() hands to NLopt, exposed for the derivative tests. Variables:
 /// θ_0..θ_{N−1} (rad). Constraints g_i(θ) ≤ 0, dimensionless, in this order:
-///   for k = 1..N−1:  (±ω_k − ω̄)/ω_max, "+" first   (ω̄ = (1 − margin)·ω_max)
-///   for k = 2..N−1:  (±α_k − ᾱ)/α_max, "+" first   (ᾱ = (1 − margin)·α_max)
-/// (a zero bound scales by 1 instead), with ω_k, α_k formed as in evaluate().
+///   for k = 1..N−1:  (±ω_k − ω̄)/ω_max, "+" first     (ω̄ = (1 − margin)·ω_max)
+///   for k = 2..N−1:  (±α_k − ᾱ)/α_max, "+" first     (ᾱ = (1 − margin)·α_max)
+///   for k = 0..N−1:  (θ_k − hi_k)/Δθ, then (lo_k − θ_k)/Δθ   (the boxes, Δθ the grid step)
+/// (a zero bound scales by 1 instead), with ω_k, α_k formed as in evaluate(). The boxes are
+/// ±infinity until setBoxes().
 class RefineProblem {
  public:
   struct JacobianEntry {
     std::size_t constraint, variable;
     double value;
   };
+  /// A symmetric pentadiagonal matrix: diag[k] = H(k,k), sub1[k] = H(k,k−1), sub2[k] = H(k,k−2)
+  /// (sub1[0], sub2[0], sub2[1] unused).
+  struct Band {
+    std::vector<double> diag, sub1, sub2;
+  };
 
   /// `f_floor` > 0: below it −ln f is continued by its second-order Taylor polynomial
   /// −ln f_floor − (f − f_floor)/f_floor + (f − f_floor)²/(2 f_floor²), so the merit stays
-  /// finite where f = 0 (a guard: refinePath() picks it below every f inside the boxes).
+  /// finite where f = 0 (refinePath() picks it below every f inside the boxes).
   RefineProblem(const ConfigMap& map,
                 std::size_t branch,
                 const PlannerSettings& settings,
@@ -94,14 +103,17 @@ class RefineProblem {
 
   std::size_t size() const { return n_; }
   std::size_t constraintCount() const;
+  double angleStep() const { return grid_.angle_step; }
+  /// Box of each θ_k (rad), lo[k] ≤ hi[k].
+  void setBoxes(std::vector<double> lo, std::vector<double> hi);
 
   /// f = mapValue() at θ (rad), time sample k, and ∂f/∂θ (1/rad): the slope of the grid cell
   /// above θ (one-sided at a grid angle; from below at a limited table's last angle), 0 where
   /// f = 0.
   void fAndSlope(double theta, std::size_t k, double& f, double& slope) const noexcept;
   /// The run of grid angles with f > 0 at sample k around θ (rad) as an interval [lo, hi] in
-  /// θ's turn (±infinity when a continuous table's whole column is open), widened to contain
-  /// θ, and the lowest f over it. Requires f(θ, k) > 0.
+  /// θ's turn (on a continuous table with the whole column open: one turn less a step either
+  /// way), widened to contain θ, and the lowest f over it. Requires f(θ, k) > 0.
   void feasibleInterval(
       double theta, std::size_t k, double& lo, double& hi, double& f_min) const noexcept;
   /// J of evaluate() (with the continuation below f_floor) and its gradient when non-null.
@@ -113,6 +125,10 @@ class RefineProblem {
   /// PHR augmented Lagrangian: objective + Σ_i (max(0, λ_i + ρ g_i)² − λ_i²)/(2ρ); gradient
   /// when non-null. `lambda` has constraintCount() entries ≥ 0, ρ > 0.
   double merit(const double* theta, const double* lambda, double rho, double* grad) const noexcept;
+  /// The Hessian of merit() at θ where it is twice differentiable (inside grid cells, no
+  /// constraint at its switching point): exact, since f is linear in θ within a cell and every
+  /// constraint is linear.
+  Band meritHessian(const double* theta, const double* lambda, double rho) const;
   /// λ_i ← max(0, λ_i + ρ g_i); returns max_i max(0, g_i) at θ (the violation before the update).
   double updateMultipliers(const double* theta, double* lambda, double rho) const noexcept;
 
@@ -128,6 +144,7 @@ class RefineProblem {
   bool continuous_;
   std::size_t n_;
   double f_floor_, omega_bar_, alpha_bar_, omega_scale_, alpha_scale_;
+  std::vector<double> lo_, hi_;
 };
 
 }  // namespace detail

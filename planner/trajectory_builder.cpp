@@ -92,10 +92,19 @@ TrajectoryBuild buildTrajectory(const collision::Scene& scene,
       if (nearest_step > kMaxJointStep) {
         int joint = 0;
         (*nearest - prev).cwiseAbs().maxCoeff(&joint);
-        track.broken = fmt::format(
-            "time sample {} (t = {:.3f} s): joint {} would jump by {:.1f} deg between samples (the "
-            "pose passes a singularity or a joint wraps); no continuous motion on branch {}",
-            k, path.samples[k].t, joint + 1, toDeg(nearest_step), branch.words());
+        const auto& limits = robot.joint(joint);
+        track.broken =
+            nearest_step > 1.5 * std::numbers::pi
+                ? fmt::format(
+                      "time sample {} (t = {:.3f} s): joint {} would have to pass its limit "
+                      "({:.0f} … {:.0f} deg) to follow the path continuously (the map's cells "
+                      "there use the other whole-turn solution, {:.0f} deg away)",
+                      k, path.samples[k].t, joint + 1, toDeg(limits.min), toDeg(limits.max),
+                      toDeg(nearest_step))
+                : fmt::format(
+                      "time sample {} (t = {:.3f} s): joint {} would jump by {:.1f} deg between "
+                      "samples (the pose passes a singularity); no continuous motion on branch {}",
+                      k, path.samples[k].t, joint + 1, toDeg(nearest_step), branch.words());
         break;
       }
       track.q.push_back(*nearest);

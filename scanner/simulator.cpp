@@ -596,7 +596,7 @@ SimulatedCloud ScanSimulator::simulate(const std::vector<ScanFrame>& frames,
   for (const double alpha : angles) {
     setup.directions.emplace_back(0.0, std::sin(alpha), std::cos(alpha));
     // A hit beyond the far edge z_max cannot be in the trapezoid.
-    setup.t_far.push_back(setup.window.z_max / std::cos(alpha) + kCullMargin);
+    setup.t_far.push_back(setup.window.z_max / std::cos(alpha));
   }
   // Fan rays end within z ≤ z_max, |y| ≤ z_max·tan α_max; camera rays run from there to the
   // camera centres: all inside this box (scanner frame).

@@ -68,7 +68,7 @@ struct SimulationStats {
   std::size_t profiles = 0;
   std::size_t laser_rays = 0;      ///< fan rays cast
   std::size_t occlusion_rays = 0;  ///< hit → camera rays cast
-  std::size_t hits = 0;            ///< fan rays whose nearest hit lies within the ray's range
+  std::size_t hits = 0;            ///< fan rays with a hit before the far edge z_max
   std::size_t outside_window = 0;  ///< nearest hits outside the trapezoid (Eq. 5)
   std::size_t occluded = 0;        ///< in the trapezoid but not seen by the camera rule
   std::size_t points = 0;

@@ -352,6 +352,7 @@ TEST(OmplPlanner, RejectsBadSettings) {
 // TEMPORARY tuning harness (to be removed)
 #include <cstdio>
 #include <cstdlib>
+#include "planner/ray_shooting.h"
 namespace {
 ConfigMap syntheticMap(std::size_t na, std::size_t nt, double dt, unsigned seed) {
   std::mt19937 rng(seed);

@@ -1,0 +1,200 @@
+// The 7-DOF trajectory: the CSV interchange format (round trip, every malformed-row error) and
+// buildTrajectory() on the demo cell — the joints reproduce the target scanner poses through FK
+// and the table transform, stay continuous, and carry their true f.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "cli/commands.h"
+#include "cli/job.h"
+#include "cli/planning.h"
+#include "collision/scene.h"
+#include "kinematics/error.h"
+#include "kinematics/trajectory.h"
+#include "kinematics/units.h"
+#include "planner/config_map.h"
+#include "planner/trajectory_builder.h"
+#include "test_support.h"
+
+namespace {
+
+using namespace scanplan;
+using kinematics::Trajectory;
+using kinematics::TrajectorySample;
+
+Trajectory randomTrajectory(std::mt19937& rng, std::size_t n) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Trajectory tr;
+  for (std::size_t k = 0; k < n; ++k) {
+    TrajectorySample s;
+    s.t = 0.1 * static_cast<double>(k) + 0.01 * (1.0 + u(rng));
+    s.theta = 20.0 * u(rng);  // several turns, unwrapped
+    for (int j = 0; j < kinematics::kNumJoints; ++j) s.q(j) = 3.0 * u(rng);
+    s.f = k == 3 ? std::nan("") : 0.5 + 0.5 * u(rng);
+    s.scanning = k % 2 == 0;
+    s.X_PS.linear() = Eigen::Quaterniond(u(rng), u(rng), u(rng), u(rng)).normalized().matrix();
+    s.X_PS.translation() = Eigen::Vector3d(u(rng), u(rng), u(rng)) * 0.3;
+    s.limit = k % 3 == 0 ? "clearance scanner - part" : "joint 5";
+    tr.samples.push_back(s);
+  }
+  return tr;
+}
+
+TEST(TrajectoryCsv, RoundTripsToThePrintedPrecision) {
+  std::mt19937 rng(5);
+  const Trajectory a = randomTrajectory(rng, 40);
+  const std::string csv = kinematics::trajectoryToCsv(a);
+  ASSERT_EQ(csv.substr(0, csv.find('\n')),
+            "t_s,table_deg,j1_deg,j2_deg,j3_deg,j4_deg,j5_deg,j6_deg,f,scanning,px_mm,py_mm,pz_mm,"
+            "qw,qx,qy,qz,limit");
+  const Trajectory b = kinematics::parseTrajectoryCsv(csv, "t.csv");
+  ASSERT_EQ(b.samples.size(), a.samples.size());
+  for (std::size_t k = 0; k < a.samples.size(); ++k) {
+    const TrajectorySample &x = a.samples[k], &y = b.samples[k];
+    // 12 significant digits: within 5e-12 relative of the printed value.
+    EXPECT_NEAR(y.t, x.t, 1e-11 * std::max(1.0, std::abs(x.t)));
+    EXPECT_NEAR(y.theta, x.theta,
+                1e-11 * std::max(1.0, std::abs(x.theta) * 180 / std::numbers::pi));
+    EXPECT_LT((y.q - x.q).cwiseAbs().maxCoeff(), 1e-11 * 180);
+    if (std::isnan(x.f)) {
+      EXPECT_TRUE(std::isnan(y.f));
+    } else {
+      EXPECT_NEAR(y.f, x.f, 1e-11);
+    }
+    EXPECT_EQ(y.scanning, x.scanning);
+    EXPECT_LT((y.X_PS.translation() - x.X_PS.translation()).norm(), 1e-12);
+    EXPECT_LT((y.X_PS.linear() - x.X_PS.linear()).cwiseAbs().maxCoeff(), 1e-11);
+    EXPECT_EQ(y.limit, x.limit);
+  }
+  // Written again, the text is identical (the format is a fixed point).
+  EXPECT_EQ(kinematics::trajectoryToCsv(b), csv);
+}
+
+TEST(TrajectoryCsv, HandWrittenFileWithoutLimitColumnAndUnknownF) {
+  const std::string text =
+      "# written by hand\n"
+      "t_s,table_deg,j1_deg,j2_deg,j3_deg,j4_deg,j5_deg,j6_deg,f,scanning,px_mm,py_mm,pz_mm,qw,qx,"
+      "qy,qz\r\n"
+      "0, 10, 0,-30,120,0,40,0, ,1, 100,0,150, 1,0,0,0\r\n"
+      "0.5,12,1,-30,120,0,40,0,nan,0,100,0,150,0,1,0,0\n";
+  const Trajectory t = kinematics::parseTrajectoryCsv(text, "hand.csv");
+  ASSERT_EQ(t.samples.size(), 2u);
+  EXPECT_TRUE(std::isnan(t.samples[0].f));
+  EXPECT_DOUBLE_EQ(t.samples[1].theta, deg(12.0));
+  EXPECT_DOUBLE_EQ(t.samples[0].q(1), deg(-30.0));
+  EXPECT_TRUE(t.samples[0].scanning);
+  EXPECT_FALSE(t.samples[1].scanning);
+  EXPECT_NEAR(t.samples[0].X_PS.translation().z(), 0.15, 1e-15);
+  EXPECT_NEAR(t.samples[1].X_PS.linear()(1, 1), -1.0, 1e-15);  // 180° about x
+}
+
+TEST(TrajectoryCsv, MalformedInputNamesFileLineAndColumn) {
+  const std::string header =
+      "t_s,table_deg,j1_deg,j2_deg,j3_deg,j4_deg,j5_deg,j6_deg,f,scanning,px_mm,py_mm,pz_mm,qw,qx,"
+      "qy,qz\n";
+  const std::string good = "0,0,0,0,0,0,0,0,1,1,0,0,0,1,0,0,0\n";
+  struct Case {
+    std::string text, expect;
+  };
+  const std::vector<Case> cases{
+      {"", "empty file"},
+      {"time,angle\n", "header 'time,angle'"},
+      {header, "no samples"},
+      {header + good + "0.1,0,0,0\n", "t.csv:3: 4 columns: expected 17"},
+      {header + good + "0.1,0,0,0,abc,0,0,0,1,1,0,0,0,1,0,0,0\n", "column j3_deg: 'abc'"},
+      {header + good + "0.1,0,0,0,0,0,0,0,1,1,0,0,nan,1,0,0,0\n", "column pz_mm: 'nan'"},
+      {header + "nan,0,0,0,0,0,0,0,1,1,0,0,0,1,0,0,0\n", "t.csv:2: column t_s"},
+      {header + good + "0,0,0,0,0,0,0,0,1,1,0,0,0,1,0,0,0\n", "strictly increasing"},
+      {header + good + "0.1,0,0,0,0,0,0,0,1,2,0,0,0,1,0,0,0\n", "expected 0 or 1"},
+      {header + good + "0.1,0,0,0,0,0,0,0,1,1,0,0,0,1,1,0,0\n", "unit quaternion"},
+      {header + good + "0.1,0,0,0,0,0,0,0,1e999,1,0,0,0,1,0,0,0\n", "column f"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.text);
+    try {
+      kinematics::parseTrajectoryCsv(c.text, "t.csv");
+      ADD_FAILURE() << "no error";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(c.expect), std::string::npos) << e.what();
+      EXPECT_EQ(std::string(e.what()).rfind("t.csv:", 0), 0u) << e.what();
+    }
+  }
+}
+
+// The demo cell on a coarse map (2° × 0.2 s) so the test stays quick.
+struct DemoPlan {
+  cli::JobSpec job;
+  kinematics::CellModel cell;
+  scanner::GeneratedPath path;
+};
+
+DemoPlan demo() {
+  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo.yaml",
+                                  {"scan.dt_s=0.2", "map.angle_step_deg=2"});
+  kinematics::CellModel cell = cli::buildCell(job);
+  scanner::GeneratedPath path = cli::generateScanPath(job, cell);
+  return {std::move(job), std::move(cell), std::move(path)};
+}
+
+TEST(BuildTrajectory, JointsReproduceTheTargetPosesAndStayContinuous) {
+  const DemoPlan d = demo();
+  const collision::Scene scene(d.cell, cli::clearanceConfig(d.job));
+  const cli::MapRun run = cli::computeMap(d.job, scene, d.path.path);
+  // As `plan` does: a branch's path is accepted only when it can be followed continuously.
+  planner::TrajectoryBuild built;
+  const cli::PlanningOutcome plan = cli::planJob(
+      run.map, d.job, "ray", false, false, [&](std::size_t b, const std::vector<double>& theta) {
+        built = planner::buildTrajectory(scene, cli::constraintSettings(d.job), d.path.path, theta,
+                                         run.map.branches[b]);
+        return built.ok && built.min_f > 0.0 ? std::string() : "not ok: " + built.reason;
+      });
+  ASSERT_TRUE(plan.solved()) << plan.chosen.result.reason;
+  ASSERT_TRUE(built.ok) << built.reason;
+  for (const auto& [b, why] : plan.rejected) {
+    EXPECT_NE(b, plan.chosen.result.branch);
+    EXPECT_FALSE(why.empty());
+  }
+  const auto& samples = built.trajectory.samples;
+  ASSERT_EQ(samples.size(), d.path.path.samples.size());
+  EXPECT_GT(built.min_f, 0.0);
+  double worst_mm = 0.0;
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    const TrajectorySample& s = samples[k];
+    EXPECT_EQ(s.t, d.path.path.samples[k].t);
+    EXPECT_EQ(s.theta, plan.theta[k]);
+    EXPECT_TRUE(d.cell.robot.withinLimits(s.q)) << k;
+    EXPECT_EQ(d.cell.robot.branchOf(s.q), run.map.branches[plan.chosen.result.branch]) << k;
+    // Independent chain: world ← base ← flange ← sensor vs world ← table ← part ← sensor.
+    const Eigen::Isometry3d by_robot = d.cell.X_WB * d.cell.robot.fk(s.q) * d.cell.scanner.X_FS;
+    const Eigen::Isometry3d by_table = d.cell.table.X_WR(s.theta) * d.cell.part.X_RP * s.X_PS;
+    worst_mm = std::max(worst_mm, toMm((by_robot.translation() - by_table.translation()).norm()));
+    EXPECT_LT((by_robot.linear() - by_table.linear()).cwiseAbs().maxCoeff(), 1e-9) << k;
+    if (k > 0) {
+      // Continuous: no whole-turn jumps; a 0.2 s step moves no joint by more than 45°.
+      EXPECT_LT((s.q - samples[k - 1].q).cwiseAbs().maxCoeff(), deg(45.0)) << k;
+    }
+    EXPECT_GT(s.f, 0.0) << k;
+    EXPECT_FALSE(s.limit.empty());
+  }
+  EXPECT_LT(worst_mm, 1e-6);
+}
+
+TEST(BuildTrajectory, UnreachableSampleIsNotOkAndNamed) {
+  const DemoPlan d = demo();
+  const collision::Scene scene(d.cell, cli::clearanceConfig(d.job));
+  // Every target 3 m above the part: out of the Viper's reach.
+  kinematics::ScanPath far = d.path.path;
+  for (auto& s : far.samples) s.X_PS.translation() += Eigen::Vector3d(0.0, 0.0, 3.0);
+  const std::vector<double> theta(far.samples.size(), 0.0);
+  const planner::TrajectoryBuild built = planner::buildTrajectory(
+      scene, cli::constraintSettings(d.job), far, theta, kinematics::IkBranch{});
+  EXPECT_FALSE(built.ok);
+  EXPECT_NE(built.reason.find("time sample 0 "), std::string::npos) << built.reason;
+  EXPECT_NE(built.reason.find("unreachable"), std::string::npos) << built.reason;
+}
+
+}  // namespace
