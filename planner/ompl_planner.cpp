@@ -1,6 +1,7 @@
 #include "planner/ompl_planner.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -45,6 +46,7 @@ struct Problem {
   PlannerSettings settings;
   bool continuous = true;
   std::size_t nt = 0;
+  std::vector<double> column_min;  // per sample: the least −ln f·Δt any angle can cost there
 
   double f(double theta, std::size_t k) const noexcept {
     return detail::mapValue(*map, grid, branch, theta, k, continuous);
@@ -59,20 +61,21 @@ struct Problem {
     return std::clamp(omega + std::clamp(target - omega, -dw, dw), -w_max, w_max);
   }
   // The J terms a step adds (evaluate()'s, Eq. in objective.h), the start sample's own −ln f
-  // included on the first step. Infinite when f = 0 at the new sample.
+  // included on the first step, each sample's −ln f less that column's least (see planOmpl).
+  // Infinite when f = 0 at the new sample.
   double stepCost(double theta0, double omega0, std::size_t k, double theta1, double omega1) const
       noexcept {
     const double dt = grid.dt;
     const double f1 = f(theta1, k + 1);
     if (!(f1 > 0.0)) return std::numeric_limits<double>::infinity();
-    double c = (-std::log(f1) + settings.k_omega * omega1 * omega1) * dt;
+    double c = -std::log(f1) * dt - column_min[k + 1] + settings.k_omega * omega1 * omega1 * dt;
     if (k + 1 >= 2) {
       const double alpha = (omega1 - omega0) / dt;
       c += settings.k_alpha * alpha * alpha * dt;
     }
     if (k == 0) {
       const double f0 = f(theta0, 0);
-      c += f0 > 0.0 ? -std::log(f0) * dt : std::numeric_limits<double>::infinity();
+      c += f0 > 0.0 ? -std::log(f0) * dt - column_min[0] : std::numeric_limits<double>::infinity();
     }
     return c;
   }
@@ -199,7 +202,17 @@ PlanResult planOmpl(const ConfigMap& map,
   const std::size_t na = map.angles.size(), nt = map.times.size();
   const double dt = g.dt;
 
-  const Problem problem{&map, g, branch, settings, continuous, nt};
+  // Reduced costs: every complete path pays Σ_k column_min[k] in any case, so subtracting it per
+  // sample keeps the order of complete paths (the optimum) and makes partial paths that end at
+  // different samples comparable. Without it the cost-to-come grows with k and SST's cheapest-node
+  // selection keeps extending the shallowest nodes.
+  Problem problem{&map, g, branch, settings, continuous, nt, {}};
+  problem.column_min.resize(nt);
+  for (std::size_t k = 0; k < nt; ++k) {
+    float best = 0.0f;
+    for (std::size_t a = 0; a < na; ++a) best = std::max(best, map.f[map.index(branch, a, k)]);
+    problem.column_min[k] = best > 0.0f && !std::getenv("NORED") ? -std::log(static_cast<double>(best)) * dt : 0.0;
+  }
   PlanResult result;
   result.branch = branch;
   const auto finish = [&]() {
@@ -326,9 +339,10 @@ PlanResult planOmpl(const ConfigMap& map,
   }
   pdef->setGoal(std::make_shared<LastSample>(si, last));
   auto objective = std::make_shared<AccumulatedCost>(si);
-  if (os.stop_at_first_solution) {
-    objective->setCostThreshold(ob::Cost(std::numeric_limits<double>::infinity()));
-  }
+  // Satisfied by any solution (stop at the first) or by none (improve until stopped; the
+  // default threshold 0 would stop SST at a reduced cost of 0, which is not always the optimum).
+  objective->setCostThreshold(ob::Cost((os.stop_at_first_solution ? 1.0 : -1.0) *
+                                       std::numeric_limits<double>::infinity()));
   pdef->setOptimizationObjective(objective);
 
   ob::PlannerPtr planner;

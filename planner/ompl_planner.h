@@ -33,9 +33,9 @@ struct OmplSettings {
   double stop_probability = 0.2;  ///< share of sampled controls with target speed exactly 0
   /// SST δ_BN, steps (see above): the cheapest tree node this close to a sample is extended.
   double selection_radius = 40.0;
-  /// SST δ_s, steps: one active node per witness ball. Large radii prune hard and pay off on long
-  /// horizons; narrow corridors need a radius below their width.
-  double pruning_radius = 10.0;
+  /// SST δ_s, steps: one active node per witness ball. Larger radii prune harder (a smaller tree
+  /// on long horizons) but can starve a corridor narrower than the radius.
+  double pruning_radius = 3.0;
   bool stop_at_first_solution = false;  ///< SST: stop at the first exact solution
 };
 

@@ -17,16 +17,6 @@ namespace scanplan::planner {
 
 namespace detail {
 
-namespace {
-
-// One non-zero of a constraint's gradient: ∂g/∂θ_j.
-struct Term {
-  std::size_t j;
-  double d;
-};
-
-}  // namespace
-
 RefineProblem::RefineProblem(const ConfigMap& map,
                              std::size_t branch,
                              const PlannerSettings& settings,
@@ -41,8 +31,6 @@ RefineProblem::RefineProblem(const ConfigMap& map,
       continuous_(continuous),
       n_(samples),
       f_floor_(f_floor),
-      omega_bar_((1.0 - bound_margin) * settings.omega_max),
-      alpha_bar_((1.0 - bound_margin) * settings.alpha_max),
       omega_scale_(settings.omega_max > 0.0 ? settings.omega_max : 1.0),
       alpha_scale_(settings.alpha_max > 0.0 ? settings.alpha_max : 1.0),
       lo_(samples, -std::numeric_limits<double>::infinity()),
@@ -50,6 +38,24 @@ RefineProblem::RefineProblem(const ConfigMap& map,
   if (samples != map.times.size() || samples < 2 || !(f_floor > 0.0)) {
     throw std::logic_error("RefineProblem: one variable per time sample (>= 2), f_floor > 0");
   }
+  bound_.assign(2 * (n_ - 1), (1.0 - bound_margin) * settings.omega_max);
+  bound_.resize(bound_.size() + 2 * (n_ - 2), (1.0 - bound_margin) * settings.alpha_max);
+}
+
+void RefineProblem::relaxBoundsTo(const double* theta) {
+  // The bound terms g_i = (s·ω − b_i)/scale: raise b_i to s·ω where θ exceeds it.
+  visitConstraints(theta, [&](std::size_t i, double g, const Term*, std::size_t) {
+    if (i < bound_.size() && g > 0.0) {
+      bound_[i] += g * (i < 2 * (n_ - 1) ? omega_scale_ : alpha_scale_);
+    }
+  });
+}
+
+bool RefineProblem::movable(const Term* t, std::size_t count) const noexcept {
+  for (std::size_t c = 0; c < count; ++c) {
+    if (lo_[t[c].j] < hi_[t[c].j]) return true;
+  }
+  return false;
 }
 
 void RefineProblem::setBoxes(std::vector<double> lo, std::vector<double> hi) {
@@ -175,8 +181,10 @@ void RefineProblem::visitConstraints(const double* theta, Visit&& visit) const n
   for (std::size_t k = 1; k < n_; ++k) {
     const double omega = (theta[k] - theta[k - 1]) / dt;
     const std::array<Term, 2> up{{{k, dw}, {k - 1, -dw}}}, down{{{k, -dw}, {k - 1, dw}}};
-    visit(i++, (omega - omega_bar_) / omega_scale_, up.data(), up.size());
-    visit(i++, (-omega - omega_bar_) / omega_scale_, down.data(), down.size());
+    visit(i, (omega - bound_[i]) / omega_scale_, up.data(), up.size());
+    ++i;
+    visit(i, (-omega - bound_[i]) / omega_scale_, down.data(), down.size());
+    ++i;
   }
   const double da = 1.0 / (dt * dt * alpha_scale_);
   for (std::size_t k = 2; k < n_; ++k) {
@@ -184,8 +192,10 @@ void RefineProblem::visitConstraints(const double* theta, Visit&& visit) const n
         ((theta[k] - theta[k - 1]) / dt - (theta[k - 1] - theta[k - 2]) / dt) / dt;
     const std::array<Term, 3> up{{{k, da}, {k - 1, -2.0 * da}, {k - 2, da}}};
     const std::array<Term, 3> down{{{k, -da}, {k - 1, 2.0 * da}, {k - 2, -da}}};
-    visit(i++, (alpha - alpha_bar_) / alpha_scale_, up.data(), up.size());
-    visit(i++, (-alpha - alpha_bar_) / alpha_scale_, down.data(), down.size());
+    visit(i, (alpha - bound_[i]) / alpha_scale_, up.data(), up.size());
+    ++i;
+    visit(i, (-alpha - bound_[i]) / alpha_scale_, down.data(), down.size());
+    ++i;
   }
   const double db = 1.0 / grid_.angle_step;
   for (std::size_t k = 0; k < n_; ++k) {
@@ -215,7 +225,7 @@ double RefineProblem::merit(const double* theta,
   const double value = objective(theta, grad);
   visitConstraints(theta, [&](std::size_t i, double g, const Term* t, std::size_t count) {
     const double m = std::max(0.0, lambda[i] + rho * g);
-    if (m == 0.0 && lambda[i] == 0.0) return;
+    if ((m == 0.0 && lambda[i] == 0.0) || !movable(t, count)) return;
     penalty += (m * m - lambda[i] * lambda[i]) / (2.0 * rho);
     for (std::size_t c = 0; grad != nullptr && c < count; ++c) grad[t[c].j] += m * t[c].d;
   });
@@ -253,7 +263,7 @@ RefineProblem::Band RefineProblem::meritHessian(const double* theta,
   }
   // The active penalty terms: ρ ∇g∇gᵀ (each g is linear and spans at most three neighbours).
   visitConstraints(theta, [&](std::size_t i, double g, const Term* t, std::size_t count) {
-    if (!(lambda[i] + rho * g > 0.0)) return;
+    if (!(lambda[i] + rho * g > 0.0) || !movable(t, count)) return;
     for (std::size_t a = 0; a < count; ++a) {
       for (std::size_t b = 0; b < count; ++b) {
         const std::size_t r = t[a].j, c = t[b].j;
@@ -274,7 +284,8 @@ double RefineProblem::updateMultipliers(const double* theta,
                                         double* lambda,
                                         double rho) const noexcept {
   double violation = 0.0;
-  visitConstraints(theta, [&](std::size_t i, double g, const Term*, std::size_t) {
+  visitConstraints(theta, [&](std::size_t i, double g, const Term* t, std::size_t count) {
+    if (!movable(t, count)) return;
     violation = std::max(violation, g);
     lambda[i] = std::max(0.0, lambda[i] + rho * g);
   });
@@ -445,25 +456,21 @@ RefineResult refinePath(const ConfigMap& map,
   }
 
   const std::size_t n = theta.size();
-  // Boxes: the open run around each input angle, shrunk by the margin; a run too short for that
-  // (a lone open grid angle) or the held start fixes the sample at its input value.
+  // Boxes: the open run around each input angle. A lone open grid angle, or the held start,
+  // fixes the sample at its input value.
   std::vector<double> box_lo(n), box_hi(n);
   std::vector<std::size_t> free;
   double f_min = std::numeric_limits<double>::infinity();
   {
     const detail::RefineProblem probe(map, branch, settings, continuous, n, 1.0, kBoundMargin);
-    const double shrink = kBoundMargin * probe.angleStep();
     for (std::size_t k = 0; k < n; ++k) {
-      double lo = 0.0, hi = 0.0, box_f_min = 0.0;
-      probe.feasibleInterval(theta[k], k, lo, hi, box_f_min);
+      double box_f_min = 0.0;
+      probe.feasibleInterval(theta[k], k, box_lo[k], box_hi[k], box_f_min);
       f_min = std::min(f_min, box_f_min);
-      if (hi - lo <= 2.0 * shrink || (rs.keep_start && k == 0)) {
-        box_lo[k] = box_hi[k] = theta[k];
-      } else {
-        // A sample on a run's end angle starts just outside: the penalty pulls it in.
-        box_lo[k] = lo + shrink;
-        box_hi[k] = hi - shrink;
+      if (box_lo[k] < box_hi[k] && !(rs.keep_start && k == 0)) {
         free.push_back(k);
+      } else {
+        box_lo[k] = box_hi[k] = theta[k];
       }
     }
   }
@@ -475,6 +482,9 @@ RefineResult refinePath(const ConfigMap& map,
   detail::RefineProblem problem(map, branch, settings, continuous, n, kFloorFraction * f_min,
                                 kBoundMargin);
   problem.setBoxes(box_lo, box_hi);
+  // Where the input sits on (or within the margin of) a bound, that bound is tightened only down
+  // to the input's value: the tightened problem always has the input as a feasible point.
+  problem.relaxBoundsTo(theta.data());
   std::vector<double> lambda(problem.constraintCount(), 0.0);
 
   nlopt::opt opt(nlopt::LD_LBFGS, static_cast<unsigned>(free.size()));
@@ -532,7 +542,7 @@ RefineResult refinePath(const ConfigMap& map,
     if (ctx.best < std::numeric_limits<double>::infinity()) x = ctx.best_theta;
     const double violation = problem.updateMultipliers(x.data(), lambda.data(), rho);
     const double j = problem.objective(x.data(), nullptr);
-    if (violation <= rs.constraint_tol) {
+    {
       const ObjectiveTerms terms = evaluate(map, branch, x, settings, continuous);
       if (terms.feasible && terms.total < best_terms.total) {
         best = x;

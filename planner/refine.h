@@ -20,9 +20,10 @@ struct RefineSettings {
   /// Relative change of the merit function, and of θ, that ends one L-BFGS run.
   double ftol_rel = 1e-12;
   double xtol_rel = 1e-12;
-  /// Largest bound violation accepted at the end of a round, relative to ω_max, α_max (the
-  /// optimiser works on bounds tightened by 1e-6 relative, so this stays well inside them).
-  double constraint_tol = 1e-7;
+  /// Constraint violation that ends the augmented-Lagrangian rounds, relative to ω_max, α_max
+  /// and the grid step (< 1e-6, the tightening of the bounds). Every round's end is judged by
+  /// evaluate() in any case.
+  double constraint_tol = 1e-10;
   /// Hold θ_0 at the input's value (a path planned from a fixed start angle).
   bool keep_start = false;
 };
@@ -73,11 +74,12 @@ namespace detail {
 
 /// The smooth problem refinePath() hands to NLopt, exposed for the derivative tests. Variables:
 /// θ_0..θ_{N−1} (rad). Constraints g_i(θ) ≤ 0, dimensionless, in this order:
-///   for k = 1..N−1:  (±ω_k − ω̄)/ω_max, "+" first     (ω̄ = (1 − margin)·ω_max)
-///   for k = 2..N−1:  (±α_k − ᾱ)/α_max, "+" first     (ᾱ = (1 − margin)·α_max)
+///   for k = 1..N−1:  (±ω_k − b_i)/ω_max, "+" first     (b_i = (1 − margin)·ω_max)
+///   for k = 2..N−1:  (±α_k − b_i)/α_max, "+" first     (b_i = (1 − margin)·α_max)
 ///   for k = 0..N−1:  (θ_k − hi_k)/Δθ, then (lo_k − θ_k)/Δθ   (the boxes, Δθ the grid step)
 /// (a zero bound scales by 1 instead), with ω_k, α_k formed as in evaluate(). The boxes are
-/// ±infinity until setBoxes().
+/// ±infinity until setBoxes(); a sample with lo_k = hi_k is fixed, and merit(), meritHessian()
+/// and updateMultipliers() leave out every constraint on fixed samples only (it is constant).
 class RefineProblem {
  public:
   struct JacobianEntry {
@@ -106,6 +108,9 @@ class RefineProblem {
   double angleStep() const { return grid_.angle_step; }
   /// Box of each θ_k (rad), lo[k] ≤ hi[k].
   void setBoxes(std::vector<double> lo, std::vector<double> hi);
+  /// Raises each speed and acceleration bound b_i that θ exceeds to θ's value, so θ (a path
+  /// feasible for evaluate(), possibly at a bound) is feasible for the tightened constraints too.
+  void relaxBoundsTo(const double* theta);
 
   /// f = mapValue() at θ (rad), time sample k, and ∂f/∂θ (1/rad): the slope of the grid cell
   /// above θ (one-sided at a grid angle; from below at a limited table's last angle), 0 where
@@ -133,9 +138,15 @@ class RefineProblem {
   double updateMultipliers(const double* theta, double* lambda, double rho) const noexcept;
 
  private:
+  struct Term {  // one non-zero of a constraint's gradient: ∂g/∂θ_j = d
+    std::size_t j;
+    double d;
+  };
+  // Calls visit(i, g_i, terms, term count) for every constraint, in order.
   template <class Visit>
   void visitConstraints(const double* theta, Visit&& visit) const noexcept;
   double cell(std::ptrdiff_t angle, std::size_t k) const noexcept;  // 0 off a limited table
+  bool movable(const Term* t, std::size_t count) const noexcept;    // touches a free sample
 
   const ConfigMap& map_;
   Grid grid_;
@@ -143,8 +154,9 @@ class RefineProblem {
   PlannerSettings settings_;
   bool continuous_;
   std::size_t n_;
-  double f_floor_, omega_bar_, alpha_bar_, omega_scale_, alpha_scale_;
+  double f_floor_, omega_scale_, alpha_scale_;
   std::vector<double> lo_, hi_;
+  std::vector<double> bound_;  // b_i of the speed and acceleration constraints
 };
 
 }  // namespace detail

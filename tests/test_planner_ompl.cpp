@@ -406,3 +406,16 @@ TEST(OmplTune, DISABLED_Synthetic) {
   }
 }
 }  // namespace
+namespace {
+TEST(OmplTune, DISABLED_Corridor) {
+  const ConfigMap map = makeMap(72, 60, 0.1, true, [](std::size_t a, std::size_t) {
+    return a == 32 ? 0.9f : (a == 31 || a == 33) ? 0.5f : 0.0f;
+  });
+  OmplSettings os = capped(static_cast<std::size_t>(envd("IT", 20000)));
+  os.selection_radius = envd("SR", 40); os.pruning_radius = envd("PR", 10); os.max_steps = static_cast<int>(envd("MS", 50));
+  const PlanResult r = planOmpl(map, 0, {}, true, os);
+  std::printf("J %.4f  %s\n", r.terms.total, r.detail.c_str());
+  for (std::size_t k = 0; k < r.theta.size(); k += 5) std::printf("%.4f ", (r.theta[k] - map.angles[32]) / map.angles[1]);
+  std::printf("\n");
+}
+}

@@ -571,7 +571,8 @@ TEST(ScannerSimulation, EmbreeMatchesBruteForceOnSmallMeshes) {
   const scanner::ScanSimulator brute(cell, ball, brute_options);
   EXPECT_EQ(embree.triangleCount(), brute.triangleCount());
 
-  // Low, where ball, table and fixture meet, with the line vertical and then horizontal.
+  // Aimed where ball and table meet, the line vertical and then horizontal (the +X camera
+  // above the laser).
   std::vector<ScanFrame> frames =
       ringFrames(cell, Eigen::Vector3d(0.0, 0.0, 0.0), 0.22, deg(40.0), 24);
   const auto turned =
@@ -593,10 +594,8 @@ TEST(ScannerSimulation, EmbreeMatchesBruteForceOnSmallMeshes) {
     std::size_t on_ball = 0;
     for (const CloudPoint& p : a.points) on_ball += p.part_triangle >= 0 ? 1 : 0;
     EXPECT_GT(on_ball, 500u);
-    EXPECT_GT(a.points.size() - on_ball, 100u);
-    EXPECT_GT(a.stats.occluded, 50u);
-    std::printf("%zu points, %zu on the ball, %zu occluded, %zu outside\n", a.points.size(),
-                on_ball, a.stats.occluded, a.stats.outside_window);
+    EXPECT_GT(a.points.size() - on_ball, 50u);
+    EXPECT_GT(a.stats.occluded, 20u);
   }
 }
 

@@ -1,0 +1,173 @@
+// `scanplan plan` end to end on the demo job (coarsened with --set so each run takes about a
+// second): the trajectory, report and figure it writes, every planner, --compare, --refine, the
+// no-path exit code, and --set errors.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+#include "cli/image_io.h"
+#include "cli/job.h"
+#include "cli_support.h"
+#include "kinematics/trajectory.h"
+#include "kinematics/units.h"
+
+namespace {
+
+using namespace scanplan;
+using namespace scanplan::test;
+
+const fs::path kSourceDir = SCANPLAN_SOURCE_DIR;
+const std::string kDemoJob = (kSourceDir / "data/jobs/demo.yaml").string();
+// 2° × 0.2 s instead of 1° × 0.1 s: a quarter of the cells.
+const std::vector<std::string> kCoarse = {"--set", "scan.dt_s=0.2", "--set",
+                                          "map.angle_step_deg=2"};
+
+class CliPlan : public Cli {
+ protected:
+  Result plan(std::vector<std::string> extra) const {
+    std::vector<std::string> args{"plan", kDemoJob, "-o", out().string()};
+    args.insert(args.end(), kCoarse.begin(), kCoarse.end());
+    args.insert(args.end(), extra.begin(), extra.end());
+    return scanplan(args);
+  }
+  fs::path out() const { return dir_ / "out"; }
+  // JSON is YAML: yaml-cpp reads the report.
+  YAML::Node report() const { return YAML::LoadFile((out() / "report.json").string()); }
+};
+
+// Every sample's joints put the scanner where the path wants it: base ← flange ← sensor equals
+// table ← part ← sensor, within 1e-6 mm (the CSV carries 12 significant digits).
+void expectReachesTargets(const kinematics::Trajectory& trajectory) {
+  const cli::JobSpec job = cli::loadJob(kDemoJob);
+  const kinematics::CellModel cell = cli::buildCell(job);
+  double worst_mm = 0.0, worst_rot = 0.0;
+  for (const auto& s : trajectory.samples) {
+    const Eigen::Isometry3d a = cell.X_WB * cell.robot.fk(s.q) * cell.scanner.X_FS;
+    const Eigen::Isometry3d b = cell.table.X_WR(s.theta) * cell.part.X_RP * s.X_PS;
+    worst_mm = std::max(worst_mm, toMm((a.translation() - b.translation()).norm()));
+    worst_rot = std::max(worst_rot, (a.linear() - b.linear()).cwiseAbs().maxCoeff());
+  }
+  EXPECT_LT(worst_mm, 1e-6);
+  EXPECT_LT(worst_rot, 1e-9);
+}
+
+TEST_F(CliPlan, WritesTrajectoryReportAndPathFigure) {
+  const Result run = plan({});
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  for (const char* f : {"trajectory.csv", "report.json", "configmap_path.png", "configmap_path.svg",
+                        "configmap.npy", "path.csv", "job.yaml"}) {
+    EXPECT_TRUE(fs::exists(out() / f)) << f;
+  }
+  EXPECT_TRUE(tmpFiles(out()).empty());
+  EXPECT_TRUE(contains(run.out, "plan       ray on ")) << run.out;
+  EXPECT_TRUE(contains(run.out, "baseline   DP optimum")) << run.out;
+
+  const kinematics::Trajectory trajectory = kinematics::parseTrajectoryCsv(
+      readFile(out() / "trajectory.csv"), (out() / "trajectory.csv").string());
+  const YAML::Node r = report();
+  EXPECT_EQ(r["status"].as<std::string>(), "planned");
+  EXPECT_EQ(r["planner"]["method"].as<std::string>(), "ray");
+  EXPECT_EQ(r["path"]["samples"].as<std::size_t>(), trajectory.samples.size());
+  const YAML::Node j = r["objective"];
+  EXPECT_NEAR(
+      j["J_s"].as<double>(),
+      j["cost_f_s"].as<double>() + j["cost_omega_s"].as<double>() + j["cost_alpha_s"].as<double>(),
+      1e-9);
+  EXPECT_LE(r["path"]["max_abs_omega_deg_s"].as<double>(), 30.0 * (1 + 1e-9));
+  EXPECT_LE(r["path"]["max_abs_alpha_deg_s2"].as<double>(), 60.0 * (1 + 1e-9));
+  EXPECT_GT(r["path"]["min_f"].as<double>(), 0.0);
+  EXPECT_TRUE(r["dp_baseline"]["gap_percent"].IsDefined());
+  EXPECT_EQ(r["job_hash"].as<std::string>().size(), 16u);
+  // The cell transforms, mm: the demo's table axis sits at x = 520 mm.
+  EXPECT_DOUBLE_EQ(r["cell"]["X_WA"][0][3].as<double>(), 520.0);
+  EXPECT_DOUBLE_EQ(r["cell"]["X_WA"][3][3].as<double>(), 1.0);
+
+  // The trajectory: the table speed and acceleration bounds hold on the written samples, and
+  // the scan pose is reached at every sample.
+  const auto& s = trajectory.samples;
+  for (std::size_t k = 1; k < s.size(); ++k) {
+    const double dt = s[k].t - s[k - 1].t;
+    EXPECT_LE(std::abs(s[k].theta - s[k - 1].theta) / dt, deg(30.0) * (1 + 1e-6)) << k;
+    EXPECT_GT(s[k].f, 0.0) << k;
+  }
+  expectReachesTargets(trajectory);
+
+  const cli::RgbImage figure = cli::decodePng(readFile(out() / "configmap_path.png"));
+  EXPECT_GE(figure.width, 180);
+  EXPECT_TRUE(contains(readFile(out() / "configmap_path.svg"), "ray J "));
+}
+
+TEST_F(CliPlan, EveryPlannerFindsAnExecutablePathOnTheDemo) {
+  for (const std::string method : {"ray", "dp", "ompl"}) {
+    SCOPED_TRACE(method);
+    fs::remove_all(out());
+    const Result run = plan({"--planner", method, "--set", "planner.ompl.time_limit_s=1"});
+    ASSERT_EQ(run.exit_code, 0) << describe(run);
+    EXPECT_EQ(report()["planner"]["method"].as<std::string>(), method);
+    expectReachesTargets(
+        kinematics::parseTrajectoryCsv(readFile(out() / "trajectory.csv"), "trajectory.csv"));
+  }
+}
+
+TEST_F(CliPlan, CompareRunsTheOtherPlannersOnTheChosenBranch) {
+  const Result run = plan({"--compare", "--set", "planner.ompl.time_limit_s=1"});
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  const YAML::Node compare = report()["compare"];
+  ASSERT_TRUE(compare.IsSequence());
+  ASSERT_EQ(compare.size(), 2u);
+  EXPECT_EQ(compare[0]["method"].as<std::string>(), "dp");
+  EXPECT_EQ(compare[1]["method"].as<std::string>(), "ompl");
+  const std::string svg = readFile(out() / "configmap_path.svg");
+  EXPECT_TRUE(contains(svg, "ray J ") && contains(svg, "dp J ")) << svg;
+}
+
+TEST_F(CliPlan, RefineNeverRaisesTheObjective) {
+  const Result run = plan({"--refine"});
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  const YAML::Node r = report();
+  ASSERT_TRUE(r["refine"].IsDefined()) << readFile(out() / "report.json");
+  EXPECT_LE(r["refine"]["J_after_s"].as<double>(), r["refine"]["J_before_s"].as<double>());
+  EXPECT_DOUBLE_EQ(r["objective"]["J_s"].as<double>(), r["refine"]["J_after_s"].as<double>());
+  EXPECT_TRUE(contains(run.out, "refine     J ")) << run.out;
+}
+
+TEST_F(CliPlan, UnreachableCellExitsThreeWithAReportThatSaysWhy) {
+  // The table 3 m from the robot: nothing is reachable.
+  const Result run = plan({"--set", "table.axis.xyz_mm=[3000, 0, 0]"});
+  EXPECT_EQ(run.exit_code, 3) << describe(run);
+  EXPECT_TRUE(contains(run.out, "NO PATH")) << run.out;
+  EXPECT_FALSE(fs::exists(out() / "trajectory.csv"));
+  const YAML::Node r = report();
+  EXPECT_EQ(r["status"].as<std::string>(), "no_path");
+  EXPECT_TRUE(contains(r["reason"].as<std::string>(), "f = 0 at every table angle"))
+      << r["reason"].as<std::string>();
+  EXPECT_TRUE(tmpFiles(out()).empty());
+}
+
+TEST_F(CliPlan, SetOverridesAreValidatedLikeTheFile) {
+  struct Case {
+    std::vector<std::string> args;
+    int code;
+    std::vector<std::string> says;
+  };
+  const std::vector<Case> cases{
+      {{"--set", "planner.ray.horizont=5"}, 4, {"planner.ray", "horizont", "horizon"}},
+      {{"--set", "planner.ray.horizon=abc"}, 4, {"planner.ray.horizon", "abc"}},
+      {{"--set", "planner.method=astar"}, 4, {"planner.method", "astar", "ray"}},
+      {{"--set", "planner"}, 4, {"--set 'planner'", "key.path=value"}},
+      {{"--set", "scan.paths[7].height_mm=5"}, 4, {"scan.paths has no item [7]"}},
+      {{"--planner", "astar"}, 2, {"astar"}},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.args.back());
+    const Result run = plan(c.args);
+    EXPECT_EQ(run.exit_code, c.code) << describe(run);
+    for (const std::string& s : c.says) EXPECT_TRUE(contains(run.err, s)) << run.err;
+  }
+}
+
+}  // namespace
