@@ -124,7 +124,7 @@ struct OmplSpec {
 
 /// `planner.refine`: NLopt smoothing of the chosen path.
 struct RefineSpec {
-  bool enabled = false;
+  bool enabled = true;
   double time_limit_s = 2.0;
 };
 

@@ -1,12 +1,12 @@
 #include "planner/ompl_planner.h"
 
 #include <algorithm>
-#include <cstdlib>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -19,8 +19,8 @@
 #include <ompl/base/goals/GoalSampleableRegion.h>
 #include <ompl/base/spaces/RealVectorStateSpace.h>
 #include <ompl/base/spaces/SO2StateSpace.h>
-#include <ompl/control/PathControl.h>
 #include <ompl/control/ControlSampler.h>
+#include <ompl/control/PathControl.h>
 #include <ompl/control/SpaceInformation.h>
 #include <ompl/control/planners/rrt/RRT.h>
 #include <ompl/control/planners/sst/SST.h>
@@ -46,7 +46,6 @@ struct Problem {
   PlannerSettings settings;
   bool continuous = true;
   std::size_t nt = 0;
-  std::vector<double> column_min;  // per sample: the least −ln f·Δt any angle can cost there
 
   double f(double theta, std::size_t k) const noexcept {
     return detail::mapValue(*map, grid, branch, theta, k, continuous);
@@ -61,21 +60,20 @@ struct Problem {
     return std::clamp(omega + std::clamp(target - omega, -dw, dw), -w_max, w_max);
   }
   // The J terms a step adds (evaluate()'s, Eq. in objective.h), the start sample's own −ln f
-  // included on the first step, each sample's −ln f less that column's least (see planOmpl).
-  // Infinite when f = 0 at the new sample.
-  double stepCost(double theta0, double omega0, std::size_t k, double theta1, double omega1) const
-      noexcept {
+  // included on the first step. Infinite when f = 0 at the new sample.
+  double stepCost(
+      double theta0, double omega0, std::size_t k, double theta1, double omega1) const noexcept {
     const double dt = grid.dt;
     const double f1 = f(theta1, k + 1);
     if (!(f1 > 0.0)) return std::numeric_limits<double>::infinity();
-    double c = -std::log(f1) * dt - column_min[k + 1] + settings.k_omega * omega1 * omega1 * dt;
+    double c = (-std::log(f1) + settings.k_omega * omega1 * omega1) * dt;
     if (k + 1 >= 2) {
       const double alpha = (omega1 - omega0) / dt;
       c += settings.k_alpha * alpha * alpha * dt;
     }
     if (k == 0) {
       const double f0 = f(theta0, 0);
-      c += f0 > 0.0 ? -std::log(f0) * dt - column_min[0] : std::numeric_limits<double>::infinity();
+      c += f0 > 0.0 ? -std::log(f0) * dt : std::numeric_limits<double>::infinity();
     }
     return c;
   }
@@ -90,11 +88,17 @@ struct StateView {
     return so2 ? c->as<ob::SO2StateSpace::StateType>(kTheta)->value
                : c->as<ob::RealVectorStateSpace::StateType>(kTheta)->values[0];
   }
-  double theta(const ob::State* s) const { return theta(const_cast<ob::State*>(s)); }
+  double theta(const ob::State* s) const {
+    const auto* c = s->as<ob::CompoundState>();
+    return so2 ? c->as<ob::SO2StateSpace::StateType>(kTheta)->value
+               : c->as<ob::RealVectorStateSpace::StateType>(kTheta)->values[0];
+  }
   static double& real(ob::State* s, unsigned i) {
     return s->as<ob::CompoundState>()->as<ob::RealVectorStateSpace::StateType>(i)->values[0];
   }
-  static double real(const ob::State* s, unsigned i) { return real(const_cast<ob::State*>(s), i); }
+  static double real(const ob::State* s, unsigned i) {
+    return s->as<ob::CompoundState>()->as<ob::RealVectorStateSpace::StateType>(i)->values[0];
+  }
   static std::size_t sample(const ob::State* s) {
     return static_cast<std::size_t>(std::llround(real(s, kTime)));
   }
@@ -102,7 +106,7 @@ struct StateView {
 
 // SO(2)'s wrap into [−π, π) (as ompl::base::SO2StateSpace::enforceBounds).
 double wrapPi(double v) {
-  constexpr double kTwoPi = 2.0 * 3.14159265358979323846;
+  constexpr double kTwoPi = 2.0 * std::numbers::pi;
   v = std::fmod(v, kTwoPi);
   if (v < -kTwoPi / 2.0) {
     v += kTwoPi;
@@ -192,9 +196,10 @@ PlanResult planOmpl(const ConfigMap& map,
                     std::optional<double> start_theta) {
   const auto clock_start = std::chrono::steady_clock::now();
   const detail::Grid g = detail::gridOf(map, branch, continuous);
-  if (!(settings.omega_max >= 0.0) || !(settings.alpha_max >= 0.0) ||
-      !(os.time_limit_s > 0.0) || os.max_steps < 1 || !(os.goal_bias >= 0.0) ||
-      !(os.goal_bias <= 1.0) || !(os.stop_probability >= 0.0) || !(os.stop_probability <= 1.0) || !(os.selection_radius > 0.0) || !(os.pruning_radius > 0.0)) {
+  if (!(settings.omega_max >= 0.0) || !(settings.alpha_max >= 0.0) || !(os.time_limit_s > 0.0) ||
+      os.max_steps < 1 || !(os.goal_bias >= 0.0) || !(os.goal_bias <= 1.0) ||
+      !(os.stop_probability >= 0.0) || !(os.stop_probability <= 1.0) ||
+      !(os.selection_radius > 0.0) || !(os.pruning_radius > 0.0)) {
     throw std::logic_error(
         "planOmpl: bounds >= 0; time limit, radii > 0; max_steps >= 1; goal_bias, stop_probability "
         "in [0, 1]");
@@ -202,17 +207,7 @@ PlanResult planOmpl(const ConfigMap& map,
   const std::size_t na = map.angles.size(), nt = map.times.size();
   const double dt = g.dt;
 
-  // Reduced costs: every complete path pays Σ_k column_min[k] in any case, so subtracting it per
-  // sample keeps the order of complete paths (the optimum) and makes partial paths that end at
-  // different samples comparable. Without it the cost-to-come grows with k and SST's cheapest-node
-  // selection keeps extending the shallowest nodes.
-  Problem problem{&map, g, branch, settings, continuous, nt, {}};
-  problem.column_min.resize(nt);
-  for (std::size_t k = 0; k < nt; ++k) {
-    float best = 0.0f;
-    for (std::size_t a = 0; a < na; ++a) best = std::max(best, map.f[map.index(branch, a, k)]);
-    problem.column_min[k] = best > 0.0f && !std::getenv("NORED") ? -std::log(static_cast<double>(best)) * dt : 0.0;
-  }
+  const Problem problem{&map, g, branch, settings, continuous, nt};
   PlanResult result;
   result.branch = branch;
   const auto finish = [&]() {
@@ -234,9 +229,8 @@ PlanResult planOmpl(const ConfigMap& map,
   std::vector<double> starts;  // rad, unwrapped: the path's first sample
   if (start_theta) {
     if (!(problem.f(*start_theta, 0) > 0.0)) {
-      result.reason =
-          fmt::format("time sample 0 (t = {} s): f = 0 at the start angle {} rad", map.times[0],
-                      *start_theta);
+      result.reason = fmt::format("time sample 0 (t = {} s): f = 0 at the start angle {} rad",
+                                  map.times[0], *start_theta);
       return finish();
     }
     starts.push_back(*start_theta);
@@ -296,26 +290,28 @@ PlanResult planOmpl(const ConfigMap& map,
   si->setPropagationStepSize(dt);
   si->setMinMaxControlDuration(1, static_cast<unsigned>(os.max_steps));
   const double last = static_cast<double>(nt - 1);
-  si->setStatePropagator(
-      [&problem, view, last](const ob::State* from, const oc::Control* control, double,
-                             ob::State* to) {
-        const double u = control->as<oc::RealVectorControlSpace::ControlType>()->values[0];
-        const double k_real = StateView::real(from, kTime);
-        const double theta0 = view.theta(from), omega0 = StateView::real(from, kOmega);
-        const double cost0 = StateView::real(from, kCost);
-        if (!(k_real < last)) {  // past the end: an invalid state stops the propagation
-          StateView::real(to, kTime) = last + 1.0;
-          return;
-        }
-        const auto k = StateView::sample(from);
-        const double omega1 = problem.nextOmega(omega0, k, u);
-        const double theta1 = theta0 + omega1 * problem.grid.dt;
-        const double c = problem.stepCost(theta0, omega0, k, theta1, omega1);
-        view.theta(to) = view.so2 ? wrapPi(theta1) : theta1;
-        StateView::real(to, kOmega) = omega1;
-        StateView::real(to, kTime) = static_cast<double>(k + 1);
-        StateView::real(to, kCost) = std::isfinite(c) ? cost0 + c : cost0;  // f = 0: invalid
-      });
+  si->setStatePropagator([&problem, view, last](const ob::State* from, const oc::Control* control,
+                                                double, ob::State* to) {
+    const double u = control->as<oc::RealVectorControlSpace::ControlType>()->values[0];
+    const double k_real = StateView::real(from, kTime);
+    const double theta0 = view.theta(from), omega0 = StateView::real(from, kOmega);
+    const double cost0 = StateView::real(from, kCost);
+    if (!(k_real < last)) {  // past the end: an invalid state stops the propagation
+      view.theta(to) = theta0;
+      StateView::real(to, kOmega) = omega0;
+      StateView::real(to, kTime) = last + 1.0;
+      StateView::real(to, kCost) = cost0;
+      return;
+    }
+    const auto k = StateView::sample(from);
+    const double omega1 = problem.nextOmega(omega0, k, u);
+    const double theta1 = theta0 + omega1 * problem.grid.dt;
+    const double c = problem.stepCost(theta0, omega0, k, theta1, omega1);
+    view.theta(to) = view.so2 ? wrapPi(theta1) : theta1;
+    StateView::real(to, kOmega) = omega1;
+    StateView::real(to, kTime) = static_cast<double>(k + 1);
+    StateView::real(to, kCost) = std::isfinite(c) ? cost0 + c : cost0;  // f = 0: invalid
+  });
   si->setStateValidityChecker([&problem, view, last](const ob::State* s) {
     const double k_real = StateView::real(s, kTime);
     if (!(k_real >= 0.0 && k_real <= last)) return false;
@@ -339,10 +335,9 @@ PlanResult planOmpl(const ConfigMap& map,
   }
   pdef->setGoal(std::make_shared<LastSample>(si, last));
   auto objective = std::make_shared<AccumulatedCost>(si);
-  // Satisfied by any solution (stop at the first) or by none (improve until stopped; the
-  // default threshold 0 would stop SST at a reduced cost of 0, which is not always the optimum).
-  objective->setCostThreshold(ob::Cost((os.stop_at_first_solution ? 1.0 : -1.0) *
-                                       std::numeric_limits<double>::infinity()));
+  // Satisfied by any solution (stop at the first) or by none (improve until stopped).
+  objective->setCostThreshold(
+      ob::Cost((os.stop_at_first_solution ? 1.0 : -1.0) * std::numeric_limits<double>::infinity()));
   pdef->setOptimizationObjective(objective);
 
   ob::PlannerPtr planner;
@@ -363,9 +358,11 @@ PlanResult planOmpl(const ConfigMap& map,
   // The planners test the condition once per iteration: counting its calls caps iterations.
   std::size_t iterations = 0;
   const std::size_t cap = os.max_iterations;
-  const ob::PlannerTerminationCondition ptc = ob::plannerOrTerminationCondition(
-      ob::timedPlannerTerminationCondition(os.time_limit_s),
-      ob::PlannerTerminationCondition([&iterations, cap] { return ++iterations > cap && cap != 0; }));
+  const ob::PlannerTerminationCondition ptc =
+      ob::plannerOrTerminationCondition(ob::timedPlannerTerminationCondition(os.time_limit_s),
+                                        ob::PlannerTerminationCondition([&iterations, cap] {
+                                          return ++iterations > cap && cap != 0;
+                                        }));
   const auto solve_start = std::chrono::steady_clock::now();
   const ob::PlannerStatus status = planner->solve(ptc);
   const double solve_s =
@@ -373,19 +370,18 @@ PlanResult planOmpl(const ConfigMap& map,
   const bool exact = status == ob::PlannerStatus::EXACT_SOLUTION;
   const bool approximate = status == ob::PlannerStatus::APPROXIMATE_SOLUTION;
   result.approximate = approximate;
-  result.detail = fmt::format("OMPL {}: {} after {:.3f} s{}, {} start state{}",
-                              plannerName(os.planner),
-                              exact         ? "exact solution"
-                              : approximate ? "approximate solution"
-                                            : status.asString(),
-                              solve_s,
-                              fmt::format(" ({} iterations)", cap != 0 ? std::min(iterations, cap)
-                                                                       : iterations),
-                              starts.size(), starts.size() == 1 ? "" : "s");
+  result.detail = fmt::format(
+      "OMPL {}: {} after {:.3f} s{}, {} start state{}", plannerName(os.planner),
+      exact         ? "exact solution"
+      : approximate ? "approximate solution"
+                    : status.asString(),
+      solve_s, fmt::format(" ({} iterations)", cap != 0 ? std::min(iterations, cap) : iterations),
+      starts.size(), starts.size() == 1 ? "" : "s");
 
   if (!exact && !approximate) {
-    result.reason = fmt::format("time sample 1 (t = {} s): OMPL {} found no motion from any start",
-                                map.times[1], plannerName(os.planner));
+    result.reason =
+        fmt::format("time sample 1 (t = {} s): OMPL {} found no motion from any start ({})",
+                    map.times[1], plannerName(os.planner), status.asString());
     return finish();
   }
   auto* path = pdef->getSolutionPath()->as<oc::PathControl>();
@@ -419,8 +415,9 @@ PlanResult planOmpl(const ConfigMap& map,
   out.push_back(theta);
   double omega = StateView::real(root, kOmega);
   for (std::size_t i = 0; i < path->getControlCount(); ++i) {
-    const double u =
-        path->getControl(static_cast<unsigned>(i))->as<oc::RealVectorControlSpace::ControlType>()->values[0];
+    const double u = path->getControl(static_cast<unsigned>(i))
+                         ->as<oc::RealVectorControlSpace::ControlType>()
+                         ->values[0];
     const auto steps = static_cast<std::size_t>(std::llround(path->getControlDurations()[i] / dt));
     for (std::size_t j = 0; j < steps; ++j) {
       omega = problem.nextOmega(omega, out.size() - 1, u);

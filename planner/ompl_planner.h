@@ -27,9 +27,9 @@ struct OmplSettings {
   /// function of (map, settings, seed) only; a run cut by the clock depends on machine speed.
   std::size_t max_iterations = 0;
   OmplPlanner planner = OmplPlanner::kSst;
-  int max_steps = 50;         ///< a control (target speed) is held for 1..max_steps samples
-  std::size_t starts = 36;    ///< start cells spread over the first column's f > 0 (0 = all)
-  double goal_bias = 0.05;    ///< share of samples drawn on the last time sample
+  int max_steps = 50;             ///< a control (target speed) is held for 1..max_steps samples
+  std::size_t starts = 36;        ///< start cells spread over the first column's f > 0 (0 = all)
+  double goal_bias = 0.05;        ///< share of samples drawn on the last time sample
   double stop_probability = 0.2;  ///< share of sampled controls with target speed exactly 0
   /// SST δ_BN, steps (see above): the cheapest tree node this close to a sample is extended.
   double selection_radius = 40.0;
@@ -47,8 +47,8 @@ struct OmplSettings {
 /// ±α_max·Δt), θ' = θ + ω'·Δt, k' = k + 1 — except the first sample from k = 0, where
 /// ω' = u·ω_max (evaluate() bounds no speed change into sample 1). So ω and α are exactly
 /// evaluate()'s finite differences, and holding a control reaches and keeps a constant speed
-/// (standing still included), which a held acceleration would not. Valid: |ω| ≤ ω_max and f(θ, k) > 0
-/// (mapValue()). Goal: k = the last time sample. Cost of a motion: the J terms of its samples
+/// (standing still included), which a held acceleration would not. Valid: |ω| ≤ ω_max and f(θ, k) >
+/// 0 (mapValue()). Goal: k = the last time sample. Cost of a motion: the J terms of its samples
 /// (including −ln f of the start sample), so the OMPL path cost is J.
 ///
 /// Starts: `start_theta` (rad) when given, else `starts` grid angles of the first column with

@@ -4,7 +4,6 @@
 #include <array>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -40,6 +39,11 @@ RefineProblem::RefineProblem(const ConfigMap& map,
   }
   bound_.assign(2 * (n_ - 1), (1.0 - bound_margin) * settings.omega_max);
   bound_.resize(bound_.size() + 2 * (n_ - 2), (1.0 - bound_margin) * settings.alpha_max);
+}
+
+void RefineProblem::setKinkRadius(double radius) {
+  if (!(radius > 0.0 && radius <= 0.5)) throw std::logic_error("RefineProblem: kink radius in (0, 0.5]");
+  kink_radius_ = radius;
 }
 
 void RefineProblem::relaxBoundsTo(const double* theta) {
@@ -78,25 +82,29 @@ double RefineProblem::cell(std::ptrdiff_t angle, std::size_t k) const noexcept {
   return static_cast<double>(map_.f[map_.index(branch_, static_cast<std::size_t>(angle), k)]);
 }
 
-void RefineProblem::fAndSlope(double theta,
-                              std::size_t k,
-                              double& f,
-                              double& slope) const noexcept {
-  // The value is mapValue()'s own, so the model and evaluate() read the same f.
-  f = mapValue(map_, grid_, branch_, theta, k, continuous_);
-  slope = 0.0;
-  if (!(f > 0.0)) return;
+RefineProblem::FValue RefineProblem::fModel(double theta, std::size_t k) const noexcept {
   const auto na = static_cast<std::ptrdiff_t>(map_.angles.size());
-  // The cell mapValue() interpolates in, found the same way (wrap, then snap to grid angles).
-  double u = (theta - grid_.angle0) / grid_.angle_step;
+  const double h = grid_.angle_step;
+  double u = (theta - grid_.angle0) / h;  // in grid steps
   if (continuous_) {
     u = std::fmod(u, static_cast<double>(na));
     if (u < 0.0) u += static_cast<double>(na);
   }
-  if (std::abs(u - std::round(u)) <= 1e-9) u = std::round(u);
-  auto i0 = static_cast<std::ptrdiff_t>(std::floor(u));
-  if (!continuous_ && i0 >= na - 1) i0 = na - 2;  // the last angle: the cell below
-  slope = (cell(i0 + 1, k) - cell(i0, k)) / grid_.angle_step;
+  const double lower = std::floor(u);
+  const double w = u - lower;
+  const auto i0 = static_cast<std::ptrdiff_t>(lower);
+  const double f0 = cell(i0, k), f1 = cell(i0 + 1, k);
+  // The corner at grid angle i with slopes sl, sr (per grid step) on its sides, rounded over
+  // |δ| ≤ r by the quadratic that meets both lines with their slopes (C¹).
+  const auto corner = [&](double fi, double sl, double sr, double delta) {
+    const double r = kink_radius_;
+    return FValue{fi + 0.5 * (sl + sr) * delta + (sr - sl) / (4.0 * r) * (delta * delta + r * r),
+                  (0.5 * (sl + sr) + (sr - sl) * delta / (2.0 * r)) / h,
+                  (sr - sl) / (2.0 * r) / (h * h)};
+  };
+  if (w < kink_radius_) return corner(f0, f0 - cell(i0 - 1, k), f1 - f0, w);
+  if (w > 1.0 - kink_radius_) return corner(f1, f1 - f0, cell(i0 + 2, k) - f1, w - 1.0);
+  return FValue{(1.0 - w) * f0 + w * f1, (f1 - f0) / h, 0.0};
 }
 
 void RefineProblem::feasibleInterval(
@@ -108,9 +116,7 @@ void RefineProblem::feasibleInterval(
   if (std::abs(u - std::round(u)) <= 1e-9) u = std::round(u);
   const auto below = static_cast<std::ptrdiff_t>(std::floor(u));
   const std::ptrdiff_t above = static_cast<double>(below) == u ? below : below + 1;
-  double f = 0.0, slope = 0.0;
-  fAndSlope(theta, k, f, slope);
-  f_min = f;
+  f_min = mapValue(map_, grid_, branch_, theta, k, continuous_);
   // Walk out over open cells; a fully open column of a continuous table stops one turn out.
   std::ptrdiff_t a_lo = below, a_hi = above;
   const bool lo_open = cell(below, k) > 0.0, hi_open = cell(above, k) > 0.0;
@@ -133,21 +139,20 @@ double RefineProblem::objective(const double* theta, double* grad) const noexcep
   if (grad != nullptr) std::fill(grad, grad + n_, 0.0);
   double cost_f = 0.0, cost_w = 0.0, cost_a = 0.0;
   for (std::size_t k = 0; k < n_; ++k) {
-    double f = 0.0, slope = 0.0;
-    fAndSlope(theta[k], k, f, slope);
+    const FValue fv = fModel(theta[k], k);
     double c = 0.0, dc_df = 0.0;
-    if (f >= f_floor_) {
-      c = -std::log(f);
-      dc_df = -1.0 / f;
+    if (fv.f >= f_floor_) {
+      c = -std::log(fv.f);
+      dc_df = -1.0 / fv.f;
     } else {
       // Second-order Taylor polynomial of −ln f at the floor: finite (and still pushing up the
-      // slope) where f = 0, so the line search never sees an infinity.
-      const double d = (f - f_floor_) / f_floor_;
+      // slope) where f ≤ 0, so the line search never sees an infinity.
+      const double d = (fv.f - f_floor_) / f_floor_;
       c = -std::log(f_floor_) - d + 0.5 * d * d;
       dc_df = (d - 1.0) / f_floor_;
     }
     cost_f += c * dt;
-    if (grad != nullptr) grad[k] += dc_df * slope * dt;
+    if (grad != nullptr) grad[k] += dc_df * fv.df * dt;
   }
   double omega_prev = 0.0;
   for (std::size_t k = 1; k < n_; ++k) {
@@ -238,13 +243,14 @@ RefineProblem::Band RefineProblem::meritHessian(const double* theta,
   Band h{std::vector<double>(n_, 0.0), std::vector<double>(n_, 0.0),
          std::vector<double>(n_, 0.0)};
   const double dt = grid_.dt;
-  // −ln f: f is linear in θ within a cell, so ∂²/∂θ² = c''(f)·slope²·Δt with c'' = 1/f² (and
-  // 1/f_floor² on the continuation).
+  // −ln f: c''(f)·f'² + c'(f)·f'' per sample·Δt, c' = −1/f, c'' = 1/f² (−1/f_floor·(…) and
+  // 1/f_floor² on the continuation). The second term only counts where it is positive (the
+  // rounded peaks): a valley's negative curvature would spoil the factorisation.
   for (std::size_t k = 0; k < n_; ++k) {
-    double f = 0.0, slope = 0.0;
-    fAndSlope(theta[k], k, f, slope);
-    const double fc = std::max(f, f_floor_);
-    h.diag[k] += slope * slope / (fc * fc) * dt;
+    const FValue fv = fModel(theta[k], k);
+    const double fc = std::max(fv.f, f_floor_);
+    const double dc_df = fv.f >= f_floor_ ? -1.0 / fv.f : ((fv.f - f_floor_) / f_floor_ - 1.0) / f_floor_;
+    h.diag[k] += (fv.df * fv.df / (fc * fc) + std::max(0.0, dc_df * fv.d2f)) * dt;
   }
   // k_ω Σ (Δθ)²/Δt and k_a Σ (Δ²θ)²/Δt³: 2k_ω/Δt·D1ᵀD1 + 2k_a/Δt³·D2ᵀD2.
   const double cw = 2.0 * settings_.k_omega / dt, ca = 2.0 * settings_.k_alpha / (dt * dt * dt);
@@ -306,7 +312,11 @@ constexpr double kFloorFraction = 0.5;
 // did not cut the violation to a quarter. The preconditioner carries the penalty's curvature, so
 // a large penalty does not stall L-BFGS.
 constexpr double kRho0 = 10.0, kRhoGrowth = 10.0, kRhoMax = 1e12, kViolationShrink = 0.25;
-constexpr int kMaxRounds = 30;
+constexpr int kMaxRounds = 30;  // per smoothing stage
+// Continuation over the rounding of f's corners (grid steps): wide corners first (smooth, fast),
+// then narrower ones, each stage warm-started, so the model ends within 1e-3 grid steps of J's
+// own f.
+constexpr std::array<double, 3> kKinkRadii = {0.1, 0.01, 0.001};
 // NLopt's default L-BFGS memory is MEMAVAIL/n vectors (thousands for n = 1000), which makes an
 // iteration cost O(n·memory); preconditioned, a few vectors suffice.
 constexpr unsigned kLbfgsMemory = 10;
@@ -505,81 +515,82 @@ RefineResult refinePath(const ConfigMap& map,
   std::vector<double> best = theta;
   ObjectiveTerms best_terms = result.before;
   double rho = kRho0;
-  double prev_violation = std::numeric_limits<double>::infinity();
-  double prev_j = problem.objective(x.data(), nullptr);
   std::string stop;
-  int round = 0;
-  for (;; ++round) {
-    if (ctx.evaluations >= rs.max_evaluations) {
-      stop = fmt::format("evaluation budget ({}) spent", rs.max_evaluations);
-      break;
-    }
-    if (rs.time_limit_s > 0.0) {
-      const double remaining = rs.time_limit_s - elapsed();
-      if (remaining <= 0.0) {
-        stop = fmt::format("time limit ({} s) reached", rs.time_limit_s);
+  int rounds = 0;
+  bool out_of_budget = false;
+  for (std::size_t stage = 0; stage < kKinkRadii.size() && !out_of_budget; ++stage) {
+    problem.setKinkRadius(kKinkRadii[stage]);
+    double prev_violation = std::numeric_limits<double>::infinity();
+    double prev_j = problem.objective(x.data(), nullptr);
+    for (int round = 0;; ++round, ++rounds) {
+      if (ctx.evaluations >= rs.max_evaluations) {
+        stop = fmt::format("evaluation budget ({}) spent", rs.max_evaluations);
+        out_of_budget = true;
         break;
       }
-      opt.set_maxtime(remaining);
-    }
-    ctx.lambda = lambda.data();
-    ctx.rho = rho;
-    ctx.base = x;
-    ctx.best = std::numeric_limits<double>::infinity();
-    precondition(problem.meritHessian(x.data(), lambda.data(), rho), free, ctx.chol);
-    std::vector<double> y(free.size(), 0.0);
-    nlopt::result status = nlopt::FAILURE;
-    try {
-      double value = 0.0;
-      status = opt.optimize(y, value);
-    } catch (const nlopt::forced_stop&) {
-      status = nlopt::FORCED_STOP;
-    } catch (const nlopt::roundoff_limited&) {
-      status = nlopt::ROUNDOFF_LIMITED;  // a kink of −ln f: the best point so far stands
-    } catch (const std::runtime_error&) {
-      status = nlopt::FAILURE;
-    }
-    if (ctx.best < std::numeric_limits<double>::infinity()) x = ctx.best_theta;
-    const double violation = problem.updateMultipliers(x.data(), lambda.data(), rho);
-    const double j = problem.objective(x.data(), nullptr);
-    {
+      if (rs.time_limit_s > 0.0) {
+        const double remaining = rs.time_limit_s - elapsed();
+        if (remaining <= 0.0) {
+          stop = fmt::format("time limit ({} s) reached", rs.time_limit_s);
+          out_of_budget = true;
+          break;
+        }
+        opt.set_maxtime(remaining);
+      }
+      ctx.lambda = lambda.data();
+      ctx.rho = rho;
+      ctx.base = x;
+      ctx.best = std::numeric_limits<double>::infinity();
+      precondition(problem.meritHessian(x.data(), lambda.data(), rho), free, ctx.chol);
+      std::vector<double> y(free.size(), 0.0);
+      nlopt::result status = nlopt::FAILURE;
+      try {
+        double value = 0.0;
+        status = opt.optimize(y, value);
+      } catch (const nlopt::forced_stop&) {
+        status = nlopt::FORCED_STOP;
+      } catch (const std::runtime_error&) {
+        status = nlopt::FAILURE;  // roundoff-limited line search and the like: keep the best
+      }
+      if (ctx.best < std::numeric_limits<double>::infinity()) x = ctx.best_theta;
+      const double violation = problem.updateMultipliers(x.data(), lambda.data(), rho);
+      const double j = problem.objective(x.data(), nullptr);
       const ObjectiveTerms terms = evaluate(map, branch, x, settings, continuous);
       if (terms.feasible && terms.total < best_terms.total) {
         best = x;
         best_terms = terms;
       }
+      if (status == nlopt::FORCED_STOP || ctx.evaluations >= rs.max_evaluations) {
+        stop = fmt::format("evaluation budget ({}) spent", rs.max_evaluations);
+        out_of_budget = true;
+        break;
+      }
+      if (status == nlopt::MAXTIME_REACHED) {
+        stop = fmt::format("time limit ({} s) reached", rs.time_limit_s);
+        out_of_budget = true;
+        break;
+      }
+      // The very first round starts with zero multipliers: if its minimiser meets the
+      // constraints, it is the constrained minimiser. Otherwise a stage ends once J settles at a
+      // point that meets them (or that evaluate() accepts: the margins absorb the rest).
+      const bool settled = std::abs(j - prev_j) <= kRoundJTol * std::max(1.0, std::abs(j));
+      if ((stage == 0 && round == 0 && violation <= rs.constraint_tol) ||
+          (settled && (violation <= rs.constraint_tol || terms.feasible))) {
+        stop = "converged";
+        break;
+      }
+      if (round + 1 >= kMaxRounds) {
+        stop = fmt::format("{} augmented-Lagrangian rounds", kMaxRounds);
+        break;
+      }
+      if (violation > kViolationShrink * prev_violation) rho = std::min(rho * kRhoGrowth, kRhoMax);
+      prev_violation = violation;
+      prev_j = j;
     }
-    if (std::getenv("REFINE_DEBUG")) {
-      std::vector<double> gv(problem.constraintCount());
-      problem.constraints(x.data(), gv.data());
-      for (std::size_t i = 0; i < gv.size(); ++i) if (gv[i] > 0.5 * violation && gv[i] > 0) fmt::print(stderr, "   g[{}] = {:g} lambda {:g} (omega/alpha/box split {} {})\n", i, gv[i], lambda[i], 2*(n-1), 2*(n-1)+2*(n-2));
-    }
-    if (std::getenv("REFINE_DEBUG")) fmt::print(stderr, "round {} rho {:g} evals {} status {} viol {:g} J {:.9f}\n", round, rho, ctx.evaluations, static_cast<int>(status), violation, j);
-    if (status == nlopt::FORCED_STOP || ctx.evaluations >= rs.max_evaluations) {
-      stop = fmt::format("evaluation budget ({}) spent", rs.max_evaluations);
-      break;
-    }
-    if (status == nlopt::MAXTIME_REACHED) {
-      stop = fmt::format("time limit ({} s) reached", rs.time_limit_s);
-      break;
-    }
-    // Round 0 starts with zero multipliers: if its minimiser already meets the constraints, it
-    // is the constrained minimiser. Later rounds stop once J settles with the constraints met.
-    if (violation <= rs.constraint_tol &&
-        (round == 0 || std::abs(j - prev_j) <= kRoundJTol * std::max(1.0, std::abs(j)))) {
-      stop = "converged";
-      break;
-    }
-    if (round + 1 >= kMaxRounds) {
-      stop = fmt::format("{} augmented-Lagrangian rounds", kMaxRounds);
-      break;
-    }
-    if (violation > kViolationShrink * prev_violation) rho = std::min(rho * kRhoGrowth, kRhoMax);
-    prev_violation = violation;
-    prev_j = j;
   }
+  ++rounds;
   result.evaluations = ctx.evaluations;
-  stop += fmt::format(" after {} round(s), {} evaluations", round + 1, ctx.evaluations);
+  stop += fmt::format(" after {} round(s), {} evaluations", rounds, ctx.evaluations);
   if (best_terms.total < result.before.total) {
     result.theta = std::move(best);
     result.after = best_terms;

@@ -111,17 +111,25 @@ class RefineProblem {
   /// Raises each speed and acceleration bound b_i that θ exceeds to θ's value, so θ (a path
   /// feasible for evaluate(), possibly at a bound) is feasible for the tightened constraints too.
   void relaxBoundsTo(const double* theta);
+  /// r of fModel(), grid steps in (0, 0.5]; 1e-3 until set.
+  void setKinkRadius(double radius);
 
-  /// f = mapValue() at θ (rad), time sample k, and ∂f/∂θ (1/rad): the slope of the grid cell
-  /// above θ (one-sided at a grid angle; from below at a limited table's last angle), 0 where
-  /// f = 0.
-  void fAndSlope(double theta, std::size_t k, double& f, double& slope) const noexcept;
+  /// f of the model at θ (rad), time sample k, and its first two derivatives (1/rad, 1/rad²):
+  /// the cells interpolated linearly (also towards a cell with f = 0, and towards 0 past a limited
+  /// table's ends), each corner at a grid angle rounded over ±r grid steps (setKinkRadius()) by
+  /// the quadratic that joins both lines with their slopes, so f is C¹ and L-BFGS meets no kinks.
+  /// Equal to mapValue() at least r grid steps from grid angles, between two cells with f > 0.
+  struct FValue {
+    double f, df, d2f;
+  };
+  FValue fModel(double theta, std::size_t k) const noexcept;
   /// The run of grid angles with f > 0 at sample k around θ (rad) as an interval [lo, hi] in
   /// θ's turn (on a continuous table with the whole column open: one turn less a step either
   /// way), widened to contain θ, and the lowest f over it. Requires f(θ, k) > 0.
   void feasibleInterval(
       double theta, std::size_t k, double& lo, double& hi, double& f_min) const noexcept;
-  /// J of evaluate() (with the continuation below f_floor) and its gradient when non-null.
+  /// J of evaluate() with the model's f (and the continuation below f_floor); its gradient when
+  /// non-null.
   double objective(const double* theta, double* grad) const noexcept;
   /// g (constraintCount() values) and, when non-null, the non-zero Jacobian entries ∂g_i/∂θ_j.
   void constraints(const double* theta,
@@ -130,9 +138,10 @@ class RefineProblem {
   /// PHR augmented Lagrangian: objective + Σ_i (max(0, λ_i + ρ g_i)² − λ_i²)/(2ρ); gradient
   /// when non-null. `lambda` has constraintCount() entries ≥ 0, ρ > 0.
   double merit(const double* theta, const double* lambda, double rho, double* grad) const noexcept;
-  /// The Hessian of merit() at θ where it is twice differentiable (inside grid cells, no
-  /// constraint at its switching point): exact, since f is linear in θ within a cell and every
-  /// constraint is linear.
+  /// The Hessian of merit() at θ where it is twice differentiable (no constraint at its switching
+  /// point) and the model's f is not in a rounded valley corner: exact, since f is linear in θ
+  /// within a cell (quadratic in a corner) and every constraint is linear. In valley corners the
+  /// negative −f''/f term is left out, keeping the matrix positive semidefinite.
   Band meritHessian(const double* theta, const double* lambda, double rho) const;
   /// λ_i ← max(0, λ_i + ρ g_i); returns max_i max(0, g_i) at θ (the violation before the update).
   double updateMultipliers(const double* theta, double* lambda, double rho) const noexcept;
@@ -155,6 +164,7 @@ class RefineProblem {
   bool continuous_;
   std::size_t n_;
   double f_floor_, omega_scale_, alpha_scale_;
+  double kink_radius_ = 1e-3;
   std::vector<double> lo_, hi_;
   std::vector<double> bound_;  // b_i of the speed and acceleration constraints
 };

@@ -98,7 +98,7 @@ TEST_F(CliPlan, WritesTrajectoryReportAndPathFigure) {
 
   const cli::RgbImage figure = cli::decodePng(readFile(out() / "configmap_path.png"));
   EXPECT_GE(figure.width, 180);
-  EXPECT_TRUE(contains(readFile(out() / "configmap_path.svg"), "ray J "));
+  EXPECT_TRUE(contains(readFile(out() / "configmap_path.svg"), "ray + refine J "));
 }
 
 TEST_F(CliPlan, EveryPlannerFindsAnExecutablePathOnTheDemo) {
@@ -122,17 +122,30 @@ TEST_F(CliPlan, CompareRunsTheOtherPlannersOnTheChosenBranch) {
   EXPECT_EQ(compare[0]["method"].as<std::string>(), "dp");
   EXPECT_EQ(compare[1]["method"].as<std::string>(), "ompl");
   const std::string svg = readFile(out() / "configmap_path.svg");
-  EXPECT_TRUE(contains(svg, "ray J ") && contains(svg, "dp J ")) << svg;
+  EXPECT_TRUE(contains(svg, "ray + refine J ") && contains(svg, "dp J ")) << svg;
 }
 
 TEST_F(CliPlan, RefineNeverRaisesTheObjective) {
-  const Result run = plan({"--refine"});
+  const Result run = plan({"--set", "planner.refine.enabled=false", "--refine"});
   ASSERT_EQ(run.exit_code, 0) << describe(run);
   const YAML::Node r = report();
   ASSERT_TRUE(r["refine"].IsDefined()) << readFile(out() / "report.json");
   EXPECT_LE(r["refine"]["J_after_s"].as<double>(), r["refine"]["J_before_s"].as<double>());
   EXPECT_DOUBLE_EQ(r["objective"]["J_s"].as<double>(), r["refine"]["J_after_s"].as<double>());
   EXPECT_TRUE(contains(run.out, "refine     J ")) << run.out;
+}
+
+TEST_F(CliPlan, SameJobSameBytes) {
+  ASSERT_EQ(plan({"--set", "planner.refine.enabled=false"}).exit_code, 0);
+  const std::string trajectory = readFile(out() / "trajectory.csv");
+  const std::string map = readFile(out() / "configmap.npy");
+  const std::string figure = readFile(out() / "configmap_path.png");
+  fs::remove_all(out());
+  ASSERT_EQ(plan({"--set", "planner.refine.enabled=false"}).exit_code, 0);
+  EXPECT_EQ(readFile(out() / "trajectory.csv"), trajectory);
+  EXPECT_EQ(readFile(out() / "configmap.npy"), map);
+  EXPECT_EQ(readFile(out() / "configmap_path.png"), figure);
+  EXPECT_FALSE(report()["refine"].IsDefined());
 }
 
 TEST_F(CliPlan, UnreachableCellExitsThreeWithAReportThatSaysWhy) {

@@ -392,13 +392,15 @@ TEST(OmplTune, DISABLED_Synthetic) {
   }
   OmplSettings os;
   os.time_limit_s = envd("TL", 1.0);
-  os.max_steps = static_cast<int>(envd("MS", 10));
-  os.selection_radius = envd("SR", 5);
-  os.pruning_radius = envd("PR", 2);
-  os.goal_bias = envd("GB", 0.05);
+  os.max_steps = static_cast<int>(envd("MS", os.max_steps));
+  os.selection_radius = envd("SR", os.selection_radius);
+  os.pruning_radius = envd("PR", os.pruning_radius);
+  os.goal_bias = envd("GB", os.goal_bias);
+  os.stop_probability = envd("P0", os.stop_probability);
   os.planner = envd("RRT", 0) > 0 ? OmplPlanner::kRrt : OmplPlanner::kSst;
   os.stop_at_first_solution = envd("FIRST", 0) > 0;
   os.starts = static_cast<std::size_t>(envd("ST", 36));
+  os.max_iterations = static_cast<std::size_t>(envd("IT", 0));
   for (std::uint32_t sd = 1; sd <= static_cast<std::uint32_t>(envd("SEEDS", 1)); ++sd) {
     os.seed = sd;
     const PlanResult r = planOmpl(map, 0, s, true, os);

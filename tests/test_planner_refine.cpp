@@ -145,7 +145,7 @@ std::vector<double> offGridPath(std::mt19937& rng, const ConfigMap& map, bool co
   return theta;
 }
 
-TEST(RefineProblem, ModelReadsMapValueAndMatchesEvaluate) {
+TEST(RefineProblem, ModelReadsMapValueAndMatchesEvaluateAwayFromCorners) {
   std::mt19937 rng(11);
   const PlannerSettings s;
   for (const bool continuous : {true, false}) {
@@ -153,31 +153,45 @@ TEST(RefineProblem, ModelReadsMapValueAndMatchesEvaluate) {
     const std::vector<double> theta = offGridPath(rng, map, continuous);
     const detail::RefineProblem p(map, 0, s, continuous, theta.size(), 1e-3, 0.0);
     for (std::size_t k = 0; k < theta.size(); ++k) {
-      double f = 0.0, slope = 0.0;
-      p.fAndSlope(theta[k], k, f, slope);
-      EXPECT_EQ(f, mapValue(map, 0, theta[k], k, continuous));
+      EXPECT_EQ(p.fModel(theta[k], k).f, mapValue(map, 0, theta[k], k, continuous));
     }
     const double j = p.objective(theta.data(), nullptr);
     EXPECT_TRUE(closeRel(j, evaluate(map, 0, theta, s, continuous).total, kSumTol, 1.0));
   }
 }
 
-TEST(RefineProblem, SlopeIsOneSidedAtGridAngles) {
-  // f = 0.2 + 0.1·a on a limited 5-angle table (step 0.1 rad): slope 1 /rad everywhere,
-  // including at the last angle (from below) and at grid angles (from above).
-  const ConfigMap map = makeMap(5, 2, 0.1, false, [](std::size_t a, std::size_t) {
-    return static_cast<float>(0.2 + 0.1 * static_cast<double>(a));
+TEST(RefineProblem, CornersAreRoundedToC1) {
+  // Limited 5-angle table (step 0.1 rad), one sample: f = 0.2, 0.5, 0.3, 0.3, 0.6 by angle.
+  // At grid angle 1 the slopes per grid step are sl = 0.3, sr = −0.2; with r = 0.1 the corner
+  // q(δ) = f1 + (sl + sr)/2·δ + (sr − sl)/(4r)·(δ² + r²) reads 0.5 − 0.0125 at δ = 0, slope
+  // (sl + sr)/2 per step, and meets both lines (value and slope) at δ = ±r.
+  const std::vector<float> cells{0.2f, 0.5f, 0.3f, 0.3f, 0.6f};
+  const ConfigMap map = makeMap(5, 2, 0.1, false, [&](std::size_t a, std::size_t) {
+    return cells[a];
   });
-  const detail::RefineProblem p(map, 0, {}, false, 2, 1e-3, 0.0);
-  for (const double theta : {-1.0, -0.9, -0.75, -0.6}) {
-    double f = 0.0, slope = 0.0;
-    p.fAndSlope(theta, 0, f, slope);
-    EXPECT_NEAR(slope, 1.0, 1e-6) << theta;  // float cells: 0.1f steps
+  detail::RefineProblem p(map, 0, {}, false, 2, 1e-3, 0.0);
+  p.setKinkRadius(0.1);
+  const double h = 0.1, r = 0.1;
+  const double sl = double{0.5f} - double{0.2f}, sr = double{0.3f} - double{0.5f};
+  const auto at = [&](double u) { return p.fModel(-1.0 + u * h, 0); };
+  EXPECT_NEAR(at(1.0).f, double{0.5f} + (sr - sl) * r / 4.0, 1e-12);
+  EXPECT_NEAR(at(1.0).df, 0.5 * (sl + sr) / h, 1e-9);
+  EXPECT_NEAR(at(1.0).d2f, (sr - sl) / (2.0 * r) / (h * h), 1e-6);
+  for (const double e : {1e-9, -1e-9}) {
+    // Just inside and outside δ = ±r: value and slope continuous.
+    EXPECT_NEAR(at(1.0 + r + e).f, at(1.0 + r - e).f, 1e-8);
+    EXPECT_NEAR(at(1.0 + r + e).df, at(1.0 + r - e).df, 1e-5);
+    EXPECT_NEAR(at(1.0 - r + e).f, at(1.0 - r - e).f, 1e-8);
+    EXPECT_NEAR(at(1.0 - r + e).df, at(1.0 - r - e).df, 1e-5);
   }
-  double f = 0.0, slope = 0.0;
-  p.fAndSlope(-1.5, 0, f, slope);  // off the table
-  EXPECT_EQ(f, 0.0);
-  EXPECT_EQ(slope, 0.0);
+  EXPECT_NEAR(at(1.5).df, sr / h, 1e-9);  // the straight part
+  EXPECT_EQ(at(1.5).d2f, 0.0);
+  // A flat corner (angles 2, 3 → slopes −0.2 and 0) and the table's last angle, where f runs on
+  // towards 0 one grid step out (sr = −0.6).
+  EXPECT_NEAR(at(4.0).f, double{0.6f} + (-double{0.6f} - (double{0.6f} - double{0.3f})) * r / 4.0,
+              1e-12);
+  EXPECT_EQ(at(6.0).f, 0.0);  // off the table
+  EXPECT_EQ(at(6.0).df, 0.0);
 }
 
 TEST(RefineProblem, FeasibleIntervalIsTheOpenRunAroundTheAngle) {
@@ -206,24 +220,31 @@ TEST(RefineProblem, FeasibleIntervalIsTheOpenRunAroundTheAngle) {
   EXPECT_FLOAT_EQ(static_cast<float>(f_min), 0.1f);
 }
 
-TEST(RefineProblem, GradientMatchesCentralDifferences) {
+TEST(RefineProblem, DerivativesMatchCentralDifferences) {
+  // Gradients of J and of the merit, the constraint Jacobian and the merit's Hessian band, at
+  // off-grid points (no corner within a central difference), with the bounds set at half the
+  // path's own speeds and a box on every sample so that many penalty terms are active.
   std::mt19937 rng(5);
-  PlannerSettings s;
-  s.k_omega = 0.7;
-  s.k_alpha = 0.3;
   for (const bool continuous : {true, false}) {
+    PlannerSettings s;
+    s.k_omega = 0.7;
+    s.k_alpha = 0.3;
     const ConfigMap map = randomMap(rng, 120, 30, continuous, false);
     const std::vector<double> theta = offGridPath(rng, map, continuous);
     const std::size_t n = theta.size();
     SCOPED_TRACE(continuous ? "continuous" : "limited");
-    // The bounds at a fraction of the path's own speeds so that many constraints are violated
-    // and the penalty terms (and their kinks, max(0, ·)) are exercised.
     const ObjectiveTerms e = evaluate(map, 0, theta, s, continuous);
     s.omega_max = 0.5 * e.max_abs_omega;
     s.alpha_max = 0.5 * e.max_abs_alpha;
-    const detail::RefineProblem p(map, 0, s, continuous, n, 1e-3, 1e-6);
-    std::vector<double> lambda(p.constraintCount());
+    detail::RefineProblem p(map, 0, s, continuous, n, 1e-3, 1e-6);
     std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::vector<double> lo(n), hi(n);
+    for (std::size_t k = 0; k < n; ++k) {  // a third of the samples outside their box
+      lo[k] = theta[k] + (k % 3 == 0 ? 1e-3 : -0.05);
+      hi[k] = theta[k] + (k % 3 == 1 ? -1e-3 : 0.05);
+    }
+    p.setBoxes(lo, hi);
+    std::vector<double> lambda(p.constraintCount());
     for (double& l : lambda) l = u(rng) < 0.5 ? 0.0 : 2.0 * u(rng);
     const double rho = 3.0;
 
@@ -235,53 +256,86 @@ TEST(RefineProblem, GradientMatchesCentralDifferences) {
       scale_j = std::max(scale_j, std::abs(grad_j[k]));
       scale_m = std::max(scale_m, std::abs(grad_m[k]));
     }
+    const detail::RefineProblem::Band band = p.meritHessian(theta.data(), lambda.data(), rho);
+    double scale_h = 0.0;
+    for (const double d : band.diag) scale_h = std::max(scale_h, std::abs(d));
+    std::vector<double> gp(n), gm(n);
     for (std::size_t k = 0; k < n; ++k) {
       x[k] = theta[k] + kFdStep;
       const double jp = p.objective(x.data(), nullptr);
-      const double mp = p.merit(x.data(), lambda.data(), rho, nullptr);
+      const double mp = p.merit(x.data(), lambda.data(), rho, gp.data());
       x[k] = theta[k] - kFdStep;
       const double jm = p.objective(x.data(), nullptr);
-      const double mm = p.merit(x.data(), lambda.data(), rho, nullptr);
+      const double mm = p.merit(x.data(), lambda.data(), rho, gm.data());
       x[k] = theta[k];
       EXPECT_TRUE(closeRel(grad_j[k], (jp - jm) / (2.0 * kFdStep), kGradTol, 1e-3 * scale_j))
           << "dJ/dtheta_" << k;
       EXPECT_TRUE(closeRel(grad_m[k], (mp - mm) / (2.0 * kFdStep), kGradTol, 1e-3 * scale_m))
           << "dmerit/dtheta_" << k;
+      // Column k of the Hessian: rows k, k+1, k+2 from the band (symmetric), the rest zero.
+      for (std::size_t r = 0; r < n; ++r) {
+        const double fd = (gp[r] - gm[r]) / (2.0 * kFdStep);
+        const double an = r == k       ? band.diag[k]
+                          : r == k + 1 ? band.sub1[r]
+                          : r == k + 2 ? band.sub2[r]
+                          : k == r + 1 ? band.sub1[k]
+                          : k == r + 2 ? band.sub2[k]
+                                       : 0.0;
+        EXPECT_TRUE(closeRel(an, fd, 1e-4, 1e-4 * scale_h)) << "H(" << r << "," << k << ")";
+      }
     }
 
-    // Constraint Jacobian: every entry against differences of g, and no entry missing (the
-    // differences of g outside the listed entries are zero).
+    // Constraint Jacobian: every entry against differences of g, and no entry missing.
     const std::size_t m = p.constraintCount();
-    EXPECT_EQ(m, 2 * (n - 1) + 2 * (n - 2));
-    std::vector<double> g0(m), gp(m), gm(m), dense(m * n, 0.0);
+    EXPECT_EQ(m, 2 * (n - 1) + 2 * (n - 2) + 2 * n);
+    std::vector<double> g0(m), gpc(m), gmc(m), dense(m * n, 0.0);
     std::vector<detail::RefineProblem::JacobianEntry> jac;
     p.constraints(theta.data(), g0.data(), &jac);
     for (const auto& entry : jac) dense[entry.constraint * n + entry.variable] += entry.value;
     for (std::size_t k = 0; k < n; ++k) {
       x[k] = theta[k] + kFdStep;
-      p.constraints(x.data(), gp.data());
+      p.constraints(x.data(), gpc.data());
       x[k] = theta[k] - kFdStep;
-      p.constraints(x.data(), gm.data());
+      p.constraints(x.data(), gmc.data());
       x[k] = theta[k];
       for (std::size_t i = 0; i < m; ++i) {
-        const double fd = (gp[i] - gm[i]) / (2.0 * kFdStep);
-        const double an = dense[i * n + k];
+        const double fd = (gpc[i] - gmc[i]) / (2.0 * kFdStep);
         // g is linear in θ: only rounding of g (~1e-16·|g|/h) separates fd from the slope.
-        ASSERT_TRUE(closeRel(an, fd, kGradTol, 1.0)) << "dg_" << i << "/dtheta_" << k;
+        ASSERT_TRUE(closeRel(dense[i * n + k], fd, kGradTol, 1.0)) << "dg_" << i << "/dtheta_" << k;
       }
     }
-    // The constraint values themselves: the ω of sample 1 and α of sample 2, "+" and "−".
+    // The values: ω of sample 1 and α of sample 2 ("+" and "−"), the box of sample 0.
     const double dt = 0.1;
     const double w1 = (theta[1] - theta[0]) / dt;
     const double a2 = ((theta[2] - theta[1]) / dt - w1) / dt;
+    const std::size_t alphas = 2 * (n - 1), boxes = alphas + 2 * (n - 2);
     EXPECT_NEAR(g0[0], (w1 - (1 - 1e-6) * s.omega_max) / s.omega_max, 1e-12);
     EXPECT_NEAR(g0[1], (-w1 - (1 - 1e-6) * s.omega_max) / s.omega_max, 1e-12);
-    EXPECT_NEAR(g0[2 * (n - 1)], (a2 - (1 - 1e-6) * s.alpha_max) / s.alpha_max, 1e-12);
-    EXPECT_NEAR(g0[2 * (n - 1) + 1], (-a2 - (1 - 1e-6) * s.alpha_max) / s.alpha_max, 1e-12);
-    s = PlannerSettings{};
-    s.k_omega = 0.7;
-    s.k_alpha = 0.3;
+    EXPECT_NEAR(g0[alphas], (a2 - (1 - 1e-6) * s.alpha_max) / s.alpha_max, 1e-12);
+    EXPECT_NEAR(g0[alphas + 1], (-a2 - (1 - 1e-6) * s.alpha_max) / s.alpha_max, 1e-12);
+    EXPECT_NEAR(g0[boxes], (theta[0] - hi[0]) / p.angleStep(), 1e-9);
+    EXPECT_NEAR(g0[boxes + 1], (lo[0] - theta[0]) / p.angleStep(), 1e-9);
   }
+}
+
+TEST(RefineProblem, RelaxedBoundsAdmitAPathOnTheBound) {
+  // θ moving at exactly ω_max: the tightened constraint (margin 1e-6) sees it 1e-6 over; after
+  // relaxBoundsTo() it sits exactly on the bound, and faster paths are still over.
+  const ConfigMap map = makeMap(36, 4, 0.1, true, [](std::size_t, std::size_t) { return 0.5f; });
+  const PlannerSettings s;
+  std::vector<double> theta(4);
+  for (std::size_t k = 0; k < 4; ++k) theta[k] = 1.0 + s.omega_max * 0.1 * static_cast<double>(k);
+  detail::RefineProblem p(map, 0, s, true, 4, 1e-3, 1e-6);
+  std::vector<double> g(p.constraintCount());
+  p.constraints(theta.data(), g.data());
+  EXPECT_NEAR(g[0], 1e-6, 1e-12);
+  p.relaxBoundsTo(theta.data());
+  p.constraints(theta.data(), g.data());
+  for (std::size_t i = 0; i < g.size(); ++i) EXPECT_LE(g[i], 1e-12) << i;
+  std::vector<double> faster = theta;
+  faster[3] += 1e-4;
+  p.constraints(faster.data(), g.data());
+  EXPECT_GT(g[4], 0.0);  // ω_3 "+"
 }
 
 TEST(RefineProblem, ContinuationBelowTheFloorIsSmoothAndFinite) {
@@ -290,7 +344,7 @@ TEST(RefineProblem, ContinuationBelowTheFloorIsSmoothAndFinite) {
   // table stays finite.
   const ConfigMap map = makeMap(5, 2, 0.1, false, [](std::size_t, std::size_t) { return 0.05f; });
   const detail::RefineProblem p(map, 0, {}, false, 2, 0.1, 0.0);
-  const std::vector<double> theta{-0.8, -0.8};
+  const std::vector<double> theta{-0.75, -0.75};  // between grid angles
   const double d = (double{0.05f} - 0.1) / 0.1;
   EXPECT_NEAR(p.objective(theta.data(), nullptr), 2.0 * 0.1 * (-std::log(0.1) - d + 0.5 * d * d),
               1e-12);
@@ -403,9 +457,10 @@ TEST(Refine, SmoothsTheGridStepsOfADpPathInAShiftingCorridor) {
 }
 
 TEST(Refine, StaysInTheOpenRunAroundEachSample) {
-  // A narrow open lane (grid angles 20..23 on a 2° limited grid) with a better region beyond a
-  // forbidden wall (f = 1 at 26..40, 0 at 24..25): refinement is local and must not jump the
-  // wall, and every sample stays within its lane's grid angles.
+  // A narrow open lane (grid angles 20..23 on a 2° limited grid, f rising from 0.3 to 0.6) with a
+  // better region beyond a forbidden wall (f = 1 at 26..40, 0 at 24..25). From a path standing
+  // at angle 21, refinement climbs towards angle 23 but is local: it must not jump the wall, and
+  // every sample stays within its lane's grid angles.
   const double step = 2.0 * kPi / 180.0;
   const ConfigMap map = makeMap(
       60, 50, 0.1, false,
@@ -415,8 +470,7 @@ TEST(Refine, StaysInTheOpenRunAroundEachSample) {
       },
       step);
   const PlannerSettings s;
-  std::vector<double> theta(50);
-  for (std::size_t k = 0; k < theta.size(); ++k) theta[k] = map.angles[k % 8 < 4 ? 21 : 22];
+  const std::vector<double> theta(50, map.angles[21]);
   const RefineResult r = refinePath(map, 0, theta, s, false);
   EXPECT_TRUE(keepsGuarantees(map, theta, r, s, false)) << r.stop_reason;
   EXPECT_TRUE(r.improved) << r.stop_reason;
@@ -428,7 +482,7 @@ TEST(Refine, StaysInTheOpenRunAroundEachSample) {
 
 TEST(Refine, DeterministicBitForBit) {
   std::mt19937 rng(7);
-  const ConfigMap map = randomMap(rng, 180, 120, true, true);
+  const ConfigMap map = randomMap(rng, 180, 120, true, false);
   PlannerSettings s;
   s.alpha_max = 2.0;
   const PlanResult dp = planDp(map, 0, s, true);
