@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <numbers>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -33,12 +34,28 @@ void describeTable(A& a, TableSpec& s) {
   }
 }
 
+inline const std::vector<std::string> kUpAxes = {"z", "y", "x", "-z", "-y", "-x"};
+
+// The rotation that turns the file's `up` direction into +z (a quarter or half turn).
+Eigen::Matrix3d upRotation(const std::string& up) {
+  using Eigen::AngleAxisd;
+  using Eigen::Vector3d;
+  const double q = std::numbers::pi / 2;
+  if (up == "y") return AngleAxisd(q, Vector3d::UnitX()).matrix();    // +y → +z
+  if (up == "-y") return AngleAxisd(-q, Vector3d::UnitX()).matrix();  // −y → +z
+  if (up == "x") return AngleAxisd(-q, Vector3d::UnitY()).matrix();   // +x → +z
+  if (up == "-x") return AngleAxisd(q, Vector3d::UnitY()).matrix();   // −x → +z
+  if (up == "-z") return AngleAxisd(2 * q, Vector3d::UnitX()).matrix();
+  return Eigen::Matrix3d::Identity();
+}
+
 template <class A>
 void describePart(A& a, PartSpec& s) {
   a.require("mesh");
   a.field("mesh", s.mesh);
   a.field("units", s.units, Expect::oneOf(kLengthUnits));
   a.field("scale", s.scale, Expect::positive());
+  a.field("up_axis", s.up_axis, Expect::oneOf(kUpAxes));
   a.section("pose", s.pose);
 }
 
@@ -492,7 +509,8 @@ kinematics::CellModel buildCell(const JobSpec& job) {
   cell.table.max_speed = deg(t.max_speed_deg_s);
   cell.table.max_accel = deg(t.max_accel_deg_s2);
 
-  cell.part.mesh = {job.part.mesh.resolved, {toLengthUnit(job.part.units), job.part.scale}};
+  cell.part.mesh = {job.part.mesh.resolved,
+                    {toLengthUnit(job.part.units), job.part.scale, upRotation(job.part.up_axis)}};
   cell.part.X_RP = toIsometry(job.part.pose);
 
   cell.scanner.X_FS = toIsometry(job.scanner.mount);

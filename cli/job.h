@@ -37,6 +37,7 @@ struct PartSpec {
   FilePath mesh;
   std::string units = "mm";
   double scale = 1.0;
+  std::string up_axis = "z";  ///< the file's up direction (x, y, z, -x, -y, -z), made +z
   PoseSpec pose;
 };
 

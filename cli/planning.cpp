@@ -1,6 +1,7 @@
 #include "cli/planning.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 
 #include <fmt/format.h>
@@ -64,6 +65,26 @@ std::optional<std::size_t> blockedColumn(const planner::ConfigMap& map, std::siz
   return std::nullopt;
 }
 
+// What limits a time column, e.g. "clearance at 60% of the angles, unreachable at 40%".
+std::string columnLimits(const planner::ConfigMap& map, std::size_t branch, std::size_t k) {
+  std::array<std::size_t, planner::kLimitCount> count{};
+  for (std::size_t a = 0; a < map.angles.size(); ++a) ++count[map.limit[map.index(branch, a, k)]];
+  std::vector<int> order(planner::kLimitCount);
+  for (int i = 0; i < planner::kLimitCount; ++i) order[static_cast<std::size_t>(i)] = i;
+  std::stable_sort(order.begin(), order.end(), [&](int x, int y) {
+    return count[static_cast<std::size_t>(x)] > count[static_cast<std::size_t>(y)];
+  });
+  std::string text;
+  for (const int i : order) {
+    const std::size_t n = count[static_cast<std::size_t>(i)];
+    if (n == 0) continue;
+    text += fmt::format("{}{} at {:.0f}% of the angles", text.empty() ? "" : ", ",
+                        planner::limitName(static_cast<planner::Limit>(i)),
+                        100.0 * static_cast<double>(n) / static_cast<double>(map.angles.size()));
+  }
+  return text;
+}
+
 }  // namespace
 
 bool continuousTable(const JobSpec& job) { return job.table.continuous; }
@@ -90,8 +111,8 @@ PlannerOutcome runPlanner(const std::string& method,
     planner::PlanResult& r = out.branches[b];
     r.branch = b;
     if (const auto k = blockedColumn(map, b)) {
-      r.reason = fmt::format("f = 0 at every table angle at time sample {} (t = {:.2f} s)", *k,
-                             map.times[*k]);
+      r.reason = fmt::format("f = 0 at every table angle at time sample {} (t = {:.2f} s): {}",
+                             *k, map.times[*k], columnLimits(map, b, *k));
     } else {
       r = planOne(method, map, b, job);
     }

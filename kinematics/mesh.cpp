@@ -253,8 +253,10 @@ LoadedMesh loadMesh(const std::filesystem::path& path, const MeshLoadOptions& op
                    " point/line primitives); expected a triangle surface mesh");
   }
   const double factor = (options.units == LengthUnit::kMillimetre ? kMmToM : 1.0) * options.scale;
+  const bool rotate = !options.rotation.isIdentity(0.0);
   for (auto& v : mesh.vertices) {
     v *= factor;
+    if (rotate) v = options.rotation * v;
     if (!v.allFinite()) {
       std::ostringstream what;
       what << "overflows when scaled by " << factor << " to metres; expected a smaller scale";

@@ -31,6 +31,8 @@ struct MeshLoadOptions {
   LengthUnit units = LengthUnit::kMillimetre;
   /// Extra uniform scale applied after the unit conversion (must be finite and > 0).
   double scale = 1.0;
+  /// Rotation applied last, e.g. to turn a y-up file z-up (must be a rotation matrix).
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
 };
 
 /// What the loader noticed but repaired; the caller decides how to report it.

@@ -4,6 +4,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -42,7 +43,8 @@ RefineProblem::RefineProblem(const ConfigMap& map,
 }
 
 void RefineProblem::setKinkRadius(double radius) {
-  if (!(radius > 0.0 && radius <= 0.5)) throw std::logic_error("RefineProblem: kink radius in (0, 0.5]");
+  if (!(radius > 0.0 && radius <= 0.5))
+    throw std::logic_error("RefineProblem: kink radius in (0, 0.5]");
   kink_radius_ = radius;
 }
 
@@ -63,14 +65,13 @@ bool RefineProblem::movable(const Term* t, std::size_t count) const noexcept {
 }
 
 void RefineProblem::setBoxes(std::vector<double> lo, std::vector<double> hi) {
-  if (lo.size() != n_ || hi.size() != n_) throw std::logic_error("RefineProblem: one box per sample");
+  if (lo.size() != n_ || hi.size() != n_)
+    throw std::logic_error("RefineProblem: one box per sample");
   lo_ = std::move(lo);
   hi_ = std::move(hi);
 }
 
-std::size_t RefineProblem::constraintCount() const {
-  return 2 * (n_ - 1) + 2 * (n_ - 2) + 2 * n_;
-}
+std::size_t RefineProblem::constraintCount() const { return 2 * (n_ - 1) + 2 * (n_ - 2) + 2 * n_; }
 
 double RefineProblem::cell(std::ptrdiff_t angle, std::size_t k) const noexcept {
   const auto na = static_cast<std::ptrdiff_t>(map_.angles.size());
@@ -122,11 +123,13 @@ void RefineProblem::feasibleInterval(
   const bool lo_open = cell(below, k) > 0.0, hi_open = cell(above, k) > 0.0;
   if (lo_open) {
     f_min = std::min(f_min, cell(below, k));
-    while (a_lo - 1 > below - na && cell(a_lo - 1, k) > 0.0) f_min = std::min(f_min, cell(--a_lo, k));
+    while (a_lo - 1 > below - na && cell(a_lo - 1, k) > 0.0)
+      f_min = std::min(f_min, cell(--a_lo, k));
   }
   if (hi_open) {
     f_min = std::min(f_min, cell(above, k));
-    while (a_hi + 1 < above + na && cell(a_hi + 1, k) > 0.0) f_min = std::min(f_min, cell(++a_hi, k));
+    while (a_hi + 1 < above + na && cell(a_hi + 1, k) > 0.0)
+      f_min = std::min(f_min, cell(++a_hi, k));
   }
   // A closed neighbour cell (θ inside a cell whose far end has f = 0, only possible if mapValue()
   // interpolates towards 0) caps the interval at θ itself.
@@ -193,8 +196,7 @@ void RefineProblem::visitConstraints(const double* theta, Visit&& visit) const n
   }
   const double da = 1.0 / (dt * dt * alpha_scale_);
   for (std::size_t k = 2; k < n_; ++k) {
-    const double alpha =
-        ((theta[k] - theta[k - 1]) / dt - (theta[k - 1] - theta[k - 2]) / dt) / dt;
+    const double alpha = ((theta[k] - theta[k - 1]) / dt - (theta[k - 1] - theta[k - 2]) / dt) / dt;
     const std::array<Term, 3> up{{{k, da}, {k - 1, -2.0 * da}, {k - 2, da}}};
     const std::array<Term, 3> down{{{k, -da}, {k - 1, 2.0 * da}, {k - 2, -da}}};
     visit(i, (alpha - bound_[i]) / alpha_scale_, up.data(), up.size());
@@ -240,8 +242,7 @@ double RefineProblem::merit(const double* theta,
 RefineProblem::Band RefineProblem::meritHessian(const double* theta,
                                                 const double* lambda,
                                                 double rho) const {
-  Band h{std::vector<double>(n_, 0.0), std::vector<double>(n_, 0.0),
-         std::vector<double>(n_, 0.0)};
+  Band h{std::vector<double>(n_, 0.0), std::vector<double>(n_, 0.0), std::vector<double>(n_, 0.0)};
   const double dt = grid_.dt;
   // −ln f: c''(f)·f'² + c'(f)·f'' per sample·Δt, c' = −1/f, c'' = 1/f² (−1/f_floor·(…) and
   // 1/f_floor² on the continuation). The second term only counts where it is positive (the
@@ -249,7 +250,8 @@ RefineProblem::Band RefineProblem::meritHessian(const double* theta,
   for (std::size_t k = 0; k < n_; ++k) {
     const FValue fv = fModel(theta[k], k);
     const double fc = std::max(fv.f, f_floor_);
-    const double dc_df = fv.f >= f_floor_ ? -1.0 / fv.f : ((fv.f - f_floor_) / f_floor_ - 1.0) / f_floor_;
+    const double dc_df =
+        fv.f >= f_floor_ ? -1.0 / fv.f : ((fv.f - f_floor_) / f_floor_ - 1.0) / f_floor_;
     h.diag[k] += (fv.df * fv.df / (fc * fc) + std::max(0.0, dc_df * fv.d2f)) * dt;
   }
   // k_ω Σ (Δθ)²/Δt and k_a Σ (Δ²θ)²/Δt³: 2k_ω/Δt·D1ᵀD1 + 2k_a/Δt³·D2ᵀD2.
@@ -320,6 +322,7 @@ constexpr std::array<double, 3> kKinkRadii = {0.1, 0.01, 0.001};
 // NLopt's default L-BFGS memory is MEMAVAIL/n vectors (thousands for n = 1000), which makes an
 // iteration cost O(n·memory); preconditioned, a few vectors suffice.
 constexpr unsigned kLbfgsMemory = 10;
+const int kInnerEvaluations = std::getenv("INNER") ? std::atoi(std::getenv("INNER")) : 100;
 // Rounds whose J differ by less than this (relative), with the bounds met, end the run.
 constexpr double kRoundJTol = 1e-12;
 // Regularisation of the preconditioner, relative to its mean diagonal: keeps the factor
@@ -378,13 +381,21 @@ struct Context {
 
 double meritCallback(unsigned n, const double* y, double* grad_y, void* data) {
   auto& c = *static_cast<Context*>(data);
+  // NLopt's L-BFGS checks maxeval only between line searches, and may evaluate once more after
+  // force_stop(): the budget is a hard cap here.
+  if (c.evaluations >= c.max_evaluations) {
+    c.opt->force_stop();
+    if (grad_y != nullptr) std::fill(grad_y, grad_y + n, 0.0);
+    return HUGE_VAL;
+  }
+  ++c.evaluations;
   const std::vector<std::size_t>& free = *c.free;
   std::copy(y, y + n, c.scratch.begin());
   c.chol.solveUpper(c.scratch.data());
   c.theta = c.base;
   for (std::size_t i = 0; i < n; ++i) c.theta[free[i]] += c.scratch[i];
-  const double v =
-      c.problem->merit(c.theta.data(), c.lambda, c.rho, grad_y != nullptr ? c.grad.data() : nullptr);
+  const double v = c.problem->merit(c.theta.data(), c.lambda, c.rho,
+                                    grad_y != nullptr ? c.grad.data() : nullptr);
   if (grad_y != nullptr) {
     for (std::size_t i = 0; i < n; ++i) grad_y[i] = c.grad[free[i]];
     c.chol.solveLower(grad_y);
@@ -395,8 +406,7 @@ double meritCallback(unsigned n, const double* y, double* grad_y, void* data) {
     c.best = v;
     c.best_theta = c.theta;
   }
-  // NLopt's L-BFGS checks maxeval only between line searches; the budget is a hard cap here.
-  if (++c.evaluations >= c.max_evaluations) c.opt->force_stop();
+  if (c.evaluations >= c.max_evaluations) c.opt->force_stop();
   return v;
 }
 
@@ -436,13 +446,12 @@ RefineResult refinePath(const ConfigMap& map,
   const auto elapsed = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
   };
-  if (!(settings.omega_max >= 0.0) || !(settings.alpha_max >= 0.0) ||
-      !(settings.k_omega >= 0.0) || !(settings.k_alpha >= 0.0)) {
+  if (!(settings.omega_max >= 0.0) || !(settings.alpha_max >= 0.0) || !(settings.k_omega >= 0.0) ||
+      !(settings.k_alpha >= 0.0)) {
     throw std::invalid_argument("refinePath: bounds and weights must be >= 0");
   }
   if (rs.max_evaluations < 1 || !(rs.time_limit_s >= 0.0) || !(rs.ftol_rel >= 0.0) ||
-      !(rs.xtol_rel >= 0.0) || !(rs.constraint_tol >= 0.0) ||
-      rs.constraint_tol >= kBoundMargin) {
+      !(rs.xtol_rel >= 0.0) || !(rs.constraint_tol >= 0.0) || rs.constraint_tol >= kBoundMargin) {
     throw std::invalid_argument(
         "refinePath: max_evaluations >= 1, time_limit_s, tolerances >= 0, constraint_tol < 1e-6");
   }
@@ -453,7 +462,8 @@ RefineResult refinePath(const ConfigMap& map,
   }
 
   RefineResult result;
-  result.algorithm = "augmented Lagrangian (PHR, sparse) over NLopt LD_LBFGS, banded preconditioner";
+  result.algorithm =
+      "augmented Lagrangian (PHR, sparse) over NLopt LD_LBFGS, banded preconditioner";
   result.theta = theta;
   result.before = evaluate(map, branch, theta, settings, continuous);
   result.after = result.before;
@@ -512,7 +522,7 @@ RefineResult refinePath(const ConfigMap& map,
 
   std::vector<double> x = theta;
   // The best round end evaluate() accepts: a later round cut short by the budget cannot undo it.
-  std::vector<double> best = theta;
+  std::vector<double> best = theta, clamped(n);
   ObjectiveTerms best_terms = result.before;
   double rho = kRho0;
   std::string stop;
@@ -522,7 +532,7 @@ RefineResult refinePath(const ConfigMap& map,
     problem.setKinkRadius(kKinkRadii[stage]);
     double prev_violation = std::numeric_limits<double>::infinity();
     double prev_j = problem.objective(x.data(), nullptr);
-    for (int round = 0;; ++round, ++rounds) {
+    for (int round = 0;; ++round) {
       if (ctx.evaluations >= rs.max_evaluations) {
         stop = fmt::format("evaluation budget ({}) spent", rs.max_evaluations);
         out_of_budget = true;
@@ -539,25 +549,45 @@ RefineResult refinePath(const ConfigMap& map,
       }
       ctx.lambda = lambda.data();
       ctx.rho = rho;
-      ctx.base = x;
-      ctx.best = std::numeric_limits<double>::infinity();
-      precondition(problem.meritHessian(x.data(), lambda.data(), rho), free, ctx.chol);
-      std::vector<double> y(free.size(), 0.0);
       nlopt::result status = nlopt::FAILURE;
-      try {
-        double value = 0.0;
-        status = opt.optimize(y, value);
-      } catch (const nlopt::forced_stop&) {
-        status = nlopt::FORCED_STOP;
-      } catch (const std::runtime_error&) {
-        status = nlopt::FAILURE;  // roundoff-limited line search and the like: keep the best
+      // One round minimises the merit for fixed λ, ρ: L-BFGS runs of at most kInnerEvaluations,
+      // each preconditioned afresh at its starting point (a Newton-like outer loop), until a run
+      // ends on its own tolerances.
+      for (;;) {
+        ctx.base = x;
+        ctx.best = std::numeric_limits<double>::infinity();
+        precondition(problem.meritHessian(x.data(), lambda.data(), rho), free, ctx.chol);
+        opt.set_maxeval(kInnerEvaluations);
+        std::vector<double> y(free.size(), 0.0);
+        try {
+          double value = 0.0;
+          status = opt.optimize(y, value);
+        } catch (const nlopt::forced_stop&) {
+          status = nlopt::FORCED_STOP;
+        } catch (const std::runtime_error&) {
+          status = nlopt::FAILURE;  // roundoff-limited line search and the like: keep the best
+        }
+        if (ctx.best < std::numeric_limits<double>::infinity()) x = ctx.best_theta;
+        if (status != nlopt::MAXEVAL_REACHED || ctx.evaluations >= rs.max_evaluations) break;
       }
-      if (ctx.best < std::numeric_limits<double>::infinity()) x = ctx.best_theta;
+      ++rounds;
       const double violation = problem.updateMultipliers(x.data(), lambda.data(), rho);
       const double j = problem.objective(x.data(), nullptr);
-      const ObjectiveTerms terms = evaluate(map, branch, x, settings, continuous);
+      // Judge the round's end by evaluate(); if it is out, also its projection onto the boxes (a
+      // box edge overshot by more than mapValue()'s snap reads f = 0; the speed and acceleration
+      // margins absorb the clamp's tiny change of ω and α).
+      ObjectiveTerms terms = evaluate(map, branch, x, settings, continuous);
+      const std::vector<double>* candidate = &x;
+      if (!terms.feasible) {
+        for (std::size_t k = 0; k < n; ++k) clamped[k] = std::clamp(x[k], box_lo[k], box_hi[k]);
+        const ObjectiveTerms clamped_terms = evaluate(map, branch, clamped, settings, continuous);
+        if (clamped_terms.feasible) {
+          terms = clamped_terms;
+          candidate = &clamped;
+        }
+      }
       if (terms.feasible && terms.total < best_terms.total) {
-        best = x;
+        best = *candidate;
         best_terms = terms;
       }
       if (status == nlopt::FORCED_STOP || ctx.evaluations >= rs.max_evaluations) {
@@ -570,9 +600,17 @@ RefineResult refinePath(const ConfigMap& map,
         out_of_budget = true;
         break;
       }
+      if (std::getenv("REFINE_DEBUG")) {
+        std::vector<double> gv(problem.constraintCount());
+        problem.constraints(x.data(), gv.data());
+        std::size_t worst = 0;
+        for (std::size_t i = 0; i < gv.size(); ++i) if (gv[i] > gv[worst]) worst = i;
+        fmt::print(stderr, "stage {} round {} rho {:g} evals {} status {} viol {:g} (i {} of {}/{}) J {:.9f} feasible {} clamped {} true J {:.9f}\n", stage, round, rho, ctx.evaluations, static_cast<int>(status), violation, worst, 2*(n-1), 4*n-6, j, terms.feasible, candidate == &clamped, terms.total);
+      }
       // The very first round starts with zero multipliers: if its minimiser meets the
       // constraints, it is the constrained minimiser. Otherwise a stage ends once J settles at a
-      // point that meets them (or that evaluate() accepts: the margins absorb the rest).
+      // point that meets them (or that evaluate() accepts: the margins absorb the rest); the next
+      // stage then starts from it with narrower corners.
       const bool settled = std::abs(j - prev_j) <= kRoundJTol * std::max(1.0, std::abs(j));
       if ((stage == 0 && round == 0 && violation <= rs.constraint_tol) ||
           (settled && (violation <= rs.constraint_tol || terms.feasible))) {
@@ -588,7 +626,6 @@ RefineResult refinePath(const ConfigMap& map,
       prev_j = j;
     }
   }
-  ++rounds;
   result.evaluations = ctx.evaluations;
   stop += fmt::format(" after {} round(s), {} evaluations", rounds, ctx.evaluations);
   if (best_terms.total < result.before.total) {

@@ -177,13 +177,10 @@ void writeCoveragePly(std::ostream& out,
       << "property uchar red\n"
       << "property uchar green\n"
       << "property uchar blue\n"
+      << "property float density_per_mm2\n"
+      << "property uint points\n"
       << "element face " << n << "\n"
       << "property list uchar int vertex_indices\n"
-      << "property uchar red\n"
-      << "property uchar green\n"
-      << "property uchar blue\n"
-      << "property uint points\n"
-      << "property float density_per_mm2\n"
       << "end_header\n";
   LittleEndianWriter w(out);
   const std::uint32_t min_points = std::max<std::uint32_t>(settings.min_points, 1);
@@ -201,14 +198,13 @@ void writeCoveragePly(std::ostream& out,
       w.f32(toMm(v.y()));
       w.f32(toMm(v.z()));
       for (const std::uint8_t c : colours[i]) w.u8(c);
+      w.f32(densities[i]);
+      w.u32(i < coverage.hits.size() ? coverage.hits[i] : 0);
     }
   }
   for (std::size_t i = 0; i < n; ++i) {
     w.u8(3);
     for (std::size_t k = 0; k < 3; ++k) w.i32(static_cast<std::int32_t>(3 * i + k));
-    for (const std::uint8_t c : colours[i]) w.u8(c);
-    w.u32(i < coverage.hits.size() ? coverage.hits[i] : 0);
-    w.f32(densities[i]);
   }
 }
 

@@ -22,11 +22,11 @@ namespace scanplan::scanner {
 void writeCloudPly(std::ostream& out, const std::vector<CloudPoint>& points);
 
 /// Writes coverage.ply: the part mesh (part frame, mm), PLY 1.0 binary little-endian, coloured
-/// by point density (densityColour). Each triangle gets its own three vertices (float x, y, z;
-/// uchar red, green, blue), so any viewer shows the face colours exactly; the `face` element
-/// has `vertex_indices` (list uchar int), the same colour, `uint points` and
-/// `float density_per_mm2`. `max_per_mm2` ≤ 0 puts the top of the colour scale at the
-/// coverage's p95 density.
+/// by point density (densityColour). Each triangle gets its own three vertices, so per-vertex
+/// values are the triangle's and any viewer shows them exactly: float x, y, z; uchar red,
+/// green, blue; float density_per_mm2; uint points (on the triangle). The `face` element has
+/// only `vertex_indices` (list uchar int), which every reader takes. `max_per_mm2` ≤ 0 puts
+/// the top of the colour scale at the coverage's p95 density.
 void writeCoveragePly(std::ostream& out,
                       const kinematics::TriangleMesh& part,
                       const PartCoverage& coverage,

@@ -32,6 +32,8 @@ enum class GroupKind { kTable, kWorld, kLink };
 struct GroupMesh {
   kinematics::TriangleMesh mesh;
   bool is_part = false;
+  // Per triangle its plane n·p = w (n unit): one cache line per hit instead of four.
+  std::vector<Eigen::Vector4d> planes;
 };
 
 // A rigid group: everything in it moves together.
@@ -117,14 +119,6 @@ std::pair<double, double> gaussianPair(std::mt19937_64& rng) {
   return {r * std::cos(a), r * std::sin(a)};
 }
 
-Eigen::Vector3d triangleNormal(const kinematics::TriangleMesh& mesh, unsigned triangle) {
-  const Eigen::Vector3i& f = mesh.triangles[triangle];
-  const Eigen::Vector3d& v0 = mesh.vertices[static_cast<std::size_t>(f(0))];
-  const Eigen::Vector3d& v1 = mesh.vertices[static_cast<std::size_t>(f(1))];
-  const Eigen::Vector3d& v2 = mesh.vertices[static_cast<std::size_t>(f(2))];
-  return (v1 - v0).cross(v2 - v0);
-}
-
 // Möller–Trumbore in double, both faces; the hit distance in [t_near, t_far] or nothing.
 std::optional<double> intersect(const std::array<Eigen::Vector3d, 3>& tri,
                                 const Eigen::Vector3d& o,
@@ -201,6 +195,16 @@ void ScanSimulator::Impl::addGroup(Group group) {
     count += m.mesh.triangles.size();
   }
   if (count == 0) return;
+  for (GroupMesh& m : group.meshes) {
+    m.planes.reserve(m.mesh.triangles.size());
+    for (const Eigen::Vector3i& f : m.mesh.triangles) {
+      const Eigen::Vector3d& v0 = m.mesh.vertices[static_cast<std::size_t>(f(0))];
+      const Eigen::Vector3d n = (m.mesh.vertices[static_cast<std::size_t>(f(1))] - v0)
+                                    .cross(m.mesh.vertices[static_cast<std::size_t>(f(2))] - v0)
+                                    .normalized();
+      m.planes.emplace_back(n.x(), n.y(), n.z(), n.dot(v0));
+    }
+  }
   group.centre = box.center();
   for (const GroupMesh& m : group.meshes) {
     for (const Eigen::Vector3d& v : m.mesh.vertices) {
@@ -405,17 +409,15 @@ void ScanSimulator::Impl::profile(const ScanFrame& frame,
     ++stats.hits;
     const ActiveGroup& a = s.active[static_cast<std::size_t>(hit.slot)];
     const Group& g = groups[static_cast<std::size_t>(a.index)];
-    const kinematics::TriangleMesh& mesh = g.meshes[hit.mesh].mesh;
+    const Eigen::Vector4d& plane = g.meshes[hit.mesh].planes[hit.triangle];
     // Embree's distance is float; the hit triangle's plane gives it in double (the point then
     // lies on the triangle to ~1e-16 relative, whatever the frames).
     const Eigen::Vector3d& d_S = setup.directions[k];
-    const Eigen::Vector3d n_G = triangleNormal(mesh, hit.triangle).normalized();
+    const Eigen::Vector3d n_G = plane.head<3>();
     const Eigen::Vector3d d_G = a.X_GS.linear() * d_S;
-    const Eigen::Vector3d& v0 =
-        mesh.vertices[static_cast<std::size_t>(mesh.triangles[hit.triangle](0))];
     const double cos_nd = n_G.dot(d_G);
     double t = hit.t;
-    if (std::abs(cos_nd) > 1e-9) t = n_G.dot(v0 - a.X_GS.translation()) / cos_nd;
+    if (std::abs(cos_nd) > 1e-9) t = (plane.w() - n_G.dot(a.X_GS.translation())) / cos_nd;
     const Eigen::Vector3d p_S = t * d_S;
     if (!setup.window.contains(p_S.y(), p_S.z())) {
       ++stats.outside_window;
@@ -533,7 +535,7 @@ ScanSimulator::ScanSimulator(const kinematics::CellModel& cell,
                             const Eigen::Isometry3d& X) {
     std::vector<GroupMesh> out;
     for (const kinematics::Shape& shape : shapes) {
-      GroupMesh m{kinematics::shapeSurface(shape, options.tessellation), false};
+      GroupMesh m{kinematics::shapeSurface(shape, options.tessellation), false, {}};
       for (Eigen::Vector3d& v : m.mesh.vertices) v = X * v;
       out.push_back(std::move(m));
     }
@@ -543,7 +545,7 @@ ScanSimulator::ScanSimulator(const kinematics::CellModel& cell,
   // The table group (frame R): the part first, so that its geometry index is 0.
   Group table;
   table.kind = GroupKind::kTable;
-  GroupMesh part_mesh{part, true};
+  GroupMesh part_mesh{part, true, {}};
   for (Eigen::Vector3d& v : part_mesh.mesh.vertices) v = cell.part.X_RP * v;
   table.meshes.push_back(std::move(part_mesh));
   kinematics::Shape top;

@@ -2,6 +2,7 @@
 
 #include "cli/robot_file.h"
 #include "kinematics/error.h"
+#include "kinematics/mesh.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -135,6 +136,30 @@ TEST_F(JobFile, BundledDemoJobAndRobotsLoadAndBuild) {
   EXPECT_EQ(spec.dh.size(), 6u);
   EXPECT_EQ(spec.links.size(), 7u);
   EXPECT_EQ(buildRobotModel(spec, kuka.string()).name(), "KUKA KR6 R900 sixx");
+}
+
+// `part.up_axis` turns the file's up direction into +z at load: the part's extents permute.
+TEST_F(JobFile, PartUpAxisRotatesTheMeshAtLoad) {
+  const JobSpec z = loadJob(kSource / "data/jobs/demo.yaml");
+  const Eigen::Vector3d size_z = [&] {
+    const kinematics::CellModel cell = buildCell(z);
+    return kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options).mesh.bounds().sizes();
+  }();
+  for (const auto& [up, expect] : std::initializer_list<std::pair<const char*, Eigen::Vector3d>>{
+           {"y", {size_z.x(), size_z.z(), size_z.y()}},
+           {"-x", {size_z.z(), size_z.y(), size_z.x()}},
+           {"-z", size_z}}) {
+    SCOPED_TRACE(up);
+    const JobSpec job =
+        loadJob(kSource / "data/jobs/demo.yaml", {std::string("part.up_axis=") + up});
+    const kinematics::CellModel cell = buildCell(job);
+    const auto mesh = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options).mesh;
+    EXPECT_LT((mesh.bounds().sizes() - expect).norm(), 1e-9);
+    // The file's up direction becomes +z.
+    const Eigen::Matrix3d& R = cell.part.mesh.options.rotation;
+    EXPECT_NEAR(R.determinant(), 1.0, 1e-12);
+  }
+  EXPECT_THROW(loadJob(kSource / "data/jobs/demo.yaml", {"part.up_axis=w"}), InputError);
 }
 
 // The comment line names the job the text was resolved from, so it differs between the two

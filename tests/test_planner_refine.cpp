@@ -111,8 +111,8 @@ ConfigMap randomMap(std::mt19937& rng, std::size_t na, std::size_t nt, bool cont
                                          << ", after " << r.after.total << " vs " << out.total;
   }
   if (r.improved != (out.total < in.total)) {
-    return ::testing::AssertionFailure() << "improved = " << r.improved << " but J " << in.total
-                                         << " -> " << out.total;
+    return ::testing::AssertionFailure()
+           << "improved = " << r.improved << " but J " << in.total << " -> " << out.total;
   }
   if (!r.improved && r.theta != input) {
     return ::testing::AssertionFailure() << "not improved, yet theta differs from the input";
@@ -124,8 +124,8 @@ ConfigMap randomMap(std::mt19937& rng, std::size_t na, std::size_t nt, bool cont
 ::testing::AssertionResult closeRel(double a, double b, double tol, double floor) {
   const double scale = std::max({std::abs(a), std::abs(b), floor});
   if (std::abs(a - b) <= tol * scale) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << a << " vs " << b << " (rel. error "
-                                       << std::abs(a - b) / scale << ")";
+  return ::testing::AssertionFailure()
+         << a << " vs " << b << " (rel. error " << std::abs(a - b) / scale << ")";
 }
 
 // A path over the map that stays off grid angles (fractional grid position in [0.2, 0.8]) so
@@ -166,9 +166,8 @@ TEST(RefineProblem, CornersAreRoundedToC1) {
   // q(δ) = f1 + (sl + sr)/2·δ + (sr − sl)/(4r)·(δ² + r²) reads 0.5 − 0.0125 at δ = 0, slope
   // (sl + sr)/2 per step, and meets both lines (value and slope) at δ = ±r.
   const std::vector<float> cells{0.2f, 0.5f, 0.3f, 0.3f, 0.6f};
-  const ConfigMap map = makeMap(5, 2, 0.1, false, [&](std::size_t a, std::size_t) {
-    return cells[a];
-  });
+  const ConfigMap map =
+      makeMap(5, 2, 0.1, false, [&](std::size_t a, std::size_t) { return cells[a]; });
   detail::RefineProblem p(map, 0, {}, false, 2, 1e-3, 0.0);
   p.setKinkRadius(0.1);
   const double h = 0.1, r = 0.1;
@@ -529,9 +528,8 @@ TEST(Refine, EvaluationBudgetIsRespectedAndStillSafe) {
 }
 
 TEST(Refine, InfeasibleOrBrokenInputThrows) {
-  const ConfigMap map = makeMap(36, 10, 0.1, true, [](std::size_t a, std::size_t) {
-    return a == 30 ? 0.0f : 0.8f;
-  });
+  const ConfigMap map =
+      makeMap(36, 10, 0.1, true, [](std::size_t a, std::size_t) { return a == 30 ? 0.0f : 0.8f; });
   const PlannerSettings s;
   const double step = 2.0 * kPi / 36.0;
   std::vector<double> ok(10, 5.0 * step);
@@ -541,7 +539,8 @@ TEST(Refine, InfeasibleOrBrokenInputThrows) {
   blocked[4] = 30.0 * step;  // f = 0 (and far too fast)
   EXPECT_THROW(refinePath(map, 0, blocked, s, true), std::invalid_argument);
   std::vector<double> fast = ok;
-  for (std::size_t k = 0; k < fast.size(); ++k) fast[k] += 1.5 * s.omega_max * 0.1 * static_cast<double>(k);
+  for (std::size_t k = 0; k < fast.size(); ++k)
+    fast[k] += 1.5 * s.omega_max * 0.1 * static_cast<double>(k);
   EXPECT_THROW(refinePath(map, 0, fast, s, true), std::invalid_argument);
   std::vector<double> nan = ok;
   nan[3] = std::nan("");

@@ -1,0 +1,686 @@
+#include "planner/validation.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+#include <tuple>
+#include <type_traits>
+#include <variant>
+
+#include <fmt/format.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include "collision/clearance.h"
+#include "kinematics/mesh.h"
+#include "kinematics/units.h"
+
+namespace scanplan::planner {
+namespace {
+
+using kinematics::JointVector;
+using kinematics::kNumJoints;
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// How far a reported distance may exceed the true one. FCL's GJK (libccd) stops at
+// distance_tolerance = 1e-6 m; on curved shapes its distance was seen up to 1e-5 m off
+// (tests/test_collision.cpp, kGjkCurvedTol = 2e-5). The bounded query itself is exact to 1e-9 m.
+constexpr double kDistanceSlack = 5e-5;  // m
+// Joint angles read back from a trajectory CSV are exact to 12 significant digits: a joint at
+// its limit must not fail on the last printed digit.
+constexpr double kLimitTolerance = 1e-9;  // rad
+constexpr std::size_t kMaxSamples = 100'000'000;
+// Each bisection halves the motion bound; 60 halvings take any real motion far below any
+// resolution. Reaching it ends the refinement with a (conservative) collision span.
+constexpr int kMaxDepth = 60;
+
+struct Pose {
+  double t = 0.0;
+  double theta = 0.0;
+  JointVector q = JointVector::Zero();
+};
+
+Pose midpoint(const Pose& a, const Pose& b) {
+  return {0.5 * (a.t + b.t), 0.5 * (a.theta + b.theta), 0.5 * (a.q + b.q)};
+}
+
+// ---- Motion bounds (conservative advancement) ----
+
+// A ball enclosing part of a body, in the frame the bound is computed in.
+struct Ball {
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  double r = 0.0;
+};
+
+// Balls enclosing `shape` (whose frame is X_FB · X_BG in frame F): one bounding ball for a
+// primitive, the vertices of a mesh (every bound below is a convex function of the point, so
+// its maximum over the mesh's hull is at a vertex).
+void appendBalls(const kinematics::Shape& shape,
+                 const Eigen::Isometry3d& X_FB,
+                 std::vector<Ball>& out) {
+  const Eigen::Isometry3d X_FG = X_FB * shape.X_BG;
+  std::visit(
+      [&](const auto& g) {
+        using G = std::decay_t<decltype(g)>;
+        if constexpr (std::is_same_v<G, kinematics::Box>) {
+          out.push_back({X_FG.translation(), 0.5 * g.size.norm()});
+        } else if constexpr (std::is_same_v<G, kinematics::Sphere>) {
+          out.push_back({X_FG.translation(), g.radius});
+        } else if constexpr (std::is_same_v<G, kinematics::Cylinder>) {
+          out.push_back({X_FG.translation(), std::hypot(g.radius, 0.5 * g.length)});
+        } else if constexpr (std::is_same_v<G, kinematics::Capsule>) {
+          out.push_back({X_FG.translation(), g.radius + 0.5 * g.length});
+        } else {
+          const kinematics::LoadedMesh loaded = kinematics::loadMesh(g.path, g.options);
+          for (const Eigen::Vector3d& v : loaded.mesh.vertices) out.push_back({X_FG * v, 0.0});
+        }
+      },
+      shape.geometry);
+}
+
+// How fast a body's points can move, per unit of joint / table motion.
+struct BodyBound {
+  int link = -1;          // on the arm's chain: 0 (base) … 6 (link 6 and the scanner); else -1
+  bool on_table = false;  // carried by the table
+  // m/rad: for joints i < link, a bound on the distance of the body's points from joint i's axis.
+  std::array<double, kNumJoints> arm{};
+  double table = 0.0;  // m/rad: the farthest point from the table axis
+};
+
+// A point p on link k (coordinates p_k in DH frame k) is moved by joint i < k (axis z of frame
+// i) at |q̇_i| times its distance from that axis. In frame i, p = Rz(θ_i)·((a_i, 0, d_i) +
+// Rx(α_i)·v) with v its coordinates in frame i + 1, so the distance is |xy((a_i,0,0) + Rx(α_i)v)|:
+// exact for i = k − 1 (v = p_k), and at most |a_i| + |v| ≤ |a_i| + Σ_{l=i+1}^{k−1} √(a_l² + d_l²)
+// + |p_k| for the joints further down the chain, whatever the configuration.
+BodyBound armBound(const kinematics::RobotModel& robot, int link, const std::vector<Ball>& balls) {
+  BodyBound b;
+  b.link = link;
+  double rho = 0.0;  // farthest point from the frame origin
+  for (const Ball& ball : balls) rho = std::max(rho, ball.c.norm() + ball.r);
+  for (int i = 0; i < link; ++i) {
+    const kinematics::DhJoint& joint = robot.joint(i);
+    double r = 0.0;
+    if (i == link - 1) {
+      const Eigen::AngleAxisd Rx(joint.alpha, Eigen::Vector3d::UnitX());
+      for (const Ball& ball : balls) {
+        const Eigen::Vector3d p = Rx * ball.c + Eigen::Vector3d(joint.a, 0.0, 0.0);
+        r = std::max(r, p.head<2>().norm() + ball.r);
+      }
+    } else {
+      double chain = 0.0;
+      for (int l = i + 1; l < link; ++l) chain += std::hypot(robot.joint(l).a, robot.joint(l).d);
+      r = std::abs(joint.a) + chain + rho;
+    }
+    b.arm[static_cast<std::size_t>(i)] = r;
+  }
+  return b;
+}
+
+// A point p_R on the table top is at X_WA · Rz(θ) · E · p_R: its distance from the axis (z of
+// A) is |xy(E · p_R)| whatever θ.
+BodyBound tableBound(const kinematics::RotaryTableModel& table, const std::vector<Ball>& balls) {
+  BodyBound b;
+  b.on_table = true;
+  const Eigen::Isometry3d E = table.axisError();
+  for (const Ball& ball : balls)
+    b.table = std::max(b.table, (E * ball.c).head<2>().norm() + ball.r);
+  return b;
+}
+
+std::vector<BodyBound> bodyBounds(const collision::Scene& scene) {
+  const kinematics::CellModel& cell = scene.cell();
+  std::vector<BodyBound> out;
+  for (const collision::BodyInfo& body : scene.bodies()) {
+    std::vector<Ball> balls;
+    switch (body.motion) {
+      case collision::BodyMotion::kWorld:
+        out.emplace_back();
+        continue;
+      case collision::BodyMotion::kRobotLink:
+        for (const auto& s :
+             cell.robot.definition().links[static_cast<std::size_t>(body.link)].shapes)
+          appendBalls(s, Eigen::Isometry3d::Identity(), balls);
+        out.push_back(armBound(cell.robot, body.link, balls));
+        continue;
+      case collision::BodyMotion::kScanner:
+        for (const auto& s : cell.scanner.body) appendBalls(s, cell.scanner.X_FS, balls);
+        out.push_back(armBound(cell.robot, kNumJoints, balls));
+        continue;
+      case collision::BodyMotion::kTable:
+        break;
+    }
+    // The table-carried bodies as Scene builds them: the table's cylinder (top at z = 0), the
+    // part, and the obstacles the table carries (names are unique in a scene).
+    if (body.name == "table") {
+      kinematics::Shape s;
+      s.geometry = kinematics::Cylinder{cell.table.radius, cell.table.height};
+      s.X_BG.translation() << 0.0, 0.0, -0.5 * cell.table.height;
+      appendBalls(s, Eigen::Isometry3d::Identity(), balls);
+    } else if (body.name == "part") {
+      kinematics::Shape s;
+      s.geometry = cell.part.mesh;
+      s.X_BG = cell.part.X_RP;
+      appendBalls(s, Eigen::Isometry3d::Identity(), balls);
+    } else {
+      const auto it =
+          std::find_if(cell.obstacles.begin(), cell.obstacles.end(),
+                       [&](const kinematics::Obstacle& o) { return o.name == body.name; });
+      if (it == cell.obstacles.end()) {
+        throw std::logic_error("validateTrajectory: no geometry for table body '" + body.name +
+                               "'");
+      }
+      for (const auto& s : it->shapes) appendBalls(s, Eigen::Isometry3d::Identity(), balls);
+    }
+    out.push_back(tableBound(cell.table, balls));
+  }
+  return out;
+}
+
+// How far any point of one body can move relative to the other over a linear motion by |Δq|
+// and |Δθ|: the distance between them is Lipschitz in the motion with this constant. Two bodies
+// on the arm's chain move relative to each other only through the joints between them; bodies
+// on different carriers add their motions.
+double pairMotion(const BodyBound& a,
+                  const BodyBound& b,
+                  const std::array<double, kNumJoints>& dq,
+                  double dtheta) noexcept {
+  double m = 0.0;
+  if (a.link >= 0 && b.link >= 0) {
+    const BodyBound& far = a.link >= b.link ? a : b;
+    for (int i = std::min(a.link, b.link); i < far.link; ++i) {
+      m += dq[static_cast<std::size_t>(i)] * far.arm[static_cast<std::size_t>(i)];
+    }
+    return m;
+  }
+  for (const BodyBound* body : {&a, &b}) {
+    for (int i = 0; i < body->link; ++i) {
+      m += dq[static_cast<std::size_t>(i)] * body->arm[static_cast<std::size_t>(i)];
+    }
+    if (body->on_table) m += dtheta * body->table;
+  }
+  return m;
+}
+
+// ---- Clearance at a pose ----
+
+struct PairSample {
+  double distance = 0.0;  // m, a lower bound (d_high when beyond it), 0 when penetrating
+  bool penetrating = false;
+  Eigen::Vector3d p_W = Eigen::Vector3d::Zero();  // midpoint of the witness points, world
+};
+using PoseCheck = std::vector<PairSample>;
+
+PoseCheck checkPose(collision::ClearanceEvaluator& evaluator, const Pose& pose) {
+  const collision::ClearanceResult r =
+      evaluator.evaluate(pose.theta, pose.q, {.bounded = true, .witness_points = true});
+  PoseCheck out(r.pairs.size());
+  for (std::size_t i = 0; i < r.pairs.size(); ++i) {
+    const collision::PairClearance& p = r.pairs[i];
+    out[i].penetrating = p.penetrating;
+    // Anything but a non-negative number proves nothing: read it as contact.
+    out[i].distance = p.penetrating || !(p.distance >= 0.0) ? 0.0 : p.distance;
+    if (!p.beyond_bound) out[i].p_W = 0.5 * (p.p_a + p.p_b);
+  }
+  return out;
+}
+
+struct Closest {
+  double distance = kInf;
+  int pair = -1;
+  double t = 0.0;
+
+  void update(const PoseCheck& check, double t_pose) {
+    for (std::size_t i = 0; i < check.size(); ++i) {
+      if (check[i].distance < distance) {
+        distance = check[i].distance;
+        pair = static_cast<int>(i);
+        t = t_pose;
+      }
+    }
+  }
+  void update(const Closest& other) {
+    if (other.distance < distance) *this = other;
+  }
+};
+
+// Where a pair could not be proven apart: [t0, t1], with the smaller distance of its two ends
+// and the contact point at t0.
+struct Span {
+  int pair = -1;
+  double t0 = 0.0, t1 = 0.0;
+  double distance = 0.0;
+  Eigen::Vector3d p_W = Eigen::Vector3d::Zero();
+};
+
+struct IntervalOutcome {
+  std::vector<Span> spans;
+  std::size_t evaluations = 0;  // bisection poses
+  Closest closest;              // over the bisection poses
+  double proven = kInf;         // lowest certified distance of the proven (sub)intervals
+};
+
+// Conservative advancement by bisection over one densified interval (see validateTrajectory()).
+class IntervalRefiner {
+ public:
+  IntervalRefiner(const std::vector<collision::PairInfo>& pairs,
+                  const std::vector<BodyBound>& bodies,
+                  double resolution,
+                  collision::ClearanceEvaluator& evaluator,
+                  IntervalOutcome& out)
+      : pairs_(pairs), bodies_(bodies), resolution_(resolution), evaluator_(evaluator), out_(out) {}
+
+  void refine(const Pose& a,
+              const PoseCheck& ca,
+              const Pose& b,
+              const PoseCheck& cb,
+              const std::vector<int>& open,
+              int depth) {
+    std::array<double, kNumJoints> dq{};
+    for (int j = 0; j < kNumJoints; ++j)
+      dq[static_cast<std::size_t>(j)] = std::abs(b.q(j) - a.q(j));
+    const double dtheta = std::abs(b.theta - a.theta);
+    std::vector<int> unresolved;
+    for (const int p : open) {
+      const auto i = static_cast<std::size_t>(p);
+      const PairSample &sa = ca[i], &sb = cb[i];
+      if (sa.penetrating && sb.penetrating) {  // in contact at both ends: one run, not refined
+        out_.spans.push_back({p, a.t, b.t, 0.0, sa.p_W});
+        continue;
+      }
+      const collision::PairInfo& pair = pairs_[i];
+      const double L = pairMotion(bodies_[static_cast<std::size_t>(pair.a)],
+                                  bodies_[static_cast<std::size_t>(pair.b)], dq, dtheta);
+      // d(s) ≥ max(d_a − L·s, d_b − L·(1 − s)) ≥ (d_a + d_b − L)/2 over the interval.
+      const double certified = 0.5 * (sa.distance + sb.distance - 2.0 * kDistanceSlack - L);
+      if (certified > 0.0) {
+        out_.proven = std::min(out_.proven, certified);
+        continue;
+      }
+      if (L <= resolution_ || depth >= kMaxDepth) {
+        out_.spans.push_back({p, a.t, b.t, std::min(sa.distance, sb.distance), sa.p_W});
+        continue;
+      }
+      unresolved.push_back(p);
+    }
+    if (unresolved.empty()) return;
+    const Pose m = midpoint(a, b);
+    const PoseCheck cm = checkPose(evaluator_, m);
+    ++out_.evaluations;
+    out_.closest.update(cm, m.t);
+    refine(a, ca, m, cm, unresolved, depth + 1);
+    refine(m, cm, b, cb, unresolved, depth + 1);
+  }
+
+ private:
+  const std::vector<collision::PairInfo>& pairs_;
+  const std::vector<BodyBound>& bodies_;
+  double resolution_;
+  collision::ClearanceEvaluator& evaluator_;
+  IntervalOutcome& out_;
+};
+
+// ---- Runs of violations ----
+
+// Merges consecutive violating items of one kind and subject into one Violation.
+class RunCollector {
+ public:
+  RunCollector(std::vector<Violation>& out, Violation::Kind kind, std::string what, int joint)
+      : out_(out) {
+    base_.kind = kind;
+    base_.what = std::move(what);
+    base_.joint = joint;
+  }
+  RunCollector(const RunCollector&) = delete;
+  RunCollector& operator=(const RunCollector&) = delete;
+  ~RunCollector() { pass(); }
+
+  // A violating item over [t0, t1], its value at t; `excess` (> 0) orders the items by severity.
+  void add(double t0, double t1, double t, double value, double limit, double excess) {
+    if (!open_ || excess > excess_) {
+      if (!open_) {
+        run_ = base_;
+        run_.t_start = t0;
+      }
+      run_.t = t;
+      run_.value = value;
+      run_.limit = limit;
+      excess_ = excess;
+      open_ = true;
+    }
+    run_.t_end = t1;
+  }
+  // A good item: ends the run.
+  void pass() {
+    if (open_) out_.push_back(run_);
+    open_ = false;
+  }
+
+ private:
+  std::vector<Violation>& out_;
+  Violation base_;
+  Violation run_;
+  double excess_ = 0.0;
+  bool open_ = false;
+};
+
+std::string jointName(int j) { return "joint " + std::to_string(j + 1); }
+
+void checkLimitsAndSpeeds(const kinematics::CellModel& cell,
+                          const kinematics::Trajectory& original,
+                          const std::vector<kinematics::TrajectorySample>& s,
+                          double omega_max,
+                          double alpha_max,
+                          double tol,
+                          std::vector<Violation>& out) {
+  const std::size_t n = s.size();
+  for (int j = 0; j < kNumJoints; ++j) {
+    const kinematics::DhJoint& joint = cell.robot.joint(j);
+    {
+      RunCollector run(out, Violation::Kind::kJointLimit, jointName(j), j);
+      for (std::size_t k = 0; k < n; ++k) {
+        const double q = s[k].q(j);
+        if (q > joint.max + kLimitTolerance) {
+          run.add(s[k].t, s[k].t, s[k].t, q, joint.max, q - joint.max);
+        } else if (q < joint.min - kLimitTolerance) {
+          run.add(s[k].t, s[k].t, s[k].t, q, joint.min, joint.min - q);
+        } else {
+          run.pass();
+        }
+      }
+    }
+    if (joint.max_speed > 0.0) {
+      RunCollector run(out, Violation::Kind::kJointSpeed, jointName(j), j);
+      for (std::size_t k = 0; k + 1 < n; ++k) {
+        const double v = std::abs(s[k + 1].q(j) - s[k].q(j)) / (s[k + 1].t - s[k].t);
+        if (v > joint.max_speed * (1.0 + tol)) {
+          run.add(s[k].t, s[k + 1].t, s[k].t, v, joint.max_speed, v - joint.max_speed);
+        } else {
+          run.pass();
+        }
+      }
+    }
+  }
+  if (!cell.table.continuous) {
+    RunCollector run(out, Violation::Kind::kTableLimit, "table", -1);
+    for (std::size_t k = 0; k < n; ++k) {
+      const double th = s[k].theta;
+      if (th > cell.table.max + kLimitTolerance) {
+        run.add(s[k].t, s[k].t, s[k].t, th, cell.table.max, th - cell.table.max);
+      } else if (th < cell.table.min - kLimitTolerance) {
+        run.add(s[k].t, s[k].t, s[k].t, th, cell.table.min, cell.table.min - th);
+      } else {
+        run.pass();
+      }
+    }
+  }
+  if (omega_max > 0.0) {
+    RunCollector run(out, Violation::Kind::kTableSpeed, "table", -1);
+    for (std::size_t k = 0; k + 1 < n; ++k) {
+      const double w = std::abs(s[k + 1].theta - s[k].theta) / (s[k + 1].t - s[k].t);
+      if (w > omega_max * (1.0 + tol)) {
+        run.add(s[k].t, s[k + 1].t, s[k].t, w, omega_max, w - omega_max);
+      } else {
+        run.pass();
+      }
+    }
+  }
+  if (alpha_max > 0.0) {
+    // On the original samples (planner::evaluate()'s finite differences), reported at the knot
+    // t_k−1 where the piecewise-linear motion changes speed.
+    const auto& o = original.samples;
+    RunCollector run(out, Violation::Kind::kTableAccel, "table", -1);
+    for (std::size_t k = 2; k < o.size(); ++k) {
+      const double dt1 = o[k].t - o[k - 1].t, dt0 = o[k - 1].t - o[k - 2].t;
+      const double w1 = (o[k].theta - o[k - 1].theta) / dt1;
+      const double w0 = (o[k - 1].theta - o[k - 2].theta) / dt0;
+      const double a = std::abs(w1 - w0) / (0.5 * (dt0 + dt1));
+      const double t = o[k - 1].t;
+      if (a > alpha_max * (1.0 + tol)) {
+        run.add(t, t, t, a, alpha_max, a - alpha_max);
+      } else {
+        run.pass();
+      }
+    }
+  }
+}
+
+std::string pairName(const collision::Scene& scene, int pair) {
+  const collision::PairInfo& p = scene.pairs()[static_cast<std::size_t>(pair)];
+  return scene.bodies()[static_cast<std::size_t>(p.a)].name + " - " +
+         scene.bodies()[static_cast<std::size_t>(p.b)].name;
+}
+
+}  // namespace
+
+std::string kindName(Violation::Kind kind) {
+  switch (kind) {
+    case Violation::Kind::kJointLimit:
+      return "joint limit";
+    case Violation::Kind::kTableLimit:
+      return "table limit";
+    case Violation::Kind::kJointSpeed:
+      return "joint speed";
+    case Violation::Kind::kTableSpeed:
+      return "table speed";
+    case Violation::Kind::kTableAccel:
+      return "table acceleration";
+    case Violation::Kind::kCollision:
+      return "collision";
+  }
+  return "unknown";
+}
+
+std::string describe(const Violation& v) {
+  const std::string when =
+      fmt::format("{}: {} at t = {:.3f} s ({:.3f} … {:.3f} s): ", kindName(v.kind), v.what, v.t,
+                  v.t_start, v.t_end);
+  const char* cmp = v.value > v.limit ? ">" : "<";
+  switch (v.kind) {
+    case Violation::Kind::kJointLimit:
+    case Violation::Kind::kTableLimit:
+      return when + fmt::format("{:.2f} deg {} {:.2f} deg", toDeg(v.value), cmp, toDeg(v.limit));
+    case Violation::Kind::kJointSpeed:
+    case Violation::Kind::kTableSpeed:
+      return when + fmt::format("{:.2f} deg/s > {:.2f} deg/s", toDeg(v.value), toDeg(v.limit));
+    case Violation::Kind::kTableAccel:
+      return when + fmt::format("{:.2f} deg/s² > {:.2f} deg/s²", toDeg(v.value), toDeg(v.limit));
+    case Violation::Kind::kCollision:
+      return when + fmt::format("distance {:.3f} mm, contact at ({:.1f}, {:.1f}, {:.1f}) mm",
+                                toMm(v.value), toMm(v.p_W.x()), toMm(v.p_W.y()), toMm(v.p_W.z()));
+  }
+  return when;
+}
+
+kinematics::Trajectory densify(const kinematics::Trajectory& trajectory, double dt) {
+  if (!(dt > 0.0) || !std::isfinite(dt)) {
+    throw std::invalid_argument(
+        fmt::format("densify: sample step {} s: expected a positive finite number", dt));
+  }
+  const auto& in = trajectory.samples;
+  std::vector<std::size_t> steps(in.empty() ? 0 : in.size() - 1);
+  std::size_t total = in.size();
+  for (std::size_t k = 0; k < steps.size(); ++k) {
+    const double span = in[k + 1].t - in[k].t;
+    if (!(span > 0.0) || !std::isfinite(span)) {
+      throw std::invalid_argument(fmt::format(
+          "densify: sample {} at t = {} s does not follow t = {} s: expected strictly increasing "
+          "times",
+          k + 1, in[k + 1].t, in[k].t));
+    }
+    // A ratio within 1e-9 of a whole number is that number (no sliver step from rounding).
+    const double n = std::max(1.0, std::ceil(span / dt - 1e-9));
+    if (n > static_cast<double>(kMaxSamples)) {
+      throw std::invalid_argument("densify: more than 1e8 samples: step too small");
+    }
+    steps[k] = static_cast<std::size_t>(n);
+    total += steps[k] - 1;
+    if (total > kMaxSamples) {
+      throw std::invalid_argument("densify: more than 1e8 samples: step too small");
+    }
+  }
+  kinematics::Trajectory out;
+  out.samples.reserve(total);
+  for (std::size_t k = 0; k < in.size(); ++k) {
+    out.samples.push_back(in[k]);
+    if (k + 1 == in.size()) break;
+    const kinematics::TrajectorySample &a = in[k], &b = in[k + 1];
+    const Eigen::Quaterniond qa(a.X_PS.linear()), qb(b.X_PS.linear());
+    for (std::size_t i = 1; i < steps[k]; ++i) {
+      const double s = static_cast<double>(i) / static_cast<double>(steps[k]);
+      kinematics::TrajectorySample x;
+      x.t = a.t + s * (b.t - a.t);
+      x.theta = a.theta + s * (b.theta - a.theta);
+      x.q = a.q + s * (b.q - a.q);
+      x.f = std::numeric_limits<double>::quiet_NaN();
+      x.scanning = a.scanning && b.scanning;
+      x.X_PS.linear() = qa.slerp(s, qb).toRotationMatrix();
+      x.X_PS.translation() =
+          a.X_PS.translation() + s * (b.X_PS.translation() - a.X_PS.translation());
+      out.samples.push_back(std::move(x));
+    }
+  }
+  return out;
+}
+
+ValidationReport validateTrajectory(const collision::Scene& scene,
+                                    const kinematics::Trajectory& trajectory,
+                                    const ValidationSettings& settings) {
+  const auto start = std::chrono::steady_clock::now();
+  if (trajectory.samples.empty()) {
+    throw std::invalid_argument("validateTrajectory: the trajectory has no samples");
+  }
+  if (!(settings.collision_resolution > 0.0) || !std::isfinite(settings.collision_resolution)) {
+    throw std::invalid_argument(fmt::format(
+        "validateTrajectory: collision_resolution {} m: expected a positive finite number",
+        settings.collision_resolution));
+  }
+  if (!(settings.speed_tolerance >= 0.0) || !std::isfinite(settings.speed_tolerance)) {
+    throw std::invalid_argument(
+        fmt::format("validateTrajectory: speed_tolerance {}: expected a non-negative finite number",
+                    settings.speed_tolerance));
+  }
+  for (const auto& s : trajectory.samples) {
+    if (!std::isfinite(s.t) || !std::isfinite(s.theta) || !s.q.allFinite()) {
+      throw std::invalid_argument(
+          fmt::format("validateTrajectory: sample at t = {} s is not finite", s.t));
+    }
+  }
+  const kinematics::CellModel& cell = scene.cell();
+  const kinematics::Trajectory dense = densify(trajectory, settings.sample_dt);
+  const auto& samples = dense.samples;
+  const std::size_t n = samples.size();
+
+  ValidationReport report;
+  report.samples = n;
+  checkLimitsAndSpeeds(cell, trajectory, samples,
+                       settings.table_omega_max.value_or(cell.table.max_speed),
+                       settings.table_alpha_max.value_or(cell.table.max_accel),
+                       settings.speed_tolerance, report.violations);
+
+  // Clearance at every densified pose, then conservative advancement over every interval.
+  const std::vector<BodyBound> bodies = bodyBounds(scene);
+  const auto& pairs = scene.pairs();
+  std::vector<Pose> poses(n);
+  for (std::size_t k = 0; k < n; ++k) poses[k] = {samples[k].t, samples[k].theta, samples[k].q};
+  tbb::enumerable_thread_specific<collision::ClearanceEvaluator> evaluators(
+      [&] { return collision::ClearanceEvaluator(scene); });
+  std::vector<PoseCheck> checks(n);
+  tbb::parallel_for(std::size_t{0}, n,
+                    [&](std::size_t k) { checks[k] = checkPose(evaluators.local(), poses[k]); });
+  std::vector<int> all_pairs(pairs.size());
+  std::iota(all_pairs.begin(), all_pairs.end(), 0);
+  std::vector<IntervalOutcome> intervals(n - 1);
+  tbb::parallel_for(std::size_t{0}, n - 1, [&](std::size_t k) {
+    IntervalRefiner refiner(pairs, bodies, settings.collision_resolution, evaluators.local(),
+                            intervals[k]);
+    refiner.refine(poses[k], checks[k], poses[k + 1], checks[k + 1], all_pairs, 0);
+  });
+
+  // Gather in time order (independent of how the work was split).
+  Closest closest;
+  double proven = kInf;
+  std::vector<std::vector<Span>> spans(pairs.size());
+  report.poses_checked = n;
+  for (std::size_t k = 0; k < n; ++k) {
+    closest.update(checks[k], poses[k].t);
+    for (std::size_t p = 0; p < pairs.size(); ++p) {
+      if (checks[k][p].penetrating) {
+        spans[p].push_back({static_cast<int>(p), poses[k].t, poses[k].t, 0.0, checks[k][p].p_W});
+      }
+    }
+    if (k + 1 == n) break;
+    const IntervalOutcome& o = intervals[k];
+    report.poses_checked += o.evaluations;
+    closest.update(o.closest);
+    proven = std::min(proven, o.proven);
+    for (const Span& s : o.spans) spans[static_cast<std::size_t>(s.pair)].push_back(s);
+  }
+  if (n == 1) {
+    for (const PairSample& s : checks[0]) proven = std::min(proven, s.distance - kDistanceSlack);
+  }
+  bool collided = false;
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    std::vector<Span>& list = spans[p];
+    if (list.empty()) continue;
+    collided = true;
+    std::sort(list.begin(), list.end(), [](const Span& x, const Span& y) {
+      return std::tie(x.t0, x.t1) < std::tie(y.t0, y.t1);
+    });
+    const auto emit = [&](const Violation& v) { report.violations.push_back(v); };
+    Violation run;
+    bool open = false;
+    for (const Span& s : list) {
+      if (open && s.t0 <= run.t_end) {
+        run.t_end = std::max(run.t_end, s.t1);
+        run.value = std::min(run.value, s.distance);
+        continue;
+      }
+      if (open) emit(run);
+      run = Violation{};
+      run.kind = Violation::Kind::kCollision;
+      run.what = pairName(scene, static_cast<int>(p));
+      run.pair = static_cast<int>(p);
+      run.t = run.t_start = s.t0;
+      run.t_end = s.t1;
+      run.value = s.distance;
+      run.limit = settings.collision_resolution;
+      run.p_W = s.p_W;
+      open = true;
+    }
+    if (open) emit(run);
+  }
+
+  std::stable_sort(report.violations.begin(), report.violations.end(),
+                   [](const Violation& a, const Violation& b) {
+                     return std::tie(a.t_start, a.kind, a.what) <
+                            std::tie(b.t_start, b.kind, b.what);
+                   });
+  for (const Violation& v : report.violations) {
+    if (v.kind == Violation::Kind::kCollision) {
+      report.first_collision = v;
+      break;
+    }
+  }
+  report.valid = report.violations.empty();
+  if (closest.pair >= 0) {
+    report.min_distance = closest.distance;
+    report.min_distance_pair = pairName(scene, closest.pair);
+    report.min_distance_t = closest.t;
+  } else {
+    report.min_distance = kInf;
+  }
+  if (pairs.empty()) {
+    report.proven_clearance = kInf;
+  } else {
+    report.proven_clearance = collided ? 0.0 : std::max(0.0, proven);
+  }
+  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return report;
+}
+
+}  // namespace scanplan::planner
