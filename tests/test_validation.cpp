@@ -524,3 +524,24 @@ TEST(Validate, ReportDoesNotDependOnTheThreadCount) {
 }
 
 }  // namespace
+#include <fstream>
+#include <sstream>
+namespace {
+TEST(TmpTiming, DemoCsv) {
+  std::ifstream f("/tmp/valdemo/trajectory.csv");
+  std::stringstream ss; ss << f.rdbuf();
+  const Trajectory tr = kinematics::parseTrajectoryCsv(ss.str(), "t.csv");
+  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo.yaml");
+  const kinematics::CellModel cell = cli::buildCell(job);
+  const collision::Scene scene(cell, cli::clearanceConfig(job));
+  for (int threads : {1, 2}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+    for (double dt : {0.01, 0.001}) {
+      for (int rep = 0; rep < 2; ++rep) {
+      const ValidationReport r = planner::validateTrajectory(scene, tr, {.sample_dt = dt});
+      std::printf("threads %d dt %.3f: %zu samples, %zu checked, %.3f s, valid %d, min %.2f mm (%s), proven %.2f mm%s\n", threads, dt, r.samples, r.poses_checked, r.seconds, r.valid, toMm(r.min_distance), r.min_distance_pair.c_str(), toMm(r.proven_clearance), listed(r).c_str());
+      }
+    }
+  }
+}
+}
