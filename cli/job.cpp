@@ -181,6 +181,7 @@ void describeDp(A& a, DpSpec& s) {
 
 template <class A>
 void describeOmpl(A& a, OmplSpec& s) {
+  a.field("max_iterations", s.max_iterations, Expect::range(1, 100000000));
   a.field("time_limit_s", s.time_limit_s, Expect{0.01, 3600.0, false, false, {}});
   a.field("seed", s.seed, Expect::range(0, 2147483647));
 }

@@ -119,7 +119,8 @@ struct DpSpec {
 
 /// `planner.ompl`: the OMPL search.
 struct OmplSpec {
-  double time_limit_s = 2.0;
+  int max_iterations = 10000;  ///< ends the search: the same seed gives the same path
+  double time_limit_s = 10.0;  ///< backstop per branch (a run it ends is not reproducible)
   int seed = 1;
 };
 

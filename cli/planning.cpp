@@ -47,6 +47,7 @@ planner::PlanResult planOne(const std::string& method,
   if (method == "ompl") {
     planner::OmplSettings os;
     os.time_limit_s = job.planner.ompl.time_limit_s;
+    os.max_iterations = static_cast<std::size_t>(job.planner.ompl.max_iterations);
     os.seed = static_cast<std::uint32_t>(job.planner.ompl.seed);
     return planner::planOmpl(map, branch, settings, continuous, os, start);
   }

@@ -35,8 +35,8 @@ namespace {
 namespace ob = ompl::base;
 namespace oc = ompl::control;
 
-// The components of a compound state, in this order.
-enum Component : unsigned { kTheta = 0, kOmega = 1, kTime = 2, kCost = 3 };
+// The components of the compound state, in this order.
+constexpr unsigned kTheta = 0, kOmega = 1, kTime = 2, kCost = 3;
 
 // Everything a step, a validity check and the goal need; outlives the OMPL objects using it.
 struct Problem {
@@ -45,7 +45,6 @@ struct Problem {
   std::size_t branch = 0;
   PlannerSettings settings;
   bool continuous = true;
-  std::size_t nt = 0;
 
   double f(double theta, std::size_t k) const noexcept {
     return detail::mapValue(*map, grid, branch, theta, k, continuous);
@@ -207,7 +206,7 @@ PlanResult planOmpl(const ConfigMap& map,
   const std::size_t na = map.angles.size(), nt = map.times.size();
   const double dt = g.dt;
 
-  const Problem problem{&map, g, branch, settings, continuous, nt};
+  const Problem problem{&map, g, branch, settings, continuous};
   PlanResult result;
   result.branch = branch;
   const auto finish = [&]() {

@@ -47,9 +47,9 @@ struct OmplSettings {
 /// ±α_max·Δt), θ' = θ + ω'·Δt, k' = k + 1 — except the first sample from k = 0, where
 /// ω' = u·ω_max (evaluate() bounds no speed change into sample 1). So ω and α are exactly
 /// evaluate()'s finite differences, and holding a control reaches and keeps a constant speed
-/// (standing still included), which a held acceleration would not. Valid: |ω| ≤ ω_max and f(θ, k) >
-/// 0 (mapValue()). Goal: k = the last time sample. Cost of a motion: the J terms of its samples
-/// (including −ln f of the start sample), so the OMPL path cost is J.
+/// (standing still included), which a held acceleration would not. Valid: |ω| ≤ ω_max and
+/// f(θ, k) > 0 (mapValue()). Goal: k = the last time sample. Cost of a motion: the J terms of its
+/// samples (including −ln f of the start sample), so the OMPL path cost is J.
 ///
 /// Starts: `start_theta` (rad) when given, else `starts` grid angles of the first column with
 /// f > 0 (several start states of one problem). A time column with f = 0 everywhere (or a
@@ -59,13 +59,14 @@ struct OmplSettings {
 /// unwrapped, first = the start) evaluate() calls feasible; `terms` = evaluate() of it. Otherwise
 /// kNoPath, `theta` empty, `reason` naming the first time sample not reached; `approximate` says
 /// OMPL ended with only an approximate solution (the furthest sample it reached is in `reason`),
-/// `detail` the planner, iterations and tree size.
+/// `detail` (always) the planner, OMPL's status, solve time and iterations.
 ///
 /// Determinism: OMPL draws every seed from one process-wide generator, so calls are serialised
 /// (a process-wide mutex) and the generator is reseeded with `seed` before anything is built.
 /// With `max_iterations` ending the search the result repeats exactly, in one process or across
-/// processes; OMPL used elsewhere in the process at the same time would break that. OMPL's
-/// console output is silenced during the call (the log level is restored afterwards).
+/// processes; OMPL used elsewhere in the process at the same time would break that. The planner
+/// itself is single-threaded. OMPL's console output is silenced during the call (the log level
+/// is restored afterwards).
 PlanResult planOmpl(const ConfigMap& map,
                     std::size_t branch,
                     const PlannerSettings& settings,

@@ -12,12 +12,14 @@ namespace scanplan::planner {
 /// Budget and tolerances of refinePath(). The defaults refine a 1000-sample path in well under
 /// a second; the evaluation budget, not the clock, is meant to stop a run (see time_limit_s).
 struct RefineSettings {
-  /// Objective evaluations over all augmented-Lagrangian rounds (each costs O(N)). >= 1.
-  int max_evaluations = 20000;
+  /// Objective evaluations over the whole run (each costs O(N)), a hard cap. >= 1. A
+  /// 1000-sample path typically needs 200–1000.
+  int max_evaluations = 10000;
   /// s, wall-clock backstop (0: none). A run it stops depends on the machine's speed, so it is
   /// not reproducible; `stop_reason` says when that happened.
   double time_limit_s = 5.0;
-  /// Relative change of the merit function, and of θ, that ends one L-BFGS run.
+  /// Relative change of the merit function, and of the (preconditioned) variables, that ends one
+  /// L-BFGS run.
   double ftol_rel = 1e-12;
   double xtol_rel = 1e-12;
   /// Constraint violation that ends the augmented-Lagrangian rounds, relative to ω_max, α_max
@@ -47,14 +49,15 @@ struct RefineResult {
 ///
 /// Method: each θ_k is boxed to the run of consecutive grid angles with f > 0 (at time t_k) that
 /// holds the input's θ_k, so f > 0 holds inside and the path keeps its way between the forbidden
-/// regions (refinement is local). The speed and acceleration bounds and the boxes, each tightened
-/// by 1e-6 relative, are sparse linear inequality constraints handled by an augmented Lagrangian
-/// (Powell–Hestenes–Rockafellar) that costs O(N) per evaluation. Each round minimises it with
-/// NLopt's LD_LBFGS in preconditioned variables y, θ = θ_round + L⁻ᵀy, with L the banded Cholesky
-/// factor of the merit's Hessian at θ_round (pentadiagonal: −ln f is diagonal in θ, the ω and α
-/// terms are first and second differences), then updates the multipliers and, when the violation
-/// did not shrink enough, the penalty. −ln f is piecewise smooth in θ (kinks at grid angles);
-/// its one-sided derivative is used there.
+/// regions (refinement is local). The speed and acceleration bounds (tightened by 1e-6 relative,
+/// but never below the input's own value) and the boxes are sparse linear inequality constraints
+/// handled by an augmented Lagrangian (Powell–Hestenes–Rockafellar) that costs O(N) per
+/// evaluation. A round minimises it for fixed multipliers with NLopt's LD_LBFGS in preconditioned
+/// variables y, θ = θ₀ + L⁻ᵀy, L the banded Cholesky factor of the merit's Hessian at θ₀
+/// (pentadiagonal: −ln f is diagonal in θ, the ω and α terms are first and second differences),
+/// rebuilt every 25 evaluations; then the multipliers are updated and, when the violation did not
+/// shrink enough, the penalty. f is piecewise linear in θ; its corners at grid angles are rounded
+/// (C¹) over ±0.1, then ±0.01, then ±0.001 grid steps, each stage warm-started from the last.
 ///
 /// Guarantees: the result is judged by evaluate() alone. It is returned only when evaluate()
 /// calls it feasible and its J is strictly lower than the input's; otherwise the input comes back

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <tuple>
 #include <type_traits>
@@ -49,8 +50,6 @@ Pose midpoint(const Pose& a, const Pose& b) {
   return {0.5 * (a.t + b.t), 0.5 * (a.theta + b.theta), 0.5 * (a.q + b.q)};
 }
 
-// ---- Motion bounds (conservative advancement) ----
-
 // A ball enclosing part of a body, in the frame the bound is computed in.
 struct Ball {
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
@@ -83,22 +82,15 @@ void appendBalls(const kinematics::Shape& shape,
       shape.geometry);
 }
 
-// How fast a body's points can move, per unit of joint / table motion.
-struct BodyBound {
-  int link = -1;          // on the arm's chain: 0 (base) … 6 (link 6 and the scanner); else -1
-  bool on_table = false;  // carried by the table
-  // m/rad: for joints i < link, a bound on the distance of the body's points from joint i's axis.
-  std::array<double, kNumJoints> arm{};
-  double table = 0.0;  // m/rad: the farthest point from the table axis
-};
-
 // A point p on link k (coordinates p_k in DH frame k) is moved by joint i < k (axis z of frame
 // i) at |q̇_i| times its distance from that axis. In frame i, p = Rz(θ_i)·((a_i, 0, d_i) +
 // Rx(α_i)·v) with v its coordinates in frame i + 1, so the distance is |xy((a_i,0,0) + Rx(α_i)v)|:
 // exact for i = k − 1 (v = p_k), and at most |a_i| + |v| ≤ |a_i| + Σ_{l=i+1}^{k−1} √(a_l² + d_l²)
 // + |p_k| for the joints further down the chain, whatever the configuration.
-BodyBound armBound(const kinematics::RobotModel& robot, int link, const std::vector<Ball>& balls) {
-  BodyBound b;
+detail::BodyBound armBound(const kinematics::RobotModel& robot,
+                           int link,
+                           const std::vector<Ball>& balls) {
+  detail::BodyBound b;
   b.link = link;
   double rho = 0.0;  // farthest point from the frame origin
   for (const Ball& ball : balls) rho = std::max(rho, ball.c.norm() + ball.r);
@@ -123,14 +115,19 @@ BodyBound armBound(const kinematics::RobotModel& robot, int link, const std::vec
 
 // A point p_R on the table top is at X_WA · Rz(θ) · E · p_R: its distance from the axis (z of
 // A) is |xy(E · p_R)| whatever θ.
-BodyBound tableBound(const kinematics::RotaryTableModel& table, const std::vector<Ball>& balls) {
-  BodyBound b;
+detail::BodyBound tableBound(const kinematics::RotaryTableModel& table,
+                             const std::vector<Ball>& balls) {
+  detail::BodyBound b;
   b.on_table = true;
   const Eigen::Isometry3d E = table.axisError();
   for (const Ball& ball : balls)
     b.table = std::max(b.table, (E * ball.c).head<2>().norm() + ball.r);
   return b;
 }
+
+}  // namespace
+
+namespace detail {
 
 std::vector<BodyBound> bodyBounds(const collision::Scene& scene) {
   const kinematics::CellModel& cell = scene.cell();
@@ -181,10 +178,8 @@ std::vector<BodyBound> bodyBounds(const collision::Scene& scene) {
   return out;
 }
 
-// How far any point of one body can move relative to the other over a linear motion by |Δq|
-// and |Δθ|: the distance between them is Lipschitz in the motion with this constant. Two bodies
-// on the arm's chain move relative to each other only through the joints between them; bodies
-// on different carriers add their motions.
+// Two bodies on the arm's chain move relative to each other only through the joints between
+// them; bodies on different carriers add their motions.
 double pairMotion(const BodyBound& a,
                   const BodyBound& b,
                   const std::array<double, kNumJoints>& dq,
@@ -206,10 +201,13 @@ double pairMotion(const BodyBound& a,
   return m;
 }
 
-// ---- Clearance at a pose ----
+}  // namespace detail
+
+namespace {
 
 struct PairSample {
   double distance = 0.0;  // m, a lower bound (d_high when beyond it), 0 when penetrating
+  bool beyond = false;    // only known to be at least d_high
   bool penetrating = false;
   Eigen::Vector3d p_W = Eigen::Vector3d::Zero();  // midpoint of the witness points, world
 };
@@ -222,6 +220,7 @@ PoseCheck checkPose(collision::ClearanceEvaluator& evaluator, const Pose& pose) 
   for (std::size_t i = 0; i < r.pairs.size(); ++i) {
     const collision::PairClearance& p = r.pairs[i];
     out[i].penetrating = p.penetrating;
+    out[i].beyond = p.beyond_bound;
     // Anything but a non-negative number proves nothing: read it as contact.
     out[i].distance = p.penetrating || !(p.distance >= 0.0) ? 0.0 : p.distance;
     if (!p.beyond_bound) out[i].p_W = 0.5 * (p.p_a + p.p_b);
@@ -236,7 +235,7 @@ struct Closest {
 
   void update(const PoseCheck& check, double t_pose) {
     for (std::size_t i = 0; i < check.size(); ++i) {
-      if (check[i].distance < distance) {
+      if (!check[i].beyond && check[i].distance < distance) {
         distance = check[i].distance;
         pair = static_cast<int>(i);
         t = t_pose;
@@ -268,7 +267,7 @@ struct IntervalOutcome {
 class IntervalRefiner {
  public:
   IntervalRefiner(const std::vector<collision::PairInfo>& pairs,
-                  const std::vector<BodyBound>& bodies,
+                  const std::vector<detail::BodyBound>& bodies,
                   double resolution,
                   collision::ClearanceEvaluator& evaluator,
                   IntervalOutcome& out)
@@ -293,10 +292,12 @@ class IntervalRefiner {
         continue;
       }
       const collision::PairInfo& pair = pairs_[i];
-      const double L = pairMotion(bodies_[static_cast<std::size_t>(pair.a)],
-                                  bodies_[static_cast<std::size_t>(pair.b)], dq, dtheta);
-      // d(s) ≥ max(d_a − L·s, d_b − L·(1 − s)) ≥ (d_a + d_b − L)/2 over the interval.
-      const double certified = 0.5 * (sa.distance + sb.distance - 2.0 * kDistanceSlack - L);
+      const double L = detail::pairMotion(bodies_[static_cast<std::size_t>(pair.a)],
+                                          bodies_[static_cast<std::size_t>(pair.b)], dq, dtheta);
+      // With true end distances δ ≥ d − s: δ(u) ≥ max(δ_a − L·u, δ_b − L·(1 − u)) over the
+      // interval (u ∈ [0, 1]), whose minimum is min(δ_a, δ_b, (δ_a + δ_b − L)/2).
+      const double da = sa.distance - kDistanceSlack, db = sb.distance - kDistanceSlack;
+      const double certified = std::min({da, db, 0.5 * (da + db - L)});
       if (certified > 0.0) {
         out_.proven = std::min(out_.proven, certified);
         continue;
@@ -318,55 +319,68 @@ class IntervalRefiner {
 
  private:
   const std::vector<collision::PairInfo>& pairs_;
-  const std::vector<BodyBound>& bodies_;
+  const std::vector<detail::BodyBound>& bodies_;
   double resolution_;
   collision::ClearanceEvaluator& evaluator_;
   IntervalOutcome& out_;
 };
 
-// ---- Runs of violations ----
-
-// Merges consecutive violating items of one kind and subject into one Violation.
-class RunCollector {
- public:
-  RunCollector(std::vector<Violation>& out, Violation::Kind kind, std::string what, int joint)
-      : out_(out) {
-    base_.kind = kind;
-    base_.what = std::move(what);
-    base_.joint = joint;
-  }
-  RunCollector(const RunCollector&) = delete;
-  RunCollector& operator=(const RunCollector&) = delete;
-  ~RunCollector() { pass(); }
-
-  // A violating item over [t0, t1], its value at t; `excess` (> 0) orders the items by severity.
-  void add(double t0, double t1, double t, double value, double limit, double excess) {
-    if (!open_ || excess > excess_) {
-      if (!open_) {
-        run_ = base_;
-        run_.t_start = t0;
-      }
-      run_.t = t;
-      run_.value = value;
-      run_.limit = limit;
-      excess_ = excess;
-      open_ = true;
-    }
-    run_.t_end = t1;
-  }
-  // A good item: ends the run.
-  void pass() {
-    if (open_) out_.push_back(run_);
-    open_ = false;
-  }
-
- private:
-  std::vector<Violation>& out_;
-  Violation base_;
-  Violation run_;
-  double excess_ = 0.0;
-  bool open_ = false;
+// One checked pose or interval that breaks a bound: over [t0, t1], `value` at t; `excess` (> 0)
+// orders the items of a run by severity.
+struct Breach {
+  double t0 = 0.0, t1 = 0.0, t = 0.0;
+  double value = 0.0, limit = 0.0, excess = 0.0;
 };
+
+// Runs of consecutive breaches (item(k) for k < count; nullopt: within bounds) become one
+// Violation each, with the worst breach's value and time.
+template <class Item>
+void collectRuns(std::vector<Violation>& out,
+                 Violation::Kind kind,
+                 const std::string& what,
+                 int joint,
+                 std::size_t count,
+                 const Item& item) {
+  std::optional<Violation> run;
+  double worst = 0.0;
+  for (std::size_t k = 0; k <= count; ++k) {
+    const std::optional<Breach> b = k < count ? item(k) : std::nullopt;
+    if (!b) {
+      if (run) out.push_back(std::move(*run));
+      run.reset();
+      continue;
+    }
+    if (!run) {
+      run = Violation{};
+      run->kind = kind;
+      run->what = what;
+      run->joint = joint;
+      run->t_start = b->t0;
+      worst = -1.0;
+    }
+    if (b->excess > worst) {
+      worst = b->excess;
+      run->t = b->t;
+      run->value = b->value;
+      run->limit = b->limit;
+    }
+    run->t_end = b->t1;
+  }
+}
+
+// A value against [min, max] at time t.
+std::optional<Breach> outside(double t, double value, double min, double max) {
+  if (value > max + kLimitTolerance) return Breach{t, t, t, value, max, value - max};
+  if (value < min - kLimitTolerance) return Breach{t, t, t, value, min, min - value};
+  return std::nullopt;
+}
+
+// A rate over [t0, t1] against its bound (with the relative tolerance), reported at t.
+std::optional<Breach> tooFast(
+    double t0, double t1, double t, double rate, double bound, double tol) {
+  if (rate > bound * (1.0 + tol)) return Breach{t0, t1, t, rate, bound, rate - bound};
+  return std::nullopt;
+}
 
 std::string jointName(int j) { return "joint " + std::to_string(j + 1); }
 
@@ -380,72 +394,39 @@ void checkLimitsAndSpeeds(const kinematics::CellModel& cell,
   const std::size_t n = s.size();
   for (int j = 0; j < kNumJoints; ++j) {
     const kinematics::DhJoint& joint = cell.robot.joint(j);
-    {
-      RunCollector run(out, Violation::Kind::kJointLimit, jointName(j), j);
-      for (std::size_t k = 0; k < n; ++k) {
-        const double q = s[k].q(j);
-        if (q > joint.max + kLimitTolerance) {
-          run.add(s[k].t, s[k].t, s[k].t, q, joint.max, q - joint.max);
-        } else if (q < joint.min - kLimitTolerance) {
-          run.add(s[k].t, s[k].t, s[k].t, q, joint.min, joint.min - q);
-        } else {
-          run.pass();
-        }
-      }
-    }
+    collectRuns(out, Violation::Kind::kJointLimit, jointName(j), j, n,
+                [&](std::size_t k) { return outside(s[k].t, s[k].q(j), joint.min, joint.max); });
     if (joint.max_speed > 0.0) {
-      RunCollector run(out, Violation::Kind::kJointSpeed, jointName(j), j);
-      for (std::size_t k = 0; k + 1 < n; ++k) {
+      collectRuns(out, Violation::Kind::kJointSpeed, jointName(j), j, n - 1, [&](std::size_t k) {
         const double v = std::abs(s[k + 1].q(j) - s[k].q(j)) / (s[k + 1].t - s[k].t);
-        if (v > joint.max_speed * (1.0 + tol)) {
-          run.add(s[k].t, s[k + 1].t, s[k].t, v, joint.max_speed, v - joint.max_speed);
-        } else {
-          run.pass();
-        }
-      }
+        return tooFast(s[k].t, s[k + 1].t, s[k].t, v, joint.max_speed, tol);
+      });
     }
   }
   if (!cell.table.continuous) {
-    RunCollector run(out, Violation::Kind::kTableLimit, "table", -1);
-    for (std::size_t k = 0; k < n; ++k) {
-      const double th = s[k].theta;
-      if (th > cell.table.max + kLimitTolerance) {
-        run.add(s[k].t, s[k].t, s[k].t, th, cell.table.max, th - cell.table.max);
-      } else if (th < cell.table.min - kLimitTolerance) {
-        run.add(s[k].t, s[k].t, s[k].t, th, cell.table.min, cell.table.min - th);
-      } else {
-        run.pass();
-      }
-    }
+    collectRuns(out, Violation::Kind::kTableLimit, "table", -1, n, [&](std::size_t k) {
+      return outside(s[k].t, s[k].theta, cell.table.min, cell.table.max);
+    });
   }
   if (omega_max > 0.0) {
-    RunCollector run(out, Violation::Kind::kTableSpeed, "table", -1);
-    for (std::size_t k = 0; k + 1 < n; ++k) {
+    collectRuns(out, Violation::Kind::kTableSpeed, "table", -1, n - 1, [&](std::size_t k) {
       const double w = std::abs(s[k + 1].theta - s[k].theta) / (s[k + 1].t - s[k].t);
-      if (w > omega_max * (1.0 + tol)) {
-        run.add(s[k].t, s[k + 1].t, s[k].t, w, omega_max, w - omega_max);
-      } else {
-        run.pass();
-      }
-    }
+      return tooFast(s[k].t, s[k + 1].t, s[k].t, w, omega_max, tol);
+    });
   }
-  if (alpha_max > 0.0) {
+  const auto& o = original.samples;
+  if (alpha_max > 0.0 && o.size() >= 3) {
     // On the original samples (planner::evaluate()'s finite differences), reported at the knot
     // t_k−1 where the piecewise-linear motion changes speed.
-    const auto& o = original.samples;
-    RunCollector run(out, Violation::Kind::kTableAccel, "table", -1);
-    for (std::size_t k = 2; k < o.size(); ++k) {
+    collectRuns(out, Violation::Kind::kTableAccel, "table", -1, o.size() - 2, [&](std::size_t i) {
+      const std::size_t k = i + 2;
       const double dt1 = o[k].t - o[k - 1].t, dt0 = o[k - 1].t - o[k - 2].t;
       const double w1 = (o[k].theta - o[k - 1].theta) / dt1;
       const double w0 = (o[k - 1].theta - o[k - 2].theta) / dt0;
       const double a = std::abs(w1 - w0) / (0.5 * (dt0 + dt1));
       const double t = o[k - 1].t;
-      if (a > alpha_max * (1.0 + tol)) {
-        run.add(t, t, t, a, alpha_max, a - alpha_max);
-      } else {
-        run.pass();
-      }
-    }
+      return tooFast(t, t, t, a, alpha_max, tol);
+    });
   }
 }
 
@@ -583,7 +564,7 @@ ValidationReport validateTrajectory(const collision::Scene& scene,
                        settings.speed_tolerance, report.violations);
 
   // Clearance at every densified pose, then conservative advancement over every interval.
-  const std::vector<BodyBound> bodies = bodyBounds(scene);
+  const std::vector<detail::BodyBound> bodies = detail::bodyBounds(scene);
   const auto& pairs = scene.pairs();
   std::vector<Pose> poses(n);
   for (std::size_t k = 0; k < n; ++k) poses[k] = {samples[k].t, samples[k].theta, samples[k].q};

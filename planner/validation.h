@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <optional>
 #include <string>
@@ -62,18 +63,18 @@ struct Violation {
 /// "collision".
 std::string kindName(Violation::Kind kind);
 /// One line in user units (s, deg, deg/s, deg/s², mm), e.g.
-/// "joint speed joint 6 at t = 1.200 s (1.200 … 1.400 s): 1146.0 deg/s > 600.0 deg/s".
+/// "joint speed: joint 6 at t = 0.200 s (0.200 … 0.600 s): 1145.92 deg/s > 600.00 deg/s".
 std::string describe(const Violation& violation);
 
 struct ValidationReport {
   bool valid = false;                        ///< no violation of any kind
   std::vector<Violation> violations;         ///< ordered by t_start, then kind, then what
   std::optional<Violation> first_collision;  ///< the collision run that starts first
-  /// m, the smallest pair distance at the checked poses (densified and bisection poses). Exact
-  /// below the pair's d_high; a pair beyond it counts as d_high (a lower bound). Infinite when
-  /// the scene has no pairs.
+  /// m, the smallest exact pair distance at the checked poses (densified and bisection poses):
+  /// pairs are measured exactly below their d_high only (as buildTrajectory's min_clearance), so
+  /// a pair that stays beyond it does not count. Infinite when no pair came that close.
   double min_distance = 0.0;
-  std::string min_distance_pair;  ///< "a - b"; empty when the scene has no pairs
+  std::string min_distance_pair;  ///< "a - b"; empty when min_distance is infinite
   double min_distance_t = 0.0;    ///< s
   /// m, a certified lower bound on every checked pair's distance over the whole continuous
   /// motion (the conservative-advancement certificate); 0 when a collision was found, infinite
@@ -106,18 +107,19 @@ kinematics::Trajectory densify(const kinematics::Trajectory& trajectory, double 
 ///   piecewise-linear motion changes speed in a step at each knot, so any acceleration computed
 ///   from the densified poses would only measure the densification step.
 /// - Collisions between every pair of Scene::pairs(), continuously: conservative advancement
-///   per densified interval. At a pose, ClearanceEvaluator (bounded) gives for each pair a lower
-///   bound d on its distance (exact below d_high, d_high beyond), trusted to within a slack
-///   s = 5·10⁻⁵ m for FCL's GJK tolerance. Over an interval, L bounds how far any point of one
-///   body can move relative to the other: Σ_j |Δq_j|·R_j over the joints between the two bodies
-///   (R_j bounds the body's distance from joint j's axis, from the DH chain and bounding balls
-///   of the link's shapes) plus |Δθ|·(the farthest point from the table axis) for a body the
-///   table carries. The distance is L-Lipschitz along the interval, so it stays above
-///   (d_a + d_b − 2s − L)/2, and the pair is proven clear when that is > 0. Otherwise the
-///   interval is bisected; an interval with both ends penetrating, or whose L is at most
+///   per densified interval. At a pose, ClearanceEvaluator (bounded) gives each pair's distance
+///   d (exact below d_high; d_high, a lower bound, beyond), trusted to within a slack
+///   s = 5·10⁻⁵ m for FCL's GJK tolerance: the pair is at least δ = d − s apart there. Over an
+///   interval, L bounds how far any point of one body can move relative to the other:
+///   Σ_j |Δq_j|·R_j over the joints between the two bodies (R_j bounds the body's distance from
+///   joint j's axis, from the DH chain and bounding balls of the link's shapes) plus
+///   |Δθ|·(the farthest point from the table axis) for a body the table carries. The distance is
+///   L-Lipschitz along the interval, so it stays above min(δ_a, δ_b, (δ_a + δ_b − L)/2): the
+///   pair is proven clear on the interval when that certificate is > 0. Otherwise the interval
+///   is bisected; an interval with both ends penetrating, or whose L is at most
 ///   collision_resolution and still unproven, is a collision span. A pair is never called clear
-///   without this proof. Spans of one pair that touch form one kCollision run: its start is
-///   the first contact (to within collision_resolution of motion) with the contact point there.
+///   without this proof. Spans of one pair that touch form one kCollision run: its start is the
+///   first contact (to within collision_resolution of motion) with the contact point there.
 ///   Limitation (FCL meshes are surfaces): a body that starts wholly inside a mesh is not seen.
 ///
 /// Violations of one kind and subject over consecutive poses / intervals are merged into one
@@ -128,5 +130,32 @@ kinematics::Trajectory densify(const kinematics::Trajectory& trajectory, double 
 ValidationReport validateTrajectory(const collision::Scene& scene,
                                     const kinematics::Trajectory& trajectory,
                                     const ValidationSettings& settings = {});
+
+namespace detail {
+
+/// validateTrajectory()'s motion bound for one body of a scene, per unit of joint / table
+/// motion (exposed for tests).
+struct BodyBound {
+  int link = -1;          ///< on the arm's chain: 0 (base) … 6 (link 6, scanner); else -1
+  bool on_table = false;  ///< carried by the table
+  /// m/rad, for joints i < link: a bound on the distance of the body's points from joint i's
+  /// axis over every configuration.
+  std::array<double, kinematics::kNumJoints> arm{};
+  double table = 0.0;  ///< m/rad: the farthest point of the body from the table axis
+};
+
+/// One BodyBound per Scene::bodies() entry (loads the meshes again to bound them).
+std::vector<BodyBound> bodyBounds(const collision::Scene& scene);
+
+/// m: a bound on how much the distance between bodies `a` and `b` can change while the joints
+/// and the table move linearly by |Δq| = dq (rad) and |Δθ| = dtheta (rad). For two bodies on the
+/// arm's chain it bounds the path of the far link's points in the near link's frame; otherwise
+/// the sum of both bodies' paths in the world (either bounds the change of the distance).
+double pairMotion(const BodyBound& a,
+                  const BodyBound& b,
+                  const std::array<double, kinematics::kNumJoints>& dq,
+                  double dtheta) noexcept;
+
+}  // namespace detail
 
 }  // namespace scanplan::planner

@@ -7,10 +7,10 @@
 
 #include <algorithm>
 #include <array>
-#include <cassert>
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <random>
 #include <stdexcept>
 #include <utility>
@@ -402,6 +402,15 @@ void ScanSimulator::Impl::profile(const ScanFrame& frame,
   for (std::size_t k = 0; k < n; ++k) s.best[k] = Hit{-1, 0, 0, setup.t_far[k]};
   castFan(setup, s);
 
+  // The hit triangles' planes are scattered over megabytes: ask for all of them first, so
+  // that the cache misses overlap instead of queueing one per ray.
+  for (std::size_t k = 0; k < n; ++k) {
+    const Hit& hit = s.best[k];
+    if (hit.slot < 0) continue;
+    const Group& g =
+        groups[static_cast<std::size_t>(s.active[static_cast<std::size_t>(hit.slot)].index)];
+    __builtin_prefetch(g.meshes[hit.mesh].planes.data() + hit.triangle);
+  }
   s.candidates.clear();
   for (std::size_t k = 0; k < n; ++k) {
     const Hit& hit = s.best[k];
@@ -460,7 +469,8 @@ void ScanSimulator::Impl::profile(const ScanFrame& frame,
   for (std::size_t i = 0; i < m; ++i) s.candidates[i].visible = s.seen[i] != 0;
 
   const bool noisy = settings.sigma_longitudinal > 0.0 || settings.sigma_orthogonal > 0.0;
-  std::mt19937_64 rng(mix(settings.seed ^ mix(index)));
+  std::optional<std::mt19937_64> rng;  // seeding costs ~300 words: only when noisy
+  if (noisy) rng.emplace(mix(settings.seed ^ mix(index)));
   const Eigen::Isometry3d X_PS = (cell.table.X_WR(frame.theta) * cell.part.X_RP).inverse() * X_WS;
   for (const Candidate& c : s.candidates) {
     if (!c.visible) {
@@ -479,7 +489,7 @@ void ScanSimulator::Impl::profile(const ScanFrame& frame,
       // its plane): d = (0, sin α, cos α), u = (0, cos α, −sin α).
       const Eigen::Vector3d& d = setup.directions[c.ray];
       const Eigen::Vector3d u(0.0, d.z(), -d.y());
-      const auto [g_l, g_o] = gaussianPair(rng);
+      const auto [g_l, g_o] = gaussianPair(*rng);
       const double e_l = settings.sigma_longitudinal * g_l;
       p_S += e_l * d + settings.sigma_orthogonal * g_o * u;
       p.range += e_l;
@@ -588,7 +598,12 @@ std::size_t ScanSimulator::triangleCount() const {
 SimulatedCloud ScanSimulator::simulate(const std::vector<ScanFrame>& frames,
                                        const LaserOptics& optics,
                                        const SimulationSettings& settings) const {
-  assert(settings.rays_per_profile >= 1);
+  // The job validates these; a caller that did not gets an exception, not garbage.
+  if (settings.rays_per_profile < 1 || !(settings.sigma_longitudinal >= 0.0) ||
+      !(settings.sigma_orthogonal >= 0.0)) {
+    throw std::invalid_argument(
+        "scanner simulation: expected rays_per_profile >= 1 and non-negative noise sigmas");
+  }
   RunSetup setup;
   setup.settings = &settings;
   setup.window = laserWindow(optics);

@@ -127,7 +127,8 @@ class ScanSimulator {
   ScanSimulator& operator=(const ScanSimulator&) = delete;
 
   /// One profile per frame; profile i is frames[i]. Precondition: the optics are valid
-  /// (LaserOptics) and settings.rays_per_profile ≥ 1.
+  /// (LaserOptics); throws std::invalid_argument unless settings.rays_per_profile ≥ 1 and the
+  /// sigmas are ≥ 0.
   SimulatedCloud simulate(const std::vector<ScanFrame>& frames,
                           const LaserOptics& optics,
                           const SimulationSettings& settings) const;

@@ -105,7 +105,7 @@ TEST_F(CliPlan, EveryPlannerFindsAnExecutablePathOnTheDemo) {
   for (const std::string method : {"ray", "dp", "ompl"}) {
     SCOPED_TRACE(method);
     fs::remove_all(out());
-    const Result run = plan({"--planner", method, "--set", "planner.ompl.time_limit_s=1"});
+    const Result run = plan({"--planner", method, "--set", "planner.ompl.max_iterations=3000"});
     ASSERT_EQ(run.exit_code, 0) << describe(run);
     EXPECT_EQ(report()["planner"]["method"].as<std::string>(), method);
     expectReachesTargets(
@@ -114,7 +114,7 @@ TEST_F(CliPlan, EveryPlannerFindsAnExecutablePathOnTheDemo) {
 }
 
 TEST_F(CliPlan, CompareRunsTheOtherPlannersOnTheChosenBranch) {
-  const Result run = plan({"--compare", "--set", "planner.ompl.time_limit_s=1"});
+  const Result run = plan({"--compare", "--set", "planner.ompl.max_iterations=3000"});
   ASSERT_EQ(run.exit_code, 0) << describe(run);
   const YAML::Node compare = report()["compare"];
   ASSERT_TRUE(compare.IsSequence());

@@ -98,8 +98,8 @@ OmplSettings capped(std::size_t iterations, std::uint32_t seed = 1) {
            << "OMPL below the DP optimum: " << ompl.terms.total << " < " << dp.terms.total;
   }
   if (!(ompl.terms.total <= factor * dp.terms.total)) {
-    return ::testing::AssertionFailure() << "OMPL J " << ompl.terms.total << " > " << factor
-                                         << " x DP J " << dp.terms.total;
+    return ::testing::AssertionFailure()
+           << "OMPL J " << ompl.terms.total << " > " << factor << " x DP J " << dp.terms.total;
   }
   return ::testing::AssertionSuccess();
 }
@@ -210,8 +210,7 @@ TEST(OmplPlanner, LimitedTableStaysWithinItsRange) {
 
 TEST(OmplPlanner, FixedStartIsHonouredOnEitherTable) {
   const PlannerSettings s;
-  const ConfigMap cont =
-      makeMap(72, 40, 0.1, true, [](std::size_t, std::size_t) { return 0.8f; });
+  const ConfigMap cont = makeMap(72, 40, 0.1, true, [](std::size_t, std::size_t) { return 0.8f; });
   // An unwrapped start beyond 2π stays as given (the path's first sample is the start).
   const double start = 2.0 * kPi + 1.234;
   const PlanResult r = planOmpl(cont, 0, s, true, capped(2500), start);
@@ -333,8 +332,9 @@ TEST(OmplPlanner, SolvedPathsAreFeasibleOnRandomMaps) {
     ++solved;
     EXPECT_TRUE(solvedAndFeasible(map, r, s, continuous));
     // OMPL moves off DP's grid, so the gap is recorded, not asserted.
-    if (dp.status == Status::kSolved) RecordProperty("gap_trial_" + std::to_string(trial),
-                   std::to_string(r.terms.total - dp.terms.total));
+    if (dp.status == Status::kSolved)
+      RecordProperty("gap_trial_" + std::to_string(trial),
+                     std::to_string(r.terms.total - dp.terms.total));
   }
   EXPECT_GE(solved, 3);
 }
@@ -389,77 +389,3 @@ TEST(OmplPlanner, RejectsBadSettings) {
 }
 
 }  // namespace
-
-// TEMPORARY tuning harness (to be removed)
-#include <cstdio>
-#include <cstdlib>
-#include "planner/ray_shooting.h"
-namespace {
-ConfigMap syntheticMap(std::size_t na, std::size_t nt, double dt, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  struct Bump { double theta, t, sigma_theta, sigma_t, height; };
-  const double t_end = static_cast<double>(nt - 1) * dt;
-  std::vector<Bump> bumps(40);
-  for (Bump& b : bumps) b = {2.0 * kPi * u(rng), t_end * u(rng), 0.2 + 0.6 * u(rng), 2.0 + 8.0 * u(rng), 0.3 + 0.7 * u(rng)};
-  ConfigMap map;
-  for (std::size_t i = 0; i < na; ++i) map.angles.push_back(2.0 * kPi * double(i) / double(na));
-  for (std::size_t k = 0; k < nt; ++k) map.times.push_back(double(k) * dt);
-  map.branches.resize(1);
-  map.f.resize(na * nt);
-  for (std::size_t a = 0; a < na; ++a) for (std::size_t k = 0; k < nt; ++k) {
-      double v = 0.05;
-      for (const Bump& b : bumps) {
-        const double d = std::remainder(map.angles[a] - b.theta, 2 * kPi) / b.sigma_theta;
-        const double e = (map.times[k] - b.t) / b.sigma_t;
-        v += b.height * std::exp(-0.5 * (d * d + e * e));
-      }
-      v = std::min(v, 1.0);
-      map.f[map.index(0, a, k)] = v < 0.2 ? 0.0f : static_cast<float>(v);
-  }
-  return map;
-}
-double envd(const char* n, double d) { const char* v = std::getenv(n); return v ? std::atof(v) : d; }
-TEST(OmplTune, DISABLED_Synthetic) {
-  const PlannerSettings s;
-  const unsigned seed = static_cast<unsigned>(envd("MAPSEED", 7));
-  const ConfigMap map = syntheticMap(360, static_cast<std::size_t>(envd("NT", 1000)), 0.1, seed);
-  if (envd("DP", 1) > 0) {
-    const PlanResult dp1 = planDp(map, 0, s, true);
-    const int sub = autoAngleSubdivisions(map, 0, s, true);
-    const PlanResult dp = planDpRefined(map, 0, s, true, sub);
-    const PlanResult ray = planRayShooting(map, 0, s, true, {});
-    if (dp.status != Status::kSolved) std::printf("dp reason: %s\nray reason: %s\n", dp.reason.c_str(), ray.reason.c_str());
-    std::printf("dp grid: %.3f s J %.4f | dp/%d: %.3f s J %.4f | ray %.3f s J %.4f\n", dp1.seconds, dp1.terms.total, sub, dp.seconds, dp.terms.total, ray.seconds, ray.status == Status::kSolved ? ray.terms.total : -1.0);
-  }
-  OmplSettings os;
-  os.time_limit_s = envd("TL", 1.0);
-  os.max_steps = static_cast<int>(envd("MS", os.max_steps));
-  os.selection_radius = envd("SR", os.selection_radius);
-  os.pruning_radius = envd("PR", os.pruning_radius);
-  os.goal_bias = envd("GB", os.goal_bias);
-  os.stop_probability = envd("P0", os.stop_probability);
-  os.planner = envd("RRT", 0) > 0 ? OmplPlanner::kRrt : OmplPlanner::kSst;
-  os.stop_at_first_solution = envd("FIRST", 0) > 0;
-  os.starts = static_cast<std::size_t>(envd("ST", 36));
-  os.max_iterations = static_cast<std::size_t>(envd("IT", 0));
-  for (std::uint32_t sd = 1; sd <= static_cast<std::uint32_t>(envd("SEEDS", 1)); ++sd) {
-    os.seed = sd;
-    const PlanResult r = planOmpl(map, 0, s, true, os);
-    std::printf("ompl seed %u: %.3f s %s J %.4f | %s | %s\n", sd, r.seconds, r.status == Status::kSolved ? "solved" : "NOPATH", r.terms.total, r.detail.c_str(), r.reason.c_str());
-  }
-}
-}  // namespace
-namespace {
-TEST(OmplTune, DISABLED_Corridor) {
-  const ConfigMap map = makeMap(72, 60, 0.1, true, [](std::size_t a, std::size_t) {
-    return a == 32 ? 0.9f : (a == 31 || a == 33) ? 0.5f : 0.0f;
-  });
-  OmplSettings os = capped(static_cast<std::size_t>(envd("IT", 20000)));
-  os.selection_radius = envd("SR", 40); os.pruning_radius = envd("PR", 10); os.max_steps = static_cast<int>(envd("MS", 50));
-  const PlanResult r = planOmpl(map, 0, {}, true, os);
-  std::printf("J %.4f  %s\n", r.terms.total, r.detail.c_str());
-  for (std::size_t k = 0; k < r.theta.size(); k += 5) std::printf("%.4f ", (r.theta[k] - map.angles[32]) / map.angles[1]);
-  std::printf("\n");
-}
-}

@@ -12,6 +12,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "planner/config_map.h"
@@ -58,8 +59,10 @@ ConfigMap makeMap(std::size_t na,
 double wrapDist(double a, double c) { return std::remainder(a - c, 2.0 * kPi); }
 
 // f from a sum of seeded Gaussian bumps; with `cut`, zero where it falls below 0.25 (forbidden
-// regions). Limited tables span [-1, -1 + 2π·(na − 1)/na].
-ConfigMap randomMap(std::mt19937& rng, std::size_t na, std::size_t nt, bool continuous, bool cut) {
+// regions), and `holes` elliptic forbidden blobs (up to ±0.3 rad × ±1.8 s) the path has to pass.
+// Limited tables span [-1, -1 + 2π·(na − 1)/na].
+ConfigMap randomMap(
+    std::mt19937& rng, std::size_t na, std::size_t nt, bool continuous, bool cut, int holes = 0) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   struct Bump {
     double theta, t, sigma_theta, sigma_t, height;
@@ -68,6 +71,13 @@ ConfigMap randomMap(std::mt19937& rng, std::size_t na, std::size_t nt, bool cont
   const double t_end = static_cast<double>(nt - 1) * 0.1;
   for (Bump& b : bumps) {
     b = {2.0 * kPi * u(rng), t_end * u(rng), 0.3 + 0.7 * u(rng), 0.5 + 2.0 * u(rng), u(rng)};
+  }
+  struct Hole {
+    double theta, t, half_theta, half_t;
+  };
+  std::vector<Hole> hole(static_cast<std::size_t>(holes));
+  for (Hole& h : hole) {
+    h = {2.0 * kPi * u(rng), t_end * u(rng), 0.05 + 0.25 * u(rng), 0.3 + 1.5 * u(rng)};
   }
   const double step = 2.0 * kPi / static_cast<double>(na);
   return makeMap(
@@ -82,6 +92,10 @@ ConfigMap randomMap(std::mt19937& rng, std::size_t na, std::size_t nt, bool cont
           v += b.height * std::exp(-0.5 * (d * d + e * e));
         }
         v = std::min(v, 1.0);
+        for (const Hole& h : hole) {
+          const double d = wrapDist(th, h.theta) / h.half_theta, e = (t - h.t) / h.half_t;
+          if (d * d + e * e < 1.0) return 0.0f;
+        }
         return cut && v < 0.25 ? 0.0f : static_cast<float>(v);
       },
       step);
@@ -352,30 +366,40 @@ TEST(RefineProblem, ContinuationBelowTheFloorIsSmoothAndFinite) {
 }
 
 TEST(Refine, NeverRaisesJOnDpAndRayShootingPaths) {
+  // Seeded random maps, continuous and limited, with forbidden regions (low f cut to 0, and
+  // blobs) that the paths run along and between.
   std::mt19937 rng(20240605);
   PlannerSettings s;
   s.alpha_max = 2.0;  // A ≥ 1 on the 2° grid, so DP can change speed
-  int refined = 0, improved = 0;
-  for (int trial = 0; trial < 8; ++trial) {
+  int refined = 0, moving = 0, improved = 0;
+  for (int trial = 0; trial < 24; ++trial) {
     const bool continuous = trial % 3 != 2;
-    const ConfigMap map = randomMap(rng, 180, 80, continuous, true);
+    const ConfigMap map = randomMap(rng, 180, 80, continuous, trial % 2 == 0, trial % 4);
     SCOPED_TRACE("trial " + std::to_string(trial));
     for (const PlanResult& plan :
          {planDp(map, 0, s, continuous), planRayShooting(map, 0, s, continuous, {})}) {
       if (plan.status != Status::kSolved) continue;
       const RefineResult r = refinePath(map, 0, plan.theta, s, continuous);
       ++refined;
-      improved += r.improved ? 1 : 0;
+      // A moving grid path or greedy ray always leaves room in continuous θ. A path standing on a
+      // grid angle that is a peak of f (a kink of −ln f) at (nearly) every sample is (nearly)
+      // optimal: what is left, a move of ~1e-5 rad at the odd sample, gains ~1e-6 s, below the
+      // model's rounded corners (measured over 400 trials: every unimproved path stood still).
+      if (r.before.max_abs_omega > 0.0) {
+        ++moving;
+        improved += r.improved ? 1 : 0;
+      }
       EXPECT_TRUE(keepsGuarantees(map, plan.theta, r, s, continuous)) << r.stop_reason;
       EXPECT_LE(r.evaluations, RefineSettings{}.max_evaluations);
       EXPECT_FALSE(r.algorithm.empty());
       EXPECT_FALSE(r.stop_reason.empty());
     }
   }
-  EXPECT_GE(refined, 8);
-  // Grid paths and greedy rays leave room: refinement should almost always find some.
-  EXPECT_GE(improved, refined - 1);
+  EXPECT_GE(refined, 40);
+  EXPECT_GE(moving, 12);
+  EXPECT_EQ(improved, moving);
   RecordProperty("refined", refined);
+  RecordProperty("moving", moving);
   RecordProperty("improved", improved);
 }
 
@@ -408,22 +432,26 @@ TEST(Refine, NeverRaisesJOnRandomFeasiblePaths) {
 }
 
 TEST(Refine, OptimalPathComesBackUnchanged) {
-  // f peaks at grid angle 40 in every column and falls linearly by 0.05 per grid step on both
-  // sides, so −ln f has a strict local minimum (a kink) there. The path standing at angle 40
-  // has ω = α = 0 and the least −ln f at every sample: no path scores lower, so refinement must
-  // hand back the input itself.
-  const ConfigMap map = makeMap(90, 100, 0.1, true, [](std::size_t a, std::size_t) {
-    const double d = std::abs(static_cast<double>(a) - 40.0);
-    return static_cast<float>(std::max(0.9 - 0.05 * d, 0.05));
-  });
-  const PlannerSettings s;
-  const std::vector<double> theta(100, map.angles[40]);
-  const RefineResult r = refinePath(map, 0, theta, s, true);
-  EXPECT_TRUE(keepsGuarantees(map, theta, r, s, true));
-  EXPECT_FALSE(r.improved) << r.stop_reason;
-  EXPECT_EQ(r.theta, theta);
-  EXPECT_EQ(r.after.total, r.before.total);
-  EXPECT_NE(r.stop_reason.find("input kept"), std::string::npos) << r.stop_reason;
+  // f peaks at grid angle 40 in every column and falls linearly on both sides (by `left` per grid
+  // step below, `right` above), so −ln f has a strict local minimum, a kink, there. The path
+  // standing at angle 40 has ω = α = 0 and the least −ln f at every sample: no path scores lower
+  // (in continuous θ too, f being linear between grid angles), so refinement must hand back the
+  // input itself, also when the kink is lopsided and the rounded model's minimum sits a little
+  // off the grid angle.
+  for (const auto& [left, right] : {std::pair{0.05, 0.05}, std::pair{0.1, 0.01}}) {
+    const ConfigMap map = makeMap(90, 100, 0.1, true, [&](std::size_t a, std::size_t) {
+      const double d = static_cast<double>(a) - 40.0;
+      return static_cast<float>(std::max(0.9 - (d < 0 ? -left * d : right * d), 0.05));
+    });
+    const PlannerSettings s;
+    const std::vector<double> theta(100, map.angles[40]);
+    const RefineResult r = refinePath(map, 0, theta, s, true);
+    EXPECT_TRUE(keepsGuarantees(map, theta, r, s, true));
+    EXPECT_FALSE(r.improved) << r.stop_reason;
+    EXPECT_EQ(r.theta, theta);
+    EXPECT_EQ(r.after.total, r.before.total);
+    EXPECT_NE(r.stop_reason.find("input kept"), std::string::npos) << r.stop_reason;
+  }
 }
 
 TEST(Refine, SmoothsTheGridStepsOfADpPathInAShiftingCorridor) {
@@ -477,6 +505,23 @@ TEST(Refine, StaysInTheOpenRunAroundEachSample) {
     EXPECT_GE(th, map.angles[20] - 1e-12);
     EXPECT_LE(th, map.angles[23] + 1e-12);
   }
+}
+
+TEST(Refine, ThousandSampleDpPathWithForbiddenBlobs) {
+  // The size the planners produce (360 angles × 1000 samples), forbidden blobs included.
+  std::mt19937 rng(41);
+  const ConfigMap map = randomMap(rng, 360, 1000, true, false, 100);
+  PlannerSettings s;
+  s.alpha_max = 2.0;
+  const PlanResult dp = planDp(map, 0, s, true);
+  ASSERT_EQ(dp.status, Status::kSolved) << dp.reason;
+  const RefineResult r = refinePath(map, 0, dp.theta, s, true);
+  EXPECT_TRUE(keepsGuarantees(map, dp.theta, r, s, true)) << r.stop_reason;
+  EXPECT_TRUE(r.improved) << r.stop_reason;
+  EXPECT_LT(r.evaluations, RefineSettings{}.max_evaluations) << r.stop_reason;
+  RecordProperty("J_dp", std::to_string(r.before.total));
+  RecordProperty("J_refined", std::to_string(r.after.total));
+  RecordProperty("evaluations", r.evaluations);
 }
 
 TEST(Refine, DeterministicBitForBit) {

@@ -18,6 +18,7 @@
 #include <random>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -368,6 +369,24 @@ TEST(ScannerSimulation, PointsOutsideTheDepthWindowAreAbsent) {
   EXPECT_EQ(cloud.stats.outside_window, static_cast<std::size_t>(too_near + beside));
   EXPECT_EQ(cloud.stats.hits, expected.size() + static_cast<std::size_t>(too_near + beside));
   EXPECT_EQ(cloud.stats.points, expected.size());
+}
+
+TEST(ScannerSimulation, RejectsSettingsTheJobWouldNotAllow) {
+  const CellModel cell = planeCell();
+  const scanner::ScanSimulator sim(cell, planeMesh(0.3, 1));
+  const ScanFrame frame = planeFrame(cell, 0.16);
+  SimulationSettings settings;
+  settings.rays_per_profile = 0;
+  EXPECT_THROW(run(sim, {frame}, settings), std::invalid_argument);
+  settings.rays_per_profile = 10;
+  settings.sigma_orthogonal = -1e-6;
+  EXPECT_THROW(run(sim, {frame}, settings), std::invalid_argument);
+  settings.sigma_orthogonal = 0.0;
+  EXPECT_EQ(run(sim, {}, settings).points.size(), 0u);
+  settings.rays_per_profile = 1;  // the central ray only
+  const SimulatedCloud one = run(sim, {frame}, settings);
+  ASSERT_EQ(one.points.size(), 1u);
+  EXPECT_NEAR(one.points[0].range, 0.16, 1e-9);
 }
 
 // ---------------------------------------------------------------------------------------------
