@@ -78,6 +78,37 @@ int run(int argc, char** argv) {
                      "Smooth the path with NLopt (planner.refine.enabled: true does the same)");
   addOverrides(*plan_cmd, plan.overrides);
 
+  VerifyOptions validate;
+  auto* validate_cmd = app.add_subcommand(
+      "validate",
+      "Prove a trajectory executable: joint limits, joint and table speeds, table acceleration, "
+      "and collisions along the whole motion (continuous check); exit 3 when it is not");
+  validate_cmd->add_option("job", validate.job_file, "Job file (YAML)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  validate_cmd
+      ->add_option("-t,--trajectory", validate.trajectory_file,
+                   "Trajectory CSV (trajectory.csv from plan, or written by hand)")
+      ->required();
+  validate_cmd->add_option("-o,--out", validate.out_dir, "Also write OUT/validation.json");
+  validate_cmd->add_flag("--json", validate.json, "Print JSON instead of text");
+  addOverrides(*validate_cmd, validate.overrides);
+
+  VerifyOptions simulate;
+  auto* simulate_cmd = app.add_subcommand(
+      "simulate",
+      "Simulate the laser scanner along a trajectory: the expected point cloud and how much of "
+      "the part it covers");
+  simulate_cmd->add_option("job", simulate.job_file, "Job file (YAML)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  simulate_cmd
+      ->add_option("-t,--trajectory", simulate.trajectory_file,
+                   "Trajectory CSV (trajectory.csv from plan, or written by hand)")
+      ->required();
+  simulate_cmd->add_option("-o,--out", simulate.out_dir, "Output folder (created)")->required();
+  addOverrides(*simulate_cmd, simulate.overrides);
+
   PlanOptions path;
   auto* path_cmd = app.add_subcommand(
       "path", "Generate the scan path: OUT/path.csv and a picture of it around the part");
@@ -150,7 +181,7 @@ int run(int argc, char** argv) {
         app.get_subcommands([&](CLI::App* sub) { return argc > 1 && sub->check_name(argv[1]); });
     if (argc > 1 && argv[1][0] != '-' && known.empty()) {
       message = std::string("unknown command '") + argv[1] +
-                "'; expected one of: plan, path, map, check, job, fk, ik";
+                "'; expected one of: plan, validate, simulate, path, map, check, job, fk, ik";
     }
     std::fprintf(
         stderr,
@@ -171,6 +202,8 @@ int run(int argc, char** argv) {
   try {
     ExitCode code = ExitCode::kOk;
     if (plan_cmd->parsed()) code = runPlan(plan);
+    if (validate_cmd->parsed()) code = runValidate(validate);
+    if (simulate_cmd->parsed()) code = runSimulate(simulate);
     if (show_cmd->parsed()) code = runJobShow(show_file);
     if (check_cmd->parsed()) code = runCheck(check);
     if (path_cmd->parsed()) code = runPath(path);

@@ -80,6 +80,17 @@ void writeFigure(const std::filesystem::path& dir,
                  const std::string& title,
                  std::vector<std::pair<Rgb, std::string>> legend);
 
+/// `validate` / `simulate`: a job and a trajectory file.
+struct VerifyOptions {
+  std::filesystem::path job_file;
+  std::filesystem::path trajectory_file;
+  std::filesystem::path out_dir;  ///< validate: optional
+  std::vector<std::string> overrides;
+  bool json = false;
+};
+ExitCode runValidate(const VerifyOptions& options);
+ExitCode runSimulate(const VerifyOptions& options);
+
 struct CheckOptions {
   std::filesystem::path job_file;
   double table_deg = 0.0;

@@ -13,6 +13,7 @@
 #include "cli/format.h"
 #include "cli/image_io.h"
 #include "cli/planning.h"
+#include "cli/verify.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"
 #include "kinematics/units.h"
@@ -92,7 +93,7 @@ void writeTerms(JsonWriter& json, const planner::ObjectiveTerms& t) {
 }
 
 struct PlanTimes {
-  double path = 0, map = 0, plan = 0, trajectory = 0, total = 0;
+  double path = 0, map = 0, plan = 0, trajectory = 0, validation = 0, simulation = 0, total = 0;
 };
 
 std::string reportJson(const JobSpec& job,
@@ -100,6 +101,8 @@ std::string reportJson(const JobSpec& job,
                        const planner::ConfigMap& map,
                        const PlanningOutcome& planning,
                        const planner::TrajectoryBuild* trajectory,
+                       const planner::ValidationReport* validation,
+                       const SimulationRun* simulation,
                        const std::string& status,
                        const std::string& reason,
                        const PlanTimes& times) {
@@ -199,11 +202,15 @@ std::string reportJson(const JobSpec& job,
     }
     json.endArray();
   }
+  if (validation) writeValidationJson(json, "validation", *validation);
+  if (simulation) writeSimulationJson(json, "simulation", *simulation);
   json.beginObject("times_s");
   json.value("path", times.path);
   json.value("map", times.map);
   json.value("plan", times.plan);
   json.value("trajectory", times.trajectory);
+  json.value("validation", times.validation);
+  json.value("simulation", times.simulation);
   json.value("total", times.total);
   json.endObject();
   json.beginObject("map");
@@ -290,12 +297,14 @@ ExitCode runPlan(const PlanOptions& options) {
   const PlanningOutcome planning =
       planJob(run.map, job, method, options.compare, options.refine, check);
   times.plan = since(t0) - times.trajectory;
+  const planner::ValidationReport* validated = nullptr;
+  const SimulationRun* simulated = nullptr;
   const auto finish = [&](const std::string& status, const std::string& reason,
                           const planner::TrajectoryBuild* trajectory) {
     times.total = since(start);
-    writeFileAtomically(
-        options.out_dir / "report.json",
-        reportJson(job, cell, run.map, planning, trajectory, status, reason, times));
+    writeFileAtomically(options.out_dir / "report.json",
+                        reportJson(job, cell, run.map, planning, trajectory, validated, simulated,
+                                   status, reason, times));
   };
   if (!planning.solved()) {
     finish(planning.rejected.empty() ? "no_path" : "no_executable_path",
@@ -317,8 +326,40 @@ ExitCode runPlan(const PlanOptions& options) {
     labels.push_back(fmt::format("{} J {:.2f} s", o.method, o.result.terms.total));
   }
   writePathFigure(options.out_dir, run.map, branch, drawn, labels);
+
+  // Prove the motion between the samples too, before anything goes to a robot.
+  std::optional<planner::ValidationReport> validation;
+  if (job.validation.enabled) {
+    t0 = Clock::now();
+    validation = planner::validateTrajectory(scene, trajectory.trajectory, validationSettings(job));
+    times.validation = since(t0);
+    validated = &*validation;
+  }
+  if (validation && !validation->valid) {
+    // Kept for inspection under a name no robot-side tool picks up as the plan.
+    writeFileAtomically(options.out_dir / "trajectory_invalid.csv",
+                        kinematics::trajectoryToCsv(trajectory.trajectory));
+    finish("invalid_trajectory",
+           fmt::format("validation found {} violation(s)", validation->violations.size()),
+           &trajectory);
+    summary += validationSummary(*validation);
+    summary += fmt::format(
+        "plan       NOT VALID: the planned motion breaks the limits above; wrote {} "
+        "(trajectory_invalid.csv, report.json)\n",
+        options.out_dir.string());
+    std::fputs(summary.c_str(), stdout);
+    return ExitCode::kNoPlan;
+  }
   writeFileAtomically(options.out_dir / "trajectory.csv",
                       kinematics::trajectoryToCsv(trajectory.trajectory));
+  std::optional<SimulationRun> simulation;
+  if (job.simulation.enabled) {
+    t0 = Clock::now();
+    simulation = simulateTrajectory(job, cell, part.mesh, trajectory.trajectory);
+    writeSimulationOutputs(options.out_dir, job, part.mesh, *simulation);
+    times.simulation = since(t0);
+    simulated = &*simulation;
+  }
   finish("planned", "", &trajectory);
 
   const planner::ObjectiveTerms& t = planning.terms;
@@ -354,12 +395,17 @@ ExitCode runPlan(const PlanOptions& options) {
       std::isfinite(trajectory.min_clearance)
           ? fmt::format("{:.1f} mm", toMm(trajectory.min_clearance))
           : std::string("beyond every d_high"));
+  if (validation) summary += validationSummary(*validation);
+  if (simulation) summary += simulationSummary(*simulation);
   summary += fmt::format(
-      "wrote      {}: job.yaml, trajectory.csv, report.json, configmap_path.png/.svg, {}\n",
-      options.out_dir.string(), kMapFilesNote);
-  summary +=
-      fmt::format("time       {:.1f} s (path {:.1f}, map {:.1f}, plan {:.1f}, trajectory {:.1f})\n",
-                  since(start), times.path, times.map, times.plan, times.trajectory);
+      "wrote      {}: job.yaml, trajectory.csv, report.json, configmap_path.png/.svg, {}{}\n",
+      options.out_dir.string(), simulation ? "cloud.ply, coverage.ply, cloud.png, " : "",
+      kMapFilesNote);
+  summary += fmt::format(
+      "time       {:.1f} s (path {:.1f}, map {:.1f}, plan {:.1f}, trajectory {:.1f}, validation "
+      "{:.1f}, simulation {:.1f})\n",
+      since(start), times.path, times.map, times.plan, times.trajectory, times.validation,
+      times.simulation);
   std::fputs(summary.c_str(), stdout);
   return ExitCode::kOk;
 }

@@ -450,8 +450,10 @@ RgbImage renderScene(const RenderRequest& request) {
       if (out.back().allFinite()) box.extend(out.back());
     }
   };
+  std::vector<Eigen::Vector3d> dots;
   project(request.vertices, mesh);
   project(request.polyline, path);
+  project(request.dots, dots);
   for (const auto& marker : request.markers) {
     const Eigen::Vector3d p = request.R_view * marker.first;
     if (p.allFinite()) box.extend(p);
@@ -466,6 +468,7 @@ RgbImage renderScene(const RenderRequest& request) {
   };
   for (auto& p : mesh) p = toScreen(p);
   for (auto& p : path) p = toScreen(p);
+  for (auto& p : dots) p = toScreen(p);
 
   // Mesh: edge functions at pixel centres, z-buffer keeps the largest depth (nearest).
   std::vector<double> depth(pixelCount(w, h), -std::numeric_limits<double>::infinity());
@@ -483,7 +486,13 @@ RgbImage renderScene(const RenderRequest& request) {
                                        .cwiseProduct(Eigen::Vector3d(1, -1, scale))
                                        .cross((c - a).cwiseProduct(Eigen::Vector3d(1, -1, scale)));
     const double lambert = std::abs(normal.z()) / normal.norm();
-    const std::uint8_t v = toByte(235.0 * (0.2 + 0.8 * lambert));
+    const double shade = 0.2 + 0.8 * lambert;
+    const std::size_t ti = static_cast<std::size_t>(&t - request.triangles.data());
+    const Rgb fill = ti < request.triangle_colours.size()
+                         ? Rgb{toByte(shade * request.triangle_colours[ti].r),
+                               toByte(shade * request.triangle_colours[ti].g),
+                               toByte(shade * request.triangle_colours[ti].b)}
+                         : Rgb{toByte(235.0 * shade), toByte(235.0 * shade), toByte(235.0 * shade)};
     const int x0 = std::max(0, static_cast<int>(std::floor(std::min({a.x(), b.x(), c.x()}))));
     const int x1 = std::min(w - 1, static_cast<int>(std::ceil(std::max({a.x(), b.x(), c.x()}))));
     const int y0 = std::max(0, static_cast<int>(std::floor(std::min({a.y(), b.y(), c.y()}))));
@@ -498,10 +507,23 @@ RgbImage renderScene(const RenderRequest& request) {
         double& zbuf = depth[pixelIndex(w, x, y)];
         if (z > zbuf) {
           zbuf = z;
-          image.set(x, y, {v, v, v});
+          image.set(x, y, fill);
         }
       }
     }
+  }
+
+  // Dots: 1 px, the nearest wins; a mesh surface in front hides them.
+  const double dot_tolerance = 1e-3 * size.norm();
+  for (std::size_t i = 0; i < dots.size(); ++i) {
+    const Eigen::Vector3d& p = dots[i];
+    if (!p.allFinite()) continue;
+    const int x = static_cast<int>(std::floor(p.x())), y = static_cast<int>(std::floor(p.y()));
+    if (x < 0 || y < 0 || x >= w || y >= h) continue;
+    double& zbuf = depth[pixelIndex(w, x, y)];
+    if (p.z() + dot_tolerance < zbuf) continue;
+    zbuf = std::max(zbuf, p.z());
+    image.set(x, y, i < request.dot_colours.size() ? request.dot_colours[i] : Rgb{});
   }
 
   // Path: 2 px wide, stamped every half pixel; behind the mesh in a lighter tint.

@@ -94,6 +94,11 @@ struct RenderRequest {
   /// Mesh in any frame (same frame as the polyline and markers); any length unit.
   std::vector<Eigen::Vector3d> vertices;
   std::vector<Eigen::Vector3i> triangles;
+  /// Optional per-triangle colours (else grey), shaded like the grey.
+  std::vector<Rgb> triangle_colours;
+  /// Points drawn 1 px, nearest first per pixel, hidden by the mesh in front of them.
+  std::vector<Eigen::Vector3d> dots;
+  std::vector<Rgb> dot_colours;  ///< one per dot (else black)
   /// Drawn 2 px wide on top of the mesh; lighter where the mesh hides it.
   std::vector<Eigen::Vector3d> polyline;
   Rgb polyline_colour{0, 114, 178};

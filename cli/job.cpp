@@ -80,10 +80,38 @@ void describeOptics(A& a, OpticsSpec& s) {
 }
 
 template <class A>
+void describeNoise(A& a, NoiseSpec& s) {
+  a.field("longitudinal_mm", s.longitudinal_mm, Expect::range(0.0, 100.0));
+  a.field("orthogonal_mm", s.orthogonal_mm, Expect::range(0.0, 100.0));
+  a.field("seed", s.seed, Expect::range(0, 2147483647));
+}
+
+inline const std::vector<std::string> kCameraRules = {"positive", "negative", "both", "either"};
+
+template <class A>
 void describeScanner(A& a, ScannerSpec& s) {
   a.section("mount", s.mount);
   a.list("body", s.body, 0, 64);
   a.section("optics", s.optics);
+  a.field("frame_rate_hz", s.frame_rate_hz, Expect{0.1, 100000.0, false, false, {}});
+  a.field("rays_per_profile", s.rays_per_profile, Expect::range(1, 100000));
+  a.field("cameras", s.cameras, Expect::oneOf(kCameraRules));
+  a.section("noise", s.noise);
+}
+
+template <class A>
+void describeValidation(A& a, ValidationSpec& s) {
+  a.field("enabled", s.enabled);
+  a.field("collision_resolution_mm", s.collision_resolution_mm,
+          Expect{0.001, 100.0, false, false, {}});
+}
+
+template <class A>
+void describeSimulation(A& a, SimulationSpec& s) {
+  a.field("enabled", s.enabled);
+  a.field("extra_eccentricity_mm", s.extra_eccentricity_mm, Expect::range(-1000.0, 1000.0));
+  a.field("extra_tilt_deg", s.extra_tilt_deg, Expect::range(-10.0, 10.0));
+  a.field("coverage_min_points", s.coverage_min_points, Expect::range(1, 1000000));
 }
 
 inline const std::vector<std::string> kPathTypes = {"ring", "raster", "waypoints", "file"};
@@ -332,6 +360,8 @@ void describeJob(A& a, JobSpec& s) {
   a.section("scan", s.scan);
   a.section("map", s.map);
   a.section("planner", s.planner);
+  a.section("validation", s.validation);
+  a.section("simulation", s.simulation);
 }
 
 }  // namespace
@@ -372,6 +402,12 @@ void describe(YamlOut& a, OmplSpec& s) { describeOmpl(a, s); }
 void describe(YamlIn& a, RefineSpec& s) { describeRefine(a, s); }
 void describe(YamlOut& a, RefineSpec& s) { describeRefine(a, s); }
 void describe(YamlIn& a, PlannerSpec& s) { describePlanner(a, s); }
+void describe(YamlIn& a, NoiseSpec& s) { describeNoise(a, s); }
+void describe(YamlOut& a, NoiseSpec& s) { describeNoise(a, s); }
+void describe(YamlIn& a, ValidationSpec& s) { describeValidation(a, s); }
+void describe(YamlOut& a, ValidationSpec& s) { describeValidation(a, s); }
+void describe(YamlIn& a, SimulationSpec& s) { describeSimulation(a, s); }
+void describe(YamlOut& a, SimulationSpec& s) { describeSimulation(a, s); }
 void describe(YamlOut& a, PlannerSpec& s) { describePlanner(a, s); }
 void describe(YamlOut& a, MapSpec& s) { describeMap(a, s); }
 

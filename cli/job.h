@@ -49,11 +49,40 @@ struct OpticsSpec {
   double gamma_deg = 10.0;
 };
 
-/// `scanner`: the laser frame on the flange (X_FS), the housing's shapes in that frame, optics.
+/// `scanner.noise`: Gaussian measurement noise of the simulated scanner (DESIGN.md §6).
+struct NoiseSpec {
+  double longitudinal_mm = 0.0;  ///< σ_l, along the laser ray
+  double orthogonal_mm = 0.0;    ///< σ_o, across it in the laser plane
+  int seed = 1;
+};
+
+/// `scanner`: the laser frame on the flange (X_FS), the housing's shapes in that frame, optics,
+/// and how it acquires (frame rate, fan, cameras, noise).
 struct ScannerSpec {
   PoseSpec mount{{0.0, 0.0, 100.0}, {0.0, 0.0, 0.0}};
   std::vector<ShapeSpec> body;
   OpticsSpec optics;
+  double frame_rate_hz = 100.0;      ///< profiles per second (also the validation step)
+  int rays_per_profile = 200;        ///< laser fan rays per profile
+  std::string cameras = "positive";  ///< positive | negative | both | either
+  NoiseSpec noise;
+};
+
+/// `validation`: the check of the planned motion before it goes to the robot.
+struct ValidationSpec {
+  bool enabled = true;                   ///< `plan` validates the trajectory
+  double collision_resolution_mm = 0.1;  ///< motion resolution of the continuous collision check
+};
+
+/// `simulation`: the scanner simulation along the planned motion.
+struct SimulationSpec {
+  bool enabled = true;  ///< `plan` simulates the scan
+  /// The real table's calibration error on top of the planner's model (`table.eccentricity_mm`,
+  /// `table.tilt_deg`): the part is posed on the erroneous table, the points are mapped with the
+  /// model, as on the real cell.
+  std::array<double, 2> extra_eccentricity_mm{};
+  std::array<double, 2> extra_tilt_deg{};
+  int coverage_min_points = 1;  ///< points on a triangle for it to count as covered
 };
 
 /// `scan.paths[].points[]`.
@@ -210,6 +239,8 @@ struct JobSpec {
   ScanSpec scan;
   MapSpec map;
   PlannerSpec planner;
+  ValidationSpec validation;
+  SimulationSpec simulation;
   std::filesystem::path source;  ///< the job file itself
 };
 

@@ -112,8 +112,8 @@ PlannerOutcome runPlanner(const std::string& method,
     planner::PlanResult& r = out.branches[b];
     r.branch = b;
     if (const auto k = blockedColumn(map, b)) {
-      r.reason = fmt::format("f = 0 at every table angle at time sample {} (t = {:.2f} s): {}",
-                             *k, map.times[*k], columnLimits(map, b, *k));
+      r.reason = fmt::format("f = 0 at every table angle at time sample {} (t = {:.2f} s): {}", *k,
+                             map.times[*k], columnLimits(map, b, *k));
     } else {
       r = planOne(method, map, b, job);
     }

@@ -472,6 +472,7 @@ void ScanSimulator::Impl::profile(const ScanFrame& frame,
   std::optional<std::mt19937_64> rng;  // seeding costs ~300 words: only when noisy
   if (noisy) rng.emplace(mix(settings.seed ^ mix(index)));
   const Eigen::Isometry3d X_PS = (cell.table.X_WR(frame.theta) * cell.part.X_RP).inverse() * X_WS;
+  out.reserve(static_cast<std::size_t>(std::count(s.seen.begin(), s.seen.end(), 1)));
   for (const Candidate& c : s.candidates) {
     if (!c.visible) {
       ++stats.occluded;

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <numbers>
 #include <optional>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -165,7 +166,7 @@ int main(int argc, char** argv) {
   const scanner::LaserOptics optics = cli::laserOptics(job);
 
   const std::filesystem::path bunny_file =
-      std::filesystem::path("../shared/data/meshes/stlmodels_bunny.bin.stl");
+      std::filesystem::path(SCANPLAN_SHARED_DATA_DIR) / "meshes/stlmodels_bunny.bin.stl";
   kinematics::TriangleMesh part;
   std::string part_name;
   if (std::filesystem::exists(bunny_file)) {
@@ -184,7 +185,7 @@ int main(int argc, char** argv) {
   // Rings at three heights and tilts, repeated up to the profile count.
   std::vector<scanner::ScanFrame> ring;
   for (const auto& [dz, tilt] : {std::pair{-0.02, 15.0}, {0.0, 30.0}, {0.02, 55.0}}) {
-    const auto r = ringFrames(cell, box.center() + Eigen::Vector3d(0, 0, dz), 0.2, deg(tilt), 120,
+    const auto r = ringFrames(cell, box.center() + Eigen::Vector3d(0, 0, dz), 0.22, deg(tilt), 120,
                               static_cast<double>(ring.size()));
     ring.insert(ring.end(), r.begin(), r.end());
   }
@@ -233,6 +234,30 @@ int main(int argc, char** argv) {
         "rays/s wall, %.2f M per CPU-second\n",
         count, hits, static_cast<double>(count) / wall / 1e6,
         static_cast<double>(count) / used / 1e6);
+
+    // The kind of rays DESIGN.md §6's throughput anchor was measured with: random rays from a
+    // box twice the part's size through random points of the part's box (many miss).
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    const Eigen::AlignedBox3d part_box = part.bounds();
+    const Eigen::Vector3d size = part_box.sizes();
+    std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> random_rays;
+    for (int i = 0; i < 600000; ++i) {
+      const Eigen::Vector3d a(unit(rng), unit(rng), unit(rng)), b(unit(rng), unit(rng), unit(rng));
+      const Eigen::Vector3d from = part_box.min() - 0.5 * size + 2.0 * a.cwiseProduct(size);
+      const Eigen::Vector3d to = part_box.min() + b.cwiseProduct(size);
+      random_rays.emplace_back(from, to - from);
+    }
+    hits = 0;
+    const double cpu2 = threadCpuSeconds();
+    for (const auto& [o, d] : random_rays) {
+      if (raycaster.cast(o, d)) ++hits;
+    }
+    const double used2 = threadCpuSeconds() - cpu2;
+    std::printf(
+        "reference: bare Embree rtcIntersect1, random rays through the part's box: %zu "
+        "hits of %zu, %.2f M per CPU-second\n",
+        hits, random_rays.size(), static_cast<double>(random_rays.size()) / used2 / 1e6);
   }
 
   for (const scanner::CameraRule rule :

@@ -1,0 +1,81 @@
+// `scanplan validate` and `scanplan simulate`: a trajectory (from `plan`, or written by hand)
+// proven executable, and the scan it would produce.
+#include <cstdio>
+
+#include <fmt/format.h>
+
+#include "cli/commands.h"
+#include "cli/format.h"
+#include "cli/verify.h"
+#include "collision/scene.h"
+#include "kinematics/error.h"
+#include "kinematics/units.h"
+
+namespace scanplan::cli {
+
+namespace {
+
+void requireSamples(const kinematics::Trajectory& t, const std::filesystem::path& file) {
+  if (t.samples.size() < 2) {
+    throw InputError(
+        fmt::format("{}: {} sample(s): expected at least 2", file.string(), t.samples.size()));
+  }
+}
+
+}  // namespace
+
+ExitCode runValidate(const VerifyOptions& options) {
+  const JobSpec job = loadJob(options.job_file, options.overrides);
+  const kinematics::CellModel cell = buildCell(job);
+  const kinematics::Trajectory trajectory = loadTrajectoryFile(options.trajectory_file);
+  requireSamples(trajectory, options.trajectory_file);
+  const collision::Scene scene(cell, clearanceConfig(job));
+  const planner::ValidationReport report =
+      planner::validateTrajectory(scene, trajectory, validationSettings(job));
+  JsonWriter json;
+  json.beginObject();
+  json.value("format", "scanplan validation report 1");
+  json.value("job", job.name);
+  json.value("job_hash", jobHash(job));
+  json.value("trajectory", options.trajectory_file.string());
+  json.value("frame_rate_hz", job.scanner.frame_rate_hz);
+  writeValidationJson(json, "validation", report);
+  json.endObject();
+  if (options.json) {
+    std::fputs(json.str().c_str(), stdout);
+  } else {
+    std::fputs(validationSummary(report, 50).c_str(), stdout);
+  }
+  if (!options.out_dir.empty()) {
+    prepareOutputDir(options.out_dir);
+    writeFileAtomically(options.out_dir / "validation.json", json.str());
+  }
+  return report.valid ? ExitCode::kOk : ExitCode::kNoPlan;
+}
+
+ExitCode runSimulate(const VerifyOptions& options) {
+  const JobSpec job = loadJob(options.job_file, options.overrides);
+  const kinematics::CellModel cell = buildCell(job);
+  const kinematics::LoadedMesh part = loadPart(job, cell);
+  const kinematics::Trajectory trajectory = loadTrajectoryFile(options.trajectory_file);
+  requireSamples(trajectory, options.trajectory_file);
+  prepareOutputDir(options.out_dir);
+  const SimulationRun run = simulateTrajectory(job, cell, part.mesh, trajectory);
+  writeSimulationOutputs(options.out_dir, job, part.mesh, run);
+  JsonWriter json;
+  json.beginObject();
+  json.value("format", "scanplan simulation report 1");
+  json.value("job", job.name);
+  json.value("job_hash", jobHash(job));
+  json.value("trajectory", options.trajectory_file.string());
+  writeSimulationJson(json, "simulation", run);
+  json.endObject();
+  writeFileAtomically(options.out_dir / "simulation.json", json.str());
+  std::string text = simulationSummary(run);
+  text += fmt::format("wrote      {}: cloud.ply, coverage.ply, cloud.png, simulation.json\n",
+                      options.out_dir.string());
+  std::fputs(text.c_str(), stdout);
+  return ExitCode::kOk;
+}
+
+}  // namespace scanplan::cli

@@ -1,0 +1,53 @@
+#pragma once
+// Proving and previewing a trajectory: validation (limits, speeds, continuous collisions) and the
+// scanner simulation (cloud, coverage) — shared by `plan`, `validate` and `simulate`.
+
+#include <filesystem>
+#include <string>
+
+#include "cli/format.h"
+#include "cli/job.h"
+#include "kinematics/mesh.h"
+#include "kinematics/trajectory.h"
+#include "planner/validation.h"
+#include "scanner/coverage.h"
+#include "scanner/simulator.h"
+
+namespace scanplan::cli {
+
+/// The job's validation settings: densified at the scanner frame rate, the table's bounds.
+planner::ValidationSettings validationSettings(const JobSpec& job);
+
+/// A trajectory CSV file; errors name the file and the line.
+kinematics::Trajectory loadTrajectoryFile(const std::filesystem::path& file);
+
+/// Validation summary lines for stdout (every violation, at most `max_lines` of them).
+std::string validationSummary(const planner::ValidationReport& report, std::size_t max_lines = 12);
+/// The report as a JSON object member `key`.
+void writeValidationJson(JsonWriter& json,
+                         const std::string& key,
+                         const planner::ValidationReport& report);
+
+/// One simulation run and the coverage of the part it gives.
+struct SimulationRun {
+  scanner::SimulatedCloud cloud;
+  scanner::PartCoverage coverage;
+  std::size_t frames = 0;  ///< profiles acquired (densified samples with scanning on)
+  double seconds = 0.0;
+};
+
+/// The scanner simulated along the trajectory: a profile every 1/frame_rate s while the path
+/// scans, the job's fan, cameras, noise and (optional) extra table error.
+SimulationRun simulateTrajectory(const JobSpec& job,
+                                 const kinematics::CellModel& cell,
+                                 const kinematics::TriangleMesh& part,
+                                 const kinematics::Trajectory& trajectory);
+/// cloud.ply, coverage.ply and cloud.png (the cloud and the coverage from three sides) in `dir`.
+void writeSimulationOutputs(const std::filesystem::path& dir,
+                            const JobSpec& job,
+                            const kinematics::TriangleMesh& part,
+                            const SimulationRun& run);
+std::string simulationSummary(const SimulationRun& run);
+void writeSimulationJson(JsonWriter& json, const std::string& key, const SimulationRun& run);
+
+}  // namespace scanplan::cli
