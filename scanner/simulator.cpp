@@ -62,7 +62,7 @@ struct Candidate {
   double t = 0.0;  // refined
   Eigen::Vector3d p_S = Eigen::Vector3d::Zero();
   Eigen::Vector3d n_S = Eigen::Vector3d::Zero();  // unit, towards the laser
-  double incidence = 0.0;
+  double cos_incidence = 1.0;
   bool visible = false;
 };
 
@@ -439,7 +439,7 @@ void ScanSimulator::Impl::profile(const ScanFrame& frame,
     c.p_S = p_S;
     c.n_S = a.X_GS.linear().transpose() * n_G;
     if (c.n_S.dot(d_S) > 0.0) c.n_S = -c.n_S;
-    c.incidence = std::acos(std::min(1.0, std::abs(cos_nd)));
+    c.cos_incidence = std::abs(cos_nd);
     s.candidates.push_back(c);
   }
 
@@ -483,7 +483,7 @@ void ScanSimulator::Impl::profile(const ScanFrame& frame,
     p.profile = index;
     p.ray = c.ray;
     p.range = c.t;
-    p.incidence = c.incidence;
+    p.incidence = std::acos(std::min(1.0, c.cos_incidence));
     Eigen::Vector3d p_S = c.p_S;
     if (noisy) {
       // Along the ray and across it within the laser plane (a triangulating head measures in
