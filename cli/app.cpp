@@ -131,6 +131,8 @@ int run(int argc, char** argv) {
   auto* show_cmd = job_cmd->add_subcommand(
       "show", "Print the fully resolved job as YAML: every default filled in, robot inline");
   show_cmd->add_option("job", show_file, "Job file (YAML)")->required()->check(CLI::ExistingFile);
+  std::vector<std::string> show_overrides;
+  addOverrides(*show_cmd, show_overrides);
 
   CheckOptions check;
   auto* check_cmd = app.add_subcommand(
@@ -204,7 +206,7 @@ int run(int argc, char** argv) {
     if (plan_cmd->parsed()) code = runPlan(plan);
     if (validate_cmd->parsed()) code = runValidate(validate);
     if (simulate_cmd->parsed()) code = runSimulate(simulate);
-    if (show_cmd->parsed()) code = runJobShow(show_file);
+    if (show_cmd->parsed()) code = runJobShow(show_file, show_overrides);
     if (check_cmd->parsed()) code = runCheck(check);
     if (path_cmd->parsed()) code = runPath(path);
     if (map_cmd->parsed()) code = runMap(map);

@@ -129,7 +129,8 @@ void writeMapOutputs(const std::filesystem::path& dir,
                      const planner::ConfigMap& map);
 ExitCode runFk(const FkOptions& options);
 ExitCode runIk(const IkOptions& options);
-ExitCode runJobShow(const std::filesystem::path& job_file);
+ExitCode runJobShow(const std::filesystem::path& job_file,
+                    const std::vector<std::string>& overrides);
 /// The job's part mesh; errors name the job and the field.
 kinematics::LoadedMesh loadPart(const JobSpec& job, const kinematics::CellModel& cell);
 /// Without a scan path: can the sensor reach a pose above the part as the table turns?

@@ -73,8 +73,9 @@ std::string reachCheck(const JobSpec& job,
   return s;
 }
 
-ExitCode runJobShow(const std::filesystem::path& job_file) {
-  const JobSpec job = loadJob(job_file);
+ExitCode runJobShow(const std::filesystem::path& job_file,
+                    const std::vector<std::string>& overrides) {
+  const JobSpec job = loadJob(job_file, overrides);
   buildCell(job);  // the robot model checks (OPW against DH) belong to "valid"
   std::fputs(jobToYaml(job).c_str(), stdout);
   return ExitCode::kOk;

@@ -30,8 +30,8 @@ struct ProgramOptions {
   /// The job's name, for the header comment only (may be empty).
   std::string job;
   /// %, the speed of the first move (from wherever the arm is to the first sample), which is not
-  /// timed: V+ SPEED, KRL $VEL_AXIS. RAPID and URScript use their own slow defaults (v100,
-  /// movej at 0.5 rad/s). (0, 100].
+  /// timed: V+ SPEED, KRL $VEL_AXIS (and E1), URScript movej v = this share of the slowest
+  /// joint's maximum speed. RAPID uses v100. (0, 100].
   double approach_speed_percent = 10.0;
   /// rad/s, the table's maximum speed; ≤ 0: unknown. When known, the table takes part in the
   /// speed check, and KRL's E1 velocity is set with the arm's (the table may lead a PTP).
@@ -57,8 +57,9 @@ struct ProgramFiles {
 
 /// Writes `trajectory` for `robot`'s controller: one joint move per sample, each timed as
 /// planned as closely as the language allows (the first is the untimed move to the start).
-/// Joints in degrees (URScript: radians), 6 decimals; t and the table angle in every step's
-/// comment. Each program's header says how its timing and its table are done:
+/// Joints, table angles and times with 6 decimals (degrees, s; URScript's joints in radians with
+/// 9); t, the table angle and the scanning flag in every step's comment. Each program's header says
+/// how its timing and its table are done:
 ///
 /// - kCsv: <name>.csv, kinematics::trajectoryToCsv() (12 significant digits).
 /// - kVplus: <name>.v2 (.PROGRAM/.END, MOVE #PPOINT(j1..j6) per step, SPEED in % rounded up to
@@ -72,8 +73,10 @@ struct ProgramFiles {
 /// - kUrscript: <name>.script, movej(q rad, t = the step's time, r = 0), the table through the
 ///   table_start()/table_move() functions the integrator implements (UR has no external axis).
 ///
-/// Throws InputError for an empty trajectory, non-finite values or times not strictly
-/// increasing.
+/// Joint values are the robot file's q, which the bundled robots define as their controllers'
+/// own joint convention. Joint limits and collisions are not checked here: validate first.
+/// Throws InputError for an empty trajectory, non-finite values, times not strictly increasing
+/// or an approach speed outside (0, 100].
 ProgramFiles writeProgram(const kinematics::Trajectory& trajectory,
                           const kinematics::RobotModel& robot,
                           ProgramFormat format,

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "cli_support.h"
+#include "test_support.h"
 
 namespace {
 
@@ -344,13 +345,23 @@ TEST_F(Cli, JobWithAnUnknownKeyIsAnInputErrorNamingFileAndLine) {
 
 TEST_F(Cli, PlanWritesTheResolvedJob) {
   const fs::path out = dir_ / "out";
-  const Result run = scanplan({"plan", kDemoJob, "-o", out.string()});
+  std::vector<std::string> light;
+  for (const std::string& o : scanplan::test::kLightDemo) {
+    light.push_back("--set");
+    light.push_back(o);
+  }
+  std::vector<std::string> args{"plan", kDemoJob, "-o", out.string()};
+  args.insert(args.end(), light.begin(), light.end());
+  const Result run = scanplan(args);
   ASSERT_EQ(run.exit_code, 0) << describe(run);
   ASSERT_TRUE(fs::exists(out / "job.yaml")) << describe(run);
   EXPECT_TRUE(tmpFiles(out).empty());
-  // The written job is `job show`'s resolved YAML, and it loads again to the same job (only the
-  // "fully resolved from <file>" comment on the first line differs).
-  const Result shown = scanplan({"job", "show", kDemoJob});
+  // The written job is `job show`'s resolved YAML (with the same --set overrides), and it loads
+  // again to the same job (only the "fully resolved from <file>" comment on the first line
+  // differs).
+  args = {"job", "show", kDemoJob};
+  args.insert(args.end(), light.begin(), light.end());
+  const Result shown = scanplan(args);
   EXPECT_EQ(readFile(out / "job.yaml"), shown.out);
   const Result again = scanplan({"job", "show", (out / "job.yaml").string()});
   EXPECT_EQ(again.exit_code, 0) << describe(again);

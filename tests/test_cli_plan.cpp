@@ -14,6 +14,7 @@
 #include "cli_support.h"
 #include "kinematics/trajectory.h"
 #include "kinematics/units.h"
+#include "test_support.h"
 
 namespace {
 
@@ -22,15 +23,22 @@ using namespace scanplan::test;
 
 const fs::path kSourceDir = SCANPLAN_SOURCE_DIR;
 const std::string kDemoJob = (kSourceDir / "data/jobs/demo.yaml").string();
-// 2° × 0.2 s instead of 1° × 0.1 s: a quarter of the cells.
-const std::vector<std::string> kCoarse = {"--set", "scan.dt_s=0.2", "--set",
-                                          "map.angle_step_deg=2"};
+// The demo, lightened (test::kLightDemo) so a plan takes about a second.
+std::vector<std::string> lightDemo() {
+  std::vector<std::string> args;
+  for (const std::string& o : kLightDemo) {
+    args.push_back("--set");
+    args.push_back(o);
+  }
+  return args;
+}
 
 class CliPlan : public Cli {
  protected:
   Result plan(std::vector<std::string> extra) const {
     std::vector<std::string> args{"plan", kDemoJob, "-o", out().string()};
-    args.insert(args.end(), kCoarse.begin(), kCoarse.end());
+    const std::vector<std::string> light = lightDemo();
+    args.insert(args.end(), light.begin(), light.end());
     args.insert(args.end(), extra.begin(), extra.end());
     return scanplan(args);
   }

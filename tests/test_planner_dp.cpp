@@ -149,9 +149,8 @@ TEST(Objective, MapValueInterpolatesAndWraps) {
   EXPECT_EQ(mapValue(l, 0, -1.0 + 2 * kPi, 0, false), 0.0);  // no wrap on a limited table
 
   // Next to a forbidden cell only the feasible grid angle itself reads f > 0.
-  const ConfigMap z = makeMap(4, 1 + 1, 1.0, true, [](std::size_t a, std::size_t) {
-    return a == 2 ? 0.0f : 0.5f;
-  });
+  const ConfigMap z =
+      makeMap(4, 1 + 1, 1.0, true, [](std::size_t a, std::size_t) { return a == 2 ? 0.0f : 0.5f; });
   EXPECT_EQ(mapValue(z, 0, kPi / 2, 0, true), 0.5);
   EXPECT_EQ(mapValue(z, 0, kPi / 2 + 1e-6, 0, true), 0.0);
   EXPECT_EQ(mapValue(z, 0, 3 * kPi / 2 - 1e-6, 0, true), 0.0);

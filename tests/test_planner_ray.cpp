@@ -130,7 +130,7 @@ TEST(RayShooting, SwervesAroundABlockAndComesBack) {
   ASSERT_TRUE(solvedAndFeasible(map, r, s, false));
   EXPECT_DOUBLE_EQ(r.theta.front(), 0.0);
   EXPECT_NEAR(r.theta.back(), 0.0, 0.02 + 1e-12);  // back in the lane
-  EXPECT_GT(std::abs(r.theta[25]), 0.1);             // around the block
+  EXPECT_GT(std::abs(r.theta[25]), 0.1);           // around the block
 }
 
 TEST(RayShooting, BlockedTimeColumnIsNoPathNamingTheSample) {

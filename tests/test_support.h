@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <random>
 #include <string>
+#include <vector>
 
 #include "cli/robot_file.h"
 #include "kinematics/robot_model.h"
@@ -10,6 +11,13 @@
 namespace scanplan::test {
 
 inline std::filesystem::path sourceDir() { return SCANPLAN_SOURCE_DIR; }
+
+/// `--set` overrides that lighten the bundled demo for tests: two of its rings (the body and
+/// the hub from above) sampled every 0.2 s, so a plan takes about a second.
+inline const std::vector<std::string> kLightDemo = {
+    "scan.dt_s=0.2",
+    "scan.paths=[{type: ring, height_mm: 35, tilt_deg: 25}, {type: ring, height_mm: 105, "
+    "tilt_deg: 60}]"};
 inline std::filesystem::path sharedDataDir() { return SCANPLAN_SHARED_DATA_DIR; }
 
 /// A bundled robot file, e.g. "viper_s650".

@@ -133,8 +133,7 @@ struct DemoPlan {
 };
 
 DemoPlan demo() {
-  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo.yaml",
-                                  {"scan.dt_s=0.2", "map.angle_step_deg=2"});
+  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo.yaml", test::kLightDemo);
   kinematics::CellModel cell = cli::buildCell(job);
   scanner::GeneratedPath path = cli::generateScanPath(job, cell);
   return {std::move(job), std::move(cell), std::move(path)};

@@ -71,8 +71,7 @@ struct DemoCell {
 };
 
 DemoCell demoCell() {
-  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo.yaml",
-                                  {"scan.dt_s=0.2", "map.angle_step_deg=2"});
+  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo.yaml", test::kLightDemo);
   kinematics::CellModel cell = cli::buildCell(job);
   return {std::move(job), std::move(cell)};
 }
