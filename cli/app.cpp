@@ -109,6 +109,23 @@ int run(int argc, char** argv) {
   simulate_cmd->add_option("-o,--out", simulate.out_dir, "Output folder (created)")->required();
   addOverrides(*simulate_cmd, simulate.overrides);
 
+  VerifyOptions export_options;
+  auto* export_cmd = app.add_subcommand(
+      "export",
+      "Write robot programs for a trajectory: V+, KRL, RAPID, URScript or the CSV interchange");
+  export_cmd->add_option("job", export_options.job_file, "Job file (YAML)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  export_cmd
+      ->add_option("-t,--trajectory", export_options.trajectory_file,
+                   "Trajectory (trajectory.csv from plan, or a V+ program)")
+      ->required();
+  export_cmd->add_option("-o,--out", export_options.out_dir, "Output folder (created)")->required();
+  export_cmd->add_option("-f,--format", export_options.formats,
+                         "Comma-separated: vplus, krl, rapid, urscript, csv (default: the job's "
+                         "outputs.programs)");
+  addOverrides(*export_cmd, export_options.overrides);
+
   PlanOptions path;
   auto* path_cmd = app.add_subcommand(
       "path", "Generate the scan path: OUT/path.csv and a picture of it around the part");
@@ -182,8 +199,9 @@ int run(int argc, char** argv) {
     const auto known =
         app.get_subcommands([&](CLI::App* sub) { return argc > 1 && sub->check_name(argv[1]); });
     if (argc > 1 && argv[1][0] != '-' && known.empty()) {
-      message = std::string("unknown command '") + argv[1] +
-                "'; expected one of: plan, validate, simulate, path, map, check, job, fk, ik";
+      message =
+          std::string("unknown command '") + argv[1] +
+          "'; expected one of: plan, validate, simulate, export, path, map, check, job, fk, ik";
     }
     std::fprintf(
         stderr,
@@ -206,6 +224,7 @@ int run(int argc, char** argv) {
     if (plan_cmd->parsed()) code = runPlan(plan);
     if (validate_cmd->parsed()) code = runValidate(validate);
     if (simulate_cmd->parsed()) code = runSimulate(simulate);
+    if (export_cmd->parsed()) code = runExport(export_options);
     if (show_cmd->parsed()) code = runJobShow(show_file, show_overrides);
     if (check_cmd->parsed()) code = runCheck(check);
     if (path_cmd->parsed()) code = runPath(path);

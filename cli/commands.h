@@ -87,8 +87,10 @@ struct VerifyOptions {
   std::filesystem::path out_dir;  ///< validate: optional
   std::vector<std::string> overrides;
   bool json = false;
+  std::string formats;  ///< export: comma-separated program formats; empty = the job's
 };
 ExitCode runValidate(const VerifyOptions& options);
+ExitCode runExport(const VerifyOptions& options);
 ExitCode runSimulate(const VerifyOptions& options);
 
 struct CheckOptions {

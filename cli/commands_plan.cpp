@@ -352,6 +352,8 @@ ExitCode runPlan(const PlanOptions& options) {
   }
   writeFileAtomically(options.out_dir / "trajectory.csv",
                       kinematics::trajectoryToCsv(trajectory.trajectory));
+  const std::string programs = writePrograms(options.out_dir / "programs", job, cell,
+                                             trajectory.trajectory, job.outputs.programs);
   std::optional<SimulationRun> simulation;
   if (job.simulation.enabled) {
     t0 = Clock::now();
@@ -396,9 +398,11 @@ ExitCode runPlan(const PlanOptions& options) {
           ? fmt::format("{:.1f} mm", toMm(trajectory.min_clearance))
           : std::string("beyond every d_high"));
   if (validation) summary += validationSummary(*validation);
+  summary += programs;
   if (simulation) summary += simulationSummary(*simulation);
   summary += fmt::format(
-      "wrote      {}: job.yaml, trajectory.csv, report.json, configmap_path.png/.svg, {}{}\n",
+      "wrote      {}: job.yaml, trajectory.csv, programs/, report.json, configmap_path.png/.svg, "
+      "{}{}\n",
       options.out_dir.string(), simulation ? "cloud.ply, coverage.ply, cloud.png, " : "",
       kMapFilesNote);
   summary += fmt::format(

@@ -1,11 +1,14 @@
 // `scanplan validate` and `scanplan simulate`: a trajectory (from `plan`, or written by hand)
 // proven executable, and the scan it would produce.
 #include <cstdio>
+#include <sstream>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "cli/commands.h"
 #include "cli/format.h"
+#include "cli/programs.h"
 #include "cli/verify.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"
@@ -75,6 +78,29 @@ ExitCode runSimulate(const VerifyOptions& options) {
   text += fmt::format("wrote      {}: cloud.ply, coverage.ply, cloud.png, simulation.json\n",
                       options.out_dir.string());
   std::fputs(text.c_str(), stdout);
+  return ExitCode::kOk;
+}
+
+ExitCode runExport(const VerifyOptions& options) {
+  const JobSpec job = loadJob(options.job_file, options.overrides);
+  const kinematics::CellModel cell = buildCell(job);
+  const kinematics::Trajectory trajectory = loadTrajectoryFile(options.trajectory_file);
+  requireSamples(trajectory, options.trajectory_file);
+  std::vector<std::string> formats = job.outputs.programs;
+  if (!options.formats.empty()) {
+    formats.clear();
+    std::stringstream list(options.formats);
+    std::string name;
+    while (std::getline(list, name, ',')) {
+      if (!parseProgramFormat(name)) {
+        throw InputError(fmt::format("--format '{}': expected a comma-separated list of {}", name,
+                                     fmt::join(programFormatNames(), ", ")));
+      }
+      formats.push_back(name);
+    }
+  }
+  prepareOutputDir(options.out_dir);
+  std::fputs(writePrograms(options.out_dir, job, cell, trajectory, formats).c_str(), stdout);
   return ExitCode::kOk;
 }
 

@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "cli/programs.h"
 #include "kinematics/error.h"
 #include "kinematics/units.h"
 
@@ -333,6 +334,12 @@ void describeConstraints(A& a, ConstraintsSpec& s) {
 }
 
 template <class A>
+void describeOutputs(A& a, OutputsSpec& s) {
+  a.field("programs", s.programs, Expect::oneOf(programFormatNames()));
+  a.field("program_name", s.program_name);
+}
+
+template <class A>
 void describeJob(A& a, JobSpec& s) {
   a.field("name", s.name);
   a.require("robot");
@@ -362,6 +369,7 @@ void describeJob(A& a, JobSpec& s) {
   a.section("planner", s.planner);
   a.section("validation", s.validation);
   a.section("simulation", s.simulation);
+  a.section("outputs", s.outputs);
 }
 
 }  // namespace
@@ -402,6 +410,8 @@ void describe(YamlOut& a, OmplSpec& s) { describeOmpl(a, s); }
 void describe(YamlIn& a, RefineSpec& s) { describeRefine(a, s); }
 void describe(YamlOut& a, RefineSpec& s) { describeRefine(a, s); }
 void describe(YamlIn& a, PlannerSpec& s) { describePlanner(a, s); }
+void describe(YamlIn& a, OutputsSpec& s) { describeOutputs(a, s); }
+void describe(YamlOut& a, OutputsSpec& s) { describeOutputs(a, s); }
 void describe(YamlIn& a, NoiseSpec& s) { describeNoise(a, s); }
 void describe(YamlOut& a, NoiseSpec& s) { describeNoise(a, s); }
 void describe(YamlIn& a, ValidationSpec& s) { describeValidation(a, s); }

@@ -225,6 +225,12 @@ struct ConstraintsSpec {
   ClearanceSpec clearance;
 };
 
+/// `outputs`: the robot programs `plan` writes.
+struct OutputsSpec {
+  std::vector<std::string> programs{"vplus", "krl", "rapid", "urscript"};  ///< formats
+  std::string program_name = "scan";  ///< made a valid identifier of each language
+};
+
 /// A whole job file, every default filled in.
 struct JobSpec {
   std::string name = "job";
@@ -241,6 +247,7 @@ struct JobSpec {
   PlannerSpec planner;
   ValidationSpec validation;
   SimulationSpec simulation;
+  OutputsSpec outputs;
   std::filesystem::path source;  ///< the job file itself
 };
 

@@ -1,12 +1,15 @@
 #include "cli/verify.h"
 
+#include <algorithm>
 #include <chrono>
 #include <fstream>
 #include <sstream>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "cli/image_io.h"
+#include "cli/programs.h"
 #include "kinematics/error.h"
 #include "kinematics/units.h"
 #include "scanner/cloud_io.h"
@@ -48,7 +51,45 @@ planner::ValidationSettings validationSettings(const JobSpec& job) {
 }
 
 kinematics::Trajectory loadTrajectoryFile(const std::filesystem::path& file) {
-  return kinematics::parseTrajectoryCsv(readWhole(file), file.string());
+  const std::string text = readWhole(file);
+  const bool vplus = text.rfind(".PROGRAM", 0) == 0 || text.find("\n.PROGRAM") != std::string::npos;
+  return vplus ? readVplusProgram(text, file.string())
+               : kinematics::parseTrajectoryCsv(text, file.string());
+}
+
+std::string writePrograms(const std::filesystem::path& dir,
+                          const JobSpec& job,
+                          const kinematics::CellModel& cell,
+                          const kinematics::Trajectory& trajectory,
+                          const std::vector<std::string>& formats) {
+  ProgramOptions options;
+  options.name = job.outputs.program_name;
+  options.job = job.name;
+  options.table_max_speed = deg(job.table.max_speed_deg_s);
+  std::vector<std::string> written;
+  double max_percent = 0.0;
+  std::size_t over = 0;
+  for (const std::string& name : formats) {
+    const auto format = parseProgramFormat(name);
+    if (!format)
+      throw InputError(fmt::format("program format '{}': expected one of {}", name,
+                                   fmt::join(programFormatNames(), ", ")));
+    const ProgramFiles files = writeProgram(trajectory, cell.robot, *format, options);
+    for (const auto& [file, content] : files.files) {
+      writeFileAtomically(dir / file, content);
+      written.push_back(file);
+    }
+    max_percent = std::max(max_percent, files.max_speed_percent);
+    over = std::max(over, files.over_speed_segments);
+  }
+  if (written.empty()) return "programs   none (outputs.programs is empty)\n";
+  return fmt::format(
+      "programs   {}: {}; fastest step {:.0f}% of an axis's max speed (joints, table){}\n",
+      (dir.filename().empty() ? dir : dir.filename()).string(), fmt::join(written, ", "),
+      max_percent,
+      over == 0
+          ? std::string()
+          : fmt::format(", {} step(s) need more than 100% (marked WARNING, run slower)", over));
 }
 
 std::string validationSummary(const planner::ValidationReport& r, std::size_t max_lines) {

@@ -18,7 +18,8 @@ namespace scanplan::cli {
 /// The job's validation settings: densified at the scanner frame rate, the table's bounds.
 planner::ValidationSettings validationSettings(const JobSpec& job);
 
-/// A trajectory CSV file; errors name the file and the line.
+/// A trajectory file: the CSV interchange format, or a V+ program written by `plan`/`export`
+/// (recognised by its .PROGRAM line); errors name the file and the line.
 kinematics::Trajectory loadTrajectoryFile(const std::filesystem::path& file);
 
 /// Validation summary lines for stdout (every violation, at most `max_lines` of them).
@@ -49,5 +50,14 @@ void writeSimulationOutputs(const std::filesystem::path& dir,
                             const SimulationRun& run);
 std::string simulationSummary(const SimulationRun& run);
 void writeSimulationJson(JsonWriter& json, const std::string& key, const SimulationRun& run);
+
+/// The robot programs of `formats` (names as in programFormatNames()) for the trajectory, into
+/// `dir`; returns one summary line (files, the fastest step as % of the joints' max speed, steps
+/// that need more than 100 %).
+std::string writePrograms(const std::filesystem::path& dir,
+                          const JobSpec& job,
+                          const kinematics::CellModel& cell,
+                          const kinematics::Trajectory& trajectory,
+                          const std::vector<std::string>& formats);
 
 }  // namespace scanplan::cli

@@ -240,6 +240,32 @@ void YamlIn::field(const char* key, std::string& value, const Expect& expect) {
   value = n.Scalar();
 }
 
+void YamlIn::field(const char* key, std::vector<std::string>& value, const Expect& expect) {
+  if (!has(key)) return;
+  const YAML::Node seq = node_[key];
+  checkSequence(key, seq, 0, 1000);
+  std::vector<std::string> items;
+  for (std::size_t i = 0; i < seq.size(); ++i) {
+    const YAML::Node item = seq[i];
+    const std::string at = fmt::format("{}[{}]", key, i);
+    if (!item.IsScalar()) {
+      throw InputError(fmt::format("{}: {}: {}: expected {}", where(item), fieldPath(at),
+                                   nodeText(item),
+                                   expect.choices.empty() ? "a text" : expect.describe("")));
+    }
+    if (!expect.accepts(item.Scalar())) {
+      throw InputError(fmt::format("{}: {}: {}: expected {}", where(item), fieldPath(at),
+                                   nodeText(item), expect.describe("")));
+    }
+    if (std::find(items.begin(), items.end(), item.Scalar()) != items.end()) {
+      throw InputError(fmt::format("{}: {}: '{}' is listed twice: expected each once", where(item),
+                                   fieldPath(at), item.Scalar()));
+    }
+    items.push_back(item.Scalar());
+  }
+  value = std::move(items);
+}
+
 void YamlIn::field(const char* key, FilePath& value, const Expect&) {
   if (!has(key)) return;
   const YAML::Node n = node_[key];
@@ -351,6 +377,11 @@ void YamlOut::field(const char* key, bool value, const Expect&) {
 }
 void YamlOut::field(const char* key, const std::string& value, const Expect&) {
   out_ << YAML::Key << key << YAML::Value << value;
+}
+void YamlOut::field(const char* key, const std::vector<std::string>& value, const Expect&) {
+  out_ << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
+  for (const std::string& v : value) out_ << v;
+  out_ << YAML::EndSeq;
 }
 void YamlOut::field(const char* key, const FilePath& value, const Expect&) {
   out_ << YAML::Key << key << YAML::Value

@@ -59,6 +59,8 @@ class YamlIn {
   void field(const char* key, bool& value, const Expect& expect = {});
   void field(const char* key, std::string& value, const Expect& expect = {});
   void field(const char* key, FilePath& value, const Expect& expect = {});
+  /// A list of texts, each checked against `expect` (e.g. oneOf); duplicates are errors.
+  void field(const char* key, std::vector<std::string>& value, const Expect& expect = {});
   template <std::size_t N>
   void field(const char* key, std::array<double, N>& value, const Expect& expect = {}) {
     std::vector<double> v(value.begin(), value.end());
@@ -148,6 +150,7 @@ class YamlOut {
   void field(const char* key, bool value, const Expect& = {});
   void field(const char* key, const std::string& value, const Expect& = {});
   void field(const char* key, const FilePath& value, const Expect& = {});
+  void field(const char* key, const std::vector<std::string>& value, const Expect& = {});
   template <class T, std::size_t N>
   void field(const char* key, const std::array<T, N>& value, const Expect& = {}) {
     out_ << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;

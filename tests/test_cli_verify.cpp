@@ -1,0 +1,195 @@
+// `validate`, `simulate` and `export` end to end, on a trajectory planned from the (lightened)
+// demo: a valid plan passes, an obstacle in its way is caught with time and contact point, a
+// malformed row names its line, the cloud lies on the part, programs read back and validate.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include "cli/job.h"
+#include "cli_support.h"
+#include "kinematics/mesh.h"
+#include "kinematics/trajectory.h"
+#include "kinematics/units.h"
+#include "scanner/cloud_io.h"
+#include "test_support.h"
+
+namespace {
+
+using namespace scanplan;
+using namespace scanplan::test;
+
+const fs::path kSourceDir = SCANPLAN_SOURCE_DIR;
+const std::string kDemoJob = (kSourceDir / "data/jobs/demo.yaml").string();
+
+std::vector<std::string> withLightDemo(std::vector<std::string> args) {
+  for (const std::string& o : kLightDemo) {
+    args.push_back("--set");
+    args.push_back(o);
+  }
+  return args;
+}
+
+class CliVerify : public Cli {
+ protected:
+  // One planned trajectory for the whole suite (planning takes about a second).
+  static void SetUpTestSuite() {
+    planned_ = fs::temp_directory_path() / ("scanplan_test_verify_" + std::to_string(::getpid()));
+    fs::remove_all(planned_);
+  }
+  static void TearDownTestSuite() { fs::remove_all(planned_); }
+
+  fs::path plannedTrajectory() {
+    if (!fs::exists(planned_ / "trajectory.csv")) {
+      const Result run = scanplan(withLightDemo(
+          {"plan", kDemoJob, "-o", planned_.string(), "--set", "simulation.enabled=false"}));
+      EXPECT_EQ(run.exit_code, 0) << describe(run);
+    }
+    return planned_ / "trajectory.csv";
+  }
+
+  static fs::path planned_;
+};
+fs::path CliVerify::planned_;
+
+TEST_F(CliVerify, ValidPlanValidatesAndWritesItsReport) {
+  const fs::path trajectory = plannedTrajectory();
+  const Result run = scanplan(withLightDemo(
+      {"validate", kDemoJob, "-t", trajectory.string(), "-o", (dir_ / "v").string()}));
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  EXPECT_TRUE(contains(run.out, "validation valid")) << run.out;
+  const YAML::Node r = YAML::LoadFile((dir_ / "v" / "validation.json").string());
+  EXPECT_TRUE(r["validation"]["valid"].as<bool>());
+  EXPECT_EQ(r["validation"]["violations"].size(), 0u);
+  EXPECT_GT(r["validation"]["proven_clearance_mm"].as<double>(), 0.0);
+}
+
+// A post placed where the scanner passes halfway through the plan: validation must find the
+// collision, say when and where, and exit 3.
+TEST_F(CliVerify, ObstacleInThePathIsACollisionWithTimeAndContactPoint) {
+  const fs::path file = plannedTrajectory();
+  const kinematics::Trajectory t = kinematics::parseTrajectoryCsv(readFile(file), file.string());
+  const cli::JobSpec job = cli::loadJob(kDemoJob, kLightDemo);
+  const kinematics::CellModel cell = cli::buildCell(job);
+  const auto& mid = t.samples[t.samples.size() / 2];
+  // The scanner's origin in the world at that sample, 40 mm back along its axis (inside the
+  // housing, clear of the part).
+  const Eigen::Isometry3d X_WS = cell.X_WB * cell.robot.fk(mid.q) * cell.scanner.X_FS;
+  const Eigen::Vector3d p = (X_WS * Eigen::Vector3d(0, 0, -0.04)) * kMToMm;
+  const std::string post = fmt::format(
+      "obstacles=[{{name: post, type: box, size_mm: [20, 20, 20], pose: {{xyz_mm: [{:.3f}, {:.3f}, "
+      "{:.3f}]}}}}]",
+      p.x(), p.y(), p.z());
+  const Result run =
+      scanplan(withLightDemo({"validate", kDemoJob, "-t", file.string(), "--json", "--set", post}));
+  EXPECT_EQ(run.exit_code, 3) << describe(run);
+  const YAML::Node r = YAML::Load(run.out)["validation"];
+  EXPECT_FALSE(r["valid"].as<bool>());
+  bool found = false;
+  for (const auto& v : r["violations"]) {
+    if (v["kind"].as<std::string>() != "collision") continue;
+    if (!contains(v["what"].as<std::string>(), "post")) continue;
+    found = true;
+    EXPECT_LE(v["start_s"].as<double>(), mid.t + 1e-9);
+    // The contact point lies on the 20 mm post (within the 0.1 mm resolution and GJK slack).
+    const Eigen::Vector3d c(v["contact_mm"][0].as<double>(), v["contact_mm"][1].as<double>(),
+                            v["contact_mm"][2].as<double>());
+    EXPECT_LT((c - p).cwiseAbs().maxCoeff(), 10.0 + 0.5) << c.transpose();
+  }
+  EXPECT_TRUE(found) << run.out;
+}
+
+TEST_F(CliVerify, MalformedTrajectoryRowIsAnInputErrorNamingTheLine) {
+  std::string text = readFile(plannedTrajectory());
+  // Break the third data row (line 4 of the file): a joint that is not a number.
+  std::size_t at = 0;
+  for (int line = 1; line < 4; ++line) at = text.find('\n', at) + 1;
+  const std::size_t comma = text.find(',', text.find(',', text.find(',', at) + 1) + 1);
+  text.insert(comma + 1, "x");
+  const fs::path broken = dir_ / "broken.csv";
+  writeFile(broken, text);
+  for (const char* cmd : {"validate", "simulate", "export"}) {
+    SCOPED_TRACE(cmd);
+    const Result run =
+        scanplan({cmd, kDemoJob, "-t", broken.string(), "-o", (dir_ / "o").string()});
+    EXPECT_EQ(run.exit_code, 4) << describe(run);
+    EXPECT_TRUE(contains(run.err, broken.string() + ":4: column j2_deg")) << run.err;
+  }
+  EXPECT_TRUE(tmpFiles(dir_).empty());
+}
+
+TEST_F(CliVerify, SimulatedCloudLiesOnThePartAndCoverageIsReported) {
+  const fs::path out = dir_ / "sim";
+  const Result run = scanplan(withLightDemo(
+      {"simulate", kDemoJob, "-t", plannedTrajectory().string(), "-o", out.string()}));
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  for (const char* f : {"cloud.ply", "coverage.ply", "cloud.png", "simulation.json"}) {
+    EXPECT_TRUE(fs::exists(out / f)) << f;
+  }
+  std::ifstream in(out / "cloud.ply", std::ios::binary);
+  const scanner::PlyVertices cloud = scanner::readPlyVertices(in, "cloud.ply");
+  ASSERT_GT(cloud.count, 1000u);
+  EXPECT_EQ(cloud.format, "binary_little_endian");
+  // Points in the part frame, mm: inside the part's box grown by a hair, or on the table top
+  // (z ≈ 0) around it.
+  const cli::JobSpec job = cli::loadJob(kDemoJob);
+  const kinematics::CellModel cell = cli::buildCell(job);
+  const auto part = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options).mesh;
+  const Eigen::AlignedBox3d box = part.bounds();
+  std::size_t on_part_box = 0, on_table = 0;
+  for (std::size_t i = 0; i < cloud.count; ++i) {
+    const Eigen::Vector3d p(cloud.column("x")[i], cloud.column("y")[i], cloud.column("z")[i]);
+    const Eigen::Vector3d m = p * kMmToM;
+    if (box.exteriorDistance(m) < 1e-6) {
+      ++on_part_box;
+    } else if (std::abs(p.z()) < 1e-3) {
+      ++on_table;
+    }
+  }
+  EXPECT_EQ(on_part_box + on_table, cloud.count);
+  EXPECT_GT(on_part_box, cloud.count / 2);
+  const YAML::Node r = YAML::LoadFile((out / "simulation.json").string())["simulation"];
+  EXPECT_GT(r["coverage"]["covered_fraction"].as<double>(), 0.05);
+  EXPECT_LE(r["coverage"]["covered_fraction"].as<double>(), 1.0);
+  EXPECT_EQ(r["points"].as<std::size_t>(), cloud.count);
+}
+
+TEST_F(CliVerify, ExportedProgramsReadBackAndValidate) {
+  const fs::path trajectory = plannedTrajectory();
+  const fs::path out = dir_ / "programs";
+  const Result run = scanplan({"export", kDemoJob, "-t", trajectory.string(), "-o", out.string(),
+                               "--format", "vplus,krl,rapid,urscript,csv"});
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  for (const char* f :
+       {"scan.v2", "scan_table.csv", "scan.src", "scan.mod", "scan.script", "scan.csv"}) {
+    EXPECT_TRUE(fs::exists(out / f)) << f;
+  }
+  // The V+ program and the CSV load back and pass validation (the seed's §7.3 point).
+  for (const char* f : {"scan.v2", "scan.csv"}) {
+    SCOPED_TRACE(f);
+    const Result v = scanplan(withLightDemo({"validate", kDemoJob, "-t", (out / f).string()}));
+    EXPECT_EQ(v.exit_code, 0) << describe(v);
+  }
+  const Result bad = scanplan({"export", kDemoJob, "-t", trajectory.string(), "-o",
+                               (dir_ / "x").string(), "--format", "vplus,gcode"});
+  EXPECT_EQ(bad.exit_code, 4) << describe(bad);
+  EXPECT_TRUE(contains(bad.err, "gcode")) << bad.err;
+}
+
+TEST_F(CliVerify, UnwritableOutputFolderIsAnInputErrorWithNoPartialFiles) {
+  // A folder inside a regular file cannot be created.
+  const fs::path blocker = dir_ / "blocker";
+  writeFile(blocker, "x");
+  const Result run = scanplan(withLightDemo({"plan", kDemoJob, "-o", (blocker / "out").string()}));
+  EXPECT_EQ(run.exit_code, 4) << describe(run);
+  EXPECT_TRUE(contains(run.err, "scanplan: error:")) << run.err;
+  EXPECT_TRUE(tmpFiles(dir_).empty());
+}
+
+}  // namespace
