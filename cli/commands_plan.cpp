@@ -43,8 +43,10 @@ void writePathFigure(const std::filesystem::path& dir,
                      const std::vector<std::pair<std::string, std::vector<double>>>& paths,
                      const std::vector<std::string>& labels) {
   const RgbImage base = mapGreyImage(map, branch);
-  const int factor = std::max(1, std::min(1000 / base.width, 1000 / base.height));
-  RgbImage image = upscale(base, factor);
+  // Enlarged so the picture is at least ~1000 px wide and 40 % as tall as wide.
+  const int fx = std::max(1, 1000 / base.width);
+  const int fy = std::max(1, (2 * base.width * fx + 5 * base.height - 1) / (5 * base.height));
+  RgbImage image = upscale(base, fx, fy);
   const double angle0 = map.angles.front();
   const double span = map.angles.size() > 1
                           ? (map.angles[1] - map.angles[0]) * static_cast<double>(map.angles.size())

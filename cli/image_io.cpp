@@ -301,11 +301,12 @@ Rgb grey(double f) {
   return {v, v, v};
 }
 
-RgbImage upscale(const RgbImage& image, int factor) {
-  factor = std::max(factor, 1);
-  RgbImage out = RgbImage::filled(image.width * factor, image.height * factor);
+RgbImage upscale(const RgbImage& image, int factor_x, int factor_y) {
+  factor_x = std::max(factor_x, 1);
+  factor_y = std::max(factor_y, 1);
+  RgbImage out = RgbImage::filled(image.width * factor_x, image.height * factor_y);
   for (int y = 0; y < out.height; ++y)
-    for (int x = 0; x < out.width; ++x) out.set(x, y, image.at(x / factor, y / factor));
+    for (int x = 0; x < out.width; ++x) out.set(x, y, image.at(x / factor_x, y / factor_y));
   return out;
 }
 

@@ -29,8 +29,8 @@ struct RgbImage {
   Rgb at(int x, int y) const;
 };
 
-/// Nearest-neighbour enlargement by an integer factor ≥ 1.
-RgbImage upscale(const RgbImage& image, int factor);
+/// Nearest-neighbour enlargement by integer factors ≥ 1 (x and y).
+RgbImage upscale(const RgbImage& image, int factor_x, int factor_y);
 /// A straight segment from (x0, y0) to (x1, y1) (pixel units, pixel centres at +0.5), `width`
 /// pixels wide, clipped to the image.
 void drawLine(RgbImage& image, double x0, double y0, double x1, double y1, Rgb colour, int width);

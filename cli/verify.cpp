@@ -85,7 +85,7 @@ std::string writePrograms(const std::filesystem::path& dir,
   if (written.empty()) return "programs   none (outputs.programs is empty)\n";
   return fmt::format(
       "programs   {}: {}; fastest step {:.0f}% of an axis's max speed (joints, table){}\n",
-      (dir.filename().empty() ? dir : dir.filename()).string(), fmt::join(written, ", "),
+      (dir.filename().empty() ? dir : dir.filename()).string() + "/", fmt::join(written, ", "),
       max_percent,
       over == 0
           ? std::string()

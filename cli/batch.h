@@ -1,0 +1,98 @@
+#pragma once
+// `scanplan batch`: a sweep of planner settings over many cases — the cases of a sweep file,
+// run in parallel with each configuration map computed once, one result row per case
+// (results.csv, results.jsonl), a summary with plots and an OMPL benchmark log.
+
+#include <array>
+#include <cstddef>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "cli/app.h"
+
+namespace scanplan::cli {
+
+/// One case of a sweep: a base job, its overrides and the repeat number.
+struct SweepCase {
+  std::size_t index = 0;     ///< position in the sweep's deterministic case order
+  std::string id;            ///< stable hash of (job as written, sorted overrides, repeat), hex
+  std::string job;           ///< the base job as the sweep file writes it
+  std::filesystem::path job_file;                         ///< resolved against the sweep file
+  std::vector<std::pair<std::string, std::string>> params;  ///< the varied values (key, value)
+  int repeat = 0;
+  std::vector<std::string> overrides;  ///< `set` then the varied values, as for --set
+};
+
+/// A parsed and expanded sweep file.
+struct Sweep {
+  std::filesystem::path file;
+  std::vector<std::string> keys;  ///< the varied keys, in the file's order (one column each)
+  std::vector<SweepCase> cases;
+};
+
+/// Reads a sweep file and expands its cases; every varied value is checked on every base job
+/// through loadJob() first, so a bad key or value is an InputError before anything runs.
+Sweep loadSweep(const std::filesystem::path& file);
+
+/// Case `id` belongs to shard `shard` (1-based) of `count`: stable, whatever else the sweep has.
+bool inShard(const std::string& id, int shard, int count);
+
+/// The numbers of a result row, in column order (kBatchMetrics).
+inline constexpr std::array<const char*, 15> kBatchMetrics = {
+    "J_s",           "cost_f_s",         "cost_omega_s",    "cost_alpha_s", "dp_gap_percent",
+    "min_f",         "min_clearance_mm", "max_omega_deg_s", "max_alpha_deg_s2", "cycle_time_s",
+    "coverage",      "map_s",            "plan_s",          "validation_s", "simulation_s"};
+/// Index of the first timing column: wall times vary run to run, everything before does not.
+inline constexpr std::size_t kFirstTimingMetric = 11;
+
+/// One row of results.csv / results.jsonl.
+struct BatchRow {
+  std::size_t index = 0;
+  std::string case_id;
+  std::string job;
+  std::vector<std::pair<std::string, std::string>> params;
+  int repeat = 0;
+  std::string method;  ///< the planner that ran (the resolved planner.method)
+  std::string status;  ///< planned | no_path | no_executable_path | invalid_trajectory | error
+  std::string reason;
+  std::array<std::optional<double>, kBatchMetrics.size()> metrics{};
+  bool map_reused = false;
+};
+
+struct BatchOptions {
+  std::filesystem::path sweep_file;
+  std::filesystem::path out_dir;
+  int jobs = 0;         ///< threads in all (cases and the work inside them); 0: every core
+  std::string shard;    ///< "I/N" (1 ≤ I ≤ N) or empty for all cases
+  bool resume = false;  ///< skip the cases results.jsonl already has
+  std::size_t max_cases = 0;  ///< stop after this many cases (0: all); simulates an interruption
+  bool reuse_maps = true;     ///< false: every case computes its own map (benchmarks)
+  bool report = true;         ///< write summary.md, plots and the OMPL log at the end
+  bool print = true;          ///< print the summary lines on stdout
+};
+
+struct BatchStats {
+  std::size_t cases = 0;    ///< in this shard
+  std::size_t skipped = 0;  ///< already in results.jsonl (--resume)
+  std::size_t ran = 0;
+  std::size_t failed = 0;  ///< status error
+  std::size_t maps = 0;    ///< maps computed
+  double seconds = 0.0;
+};
+
+/// Runs the cases of the sweep into options.out_dir; rows are appended as cases finish.
+BatchStats runBatchCases(const BatchOptions& options);
+ExitCode runBatch(const BatchOptions& options);
+/// Regenerates summary.md, plots/ and ompl_benchmark.log from OUT/results.jsonl.
+ExitCode runBatchReport(const std::filesystem::path& out_dir);
+/// Merges the results of shard runs into `out_dir` (a case in several inputs is kept once).
+ExitCode runBatchMerge(const std::vector<std::filesystem::path>& inputs,
+                       const std::filesystem::path& out_dir);
+
+/// The rows of a results.jsonl (a torn last line from an interrupted run is skipped).
+std::vector<BatchRow> readBatchRows(const std::filesystem::path& jsonl);
+
+}  // namespace scanplan::cli
