@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -158,6 +159,76 @@ TEST_F(CliVerify, SimulatedCloudLiesOnThePartAndCoverageIsReported) {
   EXPECT_GT(r["coverage"]["covered_fraction"].as<double>(), 0.05);
   EXPECT_LE(r["coverage"]["covered_fraction"].as<double>(), 1.0);
   EXPECT_EQ(r["points"].as<std::size_t>(), cloud.count);
+}
+
+// Closest distance from p to triangle abc (Ericson, Real-Time Collision Detection, 5.1.5).
+double pointTriangleDistance(const Eigen::Vector3d& p,
+                             const Eigen::Vector3d& a,
+                             const Eigen::Vector3d& b,
+                             const Eigen::Vector3d& c) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return (p - a).norm();
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return (p - b).norm();
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return (p - (a + d1 / (d1 - d3) * ab)).norm();
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return (p - c).norm();
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return (p - (a + d2 / (d2 - d6) * ac)).norm();
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+    return (p - (b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b))).norm();
+  }
+  const double denom = 1.0 / (va + vb + vc);
+  return (p - (a + ab * (vb * denom) + ac * (vc * denom))).norm();
+}
+
+// The cloud `plan` writes lies on the part: every sampled point off the table top is within
+// 1e-4 mm of the part mesh (brute force over all triangles; the file stores float mm, so the
+// bound is the float rounding of a ~100 mm coordinate, ~4e-6 mm, well inside it).
+TEST_F(CliVerify, PlannedCloudPointsLieOnThePartSurface) {
+  plannedTrajectory();
+  const fs::path out = dir_ / "sim";
+  ASSERT_EQ(scanplan(withLightDemo({"simulate", kDemoJob, "-t",
+                                    (planned_ / "trajectory.csv").string(), "-o", out.string()}))
+                .exit_code,
+            0);
+  std::ifstream in(out / "cloud.ply", std::ios::binary);
+  const scanner::PlyVertices cloud = scanner::readPlyVertices(in, "cloud.ply");
+  const cli::JobSpec job = cli::loadJob(kDemoJob);
+  const kinematics::CellModel cell = cli::buildCell(job);
+  const auto part = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options).mesh;
+  std::size_t checked = 0;
+  double worst_mm = 0.0;
+  for (std::size_t i = 0; i < cloud.count && checked < 300; i += cloud.count / 600 + 1) {
+    const Eigen::Vector3d p(cloud.column("x")[i], cloud.column("y")[i], cloud.column("z")[i]);
+    if (std::abs(p.z()) < 1e-3) continue;  // the table top around the part
+    double best = std::numeric_limits<double>::infinity();
+    for (const auto& t : part.triangles) {
+      best = std::min(best, pointTriangleDistance(p * kMmToM, part.vertices[t.x()],
+                                                  part.vertices[t.y()], part.vertices[t.z()]));
+    }
+    worst_mm = std::max(worst_mm, toMm(best));
+    ++checked;
+  }
+  EXPECT_GT(checked, 100u);
+  EXPECT_LT(worst_mm, 1e-4);
+}
+
+TEST_F(CliVerify, BrokenPartMeshIsAnInputErrorWithNoOutputs) {
+  const fs::path mesh = dir_ / "broken.stl";
+  writeFile(mesh, "solid broken\n  facet normal 0 0 1\n    outer loop\n      vertex 0 0\n");
+  const fs::path out = dir_ / "out";
+  const Result run = scanplan(
+      withLightDemo({"plan", kDemoJob, "-o", out.string(), "--set", "part.mesh=" + mesh.string()}));
+  EXPECT_EQ(run.exit_code, 4) << describe(run);
+  EXPECT_TRUE(contains(run.err, mesh.string())) << run.err;
+  EXPECT_FALSE(fs::exists(out / "trajectory.csv"));
+  EXPECT_TRUE(tmpFiles(dir_).empty());
 }
 
 TEST_F(CliVerify, ExportedProgramsReadBackAndValidate) {
