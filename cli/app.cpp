@@ -8,6 +8,7 @@
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
+#include "cli/batch.h"
 #include "cli/commands.h"
 #include "kinematics/error.h"
 
@@ -151,6 +152,33 @@ int run(int argc, char** argv) {
   std::vector<std::string> show_overrides;
   addOverrides(*show_cmd, show_overrides);
 
+  BatchOptions batch;
+  auto* batch_cmd = app.add_subcommand(
+      "batch",
+      "Run a sweep of settings over many cases: one result row per case in OUT/results.csv and "
+      "results.jsonl, summary.md, plots, an OMPL benchmark log");
+  batch_cmd->add_option("sweep", batch.sweep_file, "Sweep file (YAML)")->check(CLI::ExistingFile);
+  batch_cmd->add_option("-o,--out", batch.out_dir, "Output folder (created)");
+  batch_cmd->add_option("-j,--jobs", batch.jobs, "Threads in all (default: every core)")
+      ->check(CLI::PositiveNumber);
+  batch_cmd->add_option("--shard", batch.shard, "Run only slice I of N (1-based), e.g. 2/8")
+      ->type_name("I/N");
+  batch_cmd->add_flag("--resume", batch.resume, "Skip the cases OUT/results.jsonl already has");
+  std::filesystem::path batch_report_dir;
+  auto* batch_report_cmd = batch_cmd->add_subcommand(
+      "report", "Regenerate summary.md, plots/ and ompl_benchmark.log from OUT/results.jsonl");
+  batch_report_cmd->add_option("out", batch_report_dir, "Batch output folder")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  std::vector<std::filesystem::path> merge_inputs;
+  std::filesystem::path merge_out;
+  auto* batch_merge_cmd =
+      batch_cmd->add_subcommand("merge", "Merge the results of shard runs into one folder");
+  batch_merge_cmd->add_option("inputs", merge_inputs, "Batch output folders")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  batch_merge_cmd->add_option("-o,--out", merge_out, "Output folder (created)")->required();
+
   CheckOptions check;
   auto* check_cmd = app.add_subcommand(
       "check", "Score one pose: every constraint factor, every pair's clearance, collision");
@@ -201,7 +229,8 @@ int run(int argc, char** argv) {
     if (argc > 1 && argv[1][0] != '-' && known.empty()) {
       message =
           std::string("unknown command '") + argv[1] +
-          "'; expected one of: plan, validate, simulate, export, path, map, check, job, fk, ik";
+          "'; expected one of: plan, batch, validate, simulate, export, path, map, check, job, fk, "
+          "ik";
     }
     std::fprintf(
         stderr,
@@ -211,6 +240,11 @@ int run(int argc, char** argv) {
   }
   if (check_cmd->parsed() && check_joints->count() + check_time->count() == 0) {
     std::fprintf(stderr, "scanplan: error: check needs --joints or --time\n");
+    return static_cast<int>(ExitCode::kUsage);
+  }
+  if (batch_cmd->parsed() && !batch_report_cmd->parsed() && !batch_merge_cmd->parsed() &&
+      (batch.sweep_file.empty() || batch.out_dir.empty())) {
+    std::fprintf(stderr, "scanplan: error: batch needs a sweep file and -o OUT\n");
     return static_cast<int>(ExitCode::kUsage);
   }
   if (ik_cmd->parsed() && trans->count() + matrix->count() == 0) {
@@ -231,6 +265,13 @@ int run(int argc, char** argv) {
     if (map_cmd->parsed()) code = runMap(map);
     if (fk_cmd->parsed()) code = runFk(fk);
     if (ik_cmd->parsed()) code = runIk(ik);
+    if (batch_report_cmd->parsed()) {
+      code = runBatchReport(batch_report_dir);
+    } else if (batch_merge_cmd->parsed()) {
+      code = runBatchMerge(merge_inputs, merge_out);
+    } else if (batch_cmd->parsed()) {
+      code = runBatch(batch);
+    }
     return static_cast<int>(code);
   } catch (const InputError& e) {
     std::fprintf(stderr, "scanplan: error: %s\n", e.what());

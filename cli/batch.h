@@ -17,10 +17,10 @@ namespace scanplan::cli {
 
 /// One case of a sweep: a base job, its overrides and the repeat number.
 struct SweepCase {
-  std::size_t index = 0;     ///< position in the sweep's deterministic case order
-  std::string id;            ///< stable hash of (job as written, sorted overrides, repeat), hex
-  std::string job;           ///< the base job as the sweep file writes it
-  std::filesystem::path job_file;                         ///< resolved against the sweep file
+  std::size_t index = 0;  ///< position in the sweep's deterministic case order
+  std::string id;         ///< stable hash of (job as written, sorted overrides, repeat), hex
+  std::string job;        ///< the base job as the sweep file writes it
+  std::filesystem::path job_file;                           ///< resolved against the sweep file
   std::vector<std::pair<std::string, std::string>> params;  ///< the varied values (key, value)
   int repeat = 0;
   std::vector<std::string> overrides;  ///< `set` then the varied values, as for --set
@@ -41,10 +41,21 @@ Sweep loadSweep(const std::filesystem::path& file);
 bool inShard(const std::string& id, int shard, int count);
 
 /// The numbers of a result row, in column order (kBatchMetrics).
-inline constexpr std::array<const char*, 15> kBatchMetrics = {
-    "J_s",           "cost_f_s",         "cost_omega_s",    "cost_alpha_s", "dp_gap_percent",
-    "min_f",         "min_clearance_mm", "max_omega_deg_s", "max_alpha_deg_s2", "cycle_time_s",
-    "coverage",      "map_s",            "plan_s",          "validation_s", "simulation_s"};
+inline constexpr std::array<const char*, 15> kBatchMetrics = {"J_s",
+                                                              "cost_f_s",
+                                                              "cost_omega_s",
+                                                              "cost_alpha_s",
+                                                              "dp_gap_percent",
+                                                              "min_f",
+                                                              "min_clearance_mm",
+                                                              "max_omega_deg_s",
+                                                              "max_alpha_deg_s2",
+                                                              "cycle_time_s",
+                                                              "coverage",
+                                                              "map_s",
+                                                              "plan_s",
+                                                              "validation_s",
+                                                              "simulation_s"};
 /// Index of the first timing column: wall times vary run to run, everything before does not.
 inline constexpr std::size_t kFirstTimingMetric = 11;
 
@@ -65,9 +76,9 @@ struct BatchRow {
 struct BatchOptions {
   std::filesystem::path sweep_file;
   std::filesystem::path out_dir;
-  int jobs = 0;         ///< threads in all (cases and the work inside them); 0: every core
-  std::string shard;    ///< "I/N" (1 ≤ I ≤ N) or empty for all cases
-  bool resume = false;  ///< skip the cases results.jsonl already has
+  int jobs = 0;               ///< threads in all (cases and the work inside them); 0: every core
+  std::string shard;          ///< "I/N" (1 ≤ I ≤ N) or empty for all cases
+  bool resume = false;        ///< skip the cases results.jsonl already has
   std::size_t max_cases = 0;  ///< stop after this many cases (0: all); simulates an interruption
   bool reuse_maps = true;     ///< false: every case computes its own map (benchmarks)
   bool report = true;         ///< write summary.md, plots and the OMPL log at the end

@@ -7,7 +7,9 @@
 
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 #include <optional>
@@ -72,9 +74,15 @@ struct ActiveGroup {
   Eigen::Isometry3d X_GS = Eigen::Isometry3d::Identity();
 };
 
+// Embree packet width: the fan and the camera rays of a profile go to Embree in packets of
+// this many (16: AVX-512's native width; on narrower CPUs Embree splits them). Packets of
+// neighbouring rays measured 1.1–1.2x faster than the same rays as a coherent stream
+// (rtcIntersect1M/rtcOccluded1M); 8-wide camera packets were no better.
+constexpr std::size_t kPacket = 16;
+
 struct Scratch {
-  std::vector<RTCRayHit> rayhits;
-  std::vector<RTCRay> rays;
+  RTCRayHit16 fan_packet;  // 64-byte aligned (the type says so; TBB's storage honours it)
+  RTCRay16 camera_packet;
   std::vector<Hit> best;
   std::vector<Candidate> candidates;
   std::vector<std::size_t> pending;
@@ -139,19 +147,25 @@ std::optional<double> intersect(const std::array<Eigen::Vector3d, 3>& tri,
   return t;
 }
 
-void fillRay(RTCRay& ray, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_far) {
-  ray.org_x = static_cast<float>(o.x());
-  ray.org_y = static_cast<float>(o.y());
-  ray.org_z = static_cast<float>(o.z());
-  ray.dir_x = static_cast<float>(d.x());
-  ray.dir_y = static_cast<float>(d.y());
-  ray.dir_z = static_cast<float>(d.z());
-  ray.tnear = 0.0f;
-  ray.tfar = static_cast<float>(t_far);
-  ray.time = 0.0f;
-  ray.mask = 0xFFFFFFFFu;
-  ray.id = 0;
-  ray.flags = 0;
+// Lane j of a packet: the ray o + t·d, t in [0, t_far] (float, as Embree takes it).
+template <typename Packet>
+void fillLane(Packet& ray,
+              std::size_t j,
+              const Eigen::Vector3d& o,
+              const Eigen::Vector3d& d,
+              double t_far) noexcept {
+  ray.org_x[j] = static_cast<float>(o.x());
+  ray.org_y[j] = static_cast<float>(o.y());
+  ray.org_z[j] = static_cast<float>(o.z());
+  ray.dir_x[j] = static_cast<float>(d.x());
+  ray.dir_y[j] = static_cast<float>(d.y());
+  ray.dir_z[j] = static_cast<float>(d.z());
+  ray.tnear[j] = 0.0f;
+  ray.tfar[j] = static_cast<float>(t_far);
+  ray.time[j] = 0.0f;
+  ray.mask[j] = 0xFFFFFFFFu;
+  ray.id[j] = 0;
+  ray.flags[j] = 0;
 }
 
 }  // namespace
@@ -262,21 +276,31 @@ void ScanSimulator::Impl::castFan(const RunSetup& setup, Scratch& s) const {
     const Group& g = groups[static_cast<std::size_t>(a.index)];
     const Eigen::Vector3d o = a.X_GS.translation();
     if (backend == RayBackend::kEmbree) {
-      for (std::size_t k = 0; k < n; ++k) {
-        RTCRayHit& rh = s.rayhits[k];
-        fillRay(rh.ray, o, a.X_GS.linear() * setup.directions[k], s.best[k].t);
-        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-      }
+      // Neighbouring fan rays share the origin and nearly the direction: one packet each.
       RTCIntersectContext context;
       rtcInitIntersectContext(&context);
       context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-      rtcIntersect1M(g.scene, &context, s.rayhits.data(), static_cast<unsigned>(n),
-                     sizeof(RTCRayHit));
-      for (std::size_t k = 0; k < n; ++k) {
-        const RTCRayHit& rh = s.rayhits[k];
-        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
-        s.best[k] = {slot, rh.hit.geomID, rh.hit.primID, static_cast<double>(rh.ray.tfar)};
+      RTCRayHit16& rh = s.fan_packet;
+      assert(reinterpret_cast<std::uintptr_t>(&rh) % 64 == 0);
+      alignas(64) std::array<int, kPacket> valid{};
+      for (std::size_t base = 0; base < n; base += kPacket) {
+        const std::size_t count = std::min(kPacket, n - base);
+        for (std::size_t j = 0; j < kPacket; ++j) {
+          valid[j] = j < count ? -1 : 0;
+          if (j >= count) continue;
+          fillLane(rh.ray, j, o, a.X_GS.linear() * setup.directions[base + j], s.best[base + j].t);
+          rh.hit.geomID[j] = RTC_INVALID_GEOMETRY_ID;
+          rh.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
+        }
+        rtcIntersect16(valid.data(), g.scene, &context, &rh);
+        for (std::size_t j = 0; j < count; ++j) {
+          if (rh.hit.geomID[j] == RTC_INVALID_GEOMETRY_ID) continue;
+          s.best[base + j] = {slot, rh.hit.geomID[j], rh.hit.primID[j],
+                              static_cast<double>(rh.ray.tfar[j])};
+          // The hit triangles' planes (for the refinement) are scattered over megabytes: ask
+          // for them now, so that the cache misses overlap with the next packets' traversal.
+          __builtin_prefetch(g.meshes[rh.hit.geomID[j]].planes.data() + rh.hit.primID[j]);
+        }
       }
     } else {
       for (std::size_t k = 0; k < n; ++k) {
@@ -313,7 +337,6 @@ void ScanSimulator::Impl::cameraPass(const Eigen::Vector3d& camera,
   const std::size_t n = s.pending.size();
   stats.occlusion_rays += n;
   s.blocked.assign(n, 0);
-  s.rays.resize(std::max(s.rays.size(), n));
   s.origins.resize(n);
   s.towards.resize(n);
   s.lengths.resize(n);
@@ -327,20 +350,29 @@ void ScanSimulator::Impl::cameraPass(const Eigen::Vector3d& camera,
   for (const ActiveGroup& a : s.active) {
     const Group& g = groups[static_cast<std::size_t>(a.index)];
     if (backend == RayBackend::kEmbree) {
-      for (std::size_t i = 0; i < n; ++i) {
-        RTCRay& ray = s.rays[i];
-        fillRay(ray, a.X_GS * s.origins[i], a.X_GS.linear() * s.towards[i], s.lengths[i]);
-        if (s.blocked[i]) {  // inactive: tnear > tfar
-          ray.tnear = 1.0f;
-          ray.tfar = 0.0f;
-        }
-      }
+      // Rays of neighbouring candidates run side by side to the same camera centre: one packet
+      // each; rays already blocked by an earlier group are masked out.
       RTCIntersectContext context;
       rtcInitIntersectContext(&context);
       context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-      rtcOccluded1M(g.scene, &context, s.rays.data(), static_cast<unsigned>(n), sizeof(RTCRay));
-      for (std::size_t i = 0; i < n; ++i) {
-        if (!s.blocked[i] && s.rays[i].tfar < 0.0f) s.blocked[i] = 1;
+      RTCRay16& ray = s.camera_packet;
+      assert(reinterpret_cast<std::uintptr_t>(&ray) % 64 == 0);
+      alignas(64) std::array<int, kPacket> valid{};
+      for (std::size_t base = 0; base < n; base += kPacket) {
+        const std::size_t count = std::min(kPacket, n - base);
+        bool any = false;
+        for (std::size_t j = 0; j < kPacket; ++j) {
+          const std::size_t i = base + j;
+          valid[j] = j < count && !s.blocked[i] ? -1 : 0;
+          if (!valid[j]) continue;
+          any = true;
+          fillLane(ray, j, a.X_GS * s.origins[i], a.X_GS.linear() * s.towards[i], s.lengths[i]);
+        }
+        if (!any) continue;
+        rtcOccluded16(valid.data(), g.scene, &context, &ray);
+        for (std::size_t j = 0; j < count; ++j) {
+          if (valid[j] && ray.tfar[j] < 0.0f) s.blocked[base + j] = 1;
+        }
       }
     } else {
       for (std::size_t i = 0; i < n; ++i) {
@@ -398,19 +430,9 @@ void ScanSimulator::Impl::profile(const ScanFrame& frame,
   const std::size_t n = setup.directions.size();
   stats.laser_rays += n;
   s.best.resize(n);
-  s.rayhits.resize(n);
   for (std::size_t k = 0; k < n; ++k) s.best[k] = Hit{-1, 0, 0, setup.t_far[k]};
   castFan(setup, s);
 
-  // The hit triangles' planes are scattered over megabytes: ask for all of them first, so
-  // that the cache misses overlap instead of queueing one per ray.
-  for (std::size_t k = 0; k < n; ++k) {
-    const Hit& hit = s.best[k];
-    if (hit.slot < 0) continue;
-    const Group& g =
-        groups[static_cast<std::size_t>(s.active[static_cast<std::size_t>(hit.slot)].index)];
-    __builtin_prefetch(g.meshes[hit.mesh].planes.data() + hit.triangle);
-  }
   s.candidates.clear();
   for (std::size_t k = 0; k < n; ++k) {
     const Hit& hit = s.best[k];

@@ -15,6 +15,7 @@
 
 #include "cli/job.h"
 #include "cli_support.h"
+#include "geometry_support.h"
 #include "kinematics/mesh.h"
 #include "kinematics/trajectory.h"
 #include "kinematics/units.h"
@@ -161,32 +162,6 @@ TEST_F(CliVerify, SimulatedCloudLiesOnThePartAndCoverageIsReported) {
   EXPECT_EQ(r["points"].as<std::size_t>(), cloud.count);
 }
 
-// Closest distance from p to triangle abc (Ericson, Real-Time Collision Detection, 5.1.5).
-double pointTriangleDistance(const Eigen::Vector3d& p,
-                             const Eigen::Vector3d& a,
-                             const Eigen::Vector3d& b,
-                             const Eigen::Vector3d& c) {
-  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return (p - a).norm();
-  const Eigen::Vector3d bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return (p - b).norm();
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return (p - (a + d1 / (d1 - d3) * ab)).norm();
-  const Eigen::Vector3d cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return (p - c).norm();
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return (p - (a + d2 / (d2 - d6) * ac)).norm();
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
-    return (p - (b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b))).norm();
-  }
-  const double denom = 1.0 / (va + vb + vc);
-  return (p - (a + ab * (vb * denom) + ac * (vc * denom))).norm();
-}
-
 // The cloud `plan` writes lies on the part: every sampled point off the table top is within
 // 1e-4 mm of the part mesh (brute force over all triangles; the file stores float mm, so the
 // bound is the float rounding of a ~100 mm coordinate, ~4e-6 mm, well inside it).
@@ -209,8 +184,10 @@ TEST_F(CliVerify, PlannedCloudPointsLieOnThePartSurface) {
     if (std::abs(p.z()) < 1e-3) continue;  // the table top around the part
     double best = std::numeric_limits<double>::infinity();
     for (const auto& t : part.triangles) {
-      best = std::min(best, pointTriangleDistance(p * kMmToM, part.vertices[t.x()],
-                                                  part.vertices[t.y()], part.vertices[t.z()]));
+      best = std::min(
+          best, pointTriangleDistance(p * kMmToM, part.vertices[static_cast<std::size_t>(t.x())],
+                                      part.vertices[static_cast<std::size_t>(t.y())],
+                                      part.vertices[static_cast<std::size_t>(t.z())]));
     }
     worst_mm = std::max(worst_mm, toMm(best));
     ++checked;

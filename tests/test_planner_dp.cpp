@@ -16,9 +16,12 @@
 #include "planner/dp_planner.h"
 #include "planner/objective.h"
 
+#include "map_support.h"
+
 namespace {
 
 using namespace scanplan::planner;
+using scanplan::test::makeMap;
 constexpr double kPi = std::numbers::pi;
 using Status = PlanResult::Status;
 
@@ -30,27 +33,6 @@ constexpr double kSumRel = 1e-9;
     return ::testing::AssertionSuccess();
   }
   return ::testing::AssertionFailure() << what << ": " << actual << " vs expected " << expected;
-}
-
-// One branch; continuous: na angles over [0, 2π); limited: [-1, -1 + (na − 1)·step] rad.
-ConfigMap makeMap(std::size_t na,
-                  std::size_t nt,
-                  double dt,
-                  bool continuous,
-                  const std::function<float(std::size_t, std::size_t)>& f,
-                  double step = 0.1) {
-  ConfigMap map;
-  for (std::size_t i = 0; i < na; ++i) {
-    map.angles.push_back(continuous ? static_cast<double>(i) * 2.0 * kPi / static_cast<double>(na)
-                                    : -1.0 + static_cast<double>(i) * step);
-  }
-  for (std::size_t k = 0; k < nt; ++k) map.times.push_back(static_cast<double>(k) * dt);
-  map.branches.resize(1);
-  map.f.resize(na * nt);
-  for (std::size_t a = 0; a < na; ++a) {
-    for (std::size_t k = 0; k < nt; ++k) map.f[map.index(0, a, k)] = f(a, k);
-  }
-  return map;
 }
 
 double angleStep(const ConfigMap& map) { return map.angles[1] - map.angles[0]; }

@@ -18,35 +18,14 @@
 #include "planner/objective.h"
 #include "planner/ompl_planner.h"
 
+#include "map_support.h"
+
 namespace {
 
 using namespace scanplan::planner;
+using namespace scanplan::test;
 constexpr double kPi = std::numbers::pi;
 using Status = PlanResult::Status;
-
-// Objective terms are sums of a few hundred terms: rounding stays far below this.
-constexpr double kSumTol = 1e-9;
-
-// One branch; continuous: na angles over [0, 2π); limited: [-1, -1 + (na − 1)·step] rad.
-ConfigMap makeMap(std::size_t na,
-                  std::size_t nt,
-                  double dt,
-                  bool continuous,
-                  const std::function<float(std::size_t, std::size_t)>& f,
-                  double step = 0.1) {
-  ConfigMap map;
-  for (std::size_t i = 0; i < na; ++i) {
-    map.angles.push_back(continuous ? static_cast<double>(i) * 2.0 * kPi / static_cast<double>(na)
-                                    : -1.0 + static_cast<double>(i) * step);
-  }
-  for (std::size_t k = 0; k < nt; ++k) map.times.push_back(static_cast<double>(k) * dt);
-  map.branches.resize(1);
-  map.f.resize(na * nt);
-  for (std::size_t a = 0; a < na; ++a) {
-    for (std::size_t k = 0; k < nt; ++k) map.f[map.index(0, a, k)] = f(a, k);
-  }
-  return map;
-}
 
 // A deterministic budget: the iteration cap ends every run long before the clock.
 OmplSettings capped(std::size_t iterations, std::uint32_t seed = 1) {
@@ -55,35 +34,6 @@ OmplSettings capped(std::size_t iterations, std::uint32_t seed = 1) {
   os.time_limit_s = 30.0;
   os.seed = seed;
   return os;
-}
-
-// A solved path: one angle per sample, terms = evaluate(), feasible (f > 0, |ω|, |α| bounded).
-::testing::AssertionResult solvedAndFeasible(const ConfigMap& map,
-                                             const PlanResult& r,
-                                             const PlannerSettings& s,
-                                             bool continuous) {
-  if (r.status != Status::kSolved) {
-    return ::testing::AssertionFailure() << "kNoPath: " << r.reason << " [" << r.detail << "]";
-  }
-  if (r.theta.size() != map.times.size()) {
-    return ::testing::AssertionFailure() << r.theta.size() << " angles for " << map.times.size();
-  }
-  if (r.approximate) return ::testing::AssertionFailure() << "solved but flagged approximate";
-  const ObjectiveTerms e = evaluate(map, 0, r.theta, s, continuous);
-  if (!e.feasible || !(e.min_f > 0.0) || e.max_abs_omega > s.omega_max * (1 + kBoundTolerance) ||
-      e.max_abs_alpha > s.alpha_max * (1 + kBoundTolerance)) {
-    return ::testing::AssertionFailure() << "infeasible: min f " << e.min_f << ", max|w| "
-                                         << e.max_abs_omega << ", max|a| " << e.max_abs_alpha;
-  }
-  for (std::size_t k = 0; k < r.theta.size(); ++k) {
-    if (!(mapValue(map, 0, r.theta[k], k, continuous) > 0.0)) {
-      return ::testing::AssertionFailure() << "f = 0 at sample " << k;
-    }
-  }
-  if (std::abs(e.total - r.terms.total) > kSumTol * std::max(1.0, e.total)) {
-    return ::testing::AssertionFailure() << "J " << r.terms.total << " vs evaluate " << e.total;
-  }
-  return ::testing::AssertionSuccess();
 }
 
 // OMPL's J within `factor` of the DP optimum. DP is optimal only on its grid (OMPL moves off it),
@@ -104,9 +54,6 @@ OmplSettings capped(std::size_t iterations, std::uint32_t seed = 1) {
   return ::testing::AssertionSuccess();
 }
 
-// Circular distance between angle a and centre c (rad).
-double wrapDist(double a, double c) { return std::remainder(a - c, 2.0 * kPi); }
-
 TEST(OmplPlanner, StraightCorridorIsSolvedNearTheDpOptimum) {
   // Open only at grid angles 31..33 (5° grid), best at 32: DP stays on 32 and costs
   // J = −ln 0.9·Δt·N_t, the least any path can cost (f ≤ 0.9 everywhere, interpolation
@@ -119,7 +66,7 @@ TEST(OmplPlanner, StraightCorridorIsSolvedNearTheDpOptimum) {
   const PlannerSettings s;
   const PlanResult dp = planDp(map, 0, s, true);
   const PlanResult r = planOmpl(map, 0, s, true, capped(10000));
-  ASSERT_TRUE(solvedAndFeasible(map, r, s, true));
+  ASSERT_TRUE(solvedAndFeasible(map, r, s, true, kSamplingPlanner));
   EXPECT_NEAR(dp.terms.total, -std::log(double{0.9f}) * dt * static_cast<double>(nt), 1e-12);
   EXPECT_TRUE(nearDp(dp, r, 3.0, true));
   // f > 0 only between two open cells (mapValue()), so within one grid step of angle 32.
@@ -143,7 +90,7 @@ TEST(OmplPlanner, FollowsADriftingRidgeOnAContinuousTableAcrossTheWrap) {
     return std::abs(d) > 3.0 ? 0.0f : static_cast<float>(std::exp(-0.5 * d * d));
   });
   const PlanResult r = planOmpl(map, 0, s, true, capped(15000));
-  ASSERT_TRUE(solvedAndFeasible(map, r, s, true));
+  ASSERT_TRUE(solvedAndFeasible(map, r, s, true, kSamplingPlanner));
   for (std::size_t k = 0; k < nt; ++k) {
     EXPECT_LT(std::abs(wrapDist(r.theta[k], centre(k))), 3.0 * sigma) << "sample " << k;
   }
@@ -176,7 +123,7 @@ TEST(OmplPlanner, LeavesABlockedLaneAndReentersItWithinTheAccelerationBound) {
       step);
   const PlannerSettings s;
   const PlanResult r = planOmpl(map, 0, s, false, capped(15000), 0.0);
-  ASSERT_TRUE(solvedAndFeasible(map, r, s, false));
+  ASSERT_TRUE(solvedAndFeasible(map, r, s, false, kSamplingPlanner));
   EXPECT_EQ(r.theta.front(), 0.0);
   bool swerved = false;
   for (std::size_t k = 20; k < 30; ++k) swerved = swerved || std::abs(r.theta[k]) > 0.1;
@@ -199,7 +146,7 @@ TEST(OmplPlanner, LimitedTableStaysWithinItsRange) {
       step);
   const PlannerSettings s;
   const PlanResult r = planOmpl(map, 0, s, false, capped(10000), -0.3);
-  ASSERT_TRUE(solvedAndFeasible(map, r, s, false));
+  ASSERT_TRUE(solvedAndFeasible(map, r, s, false, kSamplingPlanner));
   for (std::size_t k = 0; k < r.theta.size(); ++k) {
     EXPECT_GE(r.theta[k], map.angles.front() - 1e-12) << "sample " << k;
     EXPECT_LE(r.theta[k], map.angles.back() + 1e-12) << "sample " << k;
@@ -214,7 +161,7 @@ TEST(OmplPlanner, FixedStartIsHonouredOnEitherTable) {
   // An unwrapped start beyond 2π stays as given (the path's first sample is the start).
   const double start = 2.0 * kPi + 1.234;
   const PlanResult r = planOmpl(cont, 0, s, true, capped(2500), start);
-  ASSERT_TRUE(solvedAndFeasible(cont, r, s, true));
+  ASSERT_TRUE(solvedAndFeasible(cont, r, s, true, kSamplingPlanner));
   EXPECT_EQ(r.theta.front(), start);
   // Uniform f: standing still is optimal and OMPL's J is at least that.
   EXPECT_GE(r.terms.total, -std::log(double{0.8f}) * 0.1 * 40 - 1e-12);
@@ -222,7 +169,7 @@ TEST(OmplPlanner, FixedStartIsHonouredOnEitherTable) {
   const ConfigMap lim = makeMap(
       21, 40, 0.1, false, [](std::size_t, std::size_t) { return 0.8f; }, 0.1);
   const PlanResult l = planOmpl(lim, 0, s, false, capped(2500), 0.35);
-  ASSERT_TRUE(solvedAndFeasible(lim, l, s, false));
+  ASSERT_TRUE(solvedAndFeasible(lim, l, s, false, kSamplingPlanner));
   EXPECT_EQ(l.theta.front(), 0.35);
 }
 
@@ -266,35 +213,6 @@ TEST(OmplPlanner, UnreachableJumpIsAnApproximateSolutionReportedAsNoPath) {
   EXPECT_NE(r.detail.find("approximate"), std::string::npos) << r.detail;
 }
 
-// f from a sum of seeded Gaussian bumps, zero where it falls below a threshold.
-ConfigMap randomMap(std::mt19937& rng, std::size_t na, std::size_t nt, bool continuous) {
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  struct Bump {
-    double theta, t, sigma_theta, sigma_t, height;
-  };
-  std::vector<Bump> bumps(8);
-  const double t_end = static_cast<double>(nt - 1) * 0.1;
-  for (Bump& b : bumps) {
-    b = {2.0 * kPi * u(rng), t_end * u(rng), 0.3 + 0.7 * u(rng), 0.5 + 2.0 * u(rng), u(rng)};
-  }
-  const double step = 2.0 * kPi / static_cast<double>(na);
-  return makeMap(
-      na, nt, 0.1, continuous,
-      [&](std::size_t a, std::size_t k) {
-        const double th =
-            continuous ? static_cast<double>(a) * step : -1.0 + static_cast<double>(a) * step;
-        const double t = static_cast<double>(k) * 0.1;
-        double v = 0.15;
-        for (const Bump& b : bumps) {
-          const double d = wrapDist(th, b.theta) / b.sigma_theta, e = (t - b.t) / b.sigma_t;
-          v += b.height * std::exp(-0.5 * (d * d + e * e));
-        }
-        v = std::min(v, 1.0);
-        return v < 0.25 ? 0.0f : static_cast<float>(v);
-      },
-      step);
-}
-
 TEST(OmplPlanner, SameSeedGivesTheSamePathInOneProcess) {
   // OMPL seeds all its generators from one process-wide generator: a run with another seed in
   // between must not change the second run with seed 42.
@@ -304,13 +222,13 @@ TEST(OmplPlanner, SameSeedGivesTheSamePathInOneProcess) {
   const PlanResult a = planOmpl(map, 0, s, true, capped(4000, 42));
   const PlanResult c = planOmpl(map, 0, s, true, capped(4000, 43));
   const PlanResult b = planOmpl(map, 0, s, true, capped(4000, 42));
-  ASSERT_TRUE(solvedAndFeasible(map, a, s, true));
+  ASSERT_TRUE(solvedAndFeasible(map, a, s, true, kSamplingPlanner));
   EXPECT_EQ(a.status, b.status);
   EXPECT_EQ(a.theta, b.theta);  // bit for bit
   EXPECT_EQ(a.terms.total, b.terms.total);
   EXPECT_EQ(a.reason, b.reason);
   // Another seed explores differently (guards against a seed that is silently ignored).
-  ASSERT_TRUE(solvedAndFeasible(map, c, s, true));
+  ASSERT_TRUE(solvedAndFeasible(map, c, s, true, kSamplingPlanner));
   EXPECT_NE(a.theta, c.theta);
 }
 
@@ -330,7 +248,7 @@ TEST(OmplPlanner, SolvedPathsAreFeasibleOnRandomMaps) {
       continue;
     }
     ++solved;
-    EXPECT_TRUE(solvedAndFeasible(map, r, s, continuous));
+    EXPECT_TRUE(solvedAndFeasible(map, r, s, continuous, kSamplingPlanner));
     // OMPL moves off DP's grid, so the gap is recorded, not asserted.
     if (dp.status == Status::kSolved)
       RecordProperty("gap_trial_" + std::to_string(trial),
@@ -348,14 +266,14 @@ TEST(OmplPlanner, RrtAndFirstSolutionModesGiveFeasiblePaths) {
   OmplSettings rrt = capped(10000);
   rrt.planner = OmplPlanner::kRrt;
   const PlanResult r = planOmpl(map, 0, s, true, rrt);
-  ASSERT_TRUE(solvedAndFeasible(map, r, s, true));
+  ASSERT_TRUE(solvedAndFeasible(map, r, s, true, kSamplingPlanner));
   EXPECT_NE(r.detail.find("RRT"), std::string::npos) << r.detail;
   OmplSettings first = capped(10000);
   first.stop_at_first_solution = true;
   const PlanResult f = planOmpl(map, 0, s, true, first);
-  ASSERT_TRUE(solvedAndFeasible(map, f, s, true));
+  ASSERT_TRUE(solvedAndFeasible(map, f, s, true, kSamplingPlanner));
   const PlanResult full = planOmpl(map, 0, s, true, capped(10000));
-  ASSERT_TRUE(solvedAndFeasible(map, full, s, true));
+  ASSERT_TRUE(solvedAndFeasible(map, full, s, true, kSamplingPlanner));
   EXPECT_LE(full.terms.total, f.terms.total + kSumTol);
 }
 
@@ -372,7 +290,7 @@ TEST(OmplPlanner, TheClockEndsAnUncappedSearch) {
   EXPECT_GE(r.seconds, os.time_limit_s);
   EXPECT_LT(r.seconds, os.time_limit_s + 2.0);
   if (r.status == Status::kSolved) {
-    EXPECT_TRUE(solvedAndFeasible(map, r, {}, true));
+    EXPECT_TRUE(solvedAndFeasible(map, r, {}, true, kSamplingPlanner));
   } else {
     EXPECT_NE(r.reason.find("time limit"), std::string::npos) << r.reason;
   }

@@ -19,59 +19,14 @@
 #include "planner/objective.h"
 #include "planner/ray_shooting.h"
 
+#include "map_support.h"
+
 namespace {
 
 using namespace scanplan::planner;
+using namespace scanplan::test;
 constexpr double kPi = std::numbers::pi;
 using Status = PlanResult::Status;
-
-// Objective terms are sums of a few hundred terms: rounding stays far below this.
-constexpr double kSumTol = 1e-9;
-
-// One branch; continuous: na angles over [0, 2π); limited: [-1, -1 + (na − 1)·step] rad.
-ConfigMap makeMap(std::size_t na,
-                  std::size_t nt,
-                  double dt,
-                  bool continuous,
-                  const std::function<float(std::size_t, std::size_t)>& f,
-                  double step = 0.1) {
-  ConfigMap map;
-  for (std::size_t i = 0; i < na; ++i) {
-    map.angles.push_back(continuous ? static_cast<double>(i) * 2.0 * kPi / static_cast<double>(na)
-                                    : -1.0 + static_cast<double>(i) * step);
-  }
-  for (std::size_t k = 0; k < nt; ++k) map.times.push_back(static_cast<double>(k) * dt);
-  map.branches.resize(1);
-  map.f.resize(na * nt);
-  for (std::size_t a = 0; a < na; ++a) {
-    for (std::size_t k = 0; k < nt; ++k) map.f[map.index(0, a, k)] = f(a, k);
-  }
-  return map;
-}
-
-// A solved path: one angle per sample, terms = evaluate(), feasible (f > 0, |ω|, |α| bounded).
-::testing::AssertionResult solvedAndFeasible(const ConfigMap& map,
-                                             const PlanResult& r,
-                                             const PlannerSettings& s,
-                                             bool continuous) {
-  if (r.status != Status::kSolved) return ::testing::AssertionFailure() << "kNoPath: " << r.reason;
-  if (r.theta.size() != map.times.size()) {
-    return ::testing::AssertionFailure() << r.theta.size() << " angles for " << map.times.size();
-  }
-  const ObjectiveTerms e = evaluate(map, 0, r.theta, s, continuous);
-  if (!e.feasible || !(e.min_f > 0.0) || e.max_abs_omega > s.omega_max * (1 + kBoundTolerance) ||
-      e.max_abs_alpha > s.alpha_max * (1 + kBoundTolerance)) {
-    return ::testing::AssertionFailure() << "infeasible: min f " << e.min_f << ", max|w| "
-                                         << e.max_abs_omega << ", max|a| " << e.max_abs_alpha;
-  }
-  if (std::abs(e.total - r.terms.total) > kSumTol * std::max(1.0, e.total)) {
-    return ::testing::AssertionFailure() << "J " << r.terms.total << " vs evaluate " << e.total;
-  }
-  return ::testing::AssertionSuccess();
-}
-
-// Circular distance between grid angle a and centre c (rad).
-double wrapDist(double a, double c) { return std::remainder(a - c, 2.0 * kPi); }
 
 TEST(RayShooting, StraightCorridorStaysOnItsBestAngle) {
   // Open only at grid angles 31..33 (5° grid), best at 32, every sample. Starting at 32 and
@@ -157,36 +112,6 @@ TEST(RayShooting, BlockedFirstColumnOrStartIsNoPathAtSampleZero) {
   const PlanResult none = planRayShooting(closed, 0, {}, true, {});
   EXPECT_EQ(none.status, Status::kNoPath);
   EXPECT_NE(none.reason.find("time sample 0 "), std::string::npos) << none.reason;
-}
-
-// f from a sum of seeded Gaussian bumps, zero where it falls below a threshold (so some maps
-// have forbidden regions).
-ConfigMap randomMap(std::mt19937& rng, std::size_t na, std::size_t nt, bool continuous) {
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  struct Bump {
-    double theta, t, sigma_theta, sigma_t, height;
-  };
-  std::vector<Bump> bumps(8);
-  const double t_end = static_cast<double>(nt - 1) * 0.1;
-  for (Bump& b : bumps) {
-    b = {2.0 * kPi * u(rng), t_end * u(rng), 0.3 + 0.7 * u(rng), 0.5 + 2.0 * u(rng), u(rng)};
-  }
-  const double step = 2.0 * kPi / static_cast<double>(na);
-  return makeMap(
-      na, nt, 0.1, continuous,
-      [&](std::size_t a, std::size_t k) {
-        const double th =
-            continuous ? static_cast<double>(a) * step : -1.0 + static_cast<double>(a) * step;
-        const double t = static_cast<double>(k) * 0.1;
-        double v = 0.15;
-        for (const Bump& b : bumps) {
-          const double d = wrapDist(th, b.theta) / b.sigma_theta, e = (t - b.t) / b.sigma_t;
-          v += b.height * std::exp(-0.5 * (d * d + e * e));
-        }
-        v = std::min(v, 1.0);
-        return v < 0.25 ? 0.0f : static_cast<float>(v);
-      },
-      step);
 }
 
 TEST(RayShooting, SolvedPathsAreFeasibleOnRandomMapsAndTheDpGapIsRecorded) {

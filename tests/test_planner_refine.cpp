@@ -21,85 +21,19 @@
 #include "planner/ray_shooting.h"
 #include "planner/refine.h"
 
+#include "map_support.h"
+
 namespace {
 
 using namespace scanplan::planner;
+using namespace scanplan::test;
 constexpr double kPi = std::numbers::pi;
 using Status = PlanResult::Status;
 
-// Objective terms are sums of a few thousand terms: rounding stays far below this.
-constexpr double kSumTol = 1e-9;
 // Central differences with h = 1e-6 rad: truncation O(h²·J''') and rounding O(1e-16·J/h) both
 // sit below this relative error on these maps.
 constexpr double kGradTol = 1e-5;
 constexpr double kFdStep = 1e-6;
-
-// One branch; continuous: na angles over [0, 2π); limited: [-1, -1 + (na − 1)·step] rad.
-ConfigMap makeMap(std::size_t na,
-                  std::size_t nt,
-                  double dt,
-                  bool continuous,
-                  const std::function<float(std::size_t, std::size_t)>& f,
-                  double step = 0.1) {
-  ConfigMap map;
-  for (std::size_t i = 0; i < na; ++i) {
-    map.angles.push_back(continuous ? static_cast<double>(i) * 2.0 * kPi / static_cast<double>(na)
-                                    : -1.0 + static_cast<double>(i) * step);
-  }
-  for (std::size_t k = 0; k < nt; ++k) map.times.push_back(static_cast<double>(k) * dt);
-  map.branches.resize(1);
-  map.f.resize(na * nt);
-  for (std::size_t a = 0; a < na; ++a) {
-    for (std::size_t k = 0; k < nt; ++k) map.f[map.index(0, a, k)] = f(a, k);
-  }
-  return map;
-}
-
-// Circular distance between grid angle a and centre c (rad).
-double wrapDist(double a, double c) { return std::remainder(a - c, 2.0 * kPi); }
-
-// f from a sum of seeded Gaussian bumps; with `cut`, zero where it falls below 0.25 (forbidden
-// regions), and `holes` elliptic forbidden blobs (up to ±0.3 rad × ±1.8 s) the path has to pass.
-// Limited tables span [-1, -1 + 2π·(na − 1)/na].
-ConfigMap randomMap(
-    std::mt19937& rng, std::size_t na, std::size_t nt, bool continuous, bool cut, int holes = 0) {
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  struct Bump {
-    double theta, t, sigma_theta, sigma_t, height;
-  };
-  std::vector<Bump> bumps(8);
-  const double t_end = static_cast<double>(nt - 1) * 0.1;
-  for (Bump& b : bumps) {
-    b = {2.0 * kPi * u(rng), t_end * u(rng), 0.3 + 0.7 * u(rng), 0.5 + 2.0 * u(rng), u(rng)};
-  }
-  struct Hole {
-    double theta, t, half_theta, half_t;
-  };
-  std::vector<Hole> hole(static_cast<std::size_t>(holes));
-  for (Hole& h : hole) {
-    h = {2.0 * kPi * u(rng), t_end * u(rng), 0.05 + 0.25 * u(rng), 0.3 + 1.5 * u(rng)};
-  }
-  const double step = 2.0 * kPi / static_cast<double>(na);
-  return makeMap(
-      na, nt, 0.1, continuous,
-      [&](std::size_t a, std::size_t k) {
-        const double th =
-            continuous ? static_cast<double>(a) * step : -1.0 + static_cast<double>(a) * step;
-        const double t = static_cast<double>(k) * 0.1;
-        double v = 0.15;
-        for (const Bump& b : bumps) {
-          const double d = wrapDist(th, b.theta) / b.sigma_theta, e = (t - b.t) / b.sigma_t;
-          v += b.height * std::exp(-0.5 * (d * d + e * e));
-        }
-        v = std::min(v, 1.0);
-        for (const Hole& h : hole) {
-          const double d = wrapDist(th, h.theta) / h.half_theta, e = (t - h.t) / h.half_t;
-          if (d * d + e * e < 1.0) return 0.0f;
-        }
-        return cut && v < 0.25 ? 0.0f : static_cast<float>(v);
-      },
-      step);
-}
 
 // The guarantees: feasible per evaluate(), J not above the input's, `after` = evaluate(theta),
 // and an unimproved result is the input itself.

@@ -1,0 +1,1085 @@
+// `scanplan batch`: sweep files, case expansion, running cases in parallel with map reuse,
+// the results files, summary, plots, shard merge and the OMPL benchmark log.
+#include "cli/batch.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <sstream>
+#include <tuple>
+
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/info.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+#include <yaml-cpp/yaml.h>
+
+#include "cli/commands.h"
+#include "cli/format.h"
+#include "cli/image_io.h"
+#include "cli/job.h"
+#include "cli/planning.h"
+#include "cli/verify.h"
+#include "collision/scene.h"
+#include "kinematics/error.h"
+#include "kinematics/units.h"
+#include "planner/trajectory_builder.h"
+
+namespace scanplan::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+std::uint64_t fnv1a(const std::string& text) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (const char c : text) {
+    h ^= static_cast<unsigned char>(c);
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+constexpr std::size_t kJ = 0, kCostF = 1, kCostOmega = 2, kCostAlpha = 3, kGap = 4, kMinF = 5,
+                      kClearance = 6, kOmega = 7, kAlpha = 8, kCycle = 9, kCoverage = 10,
+                      kMapS = 11, kPlanS = 12, kValidationS = 13, kSimulationS = 14;
+
+// ---- the sweep file -------------------------------------------------------------------------
+
+std::string where(const fs::path& file, const YAML::Node& node) {
+  const YAML::Mark m = node.Mark();
+  return m.line >= 0 ? fmt::format("{}:{}:{}", file.string(), m.line + 1, m.column + 1)
+                     : file.string();
+}
+
+// A value as --set takes it: scalars as written, lists and maps as flow YAML.
+std::string valueText(const YAML::Node& node) {
+  if (node.IsScalar()) return node.Scalar();
+  YAML::Emitter out;
+  out.SetMapFormat(YAML::Flow);
+  out.SetSeqFormat(YAML::Flow);
+  out << node;
+  return out.c_str();
+}
+
+std::string numberText(double v) {
+  const double rounded = std::round(v);
+  if (std::abs(v - rounded) < 1e-9 * std::max(1.0, std::abs(v))) v = rounded;
+  return fmt::format("{}", v);
+}
+
+// A list of values, or a range {from, to, step}.
+std::vector<std::string> valueList(const fs::path& file,
+                                   const std::string& key,
+                                   const YAML::Node& node) {
+  const std::string at = fmt::format("{}: vary.{}", where(file, node), key);
+  std::vector<std::string> values;
+  if (node.IsSequence()) {
+    for (const YAML::Node& v : node) values.push_back(valueText(v));
+  } else if (node.IsMap()) {
+    const auto number = [&](const char* name, std::optional<double> fallback) {
+      const YAML::Node n = node[name];
+      if (!n) {
+        if (fallback) return *fallback;
+        throw InputError(
+            fmt::format("{}: a range needs '{}': expected {{from, to, step}}", at, name));
+      }
+      try {
+        const double v = n.as<double>();
+        if (std::isfinite(v)) return v;
+      } catch (const YAML::Exception&) {
+      }
+      throw InputError(
+          fmt::format("{}.{}: '{}': expected a finite number", at, name, valueText(n)));
+    };
+    for (const auto& kv : node) {
+      const auto name = kv.first.as<std::string>();
+      if (name != "from" && name != "to" && name != "step") {
+        throw InputError(fmt::format("{}: unknown key '{}': expected from, to, step", at, name));
+      }
+    }
+    const double from = number("from", {}), to = number("to", {}), step = number("step", 1.0);
+    if (!(step > 0.0) || to < from) {
+      throw InputError(fmt::format("{}: from {} to {} step {}: expected step > 0 and to >= from",
+                                   at, from, to, step));
+    }
+    const auto n = static_cast<std::size_t>(std::floor((to - from) / step + 1e-9)) + 1;
+    if (n > 100000) throw InputError(fmt::format("{}: {} values: expected at most 100000", at, n));
+    for (std::size_t i = 0; i < n; ++i) {
+      values.push_back(numberText(from + static_cast<double>(i) * step));
+    }
+  } else {
+    values.push_back(valueText(node));
+  }
+  if (values.empty()) throw InputError(at + ": an empty list: expected at least one value");
+  return values;
+}
+
+std::string caseId(const std::string& job, const std::vector<std::string>& overrides, int repeat) {
+  std::vector<std::string> sorted = overrides;
+  std::sort(sorted.begin(), sorted.end());
+  std::string text = job + "\n";
+  for (const std::string& o : sorted) text += o + "\n";
+  text += std::to_string(repeat);
+  return fmt::format("{:016x}", fnv1a(text));
+}
+
+// ---- results files --------------------------------------------------------------------------
+
+std::string jsonString(const std::string& s) {
+  std::string out = "\"";
+  for (const char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (c == '\n') {
+      out += "\\n";
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      out += fmt::format("\\u{:04x}", static_cast<int>(c));
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+std::string numberOrEmpty(const std::optional<double>& v, const char* empty) {
+  return v && std::isfinite(*v) ? fmt::format("{}", *v) : std::string(empty);
+}
+
+std::string jsonLine(const BatchRow& row) {
+  std::string out = fmt::format("{{\"case_id\": {}, \"index\": {}, \"job\": {}, \"params\": {{",
+                                jsonString(row.case_id), row.index, jsonString(row.job));
+  for (std::size_t i = 0; i < row.params.size(); ++i) {
+    out += fmt::format("{}{}: {}", i ? ", " : "", jsonString(row.params[i].first),
+                       jsonString(row.params[i].second));
+  }
+  out +=
+      fmt::format("}}, \"repeat\": {}, \"method\": {}, \"status\": {}, \"reason\": {}", row.repeat,
+                  jsonString(row.method), jsonString(row.status), jsonString(row.reason));
+  for (std::size_t m = 0; m < kBatchMetrics.size(); ++m) {
+    out += fmt::format(", \"{}\": {}", kBatchMetrics[m], numberOrEmpty(row.metrics[m], "null"));
+  }
+  out += fmt::format(", \"map_reused\": {}}}\n", row.map_reused ? "true" : "false");
+  return out;
+}
+
+std::string csvField(const std::string& s) {
+  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  std::string out = "\"";
+  for (const char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
+std::string csvHeader(const std::vector<std::string>& keys) {
+  std::string out = "case_id,job";
+  for (const std::string& k : keys) out += "," + csvField(k);
+  out += ",repeat,method,status,reason";
+  for (const char* m : kBatchMetrics) out += fmt::format(",{}", m);
+  return out + ",map_reused\n";
+}
+
+std::string paramValue(const BatchRow& row, const std::string& key) {
+  for (const auto& [k, v] : row.params) {
+    if (k == key) return v;
+  }
+  return {};
+}
+
+std::string csvLine(const BatchRow& row, const std::vector<std::string>& keys) {
+  std::string out = row.case_id + "," + csvField(row.job);
+  for (const std::string& k : keys) out += "," + csvField(paramValue(row, k));
+  out += fmt::format(",{},{},{},{}", row.repeat, csvField(row.method), csvField(row.status),
+                     csvField(row.reason));
+  for (const auto& v : row.metrics) out += "," + numberOrEmpty(v, "");
+  return out + (row.map_reused ? ",true\n" : ",false\n");
+}
+
+// The varied keys of a set of rows, in order of first appearance.
+std::vector<std::string> rowKeys(const std::vector<BatchRow>& rows) {
+  std::vector<std::string> keys;
+  for (const BatchRow& r : rows) {
+    for (const auto& [k, v] : r.params) {
+      if (std::find(keys.begin(), keys.end(), k) == keys.end()) keys.push_back(k);
+    }
+  }
+  return keys;
+}
+
+void sortRows(std::vector<BatchRow>& rows) {
+  std::sort(rows.begin(), rows.end(), [](const BatchRow& a, const BatchRow& b) {
+    return std::tie(a.index, a.case_id) < std::tie(b.index, b.case_id);
+  });
+}
+
+// Both results files, complete and sorted, written atomically.
+void writeResults(const fs::path& out,
+                  const std::vector<BatchRow>& rows,
+                  const std::vector<std::string>& keys) {
+  std::string csv = csvHeader(keys), jsonl;
+  for (const BatchRow& r : rows) {
+    csv += csvLine(r, keys);
+    jsonl += jsonLine(r);
+  }
+  writeFileAtomically(out / "results.jsonl", jsonl);
+  writeFileAtomically(out / "results.csv", csv);
+}
+
+// Appends rows as cases finish (from any worker thread).
+class RowSink {
+ public:
+  RowSink(const fs::path& out, std::vector<std::string> keys)
+      : keys_(std::move(keys)),
+        csv_(out / "results.csv", std::ios::binary | std::ios::app),
+        jsonl_(out / "results.jsonl", std::ios::binary | std::ios::app) {
+    if (!csv_ || !jsonl_) {
+      throw InputError(fmt::format("{}: cannot append to the results files", out.string()));
+    }
+  }
+  void append(const BatchRow& row) {
+    const std::string json = jsonLine(row), csv = csvLine(row, keys_);
+    const std::lock_guard<std::mutex> lock(mutex_);
+    jsonl_ << json << std::flush;
+    csv_ << csv << std::flush;
+  }
+
+ private:
+  std::vector<std::string> keys_;
+  std::mutex mutex_;
+  std::ofstream csv_, jsonl_;
+};
+
+// ---- running a case -------------------------------------------------------------------------
+
+// Everything a case needs that depends only on the map-relevant part of the job.
+struct MapBundle {
+  explicit MapBundle(const JobSpec& job) : cell(buildCell(job)) {}
+  kinematics::CellModel cell;
+  PathContext context;
+  std::unique_ptr<collision::Scene> scene;
+  planner::ConfigMap map;
+  double map_seconds = 0.0;
+};
+
+std::vector<kinematics::IkBranch> mapBranches(const JobSpec& job) {
+  if (job.map.branch != "auto") return {*parseBranch(job.map.branch)};
+  std::vector<kinematics::IkBranch> all;
+  for (int i = 0; i < 8; ++i) all.push_back(kinematics::IkBranch::fromIndex(i));
+  return all;
+}
+
+std::unique_ptr<MapBundle> buildBundle(const JobSpec& job) {
+  auto bundle = std::make_unique<MapBundle>(job);
+  bundle->context = buildPath(job, bundle->cell);
+  bundle->scene = std::make_unique<collision::Scene>(bundle->cell, clearanceConfig(job));
+  planner::MapRequest request;
+  request.angle_step = deg(job.map.angle_step_deg);
+  request.branches = mapBranches(job);
+  request.memory_limit_bytes = static_cast<std::size_t>(job.map.memory_limit_mb * 1024.0 * 1024.0);
+  const auto start = Clock::now();
+  bundle->map = planner::buildConfigMap(*bundle->scene, constraintSettings(job),
+                                        bundle->context.generated.path, request, {});
+  bundle->map_seconds = since(start);
+  return bundle;
+}
+
+// The settings that change the map: the job without its planner, validation, simulation and
+// output sections (and its name). Cases with the same key share one map.
+std::string mapKey(const JobSpec& job) {
+  JobSpec copy = job;
+  copy.name.clear();
+  copy.planner = PlannerSpec{};
+  copy.validation = ValidationSpec{};
+  copy.simulation = SimulationSpec{};
+  copy.outputs = OutputsSpec{};
+  return job.source.string() + "#" + jobHash(copy);
+}
+
+BatchRow rowFor(const SweepCase& c) {
+  BatchRow row;
+  row.index = c.index;
+  row.case_id = c.id;
+  row.job = c.job;
+  row.params = c.params;
+  row.repeat = c.repeat;
+  return row;
+}
+
+// The `plan` pipeline after the map (commands_plan.cpp), without its files.
+void planCase(const JobSpec& job, const MapBundle& bundle, BatchRow& row) {
+  using Status = planner::PlanResult::Status;
+  auto& m = row.metrics;
+  m[kMapS] = bundle.map_seconds;
+  const planner::ConfigMap& map = bundle.map;
+  const kinematics::ScanPath& path = bundle.context.generated.path;
+  double trajectory_s = 0.0;
+  std::optional<planner::TrajectoryBuild> candidate;
+  // As in `plan`: a path is accepted only when the arm can follow it with f > 0 throughout.
+  const auto check = [&](std::size_t b, const std::vector<double>& theta) -> std::string {
+    const auto t = Clock::now();
+    candidate = planner::buildTrajectory(*bundle.scene, constraintSettings(job), path, theta,
+                                         map.branches[b]);
+    trajectory_s += since(t);
+    if (!candidate->ok) return candidate->reason;
+    if (!(candidate->min_f > 0.0)) return "f = 0 between the map's grid angles";
+    return {};
+  };
+  const auto t0 = Clock::now();
+  const PlanningOutcome planning = planJob(map, job, job.planner.method, false, false, check);
+  m[kPlanS] = since(t0) - trajectory_s;
+  row.method = planning.chosen.method;
+  if (planning.dp && planning.dp->status == Status::kSolved) {
+    if (const auto gap = planning.dpGap()) m[kGap] = 100.0 * *gap;
+  }
+  if (!planning.solved()) {
+    row.status = planning.rejected.empty() ? "no_path" : "no_executable_path";
+    row.reason = planning.chosen.result.reason;
+    return;
+  }
+  const planner::ObjectiveTerms& t = planning.terms;
+  m[kJ] = t.total;
+  m[kCostF] = t.cost_f;
+  m[kCostOmega] = t.cost_omega;
+  m[kCostAlpha] = t.cost_alpha;
+  m[kOmega] = toDeg(t.max_abs_omega);
+  m[kAlpha] = toDeg(t.max_abs_alpha);
+  m[kCycle] = map.times.back() - map.times.front();
+  const planner::TrajectoryBuild& trajectory = *candidate;  // the accepted branch's
+  m[kMinF] = trajectory.min_f;
+  if (std::isfinite(trajectory.min_clearance)) m[kClearance] = toMm(trajectory.min_clearance);
+  if (job.validation.enabled) {
+    const auto tv = Clock::now();
+    const planner::ValidationReport validation =
+        planner::validateTrajectory(*bundle.scene, trajectory.trajectory, validationSettings(job));
+    m[kValidationS] = since(tv);
+    if (!validation.valid) {
+      row.status = "invalid_trajectory";
+      row.reason = fmt::format("validation found {} violation(s)", validation.violations.size());
+      return;
+    }
+  }
+  if (job.simulation.enabled) {
+    const auto ts = Clock::now();
+    const SimulationRun simulation =
+        simulateTrajectory(job, bundle.cell, bundle.context.part.mesh, trajectory.trajectory);
+    m[kSimulationS] = since(ts);
+    m[kCoverage] = simulation.coverage.covered_fraction;
+  }
+  row.status = "planned";
+}
+
+template <typename F>
+void isolate(BatchRow& row, F&& work) {
+  try {
+    work();
+  } catch (const std::exception& e) {
+    row.status = "error";
+    row.reason = e.what();
+  }
+}
+
+std::pair<int, int> parseShard(const std::string& text) {
+  int shard = 0, count = 0;
+  char slash = 0, extra = 0;
+  std::istringstream in(text);
+  if (!(in >> shard >> slash >> count) || slash != '/' || (in >> extra) || count < 1 || shard < 1 ||
+      shard > count) {
+    throw InputError(fmt::format("--shard '{}': expected I/N with 1 <= I <= N, e.g. 2/8", text));
+  }
+  return {shard, count};
+}
+
+// ---- report: summary, plots, OMPL log ---------------------------------------------------------
+
+bool isSeedKey(const std::string& key) {
+  const std::size_t dot = key.rfind('.');
+  return key.substr(dot == std::string::npos ? 0 : dot + 1).find("seed") != std::string::npos;
+}
+
+// A setting: the job and the varied values except seeds (runs of a setting differ by seed and
+// repeat only).
+std::string settingOf(const BatchRow& row, const std::vector<std::string>& keys) {
+  std::string text = row.job;
+  for (const std::string& k : keys) {
+    if (!isSeedKey(k)) text += " " + k + "=" + paramValue(row, k);
+  }
+  return text;
+}
+
+struct Mean {
+  double sum = 0.0;
+  int n = 0;
+  void add(const std::optional<double>& v) {
+    if (v && std::isfinite(*v)) {
+      sum += *v;
+      ++n;
+    }
+  }
+  std::string text(const char* format = "{:.4g}") const {
+    return n ? fmt::format(fmt::runtime(format), sum / n) : std::string("–");
+  }
+};
+
+std::string summaryMarkdown(const std::vector<BatchRow>& rows,
+                            const std::vector<std::string>& keys,
+                            const std::vector<std::string>& figures) {
+  std::map<std::string, int> statuses;
+  for (const BatchRow& r : rows) ++statuses[r.status];
+  std::string md = "# scanplan batch summary\n\n";
+  md += fmt::format("{} case(s):", rows.size());
+  for (const auto& [s, n] : statuses) md += fmt::format(" {} {},", n, s);
+  md.back() = '\n';
+  md += "\nMeans per setting (over seeds and repeats; J and its gap over planned cases only).\n\n";
+  md += "| job |";
+  std::vector<std::string> shown;
+  for (const std::string& k : keys) {
+    if (!isSeedKey(k)) shown.push_back(k);
+  }
+  for (const std::string& k : shown) md += " " + k + " |";
+  md +=
+      " cases | planned | J (s) | DP gap (%) | min f | cycle (s) | coverage | plan (s) | map (s) "
+      "|\n|---|";
+  for (std::size_t i = 0; i < shown.size(); ++i) md += "---|";
+  md += "---|---|---|---|---|---|---|---|---|\n";
+  std::vector<std::string> order;
+  std::map<std::string, std::vector<const BatchRow*>> groups;
+  for (const BatchRow& r : rows) {
+    const std::string s = settingOf(r, keys);
+    if (!groups.count(s)) order.push_back(s);
+    groups[s].push_back(&r);
+  }
+  for (const std::string& s : order) {
+    const auto& group = groups[s];
+    Mean j, gap, minf, cycle, coverage, plan, map;
+    int planned = 0;
+    for (const BatchRow* r : group) {
+      planned += r->status == "planned" ? 1 : 0;
+      j.add(r->metrics[kJ]);
+      gap.add(r->metrics[kGap]);
+      minf.add(r->metrics[kMinF]);
+      cycle.add(r->metrics[kCycle]);
+      coverage.add(r->metrics[kCoverage]);
+      plan.add(r->metrics[kPlanS]);
+      map.add(r->metrics[kMapS]);
+    }
+    md += "| " + group.front()->job + " |";
+    for (const std::string& k : shown) md += " " + paramValue(*group.front(), k) + " |";
+    md += fmt::format(" {} | {} | {} | {} | {} | {} | {} | {} | {} |\n", group.size(), planned,
+                      j.text(), gap.text("{:.2f}"), minf.text(), cycle.text(), coverage.text(),
+                      plan.text("{:.3f}"), map.text("{:.2f}"));
+  }
+  const std::vector<const BatchRow*> failed = [&] {
+    std::vector<const BatchRow*> out;
+    for (const BatchRow& r : rows) {
+      if (r.status != "planned") out.push_back(&r);
+    }
+    return out;
+  }();
+  if (!failed.empty()) {
+    md += "\nCases without a plan:\n\n";
+    for (const BatchRow* r : failed) {
+      md += fmt::format("- `{}` {}: {}\n", r->case_id, r->status, r->reason);
+    }
+  }
+  if (!figures.empty()) {
+    md += "\nFigures (each metric against each varied value, one colour per planner):\n\n";
+    for (const std::string& f : figures) md += fmt::format("- [{0}](plots/{0}.svg)\n", f);
+  }
+  return md;
+}
+
+Rgb methodColour(const std::string& method) {
+  if (method == "dp") return categoryColour(4);
+  if (method == "ompl") return categoryColour(2);
+  if (method == "ray") return categoryColour(5);
+  return categoryColour(7);
+}
+
+std::string fileStem(const std::string& text) {
+  std::string out;
+  for (const char c : text) out += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+  return out;
+}
+
+std::optional<double> numberOf(const std::string& text) {
+  try {
+    std::size_t used = 0;
+    const double v = std::stod(text, &used);
+    if (used == text.size() && std::isfinite(v)) return v;
+  } catch (const std::exception&) {
+  }
+  return std::nullopt;
+}
+
+// One metric against one varied value: a point per case, a line through each planner's means;
+// categorical values are placed at 0, 1, 2, … and the planners side by side at each.
+// Returns false when no case has the metric.
+bool writePlot(const fs::path& dir,
+               const std::string& stem,
+               const std::vector<BatchRow>& rows,
+               const std::string& key,
+               std::size_t metric) {
+  std::vector<std::string> values;  // distinct values of `key`, in order of appearance
+  bool numeric = true;
+  for (const BatchRow& r : rows) {
+    const std::string v = paramValue(r, key);
+    if (std::find(values.begin(), values.end(), v) == values.end()) values.push_back(v);
+    numeric = numeric && numberOf(v).has_value();
+  }
+  if (numeric) {
+    std::sort(values.begin(), values.end(), [](const std::string& a, const std::string& b) {
+      return *numberOf(a) < *numberOf(b);
+    });
+  }
+  std::vector<std::string> methods;
+  for (const BatchRow& r : rows) {
+    if (std::find(methods.begin(), methods.end(), r.method) == methods.end()) {
+      methods.push_back(r.method);
+    }
+  }
+  const auto position = [&](const std::string& v) {
+    if (numeric) return *numberOf(v);
+    return static_cast<double>(std::find(values.begin(), values.end(), v) - values.begin());
+  };
+  double x0 = position(values.front()), x1 = position(values.back());
+  const double xpad = x1 > x0 ? 0.08 * (x1 - x0) : 0.5;
+  x0 -= xpad;
+  x1 += xpad;
+  const double spread = (x1 - x0) * 0.012;  // planners side by side at one value
+  double y0 = std::numeric_limits<double>::infinity(), y1 = -y0;
+  for (const BatchRow& r : rows) {
+    if (r.metrics[metric] && std::isfinite(*r.metrics[metric])) {
+      y0 = std::min(y0, *r.metrics[metric]);
+      y1 = std::max(y1, *r.metrics[metric]);
+    }
+  }
+  if (!std::isfinite(y0)) return false;
+  const double ypad = y1 > y0 ? 0.08 * (y1 - y0) : std::max(0.5, 0.1 * std::abs(y0));
+  y0 -= ypad;
+  y1 += ypad;
+  constexpr int kW = 720, kH = 480;
+  RgbImage image = RgbImage::filled(kW, kH, {255, 255, 255});
+  const auto px = [&](double x) { return (x - x0) / (x1 - x0) * kW; };
+  const auto py = [&](double y) { return (1.0 - (y - y0) / (y1 - y0)) * kH; };
+  std::vector<std::pair<Rgb, std::string>> legend;
+  for (std::size_t mi = 0; mi < methods.size(); ++mi) {
+    const Rgb colour = methodColour(methods[mi]);
+    const double offset =
+        (static_cast<double>(mi) - 0.5 * static_cast<double>(methods.size() - 1)) * spread;
+    std::vector<std::pair<double, double>> means;
+    for (const std::string& v : values) {
+      Mean mean;
+      for (const BatchRow& r : rows) {
+        if (r.method != methods[mi] || paramValue(r, key) != v) continue;
+        mean.add(r.metrics[metric]);
+        if (r.metrics[metric] && std::isfinite(*r.metrics[metric])) {
+          const double x = px(position(v) + offset), y = py(*r.metrics[metric]);
+          drawLine(image, x - 3, y - 3, x + 3, y + 3, colour, 2);
+          drawLine(image, x - 3, y + 3, x + 3, y - 3, colour, 2);
+        }
+      }
+      if (mean.n) means.emplace_back(px(position(v) + offset), py(mean.sum / mean.n));
+    }
+    for (std::size_t i = 1; i < means.size(); ++i) {
+      drawLine(image, means[i - 1].first, means[i - 1].second, means[i].first, means[i].second,
+               colour, 2);
+    }
+    legend.emplace_back(colour, methods[mi].empty() ? std::string("(no planner)") : methods[mi]);
+  }
+  writePng(dir / (stem + ".png"), image);
+  SvgFigure figure;
+  figure.png_file = stem + ".png";
+  figure.png_width = kW;
+  figure.png_height = kH;
+  figure.title = std::string(kBatchMetrics[metric]) + " against " + key;
+  figure.x_label = key;
+  if (!numeric) {
+    figure.x_label += " (";
+    for (std::size_t i = 0; i < values.size(); ++i) {
+      figure.x_label += fmt::format("{}{} = {}", i ? ", " : "", i, values[i]);
+    }
+    figure.x_label += ")";
+  }
+  figure.y_label = kBatchMetrics[metric];
+  figure.x_min = x0;
+  figure.x_max = x1;
+  figure.y_min = y0;
+  figure.y_max = y1;
+  figure.legend = legend;
+  writeFileAtomically(dir / (stem + ".svg"), svgFigure(figure));
+  return true;
+}
+
+// OMPL's benchmark log (ompl/doc/markdown/benchmark.md, "The benchmark logfile format"), read by
+// ompl_benchmark_statistics.py into the database Planner Arena shows: one experiment, a
+// "planner" per setting (seeds and repeats are its runs).
+std::string omplLog(const std::vector<BatchRow>& rows, const std::vector<std::string>& keys) {
+  std::vector<std::string> order;
+  std::map<std::string, std::vector<const BatchRow*>> planners;
+  for (const BatchRow& r : rows) {
+    std::string name = r.method.empty() ? std::string("none") : r.method;
+    for (const std::string& k : keys) {
+      if (!isSeedKey(k) && k != "planner.method") name += "_" + k + "=" + paramValue(r, k);
+    }
+    if (rows.size() > 0 && r.job != rows.front().job) name += "_" + r.job;
+    name = [&] {
+      std::string out;
+      for (const char c : name) out += std::isspace(static_cast<unsigned char>(c)) ? '_' : c;
+      return out;
+    }();
+    if (!planners.count(name)) order.push_back(name);
+    planners[name].push_back(&r);
+  }
+  char host[256] = "localhost";
+  ::gethostname(host, sizeof host - 1);
+  double total = 0.0;
+  for (const BatchRow& r : rows) {
+    for (std::size_t m = kFirstTimingMetric; m < kBatchMetrics.size(); ++m) {
+      total += r.metrics[m].value_or(0.0);
+    }
+  }
+  std::string log = fmt::format("scanplan version {}\n", SCANPLAN_VERSION);
+  log += "Experiment scanplan_batch\n";
+  log += fmt::format("Running on {}\n", host);
+  log += "Starting at unknown\n";
+  log += "<<<|\nscanplan batch: table-angle planning, J = objective (s)\n|>>>\n";
+  log += "0 is the random seed\n";
+  log += "0 seconds per run\n";
+  log += "0 MB per run\n";
+  log += fmt::format("{} seconds spent to collect the data\n", total);
+  log += fmt::format("{} planners\n", order.size());
+  struct Property {
+    const char* name;
+    std::size_t metric;  // kBatchMetrics index; npos: solved
+  };
+  constexpr std::size_t kSolved = static_cast<std::size_t>(-1);
+  const std::vector<Property> properties{
+      {"time REAL", kPlanS},
+      {"solved BOOLEAN", kSolved},
+      {"best cost REAL", kJ},
+      {"solution clearance REAL", kClearance},
+      {"dp gap percent REAL", kGap},
+      {"min f REAL", kMinF},
+      {"cycle time REAL", kCycle},
+      {"coverage REAL", kCoverage},
+      {"map time REAL", kMapS},
+      {"max omega deg s REAL", kOmega},
+      {"max alpha deg s2 REAL", kAlpha},
+  };
+  for (const std::string& name : order) {
+    log += name + "\n0 common properties\n";
+    log += fmt::format("{} properties for each run\n", properties.size());
+    for (const Property& p : properties) log += std::string(p.name) + "\n";
+    log += fmt::format("{} runs\n", planners[name].size());
+    for (const BatchRow* r : planners[name]) {
+      for (const Property& p : properties) {
+        log += p.metric == kSolved ? std::string(r->status == "planned" ? "1" : "0")
+                                   : numberOrEmpty(r->metrics[p.metric], "");
+        log += "; ";
+      }
+      log += "\n";
+    }
+    log += ".\n";
+  }
+  return log;
+}
+
+void writeReport(const fs::path& out, const std::vector<BatchRow>& rows) {
+  const std::vector<std::string> keys = rowKeys(rows);
+  std::vector<std::string> figures;
+  if (!rows.empty()) {
+    const fs::path plots = out / "plots";
+    fs::create_directories(plots);
+    std::vector<std::string> axes = keys;
+    if (axes.empty()) axes.push_back("");
+    for (const std::string& key : axes) {
+      for (const std::size_t metric : {kJ, kGap, kPlanS, kCoverage, kMinF, kCycle}) {
+        const std::string stem =
+            std::string(kBatchMetrics[metric]) + "_vs_" + (key.empty() ? "case" : fileStem(key));
+        if (writePlot(plots, stem, rows, key, metric)) figures.push_back(stem);
+      }
+    }
+  }
+  writeFileAtomically(out / "summary.md", summaryMarkdown(rows, keys, figures));
+  writeFileAtomically(out / "ompl_benchmark.log", omplLog(rows, keys));
+}
+
+}  // namespace
+
+// ---- public -----------------------------------------------------------------------------------
+
+bool inShard(const std::string& id, int shard, int count) {
+  return fnv1a(id) % static_cast<std::uint64_t>(count) == static_cast<std::uint64_t>(shard - 1);
+}
+
+Sweep loadSweep(const fs::path& file) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(file.string());
+  } catch (const YAML::BadFile&) {
+    throw InputError(file.string() + ": cannot read the sweep file");
+  } catch (const YAML::Exception& e) {
+    throw InputError(
+        fmt::format("{}:{}:{}: {}", file.string(), e.mark.line + 1, e.mark.column + 1, e.msg));
+  }
+  if (!root.IsMap()) throw InputError(file.string() + ": expected a mapping (jobs, vary, …)");
+  for (const auto& kv : root) {
+    const auto key = kv.first.as<std::string>();
+    if (key != "jobs" && key != "set" && key != "vary" && key != "cases" && key != "repeats") {
+      throw InputError(
+          fmt::format("{}: {}: unknown key; expected one of: jobs, set, vary, cases, "
+                      "repeats",
+                      where(file, kv.first), key));
+    }
+  }
+  const auto strings = [&](const char* key) {
+    std::vector<std::string> out;
+    const YAML::Node n = root[key];
+    if (!n) return out;
+    if (n.IsScalar()) return std::vector<std::string>{n.Scalar()};
+    if (!n.IsSequence()) {
+      throw InputError(fmt::format("{}: {}: expected a list of strings", where(file, n), key));
+    }
+    for (const YAML::Node& v : n) {
+      if (!v.IsScalar()) {
+        throw InputError(fmt::format("{}: {}: expected a string", where(file, v), key));
+      }
+      out.push_back(v.Scalar());
+    }
+    return out;
+  };
+  Sweep sweep;
+  sweep.file = file;
+  const std::vector<std::string> jobs = strings("jobs");
+  if (jobs.empty()) throw InputError(file.string() + ": jobs: missing: expected the job file(s)");
+  const std::vector<std::string> fixed = strings("set");
+  int repeats = 1;
+  if (const YAML::Node n = root["repeats"]) {
+    try {
+      repeats = n.as<int>();
+    } catch (const YAML::Exception&) {
+      repeats = 0;
+    }
+    if (repeats < 1) {
+      throw InputError(
+          fmt::format("{}: repeats: '{}': expected an integer >= 1", where(file, n), valueText(n)));
+    }
+  }
+
+  // The grid (last key fastest), then the explicit cases.
+  std::vector<std::pair<std::string, std::vector<std::string>>> grid;
+  if (const YAML::Node vary = root["vary"]) {
+    if (!vary.IsMap()) throw InputError(where(file, vary) + ": vary: expected key: [values]");
+    for (const auto& kv : vary) {
+      const auto key = kv.first.as<std::string>();
+      grid.emplace_back(key, valueList(file, key, kv.second));
+      sweep.keys.push_back(key);
+    }
+  }
+  std::vector<std::vector<std::pair<std::string, std::string>>> settings;
+  if (!grid.empty()) {
+    std::vector<std::size_t> at(grid.size(), 0);
+    while (true) {
+      std::vector<std::pair<std::string, std::string>> s;
+      for (std::size_t k = 0; k < grid.size(); ++k)
+        s.emplace_back(grid[k].first, grid[k].second[at[k]]);
+      settings.push_back(std::move(s));
+      std::size_t k = grid.size();
+      while (k > 0 && ++at[k - 1] == grid[k - 1].second.size()) at[--k] = 0;
+      if (k == 0) break;
+    }
+  }
+  std::size_t explicit_count = 0;
+  if (const YAML::Node cases = root["cases"]) {
+    explicit_count = cases.size();
+    if (!cases.IsSequence()) throw InputError(where(file, cases) + ": cases: expected a list");
+    for (const YAML::Node& c : cases) {
+      if (!c.IsMap()) {
+        throw InputError(where(file, c) + ": cases: expected a mapping key: value per case");
+      }
+      std::vector<std::pair<std::string, std::string>> s;
+      for (const auto& kv : c) {
+        const auto key = kv.first.as<std::string>();
+        s.emplace_back(key, valueText(kv.second));
+        if (std::find(sweep.keys.begin(), sweep.keys.end(), key) == sweep.keys.end()) {
+          sweep.keys.push_back(key);
+        }
+      }
+      settings.push_back(std::move(s));
+    }
+  }
+  if (settings.empty()) settings.emplace_back();
+
+  // Every value on every job before anything runs: a bad key or value names itself here.
+  const auto check = [&](const fs::path& job, const std::vector<std::string>& overrides,
+                         const std::string& what) {
+    try {
+      loadJob(job, overrides);
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("{}: {}: {}", file.string(), what, e.what()));
+    }
+  };
+  std::vector<fs::path> job_files;
+  for (const std::string& j : jobs) {
+    fs::path p = fs::path(j).is_absolute() ? fs::path(j) : file.parent_path() / j;
+    if (!fs::is_regular_file(p)) {
+      throw InputError(
+          fmt::format("{}: jobs: '{}': no such file ({})", file.string(), j, p.string()));
+    }
+    check(p, fixed, "set");
+    for (const auto& [key, values] : grid) {
+      for (const std::string& v : values) {
+        std::vector<std::string> o = fixed;
+        o.push_back(key + "=" + v);
+        check(p, o, "vary." + key);
+      }
+    }
+    job_files.push_back(std::move(p));
+  }
+
+  std::set<std::string> seen;
+  for (std::size_t j = 0; j < jobs.size(); ++j) {
+    for (const auto& s : settings) {
+      for (int r = 0; r < repeats; ++r) {
+        SweepCase c;
+        c.job = jobs[j];
+        c.job_file = job_files[j];
+        c.params = s;
+        c.repeat = r;
+        c.overrides = fixed;
+        for (const auto& [k, v] : s) c.overrides.push_back(k + "=" + v);
+        c.id = caseId(c.job, c.overrides, r);
+        if (!seen.insert(c.id).second) continue;  // an explicit case the grid already has
+        c.index = sweep.cases.size();
+        sweep.cases.push_back(std::move(c));
+      }
+    }
+  }
+  // The explicit cases, whole, on each job (a grid case may still fail in combination: a row).
+  for (const fs::path& job : job_files) {
+    for (std::size_t s = 0; s < explicit_count; ++s) {
+      std::vector<std::string> o = fixed;
+      for (const auto& [k, v] : settings[settings.size() - explicit_count + s]) {
+        o.push_back(k + "=" + v);
+      }
+      check(job, o, fmt::format("cases[{}]", s));
+    }
+  }
+  return sweep;
+}
+
+std::vector<BatchRow> readBatchRows(const fs::path& jsonl) {
+  std::vector<BatchRow> rows;
+  std::ifstream in(jsonl, std::ios::binary);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line.back() != '}') continue;  // torn by an interruption
+    try {
+      const YAML::Node n = YAML::Load(line);
+      BatchRow r;
+      r.case_id = n["case_id"].as<std::string>();
+      r.index = n["index"].as<std::size_t>();
+      r.job = n["job"].as<std::string>();
+      for (const auto& kv : n["params"]) {
+        r.params.emplace_back(kv.first.as<std::string>(), kv.second.as<std::string>());
+      }
+      r.repeat = n["repeat"].as<int>();
+      r.method = n["method"].as<std::string>();
+      r.status = n["status"].as<std::string>();
+      r.reason = n["reason"].as<std::string>();
+      for (std::size_t m = 0; m < kBatchMetrics.size(); ++m) {
+        const YAML::Node v = n[kBatchMetrics[m]];
+        if (v && !v.IsNull()) r.metrics[m] = v.as<double>();
+      }
+      r.map_reused = n["map_reused"].as<bool>();
+      rows.push_back(std::move(r));
+    } catch (const YAML::Exception&) {
+      continue;
+    }
+  }
+  return rows;
+}
+
+BatchStats runBatchCases(const BatchOptions& options) {
+  const auto start = Clock::now();
+  const Sweep sweep = loadSweep(options.sweep_file);
+  const auto [shard, shards] = options.shard.empty() ? std::pair{1, 1} : parseShard(options.shard);
+  const fs::path& out = options.out_dir;
+  const int threads = options.jobs > 0 ? options.jobs : tbb::info::default_concurrency();
+  BatchStats stats;
+
+  prepareOutputDir(out);
+  std::set<std::string> done;
+  if (fs::exists(out / "results.jsonl")) {
+    if (!options.resume) {
+      throw InputError(fmt::format(
+          "{}: has results.jsonl already: add --resume to finish that batch, or choose another "
+          "folder",
+          out.string()));
+    }
+    std::vector<BatchRow> rows = readBatchRows(out / "results.jsonl");
+    sortRows(rows);
+    for (const BatchRow& r : rows) done.insert(r.case_id);
+    writeResults(out, rows, sweep.keys);  // drops a torn last line; the CSV matches again
+  } else {
+    writeResults(out, {}, sweep.keys);
+  }
+
+  std::vector<const SweepCase*> todo;
+  for (const SweepCase& c : sweep.cases) {
+    if (!inShard(c.id, shard, shards)) continue;
+    ++stats.cases;
+    if (done.count(c.id)) {
+      ++stats.skipped;
+    } else {
+      todo.push_back(&c);
+    }
+  }
+
+  RowSink sink(out, sweep.keys);
+  Progress progress("batch");
+  std::atomic<std::size_t> started{0}, finished{0}, failed{0}, maps{0};
+  const auto finish = [&](const BatchRow& row) {
+    sink.append(row);
+    if (row.status == "error") ++failed;
+    progress(++finished, todo.size());
+  };
+  const auto admit = [&] {
+    return options.max_cases == 0 || started.fetch_add(1) < options.max_cases;
+  };
+
+  tbb::task_arena arena(threads);
+  arena.execute([&] {
+    // Each case's job, resolved in parallel; the cases sharing a map run together.
+    std::vector<std::optional<JobSpec>> jobs(todo.size());
+    std::vector<std::string> errors(todo.size());
+    tbb::parallel_for(std::size_t{0}, todo.size(), [&](std::size_t i) {
+      try {
+        jobs[i] = loadJob(todo[i]->job_file, todo[i]->overrides);
+      } catch (const std::exception& e) {
+        errors[i] = e.what();
+      }
+    });
+    std::vector<std::string> keys;
+    std::map<std::string, std::vector<std::size_t>> groups;
+    for (std::size_t i = 0; i < todo.size(); ++i) {
+      if (!jobs[i]) {
+        if (!admit()) continue;
+        BatchRow row = rowFor(*todo[i]);
+        row.status = "error";
+        row.reason = errors[i];
+        finish(row);
+        continue;
+      }
+      const std::string key = options.reuse_maps ? mapKey(*jobs[i]) : todo[i]->id;
+      if (!groups.count(key)) keys.push_back(key);
+      groups[key].push_back(i);
+    }
+    for (const std::string& key : keys) {
+      const std::vector<std::size_t>& group = groups[key];
+      if (options.max_cases && started.load() >= options.max_cases) break;
+      std::unique_ptr<MapBundle> bundle;
+      std::string bundle_error;
+      try {
+        bundle = buildBundle(*jobs[group.front()]);
+        ++maps;
+      } catch (const std::exception& e) {
+        bundle_error = e.what();
+      }
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, group.size(), 1),
+                        [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t g = r.begin(); g != r.end(); ++g) {
+                            if (!admit()) return;
+                            const std::size_t i = group[g];
+                            BatchRow row = rowFor(*todo[i]);
+                            row.method = jobs[i]->planner.method;
+                            row.map_reused = g > 0;
+                            if (bundle) {
+                              isolate(row, [&] { planCase(*jobs[i], *bundle, row); });
+                            } else {
+                              row.status = "error";
+                              row.reason = bundle_error;
+                            }
+                            finish(row);
+                          }
+                        });
+    }
+  });
+
+  stats.ran = finished.load();
+  stats.failed = failed.load();
+  stats.maps = maps.load();
+  // Complete: both files rewritten sorted (a deterministic order whatever the threads did).
+  std::vector<BatchRow> rows = readBatchRows(out / "results.jsonl");
+  sortRows(rows);
+  writeResults(out, rows, sweep.keys);
+  if (options.report) writeReport(out, rows);
+  stats.seconds = since(start);
+  return stats;
+}
+
+ExitCode runBatch(const BatchOptions& options) {
+  const BatchStats s = runBatchCases(options);
+  if (options.print) {
+    std::printf(
+        "batch      %zu case(s)%s: %zu run, %zu already done, %zu error(s); %zu map(s) computed "
+        "in %.1f s\n",
+        s.cases, options.shard.empty() ? "" : (" in shard " + options.shard).c_str(), s.ran,
+        s.skipped, s.failed, s.maps, s.seconds);
+    std::printf("wrote      %s: results.csv, results.jsonl%s\n", options.out_dir.string().c_str(),
+                options.report ? ", summary.md, plots/, ompl_benchmark.log" : "");
+  }
+  return ExitCode::kOk;
+}
+
+ExitCode runBatchReport(const fs::path& out_dir) {
+  if (!fs::is_regular_file(out_dir / "results.jsonl")) {
+    throw InputError(out_dir.string() + ": no results.jsonl: expected the folder of a batch run");
+  }
+  std::vector<BatchRow> rows = readBatchRows(out_dir / "results.jsonl");
+  sortRows(rows);
+  writeReport(out_dir, rows);
+  std::printf("wrote      %s: summary.md, plots/, ompl_benchmark.log (%zu case(s))\n",
+              out_dir.string().c_str(), rows.size());
+  return ExitCode::kOk;
+}
+
+ExitCode runBatchMerge(const std::vector<fs::path>& inputs, const fs::path& out_dir) {
+  std::vector<BatchRow> rows;
+  std::set<std::string> seen;
+  for (const fs::path& in : inputs) {
+    if (!fs::is_regular_file(in / "results.jsonl")) {
+      throw InputError(in.string() + ": no results.jsonl: expected the folder of a batch run");
+    }
+    for (BatchRow& r : readBatchRows(in / "results.jsonl")) {
+      if (seen.insert(r.case_id).second) rows.push_back(std::move(r));
+    }
+  }
+  sortRows(rows);
+  prepareOutputDir(out_dir);
+  writeResults(out_dir, rows, rowKeys(rows));
+  writeReport(out_dir, rows);
+  std::printf("merged     %zu case(s) from %zu folder(s) into %s\n", rows.size(), inputs.size(),
+              out_dir.string().c_str());
+  return ExitCode::kOk;
+}
+
+}  // namespace scanplan::cli

@@ -1,0 +1,230 @@
+// `scanplan batch` end to end on the lightened demo (test::kLightDemo, simulation off, each case
+// a fraction of a second): the issue's small sweep, resume after an interruption, shards merged,
+// failing cases as rows, and sweep errors before anything runs.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "cli/batch.h"
+#include "cli_support.h"
+#include "test_support.h"
+
+namespace {
+
+using namespace scanplan;
+using namespace scanplan::test;
+
+const fs::path kDemoJob = fs::path(SCANPLAN_SOURCE_DIR) / "data/jobs/demo.yaml";
+
+// The fixed settings of every case: the light demo, no simulation, and no refinement so that
+// the DP gap compares grid paths with the grid optimum (refinement can take a path below DP's
+// grid optimum, a negative gap).
+std::string sweepHeader() {
+  std::string text = fmt::format("jobs: ['{}']\nset:\n", kDemoJob.string());
+  for (const std::string& o : kLightDemo) text += "  - '" + o + "'\n";
+  text += "  - simulation.enabled=false\n  - planner.refine.enabled=false\n";
+  return text;
+}
+
+// The issue's small sweep: 2 planners x 3 horizons x 2 seeds = 12 cases on one map.
+const std::string kSmallVary =
+    "vary:\n"
+    "  planner.method: [ray, dp]\n"
+    "  planner.ray.horizon: [10, 15, 30]\n"
+    "  planner.ompl.seed: {from: 1, to: 2, step: 1}\n";
+
+// A row without its wall times and without map_reused (which case computes the map depends on
+// which cases a run has left to do): what must not change between runs.
+std::string stable(const cli::BatchRow& r) {
+  std::string text = fmt::format("{} #{} {} r{} {} {} [{}]", r.case_id, r.index, r.job, r.repeat,
+                                 r.method, r.status, r.reason);
+  for (const auto& [k, v] : r.params) text += " " + k + "=" + v;
+  for (std::size_t m = 0; m < cli::kFirstTimingMetric; ++m) {
+    text += " " + (r.metrics[m] ? fmt::format("{}", *r.metrics[m]) : std::string("-"));
+  }
+  return text;
+}
+
+std::vector<std::string> stableRows(const fs::path& out) {
+  std::vector<std::string> rows;
+  for (const cli::BatchRow& r : cli::readBatchRows(out / "results.jsonl")) {
+    rows.push_back(stable(r));
+  }
+  return rows;  // readBatchRows keeps the file's order: sorted by case order after a run
+}
+
+class Batch : public Cli {
+ protected:
+  fs::path writeSweep(const std::string& body) const {
+    const fs::path file = dir_ / "sweep.yaml";
+    writeFile(file, sweepHeader() + body);
+    return file;
+  }
+  Result batch(const fs::path& sweep, const fs::path& out, std::vector<std::string> extra = {}) {
+    std::vector<std::string> args{"batch", sweep.string(), "-o", out.string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return scanplan(args);
+  }
+};
+
+TEST_F(Batch, SmallSweepGivesOneRowPerCaseWithTheDpGap) {
+  const fs::path sweep = writeSweep(kSmallVary);
+  const fs::path out = dir_ / "out";
+  const Result run = batch(sweep, out, {"--jobs", "2"});
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  EXPECT_TRUE(contains(run.out, "12 case(s): 12 run, 0 already done, 0 error(s); 1 map(s)"))
+      << run.out;
+
+  const std::vector<cli::BatchRow> rows = cli::readBatchRows(out / "results.jsonl");
+  ASSERT_EQ(rows.size(), 12u);
+  int reused = 0;
+  for (const cli::BatchRow& r : rows) {
+    EXPECT_EQ(r.status, "planned") << stable(r);
+    EXPECT_EQ(r.method, r.params.at(0).second);
+    ASSERT_TRUE(r.metrics[4].has_value()) << "dp_gap_percent missing: " << stable(r);
+    // DP is the optimum of the grid problem the unrefined planners solve: the gap is >= 0 (and
+    // exactly 0 for DP itself, run on the same branch).
+    EXPECT_GE(*r.metrics[4], 0.0) << stable(r);
+    if (r.method == "dp") {
+      EXPECT_NEAR(*r.metrics[4], 0.0, 1e-9) << stable(r);
+    }
+    reused += r.map_reused ? 1 : 0;
+  }
+  EXPECT_EQ(reused, 11) << "one map for all 12 cases";
+
+  // CSV: a header and one line per case, a column per varied key.
+  const std::string csv = readFile(out / "results.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 13);
+  EXPECT_TRUE(csv.starts_with(
+      "case_id,job,planner.method,planner.ray.horizon,planner.ompl.seed,repeat,method,status,"))
+      << csv.substr(0, 200);
+  for (const char* f :
+       {"summary.md", "ompl_benchmark.log", "plots/J_s_vs_planner_ray_horizon.png",
+        "plots/J_s_vs_planner_ray_horizon.svg", "plots/dp_gap_percent_vs_planner_method.png"}) {
+    EXPECT_TRUE(fs::exists(out / f)) << f;
+  }
+  EXPECT_TRUE(tmpFiles(out).empty());
+  const std::string log = readFile(out / "ompl_benchmark.log");
+  EXPECT_TRUE(contains(log, "6 planners\n")) << log;  // 2 methods x 3 horizons, seeds are runs
+  EXPECT_TRUE(contains(log, "\n2 runs\n")) << log;
+
+  // `batch report` regenerates the summary from the results alone.
+  fs::remove(out / "summary.md");
+  const Result report = scanplan({"batch", "report", out.string()});
+  ASSERT_EQ(report.exit_code, 0) << describe(report);
+  EXPECT_TRUE(contains(readFile(out / "summary.md"), "| ray | 30 | 2 | 2 |"))
+      << readFile(out / "summary.md");
+}
+
+TEST_F(Batch, ResumedRunEqualsAnUninterruptedOne) {
+  const fs::path sweep = writeSweep(kSmallVary);
+  const fs::path full = dir_ / "full";
+  const Result whole = batch(sweep, full);
+  ASSERT_EQ(whole.exit_code, 0) << describe(whole);
+
+  // Interrupted in process after 5 cases, then resumed from the command line.
+  const fs::path part = dir_ / "part";
+  cli::BatchOptions options;
+  options.sweep_file = sweep;
+  options.out_dir = part;
+  options.max_cases = 5;
+  options.print = false;
+  const cli::BatchStats first = cli::runBatchCases(options);
+  EXPECT_EQ(first.ran, 5u);
+  EXPECT_EQ(cli::readBatchRows(part / "results.jsonl").size(), 5u);
+  // A rerun without --resume refuses to mix two batches.
+  const Result refused = batch(sweep, part);
+  EXPECT_EQ(refused.exit_code, 4) << describe(refused);
+  EXPECT_TRUE(contains(refused.err, "--resume")) << refused.err;
+  // A torn last line, as a kill mid-write leaves it.
+  std::ofstream(part / "results.jsonl", std::ios::app) << "{\"case_id\": \"0123";
+  const Result resumed = batch(sweep, part, {"--resume"});
+  ASSERT_EQ(resumed.exit_code, 0) << describe(resumed);
+  EXPECT_TRUE(contains(resumed.out, "12 case(s): 7 run, 5 already done")) << resumed.out;
+  EXPECT_EQ(stableRows(part), stableRows(full));
+  const std::string csv = readFile(part / "results.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 13) << csv;
+}
+
+TEST_F(Batch, ShardsMergedEqualTheUnshardedRun) {
+  const fs::path sweep = writeSweep(kSmallVary);
+  const fs::path full = dir_ / "full";
+  ASSERT_EQ(batch(sweep, full).exit_code, 0);
+  std::vector<std::string> merge{"batch", "merge"};
+  std::size_t total = 0;
+  for (int i = 1; i <= 3; ++i) {
+    const fs::path out = dir_ / fmt::format("shard_{}", i);
+    const Result run = batch(sweep, out, {"--shard", fmt::format("{}/3", i)});
+    ASSERT_EQ(run.exit_code, 0) << describe(run);
+    total += cli::readBatchRows(out / "results.jsonl").size();
+    merge.push_back(out.string());
+  }
+  EXPECT_EQ(total, 12u) << "the shards are disjoint and cover the sweep";
+  merge.insert(merge.end(), {"-o", (dir_ / "merged").string()});
+  const Result merged = scanplan(merge);
+  ASSERT_EQ(merged.exit_code, 0) << describe(merged);
+  EXPECT_EQ(stableRows(dir_ / "merged"), stableRows(full));
+  EXPECT_TRUE(fs::exists(dir_ / "merged" / "summary.md"));
+}
+
+// The shards through GNU parallel, as across hosts (README), merged: the unsharded run.
+TEST_F(Batch, ShardsThroughGnuParallelEqualTheUnshardedRun) {
+  if (std::system("command -v parallel >/dev/null 2>&1") != 0) {
+    GTEST_SKIP() << "GNU parallel is not installed";
+  }
+  const fs::path sweep = writeSweep(kSmallVary);
+  const fs::path full = dir_ / "full";
+  ASSERT_EQ(batch(sweep, full).exit_code, 0);
+  const std::string command = fmt::format(
+      "parallel --halt now,fail=1 '{} batch {} -o {}/p_{{}} --jobs 1 --shard {{}}/3' ::: 1 2 3 "
+      ">/dev/null 2>&1 && {} batch merge {}/p_1 {}/p_2 {}/p_3 -o {}/p_merged >/dev/null",
+      SCANPLAN_BINARY, sweep.string(), dir_.string(), SCANPLAN_BINARY, dir_.string(), dir_.string(),
+      dir_.string(), dir_.string());
+  ASSERT_EQ(std::system(command.c_str()), 0) << command;
+  EXPECT_EQ(stableRows(dir_ / "p_merged"), stableRows(full));
+}
+
+TEST_F(Batch, AFailingCaseIsARowNotTheEndOfTheBatch) {
+  // Each value is valid on its own; together min >= max: that case fails when it is loaded.
+  const fs::path sweep = writeSweep(
+      "vary:\n  table.min_deg: [170]\n  table.max_deg: [160]\ncases:\n"
+      "  - {planner.method: dp}\n");
+  const fs::path out = dir_ / "out";
+  const Result run = batch(sweep, out);
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  const std::vector<cli::BatchRow> rows = cli::readBatchRows(out / "results.jsonl");
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].status, "error");
+  EXPECT_TRUE(contains(rows[0].reason, "table.max_deg")) << rows[0].reason;
+  EXPECT_EQ(rows[1].status, "planned") << rows[1].reason;
+  EXPECT_EQ(rows[1].method, "dp");
+}
+
+TEST_F(Batch, BadKeyInTheSweepFailsBeforeAnythingRuns) {
+  const fs::path out = dir_ / "out";
+  const Result key = batch(writeSweep("vary:\n  planner.ray.horizn: [10, 15]\n"), out);
+  EXPECT_EQ(key.exit_code, 4) << describe(key);
+  EXPECT_TRUE(contains(key.err, "vary.planner.ray.horizn")) << key.err;
+  EXPECT_TRUE(contains(key.err, "horizn")) << key.err;
+  EXPECT_FALSE(fs::exists(out)) << "nothing runs, nothing is written";
+
+  const Result value = batch(writeSweep("vary:\n  planner.ray.horizon: [10, -3]\n"), out);
+  EXPECT_EQ(value.exit_code, 4) << describe(value);
+  EXPECT_TRUE(contains(value.err, "planner.ray.horizon")) << value.err;
+  EXPECT_FALSE(fs::exists(out));
+
+  const Result top = batch(writeSweep("varry:\n  planner.ray.horizon: [10]\n"), out);
+  EXPECT_EQ(top.exit_code, 4) << describe(top);
+  EXPECT_TRUE(contains(top.err, "varry: unknown key")) << top.err;
+
+  const Result shard = batch(writeSweep(kSmallVary), out, {"--shard", "4/3"});
+  EXPECT_EQ(shard.exit_code, 4) << describe(shard);
+  EXPECT_TRUE(contains(shard.err, "--shard '4/3'")) << shard.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+}  // namespace
