@@ -23,8 +23,9 @@ using MeshModel = fcl::BVHModel<fcl::OBBRSSd>;
 /// One FCL geometry rigidly attached to a body, with a bounding sphere for the broad phase.
 struct CollisionShape {
   std::shared_ptr<fcl::CollisionGeometryd> geometry;
-  /// The same solid as a triangle mesh when that is exact (boxes): used against meshes, where
-  /// FCL's triangle–triangle leaf test is far cheaper than GJK against each triangle.
+  /// The same solid as a triangle mesh when that is exact (boxes): what the exact reference
+  /// (exactShapeDistance) measures against meshes; the bounded query has its own box–mesh
+  /// traversal.
   std::shared_ptr<MeshModel> polyhedron;
   Eigen::Isometry3d X_BG = Eigen::Isometry3d::Identity();  ///< shape in its body frame
   Eigen::Vector3d centre_G = Eigen::Vector3d::Zero();      ///< bounding-sphere centre, shape frame
@@ -47,12 +48,13 @@ CollisionShape makeCollisionShape(const kinematics::Shape& shape);
 /// Builds an OBBRSS BVH model from a triangle mesh (m).
 std::shared_ptr<MeshModel> makeMeshModel(const kinematics::TriangleMesh& mesh);
 
-/// Distance between two shapes at world poses, by FCL's traversal seeded with `bound`: anything
-/// at or beyond `bound` is reported as `bound` with `beyond` set; distances below it match
-/// plain fcl::distance within 1e-9 m. Returns 0 with `penetrating` set when the shapes touch
-/// or overlap (for meshes: when surfaces cross; a solid wholly inside a mesh is not seen, and
-/// the witness points of penetrating pairs are arbitrary). Witness points (world) only when
-/// asked for, zero otherwise.
+/// Distance between two shapes at world poses, by FCL's traversal seeded with `bound` (a box
+/// against a mesh: scanplan's traversal of FCL's BVH in the box frame): anything at or beyond
+/// `bound` is reported as `bound` with `beyond` set; distances below it match plain
+/// fcl::distance within 1e-9 m. Returns 0 with `penetrating` set when the shapes touch (closer
+/// than 1 pm) or overlap (for meshes: when surfaces cross; a solid wholly inside a mesh is not
+/// seen, and the witness points of penetrating pairs are arbitrary). Witness points (world) only
+/// when asked for, zero otherwise.
 struct ShapeDistance {
   double distance = 0.0;
   bool beyond = false;

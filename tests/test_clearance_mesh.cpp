@@ -713,6 +713,19 @@ struct Reference {
   double tol;
 };
 
+// A box's surface as 12 triangles, written out independently of collision/.
+TriangleMesh boxTriangles(const Vector3d& size) {
+  TriangleMesh box;
+  for (int i = 0; i < 8; ++i) {
+    box.vertices.emplace_back(0.5 * size.x() * ((i & 1) ? 1 : -1),
+                              0.5 * size.y() * ((i & 2) ? 1 : -1),
+                              0.5 * size.z() * ((i & 4) ? 1 : -1));
+  }
+  box.triangles = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                   {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+  return box;
+}
+
 std::optional<Reference> analyticMeshPrimitiveDistance(const WorldMesh& mesh,
                                                        const Body& prim,
                                                        const Isometry3d& X_WG) {
@@ -727,15 +740,7 @@ std::optional<Reference> analyticMeshPrimitiveDistance(const WorldMesh& mesh,
     return Reference{std::max(0.0, axis - c->radius), kGjkCurvedTol};
   }
   if (const auto* b = std::get_if<kinematics::Box>(&prim.primitive)) {
-    TriangleMesh box;
-    for (int i = 0; i < 8; ++i) {
-      box.vertices.emplace_back(0.5 * b->size.x() * ((i & 1) ? 1 : -1),
-                                0.5 * b->size.y() * ((i & 2) ? 1 : -1),
-                                0.5 * b->size.z() * ((i & 4) ? 1 : -1));
-    }
-    box.triangles = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
-                     {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
-    return Reference{meshMeshDistance(mesh, toWorld(box, X_WG)), kGjkTol};
+    return Reference{meshMeshDistance(mesh, toWorld(boxTriangles(b->size), X_WG)), kGjkTol};
   }
   return std::nullopt;
 }
@@ -804,6 +809,116 @@ TEST(MeshPrimitiveDistance, OpenSheetVsEachPrimitiveBoundedAgreesWithExactAndRef
   unsigned seed = 30;
   // The sheet's waves are only ±15 mm: reaching through its extreme takes a deeper overlap.
   for (const Body& prim : primitives()) crossCheckMeshPrimitive(mesh, prim, seed++, -0.025);
+}
+
+// 3b. The box against a mesh has its own traversal (bounds in the box frame, the gap as the
+// distance when a triangle lies over one face): the cases it shortcuts, against brute force.
+
+// A flat square grid in z = 0, n × n cells, two triangles each: every triangle under a
+// parallel box face is tied for the minimum.
+TriangleMesh flatGrid(double size, int n) {
+  TriangleMesh m;
+  for (int i = 0; i <= n; ++i) {
+    for (int j = 0; j <= n; ++j) {
+      m.vertices.emplace_back(size * (i / static_cast<double>(n) - 0.5),
+                              size * (j / static_cast<double>(n) - 0.5), 0.0);
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      const int v00 = i * (n + 1) + j, v10 = v00 + n + 1;
+      m.triangles.emplace_back(v00, v10, v10 + 1);
+      m.triangles.emplace_back(v00, v10 + 1, v00 + 1);
+    }
+  }
+  return m;
+}
+
+// Bounded box–mesh distance (both argument orders, witness points on) against the brute-force
+// minimum over the box's 12 triangles × the mesh's triangles and against FCL's exact query.
+void expectBoxMeshMatchesBruteForce(const Body& mesh,
+                                    const Isometry3d& X_Wm,
+                                    const Vector3d& box_size,
+                                    const Isometry3d& X_Wb) {
+  const Body box = primitiveBody("box", kinematics::Box{box_size});
+  const WorldMesh world_mesh = toWorld(*mesh.mesh, X_Wm);
+  const WorldMesh world_box = toWorld(boxTriangles(box_size), X_Wb);
+  const double brute = meshMeshDistance(world_mesh, world_box);
+  const ShapeDistance exact = detail::exactShapeDistance(box.shape, X_Wb, mesh.shape, X_Wm);
+  EXPECT_TRUE(near(exact.distance, brute, kExactTol, "FCL's exact vs brute force"));
+  for (const double bound : kBounds) {
+    const ShapeDistance ab = detail::shapeDistance(box.shape, X_Wb, mesh.shape, X_Wm, bound, true);
+    const ShapeDistance ba = detail::shapeDistance(mesh.shape, X_Wm, box.shape, X_Wb, bound, true);
+    EXPECT_TRUE(boundedAgrees(ab, exact, bound, kSameTol)) << "box first";
+    EXPECT_TRUE(boundedAgrees(ba, exact, bound, kSameTol)) << "mesh first";
+    if (brute < bound) {
+      EXPECT_TRUE(near(ab.distance, brute, kExactTol, "bounded vs brute force"));
+      if (!ab.penetrating) {
+        EXPECT_TRUE(witnessesConsistent(ab, world_box, world_mesh, kOnSurfaceTol));
+        ShapeDistance flipped = ba;
+        std::swap(flipped.p_a, flipped.p_b);
+        EXPECT_TRUE(witnessesConsistent(flipped, world_box, world_mesh, kOnSurfaceTol));
+      }
+    }
+  }
+}
+
+TEST(BoxMeshDistance, FaceOverAFlatGridMatchesBruteForceThroughTiesEdgesAndOverhangs) {
+  const Body grid = meshBody("flat grid", flatGrid(0.2, 40));  // 3 200 triangles, 5 mm cells
+  const Vector3d size(0.17, 0.07, 0.09);
+  int checked = 0;
+  for (const double gap : {0.0, 0.0004, 0.003, 0.012, 0.031}) {
+    for (const double tilt : {0.0, 1e-3, 0.07, 0.6}) {
+      for (const double shift : {0.0, 0.06, 0.14}) {  // 0.14: the box overhangs the grid's edge
+        SCOPED_TRACE("gap " + std::to_string(gap) + ", tilt " + std::to_string(tilt) + ", shift " +
+                     std::to_string(shift));
+        Isometry3d X_Wb = Isometry3d::Identity();
+        X_Wb.linear() = Eigen::AngleAxisd(tilt, Vector3d(0.3, 1, 0).normalized()).matrix();
+        // The lowest corner `gap` above the grid's plane (negative z extent of the box).
+        const Vector3d half = 0.5 * size;
+        double lowest = kInf;
+        for (int i = 0; i < 8; ++i) {
+          const Vector3d c((i & 1) ? half.x() : -half.x(), (i & 2) ? half.y() : -half.y(),
+                           (i & 4) ? half.z() : -half.z());
+          lowest = std::min(lowest, (X_Wb.linear() * c).z());
+        }
+        X_Wb.translation() = Vector3d(shift, 0.4 * shift, gap - lowest);
+        expectBoxMeshMatchesBruteForce(grid, Isometry3d::Identity(), size, X_Wb);
+        ++checked;
+      }
+    }
+  }
+  EXPECT_EQ(checked, 60);
+}
+
+TEST(BoxMeshDistance, CurvedSheetUnderAFaceAtManyPosesMatchesBruteForce) {
+  std::mt19937 rng(41);
+  const Body sheet = meshBody("wavy sheet", wavySheet(0.2, 30, 0.02, rng));
+  const Vector3d size(0.12, 0.05, 0.06);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int k = 0; k < 40; ++k) {
+    SCOPED_TRACE("pose " + std::to_string(k));
+    Isometry3d X_Wb = Isometry3d::Identity();
+    X_Wb.linear() = Eigen::AngleAxisd(0.3 * u(rng), randomUnit(rng)).matrix();
+    X_Wb.translation() = Vector3d(0.08 * u(rng), 0.08 * u(rng), 0.045 + 0.03 * u(rng));
+    expectBoxMeshMatchesBruteForce(sheet, Isometry3d::Identity(), size, X_Wb);
+  }
+}
+
+TEST(BoxMeshDistance, AMeshWhollyInsideTheBoxIsItsSurfaceDistanceNotContact) {
+  // As for the polyhedron FCL measures: surfaces that do not cross are not in contact.
+  std::mt19937 rng(42);
+  const Body pebble = meshBody("pebble", lumpySphere(0.01, 0.1, rng));
+  for (const Vector3d& at : {Vector3d(0, 0, 0), Vector3d(0.03, -0.01, 0.02)}) {
+    Isometry3d X_Wm = Isometry3d::Identity();
+    X_Wm.translation() = at;
+    const Body box = primitiveBody("box", kinematics::Box{Vector3d(0.1, 0.08, 0.07)});
+    const ShapeDistance d =
+        detail::shapeDistance(box.shape, Isometry3d::Identity(), pebble.shape, X_Wm, kInf, false);
+    EXPECT_FALSE(d.penetrating);
+    EXPECT_GT(d.distance, 0.0);
+    expectBoxMeshMatchesBruteForce(pebble, X_Wm, Vector3d(0.1, 0.08, 0.07), Isometry3d::Identity());
+  }
 }
 
 // 4. Frame invariance (FCL's QueryWithVaryingWorldFrames): moving both bodies by the same world
