@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <ctime>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -18,6 +19,7 @@
 #include <mutex>
 #include <set>
 #include <sstream>
+#include <string_view>
 #include <tuple>
 
 #include <fmt/format.h>
@@ -27,6 +29,7 @@
 #include <tbb/task_arena.h>
 #include <yaml-cpp/yaml.h>
 
+#include "cli/bitmap_font.h"
 #include "cli/commands.h"
 #include "cli/format.h"
 #include "cli/image_io.h"
@@ -386,13 +389,21 @@ void planCase(const JobSpec& job, const MapBundle& bundle, BatchRow& row) {
   row.status = "planned";
 }
 
+// The reason of an error row: an InputError's message as it is; anything else is a bug, marked
+// as `scanplan` marks it (the batch's exit code tells the two apart, also after --resume).
+constexpr std::string_view kInternalPrefix = "internal error: ";
+std::string errorReason(const std::exception& e) {
+  if (dynamic_cast<const InputError*>(&e)) return e.what();
+  return fmt::format("{}{} (please report this)", kInternalPrefix, e.what());
+}
+
 template <typename F>
 void isolate(BatchRow& row, F&& work) {
   try {
     work();
   } catch (const std::exception& e) {
     row.status = "error";
-    row.reason = e.what();
+    row.reason = errorReason(e);
   }
 }
 
@@ -529,6 +540,162 @@ std::optional<double> numberOf(const std::string& text) {
   return std::nullopt;
 }
 
+// A metric's name on an axis, with its unit.
+std::string metricLabel(std::size_t metric) {
+  switch (metric) {
+    case kJ:
+      return "J, objective (s)";
+    case kGap:
+      return "DP gap (%)";
+    case kPlanS:
+      return "plan time (s)";
+    case kCoverage:
+      return "coverage (fraction of the part's area)";
+    case kMinF:
+      return "min f along the path";
+    case kCycle:
+      return "cycle time (s)";
+    default:
+      return kBatchMetrics[metric];
+  }
+}
+
+std::string base64(const std::string& bytes) {
+  static constexpr char kDigits[] =
+      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  for (std::size_t i = 0; i < bytes.size(); i += 3) {
+    std::uint32_t v = static_cast<std::uint32_t>(static_cast<unsigned char>(bytes[i])) << 16;
+    if (i + 1 < bytes.size())
+      v |= static_cast<std::uint32_t>(static_cast<unsigned char>(bytes[i + 1])) << 8;
+    if (i + 2 < bytes.size()) v |= static_cast<unsigned char>(bytes[i + 2]);
+    out += kDigits[(v >> 18) & 63];
+    out += kDigits[(v >> 12) & 63];
+    out += i + 1 < bytes.size() ? kDigits[(v >> 6) & 63] : '=';
+    out += i + 2 < bytes.size() ? kDigits[v & 63] : '=';
+  }
+  return out;
+}
+
+// The longest prefix of `text` (with ".." when cut) that fits `width` pixels at `scale`.
+std::string fitText(const std::string& text, int width, int scale) {
+  if (textWidth(text, scale) <= width) return text;
+  std::string cut = text;
+  while (!cut.empty() && textWidth(cut + "..", scale) > width) cut.pop_back();
+  return cut + "..";
+}
+
+// The labelled PNG: `area` (the plot's data raster) framed with a title, axis titles, tick
+// values and a legend, in the built-in bitmap font.
+struct PlotText {
+  std::string title, x_label, y_label;
+  double x0 = 0, x1 = 1, y0 = 0, y1 = 1;
+  std::vector<std::string> categories;  // non-empty: x ticks at 0, 1, … with these labels
+  std::vector<std::pair<Rgb, std::string>> legend;
+};
+
+RgbImage labelledPlot(const RgbImage& area, const PlotText& text) {
+  constexpr int kScale = 2, kTick = 6, kPad = 12;
+  constexpr Rgb kBlack{0, 0, 0}, kGreyText{90, 90, 90};
+  const int line = textHeight(kScale);
+  const Ticks y_ticks = niceTicks(text.y0, text.y1);
+  std::vector<std::pair<double, std::string>> y_labels, x_labels;
+  for (const double v : y_ticks.values) {
+    y_labels.emplace_back(v, fmt::format("{:.{}f}", v, y_ticks.decimals));
+  }
+  if (text.categories.empty()) {
+    const Ticks x_ticks = niceTicks(text.x0, text.x1);
+    for (const double v : x_ticks.values) {
+      x_labels.emplace_back(v, fmt::format("{:.{}f}", v, x_ticks.decimals));
+    }
+  } else {
+    for (std::size_t i = 0; i < text.categories.size(); ++i) {
+      x_labels.emplace_back(static_cast<double>(i), text.categories[i]);
+    }
+  }
+  int y_label_width = 0, legend_width = 0;
+  for (const auto& [v, s] : y_labels) y_label_width = std::max(y_label_width, textWidth(s, kScale));
+  for (const auto& [c, s] : text.legend)
+    legend_width = std::max(legend_width, textWidth(s, kScale));
+  legend_width = std::max(legend_width, textWidth("mean", kScale));
+  const int left = kPad + line + kPad + y_label_width + kTick + 6;
+  const int top = kPad + line + kPad;
+  const int right = kPad + 20 + 8 + legend_width + 2 * kPad;
+  const int bottom = kTick + 6 + line + kPad + line + kPad;
+  const int pw = area.width, ph = area.height;
+  RgbImage image = RgbImage::filled(left + pw + right, top + ph + bottom, {255, 255, 255});
+  for (int y = 0; y < ph; ++y) {
+    for (int x = 0; x < pw; ++x) image.set(left + x, top + y, area.at(x, y));
+  }
+  // Frame.
+  drawLine(image, left - 0.5, top - 0.5, left + pw + 0.5, top - 0.5, kBlack, 1);
+  drawLine(image, left - 0.5, top + ph + 0.5, left + pw + 0.5, top + ph + 0.5, kBlack, 1);
+  drawLine(image, left - 0.5, top - 0.5, left - 0.5, top + ph + 0.5, kBlack, 1);
+  drawLine(image, left + pw + 0.5, top - 0.5, left + pw + 0.5, top + ph + 0.5, kBlack, 1);
+  const auto px = [&](double v) { return left + (v - text.x0) / (text.x1 - text.x0) * pw; };
+  const auto py = [&](double v) { return top + (text.y1 - v) / (text.y1 - text.y0) * ph; };
+  // Title, centred over the plot (cut if it would run past the image).
+  const std::string title = fitText(text.title, image.width - 2 * kPad, kScale);
+  drawText(image,
+           std::clamp(left + (pw - textWidth(title, kScale)) / 2, kPad,
+                      image.width - kPad - textWidth(title, kScale)),
+           kPad, title, kBlack, kScale);
+  // y ticks and values.
+  for (const auto& [v, s] : y_labels) {
+    const double y = py(v);
+    drawLine(image, left - kTick, y, left, y, kBlack, 1);
+    drawText(image, left - kTick - 6 - textWidth(s, kScale),
+             static_cast<int>(std::lround(y)) - line / 2 + 1, s, kBlack, kScale);
+  }
+  // x ticks and values: every k-th value when they would overlap; categories cut to fit.
+  double spacing = pw;
+  for (std::size_t i = 1; i < x_labels.size(); ++i) {
+    spacing = std::min(spacing, std::abs(px(x_labels[i].first) - px(x_labels[i - 1].first)));
+  }
+  int widest = 0;
+  for (const auto& [v, s] : x_labels) widest = std::max(widest, textWidth(s, kScale));
+  std::size_t every = 1;
+  if (text.categories.empty()) {
+    while (every < x_labels.size() && spacing * static_cast<double>(every) < widest + 12) ++every;
+  }
+  for (std::size_t i = 0; i < x_labels.size(); ++i) {
+    const double x = px(x_labels[i].first);
+    drawLine(image, x, top + ph, x, top + ph + kTick, kBlack, 1);
+    if (i % every) continue;
+    const std::string s = text.categories.empty()
+                              ? x_labels[i].second
+                              : fitText(x_labels[i].second, static_cast<int>(spacing) - 8, kScale);
+    const int w = textWidth(s, kScale);
+    drawText(image, std::clamp(static_cast<int>(std::lround(x)) - w / 2, 0, image.width - w),
+             top + ph + kTick + 6, s, kBlack, kScale);
+  }
+  // Axis titles.
+  const std::string x_label = fitText(text.x_label, image.width - 2 * kPad, kScale);
+  drawText(image, left + (pw - textWidth(x_label, kScale)) / 2, top + ph + kTick + 6 + line + kPad,
+           x_label, kBlack, kScale);
+  const std::string y_label = fitText(text.y_label, ph + top + bottom / 2, kScale);
+  drawTextUp(image, kPad, top + (ph + textWidth(y_label, kScale)) / 2, y_label, kBlack, kScale);
+  // Legend: a swatch and name per planner, then what the marks mean.
+  const int lx = left + pw + kPad;
+  int ly = top;
+  for (const auto& [colour, name] : text.legend) {
+    for (int y = 0; y < line; ++y) {
+      for (int x = 0; x < 20; ++x) image.set(lx + x, ly + y, colour);
+    }
+    drawText(image, lx + 28, ly, name, kBlack, kScale);
+    ly += line + 10;
+  }
+  ly += 10;
+  drawLine(image, lx + 6, ly + 4, lx + 12, ly + 10, kGreyText, 2);
+  drawLine(image, lx + 6, ly + 10, lx + 12, ly + 4, kGreyText, 2);
+  drawText(image, lx + 28, ly, "case", kGreyText, kScale);
+  ly += line + 10;
+  drawLine(image, lx, ly + line / 2, lx + 20, ly + line / 2, kGreyText, 2);
+  drawText(image, lx + 28, ly, "mean", kGreyText, kScale);
+  return image;
+}
+
 // One metric against one varied value: a point per case, a line through each planner's means;
 // categorical values are placed at 0, 1, 2, … and the planners side by side at each.
 // Returns false when no case has the metric.
@@ -579,6 +746,16 @@ bool writePlot(const fs::path& dir,
   RgbImage image = RgbImage::filled(kW, kH, {255, 255, 255});
   const auto px = [&](double x) { return (x - x0) / (x1 - x0) * kW; };
   const auto py = [&](double y) { return (1.0 - (y - y0) / (y1 - y0)) * kH; };
+  // Light grid lines at the ticks the axes get.
+  constexpr Rgb kGrid{225, 225, 225};
+  for (const double v : niceTicks(y0, y1).values) drawLine(image, 0, py(v), kW, py(v), kGrid, 1);
+  std::vector<double> x_grid;
+  if (numeric) {
+    x_grid = niceTicks(x0, x1).values;
+  } else {
+    for (std::size_t i = 0; i < values.size(); ++i) x_grid.push_back(static_cast<double>(i));
+  }
+  for (const double v : x_grid) drawLine(image, px(v), 0, px(v), kH, kGrid, 1);
   std::vector<std::pair<Rgb, std::string>> legend;
   for (std::size_t mi = 0; mi < methods.size(); ++mi) {
     const Rgb colour = methodColour(methods[mi]);
@@ -602,23 +779,44 @@ bool writePlot(const fs::path& dir,
       drawLine(image, means[i - 1].first, means[i - 1].second, means[i].first, means[i].second,
                colour, 2);
     }
-    legend.emplace_back(colour, methods[mi].empty() ? std::string("(no planner)") : methods[mi]);
+    // In the legend when it has a value here (a planner whose cases all failed has none).
+    if (!means.empty()) {
+      legend.emplace_back(colour, methods[mi].empty() ? std::string("(none)") : methods[mi]);
+    }
   }
-  writePng(dir / (stem + ".png"), image);
+  const std::string x_name = key.empty() ? std::string("all cases") : key;
+  PlotText text;
+  text.title = metricLabel(metric) + " against " + x_name;
+  text.x_label = x_name;
+  text.y_label = metricLabel(metric);
+  text.x0 = x0;
+  text.x1 = x1;
+  text.y0 = y0;
+  text.y1 = y1;
+  if (!numeric) {
+    text.categories = key.empty() ? std::vector<std::string>{"all"} : values;
+    for (std::string& c : text.categories) {
+      if (c.empty()) c = "(not set)";  // an explicit case without this key
+    }
+  }
+  text.legend = legend;
+  writePng(dir / (stem + ".png"), labelledPlot(image, text));
+  // The SVG: the same data raster, embedded, with the axes and text as SVG text.
   SvgFigure figure;
-  figure.png_file = stem + ".png";
+  figure.png_file = "data:image/png;base64," + base64(encodePng(image));
   figure.png_width = kW;
   figure.png_height = kH;
-  figure.title = std::string(kBatchMetrics[metric]) + " against " + key;
-  figure.x_label = key;
-  if (!numeric) {
+  figure.title = text.title;
+  figure.x_label = x_name;
+  if (!numeric && !key.empty()) {
     figure.x_label += " (";
     for (std::size_t i = 0; i < values.size(); ++i) {
-      figure.x_label += fmt::format("{}{} = {}", i ? ", " : "", i, values[i]);
+      figure.x_label += fmt::format("{}{} = {}", i ? ", " : "", i,
+                                    values[i].empty() ? std::string("(not set)") : values[i]);
     }
     figure.x_label += ")";
   }
-  figure.y_label = kBatchMetrics[metric];
+  figure.y_label = text.y_label;
   figure.x_min = x0;
   figure.x_max = x1;
   figure.y_min = y0;
@@ -628,78 +826,207 @@ bool writePlot(const fs::path& dir,
   return true;
 }
 
-// OMPL's benchmark log (ompl/doc/markdown/benchmark.md, "The benchmark logfile format"), read by
-// ompl_benchmark_statistics.py into the database Planner Arena shows: one experiment, a
-// "planner" per setting (seeds and repeats are its runs).
-std::string omplLog(const std::vector<BatchRow>& rows, const std::vector<std::string>& keys) {
+// OMPL's benchmark log (ompl/doc/markdown/benchmark.md, "The benchmark logfile format"), as
+// ompl_benchmark_statistics.py reads it into the database Planner Arena shows. The script reads
+// one experiment per file: one log per base job (the OMPL "problem"), a "planner" per setting
+// of that job (its seeds and repeats are the planner's runs).
+
+// A database column name: what the script makes of a property name (words joined by '_'),
+// restricted to letters, digits and '_' so that its ALTER TABLE accepts it.
+std::string columnName(const std::string& key) {
+  std::string out;
+  for (const char c : key) out += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+  return out;
+}
+
+bool isInteger(const std::string& text) {
+  const std::optional<double> v = numberOf(text);
+  return v && std::abs(*v) < 9e15 && *v == std::round(*v);
+}
+
+std::string omplLogOfJob(const std::vector<const BatchRow*>& rows,
+                         const std::vector<std::string>& keys) {
+  // The planner of a row: its method and the non-seed values it was given.
+  const auto methodOf = [](const BatchRow& r) {
+    if (!r.method.empty()) return r.method;
+    const std::string v = paramValue(r, "planner.method");  // a case that failed to load
+    return v.empty() ? std::string("none") : v;
+  };
   std::vector<std::string> order;
   std::map<std::string, std::vector<const BatchRow*>> planners;
-  for (const BatchRow& r : rows) {
-    std::string name = r.method.empty() ? std::string("none") : r.method;
+  std::map<std::string, std::vector<std::string>> settings;  // "key = value" lines
+  for (const BatchRow* r : rows) {
+    std::string name = methodOf(*r);
+    std::vector<std::string> common{"planner.method = " + methodOf(*r)};
     for (const std::string& k : keys) {
-      if (!isSeedKey(k) && k != "planner.method") name += "_" + k + "=" + paramValue(r, k);
+      const std::string v = paramValue(*r, k);
+      if (isSeedKey(k) || k == "planner.method" || v.empty()) continue;
+      name += " " + k + "=" + v;
+      common.push_back(k + " = " + v);
     }
-    if (rows.size() > 0 && r.job != rows.front().job) name += "_" + r.job;
-    name = [&] {
-      std::string out;
-      for (const char c : name) out += std::isspace(static_cast<unsigned char>(c)) ? '_' : c;
-      return out;
-    }();
-    if (!planners.count(name)) order.push_back(name);
-    planners[name].push_back(&r);
+    for (char& c : name) {
+      if (c == '\n' || c == '\r') c = ' ';
+    }
+    if (!planners.count(name)) {
+      order.push_back(name);
+      settings[name] = common;
+    }
+    planners[name].push_back(r);
+  }
+  // The seeds as run properties (numeric ones: the database types them).
+  std::vector<std::pair<std::string, const char*>> seeds;
+  for (const std::string& k : keys) {
+    if (!isSeedKey(k)) continue;
+    bool integer = true, numeric = true, any = false;
+    for (const BatchRow* r : rows) {
+      const std::string v = paramValue(*r, k);
+      if (v.empty()) continue;
+      any = true;
+      integer = integer && isInteger(v);
+      numeric = numeric && numberOf(v).has_value();
+    }
+    if (any && numeric) seeds.emplace_back(k, integer ? "INTEGER" : "REAL");
+  }
+
+  // Wall time spent: planning, validation and simulation of every case, and each map once.
+  double total = 0.0;
+  for (const BatchRow* r : rows) {
+    for (const std::size_t m : {kPlanS, kValidationS, kSimulationS}) {
+      total += r->metrics[m].value_or(0.0);
+    }
+    if (!r->map_reused) total += r->metrics[kMapS].value_or(0.0);
+  }
+  std::size_t runs = planners.empty() ? 0 : planners[order.front()].size();
+  for (const auto& [name, group] : planners) {
+    if (group.size() != runs) runs = 0;
   }
   char host[256] = "localhost";
   ::gethostname(host, sizeof host - 1);
-  double total = 0.0;
-  for (const BatchRow& r : rows) {
-    for (std::size_t m = kFirstTimingMetric; m < kBatchMetrics.size(); ++m) {
-      total += r.metrics[m].value_or(0.0);
-    }
+  host[sizeof host - 1] = '\0';
+  const std::time_t now = std::time(nullptr);
+  std::tm local{};
+  ::localtime_r(&now, &local);
+  char date[64] = "unknown";
+  std::strftime(date, sizeof date, "%Y-%m-%d %H:%M:%S", &local);
+  std::string experiment = fs::path(rows.front()->job).stem().string();
+  for (char& c : experiment) {
+    if (std::isspace(static_cast<unsigned char>(c))) c = '_';
   }
+
   std::string log = fmt::format("scanplan version {}\n", SCANPLAN_VERSION);
-  log += "Experiment scanplan_batch\n";
-  log += fmt::format("Running on {}\n", host);
-  log += "Starting at unknown\n";
-  log += "<<<|\nscanplan batch: table-angle planning, J = objective (s)\n|>>>\n";
+  log += fmt::format("Experiment {}\n", experiment.empty() ? "scanplan_batch" : experiment);
+  log += fmt::format("Running on {}\n", host[0] ? host : "localhost");
+  log += fmt::format("Starting at {}\n", date);  // when this log was written
+  log += fmt::format(
+      "<<<|\nscanplan batch of {}: the table angle over time planned on the job's configuration "
+      "maps.\nPlanners are the settings of the sweep (planner.method and the varied values); "
+      "their runs are the seeds and repeats.\nProperties: time = plan time (s), solved = "
+      "planned (a path found, executable and valid), outcome, best cost = the objective J (s) "
+      "and its terms (s), dp gap percent, min f, solution clearance (mm), max omega (deg/s), "
+      "max alpha (deg/s^2), cycle time (s), coverage (fraction of the part's area), map, "
+      "validation and simulation times (s). No time limit: 0 below.\n|>>>\n",
+      rows.front()->job);
   log += "0 is the random seed\n";
   log += "0 seconds per run\n";
   log += "0 MB per run\n";
+  if (runs) log += fmt::format("{} runs per planner\n", runs);
   log += fmt::format("{} seconds spent to collect the data\n", total);
+  // The statuses as an enum, "outcome" (not OMPL's own "status" enum, so that a database holding
+  // OMPL's logs too keeps both meanings).
+  log += "1 enum type\noutcome";
+  for (const char* o : kBatchStatuses) log += fmt::format("|{}", o);
+  log += "\n";
   log += fmt::format("{} planners\n", order.size());
+
+  enum class Kind { kMetric, kSolved, kOutcome, kReused, kRepeat, kSeed };
   struct Property {
-    const char* name;
-    std::size_t metric;  // kBatchMetrics index; npos: solved
+    Property(std::string n, Kind k, std::size_t m = 0, std::string seed_key = {})
+        : name(std::move(n)), kind(k), metric(m), key(std::move(seed_key)) {}
+    std::string name;  // with its type, as the log declares it
+    Kind kind;
+    std::size_t metric;  // kBatchMetrics index (kMetric)
+    std::string key;     // the seed key (kSeed)
   };
-  constexpr std::size_t kSolved = static_cast<std::size_t>(-1);
-  const std::vector<Property> properties{
-      {"time REAL", kPlanS},
-      {"solved BOOLEAN", kSolved},
-      {"best cost REAL", kJ},
-      {"solution clearance REAL", kClearance},
-      {"dp gap percent REAL", kGap},
-      {"min f REAL", kMinF},
-      {"cycle time REAL", kCycle},
-      {"coverage REAL", kCoverage},
-      {"map time REAL", kMapS},
-      {"max omega deg s REAL", kOmega},
-      {"max alpha deg s2 REAL", kAlpha},
+  std::vector<Property> properties{
+      {"time REAL", Kind::kMetric, kPlanS},
+      {"solved BOOLEAN", Kind::kSolved},
+      {"outcome ENUM", Kind::kOutcome},
+      {"best cost REAL", Kind::kMetric, kJ},
+      {"cost f REAL", Kind::kMetric, kCostF},
+      {"cost omega REAL", Kind::kMetric, kCostOmega},
+      {"cost alpha REAL", Kind::kMetric, kCostAlpha},
+      {"dp gap percent REAL", Kind::kMetric, kGap},
+      {"min f REAL", Kind::kMetric, kMinF},
+      {"solution clearance REAL", Kind::kMetric, kClearance},
+      {"max omega deg s REAL", Kind::kMetric, kOmega},
+      {"max alpha deg s2 REAL", Kind::kMetric, kAlpha},
+      {"cycle time REAL", Kind::kMetric, kCycle},
+      {"coverage REAL", Kind::kMetric, kCoverage},
+      {"map time REAL", Kind::kMetric, kMapS},
+      {"map reused BOOLEAN", Kind::kReused},
+      {"validation time REAL", Kind::kMetric, kValidationS},
+      {"simulation time REAL", Kind::kMetric, kSimulationS},
+      {"repeat INTEGER", Kind::kRepeat},
+  };
+  for (const auto& [key, type] : seeds) {
+    properties.emplace_back(columnName(key) + " " + type, Kind::kSeed, 0, key);
+  }
+  const auto value = [](const Property& p, const BatchRow& r) -> std::string {
+    switch (p.kind) {
+      case Kind::kMetric:
+        return numberOrEmpty(r.metrics[p.metric], "");
+      case Kind::kSolved:
+        return r.status == "planned" ? "1" : "0";
+      case Kind::kOutcome: {
+        const auto* it = std::find_if(kBatchStatuses.begin(), kBatchStatuses.end(),
+                                      [&](const char* o) { return r.status == o; });
+        if (it == kBatchStatuses.end()) --it;  // an unknown status: error
+        return std::to_string(it - kBatchStatuses.begin());
+      }
+      case Kind::kReused:
+        return r.map_reused ? "1" : "0";
+      case Kind::kRepeat:
+        return std::to_string(r.repeat);
+      case Kind::kSeed:
+        return paramValue(r, p.key);
+    }
+    return {};
   };
   for (const std::string& name : order) {
-    log += name + "\n0 common properties\n";
+    log += name + "\n";
+    log += fmt::format("{} common properties\n", settings[name].size());
+    for (const std::string& s : settings[name]) log += s + "\n";
     log += fmt::format("{} properties for each run\n", properties.size());
-    for (const Property& p : properties) log += std::string(p.name) + "\n";
+    for (const Property& p : properties) log += p.name + "\n";
     log += fmt::format("{} runs\n", planners[name].size());
     for (const BatchRow* r : planners[name]) {
-      for (const Property& p : properties) {
-        log += p.metric == kSolved ? std::string(r->status == "planned" ? "1" : "0")
-                                   : numberOrEmpty(r->metrics[p.metric], "");
-        log += "; ";
-      }
+      for (const Property& p : properties) log += value(p, *r) + "; ";
       log += "\n";
     }
     log += ".\n";
   }
   return log;
+}
+
+// The OMPL logs of a batch, file name → content: ompl_benchmark.log for a sweep of one base
+// job, ompl_benchmark_<i>_<job>.log (i = 1, 2, …) for each of several.
+std::vector<std::pair<std::string, std::string>> omplLogs(const std::vector<BatchRow>& rows,
+                                                          const std::vector<std::string>& keys) {
+  std::vector<std::string> jobs;
+  std::map<std::string, std::vector<const BatchRow*>> by_job;
+  for (const BatchRow& r : rows) {
+    if (!by_job.count(r.job)) jobs.push_back(r.job);
+    by_job[r.job].push_back(&r);
+  }
+  std::vector<std::pair<std::string, std::string>> logs;
+  for (std::size_t j = 0; j < jobs.size(); ++j) {
+    const std::string file = jobs.size() == 1
+                                 ? std::string("ompl_benchmark.log")
+                                 : fmt::format("ompl_benchmark_{}_{}.log", j + 1,
+                                               fileStem(fs::path(jobs[j]).stem().string()));
+    logs.emplace_back(file, omplLogOfJob(by_job[jobs[j]], keys));
+  }
+  return logs;
 }
 
 void writeReport(const fs::path& out, const std::vector<BatchRow>& rows) {
@@ -719,7 +1046,42 @@ void writeReport(const fs::path& out, const std::vector<BatchRow>& rows) {
     }
   }
   writeFileAtomically(out / "summary.md", summaryMarkdown(rows, keys, figures));
-  writeFileAtomically(out / "ompl_benchmark.log", omplLog(rows, keys));
+  // The OMPL logs; those of an earlier report that this one does not write go (other jobs).
+  const std::vector<std::pair<std::string, std::string>> logs = omplLogs(rows, keys);
+  std::vector<fs::path> stale;
+  for (const fs::directory_entry& e : fs::directory_iterator(out)) {
+    const std::string name = e.path().filename().string();
+    if (name.starts_with("ompl_benchmark") && name.ends_with(".log") &&
+        std::none_of(logs.begin(), logs.end(), [&](const auto& l) { return l.first == name; })) {
+      stale.push_back(e.path());
+    }
+  }
+  for (const fs::path& f : stale) fs::remove(f);
+  for (const auto& [file, log] : logs) writeFileAtomically(out / file, log);
+}
+
+// Counts the rows by status (an unknown status counts as error).
+void tally(const std::vector<BatchRow>& rows, BatchStats& stats) {
+  stats.statuses = {};
+  stats.internal_errors = 0;
+  for (const BatchRow& r : rows) {
+    const auto* it = std::find_if(kBatchStatuses.begin(), kBatchStatuses.end(),
+                                  [&](const char* s) { return r.status == s; });
+    if (it == kBatchStatuses.end()) it = kBatchStatuses.end() - 1;
+    ++stats.statuses[static_cast<std::size_t>(it - kBatchStatuses.begin())];
+    if (r.status == "error" && r.reason.starts_with(kInternalPrefix)) ++stats.internal_errors;
+  }
+}
+
+// "tally      13 case(s): 12 planned, 0 no_path, …, 1 error".
+std::string tallyLine(const BatchStats& stats) {
+  std::size_t total = 0;
+  for (const std::size_t n : stats.statuses) total += n;
+  std::string line = fmt::format("tally      {} case(s):", total);
+  for (std::size_t i = 0; i < kBatchStatuses.size(); ++i) {
+    line += fmt::format("{} {} {}", i ? "," : "", stats.statuses[i], kBatchStatuses[i]);
+  }
+  return line;
 }
 
 }  // namespace
@@ -975,7 +1337,7 @@ BatchStats runBatchCases(const BatchOptions& options) {
       try {
         jobs[i] = loadJob(todo[i]->job_file, todo[i]->overrides);
       } catch (const std::exception& e) {
-        errors[i] = e.what();
+        errors[i] = errorReason(e);
       }
     });
     std::vector<std::string> keys;
@@ -1002,7 +1364,7 @@ BatchStats runBatchCases(const BatchOptions& options) {
         bundle = buildBundle(*jobs[group.front()]);
         ++maps;
       } catch (const std::exception& e) {
-        bundle_error = e.what();
+        bundle_error = errorReason(e);
       }
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, group.size(), 1),
                         [&](const tbb::blocked_range<std::size_t>& r) {
@@ -1032,12 +1394,14 @@ BatchStats runBatchCases(const BatchOptions& options) {
   sortRows(rows);
   writeResults(out, rows, sweep.keys);
   if (options.report) writeReport(out, rows);
+  tally(rows, stats);
   stats.seconds = since(start);
   return stats;
 }
 
 ExitCode runBatch(const BatchOptions& options) {
   const BatchStats s = runBatchCases(options);
+  const std::size_t errors = s.statuses.back();
   if (options.print) {
     std::printf(
         "batch      %zu case(s)%s: %zu run, %zu already done, %zu error(s); %zu map(s) computed "
@@ -1045,9 +1409,19 @@ ExitCode runBatch(const BatchOptions& options) {
         s.cases, options.shard.empty() ? "" : (" in shard " + options.shard).c_str(), s.ran,
         s.skipped, s.failed, s.maps, s.seconds);
     std::printf("wrote      %s: results.csv, results.jsonl%s\n", options.out_dir.string().c_str(),
-                options.report ? ", summary.md, plots/, ompl_benchmark.log" : "");
+                options.report ? ", summary.md, plots/, ompl_benchmark*.log" : "");
+    std::printf("%s\n", tallyLine(s).c_str());
+    std::fflush(stdout);
   }
-  return ExitCode::kOk;
+  if (errors == 0) return ExitCode::kOk;
+  std::fprintf(
+      stderr,
+      "scanplan: error: %zu of %zu case(s) ended in status error%s; every case ran and "
+      "the results are written (reasons in %s)\n",
+      errors, s.cases,
+      s.internal_errors ? fmt::format(", {} of them internal", s.internal_errors).c_str() : "",
+      (options.out_dir / "results.csv").string().c_str());
+  return s.internal_errors ? ExitCode::kInternal : ExitCode::kInput;
 }
 
 ExitCode runBatchReport(const fs::path& out_dir) {
@@ -1057,8 +1431,11 @@ ExitCode runBatchReport(const fs::path& out_dir) {
   std::vector<BatchRow> rows = readBatchRows(out_dir / "results.jsonl");
   sortRows(rows);
   writeReport(out_dir, rows);
-  std::printf("wrote      %s: summary.md, plots/, ompl_benchmark.log (%zu case(s))\n",
+  std::printf("wrote      %s: summary.md, plots/, ompl_benchmark*.log (%zu case(s))\n",
               out_dir.string().c_str(), rows.size());
+  BatchStats stats;
+  tally(rows, stats);
+  std::printf("%s\n", tallyLine(stats).c_str());
   return ExitCode::kOk;
 }
 
@@ -1079,6 +1456,9 @@ ExitCode runBatchMerge(const std::vector<fs::path>& inputs, const fs::path& out_
   writeReport(out_dir, rows);
   std::printf("merged     %zu case(s) from %zu folder(s) into %s\n", rows.size(), inputs.size(),
               out_dir.string().c_str());
+  BatchStats stats;
+  tally(rows, stats);
+  std::printf("%s\n", tallyLine(stats).c_str());
   return ExitCode::kOk;
 }
 

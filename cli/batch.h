@@ -59,6 +59,12 @@ inline constexpr std::array<const char*, 15> kBatchMetrics = {"J_s",
 /// Index of the first timing column: wall times vary run to run, everything before does not.
 inline constexpr std::size_t kFirstTimingMetric = 11;
 
+/// The statuses of a case, in this order in the tally and in the OMPL log's `outcome` enum.
+/// All but `error` are outcomes of a case that ran; `error` is a case that could not run to
+/// one (bad input in combination, or an internal error: its reason says which).
+inline constexpr std::array<const char*, 5> kBatchStatuses = {
+    "planned", "no_path", "no_executable_path", "invalid_trajectory", "error"};
+
 /// One row of results.csv / results.jsonl.
 struct BatchRow {
   std::size_t index = 0;
@@ -92,12 +98,20 @@ struct BatchStats {
   std::size_t failed = 0;  ///< status error
   std::size_t maps = 0;    ///< maps computed
   double seconds = 0.0;
+  /// Every row of the results (this run's and those --resume kept), by kBatchStatuses.
+  std::array<std::size_t, kBatchStatuses.size()> statuses{};
+  /// Rows with status error whose reason is an internal error (a bug), not bad input.
+  std::size_t internal_errors = 0;
 };
 
 /// Runs the cases of the sweep into options.out_dir; rows are appended as cases finish.
 BatchStats runBatchCases(const BatchOptions& options);
+/// runBatchCases with the summary lines. The whole batch always runs and is written; the exit
+/// code: kOk when every case ran to an outcome (planned, no_path, no_executable_path,
+/// invalid_trajectory), kInput when some case ended in status error through bad input,
+/// kInternal when some case ended in an internal error (as `plan` would have exited).
 ExitCode runBatch(const BatchOptions& options);
-/// Regenerates summary.md, plots/ and ompl_benchmark.log from OUT/results.jsonl.
+/// Regenerates summary.md, plots/ and the OMPL benchmark log(s) from OUT/results.jsonl.
 ExitCode runBatchReport(const std::filesystem::path& out_dir);
 /// Merges the results of shard runs into `out_dir` (a case in several inputs is kept once).
 ExitCode runBatchMerge(const std::vector<std::filesystem::path>& inputs,

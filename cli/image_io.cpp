@@ -100,12 +100,24 @@ void checkShape(const std::filesystem::path& file,
   }
 }
 
-struct Ticks {
-  std::vector<double> values;
-  int decimals = 0;
-};
+std::string xmlEscape(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    out += c == '&'   ? "&amp;"
+           : c == '<' ? "&lt;"
+           : c == '>' ? "&gt;"
+           : c == '"' ? "&quot;"
+                      : std::string(1, c);
+  }
+  return out;
+}
 
-// The largest step of 1, 2 or 5 × 10^k giving at least five ticks in [a, b] (at most ~12).
+std::uint8_t toByte(double v) {
+  return static_cast<std::uint8_t>(std::lround(std::clamp(v, 0.0, 255.0)));
+}
+
+}  // namespace
+
 Ticks niceTicks(double a, double b) {
   Ticks ticks;
   const double lo = std::min(a, b), hi = std::max(a, b);
@@ -124,24 +136,6 @@ Ticks niceTicks(double a, double b) {
   }
   return ticks;
 }
-
-std::string xmlEscape(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    out += c == '&'   ? "&amp;"
-           : c == '<' ? "&lt;"
-           : c == '>' ? "&gt;"
-           : c == '"' ? "&quot;"
-                      : std::string(1, c);
-  }
-  return out;
-}
-
-std::uint8_t toByte(double v) {
-  return static_cast<std::uint8_t>(std::lround(std::clamp(v, 0.0, 255.0)));
-}
-
-}  // namespace
 
 RgbImage RgbImage::filled(int w, int h, Rgb fill_colour) {
   RgbImage image;

@@ -68,9 +68,18 @@ inline constexpr Rgb kNanColour{139, 0, 0};
 /// blue, vermillion, reddish purple, black).
 Rgb categoryColour(int k);
 
+/// Axis tick values and the decimals to print them with.
+struct Ticks {
+  std::vector<double> values;
+  int decimals = 0;
+};
+/// The largest step of 1, 2 or 5 × 10^k giving at least five ticks in [a, b] (at most ~12);
+/// none for an empty or non-finite range.
+Ticks niceTicks(double a, double b);
+
 /// A standalone SVG figure around a PNG map image.
 struct SvgFigure {
-  /// href of the PNG relative to the SVG file (not embedded).
+  /// href of the PNG: a path relative to the SVG file, or a data: URI (embedded).
   std::string png_file;
   /// PNG size in pixels.
   int png_width = 0, png_height = 0;

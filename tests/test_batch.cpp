@@ -1,15 +1,20 @@
 // `scanplan batch` end to end on the lightened demo (test::kLightDemo, simulation off, each case
 // a fraction of a second): the issue's small sweep, resume after an interruption, shards merged,
-// failing cases as rows, and sweep errors before anything runs.
+// failing cases as rows and the exit code they give, labelled PNG plots, the OMPL benchmark log
+// through OMPL's own script (when installed), and sweep errors before anything runs.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include <fmt/format.h>
 
 #include "cli/batch.h"
+#include "cli/image_io.h"
 #include "cli_support.h"
 #include "test_support.h"
 
@@ -78,6 +83,10 @@ TEST_F(Batch, SmallSweepGivesOneRowPerCaseWithTheDpGap) {
   ASSERT_EQ(run.exit_code, 0) << describe(run);
   EXPECT_TRUE(contains(run.out, "12 case(s): 12 run, 0 already done, 0 error(s); 1 map(s)"))
       << run.out;
+  EXPECT_TRUE(contains(run.out,
+                       "\ntally      12 case(s): 12 planned, 0 no_path, 0 no_executable_path, 0 "
+                       "invalid_trajectory, 0 error\n"))
+      << run.out;
 
   const std::vector<cli::BatchRow> rows = cli::readBatchRows(out / "results.jsonl");
   ASSERT_EQ(rows.size(), 12u);
@@ -108,6 +117,29 @@ TEST_F(Batch, SmallSweepGivesOneRowPerCaseWithTheDpGap) {
     EXPECT_TRUE(fs::exists(out / f)) << f;
   }
   EXPECT_TRUE(tmpFiles(out).empty());
+  // The PNG plots carry their text: a margin around the 720 x 480 data area with the title on
+  // top, the y-axis title on the left and the legend on the right, all in dark pixels.
+  const cli::RgbImage png = cli::decodePng(readFile(out / "plots/J_s_vs_planner_ray_horizon.png"));
+  ASSERT_GT(png.width, 720 + 100);
+  ASSERT_GT(png.height, 480 + 60);
+  const auto dark = [&](int x0, int y0, int x1, int y1) {
+    int n = 0;
+    for (int y = y0; y < y1; ++y) {
+      for (int x = x0; x < x1; ++x) {
+        const cli::Rgb c = png.at(x, y);
+        n += c.r < 100 && c.g < 100 && c.b < 100 ? 1 : 0;
+      }
+    }
+    return n;
+  };
+  EXPECT_GT(dark(0, 0, png.width, 30), 100) << "title";
+  EXPECT_GT(dark(0, 60, 30, png.height - 60), 100) << "y-axis title";
+  EXPECT_GT(dark(0, png.height - 30, png.width, png.height), 100) << "x-axis title";
+  EXPECT_GT(dark(png.width - 80, 0, png.width, 200), 50) << "legend";
+  // The SVG embeds the bare data area and labels it with SVG text.
+  const std::string svg = readFile(out / "plots/J_s_vs_planner_ray_horizon.svg");
+  EXPECT_TRUE(contains(svg, "href=\"data:image/png;base64,iVBORw0KGgo")) << svg.substr(0, 400);
+  EXPECT_TRUE(contains(svg, ">J, objective (s) against planner.ray.horizon</text>"));
   const std::string log = readFile(out / "ompl_benchmark.log");
   EXPECT_TRUE(contains(log, "6 planners\n")) << log;  // 2 methods x 3 horizons, seeds are runs
   EXPECT_TRUE(contains(log, "\n2 runs\n")) << log;
@@ -195,13 +227,121 @@ TEST_F(Batch, AFailingCaseIsARowNotTheEndOfTheBatch) {
       "  - {planner.method: dp}\n");
   const fs::path out = dir_ / "out";
   const Result run = batch(sweep, out);
-  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  // The whole batch runs and is written; a case with bad input makes the exit code 4 (bad
+  // input), after the tally.
+  EXPECT_EQ(run.exit_code, 4) << describe(run);
+  EXPECT_TRUE(contains(run.out,
+                       "\ntally      2 case(s): 1 planned, 0 no_path, 0 no_executable_path, 0 "
+                       "invalid_trajectory, 1 error\n"))
+      << run.out;
+  EXPECT_TRUE(contains(run.err, "scanplan: error: 1 of 2 case(s) ended in status error;"))
+      << run.err;
   const std::vector<cli::BatchRow> rows = cli::readBatchRows(out / "results.jsonl");
   ASSERT_EQ(rows.size(), 2u);
   EXPECT_EQ(rows[0].status, "error");
   EXPECT_TRUE(contains(rows[0].reason, "table.max_deg")) << rows[0].reason;
+  EXPECT_FALSE(contains(rows[0].reason, "internal error")) << rows[0].reason;
   EXPECT_EQ(rows[1].status, "planned") << rows[1].reason;
   EXPECT_EQ(rows[1].method, "dp");
+  for (const char* f :
+       {"results.csv", "summary.md", "ompl_benchmark.log", "plots/J_s_vs_planner_method.png"}) {
+    EXPECT_TRUE(fs::exists(out / f)) << f;
+  }
+  // In the OMPL log the failed case is a run that did not solve, outcome 4 (error).
+  const std::string log = readFile(out / "ompl_benchmark.log");
+  EXPECT_TRUE(
+      contains(log, "\noutcome|planned|no_path|no_executable_path|invalid_trajectory|error\n"))
+      << log;
+  EXPECT_TRUE(contains(log, "\n; 0; 4; ")) << log;  // no plan time, not solved, error
+}
+
+TEST_F(Batch, ExitCodeZeroWhenEveryCaseHasAnOutcomeEvenWithoutAPath) {
+  // Half a degree per second is too slow to follow the rings: no path, an outcome, not an error.
+  const fs::path sweep = writeSweep("vary:\n  table.max_speed_deg_s: [0.5, 30]\n");
+  const fs::path out = dir_ / "out";
+  const Result run = batch(sweep, out);
+  EXPECT_EQ(run.exit_code, 0) << describe(run);
+  EXPECT_TRUE(contains(run.out,
+                       "\ntally      2 case(s): 1 planned, 1 no_path, 0 no_executable_path, 0 "
+                       "invalid_trajectory, 0 error\n"))
+      << run.out;
+  EXPECT_TRUE(run.err.empty()) << run.err;
+
+  // A case that ended in an internal error (here: written into the results as a run would
+  // write it) makes a resumed batch exit 1, as `plan` would: everything ran, something is a bug.
+  std::string jsonl = readFile(out / "results.jsonl");
+  const std::size_t at = jsonl.find("\"status\": \"planned\", \"reason\": \"\"");
+  ASSERT_NE(at, std::string::npos) << jsonl;
+  jsonl.replace(at, std::string("\"status\": \"planned\", \"reason\": \"\"").size(),
+                "\"status\": \"error\", \"reason\": \"internal error: boom (please report this)\"");
+  writeFile(out / "results.jsonl", jsonl);
+  const Result resumed = batch(sweep, out, {"--resume"});
+  EXPECT_EQ(resumed.exit_code, 1) << describe(resumed);
+  EXPECT_TRUE(contains(resumed.out, "2 case(s): 0 run, 2 already done")) << resumed.out;
+  EXPECT_TRUE(contains(resumed.out,
+                       "0 planned, 1 no_path, 0 no_executable_path, 0 "
+                       "invalid_trajectory, 1 error\n"))
+      << resumed.out;
+  EXPECT_TRUE(contains(resumed.err, "1 of 2 case(s) ended in status error, 1 of them internal"))
+      << resumed.err;
+}
+
+// The OMPL benchmark log through OMPL's own ompl_benchmark_statistics (Debian: ompl-demos) into
+// the Planner Arena database: every case a run of the right planner with its values.
+TEST_F(Batch, OmplBenchmarkLogLoadsIntoThePlannerArenaDatabase) {
+  if (std::system("command -v ompl_benchmark_statistics >/dev/null 2>&1") != 0 ||
+      std::system("command -v python3 >/dev/null 2>&1") != 0) {
+    GTEST_SKIP() << "ompl_benchmark_statistics (Debian package ompl-demos) is not installed";
+  }
+  const fs::path sweep = writeSweep(
+      "vary:\n  planner.method: [ray, dp]\n  planner.ray.horizon: [10, 30]\n"
+      "  planner.ompl.seed: [1, 2]\n");
+  const fs::path out = dir_ / "out";
+  const Result run = batch(sweep, out, {"--jobs", "2"});
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  const fs::path db = dir_ / "results.db";
+  const std::string script =
+      fmt::format("cd {} && ompl_benchmark_statistics {} -d {} >stats_out.txt 2>stats_err.txt",
+                  dir_.string(), (out / "ompl_benchmark.log").string(), db.string());
+  ASSERT_EQ(std::system(script.c_str()), 0)
+      << readFile(dir_ / "stats_out.txt") << readFile(dir_ / "stats_err.txt");
+  EXPECT_FALSE(contains(readFile(dir_ / "stats_err.txt"), "Error"))
+      << readFile(dir_ / "stats_err.txt");
+
+  // The database as Planner Arena reads it, one line per run and a few counts.
+  writeFile(dir_ / "query.py",
+            "import sqlite3, sys\n"
+            "c = sqlite3.connect(sys.argv[1])\n"
+            "print('experiments', *c.execute('SELECT count(*), name, runcount FROM experiments')"
+            ".fetchone())\n"
+            "print('planners', c.execute('SELECT count(*) FROM plannerConfigs').fetchone()[0])\n"
+            "print('outcomes', c.execute(\"SELECT count(*) FROM enums WHERE name = 'outcome'\")"
+            ".fetchone()[0])\n"
+            "for r in c.execute('SELECT p.name, r.time, r.solved, r.outcome, r.best_cost, r.min_f, "
+            "r.planner_ompl_seed FROM runs r JOIN plannerConfigs p ON p.id = r.plannerid'):\n"
+            "    print('run|%s|%.12g|%d|%d|%.12g|%.12g|%d' % r)\n");
+  const std::string query = fmt::format("python3 {} {} >{} 2>&1", (dir_ / "query.py").string(),
+                                        db.string(), (dir_ / "query.txt").string());
+  ASSERT_EQ(std::system(query.c_str()), 0) << readFile(dir_ / "query.txt");
+  std::istringstream lines(readFile(dir_ / "query.txt"));
+  std::vector<std::string> runs, other;
+  for (std::string line; std::getline(lines, line);) {
+    (line.starts_with("run|") ? runs : other).push_back(line);
+  }
+  EXPECT_EQ(other, (std::vector<std::string>{"experiments 1 demo 2", "planners 4", "outcomes 5"}));
+
+  // What each case should be: planner = method and the non-seed values, its runs the seeds.
+  std::vector<std::string> expected;
+  for (const cli::BatchRow& r : cli::readBatchRows(out / "results.jsonl")) {
+    ASSERT_EQ(r.status, "planned");
+    expected.push_back(fmt::format("run|{} planner.ray.horizon={}|{:.12g}|1|0|{:.12g}|{:.12g}|{}",
+                                   r.method, r.params.at(1).second, *r.metrics[12], *r.metrics[0],
+                                   *r.metrics[5], r.params.at(2).second));
+  }
+  ASSERT_EQ(expected.size(), 8u);
+  std::sort(expected.begin(), expected.end());
+  std::sort(runs.begin(), runs.end());
+  EXPECT_EQ(runs, expected);
 }
 
 TEST_F(Batch, BadKeyInTheSweepFailsBeforeAnythingRuns) {

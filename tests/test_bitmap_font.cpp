@@ -1,0 +1,120 @@
+// The built-in bitmap font that labels the PNG plots: text marks pixels, only inside its box,
+// and different text gives different pixels.
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "cli/bitmap_font.h"
+#include "cli/image_io.h"
+
+namespace {
+
+using namespace scanplan::cli;
+
+constexpr Rgb kWhite{255, 255, 255}, kInk{200, 0, 0};
+
+struct Box {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // [x0, x1) × [y0, y1)
+};
+
+// The inked pixels, and whether any lies outside `box`.
+std::vector<int> inked(const RgbImage& image, const Box& box, bool& outside) {
+  std::vector<int> pixels;
+  outside = false;
+  for (int y = 0; y < image.height; ++y) {
+    for (int x = 0; x < image.width; ++x) {
+      if (image.at(x, y) == kWhite) continue;
+      pixels.push_back(y * image.width + x);
+      outside = outside || x < box.x0 || x >= box.x1 || y < box.y0 || y >= box.y1;
+    }
+  }
+  return pixels;
+}
+
+std::vector<int> render(const std::string& text, int scale, bool& outside) {
+  RgbImage image = RgbImage::filled(400, 60, kWhite);
+  const int end = drawText(image, 10, 20, text, kInk, scale);
+  // The next cell starts one blank column after the last glyph.
+  EXPECT_EQ(end, 10 + (text.empty() ? 0 : textWidth(text, scale) + scale)) << text;
+  return inked(image, {10, 20, 10 + textWidth(text, scale), 20 + textHeight(scale)}, outside);
+}
+
+TEST(BitmapFont, TextMarksPixelsInsideItsBox) {
+  for (const int scale : {1, 2, 3}) {
+    for (const std::string text :
+         {"J (s) against planner.ray.horizon", "0123456789", "gjpqy_", "|", "(not set)"}) {
+      bool outside = true;
+      const std::vector<int> pixels = render(text, scale, outside);
+      EXPECT_FALSE(pixels.empty()) << text << " at scale " << scale;
+      EXPECT_FALSE(outside) << text << " at scale " << scale << " drew outside its box";
+    }
+  }
+  EXPECT_EQ(textWidth("", 2), 0);
+  EXPECT_EQ(textWidth("ab", 2), (2 * kCellWidth - 1) * 2);
+  EXPECT_EQ(textHeight(3), kGlyphHeight * 3);
+  bool outside = false;
+  EXPECT_TRUE(render("   ", 2, outside).empty()) << "spaces draw nothing";
+}
+
+TEST(BitmapFont, DifferentTextGivesDifferentPixels) {
+  bool outside = false;
+  const std::string texts[] = {"ray", "dp",  "ompl", "J_s", "10", "15",
+                               "30",  "1.0", "l.0",  "O",   "0"};
+  std::vector<std::vector<int>> drawn;
+  for (const std::string& t : texts) drawn.push_back(render(t, 2, outside));
+  for (std::size_t i = 0; i < drawn.size(); ++i) {
+    for (std::size_t j = i + 1; j < drawn.size(); ++j) {
+      EXPECT_NE(drawn[i], drawn[j]) << texts[i] << " and " << texts[j] << " look the same";
+    }
+  }
+  // Every printable ASCII character has its own glyph.
+  std::vector<std::vector<int>> glyphs;
+  for (char c = 0x21; c < 0x7f; ++c) glyphs.push_back(render(std::string(1, c), 1, outside));
+  for (std::size_t i = 0; i < glyphs.size(); ++i) {
+    EXPECT_FALSE(glyphs[i].empty()) << static_cast<char>(0x21 + i);
+    for (std::size_t j = i + 1; j < glyphs.size(); ++j) {
+      EXPECT_NE(glyphs[i], glyphs[j])
+          << static_cast<char>(0x21 + i) << " and " << static_cast<char>(0x21 + j);
+    }
+  }
+}
+
+TEST(BitmapFont, NonAsciiIsOneCellAndDegreeAndSquaredHaveGlyphs) {
+  bool outside = false;
+  const std::vector<int> question = render("?", 2, outside);
+  EXPECT_EQ(textWidth("deg/s\u00b2", 2), textWidth("deg/s2", 2)) << "one cell per character";
+  EXPECT_NE(render("\u00b0", 2, outside), question);
+  EXPECT_NE(render("\u00b2", 2, outside), question);
+  EXPECT_NE(render("\u00b0", 2, outside), render("\u00b2", 2, outside));
+  EXPECT_EQ(render("\u03c9", 2, outside), question) << "ω has no glyph: drawn as '?'";
+  EXPECT_EQ(render("\t", 2, outside), question);
+}
+
+TEST(BitmapFont, UpwardTextIsTheTextTurnedAnticlockwise) {
+  const std::string text = "min f (s)";
+  const int scale = 2, w = textWidth(text, scale), h = textHeight(scale);
+  RgbImage across = RgbImage::filled(w, h, kWhite);
+  drawText(across, 0, 0, text, kInk, scale);
+  RgbImage up = RgbImage::filled(h + 20, w + 20, kWhite);
+  drawTextUp(up, 10, w + 9, text, kInk, scale);  // bottom-left corner at (10, w + 9)
+  bool outside = true;
+  EXPECT_FALSE(inked(up, {10, 10, 10 + h, 10 + w}, outside).empty());
+  EXPECT_FALSE(outside);
+  // Pixel (x, y) of the horizontal text is pixel (10 + y, w + 9 − x) of the upward one.
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      ASSERT_EQ(across.at(x, y), up.at(10 + y, w + 9 - x)) << x << ", " << y;
+    }
+  }
+}
+
+TEST(BitmapFont, TextIsClippedToTheImage) {
+  RgbImage image = RgbImage::filled(30, 10, kWhite);
+  drawText(image, -7, -5, "clipped at every edge", kInk, 3);
+  drawTextUp(image, 25, 4, "and upwards", kInk, 2);
+  bool outside = true;
+  EXPECT_FALSE(inked(image, {0, 0, 30, 10}, outside).empty());
+}
+
+}  // namespace
