@@ -1,9 +1,9 @@
 #include "collision/fcl_geometry.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include <fcl/narrowphase/detail/gjk_solver_libccd.h>
 #include <fcl/narrowphase/detail/primitive_shape_algorithm/triangle_distance.h>
@@ -140,9 +140,9 @@ ShapeDistance meshMesh(const MeshModel& a,
 // - a triangle's gap is its vertices' axis-aligned hull against the box; when the triangle lies
 //   beyond one face and within the other two slabs, that gap IS the distance (the closest point
 //   is a vertex over the face), the common case under a face, so most leaves need no exact test;
-// - otherwise FCL's triangle–triangle distance against the faces the triangle reaches beyond
-//   (all six when it lies wholly inside the box: the distance is the surface distance, as for
-//   the polyhedron the exact reference uses).
+// - a triangle wholly inside the box is at its nearest vertex's distance to the surface (the
+//   surface distance, as for the polyhedron the exact reference uses: no contact);
+// - otherwise FCL's triangle–triangle distance against the faces the triangle reaches beyond.
 // Subtrees are skipped within kPruneTolerance of the best so far, as in FCL's traversal.
 class BoxMeshDistance {
  public:
@@ -168,11 +168,13 @@ class BoxMeshDistance {
       int node;
       double gap2;
     };
-    std::array<Entry, 128> stack;  // depth-first, closer child on top: depth ≤ tree depth + 1
-    std::size_t top = 0;
-    stack[top++] = {0, nodeGap2(0)};
-    while (top > 0) {
-      const Entry e = stack[--top];
+    // Depth-first, the closer child on top; one stack per thread, kept between queries.
+    thread_local std::vector<Entry> stack;
+    stack.clear();
+    stack.push_back({0, nodeGap2(0)});
+    while (!stack.empty()) {
+      const Entry e = stack.back();
+      stack.pop_back();
       if (pruned(e.gap2)) continue;
       const auto& node = mesh_.getBV(e.node);
       if (node.isLeaf()) {
@@ -182,13 +184,12 @@ class BoxMeshDistance {
       }
       const int l = node.leftChild(), r = node.rightChild();
       const double gl = nodeGap2(l), gr = nodeGap2(r);
-      if (top + 2 > stack.size()) throw std::logic_error("BVH deeper than 126");
       if (gl <= gr) {
-        stack[top++] = {r, gr};
-        stack[top++] = {l, gl};
+        stack.push_back({r, gr});
+        stack.push_back({l, gl});
       } else {
-        stack[top++] = {l, gl};
-        stack[top++] = {r, gr};
+        stack.push_back({l, gl});
+        stack.push_back({r, gr});
       }
     }
   }
@@ -245,12 +246,29 @@ class BoxMeshDistance {
       p_box_[i] = plus ? h_[i] : -h_[i];
       return;
     }
-    bool any = false;
-    for (int i = 0; i < 3; ++i) any = any || hi[i] > h_[i] || lo[i] < -h_[i];
+    bool inside = true;
+    for (int i = 0; i < 3; ++i) inside = inside && hi[i] <= h_[i] && lo[i] >= -h_[i];
+    if (inside) {
+      // Wholly inside the box: its distance to the box's surface (a concave function of the
+      // point) is least at a vertex, towards that vertex's nearest face.
+      for (int k = 0; k < 3; ++k) {
+        for (int i = 0; i < 3; ++i) {
+          const double d = h_[i] - std::abs(v[k][i]);
+          if (d < best_) {
+            best_ = d;
+            found_ = true;
+            p_mesh_ = v[k];
+            p_box_ = v[k];
+            p_box_[i] = v[k][i] < 0.0 ? -h_[i] : h_[i];
+          }
+        }
+      }
+      return;
+    }
     for (int face = 0; face < 6; ++face) {
       const int axis = face / 2;
       const bool plus = face % 2 == 1;
-      if (any && !(plus ? hi[axis] > h_[axis] : lo[axis] < -h_[axis])) continue;
+      if (!(plus ? hi[axis] > h_[axis] : lo[axis] < -h_[axis])) continue;
       faceTest(axis, plus, v);
       if (best_ <= 0.0) return;
     }
