@@ -1,9 +1,15 @@
 #include "cli/app.h"
 
+#include <cerrno>
+#include <chrono>
 #include <cstdio>
 #include <exception>
 #include <string>
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <fmt/format.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
@@ -16,10 +22,8 @@ namespace scanplan::cli {
 namespace {
 
 void addRobotSource(CLI::App& cmd, RobotSource& source) {
-  auto* robot =
-      cmd.add_option("--robot", source.robot_file, "Robot file (YAML)")->check(CLI::ExistingFile);
-  auto* job = cmd.add_option("--job", source.job_file, "Job file: use its robot (and scanner)")
-                  ->check(CLI::ExistingFile);
+  auto* robot = cmd.add_option("--robot", source.robot_file, "Robot file (YAML)");
+  auto* job = cmd.add_option("--job", source.job_file, "Job file: use its robot (and scanner)");
   robot->excludes(job);
   cmd.callback([robot, job] {
     if (robot->count() + job->count() == 0) {
@@ -37,6 +41,53 @@ void setUpLogging(int verbosity) {
   spdlog::set_default_logger(logger);
 }
 
+// Input files are checked here, not by CLI11's ExistingFile: a missing or unreadable file is bad
+// input (exit 4), named like every other input error, not a usage error (exit 2).
+void requireInput(const std::filesystem::path& path, const char* what, bool folder = false) {
+  if (path.empty()) return;
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (!std::filesystem::exists(status)) {
+    throw InputError(fmt::format("{}: {} does not exist", path.string(), what));
+  }
+  if (folder && !std::filesystem::is_directory(status)) {
+    throw InputError(fmt::format("{}: is not a folder: expected the {}", path.string(), what));
+  }
+  if (!folder && std::filesystem::is_directory(status)) {
+    throw InputError(fmt::format("{}: is a folder: expected the {}", path.string(), what));
+  }
+  if (::access(path.c_str(), folder ? (R_OK | X_OK) : R_OK) != 0) {
+    throw InputError(fmt::format("{}: {} cannot be read: {}", path.string(), what,
+                                 std::error_code(errno, std::generic_category()).message()));
+  }
+}
+
+// --quiet: the summary a command prints on stdout goes to /dev/null for the command's run;
+// errors (and stdout again afterwards) are untouched.
+class SilencedStdout {
+ public:
+  explicit SilencedStdout(bool silence) {
+    if (!silence) return;
+    std::fflush(stdout);
+    const int null = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
+    if (null < 0) return;
+    saved_ = ::dup(STDOUT_FILENO);
+    if (saved_ >= 0) ::dup2(null, STDOUT_FILENO);
+    ::close(null);
+  }
+  ~SilencedStdout() {
+    if (saved_ < 0) return;
+    std::fflush(stdout);
+    ::dup2(saved_, STDOUT_FILENO);
+    ::close(saved_);
+  }
+  SilencedStdout(const SilencedStdout&) = delete;
+  SilencedStdout& operator=(const SilencedStdout&) = delete;
+
+ private:
+  int saved_ = -1;
+};
+
 void addOverrides(CLI::App& cmd, std::vector<std::string>& overrides) {
   cmd.add_option("--set", overrides,
                  "Override a job value, as if the file said so: key.path=value (repeatable), e.g. "
@@ -48,23 +99,32 @@ void addOverrides(CLI::App& cmd, std::vector<std::string>& overrides) {
 }  // namespace
 
 int run(int argc, char** argv) {
+  static const char* const kTrajectoryHelp =
+      "Trajectory: a trajectory CSV (trajectory.csv from plan, or written by hand with its "
+      "columns) or a V+ program (scan.v2 from plan or export)";
   CLI::App app{
       "scanplan — scanning path planner for a 6-axis arm with a laser line scanner and a rotary "
       "table.\nUnits at the command line: mm and degrees."};
   app.set_version_flag("--version", std::string("scanplan ") + SCANPLAN_VERSION);
   app.require_subcommand(1);
+  // Options of the app are also taken after the subcommand (`scanplan plan -q …`): every
+  // subcommand, added below, inherits this.
+  app.fallthrough();
   int verbose = 0;
   bool quiet = false;
-  app.add_flag("-v,--verbose", verbose, "More detail on stderr");
-  app.add_flag("-q,--quiet", quiet, "Only errors on stderr");
+  app.add_flag("-v,--verbose", verbose,
+               "Also log on stderr the files each command reads, the --set overrides applied and "
+               "how long the command took");
+  app.add_flag("-q,--quiet", quiet,
+               "Errors only: no summary or warnings (what job show, check, fk, ik and --json "
+               "print is the result, and still printed)");
 
   PlanOptions plan;
-  auto* plan_cmd = app.add_subcommand("plan",
-                                      "Run a job: check the cell, build the scan path and the "
-                                      "configuration maps, write everything to OUT");
-  plan_cmd->add_option("job", plan.job_file, "Job file (YAML)")
-      ->required()
-      ->check(CLI::ExistingFile);
+  auto* plan_cmd = app.add_subcommand(
+      "plan",
+      "Run a job end to end: scan path, configuration maps, table-angle plan on every IK "
+      "branch, validation of the motion, robot programs and the scan simulation, all into OUT");
+  plan_cmd->add_option("job", plan.job_file, "Job file (YAML)")->required();
   plan_cmd->add_option("-o,--out", plan.out_dir, "Output folder (created)")->required();
   plan_cmd
       ->add_option(
@@ -76,7 +136,8 @@ int run(int argc, char** argv) {
                      "Also run the other planners on the chosen branch: J side by side, every path "
                      "drawn in configmap_path.png");
   plan_cmd->add_flag("--refine", plan.refine,
-                     "Smooth the path with NLopt (planner.refine.enabled: true does the same)");
+                     "Refine the path with NLopt even when the job turns it off: refinement is on "
+                     "by default (the job's planner.refine.enabled), this overrides a false");
   addOverrides(*plan_cmd, plan.overrides);
 
   VerifyOptions validate;
@@ -84,12 +145,8 @@ int run(int argc, char** argv) {
       "validate",
       "Prove a trajectory executable: joint limits, joint and table speeds, table acceleration, "
       "and collisions along the whole motion (continuous check); exit 3 when it is not");
-  validate_cmd->add_option("job", validate.job_file, "Job file (YAML)")
-      ->required()
-      ->check(CLI::ExistingFile);
-  validate_cmd
-      ->add_option("-t,--trajectory", validate.trajectory_file,
-                   "Trajectory CSV (trajectory.csv from plan, or written by hand)")
+  validate_cmd->add_option("job", validate.job_file, "Job file (YAML)")->required();
+  validate_cmd->add_option("-t,--trajectory", validate.trajectory_file, kTrajectoryHelp)
       ->required();
   validate_cmd->add_option("-o,--out", validate.out_dir, "Also write OUT/validation.json");
   validate_cmd->add_flag("--json", validate.json, "Print JSON instead of text");
@@ -100,12 +157,8 @@ int run(int argc, char** argv) {
       "simulate",
       "Simulate the laser scanner along a trajectory: the expected point cloud and how much of "
       "the part it covers");
-  simulate_cmd->add_option("job", simulate.job_file, "Job file (YAML)")
-      ->required()
-      ->check(CLI::ExistingFile);
-  simulate_cmd
-      ->add_option("-t,--trajectory", simulate.trajectory_file,
-                   "Trajectory CSV (trajectory.csv from plan, or written by hand)")
+  simulate_cmd->add_option("job", simulate.job_file, "Job file (YAML)")->required();
+  simulate_cmd->add_option("-t,--trajectory", simulate.trajectory_file, kTrajectoryHelp)
       ->required();
   simulate_cmd->add_option("-o,--out", simulate.out_dir, "Output folder (created)")->required();
   addOverrides(*simulate_cmd, simulate.overrides);
@@ -114,12 +167,8 @@ int run(int argc, char** argv) {
   auto* export_cmd = app.add_subcommand(
       "export",
       "Write robot programs for a trajectory: V+, KRL, RAPID, URScript or the CSV interchange");
-  export_cmd->add_option("job", export_options.job_file, "Job file (YAML)")
-      ->required()
-      ->check(CLI::ExistingFile);
-  export_cmd
-      ->add_option("-t,--trajectory", export_options.trajectory_file,
-                   "Trajectory (trajectory.csv from plan, or a V+ program)")
+  export_cmd->add_option("job", export_options.job_file, "Job file (YAML)")->required();
+  export_cmd->add_option("-t,--trajectory", export_options.trajectory_file, kTrajectoryHelp)
       ->required();
   export_cmd->add_option("-o,--out", export_options.out_dir, "Output folder (created)")->required();
   export_cmd->add_option("-f,--format", export_options.formats,
@@ -130,16 +179,14 @@ int run(int argc, char** argv) {
   PlanOptions path;
   auto* path_cmd = app.add_subcommand(
       "path", "Generate the scan path: OUT/path.csv and a picture of it around the part");
-  path_cmd->add_option("job", path.job_file, "Job file (YAML)")
-      ->required()
-      ->check(CLI::ExistingFile);
+  path_cmd->add_option("job", path.job_file, "Job file (YAML)")->required();
   path_cmd->add_option("-o,--out", path.out_dir, "Output folder (created)")->required();
   addOverrides(*path_cmd, path.overrides);
 
   PlanOptions map;
   auto* map_cmd = app.add_subcommand(
       "map", "Build the configuration maps over table angle x time: npy layers, json, images");
-  map_cmd->add_option("job", map.job_file, "Job file (YAML)")->required()->check(CLI::ExistingFile);
+  map_cmd->add_option("job", map.job_file, "Job file (YAML)")->required();
   map_cmd->add_option("-o,--out", map.out_dir, "Output folder (created)")->required();
   addOverrides(*map_cmd, map.overrides);
 
@@ -148,7 +195,7 @@ int run(int argc, char** argv) {
   std::filesystem::path show_file;
   auto* show_cmd = job_cmd->add_subcommand(
       "show", "Print the fully resolved job as YAML: every default filled in, robot inline");
-  show_cmd->add_option("job", show_file, "Job file (YAML)")->required()->check(CLI::ExistingFile);
+  show_cmd->add_option("job", show_file, "Job file (YAML)")->required();
   std::vector<std::string> show_overrides;
   addOverrides(*show_cmd, show_overrides);
 
@@ -157,7 +204,7 @@ int run(int argc, char** argv) {
       "batch",
       "Run a sweep of settings over many cases: one result row per case in OUT/results.csv and "
       "results.jsonl, summary.md, plots, an OMPL benchmark log");
-  batch_cmd->add_option("sweep", batch.sweep_file, "Sweep file (YAML)")->check(CLI::ExistingFile);
+  batch_cmd->add_option("sweep", batch.sweep_file, "Sweep file (YAML)");
   batch_cmd->add_option("-o,--out", batch.out_dir, "Output folder (created)");
   batch_cmd->add_option("-j,--jobs", batch.jobs, "Threads in all (default: every core)")
       ->check(CLI::PositiveNumber);
@@ -167,24 +214,18 @@ int run(int argc, char** argv) {
   std::filesystem::path batch_report_dir;
   auto* batch_report_cmd = batch_cmd->add_subcommand(
       "report", "Regenerate summary.md, plots/ and ompl_benchmark.log from OUT/results.jsonl");
-  batch_report_cmd->add_option("out", batch_report_dir, "Batch output folder")
-      ->required()
-      ->check(CLI::ExistingDirectory);
+  batch_report_cmd->add_option("out", batch_report_dir, "Batch output folder")->required();
   std::vector<std::filesystem::path> merge_inputs;
   std::filesystem::path merge_out;
   auto* batch_merge_cmd =
       batch_cmd->add_subcommand("merge", "Merge the results of shard runs into one folder");
-  batch_merge_cmd->add_option("inputs", merge_inputs, "Batch output folders")
-      ->required()
-      ->check(CLI::ExistingDirectory);
+  batch_merge_cmd->add_option("inputs", merge_inputs, "Batch output folders")->required();
   batch_merge_cmd->add_option("-o,--out", merge_out, "Output folder (created)")->required();
 
   CheckOptions check;
   auto* check_cmd = app.add_subcommand(
       "check", "Score one pose: every constraint factor, every pair's clearance, collision");
-  check_cmd->add_option("job", check.job_file, "Job file (YAML)")
-      ->required()
-      ->check(CLI::ExistingFile);
+  check_cmd->add_option("job", check.job_file, "Job file (YAML)")->required();
   check_cmd->add_option("--table", check.table_deg, "Table angle, degrees")->required();
   auto* check_joints = check_cmd->add_option(
       "--joints", check.joints_deg,
@@ -253,7 +294,41 @@ int run(int argc, char** argv) {
   }
 
   setUpLogging(quiet ? -1 : verbose);
+  const auto start = std::chrono::steady_clock::now();
   try {
+    if (plan_cmd->parsed()) requireInput(plan.job_file, "job file");
+    if (path_cmd->parsed()) requireInput(path.job_file, "job file");
+    if (map_cmd->parsed()) requireInput(map.job_file, "job file");
+    if (check_cmd->parsed()) requireInput(check.job_file, "job file");
+    if (show_cmd->parsed()) requireInput(show_file, "job file");
+    for (const auto& [cmd, options] :
+         {std::pair{validate_cmd, &validate}, std::pair{simulate_cmd, &simulate},
+          std::pair{export_cmd, &export_options}}) {
+      if (!cmd->parsed()) continue;
+      requireInput(options->job_file, "job file");
+      requireInput(options->trajectory_file, "trajectory file");
+    }
+    for (const auto& [cmd, source] :
+         {std::pair{fk_cmd, &fk.source}, std::pair{ik_cmd, &ik.source}}) {
+      if (!cmd->parsed()) continue;
+      requireInput(source->robot_file, "robot file");
+      requireInput(source->job_file, "job file");
+    }
+    if (batch_report_cmd->parsed()) {
+      requireInput(batch_report_dir, "batch output folder", true);
+    } else if (batch_merge_cmd->parsed()) {
+      for (const auto& dir : merge_inputs) requireInput(dir, "batch output folder", true);
+    } else if (batch_cmd->parsed()) {
+      requireInput(batch.sweep_file, "sweep file");
+    }
+    spdlog::debug("scanplan {}: {}", SCANPLAN_VERSION, fmt::join(argv, argv + argc, " "));
+
+    // What these commands print on stdout is a summary of the files they write (or, for
+    // validate without --json, of the verdict the exit code gives): --quiet drops it.
+    const bool summary_only = plan_cmd->parsed() || path_cmd->parsed() || map_cmd->parsed() ||
+                              simulate_cmd->parsed() || export_cmd->parsed() ||
+                              batch_cmd->parsed() || (validate_cmd->parsed() && !validate.json);
+    const SilencedStdout silenced(quiet && summary_only);
     ExitCode code = ExitCode::kOk;
     if (plan_cmd->parsed()) code = runPlan(plan);
     if (validate_cmd->parsed()) code = runValidate(validate);
@@ -272,6 +347,9 @@ int run(int argc, char** argv) {
     } else if (batch_cmd->parsed()) {
       code = runBatch(batch);
     }
+    spdlog::debug("done in {:.2f} s, exit code {}",
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+                  static_cast<int>(code));
     return static_cast<int>(code);
   } catch (const InputError& e) {
     std::fprintf(stderr, "scanplan: error: %s\n", e.what());

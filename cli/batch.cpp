@@ -578,124 +578,6 @@ std::string base64(const std::string& bytes) {
   return out;
 }
 
-// The longest prefix of `text` (with ".." when cut) that fits `width` pixels at `scale`.
-std::string fitText(const std::string& text, int width, int scale) {
-  if (textWidth(text, scale) <= width) return text;
-  std::string cut = text;
-  while (!cut.empty() && textWidth(cut + "..", scale) > width) cut.pop_back();
-  return cut + "..";
-}
-
-// The labelled PNG: `area` (the plot's data raster) framed with a title, axis titles, tick
-// values and a legend, in the built-in bitmap font.
-struct PlotText {
-  std::string title, x_label, y_label;
-  double x0 = 0, x1 = 1, y0 = 0, y1 = 1;
-  std::vector<std::string> categories;  // non-empty: x ticks at 0, 1, … with these labels
-  std::vector<std::pair<Rgb, std::string>> legend;
-};
-
-RgbImage labelledPlot(const RgbImage& area, const PlotText& text) {
-  constexpr int kScale = 2, kTick = 6, kPad = 12;
-  constexpr Rgb kBlack{0, 0, 0}, kGreyText{90, 90, 90};
-  const int line = textHeight(kScale);
-  const Ticks y_ticks = niceTicks(text.y0, text.y1);
-  std::vector<std::pair<double, std::string>> y_labels, x_labels;
-  for (const double v : y_ticks.values) {
-    y_labels.emplace_back(v, fmt::format("{:.{}f}", v, y_ticks.decimals));
-  }
-  if (text.categories.empty()) {
-    const Ticks x_ticks = niceTicks(text.x0, text.x1);
-    for (const double v : x_ticks.values) {
-      x_labels.emplace_back(v, fmt::format("{:.{}f}", v, x_ticks.decimals));
-    }
-  } else {
-    for (std::size_t i = 0; i < text.categories.size(); ++i) {
-      x_labels.emplace_back(static_cast<double>(i), text.categories[i]);
-    }
-  }
-  int y_label_width = 0, legend_width = 0;
-  for (const auto& [v, s] : y_labels) y_label_width = std::max(y_label_width, textWidth(s, kScale));
-  for (const auto& [c, s] : text.legend)
-    legend_width = std::max(legend_width, textWidth(s, kScale));
-  legend_width = std::max(legend_width, textWidth("mean", kScale));
-  const int left = kPad + line + kPad + y_label_width + kTick + 6;
-  const int top = kPad + line + kPad;
-  const int right = kPad + 20 + 8 + legend_width + 2 * kPad;
-  const int bottom = kTick + 6 + line + kPad + line + kPad;
-  const int pw = area.width, ph = area.height;
-  RgbImage image = RgbImage::filled(left + pw + right, top + ph + bottom, {255, 255, 255});
-  for (int y = 0; y < ph; ++y) {
-    for (int x = 0; x < pw; ++x) image.set(left + x, top + y, area.at(x, y));
-  }
-  // Frame.
-  drawLine(image, left - 0.5, top - 0.5, left + pw + 0.5, top - 0.5, kBlack, 1);
-  drawLine(image, left - 0.5, top + ph + 0.5, left + pw + 0.5, top + ph + 0.5, kBlack, 1);
-  drawLine(image, left - 0.5, top - 0.5, left - 0.5, top + ph + 0.5, kBlack, 1);
-  drawLine(image, left + pw + 0.5, top - 0.5, left + pw + 0.5, top + ph + 0.5, kBlack, 1);
-  const auto px = [&](double v) { return left + (v - text.x0) / (text.x1 - text.x0) * pw; };
-  const auto py = [&](double v) { return top + (text.y1 - v) / (text.y1 - text.y0) * ph; };
-  // Title, centred over the plot (cut if it would run past the image).
-  const std::string title = fitText(text.title, image.width - 2 * kPad, kScale);
-  drawText(image,
-           std::clamp(left + (pw - textWidth(title, kScale)) / 2, kPad,
-                      image.width - kPad - textWidth(title, kScale)),
-           kPad, title, kBlack, kScale);
-  // y ticks and values.
-  for (const auto& [v, s] : y_labels) {
-    const double y = py(v);
-    drawLine(image, left - kTick, y, left, y, kBlack, 1);
-    drawText(image, left - kTick - 6 - textWidth(s, kScale),
-             static_cast<int>(std::lround(y)) - line / 2 + 1, s, kBlack, kScale);
-  }
-  // x ticks and values: every k-th value when they would overlap; categories cut to fit.
-  double spacing = pw;
-  for (std::size_t i = 1; i < x_labels.size(); ++i) {
-    spacing = std::min(spacing, std::abs(px(x_labels[i].first) - px(x_labels[i - 1].first)));
-  }
-  int widest = 0;
-  for (const auto& [v, s] : x_labels) widest = std::max(widest, textWidth(s, kScale));
-  std::size_t every = 1;
-  if (text.categories.empty()) {
-    while (every < x_labels.size() && spacing * static_cast<double>(every) < widest + 12) ++every;
-  }
-  for (std::size_t i = 0; i < x_labels.size(); ++i) {
-    const double x = px(x_labels[i].first);
-    drawLine(image, x, top + ph, x, top + ph + kTick, kBlack, 1);
-    if (i % every) continue;
-    const std::string s = text.categories.empty()
-                              ? x_labels[i].second
-                              : fitText(x_labels[i].second, static_cast<int>(spacing) - 8, kScale);
-    const int w = textWidth(s, kScale);
-    drawText(image, std::clamp(static_cast<int>(std::lround(x)) - w / 2, 0, image.width - w),
-             top + ph + kTick + 6, s, kBlack, kScale);
-  }
-  // Axis titles.
-  const std::string x_label = fitText(text.x_label, image.width - 2 * kPad, kScale);
-  drawText(image, left + (pw - textWidth(x_label, kScale)) / 2, top + ph + kTick + 6 + line + kPad,
-           x_label, kBlack, kScale);
-  const std::string y_label = fitText(text.y_label, ph + top + bottom / 2, kScale);
-  drawTextUp(image, kPad, top + (ph + textWidth(y_label, kScale)) / 2, y_label, kBlack, kScale);
-  // Legend: a swatch and name per planner, then what the marks mean.
-  const int lx = left + pw + kPad;
-  int ly = top;
-  for (const auto& [colour, name] : text.legend) {
-    for (int y = 0; y < line; ++y) {
-      for (int x = 0; x < 20; ++x) image.set(lx + x, ly + y, colour);
-    }
-    drawText(image, lx + 28, ly, name, kBlack, kScale);
-    ly += line + 10;
-  }
-  ly += 10;
-  drawLine(image, lx + 6, ly + 4, lx + 12, ly + 10, kGreyText, 2);
-  drawLine(image, lx + 6, ly + 10, lx + 12, ly + 4, kGreyText, 2);
-  drawText(image, lx + 28, ly, "case", kGreyText, kScale);
-  ly += line + 10;
-  drawLine(image, lx, ly + line / 2, lx + 20, ly + line / 2, kGreyText, 2);
-  drawText(image, lx + 28, ly, "mean", kGreyText, kScale);
-  return image;
-}
-
 // One metric against one varied value: a point per case, a line through each planner's means;
 // categorical values are placed at 0, 1, 2, … and the planners side by side at each.
 // Returns false when no case has the metric.
@@ -726,22 +608,22 @@ bool writePlot(const fs::path& dir,
     if (numeric) return *numberOf(v);
     return static_cast<double>(std::find(values.begin(), values.end(), v) - values.begin());
   };
-  double x0 = position(values.front()), x1 = position(values.back());
-  const double xpad = x1 > x0 ? 0.08 * (x1 - x0) : 0.5;
-  x0 -= xpad;
-  x1 += xpad;
+  // Padded axis ranges; values equal up to rounding (e.g. the same J from two planners) make a
+  // flat range, centred on the value (axisRange), never one with ticks 1e-14 apart.
+  const std::pair<double, double> x_range =
+      axisRange(position(values.front()), position(values.back()));
+  const double x0 = x_range.first, x1 = x_range.second;
   const double spread = (x1 - x0) * 0.012;  // planners side by side at one value
-  double y0 = std::numeric_limits<double>::infinity(), y1 = -y0;
+  double lowest = std::numeric_limits<double>::infinity(), highest = -lowest;
   for (const BatchRow& r : rows) {
     if (r.metrics[metric] && std::isfinite(*r.metrics[metric])) {
-      y0 = std::min(y0, *r.metrics[metric]);
-      y1 = std::max(y1, *r.metrics[metric]);
+      lowest = std::min(lowest, *r.metrics[metric]);
+      highest = std::max(highest, *r.metrics[metric]);
     }
   }
-  if (!std::isfinite(y0)) return false;
-  const double ypad = y1 > y0 ? 0.08 * (y1 - y0) : std::max(0.5, 0.1 * std::abs(y0));
-  y0 -= ypad;
-  y1 += ypad;
+  if (!std::isfinite(lowest)) return false;
+  const std::pair<double, double> y_range = axisRange(lowest, highest);
+  const double y0 = y_range.first, y1 = y_range.second;
   constexpr int kW = 720, kH = 480;
   RgbImage image = RgbImage::filled(kW, kH, {255, 255, 255});
   const auto px = [&](double x) { return (x - x0) / (x1 - x0) * kW; };
@@ -756,7 +638,7 @@ bool writePlot(const fs::path& dir,
     for (std::size_t i = 0; i < values.size(); ++i) x_grid.push_back(static_cast<double>(i));
   }
   for (const double v : x_grid) drawLine(image, px(v), 0, px(v), kH, kGrid, 1);
-  std::vector<std::pair<Rgb, std::string>> legend;
+  std::vector<std::pair<Rgb, std::string>> legend;  // the planners (the SVG's legend)
   for (std::size_t mi = 0; mi < methods.size(); ++mi) {
     const Rgb colour = methodColour(methods[mi]);
     const double offset =
@@ -773,6 +655,7 @@ bool writePlot(const fs::path& dir,
           drawLine(image, x - 3, y + 3, x + 3, y - 3, colour, 2);
         }
       }
+      // The mean of huge values can overflow: no point then (drawLine skips non-finite ends).
       if (mean.n) means.emplace_back(px(position(v) + offset), py(mean.sum / mean.n));
     }
     for (std::size_t i = 1; i < means.size(); ++i) {
@@ -785,7 +668,7 @@ bool writePlot(const fs::path& dir,
     }
   }
   const std::string x_name = key.empty() ? std::string("all cases") : key;
-  PlotText text;
+  FigureLabels text;
   text.title = metricLabel(metric) + " against " + x_name;
   text.x_label = x_name;
   text.y_label = metricLabel(metric);
@@ -799,8 +682,12 @@ bool writePlot(const fs::path& dir,
       if (c.empty()) c = "(not set)";  // an explicit case without this key
     }
   }
-  text.legend = legend;
-  writePng(dir / (stem + ".png"), labelledPlot(image, text));
+  // A swatch and name per planner, then what the marks mean.
+  constexpr Rgb kGreyText{90, 90, 90};
+  for (const auto& [colour, name] : legend) text.legend.push_back({colour, name});
+  text.legend.push_back({kGreyText, "case", LegendEntry::Mark::kCross, kGreyText, 10});
+  text.legend.push_back({kGreyText, "mean", LegendEntry::Mark::kLine, kGreyText});
+  writePng(dir / (stem + ".png"), labelFigure(image, text).image);
   // The SVG: the same data raster, embedded, with the axes and text as SVG text.
   SvgFigure figure;
   figure.png_file = "data:image/png;base64," + base64(encodePng(image));
@@ -1058,6 +945,16 @@ void writeReport(const fs::path& out, const std::vector<BatchRow>& rows) {
   }
   for (const fs::path& f : stale) fs::remove(f);
   for (const auto& [file, log] : logs) writeFileAtomically(out / file, log);
+}
+
+// "batch      13 case(s): 13 run, 0 already done, 0 error(s); 1 map(s) computed (2.2 s of map
+// time); 8.5 s in all": the map time is the maps' own, the last time the whole run's.
+std::string batchLine(const BatchStats& s, const std::string& shard) {
+  return fmt::format(
+      "batch      {} case(s){}: {} run, {} already done, {} error(s); {} map(s) computed{}; {:.1f} "
+      "s in all",
+      s.cases, shard.empty() ? "" : " in shard " + shard, s.ran, s.skipped, s.failed, s.maps,
+      s.maps ? fmt::format(" ({:.1f} s of map time)", s.map_seconds) : "", s.seconds);
 }
 
 // Counts the rows by status (an unknown status counts as error).
@@ -1319,6 +1216,7 @@ BatchStats runBatchCases(const BatchOptions& options) {
   RowSink sink(out, sweep.keys);
   Progress progress("batch");
   std::atomic<std::size_t> started{0}, finished{0}, failed{0}, maps{0};
+  double map_seconds = 0.0;
   const auto finish = [&](const BatchRow& row) {
     sink.append(row);
     if (row.status == "error") ++failed;
@@ -1363,6 +1261,7 @@ BatchStats runBatchCases(const BatchOptions& options) {
       try {
         bundle = buildBundle(*jobs[group.front()]);
         ++maps;
+        map_seconds += bundle->map_seconds;  // maps are built one after the other
       } catch (const std::exception& e) {
         bundle_error = errorReason(e);
       }
@@ -1389,6 +1288,7 @@ BatchStats runBatchCases(const BatchOptions& options) {
   stats.ran = finished.load();
   stats.failed = failed.load();
   stats.maps = maps.load();
+  stats.map_seconds = map_seconds;
   // Complete: both files rewritten sorted (a deterministic order whatever the threads did).
   std::vector<BatchRow> rows = readBatchRows(out / "results.jsonl");
   sortRows(rows);
@@ -1403,11 +1303,7 @@ ExitCode runBatch(const BatchOptions& options) {
   const BatchStats s = runBatchCases(options);
   const std::size_t errors = s.statuses.back();
   if (options.print) {
-    std::printf(
-        "batch      %zu case(s)%s: %zu run, %zu already done, %zu error(s); %zu map(s) computed "
-        "in %.1f s\n",
-        s.cases, options.shard.empty() ? "" : (" in shard " + options.shard).c_str(), s.ran,
-        s.skipped, s.failed, s.maps, s.seconds);
+    std::printf("%s\n", batchLine(s, options.shard).c_str());
     std::printf("wrote      %s: results.csv, results.jsonl%s\n", options.out_dir.string().c_str(),
                 options.report ? ", summary.md, plots/, ompl_benchmark*.log" : "");
     std::printf("%s\n", tallyLine(s).c_str());

@@ -95,9 +95,10 @@ struct BatchStats {
   std::size_t cases = 0;    ///< in this shard
   std::size_t skipped = 0;  ///< already in results.jsonl (--resume)
   std::size_t ran = 0;
-  std::size_t failed = 0;  ///< status error
-  std::size_t maps = 0;    ///< maps computed
-  double seconds = 0.0;
+  std::size_t failed = 0;    ///< status error
+  std::size_t maps = 0;      ///< maps computed
+  double map_seconds = 0.0;  ///< wall time computing those maps (the sum over them)
+  double seconds = 0.0;      ///< wall time of the whole run: sweep, cases, results and report
   /// Every row of the results (this run's and those --resume kept), by kBatchStatuses.
   std::array<std::size_t, kBatchStatuses.size()> statuses{};
   /// Rows with status error whose reason is an internal error (a bug), not bad input.

@@ -2,7 +2,13 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
+#include <utility>
+
+#include <fmt/format.h>
+
+#include "kinematics/error.h"
 
 namespace scanplan::cli {
 namespace {
@@ -183,6 +189,186 @@ int textWidth(std::string_view text, int scale) {
   int cells = 0;
   forEachGlyph(text, [&](const Glyph&) { ++cells; });
   return cells == 0 ? 0 : (cells * kCellWidth - 1) * scale;
+}
+
+std::string fitText(const std::string& text, int width, int scale) {
+  if (textWidth(text, scale) <= width) return text;
+  std::string cut = text;
+  while (!cut.empty() && textWidth(cut + "..", scale) > width) cut.pop_back();
+  // Never end inside a UTF-8 sequence.
+  while (!cut.empty() && (static_cast<unsigned char>(cut.back()) & 0xc0) == 0x80) cut.pop_back();
+  if (!cut.empty() && static_cast<unsigned char>(cut.back()) >= 0xc0) cut.pop_back();
+  return cut + "..";
+}
+
+LabelledFigure labelFigure(const RgbImage& raster, const FigureLabels& text) {
+  constexpr int kScale = 2, kTick = 6, kPad = 12, kMark = 20;
+  constexpr Rgb kBlack{0, 0, 0}, kWhite{255, 255, 255};
+  if (raster.width > 0 && raster.height > 0 &&
+      raster.rgb.size() !=
+          3 * static_cast<std::size_t>(raster.width) * static_cast<std::size_t>(raster.height)) {
+    throw InputError(fmt::format("figure: raster {} × {} with {} bytes: expected 3 per pixel",
+                                 raster.width, raster.height, raster.rgb.size()));
+  }
+  const RgbImage area =
+      raster.width > 0 && raster.height > 0 ? raster : RgbImage::filled(1, 1, kWhite);
+  const auto range = [](double a, double b) {
+    return flatRange(a, b) || !std::isfinite(b - a) ? axisRange(a, b, 0.0) : std::pair{a, b};
+  };
+  const std::pair<double, double> xr = range(text.x0, text.x1), yr = range(text.y0, text.y1);
+  const double x0 = xr.first, x1 = xr.second, y0 = yr.first, y1 = yr.second;
+  const int line = textHeight(kScale);
+
+  std::vector<std::pair<double, std::string>> y_labels, x_labels;
+  const Ticks y_ticks = niceTicks(y0, y1);
+  for (const double v : y_ticks.values) y_labels.emplace_back(v, tickLabel(y_ticks, v));
+  if (!text.y_marks.empty()) {
+    y_labels.clear();
+    for (const auto& [v, s] : text.y_marks) {
+      if (std::isfinite(v) && v >= std::min(y0, y1) && v <= std::max(y0, y1)) {
+        y_labels.emplace_back(v, s);
+      }
+    }
+  }
+  if (text.categories.empty()) {
+    const Ticks x_ticks = niceTicks(x0, x1);
+    for (const double v : x_ticks.values) x_labels.emplace_back(v, tickLabel(x_ticks, v));
+  } else {
+    for (std::size_t i = 0; i < text.categories.size(); ++i) {
+      x_labels.emplace_back(static_cast<double>(i), text.categories[i]);
+    }
+  }
+
+  // The colour bar's labels, and the legend column's width and height.
+  const std::vector<std::pair<double, std::string>> bar_labels{
+      {1.0, "1 free"}, {0.5, "0.5"}, {0.0, "0 forbidden"}};
+  const bool bar = !text.colour_bar.empty();
+  int y_label_width = 0, legend_width = 0, legend_height = 0;
+  for (const auto& [v, s] : y_labels) y_label_width = std::max(y_label_width, textWidth(s, kScale));
+  for (const LegendEntry& e : text.legend) {
+    const int indent = e.mark == LegendEntry::Mark::kNone ? 0 : kMark + 8;
+    legend_width = std::max(legend_width, indent + textWidth(e.text, kScale));
+    legend_height += e.space_before + line + 10;
+  }
+  const int bar_height = std::clamp(area.height / 2, 80, 240);
+  if (bar) {
+    legend_width = std::max(legend_width, textWidth(text.colour_bar, kScale));
+    for (const auto& [v, s] : bar_labels) {
+      legend_width = std::max(legend_width, kMark + kTick + 6 + textWidth(s, kScale));
+    }
+    legend_height += (text.legend.empty() ? 0 : 10) + line + 10 + bar_height + line / 2;
+  }
+  const bool has_legend = !text.legend.empty() || bar;
+  const int left = kPad + line + kPad + y_label_width + kTick + 6;
+  const int top = kPad + line + kPad;
+  const int right = has_legend ? kPad + legend_width + 2 * kPad : 2 * kPad;
+  const int bottom = kTick + 6 + line + kPad + line + kPad;
+  const int pw = area.width, ph = area.height;
+  RgbImage image = RgbImage::filled(
+      left + pw + right, std::max(top + ph + bottom, top + legend_height + kPad), kWhite);
+  for (int y = 0; y < ph; ++y) {
+    for (int x = 0; x < pw; ++x) image.set(left + x, top + y, area.at(x, y));
+  }
+  // Frame, just outside the raster.
+  drawLine(image, left - 0.5, top - 0.5, left + pw + 0.5, top - 0.5, kBlack, 1);
+  drawLine(image, left - 0.5, top + ph + 0.5, left + pw + 0.5, top + ph + 0.5, kBlack, 1);
+  drawLine(image, left - 0.5, top - 0.5, left - 0.5, top + ph + 0.5, kBlack, 1);
+  drawLine(image, left + pw + 0.5, top - 0.5, left + pw + 0.5, top + ph + 0.5, kBlack, 1);
+  const auto px = [&](double v) { return left + (v - x0) / (x1 - x0) * pw; };
+  const auto py = [&](double v) { return top + (y1 - v) / (y1 - y0) * ph; };
+  // Title, centred over the plot (cut if it would run past the image).
+  const std::string title = fitText(text.title, image.width - 2 * kPad, kScale);
+  drawText(image,
+           std::clamp(left + (pw - textWidth(title, kScale)) / 2, kPad,
+                      std::max(kPad, image.width - kPad - textWidth(title, kScale))),
+           kPad, title, kBlack, kScale);
+  // y ticks and values.
+  for (const auto& [v, s] : y_labels) {
+    const double y = py(v);
+    drawLine(image, left - kTick, y, left - 1, y, kBlack, 1);  // outside the raster
+    drawText(image, left - kTick - 6 - textWidth(s, kScale),
+             static_cast<int>(std::lround(y)) - line / 2 + 1, s, kBlack, kScale);
+  }
+  // x ticks and values: every k-th value when they would overlap; categories cut to fit.
+  double spacing = pw;
+  for (std::size_t i = 1; i < x_labels.size(); ++i) {
+    spacing = std::min(spacing, std::abs(px(x_labels[i].first) - px(x_labels[i - 1].first)));
+  }
+  int widest = 0;
+  for (const auto& [v, s] : x_labels) widest = std::max(widest, textWidth(s, kScale));
+  std::size_t every = 1;
+  if (text.categories.empty()) {
+    while (every < x_labels.size() && spacing * static_cast<double>(every) < widest + 12) ++every;
+  }
+  for (std::size_t i = 0; i < x_labels.size(); ++i) {
+    const double x = px(x_labels[i].first);
+    drawLine(image, x, top + ph, x, top + ph + kTick, kBlack, 1);
+    if (i % every) continue;
+    const std::string s = text.categories.empty()
+                              ? x_labels[i].second
+                              : fitText(x_labels[i].second, static_cast<int>(spacing) - 8, kScale);
+    const int w = textWidth(s, kScale);
+    drawText(image,
+             std::clamp(static_cast<int>(std::lround(x)) - w / 2, 0, std::max(0, image.width - w)),
+             top + ph + kTick + 6, s, kBlack, kScale);
+  }
+  // Axis titles.
+  const std::string x_label = fitText(text.x_label, image.width - 2 * kPad, kScale);
+  drawText(image, std::max(kPad, left + (pw - textWidth(x_label, kScale)) / 2),
+           top + ph + kTick + 6 + line + kPad, x_label, kBlack, kScale);
+  const std::string y_label = fitText(text.y_label, image.height - 2 * kPad, kScale);
+  drawTextUp(image, kPad,
+             std::min(image.height - kPad, top + (ph + textWidth(y_label, kScale)) / 2), y_label,
+             kBlack, kScale);
+  // Legend: a mark and a text per entry, then the colour bar.
+  const int lx = left + pw + 2 * kPad;
+  int ly = top;
+  for (const LegendEntry& e : text.legend) {
+    ly += e.space_before;
+    switch (e.mark) {
+      case LegendEntry::Mark::kSwatch:
+        for (int y = 0; y < line; ++y) {
+          for (int x = 0; x < kMark; ++x) {
+            const bool edge = x == 0 || y == 0 || x == kMark - 1 || y == line - 1;
+            image.set(lx + x, ly + y, edge ? Rgb{90, 90, 90} : e.colour);
+          }
+        }
+        break;
+      case LegendEntry::Mark::kLine:
+        drawLine(image, lx, ly + line / 2, lx + kMark, ly + line / 2, e.colour, 3);
+        break;
+      case LegendEntry::Mark::kCross:
+        drawLine(image, lx + 6, ly + 4, lx + 12, ly + 10, e.colour, 2);
+        drawLine(image, lx + 6, ly + 10, lx + 12, ly + 4, e.colour, 2);
+        break;
+      case LegendEntry::Mark::kNone:
+        break;
+    }
+    drawText(image, e.mark == LegendEntry::Mark::kNone ? lx : lx + kMark + 8, ly, e.text,
+             e.text_colour, kScale);
+    ly += line + 10;
+  }
+  if (bar) {
+    if (!text.legend.empty()) ly += 10;
+    drawText(image, lx, ly, text.colour_bar, kBlack, kScale);
+    ly += line + 10;
+    for (int y = 0; y < bar_height; ++y) {
+      const Rgb c = grey(1.0 - static_cast<double>(y) / std::max(bar_height - 1, 1));
+      for (int x = 0; x < kMark; ++x) image.set(lx + x, ly + y, c);
+    }
+    drawLine(image, lx - 0.5, ly - 0.5, lx + kMark + 0.5, ly - 0.5, kBlack, 1);
+    drawLine(image, lx - 0.5, ly + bar_height + 0.5, lx + kMark + 0.5, ly + bar_height + 0.5,
+             kBlack, 1);
+    drawLine(image, lx - 0.5, ly - 0.5, lx - 0.5, ly + bar_height + 0.5, kBlack, 1);
+    drawLine(image, lx + kMark + 0.5, ly - 0.5, lx + kMark + 0.5, ly + bar_height + 0.5, kBlack, 1);
+    for (const auto& [v, s] : bar_labels) {
+      const double y = ly + (1.0 - v) * (bar_height - 1) + 0.5;
+      drawLine(image, lx + kMark, y, lx + kMark + kTick, y, kBlack, 1);
+      drawText(image, lx + kMark + kTick + 6, static_cast<int>(std::lround(y)) - line / 2 + 1, s,
+               kBlack, kScale);
+    }
+  }
+  return {std::move(image), left, top};
 }
 
 }  // namespace scanplan::cli

@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "cli/bitmap_font.h"
 #include "cli/commands.h"
 #include "cli/format.h"
 #include "cli/image_io.h"
@@ -26,6 +27,8 @@ namespace {
 
 constexpr int kMaxImageWidth = 2000;
 constexpr int kMaxImageHeight = 1200;
+// The cylinder picture: each half (view) this many rows, with a gap between them.
+constexpr int kCylinderHalf = 240, kCylinderGap = 12;
 
 // Min-pooled map image for one branch: time left → right, angle bottom → top.
 template <class Colour>
@@ -57,7 +60,7 @@ RgbImage mapImage(const planner::ConfigMap& map, std::size_t branch, Colour colo
 // (table angles around 0°) above, the back half (around 180°) below.
 RgbImage cylinderImage(const planner::ConfigMap& map, std::size_t branch) {
   const int nt = static_cast<int>(map.times.size());
-  const int w = std::min(nt, kMaxImageWidth), half = 240, gap = 12;
+  const int w = std::min(nt, kMaxImageWidth), half = kCylinderHalf, gap = kCylinderGap;
   RgbImage image = RgbImage::filled(w, 2 * half + gap, {255, 255, 255});
   const double step = map.angles.size() > 1 ? map.angles[1] - map.angles[0] : 1.0;
   for (int view = 0; view < 2; ++view) {
@@ -81,6 +84,38 @@ RgbImage cylinderImage(const planner::ConfigMap& map, std::size_t branch) {
   return image;
 }
 
+// The cylinder picture framed: time below, the table angle of the rows left (not linear: the
+// rows are the cylinder seen from the side), title, colour bar and which half is which.
+void writeCylinderFigure(const std::filesystem::path& dir,
+                         const planner::ConfigMap& map,
+                         std::size_t branch) {
+  const RgbImage raster = cylinderImage(map, branch);
+  const RgbImage area = upscale(raster, std::max(1, 1000 / std::max(raster.width, 1)), 1);
+  FigureLabels labels;
+  labels.title = "Configuration map f on a cylinder (Fig. 6b), " + map.branches[branch].words();
+  labels.x_label = "time (s)";
+  labels.y_label = "table angle (deg)";
+  labels.x0 = map.times.empty() ? 0.0 : map.times.front();
+  labels.x1 = map.times.empty() ? 1.0 : map.times.back();
+  // y in raster rows counted from the bottom; the angle seen at a row as cylinderImage has it.
+  labels.y0 = 0.0;
+  labels.y1 = raster.height;
+  for (int view = 0; view < 2; ++view) {
+    for (const int alpha : {-60, -30, 0, 30, 60}) {
+      const double row = view * (kCylinderHalf + kCylinderGap) +
+                         (1.0 - std::sin(deg(alpha))) * kCylinderHalf / 2.0;
+      const int angle = ((view == 0 ? 0 : 180) + alpha + 360) % 360;
+      labels.y_marks.emplace_back(raster.height - row, std::to_string(angle));
+    }
+  }
+  labels.colour_bar = "f (shaded)";
+  labels.legend = {{{0, 0, 0}, "above: front half,", LegendEntry::Mark::kNone},
+                   {{0, 0, 0}, "around 0 deg", LegendEntry::Mark::kNone},
+                   {{0, 0, 0}, "below: back half,", LegendEntry::Mark::kNone, {0, 0, 0}, 6},
+                   {{0, 0, 0}, "around 180 deg", LegendEntry::Mark::kNone}};
+  writePng(dir / "configmap_cylinder.png", labelFigure(area, labels).image);
+}
+
 std::vector<kinematics::IkBranch> mapBranches(const JobSpec& job) {
   if (job.map.branch != "auto") return {*parseBranch(job.map.branch)};
   std::vector<kinematics::IkBranch> all;
@@ -90,27 +125,70 @@ std::vector<kinematics::IkBranch> mapBranches(const JobSpec& job) {
 
 }  // namespace
 
+namespace {
+
+// `stem`.png: the map raster, stretched to a readable aspect, framed with the title, axes (time
+// in s, table angle in deg), tick values and legend in the bitmap font; `stem`.svg: the same
+// raster (a crop of the PNG) with vector text.
+void writeMapFigure(const std::filesystem::path& dir,
+                    const std::string& stem,
+                    const RgbImage& raster,
+                    const planner::ConfigMap& map,
+                    FigureLabels labels) {
+  // At least ~1000 px wide and 40 % as tall as wide (as the path figure, commands_plan.cpp): a
+  // 1095 × 180 map is not a thin strip; nearest-neighbour blocks keep every cell's colour.
+  const int fx = std::max(1, 1000 / std::max(raster.width, 1));
+  const int fy = std::max(
+      1, (2 * raster.width * fx + 5 * raster.height - 1) / (5 * std::max(raster.height, 1)));
+  const RgbImage area = upscale(raster, fx, fy);
+  labels.x_label = "time (s)";
+  labels.y_label = "table angle (deg)";
+  labels.x0 = map.times.empty() ? 0.0 : map.times.front();
+  labels.x1 = map.times.empty() ? 1.0 : map.times.back();
+  const double step = map.angles.size() > 1 ? map.angles[1] - map.angles[0] : 0.0;
+  labels.y0 = map.angles.empty() ? 0.0 : toDeg(map.angles.front());
+  labels.y1 = map.angles.empty() ? 360.0 : toDeg(map.angles.back() + step);
+  const LabelledFigure png = labelFigure(area, labels);
+  writePng(dir / (stem + ".png"), png.image);
+
+  SvgFigure figure;
+  figure.png_file = stem + ".png";
+  figure.png_width = png.image.width;
+  figure.png_height = png.image.height;
+  figure.crop_x = png.area_x;
+  figure.crop_y = png.area_y;
+  figure.crop_width = area.width;
+  figure.crop_height = area.height;
+  figure.title = labels.title;
+  figure.x_label = "time [s]";
+  figure.y_label = "table angle [deg]";
+  figure.x_min = labels.x0;
+  figure.x_max = labels.x1;
+  figure.y_min = labels.y0;
+  figure.y_max = labels.y1;
+  for (const LegendEntry& e : labels.legend) {
+    if (e.mark != LegendEntry::Mark::kNone) figure.legend.emplace_back(e.colour, e.text);
+  }
+  writeFileAtomically(dir / (stem + ".svg"), svgFigure(figure));
+}
+
+}  // namespace
+
+// The grey f map with paths over it (configmap_path): the legend names each path (drawn as a
+// line in its colour), and a colour bar gives the grey scale of f.
 void writeFigure(const std::filesystem::path& dir,
                  const std::string& stem,
                  const RgbImage& image,
                  const planner::ConfigMap& map,
                  const std::string& title,
                  std::vector<std::pair<Rgb, std::string>> legend) {
-  writePng(dir / (stem + ".png"), image);
-  SvgFigure figure;
-  figure.png_file = stem + ".png";
-  figure.png_width = image.width;
-  figure.png_height = image.height;
-  figure.title = title;
-  figure.x_label = "time [s]";
-  figure.y_label = "table angle [deg]";
-  figure.x_min = map.times.front();
-  figure.x_max = map.times.back();
-  const double step = map.angles.size() > 1 ? map.angles[1] - map.angles[0] : 0.0;
-  figure.y_min = toDeg(map.angles.front());
-  figure.y_max = toDeg(map.angles.back() + step);
-  figure.legend = std::move(legend);
-  writeFileAtomically(dir / (stem + ".svg"), svgFigure(figure));
+  FigureLabels labels;
+  labels.title = title;
+  for (auto& [colour, text] : legend) {
+    labels.legend.push_back({colour, std::move(text), LegendEntry::Mark::kLine});
+  }
+  labels.colour_bar = "map f";
+  writeMapFigure(dir, stem, image, map, std::move(labels));
 }
 
 RgbImage mapGreyImage(const planner::ConfigMap& map, std::size_t branch) {
@@ -213,7 +291,7 @@ ExitCode runPath(const PlanOptions& options) {
   writePng(options.out_dir / "path.png", pathPicture(context));
   std::string text = pathSummary(context);
   text += fmt::format(
-      "wrote      {} (path.csv, path.png: iso, top and front views; green start, red end)\n",
+      "wrote      {} (path.csv, path.png: iso, top and front views; green start, orange end)\n",
       options.out_dir.string());
   std::fputs(text.c_str(), stdout);
   return ExitCode::kOk;
@@ -347,23 +425,33 @@ void writeMapOutputs(const std::filesystem::path& dir,
   writeFileAtomically(dir / "configmap.json", json.str());
 
   const std::string branch = map.branches[shown].words();
-  writeFigure(dir, "configmap", mapGreyImage(map, shown), map,
-              "Configuration map f (Eq. 6), " + branch + ": white = free, black = forbidden", {});
+  FigureLabels grey_labels;
+  grey_labels.title =
+      "Configuration map f (Eq. 6), " + branch + ": white = free, black = forbidden";
+  grey_labels.colour_bar = "f";
+  writeMapFigure(dir, "configmap", mapGreyImage(map, shown), map, grey_labels);
   // Colour by the limiting constraint, brighter where f is higher.
-  std::vector<std::pair<Rgb, std::string>> legend;
-  for (int k = 0; k < planner::kLimitCount; ++k)
-    legend.push_back({categoryColour(k + 1), planner::limitName(static_cast<planner::Limit>(k))});
-  writeFigure(
+  FigureLabels why_labels;
+  why_labels.title = "Limiting constraint per cell, " + branch + " (darker = lower f)";
+  why_labels.legend.push_back({{0, 0, 0}, "limited by:", LegendEntry::Mark::kNone});
+  for (int k = 0; k < planner::kLimitCount; ++k) {
+    const std::string name = planner::limitName(static_cast<planner::Limit>(k));
+    why_labels.legend.push_back({categoryColour(k + 1), k == 0 ? name + " (f = 1)" : name});
+  }
+  why_labels.legend.push_back(
+      {{90, 90, 90}, "darker: lower f", LegendEntry::Mark::kNone, {90, 90, 90}, 10});
+  writeMapFigure(
       dir, "configmap_why",
       mapImage(map, shown,
                [&](std::size_t i) {
                  const Rgb c = categoryColour(map.limit[i] + 1);
-                 const double s = 0.45 + 0.55 * std::clamp(static_cast<double>(map.f[i]), 0.0, 1.0);
+                 const double f = std::isnan(map.f[i]) ? 0.0 : map.f[i];  // NaN: as forbidden
+                 const double s = 0.45 + 0.55 * std::clamp(f, 0.0, 1.0);
                  return Rgb{static_cast<std::uint8_t>(c.r * s), static_cast<std::uint8_t>(c.g * s),
                             static_cast<std::uint8_t>(c.b * s)};
                }),
-      map, "Limiting constraint per cell, " + branch + " (darker = lower f)", legend);
-  writePng(dir / "configmap_cylinder.png", cylinderImage(map, shown));
+      map, why_labels);
+  writeCylinderFigure(dir, map, shown);
 }
 
 }  // namespace scanplan::cli

@@ -234,6 +234,12 @@ std::string reportJson(const JobSpec& job,
 
 }  // namespace
 
+// Everything `plan` may write into its output folder: on each run, what it does not write again
+// is removed (no trajectory.csv or program of an earlier run beside a new report).
+const std::vector<std::string> kPlanOutputs{
+    "job.yaml", "report.json", "trajectory.csv", "trajectory_invalid.csv", "programs", "path.csv",
+    "path.png", "configmap*",  "cloud.ply",      "coverage.ply",           "cloud.png"};
+
 ExitCode runPlan(const PlanOptions& options) {
   const auto start = Clock::now();
   const JobSpec job = loadJob(options.job_file, options.overrides);
@@ -254,9 +260,11 @@ ExitCode runPlan(const PlanOptions& options) {
   summary += fmt::format("part       {}: {} triangles, {:.1f} x {:.1f} x {:.1f} mm, {}\n",
                          job.part.mesh.as_written, part.mesh.triangles.size(), size.x(), size.y(),
                          size.z(), part.mesh.isClosed() ? "closed" : "open (has holes)");
-  prepareOutputDir(options.out_dir);
-  writeFileAtomically(options.out_dir / "job.yaml", jobToYaml(job));
+  OutputStage stage(options.out_dir, kPlanOutputs);
+  const std::filesystem::path& out = stage.dir();
+  writeFileAtomically(out / "job.yaml", jobToYaml(job));
   if (job.scan.paths.empty()) {
+    stage.commit();
     summary += reachCheck(job, cell, part);
     summary += fmt::format("wrote      {}\n", (options.out_dir / "job.yaml").string());
     summary += "note       the job has no scan path (scan.paths): nothing to plan\n";
@@ -272,8 +280,8 @@ ExitCode runPlan(const PlanOptions& options) {
   const collision::Scene scene(cell, clearanceConfig(job));
   const MapRun run = computeMap(job, scene, path);
   times.map = run.seconds;
-  writePathOutputs(options.out_dir, context);
-  writeMapOutputs(options.out_dir, job, run.map);
+  writePathOutputs(out, context);
+  writeMapOutputs(out, job, run.map);
   summary += pathSummary(context) + mapSummary(run);
 
   // Each candidate path is turned into joint motion before it is accepted: the map scores every
@@ -304,9 +312,10 @@ ExitCode runPlan(const PlanOptions& options) {
   const auto finish = [&](const std::string& status, const std::string& reason,
                           const planner::TrajectoryBuild* trajectory) {
     times.total = since(start);
-    writeFileAtomically(options.out_dir / "report.json",
+    writeFileAtomically(out / "report.json",
                         reportJson(job, cell, run.map, planning, trajectory, validated, simulated,
                                    status, reason, times));
+    stage.commit();
   };
   if (!planning.solved()) {
     finish(planning.rejected.empty() ? "no_path" : "no_executable_path",
@@ -327,7 +336,7 @@ ExitCode runPlan(const PlanOptions& options) {
     drawn.emplace_back(o.method, o.result.theta);
     labels.push_back(fmt::format("{} J {:.2f} s", o.method, o.result.terms.total));
   }
-  writePathFigure(options.out_dir, run.map, branch, drawn, labels);
+  writePathFigure(out, run.map, branch, drawn, labels);
 
   // Prove the motion between the samples too, before anything goes to a robot.
   std::optional<planner::ValidationReport> validation;
@@ -339,28 +348,28 @@ ExitCode runPlan(const PlanOptions& options) {
   }
   if (validation && !validation->valid) {
     // Kept for inspection under a name no robot-side tool picks up as the plan.
-    writeFileAtomically(options.out_dir / "trajectory_invalid.csv",
+    writeFileAtomically(out / "trajectory_invalid.csv",
                         kinematics::trajectoryToCsv(trajectory.trajectory));
     finish("invalid_trajectory",
            fmt::format("validation found {} violation(s)", validation->violations.size()),
            &trajectory);
     summary += validationSummary(*validation);
     summary += fmt::format(
-        "plan       NOT VALID: the planned motion breaks the limits above; wrote {} "
-        "(trajectory_invalid.csv, report.json)\n",
-        options.out_dir.string());
+        "plan       NOT VALID: the planned motion breaks the limits above\n"
+        "wrote      {}: job.yaml, trajectory_invalid.csv, report.json, configmap_path.png/.svg, "
+        "{}\n",
+        options.out_dir.string(), kMapFilesNote);
     std::fputs(summary.c_str(), stdout);
     return ExitCode::kNoPlan;
   }
-  writeFileAtomically(options.out_dir / "trajectory.csv",
-                      kinematics::trajectoryToCsv(trajectory.trajectory));
-  const std::string programs = writePrograms(options.out_dir / "programs", job, cell,
-                                             trajectory.trajectory, job.outputs.programs);
+  writeFileAtomically(out / "trajectory.csv", kinematics::trajectoryToCsv(trajectory.trajectory));
+  const std::string programs =
+      writePrograms(out / "programs", job, cell, trajectory.trajectory, job.outputs.programs);
   std::optional<SimulationRun> simulation;
   if (job.simulation.enabled) {
     t0 = Clock::now();
     simulation = simulateTrajectory(job, cell, part.mesh, trajectory.trajectory);
-    writeSimulationOutputs(options.out_dir, job, part.mesh, *simulation);
+    writeSimulationOutputs(out, job, part.mesh, *simulation);
     times.simulation = since(t0);
     simulated = &*simulation;
   }

@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <spdlog/spdlog.h>
 
 #include "cli/commands.h"
 #include "cli/format.h"
@@ -18,11 +19,16 @@ namespace scanplan::cli {
 
 namespace {
 
-void requireSamples(const kinematics::Trajectory& t, const std::filesystem::path& file) {
+// The trajectory file (CSV or V+ program), at least two samples.
+kinematics::Trajectory loadTrajectory(const std::filesystem::path& file) {
+  kinematics::Trajectory t = loadTrajectoryFile(file);
   if (t.samples.size() < 2) {
     throw InputError(
         fmt::format("{}: {} sample(s): expected at least 2", file.string(), t.samples.size()));
   }
+  spdlog::debug("trajectory {}: {} samples over {:.2f} s", file.string(), t.samples.size(),
+                t.samples.back().t - t.samples.front().t);
+  return t;
 }
 
 }  // namespace
@@ -30,8 +36,7 @@ void requireSamples(const kinematics::Trajectory& t, const std::filesystem::path
 ExitCode runValidate(const VerifyOptions& options) {
   const JobSpec job = loadJob(options.job_file, options.overrides);
   const kinematics::CellModel cell = buildCell(job);
-  const kinematics::Trajectory trajectory = loadTrajectoryFile(options.trajectory_file);
-  requireSamples(trajectory, options.trajectory_file);
+  const kinematics::Trajectory trajectory = loadTrajectory(options.trajectory_file);
   const collision::Scene scene(cell, clearanceConfig(job));
   const planner::ValidationReport report =
       planner::validateTrajectory(scene, trajectory, validationSettings(job));
@@ -60,8 +65,7 @@ ExitCode runSimulate(const VerifyOptions& options) {
   const JobSpec job = loadJob(options.job_file, options.overrides);
   const kinematics::CellModel cell = buildCell(job);
   const kinematics::LoadedMesh part = loadPart(job, cell);
-  const kinematics::Trajectory trajectory = loadTrajectoryFile(options.trajectory_file);
-  requireSamples(trajectory, options.trajectory_file);
+  const kinematics::Trajectory trajectory = loadTrajectory(options.trajectory_file);
   prepareOutputDir(options.out_dir);
   const SimulationRun run = simulateTrajectory(job, cell, part.mesh, trajectory);
   writeSimulationOutputs(options.out_dir, job, part.mesh, run);
@@ -84,8 +88,7 @@ ExitCode runSimulate(const VerifyOptions& options) {
 ExitCode runExport(const VerifyOptions& options) {
   const JobSpec job = loadJob(options.job_file, options.overrides);
   const kinematics::CellModel cell = buildCell(job);
-  const kinematics::Trajectory trajectory = loadTrajectoryFile(options.trajectory_file);
-  requireSamples(trajectory, options.trajectory_file);
+  const kinematics::Trajectory trajectory = loadTrajectory(options.trajectory_file);
   std::vector<std::string> formats = job.outputs.programs;
   if (!options.formats.empty()) {
     formats.clear();

@@ -4,6 +4,8 @@
 #include <fstream>
 #include <system_error>
 
+#include <unistd.h>
+
 #include <fmt/format.h>
 
 #include "cli/yaml_reader.h"
@@ -147,6 +149,58 @@ void prepareOutputDir(const std::filesystem::path& dir) {
     throw InputError(
         fmt::format("{}: cannot create the output folder: {}", dir.string(), ec.message()));
   }
+}
+
+OutputStage::OutputStage(std::filesystem::path out_dir, std::vector<std::string> owned)
+    : out_(std::move(out_dir)), owned_(std::move(owned)) {
+  std::error_code ec;
+  created_out_ = !std::filesystem::exists(out_, ec);
+  prepareOutputDir(out_);
+  stage_ = out_ / fmt::format(".scanplan-staging-{}", static_cast<long>(::getpid()));
+  std::filesystem::remove_all(stage_, ec);  // left by an earlier, killed run with our pid
+  std::filesystem::create_directory(stage_, ec);
+  if (ec) {
+    throw InputError(
+        fmt::format("{}: cannot create a staging folder: {}", out_.string(), ec.message()));
+  }
+}
+
+OutputStage::~OutputStage() {
+  if (committed_) return;
+  std::error_code ec;
+  std::filesystem::remove_all(stage_, ec);
+  if (created_out_ && std::filesystem::is_empty(out_, ec)) std::filesystem::remove(out_, ec);
+}
+
+bool OutputStage::owned(const std::string& name) const {
+  for (const std::string& o : owned_) {
+    if (!o.empty() && o.back() == '*' ? name.starts_with(o.substr(0, o.size() - 1)) : name == o)
+      return true;
+  }
+  return false;
+}
+
+void OutputStage::commit() {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  std::vector<fs::path> earlier, staged;  // listed first: the loops below change the folders
+  for (const fs::directory_entry& e : fs::directory_iterator(out_)) earlier.push_back(e.path());
+  for (const fs::directory_entry& e : fs::directory_iterator(stage_)) staged.push_back(e.path());
+  for (const fs::path& p : earlier) {
+    const std::string name = p.filename().string();
+    if (owned(name) && !fs::exists(stage_ / name)) fs::remove_all(p, ec);
+  }
+  for (const fs::path& p : staged) {
+    const fs::path target = out_ / p.filename();
+    if (fs::is_directory(p)) fs::remove_all(target, ec);  // a folder is replaced as a whole
+    fs::rename(p, target, ec);
+    if (ec) {
+      throw InputError(fmt::format("{}: cannot move the finished output into place: {}",
+                                   target.string(), ec.message()));
+    }
+  }
+  fs::remove(stage_, ec);
+  committed_ = true;
 }
 
 Eigen::Vector4d quaternionWxyz(const Eigen::Matrix3d& R) {

@@ -118,23 +118,64 @@ std::uint8_t toByte(double v) {
 
 }  // namespace
 
+bool flatRange(double a, double b) {
+  if (!std::isfinite(a) || !std::isfinite(b)) return true;
+  const double span = std::abs(b - a);
+  return !(span > 1e-9 * std::max(std::abs(a), std::abs(b)));  // an infinite span is not flat
+}
+
+std::pair<double, double> axisRange(double lo, double hi, double pad) {
+  if (!std::isfinite(lo) && !std::isfinite(hi)) return {0.0, 1.0};
+  if (!std::isfinite(lo)) lo = hi;
+  if (!std::isfinite(hi)) hi = lo;
+  if (lo > hi) std::swap(lo, hi);
+  // A quarter of the largest double: spans, pads and their sums stay finite.
+  constexpr double kLimit = std::numeric_limits<double>::max() / 4;
+  lo = std::clamp(lo, -kLimit, kLimit);
+  hi = std::clamp(hi, -kLimit, kLimit);
+  pad = std::isfinite(pad) ? std::clamp(pad, 0.0, 1.0) : 0.0;
+  if (flatRange(lo, hi)) {
+    const double mid = 0.5 * lo + 0.5 * hi;
+    const double half = std::max(0.5, 0.1 * std::abs(mid));
+    return {mid - half, mid + half};
+  }
+  const double span = hi - lo;
+  return {lo - pad * span, hi + pad * span};
+}
+
 Ticks niceTicks(double a, double b) {
   Ticks ticks;
   const double lo = std::min(a, b), hi = std::max(a, b);
-  if (!std::isfinite(hi - lo) || hi - lo <= 0) return ticks;
+  // A flat range (also one whose ends differ only by rounding: the steps below would be
+  // smaller than the spacing of doubles there) has no ticks.
+  if (!std::isfinite(hi - lo) || !(hi - lo > 0) || flatRange(lo, hi)) return ticks;
   const int k = static_cast<int>(std::floor(std::log10(hi - lo)));
   for (int e = k + 1; e >= k - 2; --e) {
     for (const double m : {5.0, 2.0, 1.0}) {
       const double step = m * std::pow(10.0, e);
+      if (!std::isfinite(step) || !(step > 0)) continue;
       const double first = std::ceil(lo / step - 1e-9), last = std::floor(hi / step + 1e-9);
-      if (last - first + 1 < 5) continue;
-      for (double i = first; i <= last; ++i)
-        ticks.values.push_back(i * step + 0.0);  // + 0.0: no "-0"
+      if (!std::isfinite(first) || !std::isfinite(last)) continue;
+      const double count = last - first + 1;
+      if (count < 5) continue;
+      if (count > static_cast<double>(kMaxTicks)) return ticks;  // cannot happen; never loop
+      for (int i = 0; i < static_cast<int>(count); ++i) {
+        ticks.values.push_back((first + i) * step + 0.0);  // + 0.0: no "-0"
+      }
       ticks.decimals = std::max(0, -e);
       return ticks;
     }
   }
   return ticks;
+}
+
+std::string tickLabel(const Ticks& ticks, double v) {
+  double largest = 0.0;
+  for (const double t : ticks.values) largest = std::max(largest, std::abs(t));
+  if (std::isfinite(v) && largest < 1e9 && std::abs(v) < 1e9 && ticks.decimals <= 9) {
+    return fmt::format("{:.{}f}", v, std::max(ticks.decimals, 0));
+  }
+  return fmt::format("{:.12g}", v);
 }
 
 RgbImage RgbImage::filled(int w, int h, Rgb fill_colour) {
@@ -298,6 +339,12 @@ Rgb grey(double f) {
 RgbImage upscale(const RgbImage& image, int factor_x, int factor_y) {
   factor_x = std::max(factor_x, 1);
   factor_y = std::max(factor_y, 1);
+  const double pixels =
+      static_cast<double>(image.width) * factor_x * static_cast<double>(image.height) * factor_y;
+  if (pixels > static_cast<double>(1 << 28)) {
+    throw InputError(fmt::format("image {} × {} enlarged {} × {}: expected at most 2^28 pixels",
+                                 image.width, image.height, factor_x, factor_y));
+  }
   RgbImage out = RgbImage::filled(image.width * factor_x, image.height * factor_y);
   for (int y = 0; y < out.height; ++y)
     for (int x = 0; x < out.width; ++x) out.set(x, y, image.at(x / factor_x, y / factor_y));
@@ -305,16 +352,59 @@ RgbImage upscale(const RgbImage& image, int factor_x, int factor_y) {
 }
 
 void drawLine(RgbImage& image, double x0, double y0, double x1, double y1, Rgb colour, int width) {
-  const double length = std::hypot(x1 - x0, y1 - y0);
+  if (!std::isfinite(x0) || !std::isfinite(y0) || !std::isfinite(x1) || !std::isfinite(y1)) return;
+  width = std::clamp(width, 1, 64);
+  // Clipped (Cohen–Sutherland, in long double: differences of far ends neither overflow nor
+  // lose the image) to the image grown by the pen, so the stamps below are at most as many as
+  // the image's diagonal needs however far away the ends are.
+  using Real = long double;
+  const Real margin = width + 1, x_lo = -margin, x_hi = image.width + margin, y_lo = -margin,
+             y_hi = image.height + margin;
+  Real ax = x0, ay = y0, bx = x1, by = y1;
+  const auto outcode = [&](Real x, Real y) {
+    return (x < x_lo ? 1 : x > x_hi ? 2 : 0) | (y < y_lo ? 4 : y > y_hi ? 8 : 0);
+  };
+  int ca = outcode(ax, ay), cb = outcode(bx, by);
+  for (int i = 0; i < 8 && (ca | cb) != 0; ++i) {
+    if ((ca & cb) != 0) return;  // wholly on the outer side of one edge
+    const int c = ca != 0 ? ca : cb;
+    Real x = 0, y = 0;
+    if ((c & 8) != 0) {
+      y = y_hi;
+      x = ax + (bx - ax) * ((y_hi - ay) / (by - ay));
+    } else if ((c & 4) != 0) {
+      y = y_lo;
+      x = ax + (bx - ax) * ((y_lo - ay) / (by - ay));
+    } else if ((c & 2) != 0) {
+      x = x_hi;
+      y = ay + (by - ay) * ((x_hi - ax) / (bx - ax));
+    } else {
+      x = x_lo;
+      y = ay + (by - ay) * ((x_lo - ax) / (bx - ax));
+    }
+    if (c == ca) {
+      ax = x;
+      ay = y;
+      ca = outcode(ax, ay);
+    } else {
+      bx = x;
+      by = y;
+      cb = outcode(bx, by);
+    }
+  }
+  if ((ca | cb) != 0) return;
+  const double sx0 = static_cast<double>(ax), sy0 = static_cast<double>(ay);
+  const double sx1 = static_cast<double>(bx), sy1 = static_cast<double>(by);
+  const double length = std::hypot(sx1 - sx0, sy1 - sy0);
   const int steps = std::max(1, static_cast<int>(std::ceil(2.0 * length)));
-  const int half = std::max(width, 1) / 2, extra = std::max(width, 1) % 2 == 0 ? 1 : 0;
+  const int half = width / 2, extra = width % 2 == 0 ? 1 : 0;
   for (int i = 0; i <= steps; ++i) {
     const double s = static_cast<double>(i) / steps;
-    const int cx = static_cast<int>(std::floor(x0 + s * (x1 - x0)));
-    const int cy = static_cast<int>(std::floor(y0 + s * (y1 - y0)));
-    for (int dy = -half; dy <= half - extra; ++dy)
-      for (int dx = -half; dx <= half - extra; ++dx) {
-        const int x = cx + dx, y = cy + dy;
+    const int cx = static_cast<int>(std::floor(sx0 + s * (sx1 - sx0)));
+    const int cy = static_cast<int>(std::floor(sy0 + s * (sy1 - sy0)));
+    for (int ddy = -half; ddy <= half - extra; ++ddy)
+      for (int ddx = -half; ddx <= half - extra; ++ddx) {
+        const int x = cx + ddx, y = cy + ddy;
         if (x >= 0 && y >= 0 && x < image.width && y < image.height) image.set(x, y, colour);
       }
   }
@@ -336,12 +426,23 @@ Rgb categoryColour(int k) {
 std::string svgFigure(const SvgFigure& figure) {
   // Character widths are estimates (7 px per character at 12 px sans-serif).
   constexpr double kChar = 7.0, kTick = 5.0;
+  const bool cropped = figure.crop_width > 0 && figure.crop_height > 0;
+  const int shown_width = cropped ? figure.crop_width : figure.png_width;
+  const int shown_height = cropped ? figure.crop_height : figure.png_height;
   const double scale =
-      std::min(720.0 / std::max(figure.png_width, 1), 480.0 / std::max(figure.png_height, 1));
-  const double pw = scale * figure.png_width, ph = scale * figure.png_height;
-  const Ticks x_ticks = niceTicks(figure.x_min, figure.x_max);
-  const Ticks y_ticks = niceTicks(figure.y_min, figure.y_max);
-  const auto label = [](const Ticks& t, double v) { return fmt::format("{:.{}f}", v, t.decimals); };
+      std::min(720.0 / std::max(shown_width, 1), 480.0 / std::max(shown_height, 1));
+  const double pw = scale * std::max(shown_width, 1), ph = scale * std::max(shown_height, 1);
+  // A flat or non-finite range would put every tick and coordinate at infinity.
+  const auto range = [](double a, double b) {
+    return flatRange(a, b) || !std::isfinite(b - a) ? axisRange(a, b, 0.0) : std::pair{a, b};
+  };
+  const std::pair<double, double> x_range = range(figure.x_min, figure.x_max);
+  const std::pair<double, double> y_range = range(figure.y_min, figure.y_max);
+  const double x_min = x_range.first, x_max = x_range.second;
+  const double y_min = y_range.first, y_max = y_range.second;
+  const Ticks x_ticks = niceTicks(x_min, x_max);
+  const Ticks y_ticks = niceTicks(y_min, y_max);
+  const auto label = [](const Ticks& t, double v) { return tickLabel(t, v); };
   std::size_t y_chars = 1, legend_chars = 0;
   for (const double v : y_ticks.values) y_chars = std::max(y_chars, label(y_ticks, v).size());
   for (const auto& entry : figure.legend)
@@ -352,12 +453,8 @@ std::string svgFigure(const SvgFigure& figure) {
   const double width = left + pw + right;
   const double height =
       std::max(top + ph + 56, top + 20.0 * static_cast<double>(figure.legend.size()) + 16);
-  const auto px = [&](double v) {
-    return left + (v - figure.x_min) / (figure.x_max - figure.x_min) * pw;
-  };
-  const auto py = [&](double v) {
-    return top + (figure.y_max - v) / (figure.y_max - figure.y_min) * ph;
-  };
+  const auto px = [&](double v) { return left + (v - x_min) / (x_max - x_min) * pw; };
+  const auto py = [&](double v) { return top + (y_max - v) / (y_max - y_min) * ph; };
 
   std::string s = fmt::format(
       "<svg xmlns=\"http://www.w3.org/2000/svg\" xmlns:xlink=\"http://www.w3.org/1999/xlink\" "
@@ -372,13 +469,27 @@ std::string svgFigure(const SvgFigure& figure) {
         left + pw / 2, xmlEscape(figure.title));
   }
   const std::string href = xmlEscape(figure.png_file);
+  if (cropped) {
+    // A viewport onto the crop rectangle of the whole image (a nested svg clips to it).
+    s += fmt::format(
+        "<svg x=\"{1:.1f}\" y=\"{2:.1f}\" width=\"{3:.1f}\" height=\"{4:.1f}\" "
+        "viewBox=\"{5} {6} {7} {8}\" preserveAspectRatio=\"none\" overflow=\"hidden\">"
+        "<image href=\"{0}\" xlink:href=\"{0}\" x=\"0\" y=\"0\" width=\"{9}\" height=\"{10}\" "
+        "preserveAspectRatio=\"none\" image-rendering=\"optimizeSpeed\" "
+        "style=\"image-rendering: pixelated\"/></svg>\n",
+        href, left, top, pw, ph, figure.crop_x, figure.crop_y, figure.crop_width,
+        figure.crop_height, std::max(figure.png_width, 1), std::max(figure.png_height, 1));
+  } else {
+    s += fmt::format(
+        "<image href=\"{0}\" xlink:href=\"{0}\" x=\"{1:.1f}\" y=\"{2:.1f}\" width=\"{3:.1f}\" "
+        "height=\"{4:.1f}\" preserveAspectRatio=\"none\" image-rendering=\"optimizeSpeed\" "
+        "style=\"image-rendering: pixelated\"/>\n",
+        href, left, top, pw, ph);
+  }
   s += fmt::format(
-      "<image href=\"{0}\" xlink:href=\"{0}\" x=\"{1:.1f}\" y=\"{2:.1f}\" width=\"{3:.1f}\" "
-      "height=\"{4:.1f}\" preserveAspectRatio=\"none\" image-rendering=\"optimizeSpeed\" "
-      "style=\"image-rendering: pixelated\"/>\n"
-      "<rect x=\"{1:.1f}\" y=\"{2:.1f}\" width=\"{3:.1f}\" height=\"{4:.1f}\" fill=\"none\" "
+      "<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"{:.1f}\" height=\"{:.1f}\" fill=\"none\" "
       "stroke=\"black\"/>\n",
-      href, left, top, pw, ph);
+      left, top, pw, ph);
   for (const double v : x_ticks.values) {
     const double x = px(v);
     s += fmt::format(

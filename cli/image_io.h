@@ -29,10 +29,11 @@ struct RgbImage {
   Rgb at(int x, int y) const;
 };
 
-/// Nearest-neighbour enlargement by integer factors ≥ 1 (x and y).
+/// Nearest-neighbour enlargement by integer factors ≥ 1 (x and y). Throws InputError when the
+/// result would exceed 2^28 pixels.
 RgbImage upscale(const RgbImage& image, int factor_x, int factor_y);
 /// A straight segment from (x0, y0) to (x1, y1) (pixel units, pixel centres at +0.5), `width`
-/// pixels wide, clipped to the image.
+/// pixels wide, clipped to the image. A segment with a non-finite end draws nothing.
 void drawLine(RgbImage& image, double x0, double y0, double x1, double y1, Rgb colour, int width);
 
 /// PNG bytes (8-bit RGB, no text or time chunks, fixed compression): the same image always
@@ -73,9 +74,23 @@ struct Ticks {
   std::vector<double> values;
   int decimals = 0;
 };
-/// The largest step of 1, 2 or 5 × 10^k giving at least five ticks in [a, b] (at most ~12);
-/// none for an empty or non-finite range.
+/// The largest step of 1, 2 or 5 × 10^k giving at least five ticks in [a, b] (at most ~12,
+/// never more than kMaxTicks); none for an empty, non-finite or flat range (see flatRange).
 Ticks niceTicks(double a, double b);
+inline constexpr std::size_t kMaxTicks = 50;
+/// A tick value as text: fixed with the ticks' decimals, or in exponent form when that would be
+/// long (|v| ≥ 1e9 or more than 9 decimals).
+std::string tickLabel(const Ticks& ticks, double v);
+
+/// True when [a, b] has no width worth an axis: equal ends, or a span below 1e-9 of the values'
+/// magnitude (values that differ only by rounding, e.g. 25.46247875282346 and
+/// 25.462478752823472), or a non-finite end.
+bool flatRange(double a, double b);
+/// An axis range showing data in [lo, hi] (either order): `pad` × the span added on each side;
+/// a flat range is centred on its value, ± max(0.5, 10 % of it). Non-finite ends are ignored
+/// ([0, 1] when both are), and the values are clamped so that the span stays finite. The result
+/// has lo < hi and is never flat.
+std::pair<double, double> axisRange(double lo, double hi, double pad = 0.08);
 
 /// A standalone SVG figure around a PNG map image.
 struct SvgFigure {
@@ -83,6 +98,9 @@ struct SvgFigure {
   std::string png_file;
   /// PNG size in pixels.
   int png_width = 0, png_height = 0;
+  /// The part of the PNG that is the plot (e.g. the data area of a PNG that has its own
+  /// labels): x, y, width and height in PNG pixels; a width or height ≤ 0: the whole PNG.
+  int crop_x = 0, crop_y = 0, crop_width = 0, crop_height = 0;
   std::string title;
   std::string x_label, y_label;
   /// Axis values at the image's left and right edges, and at its bottom and top edges.
@@ -90,8 +108,9 @@ struct SvgFigure {
   /// Swatch colour and text, listed to the right of the plot.
   std::vector<std::pair<Rgb, std::string>> legend;
 };
-/// SVG text: the image scaled to fit a plot area of about 720 × 480 px with pixelated
-/// rendering, a frame with "nice" ticks (1, 2, 5 × 10^k), axis titles, title and legend.
+/// SVG text: the image (or its crop) scaled to fit a plot area of about 720 × 480 px with
+/// pixelated rendering, a frame with "nice" ticks (1, 2, 5 × 10^k), axis titles, title and
+/// legend. A flat or non-finite axis range is widened as axisRange does.
 std::string svgFigure(const SvgFigure& figure);
 
 /// An orthographic picture of a mesh and a path.

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include "cli/programs.h"
 #include "kinematics/error.h"
@@ -345,11 +346,13 @@ void describeJob(A& a, JobSpec& s) {
   a.require("robot");
   if constexpr (A::kReading) {
     const YAML::Node robot = a.node()["robot"];
-    if (robot.IsScalar()) {
+    if (!robot.IsDefined()) {
+      // Missing next to a near miss (robto:): finish() says which.
+    } else if (robot.IsScalar()) {
       a.field("robot", s.robot_file);
       s.robot = loadRobotFile(s.robot_file.resolved);
     } else if (robot.IsMap()) {
-      YamlIn inline_robot(robot, "robot", a.file());
+      YamlIn inline_robot(robot, "robot", a.file(), a.overrides());
       s.robot = readRobot(inline_robot);
     } else {
       a.fail("robot", "a list", "a robot file path or an inline robot mapping");
@@ -424,8 +427,16 @@ void describe(YamlOut& a, MapSpec& s) { describeMap(a, s); }
 namespace {
 
 // "planner.ray.horizon=20", "scan.paths[0].height_mm=60": sets that value in the YAML tree
-// (creating mappings on the way), so the reader validates it like any value of the file.
-void applyOverride(YAML::Node root, const std::string& text) {
+// (creating mappings on the way), so the reader validates it like any value of the file. The
+// value, and every key and mapping the override created, go into `origins`, so errors about
+// them name the override.
+void applyOverride(YAML::Node root, const std::string& text, OverrideOrigins& origins) {
+  // The key node of `key` in `map`, recorded as the override's when the override created it.
+  const auto recordKey = [&](const YAML::Node& map, const std::string& key) {
+    for (auto it = map.begin(); it != map.end(); ++it) {
+      if (it->first.IsScalar() && it->first.Scalar() == key) origins.add(it->first, text);
+    }
+  };
   const auto bad = [&](const std::string& why) {
     throw InputError(
         fmt::format("--set '{}': {}: expected key.path=value, e.g. "
@@ -473,7 +484,11 @@ void applyOverride(YAML::Node root, const std::string& text) {
       where += fmt::format("[{}]", index);
     } else {
       if (node.IsDefined() && !node.IsNull() && !node.IsMap()) bad(where + " is not a mapping");
-      if (!node[key].IsDefined()) node[key] = YAML::Node(YAML::NodeType::Map);
+      if (!node[key].IsDefined()) {
+        node[key] = YAML::Node(YAML::NodeType::Map);
+        recordKey(node, key);
+        origins.add(node[key], text);
+      }
       next.reset(node[key]);
       where += (where.empty() ? "" : ".") + key;
     }
@@ -494,20 +509,29 @@ void applyOverride(YAML::Node root, const std::string& text) {
     node[static_cast<std::size_t>(index)] = v;
   } else {
     if (node.IsDefined() && !node.IsNull() && !node.IsMap()) bad(where + " is not a mapping");
+    const bool created = !node[key].IsDefined();
     node[key] = v;
+    if (created) recordKey(node, key);
   }
+  origins.add(v, text);
 }
 
 }  // namespace
 
 JobSpec loadJob(const std::filesystem::path& file, const std::vector<std::string>& overrides) {
   JobSpec job;
-  job.source = std::filesystem::absolute(file).lexically_normal();
+  // As the user gave it, like every other message about the file.
+  job.source = file.lexically_normal();
   YAML::Node root = loadYamlFile(file);
-  for (const std::string& o : overrides) applyOverride(root, o);
-  YamlIn in(root, "", file);
+  auto origins = std::make_shared<OverrideOrigins>();
+  for (const std::string& o : overrides) applyOverride(root, o, *origins);
+  YamlIn in(root, "", file, origins);
   describeJob(in, job);
   in.finish();
+  spdlog::debug("job {} ({}): robot {} ({}), part {}", job.name, file.string(), job.robot.name,
+                job.robot_file.resolved.empty() ? "inline" : job.robot_file.resolved.string(),
+                job.part.mesh.resolved.string());
+  for (const std::string& o : overrides) spdlog::debug("job {}: --set {}", job.name, o);
   return job;
 }
 
@@ -515,7 +539,8 @@ std::string jobToYaml(const JobSpec& job) {
   JobSpec copy = job;
   YAML::Emitter out;
   out.SetIndent(2);
-  out << YAML::Comment(fmt::format("scanplan job, fully resolved from {}", job.source.string()));
+  out << YAML::Comment(fmt::format("scanplan job, fully resolved from {}",
+                                   std::filesystem::absolute(job.source).string()));
   out << YAML::BeginMap;
   YamlOut writer(out);
   describeJob(writer, copy);

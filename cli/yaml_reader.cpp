@@ -59,6 +59,52 @@ bool parseDouble(const std::string& text, double& out) {
 
 }  // namespace
 
+void OverrideOrigins::add(const YAML::Node& node, const std::string& text) {
+  if (!node.IsDefined()) return;
+  nodes_.emplace_back(node, text);
+  if (node.IsMap()) {
+    for (auto it = node.begin(); it != node.end(); ++it) {
+      add(it->first, text);
+      add(it->second, text);
+    }
+  } else if (node.IsSequence()) {
+    for (std::size_t i = 0; i < node.size(); ++i) add(node[i], text);
+  }
+}
+
+const std::string* OverrideOrigins::find(const YAML::Node& node) const {
+  if (!node.IsDefined()) return nullptr;
+  for (const auto& [n, text] : nodes_) {
+    if (n.is(node)) return &text;
+  }
+  return nullptr;
+}
+
+std::string suggestKey(const std::string& written, const std::vector<std::string>& valid) {
+  // The key without its unit (phi for phi_deg, radius for radius_mm) or its plural s (repeat
+  // for repeats): the shortest valid key that extends it so.
+  std::string best;
+  for (const std::string& v : valid) {
+    if (written.size() >= 2 && v.size() > written.size() &&
+        v.compare(0, written.size(), written) == 0 &&
+        (v[written.size()] == '_' || v.size() == written.size() + 1) &&
+        (best.empty() || v.size() < best.size())) {
+      best = v;
+    }
+  }
+  if (!best.empty()) return best;
+  // Otherwise only near misses: a unit suffix (radius_m for radius_mm) or a typo.
+  std::size_t best_d = std::max<std::size_t>(3, written.size() / 3) + 1;
+  for (const std::string& v : valid) {
+    const std::size_t d = editDistance(written, v);
+    if (d < best_d) {
+      best_d = d;
+      best = v;
+    }
+  }
+  return best;
+}
+
 bool Expect::accepts(double v) const {
   if (!std::isfinite(v)) return false;
   if (lo_open ? !(v > lo) : !(v >= lo)) return false;
@@ -120,8 +166,14 @@ YAML::Node loadYamlFile(const std::filesystem::path& file) {
   return root;
 }
 
-YamlIn::YamlIn(YAML::Node node, std::string path, std::filesystem::path file)
-    : node_(std::move(node)), path_(std::move(path)), file_(std::move(file)) {
+YamlIn::YamlIn(YAML::Node node,
+               std::string path,
+               std::filesystem::path file,
+               std::shared_ptr<const OverrideOrigins> overrides)
+    : node_(std::move(node)),
+      path_(std::move(path)),
+      file_(std::move(file)),
+      overrides_(std::move(overrides)) {
   // yaml-cpp accepts repeated keys (first wins) and any node as a key; a job file must not.
   std::vector<std::pair<std::string, YAML::Mark>> seen;
   for (auto it = node_.begin(); it != node_.end(); ++it) {
@@ -145,7 +197,13 @@ YamlIn::YamlIn(YAML::Node node, std::string path, std::filesystem::path file)
 }
 
 std::string YamlIn::where(const YAML::Node& node) const {
-  const YAML::Mark m = node.IsDefined() ? node.Mark() : node_.Mark();
+  const YAML::Node& n = node.IsDefined() ? node : node_;
+  // A value from the command line has no place in the file (and only a place in the override
+  // text when it was a flow list or mapping): name the override.
+  if (overrides_) {
+    if (const std::string* text = overrides_->find(n)) return "--set " + *text;
+  }
+  const YAML::Mark m = n.Mark();
   if (m.is_null()) return file_.string();
   return fmt::format("{}:{}:{}", file_.string(), m.line + 1, m.column + 1);
 }
@@ -165,15 +223,50 @@ bool YamlIn::has(const char* key) const {
 }
 
 void YamlIn::require(const char* key) const {
-  if (!has(key)) {
-    throw InputError(
-        fmt::format("{}: {}: required field is missing", where(node_), fieldPath(key)));
+  if (has(key)) return;
+  // `hieght_mm: 70` for height_mm: the misspelt key is the user's mistake, not the missing one.
+  // Whether that key is unknown is only certain once every field was asked for: finish().
+  for (const auto& [k, n] : unknownKeys()) {
+    if (suggestKey(k, {key}) == key) {
+      missing_.emplace_back(key);
+      return;
+    }
   }
+  missing(key);
+}
+
+void YamlIn::missing(const std::string& key) const {
+  throw InputError(fmt::format("{}: {}: required field is missing", where(node_), fieldPath(key)));
+}
+
+std::vector<std::pair<std::string, YAML::Node>> YamlIn::unknownKeys() const {
+  std::vector<std::pair<std::string, YAML::Node>> unknown;
+  for (auto it = node_.begin(); it != node_.end(); ++it) {
+    const std::string key = it->first.Scalar();
+    if (std::find(known_.begin(), known_.end(), key) == known_.end()) {
+      unknown.emplace_back(key, it->first);
+    }
+  }
+  return unknown;
+}
+
+void YamlIn::unknownKey(const std::string& key,
+                        const YAML::Node& key_node,
+                        const std::string& suggestion) const {
+  std::vector<std::string> sorted = known_;
+  std::sort(sorted.begin(), sorted.end());
+  sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+  throw InputError(
+      fmt::format("{}: {}: unknown key{}; expected one of: {}", where(key_node), fieldPath(key),
+                  suggestion.empty() ? "" : fmt::format(" (did you mean '{}'?)", suggestion),
+                  fmt::join(sorted, ", ")));
 }
 
 void YamlIn::fail(const std::string& key,
                   const std::string& value,
                   const std::string& expected) const {
+  // A required key was missing (next to a near miss): that came first.
+  if (!missing_.empty()) missing(missing_.front());
   YAML::Node n = key.empty() ? node_ : node_[key];
   if (!key.empty() && (!n.IsDefined() || n.IsNull())) {
     // An empty value has no position of its own (yaml-cpp marks the next line): point at its key.
@@ -336,31 +429,18 @@ YamlIn YamlIn::child_(const std::string& key,
     throw InputError(
         fmt::format("{}: {}: {}: expected {}", where(node), fieldPath(key), nodeText(node), what));
   }
-  return YamlIn(node, fieldPath(key), file_);
+  return YamlIn(node, fieldPath(key), file_, overrides_);
 }
 
 void YamlIn::finish() const {
-  for (auto it = node_.begin(); it != node_.end(); ++it) {
-    const std::string key = it->first.Scalar();
-    if (std::find(known_.begin(), known_.end(), key) != known_.end()) continue;
-    // Suggest only near misses: a unit suffix (radius_m for radius_mm) or a typo.
-    std::string best;
-    std::size_t best_d = std::max<std::size_t>(3, key.size() / 3) + 1;
-    for (const std::string& k : known_) {
-      const std::size_t d = editDistance(key, k);
-      if (d < best_d) {
-        best_d = d;
-        best = k;
-      }
+  const auto unknown = unknownKeys();
+  for (const std::string& m : missing_) {
+    for (const auto& [key, key_node] : unknown) {
+      if (suggestKey(key, {m}) == m) unknownKey(key, key_node, m);
     }
-    std::vector<std::string> sorted = known_;
-    std::sort(sorted.begin(), sorted.end());
-    sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
-    throw InputError(fmt::format(
-        "{}:{}:{}: {}: unknown key{}; expected one of: {}", file_.string(),
-        it->first.Mark().line + 1, it->first.Mark().column + 1, fieldPath(key),
-        best.empty() ? "" : fmt::format(" (did you mean '{}'?)", best), fmt::join(sorted, ", ")));
+    missing(m);
   }
+  for (const auto& [key, key_node] : unknown) unknownKey(key, key_node, suggestKey(key, known_));
 }
 
 void YamlOut::writeScalar(double v) { out_ << formatNumber(v); }

@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -43,15 +44,39 @@ struct FilePath {
   std::filesystem::path resolved;
 };
 
+/// The nodes of a YAML tree that came from the command line (`--set key.path=value`), each with
+/// the override's text: errors about them name the override, not a place in the file.
+class OverrideOrigins {
+ public:
+  /// Records `node` and everything under it as given by the override `text`.
+  void add(const YAML::Node& node, const std::string& text);
+  /// The override that gave `node`, or nullptr when the file did.
+  const std::string* find(const YAML::Node& node) const;
+
+ private:
+  std::vector<std::pair<YAML::Node, std::string>> nodes_;
+};
+
+/// The key of `valid` that `written` most likely means, or "" when none is close: the same key
+/// with its unit or plural ending (phi → phi_deg, radius → radius_mm, repeat → repeats), else
+/// the nearest by edit distance (radius_m → radius_mm, hieght_mm → height_mm).
+std::string suggestKey(const std::string& written, const std::vector<std::string>& valid);
+
 /// Reads one YAML mapping into a spec struct, field by field, validating as it goes.
-/// Every error names the file, line and column, the field path, the bad value and what was
-/// expected. finish() rejects keys nobody asked for. Spec structs hold their defaults, so a
-/// missing optional key keeps the default.
+/// Every error names the file, line and column (or the --set override that gave the value),
+/// the field path, the bad value and what was expected. finish() rejects keys nobody asked
+/// for, and must be called (section(), list() and the loaders do). Spec structs hold their
+/// defaults, so a missing optional key keeps the default.
 class YamlIn {
  public:
   static constexpr bool kReading = true;
 
-  YamlIn(YAML::Node node, std::string path, std::filesystem::path file);
+  /// `overrides`: which nodes came from --set (nullptr: all from the file); shared by every
+  /// child mapping.
+  YamlIn(YAML::Node node,
+         std::string path,
+         std::filesystem::path file,
+         std::shared_ptr<const OverrideOrigins> overrides = nullptr);
 
   bool has(const char* key) const;
   void field(const char* key, double& value, const Expect& expect = {});
@@ -73,7 +98,9 @@ class YamlIn {
     numbers(key, v, N, expect, true);
     for (std::size_t i = 0; i < N; ++i) value[i] = static_cast<int>(v[i]);
   }
-  /// Marks a key as required: missing → error.
+  /// Marks a key as required: missing → error. When an unknown key of this mapping is a near
+  /// miss of it (hieght_mm for height_mm), finish() reports that key instead, with the
+  /// suggestion, at its position.
   void require(const char* key) const;
 
   /// A nested mapping, described by `describe(YamlIn&, S&)`.
@@ -109,6 +136,7 @@ class YamlIn {
   const std::filesystem::path& file() const { return file_; }
   const std::string& path() const { return path_; }
   const YAML::Node& node() const { return node_; }
+  const std::shared_ptr<const OverrideOrigins>& overrides() const { return overrides_; }
 
  private:
   YamlIn child_(const std::string& key,
@@ -126,11 +154,21 @@ class YamlIn {
                      std::size_t max_size) const;
   std::string where(const YAML::Node& node) const;
   std::string fieldPath(const std::string& key) const;
+  /// The keys of this mapping no field() / section() / list() asked for (so far).
+  std::vector<std::pair<std::string, YAML::Node>> unknownKeys() const;
+  [[noreturn]] void missing(const std::string& key) const;
+  [[noreturn]] void unknownKey(const std::string& key,
+                               const YAML::Node& key_node,
+                               const std::string& suggestion) const;
 
   YAML::Node node_;
   std::string path_;
   std::filesystem::path file_;
+  std::shared_ptr<const OverrideOrigins> overrides_;
   mutable std::vector<std::string> known_;
+  /// Required keys that were missing while an unknown key looked like a misspelling of them;
+  /// finish() decides which of the two to report.
+  mutable std::vector<std::string> missing_;
 };
 
 /// Writes a spec struct back as YAML through the same describe() functions, so `job show`

@@ -13,15 +13,6 @@ LaserWindow laserWindow(const LaserOptics& o) {
   return w;
 }
 
-double LaserWindow::halfWidth(double z) const {
-  const double s = (z - z_min) / (z_max - z_min);
-  return y_near + s * (y_far - y_near);
-}
-
-bool LaserWindow::contains(double y, double z) const {
-  return z >= z_min && z <= z_max && std::abs(y) <= halfWidth(z);
-}
-
 void triangulate(
     const LaserOptics& o, double image_height_px, double p_x, double p_y, double& y, double& z) {
   const double f = image_height_px / (2.0 * std::tan(o.gamma));

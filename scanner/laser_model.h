@@ -1,5 +1,7 @@
 #pragma once
 
+#include <cmath>
+
 namespace scanplan::scanner {
 
 /// Profile scanner optics (seed §5.3, Eq. 4–5): camera baseline a and offset b (m), camera
@@ -21,9 +23,14 @@ struct LaserWindow {
   double y_far = 0.0;
 
   /// Half-width of the measured line at depth z (linear between near and far).
-  double halfWidth(double z) const;
-  /// Inside the trapezoid?
-  bool contains(double y, double z) const;
+  double halfWidth(double z) const {
+    const double s = (z - z_min) / (z_max - z_min);
+    return y_near + s * (y_far - y_near);
+  }
+  /// Inside the trapezoid? (Inline: the scanner simulation asks once per fan-ray hit.)
+  bool contains(double y, double z) const {
+    return z >= z_min && z <= z_max && std::abs(y) <= halfWidth(z);
+  }
 };
 
 /// Eq. 5. Precondition: the optics are valid (see LaserOptics).

@@ -4,9 +4,11 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cassert>
 #include <cmath>
 #include <cstdint>
@@ -50,22 +52,31 @@ struct Group {
   std::vector<std::vector<std::array<Eigen::Vector3d, 3>>> edges;
 };
 
+// A fan ray's nearest hit so far.
 struct Hit {
   int slot = -1;  // index into the profile's active groups
   unsigned mesh = 0;
   unsigned triangle = 0;
-  double t = 0.0;
+  double t = 0.0;  // as cast (Embree's float or brute force's): the next group's far limit
+  Eigen::Vector4d plane = Eigen::Vector4d::Zero();  // the triangle's (GroupMesh::planes)
+  Eigen::Vector3d d_G = Eigen::Vector3d::Zero();    // the ray's direction, group frame
 };
 
 // A fan ray's hit that lies in the trapezoid, waiting for the camera test.
 struct Candidate {
-  std::uint32_t ray = 0;
-  Hit hit;
-  double t = 0.0;  // refined
   Eigen::Vector3d p_S = Eigen::Vector3d::Zero();
   Eigen::Vector3d n_S = Eigen::Vector3d::Zero();  // unit, towards the laser
+  double t = 0.0;                                 // refined
   double cos_incidence = 1.0;
-  bool visible = false;
+  std::uint32_t ray = 0;
+  std::int32_t part_triangle = -1;  // as in CloudPoint
+};
+
+// A camera ray: from just off a candidate's hit to the camera centre, scanner frame.
+struct CameraRay {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  Eigen::Vector3d towards = Eigen::Vector3d::Zero();  // unit
+  double length = 0.0;
 };
 
 // A group taking part in one profile: the scanner frame in the group frame.
@@ -80,18 +91,56 @@ struct ActiveGroup {
 // (rtcIntersect1M/rtcOccluded1M); 8-wide camera packets were no better.
 constexpr std::size_t kPacket = 16;
 
+// simulate() runs the profiles in batches of about this many fan rays (see there): the
+// per-thread point buffers stay a few MB.
+constexpr std::size_t kBatchRays = std::size_t{1} << 15;
+
+// The fields of a packet's rays that no cast changes (Embree writes only tfar and the hit):
+// set once per packet, when the thread's scratch is made.
+template <typename Packet>
+void initLanes(Packet& ray) noexcept {
+  for (std::size_t j = 0; j < kPacket; ++j) {
+    ray.tnear[j] = 0.0f;
+    ray.time[j] = 0.0f;
+    ray.mask[j] = 0xFFFFFFFFu;
+    ray.id[j] = 0;
+    ray.flags[j] = 0;
+  }
+}
+
+// Lane j of a packet: the ray o + t·d, t in [0, t_far] (float, as Embree takes it).
+template <typename Packet>
+void fillLane(Packet& ray,
+              std::size_t j,
+              const Eigen::Vector3d& o,
+              const Eigen::Vector3d& d,
+              double t_far) noexcept {
+  ray.org_x[j] = static_cast<float>(o.x());
+  ray.org_y[j] = static_cast<float>(o.y());
+  ray.org_z[j] = static_cast<float>(o.z());
+  ray.dir_x[j] = static_cast<float>(d.x());
+  ray.dir_y[j] = static_cast<float>(d.y());
+  ray.dir_z[j] = static_cast<float>(d.z());
+  ray.tfar[j] = static_cast<float>(t_far);
+}
+
+// Per-thread buffers, reused profile after profile.
 struct Scratch {
+  Scratch() noexcept {
+    initLanes(fan_packet.ray);
+    initLanes(camera_packet);
+    for (std::size_t j = 0; j < kPacket; ++j) fan_packet.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
+  }
+
   RTCRayHit16 fan_packet;  // 64-byte aligned (the type says so; TBB's storage honours it)
   RTCRay16 camera_packet;
   std::vector<Hit> best;
   std::vector<Candidate> candidates;
-  std::vector<std::size_t> pending;
+  std::vector<std::uint32_t> pending;  // candidates with a camera ray in this pass
+  std::vector<CameraRay> camera_rays;
   std::vector<char> blocked;
   std::vector<char> seen;
   std::vector<char> seen_other;
-  std::vector<Eigen::Vector3d> origins;
-  std::vector<Eigen::Vector3d> towards;
-  std::vector<double> lengths;
   std::vector<ActiveGroup> active;
 };
 
@@ -145,27 +194,6 @@ std::optional<double> intersect(const std::array<Eigen::Vector3d, 3>& tri,
   const double t = tri[2].dot(q) * inv;
   if (t < 0.0 || t > t_far) return std::nullopt;
   return t;
-}
-
-// Lane j of a packet: the ray o + t·d, t in [0, t_far] (float, as Embree takes it).
-template <typename Packet>
-void fillLane(Packet& ray,
-              std::size_t j,
-              const Eigen::Vector3d& o,
-              const Eigen::Vector3d& d,
-              double t_far) noexcept {
-  ray.org_x[j] = static_cast<float>(o.x());
-  ray.org_y[j] = static_cast<float>(o.y());
-  ray.org_z[j] = static_cast<float>(o.z());
-  ray.dir_x[j] = static_cast<float>(d.x());
-  ray.dir_y[j] = static_cast<float>(d.y());
-  ray.dir_z[j] = static_cast<float>(d.z());
-  ray.tnear[j] = 0.0f;
-  ray.tfar[j] = static_cast<float>(t_far);
-  ray.time[j] = 0.0f;
-  ray.mask[j] = 0xFFFFFFFFu;
-  ray.id[j] = 0;
-  ray.flags[j] = 0;
 }
 
 }  // namespace
@@ -283,32 +311,58 @@ void ScanSimulator::Impl::castFan(const RunSetup& setup, Scratch& s) const {
       RTCRayHit16& rh = s.fan_packet;
       assert(reinterpret_cast<std::uintptr_t>(&rh) % 64 == 0);
       alignas(64) std::array<int, kPacket> valid{};
+      std::array<Eigen::Vector3d, kPacket> d_G;
+      // The hit triangles' planes (for the refinement) are scattered over megabytes: each
+      // packet's are prefetched as it returns and read after the next packet's traversal,
+      // which hides the cache misses. A packet's hits are a bit mask (no branch per ray).
+      std::uint32_t previous = 0;  // hits of the packet before
+      const auto take_planes = [&](std::size_t base, std::uint32_t hits) {
+        for (; hits != 0; hits &= hits - 1) {
+          Hit& hit = s.best[base + static_cast<std::size_t>(std::countr_zero(hits))];
+          hit.plane = g.meshes[hit.mesh].planes[hit.triangle];
+        }
+      };
       for (std::size_t base = 0; base < n; base += kPacket) {
         const std::size_t count = std::min(kPacket, n - base);
         for (std::size_t j = 0; j < kPacket; ++j) {
           valid[j] = j < count ? -1 : 0;
           if (j >= count) continue;
-          fillLane(rh.ray, j, o, a.X_GS.linear() * setup.directions[base + j], s.best[base + j].t);
+          d_G[j] = a.X_GS.linear() * setup.directions[base + j];
+          fillLane(rh.ray, j, o, d_G[j], s.best[base + j].t);
           rh.hit.geomID[j] = RTC_INVALID_GEOMETRY_ID;
-          rh.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
         }
         rtcIntersect16(valid.data(), g.scene, &context, &rh);
+        std::uint32_t hits = 0;
         for (std::size_t j = 0; j < count; ++j) {
-          if (rh.hit.geomID[j] == RTC_INVALID_GEOMETRY_ID) continue;
-          s.best[base + j] = {slot, rh.hit.geomID[j], rh.hit.primID[j],
-                              static_cast<double>(rh.ray.tfar[j])};
-          // The hit triangles' planes (for the refinement) are scattered over megabytes: ask
-          // for them now, so that the cache misses overlap with the next packets' traversal.
-          __builtin_prefetch(g.meshes[rh.hit.geomID[j]].planes.data() + rh.hit.primID[j]);
+          hits |= static_cast<std::uint32_t>(rh.hit.geomID[j] != RTC_INVALID_GEOMETRY_ID) << j;
         }
+        for (std::uint32_t left = hits; left != 0; left &= left - 1) {
+          const auto j = static_cast<std::size_t>(std::countr_zero(left));
+          Hit& hit = s.best[base + j];
+          hit.slot = slot;
+          hit.mesh = rh.hit.geomID[j];
+          hit.triangle = rh.hit.primID[j];
+          hit.t = static_cast<double>(rh.ray.tfar[j]);
+          hit.d_G = d_G[j];
+          __builtin_prefetch(g.meshes[hit.mesh].planes.data() + hit.triangle);
+        }
+        if (base > 0) take_planes(base - kPacket, previous);
+        previous = hits;
       }
+      if (n > 0) take_planes((n - 1) / kPacket * kPacket, previous);
     } else {
       for (std::size_t k = 0; k < n; ++k) {
         const Eigen::Vector3d d = a.X_GS.linear() * setup.directions[k];
         for (std::size_t m = 0; m < g.edges.size(); ++m) {
           for (std::size_t t = 0; t < g.edges[m].size(); ++t) {
             if (const auto hit = intersect(g.edges[m][t], o, d, s.best[k].t)) {
-              s.best[k] = {slot, static_cast<unsigned>(m), static_cast<unsigned>(t), *hit};
+              Hit& best = s.best[k];
+              best.slot = slot;
+              best.mesh = static_cast<unsigned>(m);
+              best.triangle = static_cast<unsigned>(t);
+              best.t = *hit;
+              best.plane = g.meshes[m].planes[t];
+              best.d_G = d;
             }
           }
         }
@@ -325,28 +379,24 @@ void ScanSimulator::Impl::cameraPass(const Eigen::Vector3d& camera,
                                      std::vector<char>& test,
                                      SimulationStats& stats) const {
   s.pending.clear();
+  s.camera_rays.clear();
   for (std::size_t i = 0; i < s.candidates.size(); ++i) {
     if (!test[i]) continue;
     const Candidate& c = s.candidates[i];
-    if (c.n_S.dot(camera - c.p_S) > 0.0) {
-      s.pending.push_back(i);
-    } else {
+    if (!(c.n_S.dot(camera - c.p_S) > 0.0)) {
       test[i] = 0;
+      continue;
     }
+    CameraRay& r = s.camera_rays.emplace_back();
+    r.origin = c.p_S + kOcclusionOffset * c.n_S;
+    const Eigen::Vector3d to_camera = camera - r.origin;
+    r.length = to_camera.norm();
+    r.towards = to_camera / r.length;
+    s.pending.push_back(static_cast<std::uint32_t>(i));
   }
   const std::size_t n = s.pending.size();
   stats.occlusion_rays += n;
   s.blocked.assign(n, 0);
-  s.origins.resize(n);
-  s.towards.resize(n);
-  s.lengths.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const Candidate& c = s.candidates[s.pending[i]];
-    s.origins[i] = c.p_S + kOcclusionOffset * c.n_S;
-    const Eigen::Vector3d to_camera = camera - s.origins[i];
-    s.lengths[i] = to_camera.norm();
-    s.towards[i] = to_camera / s.lengths[i];
-  }
   for (const ActiveGroup& a : s.active) {
     const Group& g = groups[static_cast<std::size_t>(a.index)];
     if (backend == RayBackend::kEmbree) {
@@ -366,7 +416,8 @@ void ScanSimulator::Impl::cameraPass(const Eigen::Vector3d& camera,
           valid[j] = j < count && !s.blocked[i] ? -1 : 0;
           if (!valid[j]) continue;
           any = true;
-          fillLane(ray, j, a.X_GS * s.origins[i], a.X_GS.linear() * s.towards[i], s.lengths[i]);
+          const CameraRay& r = s.camera_rays[i];
+          fillLane(ray, j, a.X_GS * r.origin, a.X_GS.linear() * r.towards, r.length);
         }
         if (!any) continue;
         rtcOccluded16(valid.data(), g.scene, &context, &ray);
@@ -377,11 +428,12 @@ void ScanSimulator::Impl::cameraPass(const Eigen::Vector3d& camera,
     } else {
       for (std::size_t i = 0; i < n; ++i) {
         if (s.blocked[i]) continue;
-        const Eigen::Vector3d o = a.X_GS * s.origins[i];
-        const Eigen::Vector3d d = a.X_GS.linear() * s.towards[i];
+        const CameraRay& r = s.camera_rays[i];
+        const Eigen::Vector3d o = a.X_GS * r.origin;
+        const Eigen::Vector3d d = a.X_GS.linear() * r.towards;
         for (std::size_t k = 0; k < g.edges.size() && !s.blocked[i]; ++k) {
           for (const auto& tri : g.edges[k]) {
-            if (intersect(tri, o, d, s.lengths[i])) {
+            if (intersect(tri, o, d, r.length)) {
               s.blocked[i] = 1;
               break;
             }
@@ -404,33 +456,33 @@ void ScanSimulator::Impl::profile(const ScanFrame& frame,
   const SimulationSettings& settings = *setup.settings;
   const auto link_frames = cell.robot.linkFrames(frame.q);
   const Eigen::Isometry3d X_WS = cell.X_WB * link_frames[6] * cell.scanner.X_FS;
+  const Eigen::Isometry3d X_SW = X_WS.inverse();
+  const Eigen::Isometry3d X_WR = setup.true_table.X_WR(frame.theta);
 
-  // Groups whose bounding sphere reaches the profile's rays, with the rays' frame in theirs.
+  // Groups whose bounding sphere reaches the profile's rays, with the rays' frame in theirs,
+  // X_GS, worked out only for those. (A sphere this test passes or fails depending on the
+  // rounding of its centre lies kCullMargin from every ray: no ray can hit it either way.)
   s.active.clear();
   for (std::size_t i = 0; i < groups.size(); ++i) {
     const Group& g = groups[i];
-    Eigen::Isometry3d X_GS;
-    switch (g.kind) {
-      case GroupKind::kTable:
-        X_GS = setup.true_table.X_WR(frame.theta).inverse() * X_WS;
-        break;
-      case GroupKind::kWorld:
-        X_GS = X_WS;
-        break;
-      case GroupKind::kLink:
-        X_GS = (cell.X_WB * link_frames[static_cast<std::size_t>(g.link)]).inverse() * X_WS;
-        break;
+    Eigen::Isometry3d X_WG = Eigen::Isometry3d::Identity();  // the world group's
+    if (g.kind == GroupKind::kTable) {
+      X_WG = X_WR;
+    } else if (g.kind == GroupKind::kLink) {
+      X_WG = cell.X_WB * link_frames[static_cast<std::size_t>(g.link)];
     }
-    const Eigen::Vector3d centre_S = X_GS.inverse() * g.centre;
-    if (setup.reach.exteriorDistance(centre_S) <= g.radius) {
-      s.active.push_back({static_cast<int>(i), X_GS});
-    }
+    if (setup.reach.exteriorDistance(X_SW * (X_WG * g.centre)) > g.radius) continue;
+    s.active.push_back(
+        {static_cast<int>(i), g.kind == GroupKind::kWorld ? X_WS : X_WG.inverse() * X_WS});
   }
 
   const std::size_t n = setup.directions.size();
   stats.laser_rays += n;
   s.best.resize(n);
-  for (std::size_t k = 0; k < n; ++k) s.best[k] = Hit{-1, 0, 0, setup.t_far[k]};
+  for (std::size_t k = 0; k < n; ++k) {
+    s.best[k].slot = -1;
+    s.best[k].t = setup.t_far[k];
+  }
   castFan(setup, s);
 
   s.candidates.clear();
@@ -439,14 +491,12 @@ void ScanSimulator::Impl::profile(const ScanFrame& frame,
     if (hit.slot < 0) continue;
     ++stats.hits;
     const ActiveGroup& a = s.active[static_cast<std::size_t>(hit.slot)];
-    const Group& g = groups[static_cast<std::size_t>(a.index)];
-    const Eigen::Vector4d& plane = g.meshes[hit.mesh].planes[hit.triangle];
+    const Eigen::Vector4d& plane = hit.plane;
     // Embree's distance is float; the hit triangle's plane gives it in double (the point then
     // lies on the triangle to ~1e-16 relative, whatever the frames).
     const Eigen::Vector3d& d_S = setup.directions[k];
     const Eigen::Vector3d n_G = plane.head<3>();
-    const Eigen::Vector3d d_G = a.X_GS.linear() * d_S;
-    const double cos_nd = n_G.dot(d_G);
+    const double cos_nd = n_G.dot(hit.d_G);
     double t = hit.t;
     if (std::abs(cos_nd) > 1e-9) t = (plane.w() - n_G.dot(a.X_GS.translation())) / cos_nd;
     const Eigen::Vector3d p_S = t * d_S;
@@ -454,15 +504,16 @@ void ScanSimulator::Impl::profile(const ScanFrame& frame,
       ++stats.outside_window;
       continue;
     }
-    Candidate c;
-    c.ray = static_cast<std::uint32_t>(k);
-    c.hit = hit;
-    c.t = t;
+    Candidate& c = s.candidates.emplace_back();
     c.p_S = p_S;
     c.n_S = a.X_GS.linear().transpose() * n_G;
     if (c.n_S.dot(d_S) > 0.0) c.n_S = -c.n_S;
+    c.t = t;
     c.cos_incidence = std::abs(cos_nd);
-    s.candidates.push_back(c);
+    c.ray = static_cast<std::uint32_t>(k);
+    if (groups[static_cast<std::size_t>(a.index)].meshes[hit.mesh].is_part) {
+      c.part_triangle = static_cast<std::int32_t>(hit.triangle);
+    }
   }
 
   // The camera rule (CameraRule): each pass tests the candidates still in question against
@@ -488,25 +539,23 @@ void ScanSimulator::Impl::profile(const ScanFrame& frame,
       for (std::size_t i = 0; i < m; ++i) s.seen[i] = s.seen[i] || s.seen_other[i];
       break;
   }
-  for (std::size_t i = 0; i < m; ++i) s.candidates[i].visible = s.seen[i] != 0;
 
   const bool noisy = settings.sigma_longitudinal > 0.0 || settings.sigma_orthogonal > 0.0;
   std::optional<std::mt19937_64> rng;  // seeding costs ~300 words: only when noisy
   if (noisy) rng.emplace(mix(settings.seed ^ mix(index)));
-  const Eigen::Isometry3d X_PS = (cell.table.X_WR(frame.theta) * cell.part.X_RP).inverse() * X_WS;
-  out.reserve(static_cast<std::size_t>(std::count(s.seen.begin(), s.seen.end(), 1)));
-  for (const Candidate& c : s.candidates) {
-    if (!c.visible) {
+  // Points go to the part frame through the planner's table model (seed §5.6).
+  const Eigen::Isometry3d X_WR_model =
+      settings.simulated_table ? cell.table.X_WR(frame.theta) : X_WR;
+  const Eigen::Isometry3d X_PS = (X_WR_model * cell.part.X_RP).inverse() * X_WS;
+  const std::size_t first = out.size();
+  for (std::size_t i = 0; i < m; ++i) {
+    if (!s.seen[i]) {
       ++stats.occluded;
       continue;
     }
-    CloudPoint p;
-    p.t = frame.t;
-    p.profile = index;
-    p.ray = c.ray;
-    p.range = c.t;
-    p.incidence = std::acos(std::min(1.0, c.cos_incidence));
+    const Candidate& c = s.candidates[i];
     Eigen::Vector3d p_S = c.p_S;
+    double range = c.t;
     if (noisy) {
       // Along the ray and across it within the laser plane (a triangulating head measures in
       // its plane): d = (0, sin α, cos α), u = (0, cos α, −sin α).
@@ -515,15 +564,12 @@ void ScanSimulator::Impl::profile(const ScanFrame& frame,
       const auto [g_l, g_o] = gaussianPair(*rng);
       const double e_l = settings.sigma_longitudinal * g_l;
       p_S += e_l * d + settings.sigma_orthogonal * g_o * u;
-      p.range += e_l;
+      range += e_l;
     }
-    p.p_P = X_PS * p_S;
-    const Group& g =
-        groups[static_cast<std::size_t>(s.active[static_cast<std::size_t>(c.hit.slot)].index)];
-    if (g.meshes[c.hit.mesh].is_part) p.part_triangle = static_cast<std::int32_t>(c.hit.triangle);
-    out.push_back(p);
+    out.push_back({X_PS * p_S, frame.t, index, c.ray, range,
+                   std::acos(std::min(1.0, c.cos_incidence)), c.part_triangle});
   }
-  stats.points += out.size();
+  stats.points += out.size() - first;
 }
 
 std::vector<double> fanAngles(const LaserWindow& window, int rays_per_profile) {
@@ -647,25 +693,62 @@ SimulatedCloud ScanSimulator::simulate(const std::vector<ScanFrame>& frames,
   setup.reach.min().array() -= kCullMargin;
   setup.reach.max().array() += kCullMargin;
 
+  // The points reach fresh memory once. On one thread they go straight into the cloud; on
+  // more, each thread appends its profiles' points to its own buffer, reused batch after
+  // batch, and after each batch they move to the cloud in profile order. The cloud is sized
+  // for a point per ray of the first batch, then once for the rest of the run at the points
+  // per profile so far plus a quarter (it grows again only should a batch need more).
+  struct Output {
+    std::vector<CloudPoint> points;
+    SimulationStats stats;
+  };
+  struct Span {
+    const std::vector<CloudPoint>* points = nullptr;
+    std::size_t begin = 0;
+    std::size_t end = 0;
+  };
   const std::size_t n = frames.size();
-  std::vector<std::vector<CloudPoint>> per_profile(n);
-  std::vector<SimulationStats> per_stats(n);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-                      Scratch& s = impl_->scratch.local();
-                      for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                        impl_->profile(frames[i], static_cast<std::uint32_t>(i), setup, s,
-                                       per_profile[i], per_stats[i]);
-                      }
-                    });
-
+  const std::size_t rays = setup.directions.size();
+  const std::size_t batch = std::max<std::size_t>(1, kBatchRays / rays);
+  const bool serial = tbb::this_task_arena::max_concurrency() == 1;
+  tbb::enumerable_thread_specific<Output> outputs;
+  std::vector<Span> spans(serial ? 0 : std::min(n, batch));
   SimulatedCloud cloud;
-  std::size_t total = 0;
-  for (const auto& p : per_profile) total += p.size();
-  cloud.points.reserve(total);
-  for (std::size_t i = 0; i < n; ++i) {
-    cloud.points.insert(cloud.points.end(), per_profile[i].begin(), per_profile[i].end());
-    const SimulationStats& st = per_stats[i];
+  for (std::size_t from = 0; from < n; from += batch) {
+    const std::size_t to = std::min(n, from + batch);
+    const std::size_t size = cloud.points.size();
+    if (size + (to - from) * rays > cloud.points.capacity()) {
+      const std::size_t projected = from == 0 ? 0 : size + (n - from) * size / from * 5 / 4;
+      cloud.points.reserve(std::max(size + (to - from) * rays, projected));
+    }
+    if (serial) {
+      Scratch& s = impl_->scratch.local();
+      SimulationStats& stats = outputs.local().stats;
+      for (std::size_t i = from; i < to; ++i) {
+        impl_->profile(frames[i], static_cast<std::uint32_t>(i), setup, s, cloud.points, stats);
+      }
+      continue;
+    }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(from, to),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        Scratch& s = impl_->scratch.local();
+                        Output& out = outputs.local();
+                        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                          const std::size_t begin = out.points.size();
+                          impl_->profile(frames[i], static_cast<std::uint32_t>(i), setup, s,
+                                         out.points, out.stats);
+                          spans[i - from] = {&out.points, begin, out.points.size()};
+                        }
+                      });
+    for (std::size_t i = from; i < to; ++i) {
+      const Span& span = spans[i - from];
+      cloud.points.insert(cloud.points.end(), span.points->data() + span.begin,
+                          span.points->data() + span.end);
+    }
+    for (Output& out : outputs) out.points.clear();
+  }
+  for (const Output& out : outputs) {
+    const SimulationStats& st = out.stats;
     cloud.stats.laser_rays += st.laser_rays;
     cloud.stats.occlusion_rays += st.occlusion_rays;
     cloud.stats.hits += st.hits;

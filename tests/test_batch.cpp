@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -83,6 +84,22 @@ TEST_F(Batch, SmallSweepGivesOneRowPerCaseWithTheDpGap) {
   ASSERT_EQ(run.exit_code, 0) << describe(run);
   EXPECT_TRUE(contains(run.out, "12 case(s): 12 run, 0 already done, 0 error(s); 1 map(s)"))
       << run.out;
+  // The map's own time, then the whole run's: the map took part of it.
+  double map_s = -1, all_s = -1;
+  const std::size_t line = run.out.find("1 map(s) computed (");
+  ASSERT_NE(line, std::string::npos) << run.out;
+  ASSERT_EQ(std::sscanf(run.out.c_str() + line,
+                        "1 map(s) computed (%lf s of map time); %lf s in all", &map_s, &all_s),
+            2)
+      << run.out;
+  EXPECT_GT(map_s, 0.0);
+  EXPECT_LE(map_s, all_s + 0.05);
+  // Every map's time is in the rows (map_s of the row that computed it).
+  double rows_map_s = 0.0;
+  for (const cli::BatchRow& r : cli::readBatchRows(out / "results.jsonl")) {
+    if (!r.map_reused) rows_map_s += r.metrics[cli::kFirstTimingMetric].value_or(0.0);
+  }
+  EXPECT_NEAR(map_s, rows_map_s, 0.051);
   EXPECT_TRUE(contains(run.out,
                        "\ntally      12 case(s): 12 planned, 0 no_path, 0 no_executable_path, 0 "
                        "invalid_trajectory, 0 error\n"))
@@ -167,6 +184,9 @@ TEST_F(Batch, ResumedRunEqualsAnUninterruptedOne) {
   options.print = false;
   const cli::BatchStats first = cli::runBatchCases(options);
   EXPECT_EQ(first.ran, 5u);
+  EXPECT_EQ(first.maps, 1u);
+  EXPECT_GT(first.map_seconds, 0.0);
+  EXPECT_LE(first.map_seconds, first.seconds);
   EXPECT_EQ(cli::readBatchRows(part / "results.jsonl").size(), 5u);
   // A rerun without --resume refuses to mix two batches.
   const Result refused = batch(sweep, part);
@@ -178,6 +198,13 @@ TEST_F(Batch, ResumedRunEqualsAnUninterruptedOne) {
   ASSERT_EQ(resumed.exit_code, 0) << describe(resumed);
   EXPECT_TRUE(contains(resumed.out, "12 case(s): 7 run, 5 already done")) << resumed.out;
   EXPECT_EQ(stableRows(part), stableRows(full));
+  // Nothing left to run: no map, and the line says so (no map time for the batch's time).
+  const Result again = batch(sweep, part, {"--resume"});
+  ASSERT_EQ(again.exit_code, 0) << describe(again);
+  EXPECT_TRUE(
+      contains(again.out, "12 case(s): 0 run, 12 already done, 0 error(s); 0 map(s) computed; "))
+      << again.out;
+  EXPECT_TRUE(contains(again.out, " s in all\n")) << again.out;
   const std::string csv = readFile(part / "results.csv");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 13) << csv;
 }
@@ -365,6 +392,77 @@ TEST_F(Batch, BadKeyInTheSweepFailsBeforeAnythingRuns) {
   EXPECT_EQ(shard.exit_code, 4) << describe(shard);
   EXPECT_TRUE(contains(shard.err, "--shard '4/3'")) << shard.err;
   EXPECT_FALSE(fs::exists(out));
+}
+
+// A results.jsonl row as a batch writes it (metrics in kBatchMetrics order, "null" when absent).
+std::string jsonRow(int index,
+                    const std::string& method,
+                    const std::string& horizon,
+                    const std::vector<std::string>& metrics) {
+  std::string row = fmt::format(
+      "{{\"case_id\": \"c{0}\", \"index\": {0}, \"job\": \"demo.yaml\", \"params\": "
+      "{{\"planner.method\": \"{1}\", \"planner.ray.horizon\": \"{2}\"}}, \"repeat\": 0, "
+      "\"method\": \"{1}\", \"status\": \"planned\", \"reason\": \"\"",
+      index, method, horizon);
+  for (std::size_t m = 0; m < cli::kBatchMetrics.size(); ++m) {
+    row += fmt::format(", \"{}\": {}", cli::kBatchMetrics[m],
+                       m < metrics.size() ? metrics[m] : std::string("null"));
+  }
+  return row + ", \"map_reused\": false}\n";
+}
+
+// `batch report` on values that make degenerate axes: J equal but for rounding (this died with
+// std::bad_alloc in the tick code), horizons equal but for rounding, one value, huge values
+// whose mean overflows, a metric no case has. Every plot is written and sane.
+TEST_F(Batch, ReportSurvivesDegenerateValues) {
+  const fs::path out = dir_ / "out";
+  fs::create_directories(out);
+  // J_s, cost_f_s, cost_omega_s, cost_alpha_s, dp_gap_percent, min_f, …, cycle_time_s, coverage,
+  // map_s, plan_s.
+  writeFile(out / "results.jsonl",
+            jsonRow(0, "ray", "10",
+                    {"25.46247875282346", "1", "1", "0", "0", "1e308", "null", "null", "null",
+                     "109.4", "null", "2", "0.5"}) +
+                jsonRow(1, "dp", "10.000000000000002",
+                        {"25.462478752823472", "1", "1", "0", "0", "1e308", "null", "null", "null",
+                         "109.4", "null", "2", "1e-300"}) +
+                jsonRow(2, "dp", "10.000000000000002",
+                        {"25.462478752823472", "1", "1", "0", "0", "-1e308", "null", "null", "null",
+                         "109.4", "null", "2", "0"}));
+  const Result report = scanplan({"batch", "report", out.string()});
+  ASSERT_EQ(report.exit_code, 0) << describe(report);
+  EXPECT_TRUE(contains(report.out, "tally      3 case(s): 3 planned")) << report.out;
+  for (const char* stem :
+       {"J_s_vs_planner_method", "J_s_vs_planner_ray_horizon", "min_f_vs_planner_ray_horizon",
+        "plan_s_vs_planner_method", "cycle_time_s_vs_planner_ray_horizon"}) {
+    SCOPED_TRACE(stem);
+    const fs::path png = out / "plots" / (std::string(stem) + ".png");
+    ASSERT_TRUE(fs::exists(png));
+    const cli::RgbImage image = cli::decodePng(readFile(png));
+    EXPECT_GT(image.width, 720);
+    EXPECT_LT(image.width, 720 + 600) << "tick values stay short";
+    EXPECT_LT(image.height, 480 + 300);
+    const std::string svg = readFile(out / "plots" / (std::string(stem) + ".svg"));
+    EXPECT_FALSE(contains(svg, "nan")) << svg.substr(0, 2000);
+    EXPECT_FALSE(contains(svg, "inf")) << svg.substr(0, 2000);
+    const auto ticks = std::count(svg.begin(), svg.end(), '\n');
+    EXPECT_GT(ticks, 10);
+    EXPECT_LT(ticks, 60) << "a few ticks per axis";
+  }
+  // The flat J axis is centred on the value: 25.46 ± 2.5, ticks 23 … 27.
+  const std::string j = readFile(out / "plots/J_s_vs_planner_method.svg");
+  EXPECT_TRUE(contains(j, ">25.0<") || contains(j, ">25<")) << j;
+  // No case has coverage: no plot of it.
+  EXPECT_FALSE(fs::exists(out / "plots/coverage_vs_planner_method.png"));
+
+  // A single case, and then every metric of it null.
+  writeFile(out / "results.jsonl", jsonRow(0, "ray", "10", {"25.5"}));
+  const Result one = scanplan({"batch", "report", out.string()});
+  ASSERT_EQ(one.exit_code, 0) << describe(one);
+  EXPECT_TRUE(fs::exists(out / "plots/J_s_vs_planner_method.png"));
+  writeFile(out / "results.jsonl", jsonRow(0, "ray", "10", {}));
+  const Result none = scanplan({"batch", "report", out.string()});
+  ASSERT_EQ(none.exit_code, 0) << describe(none);
 }
 
 }  // namespace

@@ -2,11 +2,16 @@
 // and different text gives different pixels.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cli/bitmap_font.h"
 #include "cli/image_io.h"
+#include "kinematics/error.h"
+#include "tests/image_support.h"
 
 namespace {
 
@@ -115,6 +120,113 @@ TEST(BitmapFont, TextIsClippedToTheImage) {
   drawTextUp(image, 25, 4, "and upwards", kInk, 2);
   bool outside = true;
   EXPECT_FALSE(inked(image, {0, 0, 30, 10}, outside).empty());
+}
+
+TEST(BitmapFont, FitTextCutsWithDotsAndNeverInsideAUtf8Character) {
+  EXPECT_EQ(fitText("short", 200, 2), "short");
+  const std::string cut = fitText("a rather long axis title", textWidth("a rather", 2), 2);
+  EXPECT_TRUE(cut.ends_with("..")) << cut;
+  EXPECT_LE(textWidth(cut, 2), textWidth("a rather", 2));
+  const std::string degrees =
+      fitText("angle \u00b0\u00b0\u00b0\u00b0", textWidth("angle \u00b0", 2), 2);
+  for (const char c : degrees.substr(0, degrees.size() - 2)) {
+    EXPECT_NE(static_cast<unsigned char>(c), 0xc2) << "a lead byte without its continuation";
+  }
+}
+
+// ---- labelFigure: a data raster framed with title, ticks, axis titles and legend -------------
+
+using scanplan::test::darkPixels;
+
+FigureLabels someLabels() {
+  FigureLabels labels;
+  labels.title = "J, objective (s) against planner.ray.horizon";
+  labels.x_label = "planner.ray.horizon";
+  labels.y_label = "J, objective (s)";
+  labels.x0 = 9.2;
+  labels.x1 = 30.8;
+  labels.y0 = 20;
+  labels.y1 = 30;
+  labels.legend = {{{213, 94, 0}, "ray"},
+                   {{0, 114, 178}, "dp", LegendEntry::Mark::kLine},
+                   {{90, 90, 90}, "case", LegendEntry::Mark::kCross, {90, 90, 90}, 10}};
+  return labels;
+}
+
+TEST(LabelFigure, RasterIsCopiedExactlyAndTextFillsTheMargins) {
+  RgbImage raster = RgbImage::filled(300, 200, {250, 250, 250});
+  for (int y = 0; y < 200; ++y) {
+    for (int x = 0; x < 300; ++x) {
+      raster.set(x, y, {static_cast<std::uint8_t>(x % 251), static_cast<std::uint8_t>(y), 77});
+    }
+  }
+  const LabelledFigure f = labelFigure(raster, someLabels());
+  const RgbImage& image = f.image;
+  ASSERT_GT(f.area_x, 30);
+  ASSERT_GT(f.area_y, 20);
+  ASSERT_GT(image.width, f.area_x + 300 + 60);
+  ASSERT_GT(image.height, f.area_y + 200 + 40);
+  for (int y = 0; y < 200; ++y) {
+    for (int x = 0; x < 300; ++x) {
+      ASSERT_EQ(image.at(f.area_x + x, f.area_y + y), raster.at(x, y)) << x << ", " << y;
+    }
+  }
+  EXPECT_GT(darkPixels(image, 0, 0, image.width, f.area_y - 2), 200) << "title";
+  EXPECT_GT(darkPixels(image, 0, f.area_y, f.area_x - 8, f.area_y + 200), 200) << "y values, title";
+  EXPECT_GT(darkPixels(image, 0, f.area_y + 202, image.width, image.height), 200)
+      << "x values, title";
+  EXPECT_GT(darkPixels(image, f.area_x + 302, 0, image.width, image.height), 50) << "legend text";
+  const auto has = [&](Rgb colour) {
+    for (int y = 0; y < image.height; ++y) {
+      for (int x = f.area_x + 302; x < image.width; ++x) {
+        if (image.at(x, y) == colour) return true;
+      }
+    }
+    return false;
+  };
+  EXPECT_TRUE(has({213, 94, 0})) << "swatch";
+  EXPECT_TRUE(has({0, 114, 178})) << "line";
+  // Deterministic.
+  EXPECT_EQ(labelFigure(raster, someLabels()).image.rgb, image.rgb);
+}
+
+TEST(LabelFigure, DegenerateRangesAndRastersStillGiveTicksAndNoCrash) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  const double big = std::numeric_limits<double>::max();
+  const RgbImage raster = RgbImage::filled(200, 100, kWhite);
+  for (const auto& [a, b] :
+       std::vector<std::pair<double, double>>{{25.46247875282346, 25.462478752823472},
+                                              {3, 3},
+                                              {0, 0},
+                                              {nan, nan},
+                                              {nan, 2},
+                                              {-inf, inf},
+                                              {-big, big},
+                                              {1e300, 1e300},
+                                              {5, -5}}) {
+    SCOPED_TRACE(::testing::Message() << a << " " << b);
+    FigureLabels labels = someLabels();
+    labels.x0 = labels.y0 = a;
+    labels.x1 = labels.y1 = b;
+    const LabelledFigure f = labelFigure(raster, labels);
+    EXPECT_LT(f.image.width, 1200) << "tick values stay short";
+    EXPECT_GT(darkPixels(f.image, 0, f.area_y, f.area_x - 8, f.area_y + 100), 30)
+        << "y tick values";
+    EXPECT_GT(darkPixels(f.image, 0, f.area_y + 102, f.image.width, f.area_y + 130), 30)
+        << "x tick values";
+  }
+  // Categories, a colour bar, no legend, long text, an empty raster.
+  FigureLabels labels = someLabels();
+  labels.categories = {"ray", "dp", "a very long category name that cannot fit", ""};
+  labels.legend.clear();
+  labels.colour_bar = "f";
+  labels.title = std::string(500, 'x');
+  EXPECT_NO_THROW(labelFigure(raster, labels));
+  EXPECT_NO_THROW(labelFigure(RgbImage{}, labels));
+  RgbImage broken = raster;
+  broken.rgb.pop_back();
+  EXPECT_THROW(labelFigure(broken, labels), scanplan::InputError);
 }
 
 }  // namespace

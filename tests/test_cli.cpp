@@ -434,4 +434,126 @@ TEST_F(Cli, CheckRejectsBadJointsAndBadPairRules) {
   EXPECT_TRUE(contains(rule.err, "scaner")) << rule.err;
 }
 
+// Help says what each command does and what it accepts.
+TEST_F(Cli, HelpTextsSayWhatTheCommandsAccept) {
+  Result run = scanplan({"plan", "--help"});
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  for (const std::string m : {"scan path", "maps", "validation", "robot programs", "simulation",
+                              "planner.refine.enabled"})
+    EXPECT_TRUE(contains(run.out, m)) << "plan --help lacks " << m << "\n" << run.out;
+  for (const std::string command : {"validate", "simulate", "export"}) {
+    run = scanplan({command, "--help"});
+    ASSERT_EQ(run.exit_code, 0) << describe(run);
+    EXPECT_TRUE(contains(run.out, "trajectory CSV") && contains(run.out, "V+ program"))
+        << command << " --help\n"
+        << run.out;
+  }
+}
+
+// Missing input files are bad input (exit 4) naming the file, for every command; CLI11's
+// usage error (exit 2) is only for the command line itself.
+TEST_F(Cli, MissingInputFilesAreInputErrorsNamingTheFile) {
+  const std::string gone = (dir_ / "nonexist.yaml").string();
+  const std::string gone_csv = (dir_ / "nonexist.csv").string();
+  const std::string gone_dir = (dir_ / "no_such_run").string();
+  const std::string out = (dir_ / "out").string();
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"plan", gone, "-o", out}, gone},
+      {{"path", gone, "-o", out}, gone},
+      {{"map", gone, "-o", out}, gone},
+      {{"check", gone, "--table", "0", "--joints", "0,0,0,0,0,0"}, gone},
+      {{"job", "show", gone}, gone},
+      {{"validate", gone, "-t", gone_csv}, gone},
+      {{"validate", kDemoJob, "-t", gone_csv}, gone_csv},
+      {{"simulate", kDemoJob, "-t", gone_csv, "-o", out}, gone_csv},
+      {{"export", kDemoJob, "-t", gone_csv, "-o", out}, gone_csv},
+      {{"fk", "--robot", gone, "--joints", "0,0,0,0,0,0"}, gone},
+      {{"fk", "--job", gone, "--joints", "0,0,0,0,0,0"}, gone},
+      {{"ik", "--job", gone, "--trans", "450,0,695,0,90,0"}, gone},
+      {{"batch", gone, "-o", out}, gone},
+      {{"batch", "report", gone_dir}, gone_dir},
+      {{"batch", "merge", gone_dir, "-o", out}, gone_dir},
+  };
+  for (const auto& [args, file] : cases) {
+    SCOPED_TRACE(args.front() + " " + args[1]);
+    const Result run = scanplan(args);
+    EXPECT_EQ(run.exit_code, 4) << describe(run);
+    EXPECT_TRUE(contains(run.err, "scanplan: error: " + file + ": ") &&
+                contains(run.err, "does not exist"))
+        << run.err;
+  }
+  EXPECT_FALSE(fs::exists(out));
+  // A folder where a file belongs, and the other way round.
+  Result run = scanplan({"job", "show", dir_.string()});
+  EXPECT_EQ(run.exit_code, 4) << describe(run);
+  EXPECT_TRUE(contains(run.err, dir_.string() + ": is a folder")) << run.err;
+  run = scanplan({"batch", "report", kDemoJob});
+  EXPECT_EQ(run.exit_code, 4) << describe(run);
+  EXPECT_TRUE(contains(run.err, kDemoJob + ": is not a folder")) << run.err;
+}
+
+// -q: errors only, before or after the subcommand; -v: what was read and how long it took.
+TEST_F(Cli, QuietDropsTheSummaryAndGlobalOptionsWorkAfterTheCommand) {
+  const fs::path out = dir_ / "out";
+  std::vector<std::string> args{
+      "plan", kDemoJob, "-o", out.string(), "-q", "--set", "simulation.enabled=false"};
+  for (const std::string& o : scanplan::test::kLightDemo) {
+    args.push_back("--set");
+    args.push_back(o);
+  }
+  Result run = scanplan(args);
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  EXPECT_EQ(run.out, "");
+  EXPECT_EQ(run.err, "");
+  EXPECT_TRUE(fs::exists(out / "trajectory.csv"));
+
+  run = scanplan({"-q", "path", (dir_ / "nonexist.yaml").string(), "-o", out.string()});
+  EXPECT_EQ(run.exit_code, 4) << describe(run);
+  EXPECT_EQ(run.out, "");
+  EXPECT_TRUE(contains(run.err, "scanplan: error: ")) << run.err;
+
+  // What job show, fk, check print is their result: -q keeps it.
+  run = scanplan({"job", "show", kDemoJob, "--quiet"});
+  EXPECT_EQ(run.exit_code, 0) << describe(run);
+  EXPECT_TRUE(contains(run.out, "\ntable:\n")) << run.out;
+
+  run = scanplan({"fk", "--robot", kViper, "--joints", "0,0,0,0,0,0", "--json", "-v"});
+  EXPECT_EQ(run.exit_code, 0) << describe(run);
+  EXPECT_TRUE(contains(run.out, "position_mm")) << run.out;
+  EXPECT_TRUE(contains(run.err, "scanplan: debug: done in ")) << run.err;
+  run = scanplan({"-v", "job", "show", kDemoJob, "--set", "table.radius_mm=250"});
+  EXPECT_EQ(run.exit_code, 0) << describe(run);
+  EXPECT_TRUE(contains(run.err, "job demo (" + kDemoJob + "): robot Adept Viper s650") &&
+              contains(run.err, "--set table.radius_mm=250"))
+      << run.err;
+  EXPECT_FALSE(contains(run.out, "debug")) << run.out;
+}
+
+// A --set value is blamed on the override, not on a place in the job file.
+TEST_F(Cli, SetErrorsNameTheOverride) {
+  const Result run =
+      scanplan({"plan", kDemoJob, "-o", (dir_ / "out").string(), "--set", "table.radius_mm=abc"});
+  EXPECT_EQ(run.exit_code, 4) << describe(run);
+  EXPECT_TRUE(contains(run.err,
+                       "scanplan: error: --set table.radius_mm=abc: table.radius_mm: "
+                       "'abc' is not a number"))
+      << run.err;
+  EXPECT_FALSE(contains(run.err, "demo.yaml")) << run.err;
+}
+
+// A broken part mesh names the job as the user gave it, like every other job error.
+TEST_F(Cli, MeshErrorsNameTheJobAsGiven) {
+  const fs::path mesh = dir_ / "broken.stl";
+  writeFile(mesh, "solid broken\n  facet normal 0 0 1\n    outer loop\n      vertex 0 0\n");
+  const fs::path job = dir_ / "broken_mesh.yaml";
+  writeFile(job, demoJobText(mesh.string()));
+  const fs::path relative = fs::relative(job);
+  ASSERT_TRUE(relative.is_relative()) << relative;
+  const Result run = scanplan({"plan", relative.string(), "-o", (dir_ / "out").string()});
+  EXPECT_EQ(run.exit_code, 4) << describe(run);
+  EXPECT_TRUE(contains(run.err, "scanplan: error: " + relative.string() + ": part.mesh: "))
+      << run.err;
+  EXPECT_FALSE(contains(run.err, "error: " + job.string())) << run.err;
+}
+
 }  // namespace

@@ -169,6 +169,54 @@ TEST_F(CliPlan, UnreachableCellExitsThreeWithAReportThatSaysWhy) {
   EXPECT_TRUE(tmpFiles(out()).empty());
 }
 
+// Staging folders left in `dir`, if any.
+std::vector<fs::path> stagingFolders(const fs::path& dir) {
+  std::vector<fs::path> out;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    if (e.path().filename().string().starts_with(".scanplan-staging")) out.push_back(e.path());
+  }
+  return out;
+}
+
+TEST_F(CliPlan, ReplanningIntoTheSameFolderLeavesNothingOfTheEarlierPlan) {
+  ASSERT_EQ(plan({}).exit_code, 0);
+  ASSERT_TRUE(fs::exists(out() / "trajectory.csv"));
+  ASSERT_TRUE(fs::exists(out() / "programs"));
+  writeFile(out() / "notes.txt", "the user's own file");
+  // Same folder, nothing reachable: the earlier trajectory and programs must not survive beside
+  // the new report (a robot-side tool would pick them up as the plan).
+  const Result run = plan({"--set", "table.axis.xyz_mm=[3000, 0, 0]"});
+  EXPECT_EQ(run.exit_code, 3) << describe(run);
+  EXPECT_EQ(report()["status"].as<std::string>(), "no_path");
+  for (const char* stale : {"trajectory.csv", "programs", "cloud.ply", "coverage.ply", "cloud.png",
+                            "configmap_path.png", "configmap_path.svg"}) {
+    EXPECT_FALSE(fs::exists(out() / stale)) << stale;
+  }
+  EXPECT_TRUE(fs::exists(out() / "configmap.npy"));  // this run's maps
+  EXPECT_EQ(readFile(out() / "notes.txt"), "the user's own file");
+  EXPECT_TRUE(stagingFolders(out()).empty());
+}
+
+TEST_F(CliPlan, ALateErrorLeavesTheEarlierOutputsAsTheyWere) {
+  ASSERT_EQ(plan({}).exit_code, 0);
+  const std::string job = readFile(out() / "job.yaml");
+  const std::string trajectory = readFile(out() / "trajectory.csv");
+  // Bad input found only when the map is sized, after the job was read and checked.
+  const Result run = plan({"--set", "map.memory_limit_mb=1"});
+  EXPECT_EQ(run.exit_code, 4) << describe(run);
+  EXPECT_TRUE(contains(run.err, "memory_limit_mb")) << run.err;
+  EXPECT_EQ(readFile(out() / "job.yaml"), job);
+  EXPECT_EQ(readFile(out() / "trajectory.csv"), trajectory);
+  EXPECT_TRUE(stagingFolders(out()).empty());
+  EXPECT_TRUE(tmpFiles(out()).empty());
+}
+
+TEST_F(CliPlan, ALateErrorIntoANewFolderLeavesNoFolder) {
+  const Result run = plan({"--set", "map.memory_limit_mb=1"});
+  EXPECT_EQ(run.exit_code, 4) << describe(run);
+  EXPECT_FALSE(fs::exists(out())) << "a failed run left " << out();
+}
+
 TEST_F(CliPlan, SetOverridesAreValidatedLikeTheFile) {
   struct Case {
     std::vector<std::string> args;

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -34,6 +35,7 @@
 #include "planner/constraints.h"
 #include "scanner/path_generators.h"
 #include "scanner/raycaster.h"
+#include "tests/image_support.h"
 #include "tests/test_support.h"
 
 extern char** environ;
@@ -759,9 +761,32 @@ TEST_F(MapJob, MapCommandWritesLayersJsonAndImages) {
   EXPECT_NE(json.find("configmap_limit.npy"), std::string::npos);
   EXPECT_NE(json.find("unreachable"), std::string::npos);
 
+  // configmap.png is the map raster stretched into whole blocks (a cell per block) and framed
+  // with axes and legend; the SVG's viewport says where the raster sits in the PNG.
   const cli::RgbImage png = cli::decodePng(readText(out / "configmap.png"));
-  EXPECT_EQ(png.width, 10);   // one pixel per time sample
-  EXPECT_EQ(png.height, 36);  // one row per angle
+  const std::string svg = readText(out / "configmap.svg");
+  const auto [crop_x, crop_y, crop_w, crop_h] = test::svgCrop(svg);
+  ASSERT_GE(crop_x, 0);
+  ASSERT_GE(crop_y, 0);
+  ASSERT_LE(crop_x + crop_w, png.width);
+  ASSERT_LE(crop_y + crop_h, png.height);
+  ASSERT_EQ(crop_w % 10, 0) << crop_w;  // 10 time samples, whole blocks
+  ASSERT_EQ(crop_h % 36, 0) << crop_h;  // 36 table angles
+  EXPECT_GE(crop_w, 1000) << "stretched to a readable width";
+  const int bw = crop_w / 10, bh = crop_h / 36;
+  int wrong = 0;
+  for (int a = 0; a < 36; ++a) {
+    for (int t = 0; t < 10; ++t) {
+      // Angle grows upwards; every pixel of the cell's block has the cell's grey.
+      const cli::Rgb want =
+          cli::grey(map.f[map.index(0, static_cast<std::size_t>(a), static_cast<std::size_t>(t))]);
+      for (const auto& [dx, dy] : {std::pair{0, 0}, {bw - 1, bh - 1}, {bw / 2, bh / 2}}) {
+        const cli::Rgb got = png.at(crop_x + t * bw + dx, crop_y + (35 - a) * bh + dy);
+        if (got.r != want.r || got.g != want.g || got.b != want.b) ++wrong;
+      }
+    }
+  }
+  EXPECT_EQ(wrong, 0) << "pixels of the map raster that are not their cell's grey";
   EXPECT_GT(cli::decodePng(readText(out / "configmap_cylinder.png")).width, 0);
   EXPECT_GT(cli::decodePng(readText(out / "configmap_why.png")).width, 0);
   const std::string why = readText(out / "configmap_why.svg");

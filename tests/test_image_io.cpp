@@ -1,11 +1,19 @@
 #include "cli/image_io.h"
 
+#include "cli/commands.h"
+#include "cli/job.h"
 #include "kinematics/error.h"
+#include "kinematics/units.h"
+#include "planner/config_map.h"
+#include "tests/image_support.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -381,6 +389,312 @@ TEST(Render, BadRequestsThrowAndEmptySceneIsBackground) {
   empty.height = 6;
   empty.background = {1, 2, 3};
   EXPECT_EQ(renderScene(empty).rgb, RgbImage::filled(8, 6, {1, 2, 3}).rgb);
+}
+
+// ---- axis ticks and ranges on degenerate data -------------------------------------------------
+
+// Ticks are few, finite, increasing and inside the range.
+void expectSaneTicks(double a, double b) {
+  SCOPED_TRACE(::testing::Message() << "[" << a << ", " << b << "]");
+  const Ticks ticks = niceTicks(a, b);
+  ASSERT_LE(ticks.values.size(), kMaxTicks);
+  const double lo = std::min(a, b), hi = std::max(a, b), slack = 1e-6 * (hi - lo);
+  for (std::size_t i = 0; i < ticks.values.size(); ++i) {
+    EXPECT_TRUE(std::isfinite(ticks.values[i]));
+    EXPECT_GE(ticks.values[i], lo - slack);
+    EXPECT_LE(ticks.values[i], hi + slack);
+    if (i) {
+      EXPECT_GT(ticks.values[i], ticks.values[i - 1]);
+    }
+    EXPECT_LT(tickLabel(ticks, ticks.values[i]).size(), 30u) << tickLabel(ticks, ticks.values[i]);
+  }
+}
+
+TEST(Ticks, ValuesThatDifferOnlyByRoundingHaveNoTicks) {
+  // Two planners' J, equal but for the last bits (a batch report died here with bad_alloc:
+  // steps of 1e-16 at 25.46 are below the spacing of doubles, the tick loop never ended).
+  const double a = 25.46247875282346, b = 25.462478752823472;
+  ASSERT_NE(a, b);
+  EXPECT_TRUE(flatRange(a, b));
+  EXPECT_TRUE(niceTicks(a, b).values.empty());
+  EXPECT_TRUE(niceTicks(b, a).values.empty());
+  // The same at other magnitudes, and just above the flat threshold ticks come back.
+  for (const double v : {1e-300, 1e-12, 1.0, 3.7e8, 1e15, 1e300}) {
+    EXPECT_TRUE(niceTicks(v, v * (1 + 1e-12)).values.empty()) << v;
+    EXPECT_TRUE(niceTicks(-v, -v * (1 + 1e-12)).values.empty()) << v;
+    expectSaneTicks(v, v * (1 + 1e-7));
+    EXPECT_FALSE(niceTicks(v, v * (1 + 1e-7)).values.empty()) << v;
+  }
+}
+
+TEST(Ticks, ZeroNonFiniteAndHugeRangesGiveFewOrNoTicks) {
+  const double inf = std::numeric_limits<double>::infinity();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double big = std::numeric_limits<double>::max();
+  for (const auto& [a, b] : std::vector<std::pair<double, double>>{
+           {0, 0}, {5, 5}, {nan, 1}, {1, nan}, {nan, nan}, {0, inf}, {-inf, inf}, {-big, big}}) {
+    EXPECT_TRUE(niceTicks(a, b).values.empty()) << a << " " << b;
+  }
+  for (const auto& [a, b] : std::vector<std::pair<double, double>>{{0, big},
+                                                                   {-big, 0},
+                                                                   {0, 1e-310},
+                                                                   {-1e-300, 1e-300},
+                                                                   {1e15, 1e15 + 1e7},
+                                                                   {0.0012, -0.0031},
+                                                                   {0, 109.4}}) {
+    expectSaneTicks(a, b);
+    EXPECT_GE(niceTicks(a, b).values.size(), 5u) << a << " " << b;
+  }
+  // Random ranges over the whole exponent range.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> mantissa(-10, 10), exponent(-300, 300), gap(-15, 2);
+  for (int i = 0; i < 20000; ++i) {
+    const double a = mantissa(rng) * std::pow(10.0, exponent(rng));
+    const double b = a + (std::abs(a) + 1e-300) * std::pow(10.0, gap(rng)) * mantissa(rng);
+    expectSaneTicks(a, b);
+    if (::testing::Test::HasFailure()) break;
+  }
+}
+
+TEST(Ticks, LabelsAreFixedForOrdinaryValuesAndShortForHugeOnes) {
+  const Ticks ticks = niceTicks(-1, 1);
+  EXPECT_EQ(tickLabel(ticks, -0.5), "-0.5");
+  const Ticks huge = niceTicks(0, 1e300);
+  ASSERT_FALSE(huge.values.empty());
+  EXPECT_EQ(tickLabel(huge, huge.values[1]), "2e+299");
+}
+
+TEST(AxisRange, FlatNonFiniteAndHugeDataGiveAFiniteRangeWithTicks) {
+  const double inf = std::numeric_limits<double>::infinity();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double big = std::numeric_limits<double>::max();
+  EXPECT_EQ(axisRange(0, 10), (std::pair{-0.8, 10.8}));
+  EXPECT_EQ(axisRange(10, 0), (std::pair{-0.8, 10.8}));
+  EXPECT_EQ(axisRange(3, 3), (std::pair{2.5, 3.5}));
+  EXPECT_EQ(axisRange(nan, nan), (std::pair{0.0, 1.0}));
+  EXPECT_EQ(axisRange(-inf, inf), (std::pair{0.0, 1.0}));
+  for (const auto& [a, b] :
+       std::vector<std::pair<double, double>>{{25.46247875282346, 25.462478752823472},
+                                              {0, 0},
+                                              {nan, 4},
+                                              {4, inf},
+                                              {-big, big},
+                                              {big, big},
+                                              {-big, -big},
+                                              {1e-300, 1e-300},
+                                              {1e300, 1e300 * (1 + 1e-15)}}) {
+    SCOPED_TRACE(::testing::Message() << a << " " << b);
+    const auto [lo, hi] = axisRange(a, b);
+    EXPECT_TRUE(std::isfinite(lo) && std::isfinite(hi));
+    EXPECT_TRUE(std::isfinite(hi - lo));
+    EXPECT_LT(lo, hi);
+    EXPECT_FALSE(flatRange(lo, hi));
+    expectSaneTicks(lo, hi);
+    EXPECT_FALSE(niceTicks(lo, hi).values.empty());
+    if (std::isfinite(a) && std::abs(a) < big / 4) {
+      EXPECT_LE(lo, a);
+      EXPECT_GE(hi, a);
+    }
+  }
+  // The rounding-equal J values: centred, padded by 10 % of the value.
+  const auto [lo, hi] = axisRange(25.46247875282346, 25.462478752823472);
+  EXPECT_NEAR(lo, 25.4624787528 - 2.54624787528, 1e-9);
+  EXPECT_NEAR(hi, 25.4624787528 + 2.54624787528, 1e-9);
+}
+
+TEST(DrawLine, NonFiniteAndFarEndsAreSafeAndClipped) {
+  const double inf = std::numeric_limits<double>::infinity();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  RgbImage image = RgbImage::filled(20, 10, kWhite);
+  const RgbImage blank = image;
+  drawLine(image, nan, 1, 5, 5, {0, 0, 0}, 2);
+  drawLine(image, 1, 1, inf, 5, {0, 0, 0}, 2);
+  drawLine(image, -1e300, -5, -1e300, 5, {0, 0, 0}, 2);  // far outside
+  EXPECT_EQ(image.rgb, blank.rgb);
+  // A horizontal line from far left to far right across row 4: every pixel of the row, quickly.
+  drawLine(image, -1e300, 4.5, 1e300, 4.5, {0, 0, 0}, 1);
+  for (int x = 0; x < 20; ++x) EXPECT_EQ(image.at(x, 4), (Rgb{0, 0, 0})) << x;
+  EXPECT_EQ(image.at(3, 3), kWhite);
+  // A diagonal through the image from far away: drawn where it crosses, nowhere else.
+  RgbImage a = RgbImage::filled(20, 10, kWhite);
+  drawLine(a, -1e6, -1e6, 1e6, 1e6, {1, 2, 3}, 1);
+  for (int x = 0; x < 10; ++x) EXPECT_EQ(a.at(x, x), (Rgb{1, 2, 3})) << x;
+  EXPECT_EQ(a.at(15, 2), kWhite);
+  EXPECT_EQ(a.at(2, 8), kWhite);
+}
+
+TEST(Svg, FlatAndNonFiniteRangesGiveFiniteCoordinatesAndTicks) {
+  for (const auto& [a, b] :
+       std::vector<std::pair<double, double>>{{25.46247875282346, 25.462478752823472},
+                                              {7, 7},
+                                              {std::numeric_limits<double>::quiet_NaN(), 1},
+                                              {0, std::numeric_limits<double>::infinity()}}) {
+    SvgFigure figure = mapFigure();
+    figure.x_min = figure.y_min = a;
+    figure.x_max = figure.y_max = b;
+    const std::string svg = svgFigure(figure);
+    EXPECT_EQ(svg.find("nan"), std::string::npos) << a << " " << b;
+    EXPECT_EQ(svg.find("inf"), std::string::npos) << a << " " << b;
+    EXPECT_GE(std::count(svg.begin(), svg.end(), '\n'), 10) << "ticks";
+  }
+}
+
+TEST(Svg, CropShowsOnlyTheDataAreaOfALabelledPng) {
+  SvgFigure figure = mapFigure();
+  figure.png_width = 1400;
+  figure.png_height = 700;
+  figure.crop_x = 90;
+  figure.crop_y = 40;
+  figure.crop_width = 1000;
+  figure.crop_height = 500;
+  const std::string svg = svgFigure(figure);
+  // Scaled by 0.72 to fit 720 × 480 from the crop's size, a viewport onto the crop.
+  EXPECT_NE(svg.find("width=\"720.0\" height=\"360.0\" viewBox=\"90 40 1000 500\""),
+            std::string::npos)
+      << svg;
+  EXPECT_NE(svg.find("width=\"1400\" height=\"700\""), std::string::npos) << svg;
+  EXPECT_NE(svg.find("href=\"maps/coverage.png\""), std::string::npos);
+}
+
+// ---- the configuration-map figures (map and plan commands) -----------------------------------
+
+// A synthetic 36-angle × 10-sample map with every f level, a NaN cell and every limit code.
+planner::ConfigMap syntheticMap() {
+  planner::ConfigMap map;
+  for (int a = 0; a < 36; ++a) map.angles.push_back(deg(10.0 * a));
+  for (int t = 0; t < 10; ++t) map.times.push_back(0.5 * t);
+  map.branches = {kinematics::IkBranch::fromIndex(0)};
+  for (int a = 0; a < 36; ++a) {
+    for (int t = 0; t < 10; ++t) {
+      map.f.push_back(static_cast<float>((7 * a + 3 * t) % 11) / 10.0f);
+      map.limit.push_back(static_cast<std::uint8_t>((a + t) % planner::kLimitCount));
+    }
+  }
+  map.f[map.index(0, 20, 4)] = std::numeric_limits<float>::quiet_NaN();
+  map.joint = map.singularity = map.clearance = map.f;
+  return map;
+}
+
+using test::Crop;
+using test::darkPixels;
+using test::svgCrop;
+
+bool hasPixel(const RgbImage& image, int x0, int y0, int x1, int y1, Rgb colour) {
+  for (int y = std::max(y0, 0); y < std::min(y1, image.height); ++y) {
+    for (int x = std::max(x0, 0); x < std::min(x1, image.width); ++x) {
+      if (image.at(x, y) == colour) return true;
+    }
+  }
+  return false;
+}
+
+TEST_F(ImageIoFiles, MapFiguresAreLabelledAndTheirRasterKeepsEveryCellsColour) {
+  const planner::ConfigMap map = syntheticMap();
+  writeMapOutputs(dir_, JobSpec{}, map);
+
+  // configmap.png: the 10 × 36 map enlarged to 1000 × 432 (100 × 12 px per cell: ~1000 px wide,
+  // 40 % as tall), framed with text; the SVG shows exactly that raster.
+  const RgbImage png = decodePng(readBytes(dir_ / "configmap.png"));
+  const std::string svg = readBytes(dir_ / "configmap.svg");
+  const Crop c = svgCrop(svg);
+  ASSERT_EQ(c.w, 1000);
+  ASSERT_EQ(c.h, 432);
+  EXPECT_GT(c.x, 40);
+  EXPECT_GT(c.y, 20);
+  EXPECT_GT(png.width, c.x + c.w + 100) << "a legend column";
+  EXPECT_LT(png.width, c.x + c.w + 400);
+  EXPECT_GT(png.height, c.y + c.h + 40) << "x ticks and axis title";
+  EXPECT_LT(png.height, c.y + c.h + 200);
+  EXPECT_NE(svg.find("href=\"configmap.png\""), std::string::npos);
+  EXPECT_NE(svg.find("width=\"" + std::to_string(png.width) + "\" height=\"" +
+                     std::to_string(png.height) + "\""),
+            std::string::npos);
+  // Every pixel of the raster is its cell's grey (time →, angle ↑; NaN dark red).
+  int wrong = 0;
+  for (int y = 0; y < c.h; ++y) {
+    for (int x = 0; x < c.w; ++x) {
+      const std::size_t cell =
+          map.index(0, static_cast<std::size_t>(35 - y / 12), static_cast<std::size_t>(x / 100));
+      wrong += png.at(c.x + x, c.y + y) == grey(map.f[cell]) ? 0 : 1;
+    }
+  }
+  EXPECT_EQ(wrong, 0);
+  EXPECT_EQ(png.at(c.x + 450, c.y + (35 - 20) * 12 + 6), kNanColour);
+  // Text in the margins: title above, tick values and axis title left and below, the colour
+  // bar's labels right; the frame is just outside the raster.
+  EXPECT_GT(darkPixels(png, 0, 0, png.width, c.y - 4), 200) << "title";
+  EXPECT_GT(darkPixels(png, 0, c.y, c.x - 8, c.y + c.h), 200) << "y values and title";
+  EXPECT_GT(darkPixels(png, 0, c.y + c.h + 8, png.width, png.height), 200) << "x values, title";
+  EXPECT_GT(darkPixels(png, c.x + c.w + 4, 0, png.width, png.height), 100) << "colour bar";
+  std::set<int> greys;  // the colour bar: every grey level from black to white
+  for (int y = 0; y < png.height; ++y) {
+    for (int x = c.x + c.w + 4; x < png.width; ++x) {
+      const Rgb p = png.at(x, y);
+      if (p.r == p.g && p.g == p.b) greys.insert(p.r);
+    }
+  }
+  EXPECT_GT(greys.size(), 150u) << "colour bar";
+  EXPECT_EQ(png.at(c.x - 1, c.y + 100), (Rgb{0, 0, 0}));
+  EXPECT_EQ(png.at(c.x + c.w, c.y + 100), (Rgb{0, 0, 0}));
+  // The SVG labels the axes with the map's values.
+  EXPECT_NE(svg.find(">time [s]<"), std::string::npos);
+  EXPECT_NE(svg.find(">350<"), std::string::npos) << "angle ticks up to 360 deg";
+
+  // configmap_why.png: the same frame, each cell the colour of its limit (darker = lower f),
+  // and a legend swatch per limit.
+  const RgbImage why = decodePng(readBytes(dir_ / "configmap_why.png"));
+  const Crop cw = svgCrop(readBytes(dir_ / "configmap_why.svg"));
+  ASSERT_EQ(cw.w, 1000);
+  ASSERT_EQ(cw.h, 432);
+  for (int a = 0; a < 36; ++a) {
+    for (int t = 0; t < 10; ++t) {
+      const std::size_t i = map.index(0, static_cast<std::size_t>(a), static_cast<std::size_t>(t));
+      const Rgb base = categoryColour(map.limit[i] + 1);
+      const double f = std::isnan(map.f[i]) ? 0.0 : map.f[i];
+      const double s = 0.45 + 0.55 * f;
+      const Rgb expected{static_cast<std::uint8_t>(base.r * s),
+                         static_cast<std::uint8_t>(base.g * s),
+                         static_cast<std::uint8_t>(base.b * s)};
+      EXPECT_EQ(why.at(cw.x + 100 * t + 50, cw.y + 12 * (35 - a) + 6), expected) << a << " " << t;
+    }
+  }
+  for (int k = 1; k <= planner::kLimitCount; ++k) {
+    EXPECT_TRUE(hasPixel(why, cw.x + cw.w + 4, 0, why.width, why.height, categoryColour(k)))
+        << "legend swatch " << k;
+  }
+  EXPECT_GT(darkPixels(why, cw.x + cw.w + 4, 0, why.width, why.height), 200) << "legend text";
+}
+
+TEST_F(ImageIoFiles, PathFigureHasALineLegendAndDegenerateMapsStillGiveFigures) {
+  const planner::ConfigMap map = syntheticMap();
+  RgbImage raster = RgbImage::filled(10, 36, {200, 200, 200});
+  writeFigure(dir_, "configmap_path", raster, map, "Table-angle path",
+              {{categoryColour(5), "ray J 27.39 s"}, {categoryColour(4), "dp J 25.49 s"}});
+  const RgbImage png = decodePng(readBytes(dir_ / "configmap_path.png"));
+  const Crop c = svgCrop(readBytes(dir_ / "configmap_path.svg"));
+  ASSERT_EQ(c.w, 1000);
+  EXPECT_TRUE(hasPixel(png, c.x + c.w + 4, 0, png.width, png.height, categoryColour(5)));
+  EXPECT_TRUE(hasPixel(png, c.x + c.w + 4, 0, png.width, png.height, categoryColour(4)));
+  EXPECT_NE(readBytes(dir_ / "configmap_path.svg").find(">dp J 25.49 s<"), std::string::npos);
+
+  // One sample and one angle (flat axes), and an all-NaN map: figures, no error.
+  planner::ConfigMap tiny;
+  tiny.angles = {0.0};
+  tiny.times = {3.0};
+  tiny.branches = {kinematics::IkBranch::fromIndex(0)};
+  tiny.f = {std::numeric_limits<float>::quiet_NaN()};
+  tiny.joint = tiny.singularity = tiny.clearance = tiny.f;
+  tiny.limit = {0};
+  ASSERT_NO_THROW(writeMapOutputs(dir_, JobSpec{}, tiny));
+  const RgbImage one = decodePng(readBytes(dir_ / "configmap.png"));
+  const Crop c1 = svgCrop(readBytes(dir_ / "configmap.svg"));
+  EXPECT_EQ(c1.w, 1000);
+  EXPECT_EQ(c1.h, 400);
+  EXPECT_EQ(one.at(c1.x + 500, c1.y + 200), kNanColour);
+  EXPECT_GT(darkPixels(one, 0, c1.y, c1.x - 8, c1.y + c1.h), 100) << "y ticks of a flat range";
+  const std::string svg = readBytes(dir_ / "configmap.svg");
+  EXPECT_EQ(svg.find("nan"), std::string::npos);
+  EXPECT_EQ(svg.find("inf"), std::string::npos);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "cli/job.h"
 
 #include "cli/robot_file.h"
+#include "cli/yaml_reader.h"
 #include "kinematics/error.h"
 #include "kinematics/mesh.h"
 
@@ -427,6 +428,86 @@ TEST_F(JobFile, EndPointsTogetherWithLengthOrPoseAreRejected) {
       loadFails(writeJob("", kRobot + linksWith("      - {type: capsule, radius_mm: 5, "
                                                 "from_mm: [0, 0, 0]}\n")),
                 {at("robot.yaml", "16:"), "links[1].shapes[0].to_mm: required field is missing"}));
+}
+
+// A misspelt required key is reported as the unknown key it is, at its position, with the
+// suggestion; a valid key that merely looks like the missing one is not blamed.
+TEST_F(JobFile, AMisspeltRequiredKeyIsReportedAsTheUnknownKey) {
+  EXPECT_TRUE(loadFails(
+      writeJob("scan:\n  paths:\n    - {type: ring, height_mm: 35}\n"
+               "    - {type: ring, hieght_mm: 70, tilt_deg: 35}\n"),
+      {at("job.yaml", "6:20: scan.paths[1].hieght_mm: unknown key (did you mean 'height_mm'?)"),
+       "expected one of:"}));
+  EXPECT_TRUE(loadFails(
+      writeJob("scan: {paths: [{type: ring, height: 70}]}\n"),
+      {at("job.yaml", "3:29: scan.paths[0].height: unknown key (did you mean 'height_mm'?)")}));
+  // No near miss: the missing key, as before.
+  EXPECT_TRUE(
+      loadFails(writeJob("scan: {paths: [{type: ring, colour: red}]}\n"),
+                {at("job.yaml", "3:"), "scan.paths[0].height_mm: required field is missing"}));
+  // `b` is one edit from `a`, but a valid key of a pair rule.
+  EXPECT_TRUE(loadFails(writeJob("constraints: {clearance: {pairs: [{b: part, exclude: true}]}}\n"),
+                        {at("job.yaml", "3:"),
+                         "constraints.clearance.pairs[0].a: required field is "
+                         "missing"}));
+  EXPECT_TRUE(loadFails(write("job.yaml", "robto: robot.yaml\npart: {mesh: part.stl}\n"),
+                        {at("job.yaml", "1:1: robto: unknown key (did you mean 'robot'?)")}));
+}
+
+TEST_F(JobFile, SuggestionsCoverAKeyWithoutItsUnitOrPluralEnding) {
+  EXPECT_TRUE(loadFails(
+      writeJob("scanner: {optics: {phi: 60}}\n"),
+      {at("job.yaml", "3:20: scanner.optics.phi: unknown key (did you mean 'phi_deg'?)")}));
+  EXPECT_TRUE(loadFails(writeJob("table: {max_speed: 20}\n"),
+                        {"table.max_speed: unknown key (did you mean 'max_speed_deg_s'?)"}));
+  EXPECT_EQ(suggestKey("repeat", {"jobs", "set", "vary", "cases", "repeats"}), "repeats");
+  EXPECT_EQ(suggestKey("radius", {"axis", "radius_mm", "height_mm"}), "radius_mm");
+  EXPECT_EQ(suggestKey("radius_m", {"axis", "radius_mm", "height_mm"}), "radius_mm");
+  EXPECT_EQ(suggestKey("colour", {"axis", "radius_mm", "height_mm"}), "");
+}
+
+// A bad value given with --set is blamed on the override, never on a made-up place in the file.
+TEST_F(JobFile, OverrideErrorsNameTheOverride) {
+  const fs::path job = writeJob("scan: {paths: [{type: raster}]}\n");
+  const auto fails = [&](const std::string& override, std::initializer_list<std::string> parts) {
+    return throwsInputError([&] { loadJob(job, {override}); }, parts);
+  };
+  EXPECT_TRUE(fails("table.radius_m=5", {"--set table.radius_m=5: table.radius_m: unknown key "
+                                         "(did you mean 'radius_mm'?)"}));
+  EXPECT_TRUE(fails("table.axis.xyz_mm=[600,0]",
+                    {"--set table.axis.xyz_mm=[600,0]: table.axis.xyz_mm: a list of 2",
+                     "expected a list of 3 numbers"}));
+  EXPECT_TRUE(fails("table.axis.xyz_mm=[600,x,0]",
+                    {"--set table.axis.xyz_mm=[600,x,0]: table.axis.xyz_mm[1]: 'x' is not a "
+                     "number"}));
+  EXPECT_TRUE(fails("table.radius_mm=abc",
+                    {"--set table.radius_mm=abc: table.radius_mm: 'abc' is not a number",
+                     "expected a finite number > 0"}));
+  EXPECT_TRUE(fails("planner.nope.x=1", {"--set planner.nope.x=1: planner.nope: unknown key"}));
+  EXPECT_TRUE(fails("scan.paths[0]={type: ring}",
+                    {"--set scan.paths[0]={type: ring}: scan.paths[0].height_mm: required field "
+                     "is missing"}));
+  for (const std::string o : {"table.radius_m=5", "table.axis.xyz_mm=[600,0]"}) {
+    try {
+      loadJob(job, {o});
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()).find("job.yaml"), std::string::npos) << e.what();
+    }
+  }
+  // Errors in the file itself keep their place, overrides or not.
+  EXPECT_TRUE(throwsInputError(
+      [&] { loadJob(writeJob("table: {radius_mm: -5}\n"), {"table.height_mm=100"}); },
+      {at("job.yaml", "3:20: table.radius_mm: -5")}));
+}
+
+// The job path in messages and in JobSpec::source is the one the caller gave.
+TEST_F(JobFile, SourceIsThePathAsGiven) {
+  const fs::path job = writeJob("");
+  const fs::path relative = fs::relative(job);
+  ASSERT_TRUE(relative.is_relative());
+  EXPECT_EQ(loadJob(relative).source, relative);
+  EXPECT_NE(jobToYaml(loadJob(relative)).find(job.string()), std::string::npos)
+      << "job show names the resolved file";
 }
 
 }  // namespace

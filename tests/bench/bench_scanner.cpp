@@ -2,13 +2,19 @@
 // shared Stanford bunny (69 451 triangles; a generated bumpy sphere of similar size when the
 // shared data is absent) on the demo cell's table, Embree vs the brute-force loop in one run,
 // plus the 2-thread speed-up and a check that both back ends give the same points.
-// Usage (from the repository root): build/tests/bench/bench_scanner [PROFILES] [RAYS] [embree]
-// ("embree": skip the brute-force runs, e.g. under a profiler)
+// Usage (from the repository root):
+//   build/tests/bench/bench_scanner [PROFILES] [RAYS] [embree|single|hash]
+// "embree": skip the brute-force runs; "single": only the one-thread runs (for a profiler or
+// callgrind); "hash": no timing, a hash of every point field and counter per camera rule, with
+// and without noise, on the scene as it is and with two obstacles added, each checked equal on
+// one thread (a change that must not alter results leaves them all the same).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <numbers>
 #include <optional>
@@ -22,6 +28,7 @@
 #include "cli/job.h"
 #include "kinematics/mesh.h"
 #include "kinematics/pose.h"
+#include "kinematics/shape.h"
 #include "kinematics/units.h"
 #include "scanner/laser_model.h"
 #include "scanner/raycaster.h"
@@ -154,12 +161,51 @@ bool sameCloud(const scanner::SimulatedCloud& a, const scanner::SimulatedCloud& 
   return true;
 }
 
+// FNV-1a over the bytes of every point field and every counter: equal hashes, equal clouds to
+// the last bit.
+class Fnv1a {
+ public:
+  template <typename T>
+  void add(const T& value) {
+    unsigned char bytes[sizeof(T)];
+    std::memcpy(bytes, &value, sizeof(T));
+    for (const unsigned char b : bytes) hash_ = (hash_ ^ b) * 0x100000001B3ull;
+  }
+  std::uint64_t value() const { return hash_; }
+
+ private:
+  std::uint64_t hash_ = 0xCBF29CE484222325ull;
+};
+
+std::uint64_t cloudHash(const scanner::SimulatedCloud& cloud) {
+  Fnv1a h;
+  for (const scanner::CloudPoint& p : cloud.points) {
+    h.add(p.p_P.x());
+    h.add(p.p_P.y());
+    h.add(p.p_P.z());
+    h.add(p.t);
+    h.add(p.profile);
+    h.add(p.ray);
+    h.add(p.range);
+    h.add(p.incidence);
+    h.add(p.part_triangle);
+  }
+  const scanner::SimulationStats& s = cloud.stats;
+  for (const std::size_t c : {s.profiles, s.laser_rays, s.occlusion_rays, s.hits, s.outside_window,
+                              s.occluded, s.points}) {
+    h.add(c);
+  }
+  return h.value();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   const int profiles = argc > 1 ? std::max(10, std::atoi(argv[1])) : 3000;
   const int rays = argc > 2 ? std::max(1, std::atoi(argv[2])) : 200;
-  const bool with_brute_force = !(argc > 3 && std::string(argv[3]) == "embree");
+  const std::string mode = argc > 3 ? argv[3] : "";
+  const bool single = mode == "single";
+  const bool with_brute_force = mode.empty();
 
   const cli::JobSpec job = cli::loadJob("data/jobs/demo.yaml");
   kinematics::CellModel cell = cli::buildCell(job);
@@ -211,9 +257,54 @@ int main(int argc, char** argv) {
   std::printf("scene build: Embree %.1f ms, brute force %.1f ms\n", 1e3 * build_embree,
               1e3 * build_brute);
 
+  if (mode == "hash") {
+    // The scene as it is (only the table group in reach), then with a post beside the part on
+    // the robot's side, where the scanner looks from (world group), and a block on the table (a
+    // third mesh in the table group), so that rays meet several groups and meshes.
+    kinematics::CellModel cluttered = cell;
+    kinematics::Shape post;
+    post.geometry = kinematics::Box{Eigen::Vector3d(0.015, 0.015, 0.2)};
+    Eigen::Vector3d to_robot = cell.table.X_WA.inverse() * cell.X_WB.translation();  // A frame
+    to_robot.z() = 0.0;
+    post.X_BG = cell.table.X_WA;
+    post.X_BG.translation() += cell.table.X_WA.linear() *
+                               (0.085 * to_robot.normalized() + Eigen::Vector3d(0.02, 0.0, 0.1));
+    cluttered.obstacles.push_back({"post", kinematics::Carrier::kWorld, {post}});
+    kinematics::Shape block;
+    block.geometry = kinematics::Box{Eigen::Vector3d(0.04, 0.04, 0.04)};
+    block.X_BG.translation() << -0.07, -0.06, 0.02;
+    cluttered.obstacles.push_back({"block", kinematics::Carrier::kTable, {block}});
+    const scanner::ScanSimulator cluttered_sim(cluttered, part);
+    for (const scanner::ScanSimulator* sim : {&embree, &cluttered_sim}) {
+      for (const scanner::CameraRule rule :
+           {scanner::CameraRule::kPositive, scanner::CameraRule::kNegative,
+            scanner::CameraRule::kBoth, scanner::CameraRule::kEither}) {
+        for (const double sigma : {0.0, 5e-5}) {
+          scanner::SimulationSettings settings;
+          settings.rays_per_profile = rays;
+          settings.cameras = rule;
+          settings.sigma_longitudinal = sigma;
+          settings.sigma_orthogonal = 0.5 * sigma;
+          const scanner::SimulatedCloud cloud = sim->simulate(frames, optics, settings);
+          scanner::SimulatedCloud serial;
+          tbb::task_arena(1).execute([&] { serial = sim->simulate(frames, optics, settings); });
+          std::printf("hash %s rule %d sigma %g: %zu points (%zu not on the part), %016llx%s\n",
+                      sim == &embree ? "plain" : "cluttered", static_cast<int>(rule), sigma,
+                      cloud.points.size(),
+                      static_cast<std::size_t>(std::count_if(
+                          cloud.points.begin(), cloud.points.end(),
+                          [](const scanner::CloudPoint& q) { return q.part_triangle < 0; })),
+                      static_cast<unsigned long long>(cloudHash(cloud)),
+                      cloudHash(serial) == cloudHash(cloud) ? "" : " (1 thread: DIFFERENT)");
+        }
+      }
+    }
+    return 0;
+  }
+
   // Reference, same machine state: the bare Embree single-ray cast (scanner::Raycaster, one
   // rtcIntersect1 per ray) of the same fans against the part alone, one thread.
-  {
+  if (!single) {
     const scanner::Raycaster raycaster(part);
     const auto angles = scanner::fanAngles(scanner::laserWindow(optics), rays);
     std::size_t count = 0, hits = 0;
@@ -267,7 +358,7 @@ int main(int argc, char** argv) {
     settings.cameras = rule;
     const char* name = rule == scanner::CameraRule::kPositive ? "one camera" : "both cameras";
     const Timing one = timed(embree, frames, optics, settings, 1, 3);
-    const Timing two = timed(embree, frames, optics, settings, 2, 3);
+    const Timing two = single ? Timing{} : timed(embree, frames, optics, settings, 2, 3);
     const auto& s = one.cloud.stats;
     std::printf(
         "\n[%s] %zu fan rays + %zu camera rays; %zu hits, %zu outside the window, %zu occluded, "
@@ -279,8 +370,10 @@ int main(int argc, char** argv) {
         one.seconds, one.cpu_seconds, one.raysPerSecond() / 1e6, one.raysPerCpuSecond() / 1e6,
         static_cast<double>(frames.size()) / one.seconds / 1e3,
         std::max(one.raysPerSecond(), one.raysPerCpuSecond()) >= 1e7 ? "met" : "MISSED");
-    std::printf("Embree, 2 threads: %.3f s = %.2f M rays/s (%.2fx)\n", two.seconds,
-                two.raysPerSecond() / 1e6, one.seconds / two.seconds);
+    if (!single) {
+      std::printf("Embree, 2 threads: %.3f s = %.2f M rays/s (%.2fx)\n", two.seconds,
+                  two.raysPerSecond() / 1e6, one.seconds / two.seconds);
+    }
 
     if (!with_brute_force) continue;
     // Brute force on a few profiles spread over the run, compared with Embree on the same.
