@@ -21,6 +21,10 @@ std::vector<double> mmVector(const Eigen::Vector3d& p) {
 }  // namespace
 
 ExitCode runCheck(const CheckOptions& options) {
+  if (!std::isfinite(options.table_deg)) {
+    throw InputError(
+        fmt::format("--table: {}: expected a finite table angle in degrees", options.table_deg));
+  }
   const JobSpec job = loadJob(options.job_file);
   const collision::Scene scene(buildCell(job), clearanceConfig(job));
   const auto& robot = scene.cell().robot;

@@ -3,7 +3,9 @@
 #include <fnmatch.h>
 
 #include <algorithm>
+#include <cmath>
 #include <set>
+#include <stdexcept>
 
 #include "collision/fcl_geometry.h"
 #include "kinematics/error.h"
@@ -41,7 +43,15 @@ bool pairByDefault(const BodyInfo& a, const BodyInfo& b) {
   const int ga = rigidGroup(a), gb = rigidGroup(b);
   if (ga == gb) return false;
   const bool a_arm = a.link >= 1, b_arm = b.link >= 1;  // the base (link 0) stays put
-  if (!a_arm && !b_arm) return false;  // neither moves with the arm: the robot cannot change it
+  if (!a_arm && !b_arm) {
+    // Neither moves with the arm. What the table carries (the part, table-carried fixtures)
+    // turns past what stands in the world (the robot base, world obstacles): such a pair
+    // depends on θ alone. The table itself turns about its own axis, into no new space.
+    const auto carried = [](const BodyInfo& body) {
+      return body.motion == BodyMotion::kTable && body.name != "table";
+    };
+    return (carried(a) && gb == -1) || (carried(b) && ga == -1);
+  }
   if (a.link >= 0 && b.link >= 0 && std::abs(a.link - b.link) <= 1) return false;  // consecutive
   return true;
 }
@@ -161,6 +171,11 @@ int Scene::bodyIndex(const std::string& name) const {
 void Scene::bodyPoses(double theta,
                       const kinematics::JointVector& q,
                       std::vector<Eigen::Isometry3d>& X_W) const {
+  // Always on (a few comparisons per pose): a NaN or infinite pose would reach FCL, whose GJK
+  // asserts abort the process; callers validate their input, this keeps a slip from crashing.
+  if (!std::isfinite(theta) || !q.allFinite()) {
+    throw std::invalid_argument("collision::Scene: non-finite table angle or joint value");
+  }
   X_W.resize(bodies_.size());
   const auto frames = cell_.robot.linkFrames(q);
   const Eigen::Isometry3d X_WR = cell_.table.X_WR(theta);

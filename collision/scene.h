@@ -75,7 +75,8 @@ class Scene {
   /// Index of a body by name, -1 when absent.
   int bodyIndex(const std::string& name) const;
 
-  /// World pose of every body frame for table angle θ (rad) and arm joints q (rad).
+  /// World pose of every body frame for table angle θ (rad) and arm joints q (rad). A
+  /// non-finite θ or q throws std::invalid_argument (so does every query built on this).
   void bodyPoses(double theta,
                  const kinematics::JointVector& q,
                  std::vector<Eigen::Isometry3d>& X_W) const;

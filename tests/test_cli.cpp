@@ -13,7 +13,10 @@
 #include <string>
 #include <vector>
 
+#include "cli/commands.h"
+#include "cli/job.h"
 #include "cli_support.h"
+#include "kinematics/units.h"
 #include "test_support.h"
 
 namespace {
@@ -418,10 +421,42 @@ TEST_F(Cli, CheckReportsASelfCollisionAsAForbiddenPose) {
   EXPECT_TRUE(contains(run.out, "CONTACT")) << run.out;
 }
 
+// --time picks the scan-path sample at that time and solves it: the joints it reports put the
+// flange where the chain of DESIGN.md §2 says the scan pose needs it at that table angle.
+TEST_F(Cli, CheckAtATimeSolvesTheScanPathSample) {
+  const Result run = scanplan({"check", kDemoJob, "--table", "40", "--time", "5", "--json"});
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  const std::vector<double> joints = array(run.out, "joints_deg");
+  ASSERT_EQ(joints.size(), 6u) << run.out;
+  using namespace scanplan;
+  const cli::JobSpec job = cli::loadJob(kDemoJob);
+  const kinematics::CellModel cell = cli::buildCell(job);
+  const kinematics::ScanPath path = cli::generateScanPath(job, cell).path;
+  const auto k = static_cast<std::size_t>(std::llround(5.0 / path.dt));
+  ASSERT_LT(k, path.samples.size());
+  const Eigen::Isometry3d X_BF_wanted = cell.flangeTarget(deg(40.0), path.samples[k].X_PS);
+  kinematics::JointVector q;
+  for (int i = 0; i < 6; ++i) q(i) = deg(joints[static_cast<std::size_t>(i)]);
+  const Eigen::Isometry3d X_BF = cell.robot.fk(q);
+  // The JSON prints the joints to 17 digits: the flange agrees to far below a micrometre.
+  EXPECT_LT((X_BF.translation() - X_BF_wanted.translation()).norm(), 1e-9);
+  EXPECT_LT((X_BF.linear() - X_BF_wanted.linear()).norm(), 1e-9);
+  // A time outside the scan path is bad input.
+  const Result late = scanplan({"check", kDemoJob, "--table", "40", "--time", "1e6"});
+  EXPECT_EQ(late.exit_code, 4) << describe(late);
+  EXPECT_TRUE(contains(late.err, "--time")) << late.err;
+}
+
 TEST_F(Cli, CheckRejectsBadJointsAndBadPairRules) {
   const Result joints = scanplan({"check", kDemoJob, "--table", "0", "--joints", "0,0,0"});
   EXPECT_EQ(joints.exit_code, 4) << describe(joints);
   EXPECT_TRUE(contains(joints.err, "--joints")) << joints.err;
+  // A NaN table angle once reached FCL and aborted the process.
+  for (const char* table : {"nan", "inf", "-inf"}) {
+    const Result bad = scanplan({"check", kDemoJob, "--table", table, "--joints", "0,0,0,0,0,0"});
+    EXPECT_EQ(bad.exit_code, 4) << table << ": " << describe(bad);
+    EXPECT_TRUE(contains(bad.err, "--table")) << bad.err;
+  }
   const fs::path job = dir_ / "rule.yaml";
   writeFile(job, "robot: " + (kSourceDir / "data/robots/viper_s650.yaml").string() +
                      "\npart: {mesh: " + (kSourceDir / "data/parts/demo_housing.stl").string() +

@@ -1,7 +1,9 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
+#include <stdexcept>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -27,6 +29,8 @@ using kinematics::JointVector;
 constexpr double kGjkTol = 2e-6;
 // On curved support functions (cylinders) libccd's GJK converges more loosely: ~1e-5 m seen.
 constexpr double kGjkCurvedTol = 2e-5;
+// Spheres are zero-length capsules (fcl_geometry.cpp): looser again, 3.3e-5 m seen at 58 mm.
+constexpr double kGjkSphereTol = 5e-5;
 // Its witness points converge more loosely still: up to ~0.3 mm off a cylinder's surface seen,
 // while the distance itself is within kGjkCurvedTol.
 constexpr double kWitnessTol = 5e-4;
@@ -105,21 +109,58 @@ TEST_P(AnalyticPrimitives, SphereSphere) {
               0.25, kGjkTol);
 }
 
-TEST_P(AnalyticPrimitives, BoxBoxAcrossAFaceAnEdgeAndACorner) {
-  const auto box = primitive(kinematics::Box{Eigen::Vector3d(0.2, 0.2, 0.2)});
-  // Faces 0.05 apart along x: centres 0.25 apart minus two half-sides of 0.1.
-  EXPECT_NEAR(distance(box, at(0, 0, 0), box, at(0.25, 0.05, -0.03)), 0.05, kGjkTol);
-  // Edges: gaps 0.03 in x and 0.04 in y → 0.05.
-  EXPECT_NEAR(distance(box, at(0, 0, 0), box, at(0.23, 0.24, 0.0)), 0.05, kGjkTol);
-  // Corners: gaps 0.02, 0.03, 0.06 → 0.07.
-  EXPECT_NEAR(distance(box, at(0, 0, 0), box, at(0.22, 0.23, 0.26)), 0.07, kGjkTol);
+TEST_P(AnalyticPrimitives, BoxBoxAcrossEveryFaceEdgeAndCorner) {
+  // Box A (half-sides 0.10, 0.15, 0.20) at the origin; box B (0.05, 0.08, 0.06) beside it in
+  // each of the 26 directions s ∈ {−1, 0, 1}³ \ 0: 6 faces, 12 edges, 8 corners. Along an axis
+  // with s_i ≠ 0 the boxes are apart by gap g_i; along s_i = 0 they overlap (B's centre offset
+  // o_i lies within A's extent). Distance = √(Σ over s_i ≠ 0 of g_i²).
+  const Eigen::Vector3d ha(0.10, 0.15, 0.20), hb(0.05, 0.08, 0.06), g(0.03, 0.04, 0.012),
+      o(0.02, -0.05, 0.07);
+  const auto a = primitive(kinematics::Box{2 * ha});
+  const auto b = primitive(kinematics::Box{2 * hb});
+  int faces = 0, edges = 0, corners = 0;
+  for (int sx = -1; sx <= 1; ++sx) {
+    for (int sy = -1; sy <= 1; ++sy) {
+      for (int sz = -1; sz <= 1; ++sz) {
+        const Eigen::Vector3i s(sx, sy, sz);
+        const int apart = s.cwiseAbs().sum();
+        if (apart == 0) continue;
+        Eigen::Vector3d c, gaps = Eigen::Vector3d::Zero();
+        for (int i = 0; i < 3; ++i) {
+          c(i) = s(i) == 0 ? o(i) : s(i) * (ha(i) + hb(i) + g(i));
+          if (s(i) != 0) gaps(i) = g(i);
+        }
+        EXPECT_NEAR(distance(a, Eigen::Isometry3d::Identity(), b, at(c.x(), c.y(), c.z())),
+                    gaps.norm(), kGjkTol)
+            << "direction " << s.transpose();
+        (apart == 1 ? faces : apart == 2 ? edges : corners)++;
+      }
+    }
+  }
+  EXPECT_EQ(faces, 6);
+  EXPECT_EQ(edges, 12);
+  EXPECT_EQ(corners, 8);
 }
 
-TEST_P(AnalyticPrimitives, CylinderBesideABoxFace) {
-  // Cylinder axis along z, 0.2 from the box face at x = 0.1, radius 0.05 → 0.15.
-  EXPECT_NEAR(distance(primitive(kinematics::Cylinder{0.05, 0.3}), at(0.3, 0, 0),
-                       primitive(kinematics::Box{Eigen::Vector3d(0.2, 0.2, 0.2)}), at(0, 0, 0)),
-              0.15, kGjkCurvedTol);
+TEST_P(AnalyticPrimitives, CylinderAgainstABoxFaceEdgeAndCorner) {
+  // The box: half-sides 0.1 at the origin. The cylinder: axis along z, radius r, length 0.3.
+  const double r = 0.05, half_length = 0.15;
+  const auto box = primitive(kinematics::Box{Eigen::Vector3d(0.2, 0.2, 0.2)});
+  const auto cylinder = primitive(kinematics::Cylinder{r, 2 * half_length});
+  // Side against a face: axis 0.2 from the face at x = 0.1 → 0.2 − r = 0.15.
+  EXPECT_NEAR(distance(cylinder, at(0.3, 0, 0), box, at(0, 0, 0)), 0.15, kGjkCurvedTol);
+  // Cap against a face: the cap 0.04 above the top face, over it.
+  EXPECT_NEAR(distance(cylinder, at(0.02, -0.03, 0.1 + 0.04 + half_length), box, at(0, 0, 0)), 0.04,
+              kGjkCurvedTol);
+  // Cap rim against the top edge along y (x = z = 0.1): the axis r + 0.03 beyond the edge in
+  // x, the cap 0.04 above → nearest rim point (0.13, 0, 0.14): √(0.03² + 0.04²) = 0.05.
+  EXPECT_NEAR(distance(cylinder, at(0.1 + r + 0.03, 0, 0.1 + 0.04 + half_length), box, at(0, 0, 0)),
+              0.05, kGjkCurvedTol);
+  // Cap rim against the corner (0.1, 0.1, 0.1): the axis at horizontal distance ρ = 0.06·√2
+  // from the corner's vertical, the cap 0.02 above → √((ρ − r)² + 0.02²).
+  const double rho = 0.06 * std::sqrt(2.0);
+  EXPECT_NEAR(distance(cylinder, at(0.16, 0.16, 0.1 + 0.02 + half_length), box, at(0, 0, 0)),
+              std::hypot(rho - r, 0.02), kGjkCurvedTol);
 }
 
 TEST_P(AnalyticPrimitives, CapsuleEndAboveASphere) {
@@ -351,6 +392,23 @@ double pointToBody(const Scene& scene,
   return best;
 }
 
+// A non-finite pose must never reach FCL: libccd's GJK asserts on it and aborts the process
+// (seen with `check --table nan` before the CLI checked its input).
+TEST(Clearance, NonFinitePosesAreRefusedNotPassedToFcl) {
+  DemoCell demo;
+  ClearanceEvaluator evaluator(demo.scene);
+  const JointVector q = JointVector::Zero();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(evaluator.evaluate(nan, q), std::invalid_argument);
+  EXPECT_THROW(evaluator.factor(inf, q), std::invalid_argument);
+  JointVector bad = q;
+  bad(4) = nan;
+  EXPECT_THROW(evaluator.evaluate(0.0, bad), std::invalid_argument);
+  EXPECT_THROW(evaluator.factor(0.0, bad), std::invalid_argument);
+  EXPECT_NO_THROW(evaluator.evaluate(0.0, q));  // and the evaluator is still usable
+}
+
 TEST(Clearance, WitnessPointsLieOnTheirBodiesAndAreTheReportedDistanceApart) {
   DemoCell demo;
   ClearanceEvaluator evaluator(demo.scene);
@@ -431,6 +489,120 @@ TEST(Scene, CornerBoxesWithNegativeSizesAreNormalised) {
   fs::remove_all(dir);
 }
 
+// Distance from point p to an axis-aligned box centred at the origin with half-sides h.
+double pointBoxDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& h) {
+  return (p.cwiseAbs() - h).cwiseMax(0.0).norm();
+}
+
+// Obstacles: a sphere carried by the table and one standing in the world, placed by hand beside
+// the demo scanner housing for one pose; their distances to the housing follow point–box
+// geometry, the table's one turning with θ (X_WR = X_WA · Rz(θ), composed here), the world's
+// one not. A group rule sets the scanner ↔ obstacles thresholds.
+TEST(Clearance, ObstaclesOnTheTableTurnWithItAndWorldOnesStayPut) {
+  DemoCell demo;
+  kinematics::CellModel cell = demo.scene.cell();
+  ASSERT_TRUE(cell.table.eccentricity.isZero());  // X_WR is the plain rotation below
+  const double theta0 = 0.3;
+  JointVector q;
+  q << deg(-20), deg(-40), deg(120), deg(0), deg(40), deg(0);
+  // The housing: a 170 × 70 × 90 mm box at (50, 0, −25) mm in the laser frame S (demo.yaml).
+  const Eigen::Vector3d half(0.085, 0.035, 0.045), centre_S(0.05, 0.0, -0.025);
+  const Eigen::Isometry3d X_WS = cell.X_WB * cell.robot.fk(q) * cell.scanner.X_FS;
+  const auto X_WR = [&](double theta) {
+    return cell.table.X_WA * Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitZ());
+  };
+  // The jig (r 20 mm) 15 mm beyond the housing's +x face at θ0; the pillar (r 25 mm) 20 mm
+  // beyond its −y face.
+  const double r_jig = 0.020, r_pillar = 0.025;
+  const Eigen::Vector3d jig_W = X_WS * (centre_S + Eigen::Vector3d(half.x() + r_jig + 0.015, 0, 0));
+  const Eigen::Vector3d pillar_W =
+      X_WS * (centre_S + Eigen::Vector3d(0.01, -(half.y() + r_pillar + 0.020), 0.005));
+  const auto sphere = [](double r, const Eigen::Vector3d& at) {
+    kinematics::Shape shape;
+    shape.geometry = kinematics::Sphere{r};
+    shape.X_BG.translation() = at;
+    return shape;
+  };
+  cell.obstacles.push_back(
+      {"jig", kinematics::Carrier::kTable, {sphere(r_jig, X_WR(theta0).inverse() * jig_W)}});
+  cell.obstacles.push_back({"pillar", kinematics::Carrier::kWorld, {sphere(r_pillar, pillar_W)}});
+  ClearanceConfig config = cli::clearanceConfig(demo.job);
+  config.rules.push_back({"scanner", "obstacles", PairRule::Action::kSet, 0.002, 0.080, 1.0});
+  const Scene scene(cell, config);
+
+  const auto pairOf = [&](const std::string& a, const std::string& b) -> int {
+    for (std::size_t i = 0; i < scene.pairs().size(); ++i) {
+      const auto& p = scene.pairs()[i];
+      const auto& na = scene.bodies()[static_cast<std::size_t>(p.a)].name;
+      const auto& nb = scene.bodies()[static_cast<std::size_t>(p.b)].name;
+      if ((na == a && nb == b) || (na == b && nb == a)) return static_cast<int>(i);
+    }
+    return -1;
+  };
+  const int scanner_jig = pairOf("scanner", "jig"), scanner_pillar = pairOf("scanner", "pillar");
+  ASSERT_GE(scanner_jig, 0);
+  ASSERT_GE(scanner_pillar, 0);
+  for (const char* link : {"link1", "link3", "link6"}) {
+    EXPECT_GE(pairOf(link, "jig"), 0) << link;
+    EXPECT_GE(pairOf(link, "pillar"), 0) << link;
+  }
+  EXPECT_LT(pairOf("base", "pillar"), 0) << "both stand in the world";
+  EXPECT_LT(pairOf("table", "jig"), 0) << "both turn with the table";
+  EXPECT_LT(pairOf("part", "jig"), 0) << "both turn with the table";
+  EXPECT_GE(pairOf("part", "pillar"), 0) << "the part turns past the pillar";
+  EXPECT_GE(pairOf("jig", "pillar"), 0) << "the jig turns past the pillar";
+  EXPECT_GE(pairOf("part", "base"), 0) << "the part turns past the robot base";
+  EXPECT_LT(pairOf("table", "pillar"), 0) << "the table turns into no new space";
+  const auto& jig_t = scene.pairs()[static_cast<std::size_t>(scanner_jig)].thresholds;
+  EXPECT_DOUBLE_EQ(jig_t.d_low, 0.002);
+  EXPECT_DOUBLE_EQ(jig_t.d_high, 0.080);
+  EXPECT_DOUBLE_EQ(
+      scene.pairs()[static_cast<std::size_t>(pairOf("link3", "jig"))].thresholds.d_high, 0.030);
+
+  ClearanceEvaluator evaluator(scene);
+  int near = 0, beyond = 0, inside = 0;
+  std::vector<double> jig_distances;
+  for (int k = -12; k <= 12; ++k) {
+    const double theta = theta0 + 0.08 * k;
+    const ClearanceResult bounded = evaluator.evaluate(theta, q);
+    const ClearanceResult exact = evaluator.evaluate(theta, q, {.bounded = false});
+    const Eigen::Vector3d jig_now = X_WR(theta) * (X_WR(theta0).inverse() * jig_W);
+    const double want_jig = pointBoxDistance(X_WS.inverse() * jig_now - centre_S, half) - r_jig;
+    const double want_pillar =
+        pointBoxDistance(X_WS.inverse() * pillar_W - centre_S, half) - r_pillar;
+    EXPECT_NEAR(want_pillar, 0.020, 1e-12);
+    for (const auto& [pair, want] :
+         {std::pair{scanner_jig, want_jig}, std::pair{scanner_pillar, want_pillar}}) {
+      const PairClearance& b = bounded.pairs[static_cast<std::size_t>(pair)];
+      const PairClearance& e = exact.pairs[static_cast<std::size_t>(pair)];
+      if (want <= 0.0) {  // the jig turned into the housing
+        EXPECT_TRUE(b.penetrating && e.penetrating) << "θ " << theta;
+        EXPECT_EQ(b.distance, 0.0);
+        EXPECT_EQ(b.factor, 0.0);
+        EXPECT_TRUE(bounded.collision);
+        ++inside;
+        continue;
+      }
+      EXPECT_NEAR(e.distance, want, kGjkSphereTol) << "θ " << theta;
+      if (want < 0.080 - kGjkSphereTol) {
+        near += pair == scanner_jig ? 1 : 0;
+        EXPECT_FALSE(b.beyond_bound) << "θ " << theta;
+        EXPECT_NEAR(b.distance, e.distance, kSameTol) << "θ " << theta;
+        EXPECT_NEAR(b.factor, rampFactor(b.distance, 0.002, 0.080, 1.0), 1e-12) << "θ " << theta;
+      } else if (want > 0.080 + kGjkSphereTol) {
+        beyond += pair == scanner_jig ? 1 : 0;
+        EXPECT_TRUE(b.beyond_bound) << "θ " << theta;
+        EXPECT_EQ(b.factor, 1.0);
+      }
+    }
+    jig_distances.push_back(bounded.pairs[static_cast<std::size_t>(scanner_jig)].distance);
+  }
+  EXPECT_GT(near, 3);
+  EXPECT_GT(beyond, 0) << "the jig turns out of the scanner's d_high";
+  EXPECT_GT(inside, 0) << "and into the housing";
+  EXPECT_NEAR(jig_distances[12], 0.015, kGjkCurvedTol);  // θ0, as placed
+}
+
 TEST(Scene, SharedViperLinkMeshesAndTheBunnyKeepBoundedEqualToExact) {
   const fs::path data = test::sharedDataDir();
   if (!fs::exists(data / "robots/viper_s650/link0.stl") ||
@@ -458,12 +630,44 @@ TEST(Scene, SharedViperLinkMeshesAndTheBunnyKeepBoundedEqualToExact) {
   const Scene scene(cell, {});
   ClearanceEvaluator evaluator(scene);
   std::mt19937 rng(41);
+  std::vector<JointVector> poses;
+  std::vector<double> factors;
+  int near = 0;
   for (int k = 0; k < 40; ++k) {
     const JointVector q = test::randomJoints(cell.robot, rng);
     const auto bounded = evaluator.evaluate(0.2 * k, q);
     const auto exact = evaluator.evaluate(0.2 * k, q, {.bounded = false});
     ASSERT_TRUE(boundedMatchesExact(scene, bounded, exact)) << "pose " << k;
+    for (std::size_t i = 0; i < exact.pairs.size(); ++i) {
+      near += exact.pairs[i].distance < scene.pairs()[i].thresholds.d_high ? 1 : 0;
+    }
+    poses.push_back(q);
+    factors.push_back(bounded.factor);
   }
+  EXPECT_GT(near, 10) << "mesh pairs within d_high: the bound was exercised";
+
+  // The scanner folded back into link 1, as with the primitive links: a collision.
+  JointVector folded;
+  folded << 0, deg(-150), deg(250), 0, deg(90), 0;
+  const ClearanceResult fold = evaluator.evaluate(0.0, folded);
+  EXPECT_TRUE(fold.collision);
+  EXPECT_EQ(fold.factor, 0.0);
+  EXPECT_TRUE(
+      boundedMatchesExact(scene, fold, evaluator.evaluate(0.0, folded, {.bounded = false})));
+
+  // Threads sharing the mesh scene: each its own evaluator, the same factors.
+  std::vector<std::vector<double>> per_thread(3);
+  std::vector<std::thread> threads;
+  for (auto& out : per_thread) {
+    threads.emplace_back([&scene, &poses, &out] {
+      ClearanceEvaluator own(scene);
+      for (std::size_t k = 0; k < poses.size(); ++k) {
+        out.push_back(own.evaluate(0.2 * static_cast<double>(k), poses[k]).factor);
+      }
+    });
+  }
+  for (auto& t : threads) t.join();
+  for (const auto& out : per_thread) EXPECT_EQ(out, factors);
 }
 
 }  // namespace
