@@ -1,9 +1,11 @@
 #include "cli/job.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <numbers>
+#include <set>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -242,10 +244,26 @@ void describePlanner(A& a, PlannerSpec& s) {
 
 inline const std::vector<std::string> kCarriers = {"world", "table"};
 
+// Names of the cell's own bodies and of the pair rules' groups (collision/scene.h).
+inline const std::vector<std::string> kReservedBodyNames = {"base", "scanner", "table",
+                                                            "part", "robot",   "obstacles"};
+
 template <class A>
 void describeObstacle(A& a, ObstacleSpec& s) {
   a.require("name");
   a.field("name", s.name);
+  if constexpr (A::kReading) {
+    // Pair rules address bodies by name, glob and group: an obstacle must be addressable.
+    const bool link = s.name.size() > 4 && s.name.starts_with("link") &&
+                      s.name.find_first_not_of("0123456789", 4) == std::string::npos;
+    if (s.name.empty() || link || s.name.find_first_of("*?[]") != std::string::npos ||
+        std::find(kReservedBodyNames.begin(), kReservedBodyNames.end(), s.name) !=
+            kReservedBodyNames.end()) {
+      a.fail("name", s.name,
+             "a name of its own: not a body or group name (base, link1 … link6, scanner, table, "
+             "part, robot, obstacles) and no glob characters (* ? [ ])");
+    }
+  }
   a.field("carrier", s.carrier, Expect::oneOf(kCarriers));
   if constexpr (A::kReading) s.by_corner = a.has("corner_mm");
   if (!s.by_corner) {
@@ -366,6 +384,14 @@ void describeJob(A& a, JobSpec& s) {
   a.section("part", s.part);
   a.section("scanner", s.scanner);
   a.list("obstacles", s.obstacles, 0, 10000);
+  if constexpr (A::kReading) {
+    std::set<std::string> names;
+    for (const ObstacleSpec& o : s.obstacles) {
+      if (!names.insert(o.name).second) {
+        a.fail("obstacles", "two obstacles named '" + o.name + "'", "a unique name per obstacle");
+      }
+    }
+  }
   a.section("constraints", s.constraints);
   a.section("scan", s.scan);
   a.section("map", s.map);

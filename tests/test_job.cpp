@@ -370,6 +370,25 @@ TEST_F(JobFile, OutOfRangeValuesAreRejected) {
                          "capsule, mesh"}));
 }
 
+// Pair rules address bodies by name, glob and group: an obstacle named like a body, a group or
+// a glob could not be told apart, and two obstacles of one name neither.
+TEST_F(JobFile, ObstacleNamesMustBeTheirOwn) {
+  for (const std::string name : {"part", "table", "scanner", "base", "link3", "robot", "obstacles",
+                                 "post*", "fixture?", "[ab]"}) {
+    EXPECT_TRUE(
+        loadFails(writeJob("obstacles: [{name: '" + name + "', type: sphere, radius_mm: 20}]\n"),
+                  {at("job.yaml", "3:"), "obstacles[0].name: " + name, "a name of its own"}))
+        << name;
+  }
+  EXPECT_TRUE(loadFails(writeJob("obstacles: [{name: post, type: sphere, radius_mm: 20}, "
+                                 "{name: post, type: box, size_mm: [10, 10, 10]}]\n"),
+                        {at("job.yaml", "3:"), "two obstacles named 'post'"}));
+  // Names that only look alike are fine.
+  EXPECT_NO_THROW(cli::loadJob(writeJob(
+      "obstacles: [{name: link_plate, type: sphere, radius_mm: 20}, {name: parts_bin, type: "
+      "sphere, radius_mm: 20}, {name: link, type: sphere, radius_mm: 5}]\n")));
+}
+
 // Changing c2 (upper arm length) in the OPW block alone moves the OPW flange 30 mm away from
 // the DH flange; the check runs when the model is built.
 TEST_F(JobFile, RobotFilesWhoseOpwDisagreesWithDhOrWithFiveRowsAreRejected) {
