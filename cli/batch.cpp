@@ -63,7 +63,7 @@ std::uint64_t fnv1a(const std::string& text) {
 
 constexpr std::size_t kJ = 0, kCostF = 1, kCostOmega = 2, kCostAlpha = 3, kGap = 4, kMinF = 5,
                       kClearance = 6, kOmega = 7, kAlpha = 8, kCycle = 9, kCoverage = 10,
-                      kMapS = 11, kPlanS = 12, kValidationS = 13, kSimulationS = 14;
+                      kMapS = 11, kPlanS = 12, kDpS = 13, kValidationS = 14, kSimulationS = 15;
 
 // ---- the sweep file -------------------------------------------------------------------------
 
@@ -89,11 +89,11 @@ std::string numberText(double v) {
   return fmt::format("{}", v);
 }
 
-// A list of values, or a range {from, to, step}.
+// A list of values, or a range {from, to, step}; `field` names it in errors (vary.KEY, seeds).
 std::vector<std::string> valueList(const fs::path& file,
-                                   const std::string& key,
+                                   const std::string& field,
                                    const YAML::Node& node) {
-  const std::string at = fmt::format("{}: vary.{}", where(file, node), key);
+  const std::string at = fmt::format("{}: {}", where(file, node), field);
   std::vector<std::string> values;
   if (node.IsSequence()) {
     for (const YAML::Node& v : node) values.push_back(valueText(v));
@@ -175,9 +175,10 @@ std::string jsonLine(const BatchRow& row) {
     out += fmt::format("{}{}: {}", i ? ", " : "", jsonString(row.params[i].first),
                        jsonString(row.params[i].second));
   }
-  out +=
-      fmt::format("}}, \"repeat\": {}, \"method\": {}, \"status\": {}, \"reason\": {}", row.repeat,
-                  jsonString(row.method), jsonString(row.status), jsonString(row.reason));
+  out += fmt::format(
+      "}}, \"seed\": {}, \"repeat\": {}, \"method\": {}, \"status\": {}, \"reason\": {}",
+      row.seed ? std::to_string(*row.seed) : std::string("null"), row.repeat,
+      jsonString(row.method), jsonString(row.status), jsonString(row.reason));
   for (std::size_t m = 0; m < kBatchMetrics.size(); ++m) {
     out += fmt::format(", \"{}\": {}", kBatchMetrics[m], numberOrEmpty(row.metrics[m], "null"));
   }
@@ -195,7 +196,7 @@ std::string csvField(const std::string& s) {
 std::string csvHeader(const std::vector<std::string>& keys) {
   std::string out = "case_id,job";
   for (const std::string& k : keys) out += "," + csvField(k);
-  out += ",repeat,method,status,reason";
+  out += ",seed,repeat,method,status,reason";
   for (const char* m : kBatchMetrics) out += fmt::format(",{}", m);
   return out + ",map_reused\n";
 }
@@ -210,8 +211,8 @@ std::string paramValue(const BatchRow& row, const std::string& key) {
 std::string csvLine(const BatchRow& row, const std::vector<std::string>& keys) {
   std::string out = row.case_id + "," + csvField(row.job);
   for (const std::string& k : keys) out += "," + csvField(paramValue(row, k));
-  out += fmt::format(",{},{},{},{}", row.repeat, csvField(row.method), csvField(row.status),
-                     csvField(row.reason));
+  out += fmt::format(",{},{},{},{},{}", row.seed ? std::to_string(*row.seed) : std::string(),
+                     row.repeat, csvField(row.method), csvField(row.status), csvField(row.reason));
   for (const auto& v : row.metrics) out += "," + numberOrEmpty(v, "");
   return out + (row.map_reused ? ",true\n" : ",false\n");
 }
@@ -305,10 +306,12 @@ std::unique_ptr<MapBundle> buildBundle(const JobSpec& job) {
 }
 
 // The settings that change the map: the job without its planner, validation, simulation and
-// output sections (and its name). Cases with the same key share one map.
+// output sections, the scanner's measurement noise (simulation only; `seeds:` sets its seed) and
+// the name. Cases with the same key share one map.
 std::string mapKey(const JobSpec& job) {
   JobSpec copy = job;
   copy.name.clear();
+  copy.scanner.noise = NoiseSpec{};
   copy.planner = PlannerSpec{};
   copy.validation = ValidationSpec{};
   copy.simulation = SimulationSpec{};
@@ -322,6 +325,7 @@ BatchRow rowFor(const SweepCase& c) {
   row.case_id = c.id;
   row.job = c.job;
   row.params = c.params;
+  row.seed = c.seed;
   row.repeat = c.repeat;
   return row;
 }
@@ -347,8 +351,12 @@ void planCase(const JobSpec& job, const MapBundle& bundle, BatchRow& row) {
   };
   const auto t0 = Clock::now();
   const PlanningOutcome planning = planJob(map, job, job.planner.method, false, false, check);
-  m[kPlanS] = since(t0) - trajectory_s;
+  const double planning_s = since(t0) - trajectory_s;
   row.method = planning.chosen.method;
+  // planJob also ran the DP yardstick on the chosen branch (planner.dp_gap): its time is dp_s,
+  // not the planner's. With method dp the yardstick is the chosen result itself: nothing more ran.
+  if (planning.dp && row.method != "dp") m[kDpS] = planning.dp->seconds;
+  m[kPlanS] = planning_s - m[kDpS].value_or(0.0);
   if (planning.dp && planning.dp->status == Status::kSolved) {
     if (const auto gap = planning.dpGap()) m[kGap] = 100.0 * *gap;
   }
@@ -458,7 +466,10 @@ std::string summaryMarkdown(const std::vector<BatchRow>& rows,
   md += fmt::format("{} case(s):", rows.size());
   for (const auto& [s, n] : statuses) md += fmt::format(" {} {},", n, s);
   md.back() = '\n';
-  md += "\nMeans per setting (over seeds and repeats; J and its gap over planned cases only).\n\n";
+  md +=
+      "\nMeans per setting (over seeds and repeats; J and its gap over planned cases only). Plan "
+      "is the planner's own time, DP the DP yardstick's on top of it (none when the planner is "
+      "DP).\n\n";
   md += "| job |";
   std::vector<std::string> shown;
   for (const std::string& k : keys) {
@@ -466,10 +477,10 @@ std::string summaryMarkdown(const std::vector<BatchRow>& rows,
   }
   for (const std::string& k : shown) md += " " + k + " |";
   md +=
-      " cases | planned | J (s) | DP gap (%) | min f | cycle (s) | coverage | plan (s) | map (s) "
-      "|\n|---|";
+      " cases | planned | J (s) | DP gap (%) | min f | cycle (s) | coverage | plan (s) | DP (s) | "
+      "map (s) |\n|---|";
   for (std::size_t i = 0; i < shown.size(); ++i) md += "---|";
-  md += "---|---|---|---|---|---|---|---|---|\n";
+  md += "---|---|---|---|---|---|---|---|---|---|\n";
   std::vector<std::string> order;
   std::map<std::string, std::vector<const BatchRow*>> groups;
   for (const BatchRow& r : rows) {
@@ -479,7 +490,7 @@ std::string summaryMarkdown(const std::vector<BatchRow>& rows,
   }
   for (const std::string& s : order) {
     const auto& group = groups[s];
-    Mean j, gap, minf, cycle, coverage, plan, map;
+    Mean j, gap, minf, cycle, coverage, plan, dp, map;
     int planned = 0;
     for (const BatchRow* r : group) {
       planned += r->status == "planned" ? 1 : 0;
@@ -489,13 +500,14 @@ std::string summaryMarkdown(const std::vector<BatchRow>& rows,
       cycle.add(r->metrics[kCycle]);
       coverage.add(r->metrics[kCoverage]);
       plan.add(r->metrics[kPlanS]);
+      dp.add(r->metrics[kDpS]);
       map.add(r->metrics[kMapS]);
     }
     md += "| " + group.front()->job + " |";
     for (const std::string& k : shown) md += " " + paramValue(*group.front(), k) + " |";
-    md += fmt::format(" {} | {} | {} | {} | {} | {} | {} | {} | {} |\n", group.size(), planned,
+    md += fmt::format(" {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n", group.size(), planned,
                       j.text(), gap.text("{:.2f}"), minf.text(), cycle.text(), coverage.text(),
-                      plan.text("{:.3f}"), map.text("{:.2f}"));
+                      plan.text("{:.3f}"), dp.text("{:.3f}"), map.text("{:.2f}"));
   }
   const std::vector<const BatchRow*> failed = [&] {
     std::vector<const BatchRow*> out;
@@ -515,13 +527,6 @@ std::string summaryMarkdown(const std::vector<BatchRow>& rows,
     for (const std::string& f : figures) md += fmt::format("- [{0}](plots/{0}.svg)\n", f);
   }
   return md;
-}
-
-Rgb methodColour(const std::string& method) {
-  if (method == "dp") return categoryColour(4);
-  if (method == "ompl") return categoryColour(2);
-  if (method == "ray") return categoryColour(5);
-  return categoryColour(7);
 }
 
 std::string fileStem(const std::string& text) {
@@ -545,16 +550,36 @@ std::string metricLabel(std::size_t metric) {
   switch (metric) {
     case kJ:
       return "J, objective (s)";
+    case kCostF:
+      return "J's f term (s)";
+    case kCostOmega:
+      return "J's omega term (s)";
+    case kCostAlpha:
+      return "J's alpha term (s)";
     case kGap:
       return "DP gap (%)";
-    case kPlanS:
-      return "plan time (s)";
-    case kCoverage:
-      return "coverage (fraction of the part's area)";
     case kMinF:
       return "min f along the path";
+    case kClearance:
+      return "min clearance (mm)";
+    case kOmega:
+      return "max table speed (deg/s)";
+    case kAlpha:
+      return "max table acceleration (deg/s²)";
     case kCycle:
       return "cycle time (s)";
+    case kCoverage:
+      return "coverage (fraction of the part's area)";
+    case kMapS:
+      return "map time (s)";
+    case kPlanS:
+      return "plan time (s)";
+    case kDpS:
+      return "DP yardstick time (s)";
+    case kValidationS:
+      return "validation time (s)";
+    case kSimulationS:
+      return "simulation time (s)";
     default:
       return kBatchMetrics[metric];
   }
@@ -640,7 +665,7 @@ bool writePlot(const fs::path& dir,
   for (const double v : x_grid) drawLine(image, px(v), 0, px(v), kH, kGrid, 1);
   std::vector<std::pair<Rgb, std::string>> legend;  // the planners (the SVG's legend)
   for (std::size_t mi = 0; mi < methods.size(); ++mi) {
-    const Rgb colour = methodColour(methods[mi]);
+    const Rgb colour = batchPlannerColour(methods[mi]);
     const double offset =
         (static_cast<double>(mi) - 0.5 * static_cast<double>(methods.size() - 1)) * spread;
     std::vector<std::pair<double, double>> means;
@@ -775,10 +800,11 @@ std::string omplLogOfJob(const std::vector<const BatchRow*>& rows,
     if (any && numeric) seeds.emplace_back(k, integer ? "INTEGER" : "REAL");
   }
 
-  // Wall time spent: planning, validation and simulation of every case, and each map once.
+  // Wall time spent: planning (the DP yardstick too), validation and simulation of every case,
+  // and each map once.
   double total = 0.0;
   for (const BatchRow* r : rows) {
-    for (const std::size_t m : {kPlanS, kValidationS, kSimulationS}) {
+    for (const std::size_t m : {kPlanS, kDpS, kValidationS, kSimulationS}) {
       total += r->metrics[m].value_or(0.0);
     }
     if (!r->map_reused) total += r->metrics[kMapS].value_or(0.0);
@@ -807,11 +833,12 @@ std::string omplLogOfJob(const std::vector<const BatchRow*>& rows,
   log += fmt::format(
       "<<<|\nscanplan batch of {}: the table angle over time planned on the job's configuration "
       "maps.\nPlanners are the settings of the sweep (planner.method and the varied values); "
-      "their runs are the seeds and repeats.\nProperties: time = plan time (s), solved = "
-      "planned (a path found, executable and valid), outcome, best cost = the objective J (s) "
-      "and its terms (s), dp gap percent, min f, solution clearance (mm), max omega (deg/s), "
-      "max alpha (deg/s^2), cycle time (s), coverage (fraction of the part's area), map, "
-      "validation and simulation times (s). No time limit: 0 below.\n|>>>\n",
+      "their runs are the seeds and repeats.\nProperties: time = plan time (s, the planner's "
+      "own), solved = planned (a path found, executable and valid), outcome, best cost = the "
+      "objective J (s) and its terms (s), dp gap percent, dp time (s, the DP yardstick's, "
+      "none when the planner is DP), min f, solution clearance (mm), max omega (deg/s), max "
+      "alpha (deg/s^2), cycle time (s), coverage (fraction of the part's area), map, "
+      "validation and simulation times (s), repeat, the seed. No time limit: 0 below.\n|>>>\n",
       rows.front()->job);
   log += "0 is the random seed\n";
   log += "0 seconds per run\n";
@@ -825,7 +852,7 @@ std::string omplLogOfJob(const std::vector<const BatchRow*>& rows,
   log += "\n";
   log += fmt::format("{} planners\n", order.size());
 
-  enum class Kind { kMetric, kSolved, kOutcome, kReused, kRepeat, kSeed };
+  enum class Kind { kMetric, kSolved, kOutcome, kReused, kRepeat, kSweepSeed, kSeed };
   struct Property {
     Property(std::string n, Kind k, std::size_t m = 0, std::string seed_key = {})
         : name(std::move(n)), kind(k), metric(m), key(std::move(seed_key)) {}
@@ -843,6 +870,7 @@ std::string omplLogOfJob(const std::vector<const BatchRow*>& rows,
       {"cost omega REAL", Kind::kMetric, kCostOmega},
       {"cost alpha REAL", Kind::kMetric, kCostAlpha},
       {"dp gap percent REAL", Kind::kMetric, kGap},
+      {"dp time REAL", Kind::kMetric, kDpS},
       {"min f REAL", Kind::kMetric, kMinF},
       {"solution clearance REAL", Kind::kMetric, kClearance},
       {"max omega deg s REAL", Kind::kMetric, kOmega},
@@ -855,6 +883,9 @@ std::string omplLogOfJob(const std::vector<const BatchRow*>& rows,
       {"simulation time REAL", Kind::kMetric, kSimulationS},
       {"repeat INTEGER", Kind::kRepeat},
   };
+  if (std::any_of(rows.begin(), rows.end(), [](const BatchRow* r) { return r->seed; })) {
+    properties.emplace_back("seed INTEGER", Kind::kSweepSeed);
+  }
   for (const auto& [key, type] : seeds) {
     properties.emplace_back(columnName(key) + " " + type, Kind::kSeed, 0, key);
   }
@@ -874,6 +905,8 @@ std::string omplLogOfJob(const std::vector<const BatchRow*>& rows,
         return r.map_reused ? "1" : "0";
       case Kind::kRepeat:
         return std::to_string(r.repeat);
+      case Kind::kSweepSeed:
+        return r.seed ? std::to_string(*r.seed) : std::string();
       case Kind::kSeed:
         return paramValue(r, p.key);
     }
@@ -925,7 +958,8 @@ void writeReport(const fs::path& out, const std::vector<BatchRow>& rows) {
     std::vector<std::string> axes = keys;
     if (axes.empty()) axes.push_back("");
     for (const std::string& key : axes) {
-      for (const std::size_t metric : {kJ, kGap, kPlanS, kCoverage, kMinF, kCycle}) {
+      // Every metric; writePlot skips one that no case has (e.g. coverage without simulation).
+      for (std::size_t metric = 0; metric < kBatchMetrics.size(); ++metric) {
         const std::string stem =
             std::string(kBatchMetrics[metric]) + "_vs_" + (key.empty() ? "case" : fileStem(key));
         if (writePlot(plots, stem, rows, key, metric)) figures.push_back(stem);
@@ -985,6 +1019,13 @@ std::string tallyLine(const BatchStats& stats) {
 
 // ---- public -----------------------------------------------------------------------------------
 
+Rgb batchPlannerColour(const std::string& method) {
+  if (method == "dp") return categoryColour(4);    // blue, as in `plan`'s figures
+  if (method == "ompl") return categoryColour(2);  // bluish green
+  if (method == "ray") return categoryColour(5);   // vermillion
+  return categoryColour(7);
+}
+
 bool inShard(const std::string& id, int shard, int count) {
   return fnv1a(id) % static_cast<std::uint64_t>(count) == static_cast<std::uint64_t>(shard - 1);
 }
@@ -1002,9 +1043,10 @@ Sweep loadSweep(const fs::path& file) {
   if (!root.IsMap()) throw InputError(file.string() + ": expected a mapping (jobs, vary, …)");
   for (const auto& kv : root) {
     const auto key = kv.first.as<std::string>();
-    if (key != "jobs" && key != "set" && key != "vary" && key != "cases" && key != "repeats") {
+    if (key != "jobs" && key != "set" && key != "vary" && key != "cases" && key != "seeds" &&
+        key != "repeats") {
       throw InputError(
-          fmt::format("{}: {}: unknown key; expected one of: jobs, set, vary, cases, "
+          fmt::format("{}: {}: unknown key; expected one of: jobs, set, vary, cases, seeds, "
                       "repeats",
                       where(file, kv.first), key));
     }
@@ -1040,6 +1082,22 @@ Sweep loadSweep(const fs::path& file) {
     if (repeats < 1) {
       throw InputError(
           fmt::format("{}: repeats: '{}': expected an integer >= 1", where(file, n), valueText(n)));
+    }
+  }
+
+  // The seeds: every case runs once per seed, with the seed in each of the job's seed keys.
+  if (const YAML::Node n = root["seeds"]) {
+    for (const std::string& v : valueList(file, "seeds", n)) {
+      const std::optional<double> seed = numberOf(v);
+      if (!seed || *seed != std::round(*seed) || *seed < 0.0 || *seed > 2147483647.0) {
+        throw InputError(fmt::format("{}: seeds: '{}': expected an integer from 0 to 2147483647",
+                                     where(file, n), v));
+      }
+      const int value = static_cast<int>(*seed);
+      if (std::find(sweep.seeds.begin(), sweep.seeds.end(), value) != sweep.seeds.end()) {
+        throw InputError(fmt::format("{}: seeds: {} is listed twice", where(file, n), value));
+      }
+      sweep.seeds.push_back(value);
     }
   }
 
@@ -1086,6 +1144,33 @@ Sweep loadSweep(const fs::path& file) {
     }
   }
   if (settings.empty()) settings.emplace_back();
+  // A seed key set elsewhere too would be overridden by the seeds, case by case: refused.
+  if (!sweep.seeds.empty()) {
+    const auto seedKey = [](std::string key) {
+      key.erase(std::remove_if(key.begin(), key.end(),
+                               [](char c) { return std::isspace(static_cast<unsigned char>(c)); }),
+                key.end());
+      return std::any_of(kJobSeedKeys.begin(), kJobSeedKeys.end(),
+                         [&](const char* k) { return key == k; });
+    };
+    const auto refuse = [&](const std::string& what) {
+      throw InputError(fmt::format(
+          "{}: seeds and {} both set a seed: seeds sets every seed key of the job ({}, {}) "
+          "case by case; give the seeds in one place",
+          file.string(), what, kJobSeedKeys[0], kJobSeedKeys[1]));
+    };
+    for (const std::string& o : fixed) {
+      if (seedKey(o.substr(0, o.find('=')))) refuse(fmt::format("set ('{}')", o));
+    }
+    for (const std::string& k : sweep.keys) {
+      if (seedKey(k)) refuse(fmt::format("vary or cases ({})", k));
+    }
+  }
+  const auto seedOverrides = [](int seed) {
+    std::vector<std::string> out;
+    for (const char* k : kJobSeedKeys) out.push_back(fmt::format("{}={}", k, seed));
+    return out;
+  };
 
   // Every value on every job before anything runs: a bad key or value names itself here.
   const auto check = [&](const fs::path& job, const std::vector<std::string>& overrides,
@@ -1104,6 +1189,11 @@ Sweep loadSweep(const fs::path& file) {
           fmt::format("{}: jobs: '{}': no such file ({})", file.string(), j, p.string()));
     }
     check(p, fixed, "set");
+    for (const int seed : sweep.seeds) {
+      std::vector<std::string> o = fixed;
+      for (std::string& s : seedOverrides(seed)) o.push_back(std::move(s));
+      check(p, o, fmt::format("seeds: {}", seed));
+    }
     for (const auto& [key, values] : grid) {
       for (const std::string& v : values) {
         std::vector<std::string> o = fixed;
@@ -1114,21 +1204,29 @@ Sweep loadSweep(const fs::path& file) {
     job_files.push_back(std::move(p));
   }
 
+  std::vector<std::optional<int>> seeds(sweep.seeds.begin(), sweep.seeds.end());
+  if (seeds.empty()) seeds.emplace_back();  // the jobs' own seeds
   std::set<std::string> seen;
   for (std::size_t j = 0; j < jobs.size(); ++j) {
     for (const auto& s : settings) {
-      for (int r = 0; r < repeats; ++r) {
-        SweepCase c;
-        c.job = jobs[j];
-        c.job_file = job_files[j];
-        c.params = s;
-        c.repeat = r;
-        c.overrides = fixed;
-        for (const auto& [k, v] : s) c.overrides.push_back(k + "=" + v);
-        c.id = caseId(c.job, c.overrides, r);
-        if (!seen.insert(c.id).second) continue;  // an explicit case the grid already has
-        c.index = sweep.cases.size();
-        sweep.cases.push_back(std::move(c));
+      for (const std::optional<int>& seed : seeds) {
+        for (int r = 0; r < repeats; ++r) {
+          SweepCase c;
+          c.job = jobs[j];
+          c.job_file = job_files[j];
+          c.params = s;
+          c.seed = seed;
+          c.repeat = r;
+          c.overrides = fixed;
+          for (const auto& [k, v] : s) c.overrides.push_back(k + "=" + v);
+          if (seed) {
+            for (std::string& o : seedOverrides(*seed)) c.overrides.push_back(std::move(o));
+          }
+          c.id = caseId(c.job, c.overrides, r);
+          if (!seen.insert(c.id).second) continue;  // an explicit case the grid already has
+          c.index = sweep.cases.size();
+          sweep.cases.push_back(std::move(c));
+        }
       }
     }
   }
@@ -1160,6 +1258,7 @@ std::vector<BatchRow> readBatchRows(const fs::path& jsonl) {
       for (const auto& kv : n["params"]) {
         r.params.emplace_back(kv.first.as<std::string>(), kv.second.as<std::string>());
       }
+      if (const YAML::Node seed = n["seed"]; seed && !seed.IsNull()) r.seed = seed.as<int>();
       r.repeat = n["repeat"].as<int>();
       r.method = n["method"].as<std::string>();
       r.status = n["status"].as<std::string>();
@@ -1215,15 +1314,12 @@ BatchStats runBatchCases(const BatchOptions& options) {
 
   RowSink sink(out, sweep.keys);
   Progress progress("batch");
-  std::atomic<std::size_t> started{0}, finished{0}, failed{0}, maps{0};
+  std::atomic<std::size_t> finished{0}, failed{0}, maps{0};
   double map_seconds = 0.0;
   const auto finish = [&](const BatchRow& row) {
     sink.append(row);
     if (row.status == "error") ++failed;
     progress(++finished, todo.size());
-  };
-  const auto admit = [&] {
-    return options.max_cases == 0 || started.fetch_add(1) < options.max_cases;
   };
 
   tbb::task_arena arena(threads);
@@ -1242,7 +1338,6 @@ BatchStats runBatchCases(const BatchOptions& options) {
     std::map<std::string, std::vector<std::size_t>> groups;
     for (std::size_t i = 0; i < todo.size(); ++i) {
       if (!jobs[i]) {
-        if (!admit()) continue;
         BatchRow row = rowFor(*todo[i]);
         row.status = "error";
         row.reason = errors[i];
@@ -1255,7 +1350,6 @@ BatchStats runBatchCases(const BatchOptions& options) {
     }
     for (const std::string& key : keys) {
       const std::vector<std::size_t>& group = groups[key];
-      if (options.max_cases && started.load() >= options.max_cases) break;
       std::unique_ptr<MapBundle> bundle;
       std::string bundle_error;
       try {
@@ -1268,7 +1362,6 @@ BatchStats runBatchCases(const BatchOptions& options) {
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, group.size(), 1),
                         [&](const tbb::blocked_range<std::size_t>& r) {
                           for (std::size_t g = r.begin(); g != r.end(); ++g) {
-                            if (!admit()) return;
                             const std::size_t i = group[g];
                             BatchRow row = rowFor(*todo[i]);
                             row.method = jobs[i]->planner.method;

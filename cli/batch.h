@@ -12,24 +12,32 @@
 #include <vector>
 
 #include "cli/app.h"
+#include "cli/image_io.h"
 
 namespace scanplan::cli {
 
-/// One case of a sweep: a base job, its overrides and the repeat number.
+/// The keys of a job that seed a random generator: a sweep's `seeds:` sets all of them.
+inline constexpr std::array<const char*, 2> kJobSeedKeys = {"planner.ompl.seed",
+                                                            "scanner.noise.seed"};
+
+/// One case of a sweep: a base job, its overrides, the seed and the repeat number.
 struct SweepCase {
   std::size_t index = 0;  ///< position in the sweep's deterministic case order
   std::string id;         ///< stable hash of (job as written, sorted overrides, repeat), hex
   std::string job;        ///< the base job as the sweep file writes it
   std::filesystem::path job_file;                           ///< resolved against the sweep file
   std::vector<std::pair<std::string, std::string>> params;  ///< the varied values (key, value)
+  std::optional<int> seed;  ///< the sweep's `seeds:` value (in every kJobSeedKeys), if it has any
   int repeat = 0;
-  std::vector<std::string> overrides;  ///< `set` then the varied values, as for --set
+  /// `set`, the varied values, then the seed keys, as for --set.
+  std::vector<std::string> overrides;
 };
 
 /// A parsed and expanded sweep file.
 struct Sweep {
   std::filesystem::path file;
   std::vector<std::string> keys;  ///< the varied keys, in the file's order (one column each)
+  std::vector<int> seeds;         ///< `seeds:`, in the file's order (empty: the jobs' own)
   std::vector<SweepCase> cases;
 };
 
@@ -41,7 +49,10 @@ Sweep loadSweep(const std::filesystem::path& file);
 bool inShard(const std::string& id, int shard, int count);
 
 /// The numbers of a result row, in column order (kBatchMetrics).
-inline constexpr std::array<const char*, 15> kBatchMetrics = {"J_s",
+/// `plan_s` is the chosen planner's own time; `dp_s` that of the DP yardstick run on the chosen
+/// branch in addition (planner.dp_gap), empty when none ran: with method dp the planner is the
+/// yardstick, and its time is plan_s.
+inline constexpr std::array<const char*, 16> kBatchMetrics = {"J_s",
                                                               "cost_f_s",
                                                               "cost_omega_s",
                                                               "cost_alpha_s",
@@ -54,6 +65,7 @@ inline constexpr std::array<const char*, 15> kBatchMetrics = {"J_s",
                                                               "coverage",
                                                               "map_s",
                                                               "plan_s",
+                                                              "dp_s",
                                                               "validation_s",
                                                               "simulation_s"};
 /// Index of the first timing column: wall times vary run to run, everything before does not.
@@ -71,6 +83,7 @@ struct BatchRow {
   std::string case_id;
   std::string job;
   std::vector<std::pair<std::string, std::string>> params;
+  std::optional<int> seed;  ///< the sweep's seed (`seeds:`), if it has any
   int repeat = 0;
   std::string method;  ///< the planner that ran (the resolved planner.method)
   std::string status;  ///< planned | no_path | no_executable_path | invalid_trajectory | error
@@ -82,13 +95,12 @@ struct BatchRow {
 struct BatchOptions {
   std::filesystem::path sweep_file;
   std::filesystem::path out_dir;
-  int jobs = 0;               ///< threads in all (cases and the work inside them); 0: every core
-  std::string shard;          ///< "I/N" (1 ≤ I ≤ N) or empty for all cases
-  bool resume = false;        ///< skip the cases results.jsonl already has
-  std::size_t max_cases = 0;  ///< stop after this many cases (0: all); simulates an interruption
-  bool reuse_maps = true;     ///< false: every case computes its own map (benchmarks)
-  bool report = true;         ///< write summary.md, plots and the OMPL log at the end
-  bool print = true;          ///< print the summary lines on stdout
+  int jobs = 0;            ///< threads in all (cases and the work inside them); 0: every core
+  std::string shard;       ///< "I/N" (1 ≤ I ≤ N) or empty for all cases
+  bool resume = false;     ///< skip the cases results.jsonl already has
+  bool reuse_maps = true;  ///< false: every case computes its own map (benchmarks)
+  bool report = true;      ///< write summary.md, plots and the OMPL log at the end
+  bool print = true;       ///< print the summary lines on stdout
 };
 
 struct BatchStats {
@@ -120,5 +132,8 @@ ExitCode runBatchMerge(const std::vector<std::filesystem::path>& inputs,
 
 /// The rows of a results.jsonl (a torn last line from an interrupted run is skipped).
 std::vector<BatchRow> readBatchRows(const std::filesystem::path& jsonl);
+
+/// A planner's colour in the batch plots (its crosses and the line through its means).
+Rgb batchPlannerColour(const std::string& method);
 
 }  // namespace scanplan::cli

@@ -1,9 +1,13 @@
 #include "cli/format.h"
 
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
+#include <string_view>
 #include <system_error>
 
+#include <signal.h>
 #include <unistd.h>
 
 #include <fmt/format.h>
@@ -157,7 +161,19 @@ OutputStage::OutputStage(std::filesystem::path out_dir, std::vector<std::string>
   created_out_ = !std::filesystem::exists(out_, ec);
   prepareOutputDir(out_);
   stage_ = out_ / fmt::format(".scanplan-staging-{}", static_cast<long>(::getpid()));
-  std::filesystem::remove_all(stage_, ec);  // left by an earlier, killed run with our pid
+  // Staging folders of runs that were killed (their process is gone, or it was an earlier run
+  // with our pid): removed, so they do not pile up. A live run's folder is left alone.
+  constexpr std::string_view kPrefix = ".scanplan-staging-";
+  for (const auto& entry : std::filesystem::directory_iterator(out_, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (!name.starts_with(kPrefix)) continue;
+    char* end = nullptr;
+    const long pid = std::strtol(name.c_str() + kPrefix.size(), &end, 10);
+    const bool dead = pid <= 0 || *end != '\0' || pid == static_cast<long>(::getpid()) ||
+                      (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH);
+    std::error_code ignored;
+    if (dead) std::filesystem::remove_all(entry.path(), ignored);
+  }
   std::filesystem::create_directory(stage_, ec);
   if (ec) {
     throw InputError(

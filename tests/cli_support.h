@@ -49,15 +49,16 @@ class Cli : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
 
-  /// Runs scanplan with `args`, stdout and stderr captured through files in the scratch folder.
-  Result scanplan(const std::vector<std::string>& args) const {
+  /// Starts scanplan with `args` in the background, stdout and stderr going to the two files:
+  /// its process id, or -1 (a test failure) when it cannot start.
+  static pid_t spawnScanplan(const std::vector<std::string>& args,
+                             const fs::path& out_file,
+                             const fs::path& err_file) {
     std::vector<std::string> argv_text{SCANPLAN_BINARY};
     argv_text.insert(argv_text.end(), args.begin(), args.end());
     std::vector<char*> argv;
     for (auto& a : argv_text) argv.push_back(a.data());
     argv.push_back(nullptr);
-    const fs::path out_file = dir_ / "stdout.txt";
-    const fs::path err_file = dir_ / "stderr.txt";
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
     posix_spawn_file_actions_addopen(&actions, 1, out_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
@@ -67,11 +68,20 @@ class Cli : public ::testing::Test {
     pid_t pid = 0;
     const int spawned = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
     posix_spawn_file_actions_destroy(&actions);
-    Result run;
     if (spawned != 0) {
       ADD_FAILURE() << "cannot start " << argv[0] << ": error " << spawned;
-      return run;
+      return -1;
     }
+    return pid;
+  }
+
+  /// Runs scanplan with `args`, stdout and stderr captured through files in the scratch folder.
+  Result scanplan(const std::vector<std::string>& args) const {
+    const fs::path out_file = dir_ / "stdout.txt";
+    const fs::path err_file = dir_ / "stderr.txt";
+    Result run;
+    const pid_t pid = spawnScanplan(args, out_file, err_file);
+    if (pid < 0) return run;
     int status = 0;
     if (::waitpid(pid, &status, 0) == pid && WIFEXITED(status)) run.exit_code = WEXITSTATUS(status);
     run.out = readFile(out_file);

@@ -1,22 +1,35 @@
 // `scanplan batch` end to end on the lightened demo (test::kLightDemo, simulation off, each case
-// a fraction of a second): the issue's small sweep, resume after an interruption, shards merged,
-// failing cases as rows and the exit code they give, labelled PNG plots, the OMPL benchmark log
-// through OMPL's own script (when installed), and sweep errors before anything runs.
+// a fraction of a second): the issue's small sweep with seeds, the planner's and the DP
+// yardstick's times, resume after a batch killed mid-run, shards merged, failing cases as rows
+// and the exit code they give, labelled PNG plots read back, the OMPL benchmark log through
+// OMPL's own script (when installed), and sweep errors before anything runs.
 #include <gtest/gtest.h>
 
+#include <signal.h>
+
 #include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <map>
+#include <optional>
+#include <set>
 #include <sstream>
 #include <string>
+#include <thread>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include <fmt/format.h>
 
 #include "cli/batch.h"
 #include "cli/image_io.h"
+#include "cli/job.h"
 #include "cli_support.h"
+#include "image_support.h"
 #include "test_support.h"
 
 namespace {
@@ -26,33 +39,128 @@ using namespace scanplan::test;
 
 const fs::path kDemoJob = fs::path(SCANPLAN_SOURCE_DIR) / "data/jobs/demo.yaml";
 
-// The fixed settings of every case: the light demo, no simulation, and no refinement so that
-// the DP gap compares grid paths with the grid optimum (refinement can take a path below DP's
-// grid optimum, a negative gap).
-std::string sweepHeader() {
+// The fixed settings of every case: the light demo, no simulation, no refinement so that the DP
+// gap compares grid paths with the grid optimum (refinement can take a path below DP's grid
+// optimum, a negative gap), and an OMPL search of 2000 iterations (0.1 s a case here, where the
+// default 10000 takes 1.1 s): seeds 1, 2 and 3 all solve with 2000, one of the three with 1000.
+std::string sweepHeader(const std::vector<std::string>& set = {}) {
   std::string text = fmt::format("jobs: ['{}']\nset:\n", kDemoJob.string());
   for (const std::string& o : kLightDemo) text += "  - '" + o + "'\n";
-  text += "  - simulation.enabled=false\n  - planner.refine.enabled=false\n";
+  text +=
+      "  - simulation.enabled=false\n  - planner.refine.enabled=false\n"
+      "  - planner.ompl.max_iterations=2000\n";
+  for (const std::string& o : set) text += "  - '" + o + "'\n";
   return text;
 }
 
-// The issue's small sweep: 2 planners x 3 horizons x 2 seeds = 12 cases on one map.
-const std::string kSmallVary =
+// The issue's small sweep: 2 planners x 3 horizons x 2 seeds, each twice (repeats) = 24 cases
+// on one map. The horizon is ray's only: OMPL's runs at the three horizons are re-runs too.
+const std::string kSmallSweep =
+    "vary:\n"
+    "  planner.method: [ray, ompl]\n"
+    "  planner.ray.horizon: [10, 15, 30]\n"
+    "seeds: [1, 2]\n"
+    "repeats: 2\n";
+
+// 12 quick cases (ray and DP take no seed; the seeds make distinct cases all the same) for the
+// tests of resume and shards.
+const std::string kQuickSweep =
     "vary:\n"
     "  planner.method: [ray, dp]\n"
     "  planner.ray.horizon: [10, 15, 30]\n"
-    "  planner.ompl.seed: {from: 1, to: 2, step: 1}\n";
+    "seeds: {from: 1, to: 2}\n";
 
-// A row without its wall times and without map_reused (which case computes the map depends on
-// which cases a run has left to do): what must not change between runs.
-std::string stable(const cli::BatchRow& r) {
-  std::string text = fmt::format("{} #{} {} r{} {} {} [{}]", r.case_id, r.index, r.job, r.repeat,
-                                 r.method, r.status, r.reason);
-  for (const auto& [k, v] : r.params) text += " " + k + "=" + v;
+// What a case gave: its planner, outcome and every number but the wall times.
+std::string outcome(const cli::BatchRow& r) {
+  std::string text = fmt::format("{} {} [{}]", r.method, r.status, r.reason);
   for (std::size_t m = 0; m < cli::kFirstTimingMetric; ++m) {
     text += " " + (r.metrics[m] ? fmt::format("{}", *r.metrics[m]) : std::string("-"));
   }
   return text;
+}
+
+// A row without its wall times and without map_reused (which case computes the map depends on
+// which cases a run has left to do): what must not change between runs.
+std::string stable(const cli::BatchRow& r) {
+  std::string text =
+      fmt::format("{} #{} {} s{} r{} {}", r.case_id, r.index, r.job,
+                  r.seed ? std::to_string(*r.seed) : std::string("-"), r.repeat, outcome(r));
+  for (const auto& [k, v] : r.params) text += " " + k + "=" + v;
+  return text;
+}
+
+std::string param(const cli::BatchRow& r, const std::string& key) {
+  for (const auto& [k, v] : r.params) {
+    if (k == key) return v;
+  }
+  return {};
+}
+
+std::optional<double> metric(const cli::BatchRow& r, const char* name) {
+  const auto* it = std::find_if(cli::kBatchMetrics.begin(), cli::kBatchMetrics.end(),
+                                [&](const char* m) { return std::string(m) == name; });
+  EXPECT_NE(it, cli::kBatchMetrics.end()) << name;
+  if (it == cli::kBatchMetrics.end()) return std::nullopt;
+  return r.metrics[static_cast<std::size_t>(it - cli::kBatchMetrics.begin())];
+}
+
+// The bytes of base64 text (an SVG's embedded PNG).
+std::string unbase64(const std::string& text) {
+  static const std::string kDigits =
+      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  unsigned bits = 0;
+  int have = 0;
+  for (const char c : text) {
+    const std::size_t d = kDigits.find(c);
+    if (d == std::string::npos) break;  // '=' padding or the end of the URI
+    bits = (bits << 6) | static_cast<unsigned>(d);
+    have += 6;
+    if (have >= 8) {
+      have -= 8;
+      out += static_cast<char>((bits >> have) & 0xFF);
+    }
+  }
+  return out;
+}
+
+// The data raster a batch plot's SVG embeds (the bare plot area, 720 x 480).
+cli::RgbImage svgRaster(const std::string& svg) {
+  const std::string prefix = "data:image/png;base64,";
+  const std::size_t at = svg.find(prefix);
+  EXPECT_NE(at, std::string::npos) << svg.substr(0, 400);
+  if (at == std::string::npos) return {};
+  return cli::decodePng(unbase64(svg.substr(at + prefix.size())));
+}
+
+// Where `area` sits pixel for pixel in the labelled `figure`: just inside the black frame that
+// labelFigure draws around it (found as the first row with a black run as wide as the area).
+std::optional<std::pair<int, int>> findArea(const cli::RgbImage& figure,
+                                            const cli::RgbImage& area) {
+  constexpr cli::Rgb kBlack{0, 0, 0};
+  for (int y = 0; y < figure.height; ++y) {
+    int run = 0;
+    for (int x = 0; x < figure.width; ++x) {
+      run = figure.at(x, y) == kBlack ? run + 1 : 0;
+      if (run < area.width) continue;
+      const int x0 = x - run + 1, y0 = y;  // near the frame's top-left corner
+      for (int dy = 0; dy <= 2; ++dy) {
+        for (int dx = 0; dx <= 2; ++dx) {
+          const int ax = x0 + dx, ay = y0 + dy;
+          if (ax + area.width > figure.width || ay + area.height > figure.height) continue;
+          bool same = true;
+          for (int v = 0; v < area.height && same; ++v) {
+            for (int u = 0; u < area.width && same; ++u) {
+              same = figure.at(ax + u, ay + v) == area.at(u, v);
+            }
+          }
+          if (same) return std::pair{ax, ay};
+        }
+      }
+      return std::nullopt;
+    }
+  }
+  return std::nullopt;
 }
 
 std::vector<std::string> stableRows(const fs::path& out) {
@@ -65,24 +173,44 @@ std::vector<std::string> stableRows(const fs::path& out) {
 
 class Batch : public Cli {
  protected:
-  fs::path writeSweep(const std::string& body) const {
+  fs::path writeSweep(const std::string& body, const std::vector<std::string>& set = {}) const {
     const fs::path file = dir_ / "sweep.yaml";
-    writeFile(file, sweepHeader() + body);
+    writeFile(file, sweepHeader(set) + body);
     return file;
   }
+  static std::vector<std::string> args(const fs::path& sweep,
+                                       const fs::path& out,
+                                       const std::vector<std::string>& extra) {
+    std::vector<std::string> a{"batch", sweep.string(), "-o", out.string()};
+    a.insert(a.end(), extra.begin(), extra.end());
+    return a;
+  }
   Result batch(const fs::path& sweep, const fs::path& out, std::vector<std::string> extra = {}) {
-    std::vector<std::string> args{"batch", sweep.string(), "-o", out.string()};
-    args.insert(args.end(), extra.begin(), extra.end());
-    return scanplan(args);
+    return scanplan(args(sweep, out, extra));
+  }
+  // Starts a batch in the background (output to files in the scratch folder): its process id.
+  pid_t startBatch(const fs::path& sweep, const fs::path& out, std::vector<std::string> extra) {
+    return spawnScanplan(args(sweep, out, extra), dir_ / "killed_out.txt", dir_ / "killed_err.txt");
   }
 };
 
-TEST_F(Batch, SmallSweepGivesOneRowPerCaseWithTheDpGap) {
-  const fs::path sweep = writeSweep(kSmallVary);
+// The complete rows of a results.jsonl as it is being written (a row is complete with its '\n').
+std::size_t completeRows(const fs::path& jsonl) {
+  const std::string text = readFile(jsonl);
+  std::size_t n = 0;
+  for (std::size_t at = text.find("}\n"); at != std::string::npos; at = text.find("}\n", at + 1)) {
+    ++n;
+  }
+  return n;
+}
+
+TEST_F(Batch, SmallSweepGivesOneRowPerCaseSeedAndRepeatWithTheDpGap) {
+  const fs::path sweep = writeSweep(kSmallSweep);
   const fs::path out = dir_ / "out";
   const Result run = batch(sweep, out, {"--jobs", "2"});
   ASSERT_EQ(run.exit_code, 0) << describe(run);
-  EXPECT_TRUE(contains(run.out, "12 case(s): 12 run, 0 already done, 0 error(s); 1 map(s)"))
+  EXPECT_TRUE(contains(run.out, "24 case(s): 24 run, 0 already done, 0 error(s); 1 map(s)"))
+      << "one map whatever the seed (scanner.noise.seed is the simulation's)\n"
       << run.out;
   // The map's own time, then the whole run's: the map took part of it.
   double map_s = -1, all_s = -1;
@@ -97,106 +225,256 @@ TEST_F(Batch, SmallSweepGivesOneRowPerCaseWithTheDpGap) {
   // Every map's time is in the rows (map_s of the row that computed it).
   double rows_map_s = 0.0;
   for (const cli::BatchRow& r : cli::readBatchRows(out / "results.jsonl")) {
-    if (!r.map_reused) rows_map_s += r.metrics[cli::kFirstTimingMetric].value_or(0.0);
+    if (!r.map_reused) rows_map_s += metric(r, "map_s").value_or(0.0);
   }
   EXPECT_NEAR(map_s, rows_map_s, 0.051);
   EXPECT_TRUE(contains(run.out,
-                       "\ntally      12 case(s): 12 planned, 0 no_path, 0 no_executable_path, 0 "
+                       "\ntally      24 case(s): 24 planned, 0 no_path, 0 no_executable_path, 0 "
                        "invalid_trajectory, 0 error\n"))
       << run.out;
 
   const std::vector<cli::BatchRow> rows = cli::readBatchRows(out / "results.jsonl");
-  ASSERT_EQ(rows.size(), 12u);
+  ASSERT_EQ(rows.size(), 24u);
   int reused = 0;
+  // Each case's outcome by planner, horizon, seed and repeat.
+  std::map<std::tuple<std::string, std::string, int, int>, std::string> outcomes;
   for (const cli::BatchRow& r : rows) {
-    EXPECT_EQ(r.status, "planned") << stable(r);
-    EXPECT_EQ(r.method, r.params.at(0).second);
-    ASSERT_TRUE(r.metrics[4].has_value()) << "dp_gap_percent missing: " << stable(r);
-    // DP is the optimum of the grid problem the unrefined planners solve: the gap is >= 0 (and
-    // exactly 0 for DP itself, run on the same branch).
-    EXPECT_GE(*r.metrics[4], 0.0) << stable(r);
-    if (r.method == "dp") {
-      EXPECT_NEAR(*r.metrics[4], 0.0, 1e-9) << stable(r);
-    }
+    SCOPED_TRACE(stable(r));
+    EXPECT_EQ(r.status, "planned");
+    EXPECT_EQ(r.method, param(r, "planner.method"));
+    ASSERT_TRUE(r.seed.has_value());
+    // DP is the optimum of the grid problem the unrefined planners solve: the gap is >= 0.
+    ASSERT_TRUE(metric(r, "dp_gap_percent").has_value());
+    EXPECT_GE(*metric(r, "dp_gap_percent"), 0.0);
+    // The planner's time and, apart, the DP yardstick's (planner.dp_gap is on).
+    ASSERT_TRUE(metric(r, "plan_s").has_value());
+    EXPECT_GE(*metric(r, "plan_s"), 0.0);
+    ASSERT_TRUE(metric(r, "dp_s").has_value());
+    EXPECT_GT(*metric(r, "dp_s"), 0.0);
+    outcomes[{r.method, param(r, "planner.ray.horizon"), *r.seed, r.repeat}] = outcome(r);
     reused += r.map_reused ? 1 : 0;
   }
-  EXPECT_EQ(reused, 11) << "one map for all 12 cases";
-
-  // CSV: a header and one line per case, a column per varied key.
-  const std::string csv = readFile(out / "results.csv");
-  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 13);
-  EXPECT_TRUE(csv.starts_with(
-      "case_id,job,planner.method,planner.ray.horizon,planner.ompl.seed,repeat,method,status,"))
-      << csv.substr(0, 200);
-  for (const char* f :
-       {"summary.md", "ompl_benchmark.log", "plots/J_s_vs_planner_ray_horizon.png",
-        "plots/J_s_vs_planner_ray_horizon.svg", "plots/dp_gap_percent_vs_planner_method.png"}) {
-    EXPECT_TRUE(fs::exists(out / f)) << f;
-  }
-  EXPECT_TRUE(tmpFiles(out).empty());
-  // The PNG plots carry their text: a margin around the 720 x 480 data area with the title on
-  // top, the y-axis title on the left and the legend on the right, all in dark pixels.
-  const cli::RgbImage png = cli::decodePng(readFile(out / "plots/J_s_vs_planner_ray_horizon.png"));
-  ASSERT_GT(png.width, 720 + 100);
-  ASSERT_GT(png.height, 480 + 60);
-  const auto dark = [&](int x0, int y0, int x1, int y1) {
-    int n = 0;
-    for (int y = y0; y < y1; ++y) {
-      for (int x = x0; x < x1; ++x) {
-        const cli::Rgb c = png.at(x, y);
-        n += c.r < 100 && c.g < 100 && c.b < 100 ? 1 : 0;
+  EXPECT_EQ(reused, 23) << "one map for all 24 cases";
+  ASSERT_EQ(outcomes.size(), 24u) << "a case per planner, horizon, seed and repeat";
+  // Ray takes no seed: the same at both. OMPL: a seed gives the same path at every repeat and
+  // horizon (not OMPL's), and the two seeds give different paths.
+  const auto of = [&](const char* method, const char* horizon, int seed, int repeat) {
+    return outcomes[{method, horizon, seed, repeat}];
+  };
+  bool seeds_differ = false;
+  for (const char* h : {"10", "15", "30"}) {
+    for (const int repeat : {0, 1}) {
+      EXPECT_EQ(of("ray", h, 1, repeat), of("ray", h, 2, repeat)) << h;
+      for (const int seed : {1, 2}) {
+        EXPECT_EQ(of("ompl", h, seed, repeat), of("ompl", "10", seed, 0))
+            << "horizon " << h << ", seed " << seed << ", repeat " << repeat;
       }
     }
-    return n;
-  };
-  EXPECT_GT(dark(0, 0, png.width, 30), 100) << "title";
-  EXPECT_GT(dark(0, 60, 30, png.height - 60), 100) << "y-axis title";
-  EXPECT_GT(dark(0, png.height - 30, png.width, png.height), 100) << "x-axis title";
-  EXPECT_GT(dark(png.width - 80, 0, png.width, 200), 50) << "legend";
-  // The SVG embeds the bare data area and labels it with SVG text.
-  const std::string svg = readFile(out / "plots/J_s_vs_planner_ray_horizon.svg");
-  EXPECT_TRUE(contains(svg, "href=\"data:image/png;base64,iVBORw0KGgo")) << svg.substr(0, 400);
-  EXPECT_TRUE(contains(svg, ">J, objective (s) against planner.ray.horizon</text>"));
-  const std::string log = readFile(out / "ompl_benchmark.log");
-  EXPECT_TRUE(contains(log, "6 planners\n")) << log;  // 2 methods x 3 horizons, seeds are runs
-  EXPECT_TRUE(contains(log, "\n2 runs\n")) << log;
+    seeds_differ = seeds_differ || of("ompl", h, 1, 0) != of("ompl", h, 2, 0);
+  }
+  EXPECT_TRUE(seeds_differ) << of("ompl", "10", 1, 0) << "\n" << of("ompl", "10", 2, 0);
 
-  // `batch report` regenerates the summary from the results alone.
+  // CSV: a header and one line per case, a column per varied key, then the seed.
+  const std::string csv = readFile(out / "results.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 25);
+  EXPECT_TRUE(csv.starts_with(
+      "case_id,job,planner.method,planner.ray.horizon,seed,repeat,method,status,reason,J_s,"))
+      << csv.substr(0, 200);
+  EXPECT_TRUE(contains(csv, ",map_s,plan_s,dp_s,validation_s,simulation_s,map_reused\n"))
+      << csv.substr(0, 400);
+  EXPECT_TRUE(fs::exists(out / "summary.md"));
+  EXPECT_TRUE(fs::exists(out / "ompl_benchmark.log"));
+  EXPECT_TRUE(tmpFiles(out).empty());
+
+  // A plot of every metric that some case has, against each varied key; none of the others
+  // (coverage and simulation time: no simulation).
+  std::set<std::string> expected_plots, plots;
+  for (std::size_t m = 0; m < cli::kBatchMetrics.size(); ++m) {
+    const bool any = std::any_of(rows.begin(), rows.end(), [&](const cli::BatchRow& r) {
+      return r.metrics[m] && std::isfinite(*r.metrics[m]);
+    });
+    if (!any) continue;
+    for (const char* key : {"planner_method", "planner_ray_horizon"}) {
+      for (const char* ext : {".png", ".svg"}) {
+        expected_plots.insert(fmt::format("{}_vs_{}{}", cli::kBatchMetrics[m], key, ext));
+      }
+    }
+  }
+  EXPECT_EQ(expected_plots.size(), 14u * 2u * 2u) << "all but coverage and simulation_s";
+  for (const auto& e : fs::directory_iterator(out / "plots")) {
+    plots.insert(e.path().filename().string());
+  }
+  EXPECT_EQ(plots, expected_plots);
+  EXPECT_TRUE(expected_plots.count("dp_s_vs_planner_method.png"));
+
+  // The PNG plots carry their text: a margin around the 720 x 480 data area with the title on
+  // top, the y-axis title on the left and the legend on the right, all in dark pixels.
+  const std::string stem = "plots/J_s_vs_planner_ray_horizon";
+  const std::string png_bytes = readFile(out / (stem + ".png"));
+  const cli::RgbImage png = cli::decodePng(png_bytes);
+  ASSERT_GT(png.width, 720 + 100);
+  ASSERT_GT(png.height, 480 + 60);
+  EXPECT_GT(darkPixels(png, 0, 0, png.width, 30), 100) << "title";
+  EXPECT_GT(darkPixels(png, 0, 60, 30, png.height - 60), 100) << "y-axis title";
+  EXPECT_GT(darkPixels(png, 0, png.height - 30, png.width, png.height), 100) << "x-axis title";
+  EXPECT_GT(darkPixels(png, png.width - 80, 0, png.width, 200), 50) << "legend";
+  // The SVG embeds the bare data area and labels it with SVG text; the PNG holds the same
+  // pixels inside its frame.
+  const std::string svg = readFile(out / (stem + ".svg"));
+  EXPECT_TRUE(contains(svg, ">J, objective (s) against planner.ray.horizon</text>"));
+  const cli::RgbImage area = svgRaster(svg);
+  ASSERT_EQ(area.width, 720);
+  ASSERT_EQ(area.height, 480);
+  const std::optional<std::pair<int, int>> at = findArea(png, area);
+  ASSERT_TRUE(at.has_value()) << "the PNG's framed data area is the SVG's raster";
+
+  // Each case is a cross (x) in its planner's colour at its horizon and J, the planners side by
+  // side: positions as writePlot computes them (horizons 10 … 30 padded by axisRange; ray, the
+  // first planner in the rows, left of OMPL by 1.2 % of the axis).
+  const auto [x0, x1] = cli::axisRange(10.0, 30.0);
+  double j_lo = 1e300, j_hi = -1e300;
+  for (const cli::BatchRow& r : rows) {
+    j_lo = std::min(j_lo, *metric(r, "J_s"));
+    j_hi = std::max(j_hi, *metric(r, "J_s"));
+  }
+  const auto [y0, y1] = cli::axisRange(j_lo, j_hi);
+  const double spread = (x1 - x0) * 0.012;
+  for (const char* method : {"ray", "ompl"}) {
+    const cli::Rgb colour = cli::batchPlannerColour(method);
+    int n = 0;
+    for (int y = 0; y < area.height; ++y) {
+      for (int x = 0; x < area.width; ++x) n += area.at(x, y) == colour ? 1 : 0;
+    }
+    EXPECT_GT(n, 100) << method << ": its crosses and line in its colour";
+  }
+  ASSERT_NE(cli::batchPlannerColour("ray"), cli::batchPlannerColour("ompl"));
+  for (const cli::BatchRow& r : rows) {
+    SCOPED_TRACE(stable(r));
+    const double offset = (r.method == "ray" ? -0.5 : 0.5) * spread;
+    const double horizon = std::stod(param(r, "planner.ray.horizon"));
+    const double x = (horizon + offset - x0) / (x1 - x0) * area.width;
+    const double y = (1.0 - (*metric(r, "J_s") - y0) / (y1 - y0)) * area.height;
+    // The cross's four arms, 2 px out along the diagonals from its centre: a line through the
+    // point (another case's mean line) covers two of them at most.
+    int arms = 0;
+    for (const auto& [dx, dy] : {std::pair{-2, -2}, {2, -2}, {-2, 2}, {2, 2}}) {
+      arms += png.at(at->first + static_cast<int>(std::floor(x + dx)),
+                     at->second + static_cast<int>(std::floor(y + dy))) ==
+                      cli::batchPlannerColour(r.method)
+                  ? 1
+                  : 0;
+    }
+    EXPECT_GE(arms, 3) << "no cross at (" << x << ", " << y << ") of the data area";
+  }
+
+  const std::string log = readFile(out / "ompl_benchmark.log");
+  EXPECT_TRUE(contains(log, "\n6 planners\n")) << log;  // 2 methods x 3 horizons
+  EXPECT_TRUE(contains(log, "\n4 runs\n")) << log;      // 2 seeds x 2 repeats each
+  EXPECT_TRUE(contains(log, "\ndp time REAL\n")) << log;
+  EXPECT_TRUE(contains(log, "\nseed INTEGER\n")) << log;
+
+  // `batch report` regenerates the summary and the plots from the results alone.
   fs::remove(out / "summary.md");
+  fs::remove_all(out / "plots");
   const Result report = scanplan({"batch", "report", out.string()});
   ASSERT_EQ(report.exit_code, 0) << describe(report);
-  EXPECT_TRUE(contains(readFile(out / "summary.md"), "| ray | 30 | 2 | 2 |"))
-      << readFile(out / "summary.md");
+  const std::string summary = readFile(out / "summary.md");
+  EXPECT_TRUE(contains(summary, "| ray | 30 | 4 | 4 |")) << summary;  // seeds and repeats
+  EXPECT_TRUE(contains(summary, "| plan (s) | DP (s) |")) << summary;
+  plots.clear();
+  for (const auto& e : fs::directory_iterator(out / "plots")) {
+    plots.insert(e.path().filename().string());
+  }
+  EXPECT_EQ(plots, expected_plots);
+  EXPECT_EQ(readFile(out / (stem + ".png")), png_bytes) << "the same figure";
 }
 
-TEST_F(Batch, ResumedRunEqualsAnUninterruptedOne) {
-  const fs::path sweep = writeSweep(kSmallVary);
+// planJob also runs the DP yardstick (planner.dp_gap): plan_s is the planner's time without it,
+// dp_s the yardstick's. The yardstick is made slow here (a grid 8 times finer than the map's:
+// 0.2 s against ray's 0.03 s on an idle machine), so that a plan_s that still held it would be
+// larger than dp_s.
+TEST_F(Batch, PlanTimeIsThePlannersOwnAndDpTimeTheYardsticks) {
+  const fs::path sweep = writeSweep(
+      "cases:\n  - {planner.method: ray}\n  - {planner.method: ray, planner.dp_gap: false}\n"
+      "  - {planner.method: dp}\n",
+      {"planner.dp.angle_subdivisions=8"});
+  const fs::path out = dir_ / "out";
+  const Result run = batch(sweep, out, {"--jobs", "1"});
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  const std::vector<cli::BatchRow> rows = cli::readBatchRows(out / "results.jsonl");
+  ASSERT_EQ(rows.size(), 3u);
+  for (const cli::BatchRow& r : rows) {
+    ASSERT_EQ(r.status, "planned") << stable(r);
+    ASSERT_TRUE(metric(r, "plan_s").has_value()) << stable(r);
+    EXPECT_GT(*metric(r, "plan_s"), 0.0) << stable(r);
+  }
+  const cli::BatchRow& ray = rows[0];
+  ASSERT_TRUE(metric(ray, "dp_s").has_value());
+  EXPECT_LT(*metric(ray, "plan_s"), *metric(ray, "dp_s"))
+      << "plan_s holds ray only, not the DP yardstick";
+  EXPECT_TRUE(metric(ray, "dp_gap_percent").has_value());
+  // No yardstick without the gap; and with method dp the planner is the yardstick: its time is
+  // plan_s, and dp_s is empty (nothing ran on top of it).
+  EXPECT_FALSE(metric(rows[1], "dp_s").has_value()) << stable(rows[1]);
+  EXPECT_FALSE(metric(rows[1], "dp_gap_percent").has_value()) << stable(rows[1]);
+  EXPECT_FALSE(metric(rows[2], "dp_s").has_value()) << stable(rows[2]);
+}
+
+// A real interruption: the batch killed (SIGKILL) between cases, then --resume runs the rest,
+// and the results are those of a run never interrupted.
+TEST_F(Batch, KilledBatchResumesToTheUninterruptedResult) {
+  const fs::path sweep = writeSweep(kQuickSweep);
   const fs::path full = dir_ / "full";
   const Result whole = batch(sweep, full);
   ASSERT_EQ(whole.exit_code, 0) << describe(whole);
+  const std::size_t cases = cli::readBatchRows(full / "results.jsonl").size();
+  ASSERT_EQ(cases, 12u);
 
-  // Interrupted in process after 5 cases, then resumed from the command line.
+  // One case at a time, killed as soon as two rows are written (a case takes ~0.1 s here, so
+  // ten are still to run; the batch has to be mid-run, checked below).
   const fs::path part = dir_ / "part";
-  cli::BatchOptions options;
-  options.sweep_file = sweep;
-  options.out_dir = part;
-  options.max_cases = 5;
-  options.print = false;
-  const cli::BatchStats first = cli::runBatchCases(options);
-  EXPECT_EQ(first.ran, 5u);
-  EXPECT_EQ(first.maps, 1u);
-  EXPECT_GT(first.map_seconds, 0.0);
-  EXPECT_LE(first.map_seconds, first.seconds);
-  EXPECT_EQ(cli::readBatchRows(part / "results.jsonl").size(), 5u);
+  const pid_t pid = startBatch(sweep, part, {"--jobs", "1"});
+  ASSERT_GT(pid, 0);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  int status = 0;
+  bool ended = false, late = false;
+  while (completeRows(part / "results.jsonl") < 2) {
+    if (::waitpid(pid, &status, WNOHANG) == pid) {
+      ended = true;
+      break;
+    }
+    if (std::chrono::steady_clock::now() > deadline) {
+      late = true;
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  if (!ended) {
+    ::kill(pid, SIGKILL);
+    ::waitpid(pid, &status, 0);
+  }
+  ASSERT_FALSE(late) << "no 2 rows after 60 s\n" << readFile(dir_ / "killed_err.txt");
+  ASSERT_FALSE(ended) << "the batch ended before it was killed: exit "
+                      << (WIFEXITED(status) ? WEXITSTATUS(status) : -1) << "\n"
+                      << readFile(dir_ / "killed_out.txt") << readFile(dir_ / "killed_err.txt");
+  ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL);
+  const std::size_t done = cli::readBatchRows(part / "results.jsonl").size();
+  ASSERT_GE(done, 2u);
+  ASSERT_LT(done, cases) << "the kill came after the last case: make the sweep bigger";
+  EXPECT_TRUE(readFile(dir_ / "killed_out.txt").empty()) << "killed before its summary lines";
+  EXPECT_FALSE(fs::exists(part / "summary.md")) << "killed before its report";
+
   // A rerun without --resume refuses to mix two batches.
   const Result refused = batch(sweep, part);
   EXPECT_EQ(refused.exit_code, 4) << describe(refused);
   EXPECT_TRUE(contains(refused.err, "--resume")) << refused.err;
-  // A torn last line, as a kill mid-write leaves it.
+  // A torn last line, as a kill in the middle of a write leaves it.
   std::ofstream(part / "results.jsonl", std::ios::app) << "{\"case_id\": \"0123";
   const Result resumed = batch(sweep, part, {"--resume"});
   ASSERT_EQ(resumed.exit_code, 0) << describe(resumed);
-  EXPECT_TRUE(contains(resumed.out, "12 case(s): 7 run, 5 already done")) << resumed.out;
+  EXPECT_TRUE(
+      contains(resumed.out, fmt::format("12 case(s): {} run, {} already done", cases - done, done)))
+      << resumed.out;
   EXPECT_EQ(stableRows(part), stableRows(full));
   // Nothing left to run: no map, and the line says so (no map time for the batch's time).
   const Result again = batch(sweep, part, {"--resume"});
@@ -209,8 +487,58 @@ TEST_F(Batch, ResumedRunEqualsAnUninterruptedOne) {
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 13) << csv;
 }
 
+// `seeds:` goes into every seed key of the job — each key of the resolved job named like a
+// seed, not only the two known today — and makes a case per seed.
+TEST_F(Batch, SeedsGoIntoEverySeedKeyOfTheJob) {
+  const fs::path file = writeSweep(
+      "vary:\n  planner.method: [ray, ompl]\nseeds: {from: 7, to: 107, step: 100}\n"
+      "repeats: 2\n");
+  const cli::Sweep sweep = cli::loadSweep(file);
+  EXPECT_EQ(sweep.seeds, (std::vector<int>{7, 107}));
+  ASSERT_EQ(sweep.cases.size(), 8u);  // 2 planners x 2 seeds x 2 repeats
+  std::set<std::string> ids;
+  for (const cli::SweepCase& c : sweep.cases) {
+    SCOPED_TRACE(c.id);
+    ASSERT_TRUE(c.seed.has_value());
+    EXPECT_EQ(c.seed, c.index / 2 % 2 == 0 ? 7 : 107) << "planner, then seed, then repeat";
+    EXPECT_EQ(c.repeat, static_cast<int>(c.index % 2));
+    ids.insert(c.id);
+    std::istringstream yaml(cli::jobToYaml(cli::loadJob(c.job_file, c.overrides)));
+    int seeds = 0;
+    for (std::string line; std::getline(yaml, line);) {
+      const std::size_t colon = line.find(':');
+      if (colon == std::string::npos || !contains(line.substr(0, colon), "seed")) continue;
+      ++seeds;
+      EXPECT_EQ(line.substr(colon + 1), fmt::format(" {}", *c.seed)) << line;
+    }
+    EXPECT_EQ(seeds, static_cast<int>(cli::kJobSeedKeys.size()));
+  }
+  EXPECT_EQ(ids.size(), 8u) << "a distinct case id per planner, seed and repeat";
+}
+
+// The README's sweep example, as written there: it loads (every value checked on the demo job)
+// and expands to (2 planners x 3 horizons + 1 explicit case) x 3 seeds.
+TEST_F(Batch, ReadmeSweepExampleLoads) {
+  const std::string readme = readFile(sourceDir() / "README.md");
+  const std::size_t section = readme.find("### `scanplan batch");
+  ASSERT_NE(section, std::string::npos);
+  const std::size_t begin = readme.find("```yaml\n", section);
+  ASSERT_NE(begin, std::string::npos);
+  const std::size_t end = readme.find("```\n", begin + 8);
+  ASSERT_NE(end, std::string::npos);
+  // Paths relative to the sweep file: ../data/jobs/demo.yaml from a folder beside data/.
+  fs::create_directories(dir_ / "sweeps");
+  fs::create_directory_symlink(sourceDir() / "data", dir_ / "data");
+  writeFile(dir_ / "sweeps" / "sweep.yaml", readme.substr(begin + 8, end - begin - 8));
+  const cli::Sweep sweep = cli::loadSweep(dir_ / "sweeps" / "sweep.yaml");
+  EXPECT_EQ(sweep.keys, (std::vector<std::string>{"planner.method", "planner.ray.horizon",
+                                                  "planner.dp.angle_subdivisions"}));
+  EXPECT_EQ(sweep.seeds, (std::vector<int>{1, 2, 3}));
+  EXPECT_EQ(sweep.cases.size(), 21u);
+}
+
 TEST_F(Batch, ShardsMergedEqualTheUnshardedRun) {
-  const fs::path sweep = writeSweep(kSmallVary);
+  const fs::path sweep = writeSweep(kQuickSweep);
   const fs::path full = dir_ / "full";
   ASSERT_EQ(batch(sweep, full).exit_code, 0);
   std::vector<std::string> merge{"batch", "merge"};
@@ -235,7 +563,7 @@ TEST_F(Batch, ShardsThroughGnuParallelEqualTheUnshardedRun) {
   if (std::system("command -v parallel >/dev/null 2>&1") != 0) {
     GTEST_SKIP() << "GNU parallel is not installed";
   }
-  const fs::path sweep = writeSweep(kSmallVary);
+  const fs::path sweep = writeSweep(kQuickSweep);
   const fs::path full = dir_ / "full";
   ASSERT_EQ(batch(sweep, full).exit_code, 0);
   const std::string command = fmt::format(
@@ -321,8 +649,7 @@ TEST_F(Batch, OmplBenchmarkLogLoadsIntoThePlannerArenaDatabase) {
     GTEST_SKIP() << "ompl_benchmark_statistics (Debian package ompl-demos) is not installed";
   }
   const fs::path sweep = writeSweep(
-      "vary:\n  planner.method: [ray, dp]\n  planner.ray.horizon: [10, 30]\n"
-      "  planner.ompl.seed: [1, 2]\n");
+      "vary:\n  planner.method: [ray, dp]\n  planner.ray.horizon: [10, 30]\nseeds: [1, 2]\n");
   const fs::path out = dir_ / "out";
   const Result run = batch(sweep, out, {"--jobs", "2"});
   ASSERT_EQ(run.exit_code, 0) << describe(run);
@@ -345,8 +672,9 @@ TEST_F(Batch, OmplBenchmarkLogLoadsIntoThePlannerArenaDatabase) {
             "print('outcomes', c.execute(\"SELECT count(*) FROM enums WHERE name = 'outcome'\")"
             ".fetchone()[0])\n"
             "for r in c.execute('SELECT p.name, r.time, r.solved, r.outcome, r.best_cost, r.min_f, "
-            "r.planner_ompl_seed FROM runs r JOIN plannerConfigs p ON p.id = r.plannerid'):\n"
-            "    print('run|%s|%.12g|%d|%d|%.12g|%.12g|%d' % r)\n");
+            "r.seed, r.dp_time FROM runs r JOIN plannerConfigs p ON p.id = r.plannerid'):\n"
+            "    dp = '-' if r[7] is None else '%.12g' % r[7]\n"
+            "    print('run|%s|%.12g|%d|%d|%.12g|%.12g|%d|%s' % (r[:7] + (dp,)))\n");
   const std::string query = fmt::format("python3 {} {} >{} 2>&1", (dir_ / "query.py").string(),
                                         db.string(), (dir_ / "query.txt").string());
   ASSERT_EQ(std::system(query.c_str()), 0) << readFile(dir_ / "query.txt");
@@ -361,9 +689,11 @@ TEST_F(Batch, OmplBenchmarkLogLoadsIntoThePlannerArenaDatabase) {
   std::vector<std::string> expected;
   for (const cli::BatchRow& r : cli::readBatchRows(out / "results.jsonl")) {
     ASSERT_EQ(r.status, "planned");
-    expected.push_back(fmt::format("run|{} planner.ray.horizon={}|{:.12g}|1|0|{:.12g}|{:.12g}|{}",
-                                   r.method, r.params.at(1).second, *r.metrics[12], *r.metrics[0],
-                                   *r.metrics[5], r.params.at(2).second));
+    const std::optional<double> dp_s = metric(r, "dp_s");
+    expected.push_back(fmt::format(
+        "run|{} planner.ray.horizon={}|{:.12g}|1|0|{:.12g}|{:.12g}|{}|{}", r.method,
+        param(r, "planner.ray.horizon"), *metric(r, "plan_s"), *metric(r, "J_s"),
+        *metric(r, "min_f"), *r.seed, dp_s ? fmt::format("{:.12g}", *dp_s) : std::string("-")));
   }
   ASSERT_EQ(expected.size(), 8u);
   std::sort(expected.begin(), expected.end());
@@ -388,9 +718,27 @@ TEST_F(Batch, BadKeyInTheSweepFailsBeforeAnythingRuns) {
   EXPECT_EQ(top.exit_code, 4) << describe(top);
   EXPECT_TRUE(contains(top.err, "varry: unknown key")) << top.err;
 
-  const Result shard = batch(writeSweep(kSmallVary), out, {"--shard", "4/3"});
+  const Result shard = batch(writeSweep(kQuickSweep), out, {"--shard", "4/3"});
   EXPECT_EQ(shard.exit_code, 4) << describe(shard);
   EXPECT_TRUE(contains(shard.err, "--shard '4/3'")) << shard.err;
+  EXPECT_FALSE(fs::exists(out));
+
+  const Result seed = batch(writeSweep("seeds: [1, 2.5]\n"), out);
+  EXPECT_EQ(seed.exit_code, 4) << describe(seed);
+  EXPECT_TRUE(contains(seed.err, "seeds: '2.5': expected an integer from 0 to 2147483647"))
+      << seed.err;
+  const Result twice = batch(writeSweep("seeds: [1, 2, 1]\n"), out);
+  EXPECT_EQ(twice.exit_code, 4) << describe(twice);
+  EXPECT_TRUE(contains(twice.err, "seeds: 1 is listed twice")) << twice.err;
+  // A seed key varied or set as well would be overridden by the seeds: refused.
+  const Result varied = batch(writeSweep("vary:\n  planner.ompl.seed: [1, 2]\nseeds: [3]\n"), out);
+  EXPECT_EQ(varied.exit_code, 4) << describe(varied);
+  EXPECT_TRUE(contains(varied.err, "seeds and vary or cases (planner.ompl.seed) both set a seed"))
+      << varied.err;
+  const Result set = batch(writeSweep("seeds: [3]\n", {"scanner.noise.seed=4"}), out);
+  EXPECT_EQ(set.exit_code, 4) << describe(set);
+  EXPECT_TRUE(contains(set.err, "seeds and set ('scanner.noise.seed=4') both set a seed"))
+      << set.err;
   EXPECT_FALSE(fs::exists(out));
 }
 

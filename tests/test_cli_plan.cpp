@@ -3,6 +3,9 @@
 // no-path exit code, and --set errors.
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <cmath>
 #include <string>
 #include <vector>
@@ -209,6 +212,27 @@ TEST_F(CliPlan, ALateErrorLeavesTheEarlierOutputsAsTheyWere) {
   EXPECT_EQ(readFile(out() / "trajectory.csv"), trajectory);
   EXPECT_TRUE(stagingFolders(out()).empty());
   EXPECT_TRUE(tmpFiles(out()).empty());
+}
+
+// A run that was killed leaves its staging folder; the next run into the folder removes it
+// once its process is gone, and leaves a running one's alone.
+TEST_F(CliPlan, StagingFoldersOfKilledRunsAreCleanedUp) {
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) ::_exit(0);
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);  // `child` is now a pid of no process
+  const fs::path dead = out() / (".scanplan-staging-" + std::to_string(child));
+  const fs::path alive = out() / (".scanplan-staging-" + std::to_string(::getpid()));
+  fs::create_directories(dead);
+  fs::create_directories(alive);
+  writeFile(dead / "report.json", "{}");
+  writeFile(alive / "report.json", "{}");
+  const Result run = plan({});
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  EXPECT_FALSE(fs::exists(dead));
+  EXPECT_TRUE(fs::exists(alive / "report.json")) << "another run's folder, still in use";
+  EXPECT_EQ(stagingFolders(out()), std::vector<fs::path>{alive});
 }
 
 TEST_F(CliPlan, ALateErrorIntoANewFolderLeavesNoFolder) {

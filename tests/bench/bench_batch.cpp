@@ -61,7 +61,7 @@ int main(int argc, char** argv) {
                           "vary:\n"
                           "  planner.method: [ray, dp]\n"
                           "  planner.ray.horizon: [10, 15, 30]\n"
-                          "  planner.ompl.seed: {from: 1, to: 2}\n";
+                          "seeds: {from: 1, to: 2}\n";
 
   const Timing one = run(sweep, dir / "jobs1", 1, true, repeats);
   const Timing two = run(sweep, dir / "jobs2", 2, true, repeats);
