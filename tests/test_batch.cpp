@@ -518,7 +518,8 @@ TEST_F(Batch, SeedsGoIntoEverySeedKeyOfTheJob) {
 
 // The README's sweep example, as written there: it loads (every value checked on the demo job)
 // and expands to (2 planners x 3 horizons + 1 explicit case) x 3 seeds.
-TEST_F(Batch, ReadmeSweepExampleLoads) {
+// The README's sweep example is the bundled data/sweeps/planners.yaml, word for word, and loads.
+TEST_F(Batch, ReadmeSweepExampleIsTheBundledSweepAndLoads) {
   const std::string readme = readFile(sourceDir() / "README.md");
   const std::size_t section = readme.find("### `scanplan batch");
   ASSERT_NE(section, std::string::npos);
@@ -526,15 +527,13 @@ TEST_F(Batch, ReadmeSweepExampleLoads) {
   ASSERT_NE(begin, std::string::npos);
   const std::size_t end = readme.find("```\n", begin + 8);
   ASSERT_NE(end, std::string::npos);
-  // Paths relative to the sweep file: ../data/jobs/demo.yaml from a folder beside data/.
-  fs::create_directories(dir_ / "sweeps");
-  fs::create_directory_symlink(sourceDir() / "data", dir_ / "data");
-  writeFile(dir_ / "sweeps" / "sweep.yaml", readme.substr(begin + 8, end - begin - 8));
-  const cli::Sweep sweep = cli::loadSweep(dir_ / "sweeps" / "sweep.yaml");
+  const fs::path bundled = sourceDir() / "data" / "sweeps" / "planners.yaml";
+  EXPECT_EQ(readme.substr(begin + 8, end - begin - 8), readFile(bundled));
+  const cli::Sweep sweep = cli::loadSweep(bundled);
   EXPECT_EQ(sweep.keys, (std::vector<std::string>{"planner.method", "planner.ray.horizon",
                                                   "planner.dp.angle_subdivisions"}));
   EXPECT_EQ(sweep.seeds, (std::vector<int>{1, 2, 3}));
-  EXPECT_EQ(sweep.cases.size(), 21u);
+  EXPECT_EQ(sweep.cases.size(), 21u);  // (2 methods × 3 horizons + 1 dp case) × 3 seeds
 }
 
 TEST_F(Batch, ShardsMergedEqualTheUnshardedRun) {
