@@ -565,8 +565,9 @@ std::string jobToYaml(const JobSpec& job) {
   JobSpec copy = job;
   YAML::Emitter out;
   out.SetIndent(2);
-  out << YAML::Comment(fmt::format("scanplan job, fully resolved from {}",
-                                   std::filesystem::absolute(job.source).string()));
+  out << YAML::Comment(
+      fmt::format("scanplan job, fully resolved from {}",
+                  std::filesystem::absolute(job.source).lexically_normal().string()));
   out << YAML::BeginMap;
   YamlOut writer(out);
   describeJob(writer, copy);
