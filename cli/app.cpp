@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <exception>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -259,6 +261,37 @@ int run(int argc, char** argv) {
   ik_cmd->add_flag("--within-limits", ik.within_limits_only,
                    "List only solutions inside the joint limits");
   ik_cmd->add_flag("--json", ik.json, "Print JSON instead of text");
+
+  // An example per command, run from the repository root on the bundled data (the tests run each
+  // one's file names against the repository).
+  const std::vector<std::pair<CLI::App*, std::vector<const char*>>> examples{
+      {plan_cmd,
+       {"scanplan plan data/jobs/demo.yaml -o out/demo",
+        "scanplan plan data/jobs/demo.yaml -o out/dp --planner dp --compare"}},
+      {validate_cmd, {"scanplan validate data/jobs/demo.yaml -t out/demo/trajectory.csv"}},
+      {simulate_cmd,
+       {"scanplan simulate data/jobs/demo.yaml -t out/demo/trajectory.csv -o out/sim"}},
+      {export_cmd,
+       {"scanplan export data/jobs/demo.yaml -t out/demo/trajectory.csv -o out/prg -f vplus,krl"}},
+      {path_cmd, {"scanplan path data/jobs/demo.yaml -o out/path"}},
+      {map_cmd, {"scanplan map data/jobs/demo.yaml -o out/map --set map.angle_step_deg=5"}},
+      {show_cmd, {"scanplan job show data/jobs/demo.yaml --set scan.dt_s=0.2"}},
+      {batch_cmd,
+       {"scanplan batch data/sweeps/planners.yaml -o out/sweep",
+        "scanplan batch data/sweeps/planners.yaml -o out/shard_2 --shard 2/4 --resume"}},
+      {batch_report_cmd, {"scanplan batch report out/sweep"}},
+      {batch_merge_cmd, {"scanplan batch merge out/shard_1 out/shard_2 -o out/sweep"}},
+      {check_cmd,
+       {"scanplan check data/jobs/demo.yaml --table 30 --joints=-20,-40,120,0,40,0",
+        "scanplan check data/jobs/demo.yaml --table 40 --time 5 --json"}},
+      {fk_cmd, {"scanplan fk --robot data/robots/viper_s650.yaml --joints 0,-90,180,0,90,0"}},
+      {ik_cmd, {"scanplan ik --robot data/robots/viper_s650.yaml --trans 450,0,695,0,90,0"}},
+  };
+  for (const auto& [cmd, lines] : examples) {
+    std::string footer = lines.size() > 1 ? "Examples:" : "Example:";
+    for (const char* line : lines) footer += std::string("\n  ") + line;
+    cmd->footer(footer);
+  }
 
   try {
     app.parse(argc, argv);

@@ -150,6 +150,52 @@ TEST_F(Cli, HelpOnTheAppAndEverySubcommandNamesItsOptions) {
   }
 }
 
+// Every command's help ends with examples on the bundled data. Their data/ files exist, and the
+// ones that need no earlier output (fk, ik, check, job show) run as printed, from the
+// repository root (here: with data/ made absolute).
+TEST_F(Cli, HelpExamplesNameBundledFilesAndRun) {
+  const std::vector<std::vector<std::string>> commands = {
+      {"plan"},  {"validate"},        {"simulate"},       {"export"},      {"path"},  {"map"},
+      {"batch"}, {"batch", "report"}, {"batch", "merge"}, {"job", "show"}, {"check"}, {"fk"},
+      {"ik"}};
+  int ran = 0;
+  for (const auto& command : commands) {
+    std::vector<std::string> args = command;
+    args.push_back("--help");
+    const Result help = scanplan(args);
+    ASSERT_EQ(help.exit_code, 0) << describe(help);
+    const std::size_t at = help.out.find("Example");
+    ASSERT_NE(at, std::string::npos) << command.front() << " --help has no example\n" << help.out;
+    std::istringstream lines(help.out.substr(at));
+    std::string line;
+    int examples = 0;
+    while (std::getline(lines, line)) {
+      const std::size_t start = line.find("scanplan ");
+      if (start == std::string::npos) continue;
+      ++examples;
+      std::istringstream words(line.substr(start + 9));
+      std::vector<std::string> example;
+      for (std::string w; words >> w;) {
+        if (w.starts_with("data/")) {
+          EXPECT_TRUE(fs::exists(kSourceDir / w)) << line;
+          w = (kSourceDir / w).string();
+        }
+        example.push_back(w);
+      }
+      ASSERT_GE(example.size(), command.size()) << line;
+      for (std::size_t i = 0; i < command.size(); ++i) EXPECT_EQ(example[i], command[i]) << line;
+      const std::string& name = command.front();
+      if (name == "fk" || name == "ik" || name == "check" || name == "job") {
+        const Result run = scanplan(example);
+        EXPECT_EQ(run.exit_code, 0) << line << "\n" << describe(run);
+        ++ran;
+      }
+    }
+    EXPECT_GE(examples, 1) << command.front();
+  }
+  EXPECT_EQ(ran, 5);
+}
+
 TEST_F(Cli, UsageErrorsExitTwo) {
   const std::string q0 = "0,0,0,0,0,0";
   Result run = scanplan({"bogus"});
