@@ -371,4 +371,70 @@ LabelledFigure labelFigure(const RgbImage& raster, const FigureLabels& text) {
   return {std::move(image), left, top};
 }
 
+RgbImage drawViewGrid(const ViewGrid& grid) {
+  constexpr int kScale = 2, kPad = 10, kScaleWidth = 200;
+  constexpr Rgb kBlack{0, 0, 0};
+  const int line = textHeight(kScale);
+  int width = 0, height = kPad;
+  for (const ViewRow& row : grid.rows) {
+    int w = 0, h = 0;
+    for (const RgbImage& v : row.views) {
+      w += v.width;
+      h = std::max(h, v.height);
+    }
+    width = std::max(width, w);
+    height += line + kPad + line + 4 + h + kPad;
+  }
+  const bool has_legend = !grid.legend.empty();
+  if (has_legend) height += line + kPad;
+  RgbImage image = RgbImage::filled(std::max(width, 1), height, {255, 255, 255});
+  int y = kPad;
+  for (const ViewRow& row : grid.rows) {
+    int x = drawText(image, kPad, y, fitText(row.title, image.width - 2 * kPad, kScale), kBlack,
+                     kScale);
+    if (!row.scale.empty() && x + 3 * kPad + kScaleWidth < image.width) {
+      x = drawText(image, x + 2 * kPad, y, row.scale_from, kBlack, kScale) + 6;
+      const int n = static_cast<int>(row.scale.size());
+      for (int i = 0; i < kScaleWidth && x + i < image.width; ++i) {
+        const Rgb c = row.scale[static_cast<std::size_t>(std::min(n - 1, i * n / kScaleWidth))];
+        for (int j = 0; j < line; ++j) image.set(x + i, y + j, c);
+      }
+      drawText(image, x + kScaleWidth + 6, y, row.scale_to, kBlack, kScale);
+    }
+    y += line + kPad;
+    int column_x = 0, tallest = 0;
+    for (std::size_t c = 0; c < row.views.size(); ++c) {
+      const RgbImage& view = row.views[c];
+      const std::string caption =
+          c < grid.captions.size() ? fitText(grid.captions[c], view.width - 8, kScale) : "";
+      drawText(image, column_x + (view.width - textWidth(caption, kScale)) / 2, y, caption,
+               {90, 90, 90}, kScale);
+      for (int vy = 0; vy < view.height; ++vy) {
+        for (int vx = 0; vx < view.width; ++vx) {
+          image.set(column_x + vx, y + line + 4 + vy, view.at(vx, vy));
+        }
+      }
+      column_x += view.width;
+      tallest = std::max(tallest, view.height);
+    }
+    y += line + 4 + tallest + kPad;
+  }
+  if (has_legend) {
+    int x = kPad;
+    for (const LegendEntry& e : grid.legend) {
+      if (e.mark == LegendEntry::Mark::kSwatch) {
+        for (int j = 0; j < line; ++j) {
+          for (int i = 0; i < line; ++i) image.set(x + i, y + j, e.colour);
+        }
+        x += line + 6;
+      } else if (e.mark == LegendEntry::Mark::kLine) {
+        drawLine(image, x, y + line / 2.0, x + 24, y + line / 2.0, e.colour, 3);
+        x += 30;
+      }
+      x = drawText(image, x, y, e.text, e.text_colour, kScale) + 2 * kPad;
+    }
+  }
+  return image;
+}
+
 }  // namespace scanplan::cli

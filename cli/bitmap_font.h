@@ -78,4 +78,27 @@ struct LabelledFigure {
 /// 1 × 1 white one; a raster whose bytes do not match its size throws InputError.
 LabelledFigure labelFigure(const RgbImage& area, const FigureLabels& labels);
 
+/// A row of views of one scene (e.g. iso, top, front) under a title line, for the three-view
+/// pictures (path.png, cloud.png).
+struct ViewRow {
+  std::string title;
+  std::vector<RgbImage> views;  ///< side by side, each with its caption (ViewGrid::captions)
+  /// Non-empty: a horizontal colour scale after the title (the colours from 0 to 1, evenly),
+  /// with `scale_from` and `scale_to` written at its ends; left out when the row is too narrow
+  /// for it after the title.
+  std::vector<Rgb> scale;
+  std::string scale_from, scale_to;
+};
+
+/// Rows of views with a caption over each view and legend lines under the whole.
+struct ViewGrid {
+  std::vector<std::string> captions;  ///< one per column
+  std::vector<ViewRow> rows;
+  std::vector<LegendEntry> legend;  ///< under the views, left to right
+};
+
+/// The grid drawn into a white image in the bitmap font at scale 2: for each row its title (and
+/// colour scale), the view captions, the views pixel for pixel; the legend last. Deterministic.
+RgbImage drawViewGrid(const ViewGrid& grid);
+
 }  // namespace scanplan::cli

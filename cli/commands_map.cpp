@@ -248,34 +248,35 @@ std::string pathSummary(const PathContext& c) {
   return s;
 }
 
-// Three views of the path around the part (iso, top, front), side by side.
+// Three views of the path around the part (iso, top, front), side by side, captioned, with a
+// legend.
 RgbImage pathPicture(const PathContext& c) {
   constexpr int kView = 480;
-  RgbImage out = RgbImage::filled(3 * kView, kView, {255, 255, 255});
-  const Eigen::Matrix3d iso =
-      (Eigen::Matrix3d() << 0.7071, -0.7071, 0, 0.4082, 0.4082, 0.8165, -0.5774, -0.5774, 0.5774)
-          .finished();
-  const Eigen::Matrix3d top = Eigen::Matrix3d::Identity();
-  const Eigen::Matrix3d front = (Eigen::Matrix3d() << 1, 0, 0, 0, 0, 1, 0, -1, 0).finished();
-  int column = 0;
-  for (const Eigen::Matrix3d& R : {iso, top, front}) {
-    RenderRequest r;
-    r.width = kView;
-    r.height = kView;
-    r.R_view = R;
-    r.vertices = c.part.mesh.vertices;
-    r.triangles = c.part.mesh.triangles;
-    for (const auto& s : c.generated.path.samples) r.polyline.push_back(s.X_PS.translation());
-    if (!r.polyline.empty()) {
-      r.markers.push_back({r.polyline.front(), categoryColour(2)});
-      r.markers.push_back({r.polyline.back(), categoryColour(5)});
-    }
-    const RgbImage view = renderScene(r);
-    for (int y = 0; y < kView; ++y)
-      for (int x = 0; x < kView; ++x) out.set(column * kView + x, y, view.at(x, y));
-    ++column;
+  ViewGrid grid;
+  ViewRow& row = grid.rows.emplace_back();
+  row.title = fmt::format("Scan path: the laser origin around the part, part frame ({:.1f} s)",
+                          c.generated.path.duration());
+  RenderRequest r;
+  r.width = kView;
+  r.height = kView;
+  r.vertices = c.part.mesh.vertices;
+  r.triangles = c.part.mesh.triangles;
+  for (const auto& s : c.generated.path.samples) r.polyline.push_back(s.X_PS.translation());
+  const Rgb start = categoryColour(2), end = categoryColour(5);
+  if (!r.polyline.empty()) {
+    r.markers.push_back({r.polyline.front(), start});
+    r.markers.push_back({r.polyline.back(), end});
   }
-  return out;
+  for (const NamedView& view : partViews()) {
+    r.R_view = view.R_view;
+    grid.captions.push_back(view.name);
+    row.views.push_back(renderScene(r));
+  }
+  grid.legend = {
+      {r.polyline_colour, "path (lighter where the part hides it)", LegendEntry::Mark::kLine},
+      {start, "start"},
+      {end, "end"}};
+  return drawViewGrid(grid);
 }
 
 scanner::GeneratedPath generateScanPath(const JobSpec& job, const kinematics::CellModel& cell) {

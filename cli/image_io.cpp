@@ -677,4 +677,12 @@ RgbImage renderScene(const RenderRequest& request) {
   return image;
 }
 
+std::array<NamedView, 3> partViews() {
+  return {{{"iso", (Eigen::Matrix3d() << 0.7071, -0.7071, 0, 0.4082, 0.4082, 0.8165, -0.5774,
+                    -0.5774, 0.5774)
+                       .finished()},
+           {"top", Eigen::Matrix3d::Identity()},
+           {"front", (Eigen::Matrix3d() << 1, 0, 0, 0, 0, 1, 0, -1, 0).finished()}}};
+}
+
 }  // namespace scanplan::cli

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -138,5 +139,14 @@ struct RenderRequest {
 /// the mesh Lambert-shaded in grey (light from the viewer) with a z-buffer. Deterministic.
 /// Throws InputError for a non-positive size or a triangle index out of range.
 RgbImage renderScene(const RenderRequest& request);
+
+/// A named view direction for renderScene (R_view) of a z-up frame.
+struct NamedView {
+  const char* name;
+  Eigen::Matrix3d R_view;
+};
+/// The three views of the path and cloud pictures: iso (from +x −y +z), top (looking down z),
+/// front (looking along +y).
+std::array<NamedView, 3> partViews();
 
 }  // namespace scanplan::cli

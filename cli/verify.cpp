@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "cli/bitmap_font.h"
 #include "cli/image_io.h"
 #include "cli/programs.h"
 #include "kinematics/error.h"
@@ -222,14 +223,8 @@ void writeSimulationOutputs(const std::filesystem::path& dir,
   }
 
   // cloud.png: top row the points (coloured by acquisition time), bottom row the part coloured
-  // by density; iso, top and front views.
+  // by density; iso, top and front views, captioned, each row with its colour scale.
   constexpr int kView = 480;
-  RgbImage out = RgbImage::filled(3 * kView, 2 * kView, {255, 255, 255});
-  const Eigen::Matrix3d iso =
-      (Eigen::Matrix3d() << 0.7071, -0.7071, 0, 0.4082, 0.4082, 0.8165, -0.5774, -0.5774, 0.5774)
-          .finished();
-  const Eigen::Matrix3d top = Eigen::Matrix3d::Identity();
-  const Eigen::Matrix3d front = (Eigen::Matrix3d() << 1, 0, 0, 0, 0, 1, 0, -1, 0).finished();
   const double t_end = run.cloud.points.empty() ? 1.0 : run.cloud.points.back().t;
   std::vector<Rgb> triangle_colours;
   const double max_density = run.coverage.density_p95_per_mm2;
@@ -238,11 +233,28 @@ void writeSimulationOutputs(const std::filesystem::path& dir,
     triangle_colours.push_back(toRgb(scanner::densityColour(
         scanner::triangleDensityPerMm2(part, run.coverage, i), max_density, covered)));
   }
-  int column = 0;
-  for (const Eigen::Matrix3d& R : {iso, top, front}) {
+  ViewGrid grid;
+  grid.rows.resize(2);  // both rows first: references into the vector stay valid
+  ViewRow& cloud = grid.rows[0];
+  cloud.title =
+      fmt::format("Simulated cloud, {} points, by acquisition time:", run.cloud.points.size());
+  ViewRow& density = grid.rows[1];
+  density.title = fmt::format("Coverage, {:.1f}% of the area, point density:",
+                              100.0 * run.coverage.covered_fraction);
+  for (int i = 0; i < 64; ++i) {
+    const double u = i / 63.0;
+    cloud.scale.push_back(toRgb(scanner::densityColour(u, 1.0, true)));
+    density.scale.push_back(toRgb(scanner::densityColour(u * max_density, max_density, true)));
+  }
+  cloud.scale_from = "0 s";
+  cloud.scale_to = fmt::format("{:.0f} s", t_end);
+  density.scale_from = "0";
+  density.scale_to = fmt::format("{:.1f} points/mm² (95%)", max_density);
+  for (const NamedView& view : partViews()) {
+    grid.captions.push_back(view.name);
     RenderRequest points;
     points.width = points.height = kView;
-    points.R_view = R;
+    points.R_view = view.R_view;
     // Fit both rows to the part's box: invisible corner markers would show, so use the part.
     points.vertices = part.vertices;
     points.triangles = {};
@@ -251,22 +263,21 @@ void writeSimulationOutputs(const std::filesystem::path& dir,
       const double u = t_end > 0.0 ? p.t / t_end : 0.0;
       points.dot_colours.push_back(toRgb(scanner::densityColour(u, 1.0, true)));
     }
-    const RgbImage a = renderScene(points);
+    cloud.views.push_back(renderScene(points));
     RenderRequest mesh;
     mesh.width = mesh.height = kView;
-    mesh.R_view = R;
+    mesh.R_view = view.R_view;
     mesh.vertices = part.vertices;
     mesh.triangles = part.triangles;
     mesh.triangle_colours = triangle_colours;
-    const RgbImage b = renderScene(mesh);
-    for (int y = 0; y < kView; ++y) {
-      for (int x = 0; x < kView; ++x) {
-        out.set(column * kView + x, y, a.at(x, y));
-        out.set(column * kView + x, kView + y, b.at(x, y));
-      }
-    }
-    ++column;
+    density.views.push_back(renderScene(mesh));
   }
+  grid.legend = {{toRgb(scanner::densityColour(0.0, 1.0, false)),
+                  coverage_settings.min_points > 1
+                      ? fmt::format("not covered (fewer than {} points on the triangle)",
+                                    coverage_settings.min_points)
+                      : std::string("not covered (no point on the triangle)")}};
+  const RgbImage out = drawViewGrid(grid);
   writePng(dir / "cloud.png", out);
 }
 

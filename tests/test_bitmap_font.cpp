@@ -229,4 +229,72 @@ TEST(LabelFigure, DegenerateRangesAndRastersStillGiveTicksAndNoCrash) {
   EXPECT_THROW(labelFigure(broken, labels), scanplan::InputError);
 }
 
+// ---- drawViewGrid: rows of captioned views --------------------------------------------------
+
+// A view of one flat colour with a distinct pixel in a corner (so a shifted copy shows).
+RgbImage solidView(int w, int h, Rgb fill, Rgb corner) {
+  RgbImage v = RgbImage::filled(w, h, fill);
+  v.set(w - 1, h - 1, corner);
+  return v;
+}
+
+TEST(ViewGrid, ViewsAreCopiedWholeUnderTheirCaptionsWithTitlesScalesAndLegend) {
+  ViewGrid grid;
+  grid.captions = {"iso", "top", "front"};
+  grid.rows.resize(2);
+  const Rgb corner{255, 0, 0};
+  for (int r = 0; r < 2; ++r) {
+    grid.rows[static_cast<std::size_t>(r)].title = r == 0 ? "Points by time:" : "Coverage:";
+    for (int c = 0; c < 3; ++c) {
+      const auto shade = static_cast<std::uint8_t>(200 - 30 * c - 10 * r);
+      grid.rows[static_cast<std::size_t>(r)].views.push_back(
+          solidView(300, 80, {shade, shade, 255}, corner));
+    }
+  }
+  grid.rows[0].scale = {{0, 0, 0}, {0, 255, 0}};
+  grid.rows[0].scale_from = "0 s";
+  grid.rows[0].scale_to = "9 s";
+  grid.legend = {{{10, 20, 30}, "not covered"}};
+  const RgbImage image = drawViewGrid(grid);
+  EXPECT_EQ(image.width, 900);
+  // Find each view by its fill colour's first pixel, then check it whole.
+  int next_y = 0;
+  for (int r = 0; r < 2; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      const auto shade = static_cast<std::uint8_t>(200 - 30 * c - 10 * r);
+      int top = -1;
+      for (int y = next_y; y < image.height && top < 0; ++y) {
+        const Rgb p = image.at(c * 300, y);
+        if (p.r == shade && p.g == shade && p.b == 255) top = y;
+      }
+      ASSERT_GE(top, 0) << "view " << r << "," << c;
+      int wrong = 0;
+      for (int y = 0; y < 80; ++y) {
+        for (int x = 0; x < 300; ++x) {
+          const Rgb want = x == 299 && y == 79 ? corner : Rgb{shade, shade, 255};
+          const Rgb got = image.at(c * 300 + x, top + y);
+          wrong += got.r != want.r || got.g != want.g || got.b != want.b;
+        }
+      }
+      EXPECT_EQ(wrong, 0) << "view " << r << "," << c;
+      // Its caption is drawn in the band just above it, within its column.
+      EXPECT_GT(darkPixels(image, c * 300, top - textHeight(), c * 300 + 300, top), 10)
+          << "caption of view " << r << "," << c;
+      if (c == 2) next_y = top + 80;
+    }
+  }
+  // The first row's title and its colour scale (both scale colours drawn), and the legend.
+  EXPECT_GT(darkPixels(image, 0, 0, 120, textHeight() + 12), 20) << "title";
+  int green = 0, swatch = 0;
+  for (int y = 0; y < image.height; ++y) {
+    for (int x = 0; x < image.width; ++x) {
+      const Rgb p = image.at(x, y);
+      green += p.r == 0 && p.g == 255 && p.b == 0;
+      swatch += p.r == 10 && p.g == 20 && p.b == 30;
+    }
+  }
+  EXPECT_GT(green, 100) << "the colour scale";
+  EXPECT_EQ(swatch, textHeight() * textHeight()) << "the legend's swatch";
+}
+
 }  // namespace
