@@ -363,8 +363,8 @@ ExitCode runPlan(const PlanOptions& options) {
     return ExitCode::kNoPlan;
   }
   writeFileAtomically(out / "trajectory.csv", kinematics::trajectoryToCsv(trajectory.trajectory));
-  const std::string programs =
-      writePrograms(out / "programs", job, cell, trajectory.trajectory, job.outputs.programs);
+  const std::string programs = writePrograms(out / "programs", "programs/", job, cell,
+                                             trajectory.trajectory, job.outputs.programs);
   std::optional<SimulationRun> simulation;
   if (job.simulation.enabled) {
     t0 = Clock::now();

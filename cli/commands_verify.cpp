@@ -103,7 +103,10 @@ ExitCode runExport(const VerifyOptions& options) {
     }
   }
   prepareOutputDir(options.out_dir);
-  std::fputs(writePrograms(options.out_dir, job, cell, trajectory, formats).c_str(), stdout);
+  std::fputs(
+      writePrograms(options.out_dir, options.out_dir.string(), job, cell, trajectory, formats)
+          .c_str(),
+      stdout);
   return ExitCode::kOk;
 }
 

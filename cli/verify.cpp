@@ -59,6 +59,7 @@ kinematics::Trajectory loadTrajectoryFile(const std::filesystem::path& file) {
 }
 
 std::string writePrograms(const std::filesystem::path& dir,
+                          const std::string& shown_as,
                           const JobSpec& job,
                           const kinematics::CellModel& cell,
                           const kinematics::Trajectory& trajectory,
@@ -86,8 +87,7 @@ std::string writePrograms(const std::filesystem::path& dir,
   if (written.empty()) return "programs   none (outputs.programs is empty)\n";
   return fmt::format(
       "programs   {}: {}; fastest step {:.0f}% of an axis's max speed (joints, table){}\n",
-      (dir.filename().empty() ? dir : dir.filename()).string() + "/", fmt::join(written, ", "),
-      max_percent,
+      shown_as, fmt::join(written, ", "), max_percent,
       over == 0
           ? std::string()
           : fmt::format(", {} step(s) need more than 100% (marked WARNING, run slower)", over));

@@ -52,9 +52,10 @@ std::string simulationSummary(const SimulationRun& run);
 void writeSimulationJson(JsonWriter& json, const std::string& key, const SimulationRun& run);
 
 /// The robot programs of `formats` (names as in programFormatNames()) for the trajectory, into
-/// `dir`; returns one summary line (files, the fastest step as % of the joints' max speed, steps
-/// that need more than 100 %).
+/// `dir`; returns one summary line (the folder as `shown_as`, the files, the fastest step as % of
+/// the joints' max speed, steps that need more than 100 %).
 std::string writePrograms(const std::filesystem::path& dir,
+                          const std::string& shown_as,
                           const JobSpec& job,
                           const kinematics::CellModel& cell,
                           const kinematics::Trajectory& trajectory,

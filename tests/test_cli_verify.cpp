@@ -217,7 +217,10 @@ TEST_F(CliVerify, ExportedProgramsReadBackAndValidate) {
   for (const char* f :
        {"scan.v2", "scan_table.csv", "scan.src", "scan.mod", "scan.script", "scan.csv"}) {
     EXPECT_TRUE(fs::exists(out / f)) << f;
+    EXPECT_TRUE(contains(run.out, f)) << "the summary names " << f << "\n" << run.out;
   }
+  EXPECT_TRUE(contains(run.out, "programs   " + out.string() + ": ")) << "the folder as given\n"
+                                                                      << run.out;
   // The V+ program and the CSV load back and pass validation (the seed's §7.3 point).
   for (const char* f : {"scan.v2", "scan.csv"}) {
     SCOPED_TRACE(f);
