@@ -1294,6 +1294,30 @@ BatchStats runBatchCases(const BatchOptions& options) {
           out.string()));
     }
     std::vector<BatchRow> rows = readBatchRows(out / "results.jsonl");
+    // Every row must be a case of this sweep (and shard): rows of another sweep would be mixed
+    // into this one's results without a word.
+    std::set<std::string> ours;
+    for (const SweepCase& c : sweep.cases) {
+      if (inShard(c.id, shard, shards)) ours.insert(c.id);
+    }
+    std::size_t foreign = 0;
+    const BatchRow* example = nullptr;
+    for (const BatchRow& r : rows) {
+      if (ours.count(r.case_id)) continue;
+      ++foreign;
+      if (!example) example = &r;
+    }
+    if (example) {
+      std::string values;
+      for (const auto& [k, v] : example->params) values += fmt::format(", {}={}", k, v);
+      throw InputError(fmt::format(
+          "{}: {} of its {} row(s) are not cases of {}{} (e.g. case {}: {}{}{}): the sweep or "
+          "the shard changed since that batch ran; resume with them as they were, or write to "
+          "another folder",
+          (out / "results.jsonl").string(), foreign, rows.size(), options.sweep_file.string(),
+          options.shard.empty() ? "" : " shard " + options.shard, example->case_id, example->job,
+          values, example->seed ? fmt::format(", seed {}", *example->seed) : ""));
+    }
     sortRows(rows);
     for (const BatchRow& r : rows) done.insert(r.case_id);
     writeResults(out, rows, sweep.keys);  // drops a torn last line; the CSV matches again

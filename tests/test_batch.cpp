@@ -700,6 +700,25 @@ TEST_F(Batch, OmplBenchmarkLogLoadsIntoThePlannerArenaDatabase) {
   EXPECT_EQ(runs, expected);
 }
 
+// --resume after the sweep changed: the old rows are not this sweep's cases, and would be mixed
+// into its results. Refused before anything runs; the folder is left as it was.
+TEST_F(Batch, ResumingAChangedSweepIsRefused) {
+  const fs::path out = dir_ / "out";
+  ASSERT_EQ(batch(writeSweep("vary:\n  planner.ray.horizon: [10, 15]\n"), out).exit_code, 0);
+  const std::string before = readFile(out / "results.jsonl");
+  const Result changed =
+      batch(writeSweep("vary:\n  planner.ray.horizon: [10, 20]\n"), out, {"--resume"});
+  EXPECT_EQ(changed.exit_code, 4) << describe(changed);
+  EXPECT_TRUE(contains(changed.err, "1 of its 2 row(s) are not cases of")) << changed.err;
+  EXPECT_TRUE(contains(changed.err, "planner.ray.horizon=15")) << changed.err;
+  EXPECT_EQ(readFile(out / "results.jsonl"), before);
+  // The same sweep resumes (nothing left to run).
+  const Result same =
+      batch(writeSweep("vary:\n  planner.ray.horizon: [10, 15]\n"), out, {"--resume"});
+  EXPECT_EQ(same.exit_code, 0) << describe(same);
+  EXPECT_TRUE(contains(same.out, "2 case(s): 0 run, 2 already done")) << same.out;
+}
+
 TEST_F(Batch, BadKeyInTheSweepFailsBeforeAnythingRuns) {
   const fs::path out = dir_ / "out";
   const Result key = batch(writeSweep("vary:\n  planner.ray.horizn: [10, 15]\n"), out);
