@@ -142,14 +142,17 @@ TEST_F(JobFile, BundledDemoJobAndRobotsLoadAndBuild) {
 // `part.up_axis` turns the file's up direction into +z at load: the part's extents permute.
 TEST_F(JobFile, PartUpAxisRotatesTheMeshAtLoad) {
   const JobSpec z = loadJob(kSource / "data/jobs/demo.yaml");
-  const Eigen::Vector3d size_z = [&] {
+  // `-> Eigen::Vector3d`: a deduced return type would be Eigen's expression for max − min of a
+  // box that dies with the lambda (AddressSanitizer: stack-use-after-scope).
+  const Eigen::Vector3d size_z = [&]() -> Eigen::Vector3d {
     const kinematics::CellModel cell = buildCell(z);
     return kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options).mesh.bounds().sizes();
   }();
-  for (const auto& [up, expect] : std::initializer_list<std::pair<const char*, Eigen::Vector3d>>{
-           {"y", {size_z.x(), size_z.z(), size_z.y()}},
-           {"-x", {size_z.z(), size_z.y(), size_z.x()}},
-           {"-z", size_z}}) {
+  const std::vector<std::pair<const char*, Eigen::Vector3d>> cases{
+      {"y", {size_z.x(), size_z.z(), size_z.y()}},
+      {"-x", {size_z.z(), size_z.y(), size_z.x()}},
+      {"-z", size_z}};
+  for (const auto& [up, expect] : cases) {
     SCOPED_TRACE(up);
     const JobSpec job =
         loadJob(kSource / "data/jobs/demo.yaml", {std::string("part.up_axis=") + up});
