@@ -4,6 +4,7 @@
 #include "cli/yaml_reader.h"
 #include "kinematics/error.h"
 #include "kinematics/mesh.h"
+#include "tests/test_support.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -63,25 +64,7 @@ std::string indented(const std::string& text) {
   return out;
 }
 
-// Passes when `run` throws InputError whose message holds every one of `parts`; prints the
-// actual message (or what happened instead) otherwise.
-template <class F>
-::testing::AssertionResult throwsInputError(F&& run, std::initializer_list<std::string> parts) {
-  try {
-    run();
-  } catch (const InputError& e) {
-    const std::string message = e.what();
-    for (const std::string& p : parts) {
-      if (message.find(p) == std::string::npos) {
-        return ::testing::AssertionFailure() << "'" << p << "' not in: " << message;
-      }
-    }
-    return ::testing::AssertionSuccess() << message;
-  } catch (const std::exception& e) {
-    return ::testing::AssertionFailure() << "threw a non-InputError: " << e.what();
-  }
-  return ::testing::AssertionFailure() << "no exception";
-}
+using test::throwsInputError;
 
 ::testing::AssertionResult loadFails(const fs::path& job,
                                      std::initializer_list<std::string> parts) {

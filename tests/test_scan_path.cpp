@@ -186,23 +186,7 @@ class ScanJob : public ::testing::Test {
   fs::path dir_;
 };
 
-template <class F>
-::testing::AssertionResult throwsInputError(F&& run, std::initializer_list<std::string> parts) {
-  try {
-    run();
-  } catch (const InputError& e) {
-    const std::string message = e.what();
-    for (const std::string& p : parts) {
-      if (message.find(p) == std::string::npos) {
-        return ::testing::AssertionFailure() << "'" << p << "' not in: " << message;
-      }
-    }
-    return ::testing::AssertionSuccess() << message;
-  } catch (const std::exception& e) {
-    return ::testing::AssertionFailure() << "threw a non-InputError: " << e.what();
-  }
-  return ::testing::AssertionFailure() << "no exception";
-}
+using test::throwsInputError;
 
 // ---------------------------------------------------------------------------------------------
 // Eq. 5 and Eq. 4.

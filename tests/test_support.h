@@ -1,14 +1,39 @@
 #pragma once
 
+#include <gtest/gtest.h>
+
+#include <exception>
 #include <filesystem>
+#include <initializer_list>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "cli/robot_file.h"
+#include "kinematics/error.h"
 #include "kinematics/robot_model.h"
 
 namespace scanplan::test {
+
+/// Passes when `run` throws InputError whose message holds every one of `parts`; prints the
+/// actual message (or what happened instead) otherwise.
+template <class F>
+::testing::AssertionResult throwsInputError(F&& run, std::initializer_list<std::string> parts) {
+  try {
+    run();
+  } catch (const InputError& e) {
+    const std::string message = e.what();
+    for (const std::string& p : parts) {
+      if (message.find(p) == std::string::npos) {
+        return ::testing::AssertionFailure() << "'" << p << "' not in: " << message;
+      }
+    }
+    return ::testing::AssertionSuccess() << message;
+  } catch (const std::exception& e) {
+    return ::testing::AssertionFailure() << "threw a non-InputError: " << e.what();
+  }
+  return ::testing::AssertionFailure() << "no exception";
+}
 
 inline std::filesystem::path sourceDir() { return SCANPLAN_SOURCE_DIR; }
 
