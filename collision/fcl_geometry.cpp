@@ -217,7 +217,7 @@ class BoxMeshDistance {
   void leaf(int primitive) {
     const fcl::Triangle& tri = mesh_.tri_indices[primitive];
     Eigen::Vector3d v[3];
-    for (int k = 0; k < 3; ++k) v[k] = R_ * mesh_.vertices[tri[static_cast<std::size_t>(k)]] + t_;
+    for (int k = 0; k < 3; ++k) v[k] = R_ * mesh_.vertices[tri[k]] + t_;
     const Eigen::Vector3d lo = v[0].cwiseMin(v[1]).cwiseMin(v[2]);
     const Eigen::Vector3d hi = v[0].cwiseMax(v[1]).cwiseMax(v[2]);
     const Eigen::Vector3d gap = (lo - h_).cwiseMax(-h_ - hi).cwiseMax(0.0);
