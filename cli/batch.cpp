@@ -1455,9 +1455,24 @@ ExitCode runBatchReport(const fs::path& out_dir) {
 ExitCode runBatchMerge(const std::vector<fs::path>& inputs, const fs::path& out_dir) {
   std::vector<BatchRow> rows;
   std::set<std::string> seen;
+  // Shards of one sweep have the same columns (the sweep's varied keys): different ones mean
+  // folders of different sweeps, whose rows must not be mixed.
+  const auto header = [](const fs::path& dir) {
+    std::ifstream csv(dir / "results.csv");
+    std::string line;
+    std::getline(csv, line);
+    return line;
+  };
+  const std::string columns = inputs.empty() ? std::string() : header(inputs.front());
   for (const fs::path& in : inputs) {
     if (!fs::is_regular_file(in / "results.jsonl")) {
       throw InputError(in.string() + ": no results.jsonl: expected the folder of a batch run");
+    }
+    if (const std::string h = header(in); h != columns) {
+      throw InputError(
+          fmt::format("{}: its columns differ from {}'s ({} vs {}): expected shards of one sweep",
+                      (in / "results.csv").string(), inputs.front().string(),
+                      h.empty() ? "none" : h, columns.empty() ? "none" : columns));
     }
     for (BatchRow& r : readBatchRows(in / "results.jsonl")) {
       if (seen.insert(r.case_id).second) rows.push_back(std::move(r));

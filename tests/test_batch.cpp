@@ -719,6 +719,19 @@ TEST_F(Batch, ResumingAChangedSweepIsRefused) {
   EXPECT_TRUE(contains(same.out, "2 case(s): 0 run, 2 already done")) << same.out;
 }
 
+// Folders of two different sweeps (other varied keys) are not shards of one: merge refuses them
+// and writes nothing.
+TEST_F(Batch, MergingFoldersOfDifferentSweepsIsRefused) {
+  const fs::path a = dir_ / "a", b = dir_ / "b", merged = dir_ / "merged";
+  ASSERT_EQ(batch(writeSweep("vary:\n  planner.ray.horizon: [10]\n"), a).exit_code, 0);
+  ASSERT_EQ(batch(writeSweep("vary:\n  planner.ray.rays: [11]\n"), b).exit_code, 0);
+  const Result run = scanplan({"batch", "merge", a.string(), b.string(), "-o", merged.string()});
+  EXPECT_EQ(run.exit_code, 4) << describe(run);
+  EXPECT_TRUE(contains(run.err, "columns differ")) << run.err;
+  EXPECT_TRUE(contains(run.err, (b / "results.csv").string())) << run.err;
+  EXPECT_FALSE(fs::exists(merged / "results.jsonl"));
+}
+
 TEST_F(Batch, BadKeyInTheSweepFailsBeforeAnythingRuns) {
   const fs::path out = dir_ / "out";
   const Result key = batch(writeSweep("vary:\n  planner.ray.horizn: [10, 15]\n"), out);
