@@ -237,6 +237,7 @@ int run(int argc, char** argv) {
                                            "by IK (the job's map.branch, or the best)");
   check_joints->excludes(check_time);
   check_cmd->add_flag("--json", check.json, "Print JSON instead of text");
+  addOverrides(*check_cmd, check.overrides);
 
   FkOptions fk;
   auto* fk_cmd =
@@ -283,7 +284,9 @@ int run(int argc, char** argv) {
       {batch_merge_cmd, {"scanplan batch merge out/shard_1 out/shard_2 -o out/sweep"}},
       {check_cmd,
        {"scanplan check data/jobs/demo.yaml --table 30 --joints=-20,-40,120,0,40,0",
-        "scanplan check data/jobs/demo.yaml --table 40 --time 5 --json"}},
+        "scanplan check data/jobs/demo.yaml --table 40 --time 5 --json",
+        "scanplan check data/jobs/demo.yaml --table 30 --joints=-20,-40,120,0,40,0 --set "
+        "constraints.clearance.d_high_mm=60"}},
       {fk_cmd, {"scanplan fk --robot data/robots/viper_s650.yaml --joints 0,-90,180,0,90,0"}},
       {ik_cmd, {"scanplan ik --robot data/robots/viper_s650.yaml --trans 450,0,695,0,90,0"}},
   };

@@ -99,6 +99,7 @@ struct CheckOptions {
   std::string joints_deg;  ///< empty: use time_s
   double time_s = -1.0;
   bool json = false;
+  std::vector<std::string> overrides;  ///< --set key.path=value
 };
 
 ExitCode runCheck(const CheckOptions& options);

@@ -25,7 +25,7 @@ ExitCode runCheck(const CheckOptions& options) {
     throw InputError(
         fmt::format("--table: {}: expected a finite table angle in degrees", options.table_deg));
   }
-  const JobSpec job = loadJob(options.job_file);
+  const JobSpec job = loadJob(options.job_file, options.overrides);
   const collision::Scene scene(buildCell(job), clearanceConfig(job));
   const auto& robot = scene.cell().robot;
   const double theta = deg(options.table_deg);

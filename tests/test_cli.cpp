@@ -193,7 +193,7 @@ TEST_F(Cli, HelpExamplesNameBundledFilesAndRun) {
     }
     EXPECT_GE(examples, 1) << command.front();
   }
-  EXPECT_EQ(ran, 5);
+  EXPECT_EQ(ran, 6);
 }
 
 TEST_F(Cli, UsageErrorsExitTwo) {
@@ -456,6 +456,16 @@ TEST_F(Cli, CheckScoresAPoseAndListsEveryPair) {
   ASSERT_EQ(text.exit_code, 0) << describe(text);
   EXPECT_TRUE(contains(text.out, "scanner - part")) << text.out;
   EXPECT_TRUE(contains(text.out, "collision    no")) << text.out;
+  // --set as on the other job commands: the job-wide d_high moves every pair without a rule.
+  const Result wider = scanplan({"check", kDemoJob, "--table", "30", "--joints=-20,-40,120,0,40,0",
+                                 "--json", "--set", "constraints.clearance.d_high_mm=60"});
+  ASSERT_EQ(wider.exit_code, 0) << describe(wider);
+  EXPECT_TRUE(contains(wider.out, "\"d_high_mm\": 60")) << wider.out;
+  EXPECT_FALSE(contains(run.out, "\"d_high_mm\": 60")) << run.out;
+  const Result bad = scanplan({"check", kDemoJob, "--table", "30", "--joints=-20,-40,120,0,40,0",
+                               "--set", "constraints.clearance.d_high_mm=-1"});
+  EXPECT_EQ(bad.exit_code, 4) << describe(bad);
+  EXPECT_TRUE(contains(bad.err, "constraints.clearance.d_high_mm")) << bad.err;
 }
 
 TEST_F(Cli, CheckReportsASelfCollisionAsAForbiddenPose) {
