@@ -16,8 +16,8 @@
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
-#include "cli/batch.h"
-#include "cli/commands.h"
+#include "cli/batch/batch.h"
+#include "cli/commands/commands.h"
 #include "kinematics/error.h"
 
 namespace scanplan::cli {

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "cli/job.h"
+#include "cli/config/job.h"
 #include "planner/config_map.h"
 #include "planner/dp_planner.h"
 #include "planner/refine.h"

@@ -8,9 +8,9 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include "cli/bitmap_font.h"
-#include "cli/image_io.h"
-#include "cli/programs.h"
+#include "cli/plot/bitmap_font.h"
+#include "cli/plot/image_io.h"
+#include "cli/programs/programs.h"
 #include "kinematics/error.h"
 #include "kinematics/units.h"
 #include "scanner/cloud_io.h"

@@ -5,8 +5,8 @@
 #include <filesystem>
 #include <string>
 
-#include "cli/format.h"
-#include "cli/job.h"
+#include "cli/io/output.h"
+#include "cli/config/job.h"
 #include "kinematics/mesh.h"
 #include "kinematics/trajectory.h"
 #include "planner/validation.h"

@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <string>
 
-#include "cli/image_io.h"
+#include "cli/plot/image_io.h"
 
 namespace scanplan::test {
 

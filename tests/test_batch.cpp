@@ -25,9 +25,9 @@
 
 #include <fmt/format.h>
 
-#include "cli/batch.h"
-#include "cli/image_io.h"
-#include "cli/job.h"
+#include "cli/batch/batch.h"
+#include "cli/plot/image_io.h"
+#include "cli/config/job.h"
 #include "cli_support.h"
 #include "image_support.h"
 #include "test_support.h"

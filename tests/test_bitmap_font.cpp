@@ -8,8 +8,8 @@
 #include <utility>
 #include <vector>
 
-#include "cli/bitmap_font.h"
-#include "cli/image_io.h"
+#include "cli/plot/bitmap_font.h"
+#include "cli/plot/image_io.h"
 #include "kinematics/error.h"
 #include "tests/image_support.h"
 

@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "cli/commands.h"
-#include "cli/job.h"
+#include "cli/commands/commands.h"
+#include "cli/config/job.h"
 #include "cli_support.h"
 #include "kinematics/units.h"
 #include "test_support.h"

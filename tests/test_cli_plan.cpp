@@ -12,8 +12,8 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "cli/image_io.h"
-#include "cli/job.h"
+#include "cli/plot/image_io.h"
+#include "cli/config/job.h"
 #include "cli_support.h"
 #include "kinematics/trajectory.h"
 #include "kinematics/units.h"

@@ -13,7 +13,7 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
-#include "cli/job.h"
+#include "cli/config/job.h"
 #include "cli_support.h"
 #include "geometry_support.h"
 #include "kinematics/mesh.h"

@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include "cli/job.h"
+#include "cli/config/job.h"
 #include "collision/clearance.h"
 #include "collision/fcl_geometry.h"
 #include "collision/scene.h"

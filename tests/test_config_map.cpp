@@ -24,9 +24,9 @@
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
-#include "cli/image_io.h"
-#include "cli/job.h"
-#include "cli/spec.h"
+#include "cli/plot/image_io.h"
+#include "cli/config/job.h"
+#include "cli/config/spec.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"
 #include "kinematics/mesh.h"

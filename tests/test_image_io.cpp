@@ -1,7 +1,7 @@
-#include "cli/image_io.h"
+#include "cli/plot/image_io.h"
 
-#include "cli/commands.h"
-#include "cli/job.h"
+#include "cli/commands/commands.h"
+#include "cli/config/job.h"
 #include "kinematics/error.h"
 #include "kinematics/units.h"
 #include "planner/config_map.h"

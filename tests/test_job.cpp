@@ -1,7 +1,7 @@
-#include "cli/job.h"
+#include "cli/config/job.h"
 
-#include "cli/robot_file.h"
-#include "cli/yaml_reader.h"
+#include "cli/config/robot_file.h"
+#include "cli/config/yaml_reader.h"
 #include "kinematics/error.h"
 #include "kinematics/mesh.h"
 #include "tests/test_support.h"

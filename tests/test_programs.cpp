@@ -15,8 +15,8 @@
 #include <string>
 #include <vector>
 
-#include "cli/job.h"
-#include "cli/programs.h"
+#include "cli/config/job.h"
+#include "cli/programs/programs.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"
 #include "kinematics/trajectory.h"

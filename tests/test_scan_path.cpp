@@ -23,7 +23,7 @@
 
 #include <Eigen/Geometry>
 
-#include "cli/job.h"
+#include "cli/config/job.h"
 #include "kinematics/error.h"
 #include "kinematics/mesh.h"
 #include "kinematics/scan_path.h"

@@ -24,7 +24,7 @@
 
 #include <Eigen/Geometry>
 
-#include "cli/job.h"
+#include "cli/config/job.h"
 #include "kinematics/cell.h"
 #include "kinematics/error.h"
 #include "kinematics/mesh.h"

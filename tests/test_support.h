@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "cli/robot_file.h"
+#include "cli/config/robot_file.h"
 #include "kinematics/error.h"
 #include "kinematics/robot_model.h"
 

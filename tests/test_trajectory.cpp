@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "cli/commands.h"
-#include "cli/job.h"
+#include "cli/commands/commands.h"
+#include "cli/config/job.h"
 #include "cli/planning.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"

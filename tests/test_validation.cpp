@@ -14,8 +14,8 @@
 
 #include <tbb/global_control.h>
 
-#include "cli/commands.h"
-#include "cli/job.h"
+#include "cli/commands/commands.h"
+#include "cli/config/job.h"
 #include "cli/planning.h"
 #include "collision/clearance.h"
 #include "collision/scene.h"

@@ -10,7 +10,7 @@
 #include <fstream>
 #include <string>
 
-#include "cli/batch.h"
+#include "cli/batch/batch.h"
 
 using namespace scanplan;
 namespace fs = std::filesystem;

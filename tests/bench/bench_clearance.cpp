@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "cli/job.h"
+#include "cli/config/job.h"
 #include "collision/clearance.h"
 #include "collision/scene.h"
 #include "kinematics/mesh.h"

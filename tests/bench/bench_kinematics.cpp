@@ -6,7 +6,7 @@
 #include <random>
 #include <vector>
 
-#include "cli/robot_file.h"
+#include "cli/config/robot_file.h"
 #include "kinematics/robot_model.h"
 
 using namespace scanplan;

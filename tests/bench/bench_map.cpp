@@ -10,7 +10,7 @@
 
 #include <tbb/global_control.h>
 
-#include "cli/job.h"
+#include "cli/config/job.h"
 #include "collision/scene.h"
 #include "kinematics/mesh.h"
 #include "kinematics/units.h"

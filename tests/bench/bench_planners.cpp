@@ -14,8 +14,8 @@
 
 #include <tbb/global_control.h>
 
-#include "cli/commands.h"
-#include "cli/job.h"
+#include "cli/commands/commands.h"
+#include "cli/config/job.h"
 #include "collision/scene.h"
 #include "kinematics/units.h"
 #include "planner/config_map.h"

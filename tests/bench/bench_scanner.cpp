@@ -25,7 +25,7 @@
 #include <tbb/task_arena.h>
 #include <time.h>
 
-#include "cli/job.h"
+#include "cli/config/job.h"
 #include "kinematics/mesh.h"
 #include "kinematics/pose.h"
 #include "kinematics/shape.h"

@@ -10,10 +10,10 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include "cli/bitmap_font.h"
-#include "cli/commands.h"
-#include "cli/format.h"
-#include "cli/image_io.h"
+#include "cli/plot/bitmap_font.h"
+#include "cli/commands/commands.h"
+#include "cli/io/output.h"
+#include "cli/plot/image_io.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"
 #include "kinematics/mesh.h"
@@ -135,7 +135,7 @@ void writeMapFigure(const std::filesystem::path& dir,
                     const RgbImage& raster,
                     const planner::ConfigMap& map,
                     FigureLabels labels) {
-  // At least ~1000 px wide and 40 % as tall as wide (as the path figure, commands_plan.cpp): a
+  // At least ~1000 px wide and 40 % as tall as wide (as the path figure, cli/commands/plan.cpp): a
   // 1095 × 180 map is not a thin strip; nearest-neighbour blocks keep every cell's colour.
   const int fx = std::max(1, 1000 / std::max(raster.width, 1));
   const int fy = std::max(

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "cli/app.h"
-#include "cli/image_io.h"
+#include "cli/plot/image_io.h"
 
 namespace scanplan::cli {
 

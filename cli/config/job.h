@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "cli/robot_file.h"
-#include "cli/spec.h"
+#include "cli/config/robot_file.h"
+#include "cli/config/spec.h"
 #include "collision/scene.h"
 #include "kinematics/cell.h"
 #include "planner/constraints.h"

@@ -1,4 +1,4 @@
-#include "cli/robot_file.h"
+#include "cli/config/robot_file.h"
 
 #include <fmt/format.h>
 

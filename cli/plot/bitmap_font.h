@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "cli/image_io.h"
+#include "cli/plot/image_io.h"
 
 namespace scanplan::cli {
 

@@ -1,4 +1,4 @@
-#include "cli/image_io.h"
+#include "cli/plot/image_io.h"
 
 #include <algorithm>
 #include <array>
@@ -15,7 +15,7 @@
 #include <png.h>
 #include <Eigen/Geometry>
 
-#include "cli/format.h"
+#include "cli/io/output.h"
 #include "kinematics/error.h"
 
 namespace scanplan::cli {

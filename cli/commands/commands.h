@@ -8,8 +8,8 @@
 #include <mutex>
 
 #include "cli/app.h"
-#include "cli/image_io.h"
-#include "cli/job.h"
+#include "cli/plot/image_io.h"
+#include "cli/config/job.h"
 #include "kinematics/mesh.h"
 #include "planner/config_map.h"
 

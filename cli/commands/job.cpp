@@ -4,8 +4,8 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include "cli/commands.h"
-#include "cli/format.h"
+#include "cli/commands/commands.h"
+#include "cli/io/output.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"
 #include "kinematics/mesh.h"

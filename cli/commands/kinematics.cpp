@@ -4,9 +4,9 @@
 
 #include <fmt/format.h>
 
-#include "cli/commands.h"
-#include "cli/format.h"
-#include "cli/robot_file.h"
+#include "cli/commands/commands.h"
+#include "cli/io/output.h"
+#include "cli/config/robot_file.h"
 #include "kinematics/error.h"
 #include "kinematics/pose.h"
 #include "kinematics/units.h"

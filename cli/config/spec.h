@@ -6,7 +6,7 @@
 
 #include <Eigen/Geometry>
 
-#include "cli/yaml_reader.h"
+#include "cli/config/yaml_reader.h"
 #include "kinematics/shape.h"
 
 namespace scanplan::cli {

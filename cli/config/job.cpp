@@ -1,4 +1,4 @@
-#include "cli/job.h"
+#include "cli/config/job.h"
 
 #include <algorithm>
 #include <cmath>
@@ -11,7 +11,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include "cli/programs.h"
+#include "cli/programs/programs.h"
 #include "kinematics/error.h"
 #include "kinematics/units.h"
 

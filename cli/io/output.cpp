@@ -1,4 +1,4 @@
-#include "cli/format.h"
+#include "cli/io/output.h"
 
 #include <cerrno>
 #include <cmath>
@@ -12,7 +12,7 @@
 
 #include <fmt/format.h>
 
-#include "cli/yaml_reader.h"
+#include "cli/config/yaml_reader.h"
 #include "kinematics/error.h"
 
 namespace scanplan::cli {

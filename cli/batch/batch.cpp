@@ -1,6 +1,6 @@
 // `scanplan batch`: sweep files, case expansion, running cases in parallel with map reuse,
 // the results files, summary, plots, shard merge and the OMPL benchmark log.
-#include "cli/batch.h"
+#include "cli/batch/batch.h"
 
 #include <unistd.h>
 
@@ -29,11 +29,11 @@
 #include <tbb/task_arena.h>
 #include <yaml-cpp/yaml.h>
 
-#include "cli/bitmap_font.h"
-#include "cli/commands.h"
-#include "cli/format.h"
-#include "cli/image_io.h"
-#include "cli/job.h"
+#include "cli/plot/bitmap_font.h"
+#include "cli/commands/commands.h"
+#include "cli/io/output.h"
+#include "cli/plot/image_io.h"
+#include "cli/config/job.h"
 #include "cli/planning.h"
 #include "cli/verify.h"
 #include "collision/scene.h"
@@ -330,7 +330,7 @@ BatchRow rowFor(const SweepCase& c) {
   return row;
 }
 
-// The `plan` pipeline after the map (commands_plan.cpp), without its files.
+// The `plan` pipeline after the map (cli/commands/plan.cpp), without its files.
 void planCase(const JobSpec& job, const MapBundle& bundle, BatchRow& row) {
   using Status = planner::PlanResult::Status;
   auto& m = row.metrics;

@@ -1,4 +1,4 @@
-#include "cli/programs.h"
+#include "cli/programs/programs.h"
 
 #include <algorithm>
 #include <cctype>

@@ -1,4 +1,4 @@
-#include "cli/spec.h"
+#include "cli/config/spec.h"
 
 #include "kinematics/pose.h"
 #include "kinematics/units.h"

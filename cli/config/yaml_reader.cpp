@@ -1,4 +1,4 @@
-#include "cli/yaml_reader.h"
+#include "cli/config/yaml_reader.h"
 
 #include <algorithm>
 #include <cctype>

@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "cli/spec.h"
-#include "cli/yaml_reader.h"
+#include "cli/config/spec.h"
+#include "cli/config/yaml_reader.h"
 #include "kinematics/robot_model.h"
 
 namespace scanplan::cli {

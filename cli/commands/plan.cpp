@@ -9,9 +9,9 @@
 
 #include <fmt/format.h>
 
-#include "cli/commands.h"
-#include "cli/format.h"
-#include "cli/image_io.h"
+#include "cli/commands/commands.h"
+#include "cli/io/output.h"
+#include "cli/plot/image_io.h"
 #include "cli/planning.h"
 #include "cli/verify.h"
 #include "collision/scene.h"

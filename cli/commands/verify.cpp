@@ -7,9 +7,9 @@
 #include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
-#include "cli/commands.h"
-#include "cli/format.h"
-#include "cli/programs.h"
+#include "cli/commands/commands.h"
+#include "cli/io/output.h"
+#include "cli/programs/programs.h"
 #include "cli/verify.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"

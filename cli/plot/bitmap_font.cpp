@@ -1,4 +1,4 @@
-#include "cli/bitmap_font.h"
+#include "cli/plot/bitmap_font.h"
 
 #include <algorithm>
 #include <array>
