@@ -91,7 +91,7 @@ std::string columnLimits(const planner::ConfigMap& map, std::size_t branch, std:
 bool continuousTable(const JobSpec& job) { return job.table.continuous; }
 
 std::optional<double> PlanningOutcome::dpGap() const {
-  if (!solved() || !dp || dp->status != Status::kSolved || !(dp->terms.total > 0.0)) {
+  if (!solved() || !dp || dp->status != Status::kExact || !(dp->terms.total > 0.0)) {
     return std::nullopt;
   }
   return (terms.total - dp->terms.total) / dp->terms.total;
@@ -117,13 +117,13 @@ PlannerOutcome runPlanner(const std::string& method,
     } else {
       r = planOne(method, map, b, job);
     }
-    if (r.status == Status::kSolved && (!any || r.terms.total < out.result.terms.total)) {
+    if (r.status == Status::kExact && (!any || r.terms.total < out.result.terms.total)) {
       out.result = r;
       any = true;
     }
     reasons += fmt::format(
         "\n  {}: {}", map.branches[b].words(),
-        r.status == Status::kSolved ? fmt::format("J = {:.4f} s", r.terms.total) : r.reason);
+        r.status == Status::kExact ? fmt::format("J = {:.4f} s", r.terms.total) : r.reason);
   }
   if (!any) {
     out.result = planner::PlanResult{};
@@ -148,7 +148,7 @@ PlanningOutcome planJob(const planner::ConfigMap& map,
 
   std::vector<std::size_t> order;
   for (std::size_t b = 0; b < out.chosen.branches.size(); ++b) {
-    if (out.chosen.branches[b].status == Status::kSolved) order.push_back(b);
+    if (out.chosen.branches[b].status == Status::kExact) order.push_back(b);
   }
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
     return out.chosen.branches[a].terms.total < out.chosen.branches[b].terms.total;

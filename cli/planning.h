@@ -16,7 +16,7 @@ namespace scanplan::cli {
 /// One planner run over the map: every branch tried, the best solved one kept.
 struct PlannerOutcome {
   std::string method;                         ///< ray | dp | ompl
-  planner::PlanResult result;                 ///< the best branch's (kSolved), or a kNoPath
+  planner::PlanResult result;                 ///< the best branch's (kExact), or why none
   std::vector<planner::PlanResult> branches;  ///< per map branch (status kNoPath when skipped)
   double seconds = 0.0;                       ///< all branches
 };
@@ -32,7 +32,7 @@ struct PlanningOutcome {
   std::vector<PlannerOutcome> others;           ///< --compare: the other planners, same branch
   /// Branches whose path the check turned down, best J first, with the reason.
   std::vector<std::pair<std::size_t, std::string>> rejected;
-  bool solved() const { return chosen.result.status == planner::PlanResult::Status::kSolved; }
+  bool solved() const { return chosen.result.status == planner::PlanResult::Status::kExact; }
   /// (J − J_dp) / J_dp of the final path, when DP solved; negative when the continuous path beats
   /// DP's grid.
   std::optional<double> dpGap() const;

@@ -19,13 +19,6 @@ namespace scanplan::cli {
 
 namespace {
 
-scanner::CameraRule cameraRule(const std::string& name) {
-  if (name == "negative") return scanner::CameraRule::kNegative;
-  if (name == "both") return scanner::CameraRule::kBoth;
-  if (name == "either") return scanner::CameraRule::kEither;
-  return scanner::CameraRule::kPositive;
-}
-
 std::string readWhole(const std::filesystem::path& file) {
   std::error_code ec;
   if (!std::filesystem::exists(file, ec)) {
@@ -41,15 +34,6 @@ std::string readWhole(const std::filesystem::path& file) {
 Rgb toRgb(const std::array<std::uint8_t, 3>& c) { return {c[0], c[1], c[2]}; }
 
 }  // namespace
-
-planner::ValidationSettings validationSettings(const JobSpec& job) {
-  planner::ValidationSettings s;
-  s.sample_dt = 1.0 / job.scanner.frame_rate_hz;
-  s.table_omega_max = deg(job.table.max_speed_deg_s);
-  s.table_alpha_max = deg(job.table.max_accel_deg_s2);
-  s.collision_resolution = job.validation.collision_resolution_mm * kMmToM;
-  return s;
-}
 
 kinematics::Trajectory loadTrajectoryFile(const std::filesystem::path& file) {
   const std::string text = readWhole(file);
@@ -173,36 +157,8 @@ SimulationRun simulateTrajectory(const JobSpec& job,
                                  const kinematics::CellModel& cell,
                                  const kinematics::TriangleMesh& part,
                                  const kinematics::Trajectory& trajectory) {
-  const auto start = std::chrono::steady_clock::now();
-  const kinematics::Trajectory dense =
-      planner::densify(trajectory, 1.0 / job.scanner.frame_rate_hz);
-  std::vector<scanner::ScanFrame> frames;
-  for (const auto& s : dense.samples) {
-    if (s.scanning) frames.push_back({s.t, s.theta, s.q});
-  }
-  scanner::SimulationSettings settings;
-  settings.rays_per_profile = job.scanner.rays_per_profile;
-  settings.cameras = cameraRule(job.scanner.cameras);
-  settings.sigma_longitudinal = job.scanner.noise.longitudinal_mm * kMmToM;
-  settings.sigma_orthogonal = job.scanner.noise.orthogonal_mm * kMmToM;
-  settings.seed = static_cast<std::uint64_t>(job.scanner.noise.seed);
-  const auto& e = job.simulation.extra_eccentricity_mm;
-  const auto& t = job.simulation.extra_tilt_deg;
-  if (e[0] != 0.0 || e[1] != 0.0 || t[0] != 0.0 || t[1] != 0.0) {
-    kinematics::RotaryTableModel real = cell.table;
-    real.eccentricity += Eigen::Vector2d(e[0], e[1]) * kMmToM;
-    real.tilt += Eigen::Vector2d(deg(t[0]), deg(t[1]));
-    settings.simulated_table = real;
-  }
-  const scanner::ScanSimulator simulator(cell, part);
-  SimulationRun run;
-  run.frames = frames.size();
-  run.cloud = simulator.simulate(frames, laserOptics(job), settings);
-  scanner::CoverageSettings coverage;
-  coverage.min_points = static_cast<std::uint32_t>(job.simulation.coverage_min_points);
-  run.coverage = scanner::computeCoverage(part, run.cloud.points, coverage);
-  run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return run;
+  return pipeline::simulateTrajectory(cell, part, laserOptics(job), simulationSettings(job, cell),
+                                      trajectory);
 }
 
 void writeSimulationOutputs(const std::filesystem::path& dir,

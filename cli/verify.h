@@ -7,6 +7,8 @@
 
 #include "cli/io/output.h"
 #include "cli/config/job.h"
+#include "cli/config/problem.h"
+#include "pipeline/simulation.h"
 #include "kinematics/mesh.h"
 #include "kinematics/trajectory.h"
 #include "planner/validation.h"
@@ -15,8 +17,7 @@
 
 namespace scanplan::cli {
 
-/// The job's validation settings: densified at the scanner frame rate, the table's bounds.
-planner::ValidationSettings validationSettings(const JobSpec& job);
+/// (validationSettings() is in cli/config/problem.h.)
 
 /// A trajectory file: the CSV interchange format, or a V+ program written by `plan`/`export`
 /// (recognised by its .PROGRAM line); errors name the file and the line.
@@ -29,13 +30,7 @@ void writeValidationJson(JsonWriter& json,
                          const std::string& key,
                          const planner::ValidationReport& report);
 
-/// One simulation run and the coverage of the part it gives.
-struct SimulationRun {
-  scanner::SimulatedCloud cloud;
-  scanner::PartCoverage coverage;
-  std::size_t frames = 0;  ///< profiles acquired (densified samples with scanning on)
-  double seconds = 0.0;
-};
+using SimulationRun = pipeline::SimulationRun;
 
 /// The scanner simulated along the trajectory: a profile every 1/frame_rate s while the path
 /// scans, the job's fan, cameras, noise and (optional) extra table error.

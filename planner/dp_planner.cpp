@@ -198,7 +198,7 @@ PlanResult planDp(const ConfigMap& map,
   if (!(std::abs(t.total - best_value) <= 1e-9 * std::max(1.0, std::abs(best_value)))) {
     throw std::logic_error("planDp: backtracked path does not reproduce the optimum");
   }
-  result.status = PlanResult::Status::kSolved;
+  result.status = PlanResult::Status::kExact;
   return finish(result);
 }
 
@@ -247,7 +247,7 @@ PlanResult planDpRefined(const ConfigMap& map,
   });
   PlanResult result = planDp(fine, 0, settings, continuous, start_theta);
   result.branch = branch;
-  if (result.status == PlanResult::Status::kSolved) {
+  if (result.status == PlanResult::Status::kExact) {
     result.terms = evaluate(map, branch, result.theta, settings, continuous);
     if (!result.terms.feasible) throw std::logic_error("planDpRefined: infeasible optimum");
   }

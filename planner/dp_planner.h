@@ -7,22 +7,10 @@
 
 #include "planner/config_map.h"
 #include "planner/objective.h"
+#include "planner/plan_result.h"
 
 namespace scanplan::planner {
 
-/// A planner's answer. A partial path is never returned: `theta` is empty unless kSolved.
-struct PlanResult {
-  enum class Status { kSolved, kNoPath } status = Status::kNoPath;
-  std::vector<double> theta;  ///< rad, one per time sample, unwrapped (see evaluate())
-  ObjectiveTerms terms;       ///< of `theta` (kSolved only)
-  double seconds = 0.0;       ///< wall time spent planning
-  std::size_t branch = 0;     ///< the map branch planned on
-  std::string reason;         ///< kNoPath: the first time sample no feasible path reaches, and why
-  bool approximate = false;   ///< kNoPath from a sampling planner (OMPL): it ended with only an
-                              ///< approximate (partial) solution, not returned
-  std::string detail;         ///< planner-specific notes, e.g. OMPL's planner, exact/approximate,
-                              ///< iterations and tree size (empty for DP and Ray Shooting)
-};
 
 /// The exact optimum of the discretised problem (DESIGN.md §5.2): dynamic programming over
 /// (grid angle, previous step). The path sits on grid angles and moves an integer number d_k of

@@ -368,7 +368,9 @@ PlanResult planOmpl(const ConfigMap& map,
       std::chrono::duration<double>(std::chrono::steady_clock::now() - solve_start).count();
   const bool exact = status == ob::PlannerStatus::EXACT_SOLUTION;
   const bool approximate = status == ob::PlannerStatus::APPROXIMATE_SOLUTION;
-  result.approximate = approximate;
+  result.status = approximate                               ? PlanResult::Status::kApproximate
+                  : status == ob::PlannerStatus::TIMEOUT    ? PlanResult::Status::kTimeout
+                                                            : PlanResult::Status::kNoPath;
   result.detail = fmt::format(
       "OMPL {}: {} after {:.3f} s{}, {} start state{}", plannerName(os.planner),
       exact         ? "exact solution"
@@ -439,7 +441,7 @@ PlanResult planOmpl(const ConfigMap& map,
         terms.max_abs_alpha);
     return finish();
   }
-  result.status = PlanResult::Status::kSolved;
+  result.status = PlanResult::Status::kExact;
   result.theta = std::move(out);
   result.terms = terms;
   return finish();

@@ -55,11 +55,12 @@ struct OmplSettings {
 /// f > 0 (several start states of one problem). A time column with f = 0 everywhere (or a
 /// blocked start) is reported before OMPL runs.
 ///
-/// kSolved only with an exact OMPL solution whose per-sample path (one angle per time sample,
+/// kExact only with an exact OMPL solution whose per-sample path (one angle per time sample,
 /// unwrapped, first = the start) evaluate() calls feasible; `terms` = evaluate() of it. Otherwise
-/// kNoPath, `theta` empty, `reason` naming the first time sample not reached; `approximate` says
-/// OMPL ended with only an approximate solution (the furthest sample it reached is in `reason`),
-/// `detail` (always) the planner, OMPL's status, solve time and iterations.
+/// `theta` empty, `reason` naming the first time sample not reached, and the status: kApproximate
+/// when OMPL ended with only an approximate solution (the furthest sample it reached is in
+/// `reason`), kTimeout when OMPL reports a timeout without one, kNoPath otherwise; `detail`
+/// (always) the planner, OMPL's status, solve time and iterations.
 ///
 /// Determinism: OMPL draws every seed from one process-wide generator, so calls are serialised
 /// (a process-wide mutex) and the generator is reseeded with `seed` before anything is built.

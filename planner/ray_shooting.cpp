@@ -209,8 +209,8 @@ PlanResult planRayShooting(const ConfigMap& map,
     if (run.theta.size() == nt) {
       const ObjectiveTerms terms = evaluate(map, branch, run.theta, settings, continuous);
       if (terms.feasible) {
-        if (result.status != PlanResult::Status::kSolved || terms.total < result.terms.total) {
-          result.status = PlanResult::Status::kSolved;
+        if (result.status != PlanResult::Status::kExact || terms.total < result.terms.total) {
+          result.status = PlanResult::Status::kExact;
           result.terms = terms;
           result.theta = run.theta;
         }
@@ -225,7 +225,7 @@ PlanResult planRayShooting(const ConfigMap& map,
       furthest = i;
     }
   }
-  if (result.status != PlanResult::Status::kSolved) {
+  if (result.status != PlanResult::Status::kExact) {
     result.reason = fmt::format(
         "no start of {} reached the end; the furthest (theta0 = {} rad) "
         "stopped: {}",

@@ -33,7 +33,7 @@ struct RayShootingSettings {
 /// step (θ) and half an acceleration step (α_max·Δt, ω) of another run's state at a higher cost
 /// so far is dropped — from nearly the same state both would shoot nearly the same rays — so
 /// starts that collapse into one corridor cost one run. Each ray stops as soon as its partial
-/// cost exceeds the best complete ray's (every term is ≥ 0), which does not change the choice. kSolved only when evaluate() calls the path feasible; otherwise kNoPath with the reason
+/// cost exceeds the best complete ray's (every term is ≥ 0), which does not change the choice. kExact only when evaluate() calls the path feasible; otherwise kNoPath with the reason
 /// (the furthest time sample any run reached, and why it stopped). Deterministic: the runs are
 /// independent (TBB over starts) and combined in start order.
 PlanResult planRayShooting(const ConfigMap& map,

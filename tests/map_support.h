@@ -110,7 +110,7 @@ inline ::testing::AssertionResult solvedAndFeasible(const planner::ConfigMap& ma
                                                     const planner::PlannerSettings& s,
                                                     bool continuous,
                                                     bool sampling = false) {
-  if (r.status != planner::PlanResult::Status::kSolved) {
+  if (r.status != planner::PlanResult::Status::kExact) {
     auto failure = ::testing::AssertionFailure() << "kNoPath: " << r.reason;
     if (sampling) failure << " [" << r.detail << "]";
     return failure;
@@ -118,7 +118,7 @@ inline ::testing::AssertionResult solvedAndFeasible(const planner::ConfigMap& ma
   if (r.theta.size() != map.times.size()) {
     return ::testing::AssertionFailure() << r.theta.size() << " angles for " << map.times.size();
   }
-  if (sampling && r.approximate) {
+  if (sampling && r.status == planner::PlannerStatus::kApproximate) {
     return ::testing::AssertionFailure() << "solved but flagged approximate";
   }
   const planner::ObjectiveTerms e = planner::evaluate(map, 0, r.theta, s, continuous);

@@ -42,7 +42,7 @@ void expectConsistent(const ConfigMap& map,
                       const PlanResult& r,
                       const PlannerSettings& s,
                       bool continuous) {
-  ASSERT_EQ(r.status, Status::kSolved) << r.reason;
+  ASSERT_EQ(r.status, Status::kExact) << r.reason;
   ASSERT_EQ(r.theta.size(), map.times.size());
   const ObjectiveTerms e = evaluate(map, 0, r.theta, s, continuous);
   EXPECT_TRUE(e.feasible) << "max|w| " << e.max_abs_omega << " max|a| " << e.max_abs_alpha
@@ -382,8 +382,8 @@ TEST(DpPlanner, RefinedEqualsDpOnTheResampledMap) {
   s.omega_max = 4.0 * angleStep(fine) / 0.1;
   const PlanResult a = planDpRefined(map, 0, s, true, static_cast<int>(r));
   const PlanResult b = planDp(fine, 0, s, true);
-  ASSERT_EQ(a.status, Status::kSolved) << a.reason;
-  ASSERT_EQ(b.status, Status::kSolved) << b.reason;
+  ASSERT_EQ(a.status, Status::kExact) << a.reason;
+  ASSERT_EQ(b.status, Status::kExact) << b.reason;
   ASSERT_EQ(a.theta.size(), b.theta.size());
   for (std::size_t k = 0; k < a.theta.size(); ++k) EXPECT_NEAR(a.theta[k], b.theta[k], 1e-12);
   EXPECT_NEAR(a.terms.total, b.terms.total, 1e-6 * b.terms.total);

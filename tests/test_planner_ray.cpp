@@ -105,7 +105,7 @@ TEST(RayShooting, BlockedFirstColumnOrStartIsNoPathAtSampleZero) {
   EXPECT_EQ(fixed.status, Status::kNoPath);
   EXPECT_NE(fixed.reason.find("time sample 0 "), std::string::npos) << fixed.reason;
   const PlanResult free = planRayShooting(map, 0, {}, true, {});
-  ASSERT_EQ(free.status, Status::kSolved) << free.reason;
+  ASSERT_EQ(free.status, Status::kExact) << free.reason;
   EXPECT_DOUBLE_EQ(free.theta.front(), map.angles[5]);  // the only open start
   const ConfigMap closed =
       makeMap(36, 10, 0.1, true, [](std::size_t, std::size_t k) { return k == 0 ? 0.0f : 0.8f; });
@@ -125,14 +125,14 @@ TEST(RayShooting, SolvedPathsAreFeasibleOnRandomMapsAndTheDpGapIsRecorded) {
     const PlanResult ray = planRayShooting(map, 0, s, continuous, {});
     const PlanResult dp = planDp(map, 0, s, continuous);
     SCOPED_TRACE("trial " + std::to_string(trial));
-    if (ray.status != Status::kSolved) {
+    if (ray.status != Status::kExact) {
       EXPECT_FALSE(ray.reason.empty());
       EXPECT_TRUE(ray.theta.empty());
       continue;
     }
     ++solved;
     EXPECT_TRUE(solvedAndFeasible(map, ray, s, continuous));
-    if (dp.status == Status::kSolved) {
+    if (dp.status == Status::kExact) {
       ++both;
       RecordProperty("gap_trial_" + std::to_string(trial),
                      std::to_string(ray.terms.total - dp.terms.total));

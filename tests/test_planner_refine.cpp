@@ -312,7 +312,7 @@ TEST(Refine, NeverRaisesJOnDpAndRayShootingPaths) {
     SCOPED_TRACE("trial " + std::to_string(trial));
     for (const PlanResult& plan :
          {planDp(map, 0, s, continuous), planRayShooting(map, 0, s, continuous, {})}) {
-      if (plan.status != Status::kSolved) continue;
+      if (plan.status != Status::kExact) continue;
       const RefineResult r = refinePath(map, 0, plan.theta, s, continuous);
       ++refined;
       // A moving grid path or greedy ray always leaves room in continuous θ. A path standing on a
@@ -403,7 +403,7 @@ TEST(Refine, SmoothsTheGridStepsOfADpPathInAShiftingCorridor) {
   PlannerSettings s;
   s.alpha_max = 2.0;  // A = 1: DP can change its step by one grid step per sample
   const PlanResult dp = planDp(map, 0, s, true);
-  ASSERT_EQ(dp.status, Status::kSolved) << dp.reason;
+  ASSERT_EQ(dp.status, Status::kExact) << dp.reason;
   const RefineResult r = refinePath(map, 0, dp.theta, s, true);
   EXPECT_TRUE(keepsGuarantees(map, dp.theta, r, s, true)) << r.stop_reason;
   ASSERT_TRUE(r.improved) << r.stop_reason;
@@ -448,7 +448,7 @@ TEST(Refine, ThousandSampleDpPathWithForbiddenBlobs) {
   PlannerSettings s;
   s.alpha_max = 2.0;
   const PlanResult dp = planDp(map, 0, s, true);
-  ASSERT_EQ(dp.status, Status::kSolved) << dp.reason;
+  ASSERT_EQ(dp.status, Status::kExact) << dp.reason;
   const RefineResult r = refinePath(map, 0, dp.theta, s, true);
   EXPECT_TRUE(keepsGuarantees(map, dp.theta, r, s, true)) << r.stop_reason;
   EXPECT_TRUE(r.improved) << r.stop_reason;
@@ -464,7 +464,7 @@ TEST(Refine, DeterministicBitForBit) {
   PlannerSettings s;
   s.alpha_max = 2.0;
   const PlanResult dp = planDp(map, 0, s, true);
-  ASSERT_EQ(dp.status, Status::kSolved) << dp.reason;
+  ASSERT_EQ(dp.status, Status::kExact) << dp.reason;
   const RefineResult a = refinePath(map, 0, dp.theta, s, true);
   const RefineResult b = refinePath(map, 0, dp.theta, s, true);
   ASSERT_EQ(a.theta.size(), b.theta.size());
@@ -480,7 +480,7 @@ TEST(Refine, KeepStartHoldsTheFirstAngle) {
   PlannerSettings s;
   s.alpha_max = 2.0;
   const PlanResult dp = planDp(map, 0, s, true, map.angles[17]);
-  ASSERT_EQ(dp.status, Status::kSolved) << dp.reason;
+  ASSERT_EQ(dp.status, Status::kExact) << dp.reason;
   RefineSettings rs;
   rs.keep_start = true;
   const RefineResult r = refinePath(map, 0, dp.theta, s, true, rs);
@@ -495,7 +495,7 @@ TEST(Refine, EvaluationBudgetIsRespectedAndStillSafe) {
   PlannerSettings s;
   s.alpha_max = 2.0;
   const PlanResult dp = planDp(map, 0, s, true);
-  ASSERT_EQ(dp.status, Status::kSolved) << dp.reason;
+  ASSERT_EQ(dp.status, Status::kExact) << dp.reason;
   for (const int budget : {1, 5, 30}) {
     RefineSettings rs;
     rs.max_evaluations = budget;

@@ -357,7 +357,7 @@ void planCase(const JobSpec& job, const MapBundle& bundle, BatchRow& row) {
   // not the planner's. With method dp the yardstick is the chosen result itself: nothing more ran.
   if (planning.dp && row.method != "dp") m[kDpS] = planning.dp->seconds;
   m[kPlanS] = planning_s - m[kDpS].value_or(0.0);
-  if (planning.dp && planning.dp->status == Status::kSolved) {
+  if (planning.dp && planning.dp->status == Status::kExact) {
     if (const auto gap = planning.dpGap()) m[kGap] = 100.0 * *gap;
   }
   if (!planning.solved()) {

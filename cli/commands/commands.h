@@ -10,6 +10,7 @@
 #include "cli/app.h"
 #include "cli/plot/image_io.h"
 #include "cli/config/job.h"
+#include "cli/config/problem.h"
 #include "kinematics/mesh.h"
 #include "planner/config_map.h"
 
@@ -134,8 +135,6 @@ ExitCode runFk(const FkOptions& options);
 ExitCode runIk(const IkOptions& options);
 ExitCode runJobShow(const std::filesystem::path& job_file,
                     const std::vector<std::string>& overrides);
-/// The job's part mesh; errors name the job and the field.
-kinematics::LoadedMesh loadPart(const JobSpec& job, const kinematics::CellModel& cell);
 /// Without a scan path: can the sensor reach a pose above the part as the table turns?
 std::string reachCheck(const JobSpec& job,
                        const kinematics::CellModel& cell,

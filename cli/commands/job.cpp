@@ -14,18 +14,6 @@
 
 namespace scanplan::cli {
 
-kinematics::LoadedMesh loadPart(const JobSpec& job, const kinematics::CellModel& cell) {
-  try {
-    kinematics::LoadedMesh part = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
-    for (const std::string& w : part.report.warnings) {
-      spdlog::warn("{}: part.mesh: {}", job.source.filename().string(), w);
-    }
-    return part;
-  } catch (const InputError& e) {
-    throw InputError(fmt::format("{}: part.mesh: {}", job.source.string(), e.what()));
-  }
-}
-
 // Without a scan path: can the sensor reach 150 mm above the part top, looking down, as the
 // table turns? A first look at whether the cell is laid out sensibly.
 std::string reachCheck(const JobSpec& job,

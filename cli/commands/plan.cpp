@@ -12,7 +12,7 @@
 #include "cli/commands/commands.h"
 #include "cli/io/output.h"
 #include "cli/plot/image_io.h"
-#include "cli/planning.h"
+#include "pipeline/plan_scan.h"
 #include "cli/verify.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"
@@ -24,7 +24,6 @@ namespace scanplan::cli {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-using Status = planner::PlanResult::Status;
 
 double since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -94,20 +93,17 @@ void writeTerms(JsonWriter& json, const planner::ObjectiveTerms& t) {
   json.value("cost_alpha_s", t.cost_alpha);
 }
 
-struct PlanTimes {
-  double path = 0, map = 0, plan = 0, trajectory = 0, validation = 0, simulation = 0, total = 0;
-};
 
 std::string reportJson(const JobSpec& job,
                        const kinematics::CellModel& cell,
                        const planner::ConfigMap& map,
-                       const PlanningOutcome& planning,
+                       const pipeline::PathChoice& planning,
                        const planner::TrajectoryBuild* trajectory,
                        const planner::ValidationReport* validation,
                        const SimulationRun* simulation,
                        const std::string& status,
                        const std::string& reason,
-                       const PlanTimes& times) {
+                       const pipeline::StageTimes& times) {
   JsonWriter json;
   json.beginObject();
   json.value("format", "scanplan plan report 1");
@@ -157,10 +153,10 @@ std::string reportJson(const JobSpec& job,
   }
   if (planning.dp) {
     json.beginObject("dp_baseline");
-    json.value("status", planning.dp->status == Status::kSolved ? "solved" : "no_path");
+    json.value("status", planning.dp->solved() ? "solved" : "no_path");
     json.value("angle_subdivisions", planning.dp_subdivisions);
     json.value("seconds", planning.dp->seconds);
-    if (planning.dp->status == Status::kSolved) json.value("J_s", planning.dp->terms.total);
+    if (planning.dp->solved()) json.value("J_s", planning.dp->terms.total);
     if (const auto gap = planning.dpGap()) json.value("gap_percent", 100.0 * *gap);
     json.endObject();
   }
@@ -179,8 +175,8 @@ std::string reportJson(const JobSpec& job,
     const planner::PlanResult& r = planning.chosen.branches[b];
     json.beginObject();
     json.value("branch", map.branches[b].words());
-    json.value("status", r.status == Status::kSolved ? "solved" : "no_path");
-    if (r.status == Status::kSolved) {
+    json.value("status", r.solved() ? "solved" : "no_path");
+    if (r.solved()) {
       json.value("J_s", r.terms.total);
     } else {
       json.value("reason", r.reason);
@@ -190,12 +186,12 @@ std::string reportJson(const JobSpec& job,
   json.endArray();
   if (!planning.others.empty()) {
     json.beginArray("compare");
-    for (const PlannerOutcome& o : planning.others) {
+    for (const pipeline::PlannerOutcome& o : planning.others) {
       json.beginObject();
       json.value("method", o.method);
-      json.value("status", o.result.status == Status::kSolved ? "solved" : "no_path");
+      json.value("status", o.result.solved() ? "solved" : "no_path");
       json.value("seconds", o.seconds);
-      if (o.result.status == Status::kSolved) {
+      if (o.result.solved()) {
         writeTerms(json, o.result.terms);
       } else {
         json.value("reason", o.result.reason);
@@ -232,6 +228,96 @@ std::string reportJson(const JobSpec& job,
   return json.str();
 }
 
+// The cell, as the first lines of the summary.
+std::string cellSummary(const JobSpec& job,
+                        const kinematics::CellModel& cell,
+                        const kinematics::LoadedMesh& part) {
+  std::string s = fmt::format("job        {} ({})\n", job.name, job.source.string());
+  s += fmt::format("robot      {}\n", cell.robot.name());
+  s += fmt::format(
+      "table      radius {} mm, axis at ({:.1f}, {:.1f}, {:.1f}) mm, {}\n", job.table.radius_mm,
+      toMm(cell.table.X_WA.translation().x()), toMm(cell.table.X_WA.translation().y()),
+      toMm(cell.table.X_WA.translation().z()),
+      job.table.continuous ? "continuous"
+                           : fmt::format("{} … {} deg", job.table.min_deg, job.table.max_deg));
+  const Eigen::Vector3d size = part.mesh.bounds().sizes() * kMToMm;
+  s += fmt::format("part       {}: {} triangles, {:.1f} x {:.1f} x {:.1f} mm, {}\n",
+                   job.part.mesh.as_written, part.mesh.triangles.size(), size.x(), size.y(),
+                   size.z(), part.mesh.isClosed() ? "closed" : "open (has holes)");
+  return s;
+}
+
+// planScan() with a progress line on a terminal; its input errors name the job file.
+pipeline::ScanPlan runPipeline(const JobSpec& job,
+                               const pipeline::ScanProblem& problem,
+                               const PlanOptions& options) {
+  Progress progress("map");
+  pipeline::PlanOptions po;
+  po.method = options.planner;
+  po.compare = options.compare;
+  po.refine = options.refine;
+  try {
+    return pipeline::planScan(problem, po, [&progress](std::string_view, std::size_t d,
+                                                       std::size_t n) { progress(d, n); });
+  } catch (const InputError& e) {
+    throw InputError(job.source.string() + ": " + e.what());
+  }
+}
+
+// The plan's lines after the map: the path, the choice, refinement, the DP gap, comparisons and
+// the trajectory.
+std::string choiceSummary(const pipeline::ScanPlan& plan) {
+  const planner::ConfigMap& map = plan.prepared->map;
+  const pipeline::PathChoice& c = plan.choice;
+  const planner::ObjectiveTerms& t = c.terms;
+  std::string s = fmt::format(
+      "plan       {} on {}: J = {:.3f} s (f {:.3f}, omega {:.3f}, alpha {:.3f}) in {:.2f} s\n",
+      c.chosen.method, map.branches[c.chosen.result.branch].words(), t.total, t.cost_f,
+      t.cost_omega, t.cost_alpha, c.chosen.seconds);
+  for (const auto& [b, why] : c.rejected) {
+    s += fmt::format("  rejected {} (lower J): {}\n", map.branches[b].words(), why);
+  }
+  if (c.refine) {
+    s += fmt::format("refine     J {:.3f} -> {:.3f} s ({})\n", c.refine->before.total,
+                     c.refine->after.total, c.refine->improved ? "improved" : "kept the input");
+  }
+  if (const auto gap = c.dpGap()) {
+    const double step = toDeg(map.angles[1] - map.angles[0]) / c.dp_subdivisions;
+    s += fmt::format("baseline   DP optimum J = {:.3f} s (grid {:.3g} deg): gap {:+.1f}%\n",
+                     c.dp->terms.total, step, 100.0 * *gap);
+  }
+  for (const pipeline::PlannerOutcome& o : c.others) {
+    s += o.result.solved() ? fmt::format("compare    {:<5} J = {:.3f} s in {:.2f} s\n", o.method,
+                                         o.result.terms.total, o.seconds)
+                           : fmt::format("compare    {:<5} no path: {}\n", o.method,
+                                         o.result.reason);
+  }
+  const planner::TrajectoryBuild& tb = *plan.trajectory;
+  const auto& worst = tb.trajectory.samples[tb.min_f_sample];
+  s += fmt::format(
+      "trajectory {} samples over {:.1f} s; table |omega| <= {:.1f} deg/s, |alpha| <= {:.1f} "
+      "deg/s^2; min f {:.3f} at t = {:.1f} s ({}); min clearance {}\n",
+      tb.trajectory.samples.size(), tb.trajectory.duration(), toDeg(t.max_abs_omega),
+      toDeg(t.max_abs_alpha), tb.min_f, worst.t, worst.limit,
+      std::isfinite(tb.min_clearance) ? fmt::format("{:.1f} mm", toMm(tb.min_clearance))
+                                      : std::string("beyond every d_high"));
+  return s;
+}
+
+// configmap_path.png/.svg: the chosen path and, with --compare, every other planner's.
+void writeChoiceFigure(const std::filesystem::path& out, const pipeline::ScanPlan& plan) {
+  const pipeline::PathChoice& c = plan.choice;
+  std::vector<std::pair<std::string, std::vector<double>>> drawn{{c.chosen.method, c.theta}};
+  std::vector<std::string> labels{fmt::format("{}{} J {:.2f} s", c.chosen.method,
+                                              c.refine ? " + refine" : "", c.terms.total)};
+  for (const pipeline::PlannerOutcome& o : c.others) {
+    if (!o.result.solved()) continue;
+    drawn.emplace_back(o.method, o.result.theta);
+    labels.push_back(fmt::format("{} J {:.2f} s", o.method, o.result.terms.total));
+  }
+  writePathFigure(out, plan.prepared->map, c.chosen.result.branch, drawn, labels);
+}
+
 }  // namespace
 
 // Everything `plan` may write into its output folder: on each run, what it does not write again
@@ -245,21 +331,7 @@ ExitCode runPlan(const PlanOptions& options) {
   const JobSpec job = loadJob(options.job_file, options.overrides);
   const kinematics::CellModel cell = buildCell(job);
   const kinematics::LoadedMesh part = loadPart(job, cell);
-  const std::string method = options.planner.empty() ? job.planner.method : options.planner;
-
-  std::string summary;
-  summary += fmt::format("job        {} ({})\n", job.name, job.source.string());
-  summary += fmt::format("robot      {}\n", cell.robot.name());
-  summary += fmt::format(
-      "table      radius {} mm, axis at ({:.1f}, {:.1f}, {:.1f}) mm, {}\n", job.table.radius_mm,
-      toMm(cell.table.X_WA.translation().x()), toMm(cell.table.X_WA.translation().y()),
-      toMm(cell.table.X_WA.translation().z()),
-      job.table.continuous ? "continuous"
-                           : fmt::format("{} … {} deg", job.table.min_deg, job.table.max_deg));
-  const Eigen::Vector3d size = part.mesh.bounds().sizes() * kMToMm;
-  summary += fmt::format("part       {}: {} triangles, {:.1f} x {:.1f} x {:.1f} mm, {}\n",
-                         job.part.mesh.as_written, part.mesh.triangles.size(), size.x(), size.y(),
-                         size.z(), part.mesh.isClosed() ? "closed" : "open (has holes)");
+  std::string summary = cellSummary(job, cell, part);
   OutputStage stage(options.out_dir, kPlanOutputs);
   const std::filesystem::path& out = stage.dir();
   writeFileAtomically(out / "job.yaml", jobToYaml(job));
@@ -271,89 +343,40 @@ ExitCode runPlan(const PlanOptions& options) {
     std::fputs(summary.c_str(), stdout);
     return ExitCode::kOk;
   }
-
-  PlanTimes times;
-  auto t0 = Clock::now();
-  const PathContext context = buildPath(job, cell);
-  times.path = since(t0);
-  const kinematics::ScanPath& path = context.generated.path;
-  const collision::Scene scene(cell, clearanceConfig(job));
-  const MapRun run = computeMap(job, scene, path);
-  times.map = run.seconds;
+  const pipeline::ScanProblem problem = toProblem(job, cell, part.mesh);
+  const pipeline::ScanPlan plan = runPipeline(job, problem, options);
+  const pipeline::PreparedScan& prepared = *plan.prepared;
+  const PathContext context{part, prepared.window, prepared.path};
   writePathOutputs(out, context);
-  writeMapOutputs(out, job, run.map);
-  summary += pathSummary(context) + mapSummary(run);
-
-  // Each candidate path is turned into joint motion before it is accepted: the map scores every
-  // cell on its own, but a path must also be followable continuously (joints such as J4 and J6
-  // cannot wrap past their limits) and keep f > 0 between the grid angles.
-  std::optional<planner::TrajectoryBuild> candidate;
-  const auto check = [&](std::size_t b, const std::vector<double>& theta) -> std::string {
-    const auto t = Clock::now();
-    candidate =
-        planner::buildTrajectory(scene, constraintSettings(job), path, theta, run.map.branches[b]);
-    times.trajectory += since(t);
-    if (!candidate->ok) return candidate->reason;
-    if (!(candidate->min_f > 0.0)) {
-      const auto& s = candidate->trajectory.samples[candidate->min_f_sample];
-      return fmt::format(
-          "time sample {} (t = {:.2f} s, table {:.2f} deg): f = 0 ({}) between the map's grid "
-          "angles; a finer map.angle_step_deg resolves it",
-          candidate->min_f_sample, s.t, toDeg(s.theta), s.limit);
-    }
-    return {};
-  };
-  t0 = Clock::now();
-  const PlanningOutcome planning =
-      planJob(run.map, job, method, options.compare, options.refine, check);
-  times.plan = since(t0) - times.trajectory;
-  const planner::ValidationReport* validated = nullptr;
-  const SimulationRun* simulated = nullptr;
-  const auto finish = [&](const std::string& status, const std::string& reason,
-                          const planner::TrajectoryBuild* trajectory) {
+  writeMapOutputs(out, job, prepared.map);
+  summary += pathSummary(context) + mapSummary(MapRun{prepared.map, prepared.map_seconds});
+  pipeline::StageTimes times = plan.times;
+  const auto finish = [&](const planner::TrajectoryBuild* trajectory) {
     times.total = since(start);
-    writeFileAtomically(out / "report.json",
-                        reportJson(job, cell, run.map, planning, trajectory, validated, simulated,
-                                   status, reason, times));
+    writeFileAtomically(
+        out / "report.json",
+        reportJson(job, cell, prepared.map, plan.choice, trajectory,
+                   plan.validation ? &*plan.validation : nullptr,
+                   plan.simulation ? &*plan.simulation : nullptr,
+                   std::string(pipeline::scanStatusName(plan.status)), plan.reason, times));
     stage.commit();
   };
-  if (!planning.solved()) {
-    finish(planning.rejected.empty() ? "no_path" : "no_executable_path",
-           planning.chosen.result.reason, nullptr);
-    summary += fmt::format("plan       NO PATH ({}): {}\n", method, planning.chosen.result.reason);
+  const std::string method = plan.choice.chosen.method;
+  if (!plan.trajectory) {
+    finish(nullptr);
+    summary += fmt::format("plan       NO PATH ({}): {}\n", method, plan.reason);
     summary += fmt::format("wrote      {}: job.yaml, report.json, {}\n", options.out_dir.string(),
                            kMapFilesNote);
     std::fputs(summary.c_str(), stdout);
     return ExitCode::kNoPlan;
   }
-  const std::size_t branch = planning.chosen.result.branch;
-  const planner::TrajectoryBuild& trajectory = *candidate;  // the accepted branch's, checked last
-  std::vector<std::pair<std::string, std::vector<double>>> drawn{{method, planning.theta}};
-  std::vector<std::string> labels{fmt::format(
-      "{}{} J {:.2f} s", method, planning.refine ? " + refine" : "", planning.terms.total)};
-  for (const PlannerOutcome& o : planning.others) {
-    if (o.result.status != Status::kSolved) continue;
-    drawn.emplace_back(o.method, o.result.theta);
-    labels.push_back(fmt::format("{} J {:.2f} s", o.method, o.result.terms.total));
-  }
-  writePathFigure(out, run.map, branch, drawn, labels);
-
-  // Prove the motion between the samples too, before anything goes to a robot.
-  std::optional<planner::ValidationReport> validation;
-  if (job.validation.enabled) {
-    t0 = Clock::now();
-    validation = planner::validateTrajectory(scene, trajectory.trajectory, validationSettings(job));
-    times.validation = since(t0);
-    validated = &*validation;
-  }
-  if (validation && !validation->valid) {
+  const kinematics::Trajectory& trajectory = plan.trajectory->trajectory;
+  writeChoiceFigure(out, plan);
+  if (plan.status == pipeline::ScanStatus::kInvalidTrajectory) {
     // Kept for inspection under a name no robot-side tool picks up as the plan.
-    writeFileAtomically(out / "trajectory_invalid.csv",
-                        kinematics::trajectoryToCsv(trajectory.trajectory));
-    finish("invalid_trajectory",
-           fmt::format("validation found {} violation(s)", validation->violations.size()),
-           &trajectory);
-    summary += validationSummary(*validation);
+    writeFileAtomically(out / "trajectory_invalid.csv", kinematics::trajectoryToCsv(trajectory));
+    finish(&*plan.trajectory);
+    summary += validationSummary(*plan.validation);
     summary += fmt::format(
         "plan       NOT VALID: the planned motion breaks the limits above\n"
         "wrote      {}: job.yaml, trajectory_invalid.csv, report.json, configmap_path.png/.svg, "
@@ -362,59 +385,19 @@ ExitCode runPlan(const PlanOptions& options) {
     std::fputs(summary.c_str(), stdout);
     return ExitCode::kNoPlan;
   }
-  writeFileAtomically(out / "trajectory.csv", kinematics::trajectoryToCsv(trajectory.trajectory));
-  const std::string programs = writePrograms(out / "programs", "programs/", job, cell,
-                                             trajectory.trajectory, job.outputs.programs);
-  std::optional<SimulationRun> simulation;
-  if (job.simulation.enabled) {
-    t0 = Clock::now();
-    simulation = simulateTrajectory(job, cell, part.mesh, trajectory.trajectory);
-    writeSimulationOutputs(out, job, part.mesh, *simulation);
-    times.simulation = since(t0);
-    simulated = &*simulation;
-  }
-  finish("planned", "", &trajectory);
-
-  const planner::ObjectiveTerms& t = planning.terms;
-  summary += fmt::format(
-      "plan       {} on {}: J = {:.3f} s (f {:.3f}, omega {:.3f}, alpha {:.3f}) in {:.2f} s\n",
-      method, run.map.branches[branch].words(), t.total, t.cost_f, t.cost_omega, t.cost_alpha,
-      planning.chosen.seconds);
-  for (const auto& [b, why] : planning.rejected) {
-    summary += fmt::format("  rejected {} (lower J): {}\n", run.map.branches[b].words(), why);
-  }
-  if (planning.refine) {
-    summary += fmt::format("refine     J {:.3f} -> {:.3f} s ({})\n", planning.refine->before.total,
-                           planning.refine->after.total,
-                           planning.refine->improved ? "improved" : "kept the input");
-  }
-  if (const auto gap = planning.dpGap()) {
-    summary += fmt::format("baseline   DP optimum J = {:.3f} s (grid {:.3g} deg): gap {:+.1f}%\n",
-                           planning.dp->terms.total,
-                           job.map.angle_step_deg / planning.dp_subdivisions, 100.0 * *gap);
-  }
-  for (const PlannerOutcome& o : planning.others) {
-    summary += o.result.status == Status::kSolved
-                   ? fmt::format("compare    {:<5} J = {:.3f} s in {:.2f} s\n", o.method,
-                                 o.result.terms.total, o.seconds)
-                   : fmt::format("compare    {:<5} no path: {}\n", o.method, o.result.reason);
-  }
-  const auto& worst = trajectory.trajectory.samples[trajectory.min_f_sample];
-  summary += fmt::format(
-      "trajectory {} samples over {:.1f} s; table |omega| <= {:.1f} deg/s, |alpha| <= {:.1f} "
-      "deg/s^2; min f {:.3f} at t = {:.1f} s ({}); min clearance {}\n",
-      trajectory.trajectory.samples.size(), trajectory.trajectory.duration(),
-      toDeg(t.max_abs_omega), toDeg(t.max_abs_alpha), trajectory.min_f, worst.t, worst.limit,
-      std::isfinite(trajectory.min_clearance)
-          ? fmt::format("{:.1f} mm", toMm(trajectory.min_clearance))
-          : std::string("beyond every d_high"));
-  if (validation) summary += validationSummary(*validation);
+  writeFileAtomically(out / "trajectory.csv", kinematics::trajectoryToCsv(trajectory));
+  const std::string programs =
+      writePrograms(out / "programs", "programs/", job, cell, trajectory, job.outputs.programs);
+  if (plan.simulation) writeSimulationOutputs(out, job, problem.part, *plan.simulation);
+  finish(&*plan.trajectory);
+  summary += choiceSummary(plan);
+  if (plan.validation) summary += validationSummary(*plan.validation);
   summary += programs;
-  if (simulation) summary += simulationSummary(*simulation);
+  if (plan.simulation) summary += simulationSummary(*plan.simulation);
   summary += fmt::format(
       "wrote      {}: job.yaml, trajectory.csv, programs/, report.json, configmap_path.png/.svg, "
       "{}{}\n",
-      options.out_dir.string(), simulation ? "cloud.ply, coverage.ply, cloud.png, " : "",
+      options.out_dir.string(), plan.simulation ? "cloud.ply, coverage.ply, cloud.png, " : "",
       kMapFilesNote);
   summary += fmt::format(
       "time       {:.1f} s (path {:.1f}, map {:.1f}, plan {:.1f}, trajectory {:.1f}, validation "

@@ -67,7 +67,7 @@ planner::ConfigMap syntheticMap(std::size_t na, std::size_t nt, double dt, unsig
 }
 
 void line(const char* name, const PlanResult& r, double dp_j) {
-  if (r.status != PlanResult::Status::kSolved) {
+  if (r.status != PlanResult::Status::kExact) {
     std::printf("  %-26s %9.1f ms   no path: %s\n", name, 1e3 * r.seconds, r.reason.c_str());
     return;
   }
@@ -83,7 +83,7 @@ void refined(const char* name,
              const planner::PlannerSettings& s,
              bool continuous,
              double dp_j) {
-  if (r.status != PlanResult::Status::kSolved) return;
+  if (r.status != PlanResult::Status::kExact) return;
   const planner::RefineResult x = planner::refinePath(map, branch, r.theta, s, continuous);
   std::printf("  %-26s %9.1f ms   J = %9.4f s  (was %.4f; %s)  gap to DP %+7.2f%%\n", name,
               1e3 * x.seconds, x.after.total, x.before.total, x.improved ? "improved" : "kept",
@@ -100,7 +100,7 @@ void compare(const char* title,
   const int r = planner::autoAngleSubdivisions(map, branch, s, continuous);
   const PlanResult dp1 = planner::planDp(map, branch, s, continuous);
   const PlanResult dp = planner::planDpRefined(map, branch, s, continuous, r);
-  const double dp_j = dp.status == PlanResult::Status::kSolved ? dp.terms.total : NAN;
+  const double dp_j = dp.status == PlanResult::Status::kExact ? dp.terms.total : NAN;
   const PlanResult ray = planner::planRayShooting(map, branch, s, continuous, {});
   planner::OmplSettings os;
   os.time_limit_s = 2.0;

@@ -1,0 +1,117 @@
+#include "cli/config/problem.h"
+
+#include <cstdint>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "kinematics/error.h"
+#include "kinematics/units.h"
+
+namespace scanplan::cli {
+
+namespace {
+
+scanner::CameraRule cameraRule(const std::string& name) {
+  if (name == "negative") return scanner::CameraRule::kNegative;
+  if (name == "both") return scanner::CameraRule::kBoth;
+  if (name == "either") return scanner::CameraRule::kEither;
+  return scanner::CameraRule::kPositive;
+}
+
+}  // namespace
+
+kinematics::LoadedMesh loadPart(const JobSpec& job, const kinematics::CellModel& cell) {
+  try {
+    kinematics::LoadedMesh part = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
+    for (const std::string& w : part.report.warnings) {
+      spdlog::warn("{}: part.mesh: {}", job.source.filename().string(), w);
+    }
+    return part;
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("{}: part.mesh: {}", job.source.string(), e.what()));
+  }
+}
+
+pipeline::MapSettings mapSettings(const JobSpec& job) {
+  pipeline::MapSettings s;
+  s.angle_step = deg(job.map.angle_step_deg);
+  if (job.map.branch != "auto") s.branches = {*parseBranch(job.map.branch)};
+  s.memory_limit_bytes = static_cast<std::size_t>(job.map.memory_limit_mb * 1024.0 * 1024.0);
+  return s;
+}
+
+pipeline::PlanSettings planSettings(const JobSpec& job) {
+  pipeline::PlanSettings s;
+  s.method = job.planner.method;
+  s.objective = plannerSettings(job);
+  s.continuous = job.table.continuous;
+  s.start_theta = startAngle(job);
+  s.planners.ray.rays = job.planner.ray.rays;
+  s.planners.ray.horizon = job.planner.ray.horizon;
+  s.planners.ray.starts = job.planner.ray.starts;
+  s.planners.ray.blocked_penalty = job.planner.ray.blocked_penalty_s;
+  s.planners.dp_subdivisions = job.planner.dp.angle_subdivisions;
+  s.planners.ompl.seed = static_cast<std::uint32_t>(job.planner.ompl.seed);
+  s.termination.time_limit_s = job.planner.ompl.time_limit_s;
+  s.termination.max_iterations = static_cast<std::size_t>(job.planner.ompl.max_iterations);
+  s.refine = job.planner.refine.enabled;
+  s.refine_settings.time_limit_s = job.planner.refine.time_limit_s;
+  s.dp_gap = job.planner.dp_gap;
+  return s;
+}
+
+planner::ValidationSettings validationSettings(const JobSpec& job) {
+  planner::ValidationSettings s;
+  s.sample_dt = 1.0 / job.scanner.frame_rate_hz;
+  s.table_omega_max = deg(job.table.max_speed_deg_s);
+  s.table_alpha_max = deg(job.table.max_accel_deg_s2);
+  s.collision_resolution = job.validation.collision_resolution_mm * kMmToM;
+  return s;
+}
+
+pipeline::SimulationSettings simulationSettings(const JobSpec& job,
+                                                const kinematics::CellModel& cell) {
+  pipeline::SimulationSettings s;
+  s.frame_rate_hz = job.scanner.frame_rate_hz;
+  s.scanner.rays_per_profile = job.scanner.rays_per_profile;
+  s.scanner.cameras = cameraRule(job.scanner.cameras);
+  s.scanner.sigma_longitudinal = job.scanner.noise.longitudinal_mm * kMmToM;
+  s.scanner.sigma_orthogonal = job.scanner.noise.orthogonal_mm * kMmToM;
+  s.scanner.seed = static_cast<std::uint64_t>(job.scanner.noise.seed);
+  const auto& e = job.simulation.extra_eccentricity_mm;
+  const auto& t = job.simulation.extra_tilt_deg;
+  if (e[0] != 0.0 || e[1] != 0.0 || t[0] != 0.0 || t[1] != 0.0) {
+    kinematics::RotaryTableModel real = cell.table;
+    real.eccentricity += Eigen::Vector2d(e[0], e[1]) * kMmToM;
+    real.tilt += Eigen::Vector2d(deg(t[0]), deg(t[1]));
+    s.scanner.simulated_table = real;
+  }
+  s.coverage.min_points = static_cast<std::uint32_t>(job.simulation.coverage_min_points);
+  return s;
+}
+
+pipeline::ScanProblem toProblem(const JobSpec& job,
+                                kinematics::CellModel cell,
+                                kinematics::TriangleMesh part) {
+  pipeline::ScanProblem p(std::move(cell));
+  p.name = job.name;
+  p.optics = laserOptics(job);
+  p.path = pathRequest(job);
+  p.clearance = clearanceConfig(job);
+  p.constraints = constraintSettings(job);
+  p.map = mapSettings(job);
+  p.planning = planSettings(job);
+  if (job.validation.enabled) p.validation = validationSettings(job);
+  if (job.simulation.enabled) p.simulation = simulationSettings(job, p.cell);
+  p.part = std::move(part);
+  return p;
+}
+
+pipeline::ScanProblem toProblem(const JobSpec& job) {
+  kinematics::CellModel cell = buildCell(job);
+  kinematics::LoadedMesh part = loadPart(job, cell);
+  return toProblem(job, std::move(cell), std::move(part.mesh));
+}
+
+}  // namespace scanplan::cli

@@ -1,0 +1,35 @@
+#pragma once
+// A job file as the library's problem: cli/config's bridge from the validated JobSpec (mm,
+// degrees, names) to pipeline::ScanProblem (SI, models).
+
+#include "cli/config/job.h"
+#include "kinematics/cell.h"
+#include "kinematics/mesh.h"
+#include "pipeline/problem.h"
+#include "planner/validation.h"
+
+namespace scanplan::cli {
+
+/// The job's part mesh (loader warnings logged); errors name the job file and `part.mesh`.
+kinematics::LoadedMesh loadPart(const JobSpec& job, const kinematics::CellModel& cell);
+
+/// The whole job as a problem: the cell, the part mesh, the scan path request and every
+/// stage's settings (validation and simulation nullopt when the job turns them off).
+pipeline::ScanProblem toProblem(const JobSpec& job);
+/// As above, with the cell and part mesh already built.
+pipeline::ScanProblem toProblem(const JobSpec& job,
+                                kinematics::CellModel cell,
+                                kinematics::TriangleMesh part);
+
+/// `map`: the grid, the branches and the memory limit, SI.
+pipeline::MapSettings mapSettings(const JobSpec& job);
+/// `planner` (+ the table's dynamics): the search, its budget, refinement and the DP yardstick.
+pipeline::PlanSettings planSettings(const JobSpec& job);
+/// The validation settings: densified at the scanner frame rate, the table's bounds.
+planner::ValidationSettings validationSettings(const JobSpec& job);
+/// The simulation settings: the scanner's fan, cameras, noise, the real table's extra error on
+/// `cell`'s table.
+pipeline::SimulationSettings simulationSettings(const JobSpec& job,
+                                                const kinematics::CellModel& cell);
+
+}  // namespace scanplan::cli

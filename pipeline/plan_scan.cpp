@@ -1,0 +1,152 @@
+#include "pipeline/plan_scan.h"
+
+#include <chrono>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "kinematics/error.h"
+#include "kinematics/units.h"
+#include "scanner/raycaster.h"
+
+namespace scanplan::pipeline {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+void require(bool ok, const std::string& field, const std::string& what) {
+  if (!ok) throw InputError("problem: " + field + ": " + what);
+}
+
+bool positive(double v) { return std::isfinite(v) && v > 0.0; }
+
+// The map scores each cell on its own; a path must also be followable continuously (joints such
+// as J4 and J6 cannot wrap past their limits) and keep f > 0 between the grid angles.
+std::string executable(const planner::TrajectoryBuild& build) {
+  if (!build.ok) return build.reason;
+  if (build.min_f > 0.0) return {};
+  const auto& s = build.trajectory.samples[build.min_f_sample];
+  return fmt::format(
+      "time sample {} (t = {:.2f} s, table {:.2f} deg): f = 0 ({}) between the map's grid "
+      "angles; a finer map.angle_step_deg resolves it",
+      build.min_f_sample, s.t, toDeg(s.theta), s.limit);
+}
+
+// Validation and simulation of the accepted trajectory.
+void proveAndSimulate(const ScanProblem& problem, const PreparedScan& prepared, ScanPlan& plan) {
+  const kinematics::Trajectory& trajectory = plan.trajectory->trajectory;
+  if (problem.validation) {
+    const auto t = Clock::now();
+    plan.validation = planner::validateTrajectory(*prepared.scene, trajectory, *problem.validation);
+    plan.times.validation = since(t);
+    if (!plan.validation->valid) {
+      plan.status = ScanStatus::kInvalidTrajectory;
+      plan.reason =
+          fmt::format("validation found {} violation(s)", plan.validation->violations.size());
+      return;
+    }
+  }
+  if (problem.simulation) {
+    plan.simulation = simulateTrajectory(problem.cell, problem.part, problem.optics,
+                                         *problem.simulation, trajectory);
+    plan.times.simulation = plan.simulation->seconds;
+  }
+  plan.status = ScanStatus::kPlanned;
+}
+
+}  // namespace
+
+std::vector<kinematics::IkBranch> mapBranches(const MapSettings& settings) {
+  if (!settings.branches.empty()) return settings.branches;
+  std::vector<kinematics::IkBranch> all;
+  for (int i = 0; i < 8; ++i) all.push_back(kinematics::IkBranch::fromIndex(i));
+  return all;
+}
+
+void checkProblem(const ScanProblem& p) {
+  require(!p.part.triangles.empty(), "part", "no triangles: expected a part mesh");
+  require(!p.path.elements.empty(), "path.elements",
+          "empty: expected at least one path element (ring, raster, waypoints or file)");
+  require(positive(p.path.dt), "path.dt", fmt::format("{}: expected a time step > 0 s", p.path.dt));
+  require(positive(p.map.angle_step), "map.angle_step",
+          fmt::format("{}: expected an angle step > 0 rad", p.map.angle_step));
+  const auto& names = planner::plannerNames();
+  require(std::find(names.begin(), names.end(), p.planning.method) != names.end(),
+          "planning.method", p.planning.method + ": expected ray, dp or ompl");
+  require(positive(p.planning.objective.omega_max) && positive(p.planning.objective.alpha_max),
+          "planning.objective", "table speed and acceleration bounds must be > 0");
+  if (p.validation) {
+    require(positive(p.validation->sample_dt), "validation.sample_dt", "expected > 0 s");
+  }
+  if (p.simulation) {
+    require(positive(p.simulation->frame_rate_hz), "simulation.frame_rate_hz", "expected > 0");
+  }
+}
+
+std::shared_ptr<const PreparedScan> prepareScan(const ScanProblem& problem,
+                                                const ProgressFn& progress) {
+  checkProblem(problem);
+  auto prepared = std::make_shared<PreparedScan>();
+  auto t = Clock::now();
+  prepared->window = scanner::laserWindow(problem.optics);
+  const scanner::Raycaster raycaster(problem.part);
+  prepared->path = scanner::generatePath(problem.path, problem.part, raycaster, prepared->window);
+  prepared->path_seconds = since(t);
+  prepared->scene = std::make_unique<collision::Scene>(problem.cell, problem.clearance);
+  planner::MapRequest request;
+  request.angle_step = problem.map.angle_step;
+  request.branches = mapBranches(problem.map);
+  request.memory_limit_bytes = problem.map.memory_limit_bytes;
+  t = Clock::now();
+  planner::ProgressFn map_progress;
+  if (progress) map_progress = [&progress](std::size_t d, std::size_t n) { progress("map", d, n); };
+  prepared->map = planner::buildConfigMap(*prepared->scene, problem.constraints,
+                                          prepared->path.path, request, map_progress);
+  prepared->map_seconds = since(t);
+  return prepared;
+}
+
+ScanPlan planPrepared(const ScanProblem& problem,
+                      std::shared_ptr<const PreparedScan> prepared,
+                      const PlanOptions& options) {
+  ScanPlan plan;
+  plan.prepared = std::move(prepared);
+  const PreparedScan& p = *plan.prepared;
+  plan.times.path = p.path_seconds;
+  plan.times.map = p.map_seconds;
+  const auto accept = [&](std::size_t b, const std::vector<double>& theta) {
+    const auto t = Clock::now();
+    plan.trajectory = planner::buildTrajectory(*p.scene, problem.constraints, p.path.path, theta,
+                                               p.map.branches[b]);
+    plan.times.trajectory += since(t);
+    return executable(*plan.trajectory);
+  };
+  const auto t = Clock::now();
+  plan.choice = choosePath(p.map, problem.planning, options, accept);
+  plan.times.plan = since(t) - plan.times.trajectory;
+  if (plan.choice.dp && plan.choice.chosen.method != "dp") plan.times.dp = plan.choice.dp->seconds;
+  if (!plan.choice.solved()) {
+    plan.status = plan.choice.rejected.empty() ? ScanStatus::kNoPath : ScanStatus::kNoExecutablePath;
+    plan.reason = plan.choice.chosen.result.reason;
+    plan.trajectory.reset();
+    return plan;
+  }
+  proveAndSimulate(problem, p, plan);
+  return plan;
+}
+
+ScanPlan planScan(const ScanProblem& problem,
+                  const PlanOptions& options,
+                  const ProgressFn& progress) {
+  const auto start = Clock::now();
+  ScanPlan plan = planPrepared(problem, prepareScan(problem, progress), options);
+  plan.times.total = since(start);
+  return plan;
+}
+
+}  // namespace scanplan::pipeline

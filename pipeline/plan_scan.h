@@ -1,0 +1,143 @@
+#pragma once
+// planScan(): a whole scan plan from a ScanProblem — scan path, configuration maps, the
+// table-angle path (every branch planned, the best executable one chosen), the 7-DOF
+// trajectory, its validation and the scanner simulation. Every planning decision lives here;
+// front ends only read problems and write what comes back.
+
+#include <cstddef>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "collision/scene.h"
+#include "kinematics/scan_path.h"
+#include "pipeline/problem.h"
+#include "pipeline/simulation.h"
+#include "planner/config_map.h"
+#include "planner/plan_result.h"
+#include "planner/refine.h"
+#include "planner/trajectory_builder.h"
+#include "planner/validation.h"
+#include "scanner/laser_model.h"
+#include "scanner/path_generators.h"
+
+namespace scanplan::pipeline {
+
+/// Progress of a long stage: its name ("map"), work done and work in all. Called from worker
+/// threads; the callee serialises.
+using ProgressFn = std::function<void(std::string_view stage, std::size_t done, std::size_t total)>;
+
+/// Per-call choices on top of the problem's settings.
+struct PlanOptions {
+  std::string method;    ///< empty: problem.planning.method
+  bool compare = false;  ///< also run every other planner on the chosen branch
+  bool refine = false;   ///< refine even when problem.planning.refine is off
+};
+
+/// One planner's run over the map's branches.
+struct PlannerOutcome {
+  std::string method;                         ///< ray | dp | ompl
+  planner::PlanResult result;                 ///< the chosen branch's, or why none was chosen
+  std::vector<planner::PlanResult> branches;  ///< per map branch
+  double seconds = 0.0;                       ///< all branches
+};
+
+/// The path search: the chosen planner on every branch, the branch choice, refinement, the DP
+/// yardstick and the comparisons.
+struct PathChoice {
+  PlannerOutcome chosen;
+  std::optional<planner::RefineResult> refine;  ///< of the chosen branch, when refinement ran
+  std::vector<double> theta;                    ///< the final path (refined when that helped)
+  planner::ObjectiveTerms terms;                ///< evaluate() of `theta`
+  std::optional<planner::PlanResult> dp;        ///< DP on the chosen branch (the yardstick)
+  int dp_subdivisions = 1;                      ///< DP's angle grid: map step / this
+  std::vector<PlannerOutcome> others;           ///< PlanOptions::compare: the other planners
+  /// Branches whose path could not be executed, best J first, with the reason.
+  std::vector<std::pair<std::size_t, std::string>> rejected;
+  /// Why the chosen branch won (e.g. "lowest J of 6 solved branches").
+  std::string why_chosen;
+  bool solved() const { return chosen.result.solved(); }
+  /// (J − J_dp) / J_dp of the final path, when DP solved; negative when the continuous path
+  /// beats DP's grid.
+  std::optional<double> dpGap() const;
+};
+
+/// The stages before planning, shared by every planner setting on the same cell and path (a
+/// batch computes them once per map).
+struct PreparedScan {
+  scanner::LaserWindow window;
+  scanner::GeneratedPath path;
+  std::unique_ptr<collision::Scene> scene;
+  planner::ConfigMap map;
+  double path_seconds = 0.0;
+  double map_seconds = 0.0;
+};
+
+/// Wall time of each stage, s.
+struct StageTimes {
+  double path = 0, map = 0, plan = 0, dp = 0, trajectory = 0, validation = 0, simulation = 0;
+  double total = 0;
+};
+
+/// How a plan ended.
+enum class ScanStatus {
+  kPlanned,            ///< a valid trajectory (validated when the problem asks)
+  kNoPath,             ///< no planner path on any branch
+  kNoExecutablePath,   ///< paths were found but the arm cannot follow any of them
+  kInvalidTrajectory,  ///< the chosen trajectory failed validation
+};
+/// "planned", "no_path", "no_executable_path", "invalid_trajectory".
+std::string_view scanStatusName(ScanStatus status);
+
+/// Everything planScan() found. `trajectory` is set when a branch was accepted (also when the
+/// validation then failed); `validation` and `simulation` when they ran.
+struct ScanPlan {
+  ScanStatus status = ScanStatus::kNoPath;
+  std::string reason;  ///< not kPlanned: why
+  std::shared_ptr<const PreparedScan> prepared;
+  PathChoice choice;
+  std::optional<planner::TrajectoryBuild> trajectory;
+  std::optional<planner::ValidationReport> validation;
+  std::optional<SimulationRun> simulation;
+  StageTimes times;
+  bool planned() const { return status == ScanStatus::kPlanned; }
+};
+
+/// The scan path and the maps of `problem` (checked first with checkProblem()).
+std::shared_ptr<const PreparedScan> prepareScan(const ScanProblem& problem,
+                                                const ProgressFn& progress = {});
+
+/// The stages after the maps, on `prepared` (made by prepareScan() from a problem with the same
+/// cell, part, path, constraints and map settings; only the planning, validation and simulation
+/// settings may differ).
+ScanPlan planPrepared(const ScanProblem& problem,
+                      std::shared_ptr<const PreparedScan> prepared,
+                      const PlanOptions& options = {});
+
+/// prepareScan() then planPrepared(): the whole pipeline. Throws InputError for a bad problem;
+/// "no plan" is a status, not an exception.
+ScanPlan planScan(const ScanProblem& problem,
+                  const PlanOptions& options = {},
+                  const ProgressFn& progress = {});
+
+/// The path search alone, on a map (exposed for tests and tools): runs `method` on every branch,
+/// takes the solved branches in order of J, refines each (when asked) and accepts the first whose
+/// path `accept` passes (empty string = accepted, else the reason); then the DP yardstick and the
+/// comparisons on the chosen branch.
+using PathCheck = std::function<std::string(std::size_t branch, const std::vector<double>& theta)>;
+PathChoice choosePath(const planner::ConfigMap& map,
+                      const PlanSettings& settings,
+                      const PlanOptions& options,
+                      const PathCheck& accept = {});
+
+/// One planner over the map's branches (or only `branch`), keeping the lowest J.
+PlannerOutcome runPlanner(const std::string& method,
+                          const planner::ConfigMap& map,
+                          const PlanSettings& settings,
+                          std::optional<std::size_t> branch = {});
+
+}  // namespace scanplan::pipeline

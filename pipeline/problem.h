@@ -1,0 +1,84 @@
+#pragma once
+// The whole scan-planning problem in SI units: what planScan() needs, and nothing about files.
+// A front end (the job file reader in cli/config, or a C++ caller) fills it in; checkProblem()
+// validates it before anything runs.
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "collision/scene.h"
+#include "kinematics/cell.h"
+#include "kinematics/mesh.h"
+#include "planner/constraints.h"
+#include "planner/objective.h"
+#include "planner/planner.h"
+#include "planner/refine.h"
+#include "planner/validation.h"
+#include "scanner/coverage.h"
+#include "scanner/laser_model.h"
+#include "scanner/path_generators.h"
+#include "scanner/simulator.h"
+
+namespace scanplan::pipeline {
+
+/// The configuration map grid (DESIGN.md §4).
+struct MapSettings {
+  double angle_step = 0.017453292519943295;  ///< rad, table-angle grid step
+  /// IK branches to map and plan on; empty: all eight.
+  std::vector<kinematics::IkBranch> branches;
+  std::size_t memory_limit_bytes = std::size_t{8192} << 20;  ///< the maps refuse to exceed it
+};
+
+/// How the table-angle path is searched, refined and judged (DESIGN.md §5).
+struct PlanSettings {
+  std::string method = "ray";         ///< a planner::plannerNames() entry
+  planner::PlannerSettings objective;  ///< weights and table bounds, SI
+  bool continuous = true;              ///< the table turns without end
+  std::optional<double> start_theta;   ///< rad, a fixed first table angle; nullopt: searched
+  planner::PlannerConfig planners;     ///< every planner's own settings
+  /// Each planner run's budget (per branch); OMPL honours both, see planner::Termination.
+  planner::Termination termination;
+  bool refine = true;  ///< NLopt refinement of each candidate path (DESIGN.md §5.4)
+  planner::RefineSettings refine_settings;
+  bool dp_gap = true;  ///< also run DP on the chosen branch: the gap to the optimum
+};
+
+/// The scanner simulation along the planned motion (DESIGN.md §6).
+struct SimulationSettings {
+  double frame_rate_hz = 100.0;        ///< profiles per second while the path scans
+  scanner::SimulationSettings scanner;  ///< fan, cameras, noise, real table error
+  scanner::CoverageSettings coverage;
+};
+
+/// A whole planning problem: the cell (robot, table, part pose, scanner, obstacles), the part
+/// mesh, the scan path request, the constraints and every stage's settings. SI throughout.
+struct ScanProblem {
+  explicit ScanProblem(kinematics::CellModel cell_model) : cell(std::move(cell_model)) {}
+
+  std::string name = "job";  ///< shown in reports
+  kinematics::CellModel cell;
+  kinematics::TriangleMesh part;  ///< the part mesh, metres, part frame P
+  scanner::LaserOptics optics;    ///< Eq. 5 geometry of the scanner
+  scanner::PathRequest path;      ///< the scan path, relative to the part
+  collision::ClearanceConfig clearance;
+  planner::ConstraintSettings constraints;
+  MapSettings map;
+  PlanSettings planning;
+  /// The check of the planned motion (limits, speeds, continuous collisions); nullopt: skipped.
+  std::optional<planner::ValidationSettings> validation;
+  /// The scanner simulation (cloud, coverage); nullopt: skipped.
+  std::optional<SimulationSettings> simulation;
+};
+
+/// Throws scanplan::InputError naming the field (e.g. "planning.method") when the problem
+/// cannot be planned as given: an empty part or path, an unknown planner, non-finite or
+/// non-positive steps, rates and bounds.
+void checkProblem(const ScanProblem& problem);
+
+/// The IK branches the maps cover: `settings.branches`, or all eight.
+std::vector<kinematics::IkBranch> mapBranches(const MapSettings& settings);
+
+}  // namespace scanplan::pipeline

@@ -1,0 +1,31 @@
+#pragma once
+
+#include <cstddef>
+
+#include "kinematics/cell.h"
+#include "kinematics/mesh.h"
+#include "kinematics/trajectory.h"
+#include "pipeline/problem.h"
+#include "scanner/coverage.h"
+#include "scanner/laser_model.h"
+#include "scanner/simulator.h"
+
+namespace scanplan::pipeline {
+
+/// One simulation run and the coverage of the part it gives.
+struct SimulationRun {
+  scanner::SimulatedCloud cloud;
+  scanner::PartCoverage coverage;
+  std::size_t frames = 0;  ///< profiles acquired (densified samples with scanning on)
+  double seconds = 0.0;
+};
+
+/// The scanner simulated along `trajectory`: a profile every 1/frame_rate_hz s while the path
+/// scans, with the settings' fan, cameras, noise and real-table error.
+SimulationRun simulateTrajectory(const kinematics::CellModel& cell,
+                                 const kinematics::TriangleMesh& part,
+                                 const scanner::LaserOptics& optics,
+                                 const SimulationSettings& settings,
+                                 const kinematics::Trajectory& trajectory);
+
+}  // namespace scanplan::pipeline
