@@ -1,0 +1,144 @@
+// planScan() and the planner interface, through the C++ API (no files written, no CLI): the
+// pipeline's trajectory follows the scan path through the 7-DOF chain, is what the planners and
+// evaluate() say it is, and bad problems are refused with the field named.
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "cli/config/job.h"
+#include "cli/config/problem.h"
+#include "map_support.h"
+#include "pipeline/plan_scan.h"
+#include "planner/dp_planner.h"
+#include "planner/planner.h"
+#include "test_support.h"
+
+namespace {
+
+using namespace scanplan;
+using planner::PlannerStatus;
+
+// The light demo (two rings every 0.2 s) on one branch and a 2° grid, no simulation: ~1 s.
+pipeline::ScanProblem lightDemo(std::vector<std::string> extra = {}) {
+  std::vector<std::string> overrides = test::kLightDemo;
+  overrides.push_back("map.branch=RIGHTY ABOVE NOFLIP");
+  overrides.push_back("map.angle_step_deg=2");
+  overrides.push_back("simulation.enabled=false");
+  for (auto& e : extra) overrides.push_back(std::move(e));
+  return cli::toProblem(cli::loadJob(test::sourceDir() / "data/jobs/demo.yaml", overrides));
+}
+
+// Positions agree to 1 µm and orientations to 1 µrad: IK solutions reproduce FK to ~1e-12 m,
+// so anything looser than this is a wrong chain, not rounding.
+constexpr double kPoseTol = 1e-6;
+
+TEST(PlanScan, TrajectoryPutsTheScannerOnThePathThroughTheWholeChain) {
+  const pipeline::ScanProblem problem = lightDemo();
+  const pipeline::ScanPlan plan = pipeline::planScan(problem);
+  ASSERT_TRUE(plan.planned()) << plan.reason;
+  ASSERT_TRUE(plan.trajectory && plan.validation);
+  EXPECT_TRUE(plan.validation->valid);
+  const auto& samples = plan.trajectory->trajectory.samples;
+  const auto& path = plan.prepared->path.path.samples;
+  ASSERT_EQ(samples.size(), path.size());
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    // FK of the arm joints must land the flange where the table angle and the path ask.
+    const Eigen::Isometry3d X_BF = problem.cell.robot.fk(samples[k].q);
+    const Eigen::Isometry3d want = problem.cell.flangeTarget(samples[k].theta, path[k].X_PS);
+    ASSERT_LT((X_BF.translation() - want.translation()).norm(), kPoseTol) << "sample " << k;
+    ASSERT_LT((X_BF.linear() - want.linear()).norm(), kPoseTol) << "sample " << k;
+    ASSERT_DOUBLE_EQ(samples[k].theta, plan.choice.theta[k]);
+  }
+}
+
+TEST(PlanScan, ReportedTermsAreEvaluateOfThePathAndTheDpYardstickIsTheDpPlanner) {
+  const pipeline::ScanProblem problem = lightDemo();
+  const pipeline::ScanPlan plan = pipeline::planScan(problem);
+  ASSERT_TRUE(plan.planned()) << plan.reason;
+  const planner::ConfigMap& map = plan.prepared->map;
+  const std::size_t b = plan.choice.chosen.result.branch;
+  const planner::ObjectiveTerms e = planner::evaluate(map, b, plan.choice.theta,
+                                                      problem.planning.objective, true);
+  EXPECT_TRUE(e.feasible);
+  EXPECT_NEAR(e.total, plan.choice.terms.total, test::kSumTol * std::max(1.0, e.total));
+  // The yardstick is DP through the registry on the same branch: the same path.
+  ASSERT_TRUE(plan.choice.dp && plan.choice.dp->solved());
+  const planner::PlanResult dp = planner::planDpRefined(
+      map, b, problem.planning.objective, true, plan.choice.dp_subdivisions);
+  EXPECT_EQ(dp.theta, plan.choice.dp->theta);
+  EXPECT_TRUE(plan.choice.dpGap().has_value());
+}
+
+TEST(PlanScan, PreparedMapsAreReusedAcrossPlannerSettings) {
+  const pipeline::ScanProblem problem = lightDemo();
+  const auto prepared = pipeline::prepareScan(problem);
+  pipeline::ScanProblem dp_problem = lightDemo({"planner.method=dp"});
+  const pipeline::ScanPlan a = pipeline::planPrepared(dp_problem, prepared);
+  const pipeline::ScanPlan b = pipeline::planScan(dp_problem);
+  ASSERT_TRUE(a.planned() && b.planned()) << a.reason << b.reason;
+  EXPECT_EQ(a.prepared.get(), prepared.get());
+  EXPECT_EQ(a.choice.chosen.method, "dp");
+  EXPECT_EQ(a.choice.theta, b.choice.theta);  // deterministic, same map either way
+}
+
+TEST(PlanScan, BadProblemsAreInputErrorsNamingTheField) {
+  pipeline::ScanProblem p = lightDemo();
+  p.planning.method = "astar";
+  EXPECT_TRUE(test::throwsInputError([&] { pipeline::planScan(p); },
+                                     {"planning.method", "astar", "ray, dp or ompl"}));
+  p = lightDemo();
+  p.path.elements.clear();
+  EXPECT_TRUE(test::throwsInputError([&] { pipeline::planScan(p); }, {"path.elements"}));
+  p = lightDemo();
+  p.map.angle_step = std::nan("");
+  EXPECT_TRUE(test::throwsInputError([&] { pipeline::planScan(p); }, {"map.angle_step"}));
+}
+
+TEST(PlannerRegistry, NamesMakeEveryPlannerAndUnknownNamesNone) {
+  const planner::PlannerConfig config;
+  for (const std::string& name : planner::plannerNames()) {
+    const auto p = planner::makePlanner(name, config);
+    ASSERT_TRUE(p) << name;
+    EXPECT_EQ(p->name(), name);
+  }
+  EXPECT_EQ(planner::makePlanner("rrt", config), nullptr);
+}
+
+TEST(PlannerInterface, MalformedProblemsAreInvalidInputNotExceptions) {
+  std::mt19937 rng(7);
+  const planner::ConfigMap map = test::randomMap(rng, 72, 40, true);
+  for (const std::string& name : planner::plannerNames()) {
+    const auto p = planner::makePlanner(name, {});
+    planner::PlanningProblem bad{&map, 3, {}, true, {}};  // the map has one branch
+    const planner::PlanResult r = p->solve(bad, {});
+    EXPECT_EQ(r.status, PlannerStatus::kInvalidInput) << name;
+    EXPECT_NE(r.reason.find("branch 3"), std::string::npos) << r.reason;
+    bad.branch = 0;
+    bad.settings.omega_max = -1.0;
+    EXPECT_EQ(p->solve(bad, {}).status, PlannerStatus::kInvalidInput) << name;
+    bad.settings = {};
+    EXPECT_EQ(p->solve(bad, {0, -1.0}).status, PlannerStatus::kTimeout) << name;
+    const planner::PlanResult ok = p->solve(bad, {2000, 10.0});
+    EXPECT_EQ(ok.status, PlannerStatus::kExact) << name << ": " << ok.reason;
+    EXPECT_EQ(planner::statusName(ok.status), "exact");
+  }
+}
+
+TEST(PlannerInterface, OmplTerminationIsPassedInAndAnIterationCapRepeats) {
+  std::mt19937 rng(11);
+  const planner::ConfigMap map = test::randomMap(rng, 72, 60, true);
+  const auto ompl = planner::makePlanner("ompl", {});
+  const planner::PlanningProblem problem{&map, 0, {}, true, {}};
+  const planner::PlanResult a = ompl->solve(problem, {3000, 30.0});
+  const planner::PlanResult b = ompl->solve(problem, {3000, 30.0});
+  ASSERT_TRUE(a.solved()) << a.reason << " " << a.detail;
+  EXPECT_EQ(a.theta, b.theta);
+  EXPECT_NE(a.detail.find("3000 iterations"), std::string::npos) << a.detail;
+  const planner::PlanResult c = ompl->solve(problem, {500, 30.0});
+  EXPECT_NE(c.detail.find("500 iterations"), std::string::npos) << c.detail;
+}
+
+}  // namespace
