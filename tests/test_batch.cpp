@@ -389,7 +389,7 @@ TEST_F(Batch, SmallSweepGivesOneRowPerCaseSeedAndRepeatWithTheDpGap) {
   EXPECT_EQ(readFile(out / (stem + ".png")), png_bytes) << "the same figure";
 }
 
-// planJob also runs the DP yardstick (planner.dp_gap): plan_s is the planner's time without it,
+// The pipeline also runs the DP yardstick (planner.dp_gap): plan_s is the planner's time without it,
 // dp_s the yardstick's. The yardstick is made slow here (a grid 8 times finer than the map's:
 // 0.2 s against ray's 0.03 s on an idle machine), so that a plan_s that still held it would be
 // larger than dp_s.

@@ -11,7 +11,8 @@
 
 #include "cli/commands/commands.h"
 #include "cli/config/job.h"
-#include "cli/planning.h"
+#include "cli/config/problem.h"
+#include "pipeline/plan_scan.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"
 #include "kinematics/trajectory.h"
@@ -145,8 +146,8 @@ TEST(BuildTrajectory, JointsReproduceTheTargetPosesAndStayContinuous) {
   const cli::MapRun run = cli::computeMap(d.job, scene, d.path.path);
   // As `plan` does: a branch's path is accepted only when it can be followed continuously.
   planner::TrajectoryBuild built;
-  const cli::PlanningOutcome plan = cli::planJob(
-      run.map, d.job, "ray", false, false, [&](std::size_t b, const std::vector<double>& theta) {
+  const pipeline::PathChoice plan = pipeline::choosePath(
+      run.map, cli::planSettings(d.job), {.method = "ray"}, [&](std::size_t b, const std::vector<double>& theta) {
         built = planner::buildTrajectory(scene, cli::constraintSettings(d.job), d.path.path, theta,
                                          run.map.branches[b]);
         return built.ok && built.min_f > 0.0 ? std::string() : "not ok: " + built.reason;

@@ -16,7 +16,8 @@
 
 #include "cli/commands/commands.h"
 #include "cli/config/job.h"
-#include "cli/planning.h"
+#include "cli/config/problem.h"
+#include "pipeline/plan_scan.h"
 #include "collision/clearance.h"
 #include "collision/scene.h"
 #include "kinematics/shape.h"
@@ -570,8 +571,8 @@ const DemoPlan& demoPlan() {
     DemoPlan p;
     const scanner::GeneratedPath path = cli::generateScanPath(p.demo.job, p.demo.cell);
     const cli::MapRun run = cli::computeMap(p.demo.job, p.scene, path.path);
-    const cli::PlanningOutcome outcome = cli::planJob(
-        run.map, p.demo.job, "ray", false, false,
+    const pipeline::PathChoice outcome = pipeline::choosePath(
+        run.map, cli::planSettings(p.demo.job), {.method = "ray"},
         [&](std::size_t b, const std::vector<double>& theta) {
           p.built = planner::buildTrajectory(p.scene, cli::constraintSettings(p.demo.job),
                                              path.path, theta, run.map.branches[b]);
