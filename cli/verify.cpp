@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <spdlog/spdlog.h>
 
 #include "cli/plot/bitmap_font.h"
 #include "cli/plot/image_io.h"
@@ -32,6 +33,25 @@ std::string readWhole(const std::filesystem::path& file) {
 }
 
 Rgb toRgb(const std::array<std::uint8_t, 3>& c) { return {c[0], c[1], c[2]}; }
+
+// The summary's word on the formats against the robot's controller: a warning for another
+// vendor's language (its joint values are this robot's, not that vendor's), a note when the
+// robot file names no controller.
+std::string controllerNote(const RobotSpec& robot, const std::vector<std::string>& formats) {
+  const std::vector<std::string> foreign = foreignPrograms(robot, formats);
+  if (!foreign.empty()) {
+    const std::string warning =
+        fmt::format("{} {} not the language of robot '{}' (controller {}, writes {})",
+                    fmt::join(foreign, ", "), foreign.size() == 1 ? "is" : "are", robot.name,
+                    robot.controller, controllerProgramFormat(robot.controller));
+    spdlog::warn("programs: {}", warning);
+    return "; WARNING: " + warning;
+  }
+  if (controllerProgramFormat(robot.controller).empty()) {
+    return fmt::format("; robot '{}' names no controller (controller: none)", robot.name);
+  }
+  return "";
+}
 
 }  // namespace
 
@@ -70,11 +90,12 @@ std::string writePrograms(const std::filesystem::path& dir,
   }
   if (written.empty()) return "programs   none (outputs.programs is empty)\n";
   return fmt::format(
-      "programs   {}: {}; fastest step {:.0f}% of an axis's max speed (joints, table){}\n",
+      "programs   {}: {}; fastest step {:.0f}% of an axis's max speed (joints, table){}{}\n",
       shown_as, fmt::join(written, ", "), max_percent,
       over == 0
           ? std::string()
-          : fmt::format(", {} step(s) need more than 100% (marked WARNING, run slower)", over));
+          : fmt::format(", {} step(s) need more than 100% (marked WARNING, run slower)", over),
+      controllerNote(job.robot, formats));
 }
 
 std::string validationSummary(const planner::ValidationReport& r, std::size_t max_lines) {

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -231,6 +232,39 @@ TEST_F(CliVerify, ExportedProgramsReadBackAndValidate) {
                                (dir_ / "x").string(), "--format", "vplus,gcode"});
   EXPECT_EQ(bad.exit_code, 4) << describe(bad);
   EXPECT_TRUE(contains(bad.err, "gcode")) << bad.err;
+}
+
+// `plan` writes the robot controller's program and the CSV: for the Viper (adept_vplus) the V+
+// program with its table list, and the CSV; no other vendor's language.
+TEST_F(CliVerify, PlanWritesTheControllersProgramAndTheCsv) {
+  const fs::path programs = plannedTrajectory().parent_path() / "programs";
+  std::set<std::string> files;
+  for (const auto& e : fs::directory_iterator(programs)) files.insert(e.path().filename().string());
+  EXPECT_EQ(files, (std::set<std::string>{"scan.v2", "scan_table.csv", "scan.csv"}));
+}
+
+// The KUKA (kuka_krl) gets KRL and the CSV; outputs.programs overrides, with a warning on
+// stderr and in the summary for another vendor's language.
+TEST_F(CliVerify, ExportDefaultsToTheControllersLanguageAndWarnsOnAnotherVendors) {
+  const fs::path trajectory = plannedTrajectory();
+  const std::string kuka_job = (kSourceDir / "data/jobs/kuka_demo.yaml").string();
+  const fs::path kuka = dir_ / "kuka";
+  const Result run = scanplan({"export", kuka_job, "-t", trajectory.string(), "-o", kuka.string()});
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  std::set<std::string> files;
+  for (const auto& e : fs::directory_iterator(kuka)) files.insert(e.path().filename().string());
+  EXPECT_EQ(files, (std::set<std::string>{"scan.src", "scan.csv"}));
+  EXPECT_FALSE(contains(run.out + run.err, "WARNING")) << describe(run);
+
+  const fs::path mixed = dir_ / "mixed";
+  const Result over = scanplan({"export", kDemoJob, "-t", trajectory.string(), "-o", mixed.string(),
+                                "--set", "outputs.programs=[vplus, krl, csv]"});
+  ASSERT_EQ(over.exit_code, 0) << describe(over);
+  EXPECT_TRUE(fs::exists(mixed / "scan.src"));
+  const std::string warning =
+      "krl is not the language of robot 'Adept Viper s650' (controller adept_vplus, writes vplus)";
+  EXPECT_TRUE(contains(over.out, "; WARNING: " + warning)) << over.out;
+  EXPECT_TRUE(contains(over.err, "programs: " + warning)) << over.err;
 }
 
 TEST_F(CliVerify, UnwritableOutputFolderIsAnInputErrorWithNoPartialFiles) {

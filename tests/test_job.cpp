@@ -1,7 +1,7 @@
 #include "cli/config/job.h"
 
 #include "cli/config/robot_file.h"
-#include "cli/config/yaml_reader.h"
+#include "cli/config/text.h"
 #include "kinematics/error.h"
 #include "kinematics/mesh.h"
 #include "tests/test_support.h"
@@ -258,10 +258,10 @@ TEST_F(JobFile, UnknownKeysAreNamedWithLineAndSuggestion) {
   EXPECT_TRUE(
       loadFails(writeJob("table:\n  radius_mm: 250\n  radius_m: 0.25\n"),
                 {at("job.yaml", "5:3: table.radius_m: unknown key"), "did you mean 'radius_mm'"}));
-  EXPECT_TRUE(loadFails(
-      write("job.yaml",
-            "robot:\n" + indented(kRobot + "payload_kg: 5\n") + "\npart: {mesh: part.stl}\n"),
-      {at("job.yaml", "13:3: robot.payload_kg: unknown key"), "expected one of: dh, links"}));
+  EXPECT_TRUE(loadFails(write("job.yaml", "robot:\n" + indented(kRobot + "payload_kg: 5\n") +
+                                              "\npart: {mesh: part.stl}\n"),
+                        {at("job.yaml", "13:3: robot.payload_kg: unknown key"),
+                         "expected one of: controller, dh, links"}));
 }
 
 TEST_F(JobFile, WrongTypesSayWhatWasExpected) {
@@ -395,6 +395,68 @@ TEST_F(JobFile, RobotFilesWhoseOpwDisagreesWithDhOrWithFiveRowsAreRejected) {
   EXPECT_TRUE(
       throwsInputError([&] { loadRobotFile(write("five.yaml", five_rows)); },
                        {at("five.yaml", "3:3: dh: a list of 5"), "expected exactly 6 entries"}));
+}
+
+// `controller:` says which program language the robot runs; `plan` writes that one and the CSV
+// unless outputs.programs says otherwise.
+TEST_F(JobFile, TheRobotsControllerChoosesTheDefaultPrograms) {
+  const JobSpec demo = loadJob(kSource / "data/jobs/demo.yaml");
+  EXPECT_EQ(demo.robot.controller, "adept_vplus");
+  EXPECT_EQ(demo.outputs.programs, (std::vector<std::string>{"vplus", "csv"}));
+  const JobSpec kuka = loadJob(kSource / "data/jobs/kuka_demo.yaml");
+  EXPECT_EQ(kuka.robot.controller, "kuka_krl");
+  EXPECT_EQ(kuka.outputs.programs, (std::vector<std::string>{"krl", "csv"}));
+
+  // No controller key: none, the CSV alone.
+  const JobSpec plain = loadJob(writeJob(""));
+  EXPECT_EQ(plain.robot.controller, "none");
+  EXPECT_EQ(plain.outputs.programs, std::vector<std::string>{"csv"});
+  EXPECT_TRUE(foreignPrograms(plain.robot, {"vplus", "krl"}).empty()) << "no vendor, none foreign";
+
+  const std::vector<std::pair<std::string, std::string>> languages = {{"adept_vplus", "vplus"},
+                                                                      {"kuka_krl", "krl"},
+                                                                      {"abb_rapid", "rapid"},
+                                                                      {"ur_script", "urscript"}};
+  for (const auto& [controller, language] : languages) {
+    SCOPED_TRACE(controller);
+    const JobSpec job = loadJob(writeJob("", "controller: " + controller + "\n" + kRobot));
+    EXPECT_EQ(job.outputs.programs, (std::vector<std::string>{language, "csv"}));
+    EXPECT_EQ(controllerProgramFormat(controller), language);
+  }
+
+  // outputs.programs overrides; another vendor's language is found (the CSV is nobody's).
+  const JobSpec over =
+      loadJob(kSource / "data/jobs/demo.yaml", {"outputs.programs=[krl, vplus, csv, rapid]"});
+  EXPECT_EQ(over.outputs.programs, (std::vector<std::string>{"krl", "vplus", "csv", "rapid"}));
+  EXPECT_EQ(foreignPrograms(over.robot, over.outputs.programs),
+            (std::vector<std::string>{"krl", "rapid"}));
+  // export's --format names are case-insensitive.
+  EXPECT_EQ(foreignPrograms(over.robot, {"VPLUS", "KRL"}), std::vector<std::string>{"KRL"});
+  EXPECT_TRUE(
+      loadJob(kSource / "data/jobs/demo.yaml", {"outputs.programs=[]"}).outputs.programs.empty());
+
+  // `job show` prints it, and the printed job loads back to the same programs.
+  const std::string shown = jobToYaml(kuka);
+  EXPECT_NE(shown.find("controller: kuka_krl"), std::string::npos) << shown;
+  EXPECT_EQ(loadJob(write("shown.yaml", shown)).outputs.programs, kuka.outputs.programs);
+}
+
+TEST_F(JobFile, AnUnknownControllerIsRejectedWithASuggestion) {
+  const std::string expected = "expected one of adept_vplus, kuka_krl, abb_rapid, ur_script, none";
+  EXPECT_TRUE(loadFails(writeJob("", "controller: adept\n" + kRobot),
+                        {at("robot.yaml", "1:13: controller: 'adept': "), expected,
+                         "(did you mean 'adept_vplus'?)"}));
+  EXPECT_TRUE(loadFails(writeJob("", "controller: rapid\n" + kRobot),
+                        {"controller: 'rapid'", "(did you mean 'abb_rapid'?)"}));
+  EXPECT_TRUE(
+      loadFails(writeJob("", "controller: fanuc\n" + kRobot), {"controller: 'fanuc'", expected}));
+  EXPECT_TRUE(loadFails(writeJob("", "controller: [adept_vplus]\n" + kRobot),
+                        {"controller: a list", expected}));
+  // Inline robots too, their path under `robot`.
+  EXPECT_TRUE(loadFails(
+      write("inline.yaml",
+            "robot:\n" + indented("controller: kuka\n" + kRobot) + "\npart: {mesh: part.stl}\n"),
+      {at("inline.yaml", "2:15: robot.controller: 'kuka'"), "(did you mean 'kuka_krl'?)"}));
 }
 
 // from (0, 0, 0) → to (30, 40, 0) mm is a 3-4-5 triangle: length 50 mm, centred at (15, 20, 0)

@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "cli/config/detail/describe.h"
 #include "cli/programs/programs.h"
 #include "kinematics/error.h"
 #include "kinematics/units.h"
@@ -398,6 +399,7 @@ void describeJob(A& a, JobSpec& s) {
   a.section("planner", s.planner);
   a.section("validation", s.validation);
   a.section("simulation", s.simulation);
+  if constexpr (A::kReading) s.outputs.programs = defaultPrograms(s.robot);
   a.section("outputs", s.outputs);
 }
 

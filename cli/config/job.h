@@ -227,7 +227,9 @@ struct ConstraintsSpec {
 
 /// `outputs`: the robot programs `plan` writes.
 struct OutputsSpec {
-  std::vector<std::string> programs{"vplus", "krl", "rapid", "urscript"};  ///< formats
+  /// Formats (programFormatNames()). When the job does not say: defaultPrograms(robot), the
+  /// robot controller's language and the CSV.
+  std::vector<std::string> programs;
   std::string program_name = "scan";  ///< made a valid identifier of each language
 };
 

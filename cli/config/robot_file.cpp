@@ -1,7 +1,10 @@
 #include "cli/config/robot_file.h"
 
+#include <cctype>
+
 #include <fmt/format.h>
 
+#include "cli/config/detail/describe.h"
 #include "kinematics/error.h"
 #include "kinematics/units.h"
 
@@ -67,6 +70,7 @@ void describeRobot(A& a, RobotSpec& s) {
   a.require("dh");
   a.require("opw");
   a.field("name", s.name);
+  a.field("controller", s.controller, Expect::oneOf(kControllers));
   a.list("dh", s.dh, 6, 6);
   a.section("opw", s.opw);
   a.list("links", s.links, 0, 7);
@@ -88,6 +92,33 @@ void describe(YamlIn& a, LinkSpec& s) { describeLink(a, s); }
 void describe(YamlOut& a, LinkSpec& s) { describeLink(a, s); }
 void describe(YamlIn& a, RobotSpec& s) { describeRobot(a, s); }
 void describe(YamlOut& a, RobotSpec& s) { describeRobot(a, s); }
+
+std::string controllerProgramFormat(const std::string& controller) {
+  if (controller == "adept_vplus") return "vplus";
+  if (controller == "kuka_krl") return "krl";
+  if (controller == "abb_rapid") return "rapid";
+  if (controller == "ur_script") return "urscript";
+  return "";
+}
+
+std::vector<std::string> defaultPrograms(const RobotSpec& robot) {
+  const std::string own = controllerProgramFormat(robot.controller);
+  if (own.empty()) return {"csv"};
+  return {own, "csv"};
+}
+
+std::vector<std::string> foreignPrograms(const RobotSpec& robot,
+                                         const std::vector<std::string>& formats) {
+  const std::string own = controllerProgramFormat(robot.controller);
+  std::vector<std::string> foreign;
+  if (own.empty()) return foreign;
+  for (const std::string& f : formats) {
+    std::string name = f;
+    for (char& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (name != own && name != "csv") foreign.push_back(f);
+  }
+  return foreign;
+}
 
 RobotSpec readRobot(YamlIn& in) {
   RobotSpec spec;

@@ -6,7 +6,6 @@
 #include <vector>
 
 #include "cli/config/spec.h"
-#include "cli/config/yaml_reader.h"
 #include "kinematics/robot_model.h"
 
 namespace scanplan::cli {
@@ -35,19 +34,31 @@ struct LinkSpec {
   std::vector<ShapeSpec> shapes;
 };
 
-/// A robot file: name, DH table, OPW parameters, link geometry (base + 6 links).
+/// The robot controllers a robot file can name (`controller:`): each runs one program language.
+/// "none": the file does not say (the default), so `plan` writes only the CSV.
+inline const std::vector<std::string> kControllers = {"adept_vplus", "kuka_krl", "abb_rapid",
+                                                      "ur_script", "none"};
+
+/// A robot file: name, controller, DH table, OPW parameters, link geometry (base + 6 links).
 struct RobotSpec {
   std::string name;
+  std::string controller = "none";  ///< one of kControllers
   std::vector<JointSpec> dh;
   OpwSpec opw;
   std::vector<LinkSpec> links;
 };
 
-void describe(YamlIn& a, RobotSpec& s);
-void describe(YamlOut& a, RobotSpec& s);
+/// The program format (a name of programFormatNames()) the controller runs: vplus, krl, rapid,
+/// urscript; "" for none.
+std::string controllerProgramFormat(const std::string& controller);
+/// The programs `plan` writes when the job's outputs.programs does not say: the controller's
+/// language and the CSV; the CSV alone when the robot names no controller.
+std::vector<std::string> defaultPrograms(const RobotSpec& robot);
+/// The formats among `formats` that are another vendor's language than the robot's controller
+/// (the CSV is nobody's; a robot with controller none has no vendor, so nothing is foreign).
+std::vector<std::string> foreignPrograms(const RobotSpec& robot,
+                                         const std::vector<std::string>& formats);
 
-/// Reads and validates a robot mapping (a robot file's top level or a job's inline `robot`).
-RobotSpec readRobot(YamlIn& in);
 /// Loads a robot file; errors name the file.
 RobotSpec loadRobotFile(const std::filesystem::path& file);
 /// Builds the kinematic model, checking OPW against DH; errors name `source` (the file).

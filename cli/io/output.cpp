@@ -12,7 +12,7 @@
 
 #include <fmt/format.h>
 
-#include "cli/config/yaml_reader.h"
+#include "cli/config/text.h"
 #include "kinematics/error.h"
 
 namespace scanplan::cli {

@@ -1,4 +1,6 @@
 #pragma once
+// The YAML side of the job and robot files: private to cli/config (only its .cpp files include
+// this). Everything else sees the plain spec structs of spec.h, robot_file.h and job.h.
 
 #include <array>
 #include <cstddef>
@@ -9,6 +11,9 @@
 #include <vector>
 
 #include <yaml-cpp/yaml.h>
+
+#include "cli/config/spec.h"
+#include "cli/config/text.h"
 
 namespace scanplan::cli {
 
@@ -37,13 +42,6 @@ struct Expect {
   std::string describe(const char* kind) const;
 };
 
-/// A path as written in a YAML file and as resolved against that file's folder. Reading one
-/// checks that the file exists.
-struct FilePath {
-  std::string as_written;
-  std::filesystem::path resolved;
-};
-
 /// The nodes of a YAML tree that came from the command line (`--set key.path=value`), each with
 /// the override's text: errors about them name the override, not a place in the file.
 class OverrideOrigins {
@@ -56,11 +54,6 @@ class OverrideOrigins {
  private:
   std::vector<std::pair<YAML::Node, std::string>> nodes_;
 };
-
-/// The key of `valid` that `written` most likely means, or "" when none is close: the same key
-/// with its unit or plural ending (phi → phi_deg, radius → radius_mm, repeat → repeats), else
-/// the nearest by edit distance (radius_m → radius_mm, hieght_mm → height_mm).
-std::string suggestKey(const std::string& written, const std::vector<std::string>& valid);
 
 /// Reads one YAML mapping into a spec struct, field by field, validating as it goes.
 /// Every error names the file, line and column (or the --set override that gave the value),
@@ -224,8 +217,5 @@ class YamlOut {
 /// Loads a YAML file (a mapping at the top), turning parse errors into InputError with
 /// file:line:column.
 YAML::Node loadYamlFile(const std::filesystem::path& file);
-
-/// Shortest round-trip decimal text of a number ("250", "0.1", "-1e-05").
-std::string formatNumber(double v);
 
 }  // namespace scanplan::cli

@@ -1,4 +1,4 @@
-#include "cli/config/yaml_reader.h"
+#include "cli/config/detail/yaml_reader.h"
 
 #include <algorithm>
 #include <cctype>
@@ -20,20 +20,27 @@ std::string nodeText(const YAML::Node& node) {
   return "a mapping";
 }
 
-// Edit distance, for "did you mean" hints on misspelt keys.
-std::size_t editDistance(const std::string& a, const std::string& b) {
-  std::vector<std::size_t> row(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    std::size_t diag = row[0];
-    row[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t up = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0u : 1u)});
-      diag = up;
-    }
+// The choice a rejected text most likely means, for "did you mean": as for keys (adept →
+// adept_vplus, ur_scrpit → ur_script), ignoring case, or the choice it is the last word of
+// (vplus → adept_vplus).
+std::string suggestChoice(const std::string& written, const std::vector<std::string>& choices) {
+  std::string lower = written;
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (std::string s = suggestKey(lower, choices); !s.empty()) return s;
+  for (const std::string& c : choices) {
+    if (c.size() > lower.size() + 1 && c.ends_with("_" + lower)) return c;
   }
-  return row[b.size()];
+  return "";
+}
+
+// What a text field expected, with the choice it most likely meant.
+std::string expectedText(const Expect& expect, const std::string& written) {
+  if (expect.choices.empty()) return "a text";
+  std::string s = expect.describe("");
+  if (const std::string hint = suggestChoice(written, expect.choices); !hint.empty()) {
+    s += " (did you mean '" + hint + "'?)";
+  }
+  return s;
 }
 
 bool parseDouble(const std::string& text, double& out) {
@@ -80,31 +87,6 @@ const std::string* OverrideOrigins::find(const YAML::Node& node) const {
   return nullptr;
 }
 
-std::string suggestKey(const std::string& written, const std::vector<std::string>& valid) {
-  // The key without its unit (phi for phi_deg, radius for radius_mm) or its plural s (repeat
-  // for repeats): the shortest valid key that extends it so.
-  std::string best;
-  for (const std::string& v : valid) {
-    if (written.size() >= 2 && v.size() > written.size() &&
-        v.compare(0, written.size(), written) == 0 &&
-        (v[written.size()] == '_' || v.size() == written.size() + 1) &&
-        (best.empty() || v.size() < best.size())) {
-      best = v;
-    }
-  }
-  if (!best.empty()) return best;
-  // Otherwise only near misses: a unit suffix (radius_m for radius_mm) or a typo.
-  std::size_t best_d = std::max<std::size_t>(3, written.size() / 3) + 1;
-  for (const std::string& v : valid) {
-    const std::size_t d = editDistance(written, v);
-    if (d < best_d) {
-      best_d = d;
-      best = v;
-    }
-  }
-  return best;
-}
-
 bool Expect::accepts(double v) const {
   if (!std::isfinite(v)) return false;
   if (lo_open ? !(v > lo) : !(v >= lo)) return false;
@@ -133,12 +115,6 @@ std::string Expect::describe(const char* kind) const {
     s += fmt::format(" {} {}", hi_open ? "<" : "≤", formatNumber(hi));
   }
   return s;
-}
-
-std::string formatNumber(double v) {
-  char buf[64];
-  const auto [ptr, ec] = std::to_chars(buf, buf + sizeof buf, v);
-  return ec == std::errc() ? std::string(buf, ptr) : fmt::format("{}", v);
 }
 
 YAML::Node loadYamlFile(const std::filesystem::path& file) {
@@ -329,7 +305,7 @@ void YamlIn::field(const char* key, std::string& value, const Expect& expect) {
   const YAML::Node n = node_[key];
   if (!n.IsScalar())
     fail(key, nodeText(n), expect.choices.empty() ? "a text" : expect.describe(""));
-  if (!expect.accepts(n.Scalar())) fail(key, nodeText(n), expect.describe(""));
+  if (!expect.accepts(n.Scalar())) fail(key, nodeText(n), expectedText(expect, n.Scalar()));
   value = n.Scalar();
 }
 
@@ -348,7 +324,7 @@ void YamlIn::field(const char* key, std::vector<std::string>& value, const Expec
     }
     if (!expect.accepts(item.Scalar())) {
       throw InputError(fmt::format("{}: {}: {}: expected {}", where(item), fieldPath(at),
-                                   nodeText(item), expect.describe("")));
+                                   nodeText(item), expectedText(expect, item.Scalar())));
     }
     if (std::find(items.begin(), items.end(), item.Scalar()) != items.end()) {
       throw InputError(fmt::format("{}: {}: '{}' is listed twice: expected each once", where(item),
