@@ -56,6 +56,75 @@ bool pairByDefault(const BodyInfo& a, const BodyInfo& b) {
   return true;
 }
 
+// A pair checked or not, and its thresholds.
+struct Candidate {
+  bool enabled;
+  PairThresholds t;
+};
+
+// Applies one rule to every pair of bodies it matches (candidates in the order of the pairs
+// a < b); a rule that matches no pair is an input error.
+void applyRule(const PairRule& rule,
+               const std::vector<BodyInfo>& bodies,
+               std::vector<Candidate>& candidates) {
+  const int n = static_cast<int>(bodies.size());
+  bool any = false;
+  std::size_t c = 0;
+  for (int a = 0; a < n; ++a) {
+    for (int b = a + 1; b < n; ++b, ++c) {
+      const BodyInfo& A = bodies[static_cast<std::size_t>(a)];
+      const BodyInfo& B = bodies[static_cast<std::size_t>(b)];
+      if (!((matches(rule.a, A) && matches(rule.b, B)) ||
+            (matches(rule.a, B) && matches(rule.b, A)))) {
+        continue;
+      }
+      any = true;
+      Candidate& cand = candidates[c];
+      if (rule.action == PairRule::Action::kExclude) cand.enabled = false;
+      if (rule.action == PairRule::Action::kInclude) cand.enabled = true;
+      if (rule.d_low >= 0.0) cand.t.d_low = rule.d_low;
+      if (rule.d_high >= 0.0) cand.t.d_high = rule.d_high;
+      if (rule.gamma > 0.0) cand.t.gamma = rule.gamma;
+    }
+  }
+  if (!any) {
+    throw InputError("constraints.clearance.pairs: rule [" + rule.a + ", " + rule.b +
+                     "] matches no pair of bodies: expected body names, globs, 'robot' or "
+                     "'obstacles'");
+  }
+}
+
+// The pairs to check: default pairs, then the job's rules in order.
+std::vector<PairInfo> selectPairs(const std::vector<BodyInfo>& bodies,
+                                  const ClearanceConfig& config) {
+  const int n = static_cast<int>(bodies.size());
+  std::vector<Candidate> candidates;
+  for (int a = 0; a < n; ++a) {
+    for (int b = a + 1; b < n; ++b) {
+      candidates.push_back(
+          {pairByDefault(bodies[static_cast<std::size_t>(a)], bodies[static_cast<std::size_t>(b)]),
+           config.defaults});
+    }
+  }
+  for (const PairRule& rule : config.rules) applyRule(rule, bodies, candidates);
+  std::vector<PairInfo> pairs;
+  std::size_t c = 0;
+  for (int a = 0; a < n; ++a) {
+    for (int b = a + 1; b < n; ++b, ++c) {
+      if (!candidates[c].enabled) continue;
+      const PairThresholds& t = candidates[c].t;
+      if (!(t.d_low < t.d_high)) {
+        throw InputError("constraints.clearance: pair " + bodies[static_cast<std::size_t>(a)].name +
+                         " ↔ " + bodies[static_cast<std::size_t>(b)].name + ": d_low " +
+                         std::to_string(toMm(t.d_low)) + " mm is not below d_high " +
+                         std::to_string(toMm(t.d_high)) + " mm: expected d_low < d_high");
+      }
+      pairs.push_back({a, b, t});
+    }
+  }
+  return pairs;
+}
+
 }  // namespace
 
 Scene::Scene(const kinematics::CellModel& cell, const ClearanceConfig& config)
@@ -100,61 +169,7 @@ Scene::Scene(const kinematics::CellModel& cell, const ClearanceConfig& config)
         -1, o.shapes);
   }
 
-  // Default pairs, then the job's rules in order.
-  struct Candidate {
-    bool enabled;
-    PairThresholds t;
-  };
-  const int n = static_cast<int>(bodies_.size());
-  std::vector<Candidate> candidates;
-  for (int a = 0; a < n; ++a) {
-    for (int b = a + 1; b < n; ++b) {
-      candidates.push_back({pairByDefault(bodies_[static_cast<std::size_t>(a)],
-                                          bodies_[static_cast<std::size_t>(b)]),
-                            config.defaults});
-    }
-  }
-  for (const PairRule& rule : config.rules) {
-    bool any = false;
-    std::size_t c = 0;
-    for (int a = 0; a < n; ++a) {
-      for (int b = a + 1; b < n; ++b, ++c) {
-        const BodyInfo& A = bodies_[static_cast<std::size_t>(a)];
-        const BodyInfo& B = bodies_[static_cast<std::size_t>(b)];
-        if (!((matches(rule.a, A) && matches(rule.b, B)) ||
-              (matches(rule.a, B) && matches(rule.b, A)))) {
-          continue;
-        }
-        any = true;
-        Candidate& cand = candidates[c];
-        if (rule.action == PairRule::Action::kExclude) cand.enabled = false;
-        if (rule.action == PairRule::Action::kInclude) cand.enabled = true;
-        if (rule.d_low >= 0.0) cand.t.d_low = rule.d_low;
-        if (rule.d_high >= 0.0) cand.t.d_high = rule.d_high;
-        if (rule.gamma > 0.0) cand.t.gamma = rule.gamma;
-      }
-    }
-    if (!any) {
-      throw InputError("constraints.clearance.pairs: rule [" + rule.a + ", " + rule.b +
-                       "] matches no pair of bodies: expected body names, globs, 'robot' or "
-                       "'obstacles'");
-    }
-  }
-  std::size_t c = 0;
-  for (int a = 0; a < n; ++a) {
-    for (int b = a + 1; b < n; ++b, ++c) {
-      if (!candidates[c].enabled) continue;
-      const PairThresholds& t = candidates[c].t;
-      if (!(t.d_low < t.d_high)) {
-        throw InputError("constraints.clearance: pair " +
-                         bodies_[static_cast<std::size_t>(a)].name + " ↔ " +
-                         bodies_[static_cast<std::size_t>(b)].name + ": d_low " +
-                         std::to_string(toMm(t.d_low)) + " mm is not below d_high " +
-                         std::to_string(toMm(t.d_high)) + " mm: expected d_low < d_high");
-      }
-      pairs_.push_back({a, b, t});
-    }
-  }
+  pairs_ = selectPairs(bodies_, config);
 }
 
 Scene::~Scene() = default;

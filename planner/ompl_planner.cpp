@@ -185,16 +185,7 @@ class StopBiasedSampler : public oc::ControlSampler {
 
 const char* plannerName(OmplPlanner p) { return p == OmplPlanner::kSst ? "SST" : "RRT"; }
 
-}  // namespace
-
-PlanResult planOmpl(const ConfigMap& map,
-                    std::size_t branch,
-                    const PlannerSettings& settings,
-                    bool continuous,
-                    const OmplSettings& os,
-                    std::optional<double> start_theta) {
-  const auto clock_start = std::chrono::steady_clock::now();
-  const detail::Grid g = detail::gridOf(map, branch, continuous);
+void checkSettings(const PlannerSettings& settings, const OmplSettings& os) {
   if (!(settings.omega_max >= 0.0) || !(settings.alpha_max >= 0.0) || !(os.time_limit_s > 0.0) ||
       os.max_steps < 1 || !(os.goal_bias >= 0.0) || !(os.goal_bias <= 1.0) ||
       !(os.stop_probability >= 0.0) || !(os.stop_probability <= 1.0) ||
@@ -203,59 +194,45 @@ PlanResult planOmpl(const ConfigMap& map,
         "planOmpl: bounds >= 0; time limit, radii > 0; max_steps >= 1; goal_bias, stop_probability "
         "in [0, 1]");
   }
+}
+
+// A cheap certain answer: the first time sample with f = 0 at every angle, explained; empty when
+// every column has an open cell.
+std::string closedColumn(const ConfigMap& map, std::size_t branch) {
   const std::size_t na = map.angles.size(), nt = map.times.size();
-  const double dt = g.dt;
-
-  const Problem problem{&map, g, branch, settings, continuous};
-  PlanResult result;
-  result.branch = branch;
-  const auto finish = [&]() {
-    result.seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
-    return result;
-  };
-
-  // Cheap certain answers first: a column with f = 0 everywhere, or a blocked start.
   for (std::size_t k = 0; k < nt; ++k) {
     bool open = false;
     for (std::size_t a = 0; a < na && !open; ++a) open = map.f[map.index(branch, a, k)] > 0.0f;
     if (!open) {
-      result.reason =
-          fmt::format("time sample {} (t = {} s): f = 0 at every table angle", k, map.times[k]);
-      return finish();
+      return fmt::format("time sample {} (t = {} s): f = 0 at every table angle", k, map.times[k]);
     }
   }
-  std::vector<double> starts;  // rad, unwrapped: the path's first sample
-  if (start_theta) {
-    if (!(problem.f(*start_theta, 0) > 0.0)) {
-      result.reason = fmt::format("time sample 0 (t = {} s): f = 0 at the start angle {} rad",
-                                  map.times[0], *start_theta);
-      return finish();
-    }
-    starts.push_back(*start_theta);
-  } else {
-    std::vector<std::size_t> open;
-    for (std::size_t a = 0; a < na; ++a) {
-      if (map.f[map.index(branch, a, 0)] > 0.0f) open.push_back(a);
-    }
-    const std::size_t n = os.starts == 0 ? open.size() : std::min(open.size(), os.starts);
-    for (std::size_t i = 0; i < n; ++i) starts.push_back(map.angles[open[i * open.size() / n]]);
+  return {};
+}
+
+// Start angles (rad) spread evenly over the first column's open cells: `count` of them, 0 = all.
+std::vector<double> spreadStarts(const ConfigMap& map, std::size_t branch, std::size_t count) {
+  std::vector<std::size_t> open;
+  for (std::size_t a = 0; a < map.angles.size(); ++a) {
+    if (map.f[map.index(branch, a, 0)] > 0.0f) open.push_back(a);
   }
+  std::vector<double> starts;
+  const std::size_t n = count == 0 ? open.size() : std::min(open.size(), count);
+  for (std::size_t i = 0; i < n; ++i) starts.push_back(map.angles[open[i * open.size() / n]]);
+  return starts;
+}
 
-  const std::lock_guard<std::mutex> lock(omplMutex());
-  const LogLevelGuard quiet;
-  // Reseeding after seeds were drawn makes OMPL log an error (silenced) but it does reseed: every
-  // RNG built below gets the same seed sequence on every call.
-  ompl::RNG::setSeed(os.seed == 0 ? 1u : os.seed);
-
+// θ, ω, k and the accumulated J, in that order (kTheta …).
+ob::StateSpacePtr makeStateSpace(const Problem& problem) {
+  const ConfigMap& map = *problem.map;
+  const double dt = problem.grid.dt;
   // Metric in "steps" (header): weights turn rad, rad/s and samples into comparable units.
-  const double w_max = settings.omega_max, a_max = settings.alpha_max;
-  const double theta_unit = w_max * dt > 0.0 ? w_max * dt : g.angle_step;
+  const double w_max = problem.settings.omega_max, a_max = problem.settings.alpha_max;
+  const double theta_unit = w_max * dt > 0.0 ? w_max * dt : problem.grid.angle_step;
   const double omega_unit = a_max * dt > 0.0 ? a_max * dt : std::max(2.0 * w_max, 1.0);
-  const StateView view{continuous};
 
   auto space = std::make_shared<ob::CompoundStateSpace>();
-  if (continuous) {
+  if (problem.continuous) {
     space->addSubspace(std::make_shared<ob::SO2StateSpace>(), 1.0 / theta_unit);
   } else {
     auto theta_space = std::make_shared<ob::RealVectorStateSpace>(1);
@@ -270,25 +247,36 @@ PlanResult planOmpl(const ConfigMap& map,
   // Bounds only shape sampling (validity enforces |ω| ≤ ω_max); they must be non-empty.
   const double w_bound = std::max(w_max, 1e-9);
   space->addSubspace(realSpace(-w_bound, w_bound), 1.0 / omega_unit);
-  space->addSubspace(realSpace(0.0, static_cast<double>(nt - 1)), 1.0);
+  space->addSubspace(realSpace(0.0, static_cast<double>(map.times.size() - 1)), 1.0);
   // The accumulated J rides along outside the metric (weight 0); finite bounds keep sampled
   // values finite so 0·distance stays 0.
   space->addSubspace(realSpace(0.0, 1e100), 0.0);
   space->lock();
+  return space;
+}
 
+oc::ControlSpacePtr makeControlSpace(const ob::StateSpacePtr& space, double stop_probability) {
   auto controls = std::make_shared<oc::RealVectorControlSpace>(space, 1);
   ob::RealVectorBounds u_bounds(1);
   u_bounds.setLow(-1.0);
   u_bounds.setHigh(1.0);
   controls->setBounds(u_bounds);
-  controls->setControlSamplerAllocator([p = os.stop_probability](const oc::ControlSpace* cs) {
+  controls->setControlSamplerAllocator([p = stop_probability](const oc::ControlSpace* cs) {
     return std::make_shared<StopBiasedSampler>(cs, p);
   });
+  return controls;
+}
 
+// The dynamics (Problem::nextOmega) and validity; `problem` must outlive the result.
+oc::SpaceInformationPtr makeSpaceInformation(const Problem& problem,
+                                             const ob::StateSpacePtr& space,
+                                             const oc::ControlSpacePtr& controls,
+                                             int max_steps) {
+  const StateView view{problem.continuous};
   auto si = std::make_shared<oc::SpaceInformation>(space, controls);
-  si->setPropagationStepSize(dt);
-  si->setMinMaxControlDuration(1, static_cast<unsigned>(os.max_steps));
-  const double last = static_cast<double>(nt - 1);
+  si->setPropagationStepSize(problem.grid.dt);
+  si->setMinMaxControlDuration(1, static_cast<unsigned>(max_steps));
+  const double last = static_cast<double>(problem.map->times.size() - 1);
   si->setStatePropagator([&problem, view, last](const ob::State* from, const oc::Control* control,
                                                 double, ob::State* to) {
     const double u = control->as<oc::RealVectorControlSpace::ControlType>()->values[0];
@@ -321,7 +309,16 @@ PlanResult planOmpl(const ConfigMap& map,
     return problem.f(view.theta(s), StateView::sample(s)) > 0.0;
   });
   si->setup();
+  return si;
+}
 
+// Start states at rest on sample 0, the last sample as the goal, J as the objective.
+ob::ProblemDefinitionPtr makeProblemDefinition(const oc::SpaceInformationPtr& si,
+                                               const std::vector<double>& starts,
+                                               bool continuous,
+                                               double last,
+                                               bool stop_at_first_solution) {
+  const StateView view{continuous};
   auto pdef = std::make_shared<ob::ProblemDefinition>(si);
   for (const double theta0 : starts) {
     ob::State* s = si->allocState();
@@ -336,9 +333,14 @@ PlanResult planOmpl(const ConfigMap& map,
   auto objective = std::make_shared<AccumulatedCost>(si);
   // Satisfied by any solution (stop at the first) or by none (improve until stopped).
   objective->setCostThreshold(
-      ob::Cost((os.stop_at_first_solution ? 1.0 : -1.0) * std::numeric_limits<double>::infinity()));
+      ob::Cost((stop_at_first_solution ? 1.0 : -1.0) * std::numeric_limits<double>::infinity()));
   pdef->setOptimizationObjective(objective);
+  return pdef;
+}
 
+ob::PlannerPtr makePlanner(const oc::SpaceInformationPtr& si,
+                           const ob::ProblemDefinitionPtr& pdef,
+                           const OmplSettings& os) {
   ob::PlannerPtr planner;
   if (os.planner == OmplPlanner::kSst) {
     auto sst = std::make_shared<oc::SST>(si);
@@ -353,9 +355,20 @@ PlanResult planOmpl(const ConfigMap& map,
   }
   planner->setProblemDefinition(pdef);
   planner->setup();
+  return planner;
+}
 
+struct SolveOutcome {
+  ob::PlannerStatus status;
+  std::size_t iterations = 0;  // calls of the termination condition
+  double seconds = 0.0;        // s, of solve()
+};
+
+// solve() until the time limit or the iteration cap, whichever comes first.
+SolveOutcome solveWithin(ob::Planner& planner, const OmplSettings& os) {
+  SolveOutcome out;
   // The planners test the condition once per iteration: counting its calls caps iterations.
-  std::size_t iterations = 0;
+  std::size_t& iterations = out.iterations;
   const std::size_t cap = os.max_iterations;
   const ob::PlannerTerminationCondition ptc =
       ob::plannerOrTerminationCondition(ob::timedPlannerTerminationCondition(os.time_limit_s),
@@ -363,48 +376,62 @@ PlanResult planOmpl(const ConfigMap& map,
                                           return ++iterations > cap && cap != 0;
                                         }));
   const auto solve_start = std::chrono::steady_clock::now();
-  const ob::PlannerStatus status = planner->solve(ptc);
-  const double solve_s =
+  out.status = planner.solve(ptc);
+  out.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - solve_start).count();
-  const bool exact = status == ob::PlannerStatus::EXACT_SOLUTION;
-  const bool approximate = status == ob::PlannerStatus::APPROXIMATE_SOLUTION;
-  result.status = approximate                               ? PlanResult::Status::kApproximate
-                  : status == ob::PlannerStatus::TIMEOUT    ? PlanResult::Status::kTimeout
-                                                            : PlanResult::Status::kNoPath;
-  result.detail = fmt::format(
+  return out;
+}
+
+std::string solveDetail(const OmplSettings& os, const SolveOutcome& o, std::size_t starts) {
+  const bool exact = o.status == ob::PlannerStatus::EXACT_SOLUTION;
+  const bool approximate = o.status == ob::PlannerStatus::APPROXIMATE_SOLUTION;
+  const std::size_t cap = os.max_iterations;
+  return fmt::format(
       "OMPL {}: {} after {:.3f} s{}, {} start state{}", plannerName(os.planner),
       exact         ? "exact solution"
       : approximate ? "approximate solution"
-                    : status.asString(),
-      solve_s, fmt::format(" ({} iterations)", cap != 0 ? std::min(iterations, cap) : iterations),
-      starts.size(), starts.size() == 1 ? "" : "s");
+                    : o.status.asString(),
+      o.seconds,
+      fmt::format(" ({} iterations)", cap != 0 ? std::min(o.iterations, cap) : o.iterations),
+      starts, starts == 1 ? "" : "s");
+}
 
-  if (!exact && !approximate) {
-    result.reason =
-        fmt::format("time sample 1 (t = {} s): OMPL {} found no motion from any start ({})",
-                    map.times[1], plannerName(os.planner), status.asString());
-    return finish();
+// Why no exact solution: none at all, or an approximate one ending before the last sample.
+std::string unsolvedReason(const ConfigMap& map,
+                           const OmplSettings& os,
+                           const SolveOutcome& o,
+                           const ob::ProblemDefinition& pdef) {
+  if (o.status != ob::PlannerStatus::APPROXIMATE_SOLUTION) {
+    return fmt::format("time sample 1 (t = {} s): OMPL {} found no motion from any start ({})",
+                       map.times[1], plannerName(os.planner), o.status.asString());
   }
-  auto* path = pdef->getSolutionPath()->as<oc::PathControl>();
+  const std::size_t nt = map.times.size(), cap = os.max_iterations;
+  auto* path = pdef.getSolutionPath()->as<oc::PathControl>();
   const std::size_t reached = StateView::sample(path->getStates().back());
-  if (!exact) {
-    const std::size_t first_missed = std::min(reached + 1, nt - 1);
-    result.reason = fmt::format(
-        "time sample {} (t = {} s): not reached; OMPL {} ended with an approximate solution "
-        "whose furthest state is time sample {} of {} ({})",
-        first_missed, map.times[first_missed], plannerName(os.planner), reached, nt - 1,
-        cap != 0 && iterations > cap ? "iteration cap" : "time limit");
-    return finish();
-  }
+  const std::size_t first_missed = std::min(reached + 1, nt - 1);
+  return fmt::format(
+      "time sample {} (t = {} s): not reached; OMPL {} ended with an approximate solution "
+      "whose furthest state is time sample {} of {} ({})",
+      first_missed, map.times[first_missed], plannerName(os.planner), reached, nt - 1,
+      cap != 0 && o.iterations > cap ? "iteration cap" : "time limit");
+}
 
-  // One angle per sample: replay each control for its duration from the root, unwrapped (ω does
-  // not depend on θ, so these are the speeds OMPL propagated).
-  const ob::State* root = path->getState(0);
+// One angle per sample: replay each control for its duration from the root, unwrapped (ω does
+// not depend on θ, so these are the speeds OMPL propagated). The root is the start state nearest
+// the path's first state unless the start is fixed.
+std::vector<double> replayPath(const Problem& problem,
+                               oc::PathControl& path,  // getControlDurations() is not const
+                               const std::vector<double>& starts,
+                               bool fixed_start) {
+  const StateView view{problem.continuous};
+  const double dt = problem.grid.dt;
+  const ob::State* root = path.getState(0);
   double theta = starts.front();
-  if (!start_theta) {
+  if (!fixed_start) {
     double best = std::numeric_limits<double>::infinity();
     for (const double s : starts) {
-      const double d = std::abs(continuous ? wrapPi(s - view.theta(root)) : s - view.theta(root));
+      const double d =
+          std::abs(problem.continuous ? wrapPi(s - view.theta(root)) : s - view.theta(root));
       if (d < best) {
         best = d;
         theta = s;
@@ -412,20 +439,86 @@ PlanResult planOmpl(const ConfigMap& map,
     }
   }
   std::vector<double> out;
-  out.reserve(nt);
+  out.reserve(problem.map->times.size());
   out.push_back(theta);
   double omega = StateView::real(root, kOmega);
-  for (std::size_t i = 0; i < path->getControlCount(); ++i) {
-    const double u = path->getControl(static_cast<unsigned>(i))
+  for (std::size_t i = 0; i < path.getControlCount(); ++i) {
+    const double u = path.getControl(static_cast<unsigned>(i))
                          ->as<oc::RealVectorControlSpace::ControlType>()
                          ->values[0];
-    const auto steps = static_cast<std::size_t>(std::llround(path->getControlDurations()[i] / dt));
+    const auto steps = static_cast<std::size_t>(std::llround(path.getControlDurations()[i] / dt));
     for (std::size_t j = 0; j < steps; ++j) {
       omega = problem.nextOmega(omega, out.size() - 1, u);
       theta += omega * dt;
       out.push_back(theta);
     }
   }
+  return out;
+}
+
+}  // namespace
+
+PlanResult planOmpl(const ConfigMap& map,
+                    std::size_t branch,
+                    const PlannerSettings& settings,
+                    bool continuous,
+                    const OmplSettings& os,
+                    std::optional<double> start_theta) {
+  const auto clock_start = std::chrono::steady_clock::now();
+  const detail::Grid g = detail::gridOf(map, branch, continuous);
+  checkSettings(settings, os);
+  const std::size_t nt = map.times.size();
+
+  const Problem problem{&map, g, branch, settings, continuous};
+  PlanResult result;
+  result.branch = branch;
+  const auto finish = [&]() {
+    result.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
+    return result;
+  };
+
+  // Cheap certain answers first: a column with f = 0 everywhere, or a blocked start.
+  result.reason = closedColumn(map, branch);
+  if (!result.reason.empty()) return finish();
+  std::vector<double> starts;  // rad, unwrapped: the path's first sample
+  if (start_theta) {
+    if (!(problem.f(*start_theta, 0) > 0.0)) {
+      result.reason = fmt::format("time sample 0 (t = {} s): f = 0 at the start angle {} rad",
+                                  map.times[0], *start_theta);
+      return finish();
+    }
+    starts.push_back(*start_theta);
+  } else {
+    starts = spreadStarts(map, branch, os.starts);
+  }
+
+  const std::lock_guard<std::mutex> lock(omplMutex());
+  const LogLevelGuard quiet;
+  // Reseeding after seeds were drawn makes OMPL log an error (silenced) but it does reseed: every
+  // RNG built below gets the same seed sequence on every call.
+  ompl::RNG::setSeed(os.seed == 0 ? 1u : os.seed);
+
+  const ob::StateSpacePtr space = makeStateSpace(problem);
+  const oc::SpaceInformationPtr si = makeSpaceInformation(
+      problem, space, makeControlSpace(space, os.stop_probability), os.max_steps);
+  const ob::ProblemDefinitionPtr pdef = makeProblemDefinition(
+      si, starts, continuous, static_cast<double>(nt - 1), os.stop_at_first_solution);
+  const ob::PlannerPtr planner = makePlanner(si, pdef, os);
+
+  const SolveOutcome solved = solveWithin(*planner, os);
+  result.status = solved.status == ob::PlannerStatus::APPROXIMATE_SOLUTION
+                      ? PlanResult::Status::kApproximate
+                  : solved.status == ob::PlannerStatus::TIMEOUT ? PlanResult::Status::kTimeout
+                                                                : PlanResult::Status::kNoPath;
+  result.detail = solveDetail(os, solved, starts.size());
+  if (solved.status != ob::PlannerStatus::EXACT_SOLUTION) {
+    result.reason = unsolvedReason(map, os, solved, *pdef);
+    return finish();
+  }
+
+  std::vector<double> out = replayPath(problem, *pdef->getSolutionPath()->as<oc::PathControl>(),
+                                       starts, start_theta.has_value());
   if (out.size() != nt) {
     result.reason = fmt::format(
         "time sample {} (t = {} s): the OMPL path replays to {} samples of {}",

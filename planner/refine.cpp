@@ -437,18 +437,15 @@ void precondition(const detail::RefineProblem::Band& h,
   chol.factor(reg);
 }
 
-}  // namespace
+using Clock = std::chrono::steady_clock;
 
-RefineResult refinePath(const ConfigMap& map,
-                        std::size_t branch,
-                        const std::vector<double>& theta,
-                        const PlannerSettings& settings,
-                        bool continuous,
-                        const RefineSettings& rs) {
-  const auto clock_start = std::chrono::steady_clock::now();
-  const auto elapsed = [&] {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
-  };
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+void checkInputs(const std::vector<double>& theta,
+                 const PlannerSettings& settings,
+                 const RefineSettings& rs) {
   if (!(settings.omega_max >= 0.0) || !(settings.alpha_max >= 0.0) || !(settings.k_omega >= 0.0) ||
       !(settings.k_alpha >= 0.0)) {
     throw std::invalid_argument("refinePath: bounds and weights must be >= 0");
@@ -463,55 +460,55 @@ RefineResult refinePath(const ConfigMap& map,
       throw std::invalid_argument(fmt::format("refinePath: theta[{}] is not finite", k));
     }
   }
+}
 
-  RefineResult result;
-  result.algorithm =
-      "augmented Lagrangian (PHR, sparse) over NLopt LD_LBFGS, banded preconditioner";
-  result.theta = theta;
-  result.before = evaluate(map, branch, theta, settings, continuous);
-  result.after = result.before;
-  if (!result.before.feasible) {
-    throw std::invalid_argument(fmt::format(
-        "refinePath: the input path is infeasible (min f {} at sample {}, max |omega| {} rad/s, "
-        "max |alpha| {} rad/s^2)",
-        result.before.min_f, result.before.min_f_sample, result.before.max_abs_omega,
-        result.before.max_abs_alpha));
+// evaluate() on one branch of one map: the judge of every candidate path.
+struct Judge {
+  const ConfigMap& map;
+  std::size_t branch;
+  const PlannerSettings& settings;
+  bool continuous;
+
+  ObjectiveTerms operator()(const std::vector<double>& theta) const {
+    return evaluate(map, branch, theta, settings, continuous);
   }
+};
 
-  const std::size_t n = theta.size();
-  // Boxes: the open run around each input angle. A lone open grid angle, or the held start,
-  // fixes the sample at its input value.
-  std::vector<double> box_lo(n), box_hi(n);
+// Boxes: the open run around each input angle. A lone open grid angle, or the held start, fixes
+// the sample at its input value (lo = hi); the others are `free`.
+struct Boxes {
+  std::vector<double> lo, hi;
   std::vector<std::size_t> free;
-  double f_min = std::numeric_limits<double>::infinity();
-  {
-    const detail::RefineProblem probe(map, branch, settings, continuous, n, 1.0, kBoundMargin);
-    for (std::size_t k = 0; k < n; ++k) {
-      double box_f_min = 0.0;
-      probe.feasibleInterval(theta[k], k, box_lo[k], box_hi[k], box_f_min);
-      f_min = std::min(f_min, box_f_min);
-      if (box_lo[k] < box_hi[k] && !(rs.keep_start && k == 0)) {
-        free.push_back(k);
-      } else {
-        box_lo[k] = box_hi[k] = theta[k];
-      }
+  double f_min = std::numeric_limits<double>::infinity();  // lowest f inside the boxes
+};
+
+Boxes openBoxes(const Judge& judge, const std::vector<double>& theta, bool keep_start) {
+  const std::size_t n = theta.size();
+  Boxes b;
+  b.lo.resize(n);
+  b.hi.resize(n);
+  const detail::RefineProblem probe(judge.map, judge.branch, judge.settings, judge.continuous, n,
+                                    1.0, kBoundMargin);
+  for (std::size_t k = 0; k < n; ++k) {
+    double box_f_min = 0.0;
+    probe.feasibleInterval(theta[k], k, b.lo[k], b.hi[k], box_f_min);
+    b.f_min = std::min(b.f_min, box_f_min);
+    if (b.lo[k] < b.hi[k] && !(keep_start && k == 0)) {
+      b.free.push_back(k);
+    } else {
+      b.lo[k] = b.hi[k] = theta[k];
     }
   }
-  if (free.empty()) {
-    result.stop_reason = "every sample is fixed (lone open grid angles); input kept";
-    result.seconds = elapsed();
-    return result;
-  }
-  detail::RefineProblem problem(map, branch, settings, continuous, n, kFloorFraction * f_min,
-                                kBoundMargin);
-  problem.setBoxes(box_lo, box_hi);
-  // Where the input sits on (or within the margin of) a bound, that bound is tightened only down
-  // to the input's value: the tightened problem always has the input as a feasible point.
-  problem.relaxBoundsTo(theta.data());
-  std::vector<double> lambda(problem.constraintCount(), 0.0);
+  return b;
+}
 
-  nlopt::opt opt(nlopt::LD_LBFGS, static_cast<unsigned>(free.size()));
-  Context ctx;
+// L-BFGS on the free samples, preconditioned; every evaluation goes through `ctx`.
+void setUpOptimiser(nlopt::opt& opt,
+                    Context& ctx,
+                    const detail::RefineProblem& problem,
+                    const std::vector<std::size_t>& free,
+                    std::size_t n,
+                    const RefineSettings& rs) {
   ctx.problem = &problem;
   ctx.free = &free;
   ctx.scratch.resize(free.size());
@@ -522,84 +519,136 @@ RefineResult refinePath(const ConfigMap& map,
   opt.set_ftol_rel(rs.ftol_rel);
   opt.set_xtol_rel(rs.xtol_rel);
   opt.set_vector_storage(kLbfgsMemory);
+}
 
-  std::vector<double> x = theta;
-  // The best round end evaluate() accepts: a later round cut short by the budget cannot undo it.
-  std::vector<double> best = theta, clamped(n);
-  ObjectiveTerms best_terms = result.before;
-  double rho = kRho0;
+// Before a round: why the budget is spent, or empty (and the round gets the time that is left).
+std::string budgetSpent(const RefineSettings& rs,
+                        int evaluations,
+                        Clock::time_point clock_start,
+                        nlopt::opt& opt) {
+  if (evaluations >= rs.max_evaluations) {
+    return fmt::format("evaluation budget ({}) spent", rs.max_evaluations);
+  }
+  if (rs.time_limit_s > 0.0) {
+    const double remaining = rs.time_limit_s - secondsSince(clock_start);
+    if (remaining <= 0.0) return fmt::format("time limit ({} s) reached", rs.time_limit_s);
+    opt.set_maxtime(remaining);
+  }
+  return {};
+}
+
+// One round minimises the merit for fixed λ, ρ from x (updated to the best point seen): L-BFGS
+// runs of at most kInnerEvaluations, each preconditioned afresh at its starting point (a
+// Newton-like outer loop), until a run ends on its own tolerances.
+nlopt::result minimiseMerit(const detail::RefineProblem& problem,
+                            const std::vector<double>& lambda,
+                            double rho,
+                            int max_evaluations,
+                            nlopt::opt& opt,
+                            Context& ctx,
+                            std::vector<double>& x) {
+  const std::vector<std::size_t>& free = *ctx.free;
+  ctx.lambda = lambda.data();
+  ctx.rho = rho;
+  nlopt::result status = nlopt::FAILURE;
+  for (;;) {
+    ctx.base = x;
+    ctx.best = std::numeric_limits<double>::infinity();
+    precondition(problem.meritHessian(x.data(), lambda.data(), rho), free, ctx.chol);
+    opt.set_maxeval(kInnerEvaluations);
+    std::vector<double> y(free.size(), 0.0);
+    try {
+      double value = 0.0;
+      status = opt.optimize(y, value);
+    } catch (const nlopt::forced_stop&) {
+      status = nlopt::FORCED_STOP;
+    } catch (const std::runtime_error&) {
+      status = nlopt::FAILURE;  // roundoff-limited line search and the like: keep the best
+    }
+    if (ctx.best < std::numeric_limits<double>::infinity()) x = ctx.best_theta;
+    if (status != nlopt::MAXEVAL_REACHED || ctx.evaluations >= max_evaluations) break;
+  }
+  return status;
+}
+
+// The lowest-J path evaluate() accepts so far.
+struct Incumbent {
+  std::vector<double> theta;
+  ObjectiveTerms terms;
+};
+
+// Judges a round's end by evaluate(); if it is out, also its projection onto the boxes (a box
+// edge overshot by more than mapValue()'s snap reads f = 0; the speed and acceleration margins
+// absorb the clamp's tiny change of ω and α). Keeps the better of it and `best`; returns its terms.
+ObjectiveTerms judgeRound(const Judge& judge,
+                          const std::vector<double>& x,
+                          const Boxes& boxes,
+                          std::vector<double>& clamped,
+                          Incumbent& best) {
+  ObjectiveTerms terms = judge(x);
+  const std::vector<double>* candidate = &x;
+  if (!terms.feasible) {
+    for (std::size_t k = 0; k < x.size(); ++k)
+      clamped[k] = std::clamp(x[k], boxes.lo[k], boxes.hi[k]);
+    const ObjectiveTerms clamped_terms = judge(clamped);
+    if (clamped_terms.feasible) {
+      terms = clamped_terms;
+      candidate = &clamped;
+    }
+  }
+  if (terms.feasible && terms.total < best.terms.total) {
+    best.theta = *candidate;
+    best.terms = terms;
+  }
+  return terms;
+}
+
+struct RoundsOutcome {
+  Incumbent best;  // the best round end: a later round cut short by the budget cannot undo it
   std::string stop;
   int rounds = 0;
+  int evaluations = 0;
+};
+
+// The augmented-Lagrangian stages (one per kink radius) and their rounds, from `input`.
+RoundsOutcome runRounds(detail::RefineProblem& problem,
+                        const Boxes& boxes,
+                        const Judge& judge,
+                        const RefineSettings& rs,
+                        const Incumbent& input,
+                        Clock::time_point clock_start) {
+  std::vector<double> lambda(problem.constraintCount(), 0.0);
+  nlopt::opt opt(nlopt::LD_LBFGS, static_cast<unsigned>(boxes.free.size()));
+  Context ctx;
+  setUpOptimiser(opt, ctx, problem, boxes.free, input.theta.size(), rs);
+
+  std::vector<double> x = input.theta, clamped(x.size());
+  RoundsOutcome out{input, {}, 0, 0};
+  double rho = kRho0;
   bool out_of_budget = false;
   for (std::size_t stage = 0; stage < kKinkRadii.size() && !out_of_budget; ++stage) {
     problem.setKinkRadius(kKinkRadii[stage]);
     double prev_violation = std::numeric_limits<double>::infinity();
     double prev_j = problem.objective(x.data(), nullptr);
     for (int round = 0;; ++round) {
-      if (ctx.evaluations >= rs.max_evaluations) {
-        stop = fmt::format("evaluation budget ({}) spent", rs.max_evaluations);
+      out.stop = budgetSpent(rs, ctx.evaluations, clock_start, opt);
+      if (!out.stop.empty()) {
         out_of_budget = true;
         break;
       }
-      if (rs.time_limit_s > 0.0) {
-        const double remaining = rs.time_limit_s - elapsed();
-        if (remaining <= 0.0) {
-          stop = fmt::format("time limit ({} s) reached", rs.time_limit_s);
-          out_of_budget = true;
-          break;
-        }
-        opt.set_maxtime(remaining);
-      }
-      ctx.lambda = lambda.data();
-      ctx.rho = rho;
-      nlopt::result status = nlopt::FAILURE;
-      // One round minimises the merit for fixed λ, ρ: L-BFGS runs of at most kInnerEvaluations,
-      // each preconditioned afresh at its starting point (a Newton-like outer loop), until a run
-      // ends on its own tolerances.
-      for (;;) {
-        ctx.base = x;
-        ctx.best = std::numeric_limits<double>::infinity();
-        precondition(problem.meritHessian(x.data(), lambda.data(), rho), free, ctx.chol);
-        opt.set_maxeval(kInnerEvaluations);
-        std::vector<double> y(free.size(), 0.0);
-        try {
-          double value = 0.0;
-          status = opt.optimize(y, value);
-        } catch (const nlopt::forced_stop&) {
-          status = nlopt::FORCED_STOP;
-        } catch (const std::runtime_error&) {
-          status = nlopt::FAILURE;  // roundoff-limited line search and the like: keep the best
-        }
-        if (ctx.best < std::numeric_limits<double>::infinity()) x = ctx.best_theta;
-        if (status != nlopt::MAXEVAL_REACHED || ctx.evaluations >= rs.max_evaluations) break;
-      }
-      ++rounds;
+      const nlopt::result status =
+          minimiseMerit(problem, lambda, rho, rs.max_evaluations, opt, ctx, x);
+      ++out.rounds;
       const double violation = problem.updateMultipliers(x.data(), lambda.data(), rho);
       const double j = problem.objective(x.data(), nullptr);
-      // Judge the round's end by evaluate(); if it is out, also its projection onto the boxes (a
-      // box edge overshot by more than mapValue()'s snap reads f = 0; the speed and acceleration
-      // margins absorb the clamp's tiny change of ω and α).
-      ObjectiveTerms terms = evaluate(map, branch, x, settings, continuous);
-      const std::vector<double>* candidate = &x;
-      if (!terms.feasible) {
-        for (std::size_t k = 0; k < n; ++k) clamped[k] = std::clamp(x[k], box_lo[k], box_hi[k]);
-        const ObjectiveTerms clamped_terms = evaluate(map, branch, clamped, settings, continuous);
-        if (clamped_terms.feasible) {
-          terms = clamped_terms;
-          candidate = &clamped;
-        }
-      }
-      if (terms.feasible && terms.total < best_terms.total) {
-        best = *candidate;
-        best_terms = terms;
-      }
+      const ObjectiveTerms terms = judgeRound(judge, x, boxes, clamped, out.best);
       if (status == nlopt::FORCED_STOP || ctx.evaluations >= rs.max_evaluations) {
-        stop = fmt::format("evaluation budget ({}) spent", rs.max_evaluations);
+        out.stop = fmt::format("evaluation budget ({}) spent", rs.max_evaluations);
         out_of_budget = true;
         break;
       }
       if (status == nlopt::MAXTIME_REACHED) {
-        stop = fmt::format("time limit ({} s) reached", rs.time_limit_s);
+        out.stop = fmt::format("time limit ({} s) reached", rs.time_limit_s);
         out_of_budget = true;
         break;
       }
@@ -610,11 +659,11 @@ RefineResult refinePath(const ConfigMap& map,
       const bool settled = std::abs(j - prev_j) <= kRoundJTol * std::max(1.0, std::abs(j));
       if ((stage == 0 && round == 0 && violation <= rs.constraint_tol) ||
           (settled && (violation <= rs.constraint_tol || terms.feasible))) {
-        stop = "converged";
+        out.stop = "converged";
         break;
       }
       if (round + 1 >= kMaxRounds) {
-        stop = fmt::format("{} augmented-Lagrangian rounds", kMaxRounds);
+        out.stop = fmt::format("{} augmented-Lagrangian rounds", kMaxRounds);
         break;
       }
       if (violation > kViolationShrink * prev_violation) rho = std::min(rho * kRhoGrowth, kRhoMax);
@@ -622,17 +671,64 @@ RefineResult refinePath(const ConfigMap& map,
       prev_j = j;
     }
   }
-  result.evaluations = ctx.evaluations;
-  stop += fmt::format(" after {} round(s), {} evaluations", rounds, ctx.evaluations);
-  if (best_terms.total < result.before.total) {
-    result.theta = std::move(best);
-    result.after = best_terms;
+  out.evaluations = ctx.evaluations;
+  return out;
+}
+
+}  // namespace
+
+RefineResult refinePath(const ConfigMap& map,
+                        std::size_t branch,
+                        const std::vector<double>& theta,
+                        const PlannerSettings& settings,
+                        bool continuous,
+                        const RefineSettings& rs) {
+  const auto clock_start = Clock::now();
+  checkInputs(theta, settings, rs);
+  const Judge judge{map, branch, settings, continuous};
+
+  RefineResult result;
+  result.algorithm =
+      "augmented Lagrangian (PHR, sparse) over NLopt LD_LBFGS, banded preconditioner";
+  result.theta = theta;
+  result.before = judge(theta);
+  result.after = result.before;
+  if (!result.before.feasible) {
+    throw std::invalid_argument(fmt::format(
+        "refinePath: the input path is infeasible (min f {} at sample {}, max |omega| {} rad/s, "
+        "max |alpha| {} rad/s^2)",
+        result.before.min_f, result.before.min_f_sample, result.before.max_abs_omega,
+        result.before.max_abs_alpha));
+  }
+
+  const std::size_t n = theta.size();
+  const Boxes boxes = openBoxes(judge, theta, rs.keep_start);
+  if (boxes.free.empty()) {
+    result.stop_reason = "every sample is fixed (lone open grid angles); input kept";
+    result.seconds = secondsSince(clock_start);
+    return result;
+  }
+  detail::RefineProblem problem(map, branch, settings, continuous, n, kFloorFraction * boxes.f_min,
+                                kBoundMargin);
+  problem.setBoxes(boxes.lo, boxes.hi);
+  // Where the input sits on (or within the margin of) a bound, that bound is tightened only down
+  // to the input's value: the tightened problem always has the input as a feasible point.
+  problem.relaxBoundsTo(theta.data());
+
+  RoundsOutcome rounds =
+      runRounds(problem, boxes, judge, rs, Incumbent{theta, result.before}, clock_start);
+  result.evaluations = rounds.evaluations;
+  std::string stop = std::move(rounds.stop);
+  stop += fmt::format(" after {} round(s), {} evaluations", rounds.rounds, rounds.evaluations);
+  if (rounds.best.terms.total < result.before.total) {
+    result.theta = std::move(rounds.best.theta);
+    result.after = rounds.best.terms;
     result.improved = true;
   } else {
     stop += "; input kept: no round ended feasible with a lower J";
   }
   result.stop_reason = std::move(stop);
-  result.seconds = elapsed();
+  result.seconds = secondsSince(clock_start);
   return result;
 }
 

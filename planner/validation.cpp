@@ -528,10 +528,9 @@ kinematics::Trajectory densify(const kinematics::Trajectory& trajectory, double 
   return out;
 }
 
-ValidationReport validateTrajectory(const collision::Scene& scene,
-                                    const kinematics::Trajectory& trajectory,
-                                    const ValidationSettings& settings) {
-  const auto start = std::chrono::steady_clock::now();
+namespace {
+
+void checkInputs(const kinematics::Trajectory& trajectory, const ValidationSettings& settings) {
   if (trajectory.samples.empty()) {
     throw std::invalid_argument("validateTrajectory: the trajectory has no samples");
   }
@@ -551,68 +550,90 @@ ValidationReport validateTrajectory(const collision::Scene& scene,
           fmt::format("validateTrajectory: sample at t = {} s is not finite", s.t));
     }
   }
-  const kinematics::CellModel& cell = scene.cell();
-  const kinematics::Trajectory dense = densify(trajectory, settings.sample_dt);
-  const auto& samples = dense.samples;
+}
+
+// Clearance at every densified pose, and conservative advancement over every interval.
+struct ClearanceSweep {
+  std::vector<Pose> poses;
+  std::vector<PoseCheck> checks;           // one per pose
+  std::vector<IntervalOutcome> intervals;  // one per pair of consecutive poses
+};
+
+ClearanceSweep sweepClearance(const collision::Scene& scene,
+                              const std::vector<kinematics::TrajectorySample>& samples,
+                              double resolution) {
   const std::size_t n = samples.size();
-
-  ValidationReport report;
-  report.samples = n;
-  checkLimitsAndSpeeds(cell, trajectory, samples,
-                       settings.table_omega_max.value_or(cell.table.max_speed),
-                       settings.table_alpha_max.value_or(cell.table.max_accel),
-                       settings.speed_tolerance, report.violations);
-
-  // Clearance at every densified pose, then conservative advancement over every interval.
   const std::vector<detail::BodyBound> bodies = detail::bodyBounds(scene);
   const auto& pairs = scene.pairs();
-  std::vector<Pose> poses(n);
+  ClearanceSweep sweep;
+  std::vector<Pose>& poses = sweep.poses;
+  poses.resize(n);
   for (std::size_t k = 0; k < n; ++k) poses[k] = {samples[k].t, samples[k].theta, samples[k].q};
   tbb::enumerable_thread_specific<collision::ClearanceEvaluator> evaluators(
       [&] { return collision::ClearanceEvaluator(scene); });
-  std::vector<PoseCheck> checks(n);
+  std::vector<PoseCheck>& checks = sweep.checks;
+  checks.resize(n);
   tbb::parallel_for(std::size_t{0}, n,
                     [&](std::size_t k) { checks[k] = checkPose(evaluators.local(), poses[k]); });
   std::vector<int> all_pairs(pairs.size());
   std::iota(all_pairs.begin(), all_pairs.end(), 0);
-  std::vector<IntervalOutcome> intervals(n - 1);
+  sweep.intervals.resize(n - 1);
   tbb::parallel_for(std::size_t{0}, n - 1, [&](std::size_t k) {
-    IntervalRefiner refiner(pairs, bodies, settings.collision_resolution, evaluators.local(),
-                            intervals[k]);
+    IntervalRefiner refiner(pairs, bodies, resolution, evaluators.local(), sweep.intervals[k]);
     refiner.refine(poses[k], checks[k], poses[k + 1], checks[k + 1], all_pairs, 0);
   });
+  return sweep;
+}
 
-  // Gather in time order (independent of how the work was split).
+// The sweep's results in time order (independent of how the work was split).
+struct Gathered {
   Closest closest;
   double proven = kInf;
-  std::vector<std::vector<Span>> spans(pairs.size());
-  report.poses_checked = n;
+  std::vector<std::vector<Span>> spans;  // per pair
+  std::size_t poses_checked = 0;
+};
+
+Gathered gatherInTimeOrder(const ClearanceSweep& sweep, std::size_t pair_count) {
+  const std::size_t n = sweep.poses.size();
+  Gathered g;
+  g.spans.resize(pair_count);
+  g.poses_checked = n;
   for (std::size_t k = 0; k < n; ++k) {
-    closest.update(checks[k], poses[k].t);
-    for (std::size_t p = 0; p < pairs.size(); ++p) {
-      if (checks[k][p].penetrating) {
-        spans[p].push_back({static_cast<int>(p), poses[k].t, poses[k].t, 0.0, checks[k][p].p_W});
-      }
+    const PoseCheck& check = sweep.checks[k];
+    const double t = sweep.poses[k].t;
+    g.closest.update(check, t);
+    for (std::size_t p = 0; p < pair_count; ++p) {
+      if (check[p].penetrating)
+        g.spans[p].push_back({static_cast<int>(p), t, t, 0.0, check[p].p_W});
     }
     if (k + 1 == n) break;
-    const IntervalOutcome& o = intervals[k];
-    report.poses_checked += o.evaluations;
-    closest.update(o.closest);
-    proven = std::min(proven, o.proven);
-    for (const Span& s : o.spans) spans[static_cast<std::size_t>(s.pair)].push_back(s);
+    const IntervalOutcome& o = sweep.intervals[k];
+    g.poses_checked += o.evaluations;
+    g.closest.update(o.closest);
+    g.proven = std::min(g.proven, o.proven);
+    for (const Span& s : o.spans) g.spans[static_cast<std::size_t>(s.pair)].push_back(s);
   }
   if (n == 1) {
-    for (const PairSample& s : checks[0]) proven = std::min(proven, s.distance - kDistanceSlack);
+    for (const PairSample& s : sweep.checks[0])
+      g.proven = std::min(g.proven, s.distance - kDistanceSlack);
   }
+  return g;
+}
+
+// One collision violation per run of overlapping spans of a pair; true when there is any.
+bool emitCollisions(const collision::Scene& scene,
+                    std::vector<std::vector<Span>>& spans,
+                    double resolution,
+                    std::vector<Violation>& violations) {
   bool collided = false;
-  for (std::size_t p = 0; p < pairs.size(); ++p) {
+  for (std::size_t p = 0; p < spans.size(); ++p) {
     std::vector<Span>& list = spans[p];
     if (list.empty()) continue;
     collided = true;
     std::sort(list.begin(), list.end(), [](const Span& x, const Span& y) {
       return std::tie(x.t0, x.t1) < std::tie(y.t0, y.t1);
     });
-    const auto emit = [&](const Violation& v) { report.violations.push_back(v); };
+    const auto emit = [&](const Violation& v) { violations.push_back(v); };
     Violation run;
     bool open = false;
     for (const Span& s : list) {
@@ -629,13 +650,20 @@ ValidationReport validateTrajectory(const collision::Scene& scene,
       run.t = run.t_start = s.t0;
       run.t_end = s.t1;
       run.value = s.distance;
-      run.limit = settings.collision_resolution;
+      run.limit = resolution;
       run.p_W = s.p_W;
       open = true;
     }
     if (open) emit(run);
   }
+  return collided;
+}
 
+// Orders the violations, and fills in the verdict and the distances.
+void concludeReport(const collision::Scene& scene,
+                    const Gathered& gathered,
+                    bool collided,
+                    ValidationReport& report) {
   std::stable_sort(report.violations.begin(), report.violations.end(),
                    [](const Violation& a, const Violation& b) {
                      return std::tie(a.t_start, a.kind, a.what) <
@@ -648,6 +676,7 @@ ValidationReport validateTrajectory(const collision::Scene& scene,
     }
   }
   report.valid = report.violations.empty();
+  const Closest& closest = gathered.closest;
   if (closest.pair >= 0) {
     report.min_distance = closest.distance;
     report.min_distance_pair = pairName(scene, closest.pair);
@@ -655,11 +684,37 @@ ValidationReport validateTrajectory(const collision::Scene& scene,
   } else {
     report.min_distance = kInf;
   }
-  if (pairs.empty()) {
+  if (scene.pairs().empty()) {
     report.proven_clearance = kInf;
   } else {
-    report.proven_clearance = collided ? 0.0 : std::max(0.0, proven);
+    report.proven_clearance = collided ? 0.0 : std::max(0.0, gathered.proven);
   }
+}
+
+}  // namespace
+
+ValidationReport validateTrajectory(const collision::Scene& scene,
+                                    const kinematics::Trajectory& trajectory,
+                                    const ValidationSettings& settings) {
+  const auto start = std::chrono::steady_clock::now();
+  checkInputs(trajectory, settings);
+  const kinematics::CellModel& cell = scene.cell();
+  const kinematics::Trajectory dense = densify(trajectory, settings.sample_dt);
+  const auto& samples = dense.samples;
+
+  ValidationReport report;
+  report.samples = samples.size();
+  checkLimitsAndSpeeds(cell, trajectory, samples,
+                       settings.table_omega_max.value_or(cell.table.max_speed),
+                       settings.table_alpha_max.value_or(cell.table.max_accel),
+                       settings.speed_tolerance, report.violations);
+
+  const ClearanceSweep sweep = sweepClearance(scene, samples, settings.collision_resolution);
+  Gathered gathered = gatherInTimeOrder(sweep, scene.pairs().size());
+  report.poses_checked = gathered.poses_checked;
+  const bool collided =
+      emitCollisions(scene, gathered.spans, settings.collision_resolution, report.violations);
+  concludeReport(scene, gathered, collided, report);
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;
 }

@@ -214,18 +214,49 @@ const std::vector<double>& PlyVertices::column(const std::string& name) const {
   return columns[static_cast<std::size_t>(it - names.begin())];
 }
 
-PlyVertices readPlyVertices(std::istream& in, const std::string& source) {
-  const auto bad = [&](const std::string& what) {
-    return InputError("PLY file '" + source + "': " + what);
-  };
+namespace {
+
+InputError plyError(const std::string& source, const std::string& what) {
+  return InputError("PLY file '" + source + "': " + what);
+}
+
+// One `property` line of the header into the last element.
+void addProperty(std::istringstream& words,
+                 const std::string& line,
+                 const std::string& source,
+                 std::vector<Element>& elements) {
+  if (elements.empty()) throw plyError(source, "property before any element: '" + line + "'");
+  Property p;
+  std::string type;
+  words >> type;
+  if (type == "list") {
+    std::string count_type, item_type;
+    words >> count_type >> item_type >> p.name;
+    p.is_list = true;
+    if (!parseScalar(count_type, p.count_type) || !parseScalar(item_type, p.type)) {
+      throw plyError(source, "bad list property '" + line + "'");
+    }
+  } else {
+    words >> p.name;
+    if (!parseScalar(type, p.type)) {
+      throw plyError(source, "unknown property type in '" + line + "'");
+    }
+  }
+  if (p.name.empty()) throw plyError(source, "property without a name: '" + line + "'");
+  elements.back().properties.push_back(p);
+}
+
+// The header up to end_header: the format (into `format`) and the elements.
+std::vector<Element> readPlyHeader(std::istream& in,
+                                   const std::string& source,
+                                   std::string& format) {
   std::string line;
   const auto next = [&]() -> bool {
     if (!std::getline(in, line)) return false;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     return true;
   };
-  if (!next() || line != "ply") throw bad("does not start with 'ply'");
-  PlyVertices result;
+  if (!next() || line != "ply") throw plyError(source, "does not start with 'ply'");
   std::vector<Element> elements;
   bool ended = false;
   while (next()) {
@@ -239,41 +270,34 @@ PlyVertices readPlyVertices(std::istream& in, const std::string& source) {
     if (keyword == "comment" || keyword == "obj_info" || keyword.empty()) continue;
     if (keyword == "format") {
       std::string version;
-      words >> result.format >> version;
-      if (result.format != "ascii" && result.format != "binary_little_endian" &&
-          result.format != "binary_big_endian") {
-        throw bad("unknown format '" + result.format + "'");
+      words >> format >> version;
+      if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian") {
+        throw plyError(source, "unknown format '" + format + "'");
       }
     } else if (keyword == "element") {
       Element e;
       long long count = -1;
-      if (!(words >> e.name >> count) || count < 0) throw bad("bad element line '" + line + "'");
+      if (!(words >> e.name >> count) || count < 0) {
+        throw plyError(source, "bad element line '" + line + "'");
+      }
       e.count = static_cast<std::size_t>(count);
       elements.push_back(std::move(e));
     } else if (keyword == "property") {
-      if (elements.empty()) throw bad("property before any element: '" + line + "'");
-      Property p;
-      std::string type;
-      words >> type;
-      if (type == "list") {
-        std::string count_type, item_type;
-        words >> count_type >> item_type >> p.name;
-        p.is_list = true;
-        if (!parseScalar(count_type, p.count_type) || !parseScalar(item_type, p.type)) {
-          throw bad("bad list property '" + line + "'");
-        }
-      } else {
-        words >> p.name;
-        if (!parseScalar(type, p.type)) throw bad("unknown property type in '" + line + "'");
-      }
-      if (p.name.empty()) throw bad("property without a name: '" + line + "'");
-      elements.back().properties.push_back(p);
+      addProperty(words, line, source, elements);
     } else {
-      throw bad("unknown header line '" + line + "'");
+      throw plyError(source, "unknown header line '" + line + "'");
     }
   }
-  if (!ended) throw bad("no end_header");
-  if (result.format.empty()) throw bad("no format line");
+  if (!ended) throw plyError(source, "no end_header");
+  if (format.empty()) throw plyError(source, "no format line");
+  return elements;
+}
+
+}  // namespace
+
+PlyVertices readPlyVertices(std::istream& in, const std::string& source) {
+  PlyVertices result;
+  const std::vector<Element> elements = readPlyHeader(in, source, result.format);
   PlyDataReader reader(in, result.format, source);
   for (const Element& e : elements) {
     const bool is_vertex = e.name == "vertex";
@@ -301,7 +325,7 @@ PlyVertices readPlyVertices(std::istream& in, const std::string& source) {
     }
     if (is_vertex) return result;
   }
-  throw bad("has no vertex element");
+  throw plyError(source, "has no vertex element");
 }
 
 }  // namespace scanplan::scanner

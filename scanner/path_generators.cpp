@@ -136,12 +136,16 @@ std::vector<Key> ringKeys(const RingSpec& ring,
   return keys;
 }
 
-std::vector<Key> rasterKeys(const RasterSpec& raster,
-                            const kinematics::TriangleMesh& part,
-                            const Raycaster& raycaster,
-                            const LaserWindow& window,
-                            std::size_t index,
-                            ElementReport& report) {
+// A raster's axes (u along the passes, w across them, v the view) and the part's extent on them.
+struct RasterAxes {
+  Eigen::Vector3d u, v, w;
+  double u_min = 1e9, u_max = -1e9, w_min = 1e9, w_max = -1e9, v_min = 1e9;
+};
+
+RasterAxes rasterAxes(const RasterSpec& raster,
+                      const kinematics::TriangleMesh& part,
+                      std::size_t index) {
+  RasterAxes a;
   const Eigen::Vector3d v = raster.view.normalized();
   Eigen::Vector3d u = raster.pass_direction - raster.pass_direction.dot(v) * v;
   if (u.norm() < 1e-6) {
@@ -151,108 +155,173 @@ std::vector<Key> rasterKeys(const RasterSpec& raster,
   }
   u.normalize();
   const Eigen::Vector3d w = v.cross(u);
-  double u_min = 1e9, u_max = -1e9, w_min = 1e9, w_max = -1e9, v_min = 1e9;
   for (const Eigen::Vector3d& p : part.vertices) {
-    u_min = std::min(u_min, p.dot(u));
-    u_max = std::max(u_max, p.dot(u));
-    w_min = std::min(w_min, p.dot(w));
-    w_max = std::max(w_max, p.dot(w));
-    v_min = std::min(v_min, p.dot(v));
+    a.u_min = std::min(a.u_min, p.dot(u));
+    a.u_max = std::max(a.u_max, p.dot(u));
+    a.w_min = std::min(a.w_min, p.dot(w));
+    a.w_max = std::max(a.w_max, p.dot(w));
+    a.v_min = std::min(a.v_min, p.dot(v));
   }
-  const double z_mid = 0.5 * (window.z_min + window.z_max);
-  const double spacing = 2.0 * window.y_near * (1.0 - raster.overlap);
-  const double v0 = v_min - 0.1;  // probe plane, before the part along the view
-  const int passes = std::max(1, static_cast<int>(std::ceil((w_max - w_min) / spacing)));
-  const double step = 0.002;
-  const int samples = static_cast<int>(std::ceil((u_max - u_min + 2.0 * raster.lead) / step)) + 1;
-  const double half_line = 0.9 * window.y_near;
+  a.u = u;
+  a.v = v;
+  a.w = w;
+  return a;
+}
 
-  std::vector<Key> keys;
+constexpr double kRasterStep = 0.002;  // m between probed stations along a pass
+
+// One pass at wk across, probed at `samples` stations every kRasterStep along u from
+// u_min − lead: the required scanner position along v at each (`pv`: the nearest surface under
+// the line no closer than z_min, the seen depths centred in the window where that allows), and
+// the nearest and farthest surface distance from the probe plane v0 (`seen`); NaN off the part.
+struct PassProbe {
+  std::vector<double> pv;
+  std::vector<std::pair<double, double>> seen;
+};
+
+PassProbe probePass(const RasterAxes& a,
+                    const RasterSpec& raster,
+                    const Raycaster& raycaster,
+                    const LaserWindow& window,
+                    double v0,
+                    double wk,
+                    int samples) {
+  const double z_mid = 0.5 * (window.z_min + window.z_max);
+  const double half_line = 0.9 * window.y_near;
+  const double step = kRasterStep;
+  PassProbe out{
+      std::vector<double>(static_cast<std::size_t>(samples), kNaN),
+      std::vector<std::pair<double, double>>(static_cast<std::size_t>(samples), {kNaN, kNaN})};
+  for (int i = 0; i < samples; ++i) {
+    const double s = a.u_min - raster.lead + step * i;
+    double near = 1e9, farthest = -1e9;
+    for (double o : {-half_line, -0.5 * half_line, 0.0, 0.5 * half_line, half_line}) {
+      if (const auto hit = raycaster.cast(s * a.u + (wk + o) * a.w + v0 * a.v, a.v)) {
+        near = std::min(near, hit->distance);
+        farthest = std::max(farthest, hit->distance);
+      }
+    }
+    if (near > 1e8) continue;
+    out.seen[static_cast<std::size_t>(i)] = {near, farthest};
+    out.pv[static_cast<std::size_t>(i)] =
+        std::min(v0 + 0.5 * (near + farthest) - z_mid, v0 + near - window.z_min);
+  }
+  return out;
+}
+
+// Smooth: the most conservative (farthest back) position within ±15 mm, so the surface never
+// comes closer than z_min between stations; stations off the part take the pass's.
+std::vector<double> smoothPass(const std::vector<double>& pv, int samples) {
+  const double step = kRasterStep;
+  const double fallback = *std::min_element(pv.begin(), pv.end(), [](double a, double b) {
+    return std::isnan(b) || (!std::isnan(a) && a < b);
+  });
+  const int window_steps = static_cast<int>(0.015 / step);
+  std::vector<double> smooth(pv.size());
+  for (int i = 0; i < samples; ++i) {
+    double m = 1e9;
+    for (int j = std::max(0, i - window_steps); j <= std::min(samples - 1, i + window_steps); ++j) {
+      const double x = pv[static_cast<std::size_t>(j)];
+      m = std::min(m, std::isnan(x) ? fallback : x);
+    }
+    smooth[static_cast<std::size_t>(i)] = m;
+  }
+  return smooth;
+}
+
+// What the passes saw: the depth range in the window and how many stations fit it.
+struct RasterDepths {
   std::size_t probed = 0, in_window = 0;
   double depth_min = 1e9, depth_max = -1e9;
+};
+
+// The keys of pass k (forward on even k), a transfer from the previous pass first.
+void addPassKeys(const RasterAxes& a,
+                 const RasterSpec& raster,
+                 const LaserWindow& window,
+                 double v0,
+                 int k,
+                 double wk,
+                 int samples,
+                 const std::vector<double>& smooth,
+                 const PassProbe& probe,
+                 std::vector<Key>& keys,
+                 RasterDepths& depths) {
+  const Eigen::Vector3d &u = a.u, &v = a.v, &w = a.w;
+  const double step = kRasterStep;
+  const bool forward = k % 2 == 0;
+  const Eigen::Vector3d motion = forward ? u : Eigen::Vector3d(-u);
+  double s_prev = 0.0;
+  for (int n = 0; n < samples; n += 5) {  // keys every 10 mm; positions every 2 mm were probed
+    const int i = forward ? n : samples - 1 - n;
+    const double s = a.u_min - raster.lead + step * i;
+    const double p = smooth[static_cast<std::size_t>(i)];
+    const Eigen::Isometry3d X = frame(s * u + wk * w + p * v, v, motion);
+    // The move from the previous key acquires when it overlaps the part's extent at all.
+    const bool on_part = std::max(s, s_prev) >= a.u_min && std::min(s, s_prev) <= a.u_max;
+    s_prev = s;
+    if (keys.empty()) {
+      keys.push_back({0.0, X, false});
+    } else if (n == 0) {
+      // Transfer from the previous pass: back off to the farther of the two heights first.
+      const Eigen::Isometry3d& last = keys.back().X;
+      const double back = std::min(last.translation().dot(v), p);
+      Eigen::Isometry3d up = last, over = X;
+      up.translation() += (back - last.translation().dot(v)) * v;
+      over.translation() += (back - p) * v;
+      moveTo(keys, up, raster.speed * 3.0, 0.5, false);
+      moveTo(keys, over, raster.speed * 3.0, 0.5, false);
+      moveTo(keys, X, raster.speed * 3.0, 0.5, false);
+    } else {
+      moveTo(keys, X, raster.speed, 0.5, on_part);
+    }
+    const auto& [near, farthest] = probe.seen[static_cast<std::size_t>(i)];
+    if (!std::isnan(near)) {
+      const double z_near = near - (p - v0), z_far = farthest - (p - v0);
+      ++depths.probed;
+      depths.in_window += (z_near >= window.z_min - 1e-9 && z_far <= window.z_max + 1e-9) ? 1 : 0;
+      depths.depth_min = std::min(depths.depth_min, z_near);
+      depths.depth_max = std::max(depths.depth_max, z_far);
+    }
+  }
+}
+
+std::vector<Key> rasterKeys(const RasterSpec& raster,
+                            const kinematics::TriangleMesh& part,
+                            const Raycaster& raycaster,
+                            const LaserWindow& window,
+                            std::size_t index,
+                            ElementReport& report) {
+  const RasterAxes a = rasterAxes(raster, part, index);
+  const double spacing = 2.0 * window.y_near * (1.0 - raster.overlap);
+  const double v0 = a.v_min - 0.1;  // probe plane, before the part along the view
+  const int passes = std::max(1, static_cast<int>(std::ceil((a.w_max - a.w_min) / spacing)));
+  const int samples =
+      static_cast<int>(std::ceil((a.u_max - a.u_min + 2.0 * raster.lead) / kRasterStep)) + 1;
+
+  std::vector<Key> keys;
+  RasterDepths depths;
   for (int k = 0; k < passes; ++k) {
-    const double wk = w_min + (w_max - w_min) * (k + 0.5) / passes;
-    // Required scanner position along v at each station: the nearest surface under the line no
-    // closer than z_min, the seen depths centred in the window where that allows.
-    std::vector<double> pv(static_cast<std::size_t>(samples), kNaN);
-    std::vector<std::pair<double, double>> seen(static_cast<std::size_t>(samples), {kNaN, kNaN});
-    for (int i = 0; i < samples; ++i) {
-      const double s = u_min - raster.lead + step * i;
-      double near = 1e9, farthest = -1e9;
-      for (double o : {-half_line, -0.5 * half_line, 0.0, 0.5 * half_line, half_line}) {
-        if (const auto hit = raycaster.cast(s * u + (wk + o) * w + v0 * v, v)) {
-          near = std::min(near, hit->distance);
-          farthest = std::max(farthest, hit->distance);
-        }
-      }
-      if (near > 1e8) continue;
-      seen[static_cast<std::size_t>(i)] = {near, farthest};
-      pv[static_cast<std::size_t>(i)] =
-          std::min(v0 + 0.5 * (near + farthest) - z_mid, v0 + near - window.z_min);
+    const double wk = a.w_min + (a.w_max - a.w_min) * (k + 0.5) / passes;
+    const PassProbe probe = probePass(a, raster, raycaster, window, v0, wk, samples);
+    if (std::all_of(probe.pv.begin(), probe.pv.end(), [](double x) { return std::isnan(x); })) {
+      continue;
     }
-    if (std::all_of(pv.begin(), pv.end(), [](double x) { return std::isnan(x); })) continue;
-    // Smooth: the most conservative (farthest back) position within ±15 mm, so the surface
-    // never comes closer than z_min between stations; stations off the part take the pass's.
-    const double fallback = *std::min_element(pv.begin(), pv.end(), [](double a, double b) {
-      return std::isnan(b) || (!std::isnan(a) && a < b);
-    });
-    const int window_steps = static_cast<int>(0.015 / step);
-    std::vector<double> smooth(pv.size());
-    for (int i = 0; i < samples; ++i) {
-      double m = 1e9;
-      for (int j = std::max(0, i - window_steps); j <= std::min(samples - 1, i + window_steps);
-           ++j) {
-        const double x = pv[static_cast<std::size_t>(j)];
-        m = std::min(m, std::isnan(x) ? fallback : x);
-      }
-      smooth[static_cast<std::size_t>(i)] = m;
-    }
-    const bool forward = k % 2 == 0;
-    const Eigen::Vector3d motion = forward ? u : Eigen::Vector3d(-u);
-    double s_prev = 0.0;
-    for (int n = 0; n < samples; n += 5) {  // keys every 10 mm; positions every 2 mm were probed
-      const int i = forward ? n : samples - 1 - n;
-      const double s = u_min - raster.lead + step * i;
-      const double p = smooth[static_cast<std::size_t>(i)];
-      const Eigen::Isometry3d X = frame(s * u + wk * w + p * v, v, motion);
-      // The move from the previous key acquires when it overlaps the part's extent at all.
-      const bool on_part = std::max(s, s_prev) >= u_min && std::min(s, s_prev) <= u_max;
-      s_prev = s;
-      if (keys.empty()) {
-        keys.push_back({0.0, X, false});
-      } else if (n == 0) {
-        // Transfer from the previous pass: back off to the farther of the two heights first.
-        const Eigen::Isometry3d& last = keys.back().X;
-        const double back = std::min(last.translation().dot(v), p);
-        Eigen::Isometry3d up = last, over = X;
-        up.translation() += (back - last.translation().dot(v)) * v;
-        over.translation() += (back - p) * v;
-        moveTo(keys, up, raster.speed * 3.0, 0.5, false);
-        moveTo(keys, over, raster.speed * 3.0, 0.5, false);
-        moveTo(keys, X, raster.speed * 3.0, 0.5, false);
-      } else {
-        moveTo(keys, X, raster.speed, 0.5, on_part);
-      }
-      const auto& [near, farthest] = seen[static_cast<std::size_t>(i)];
-      if (!std::isnan(near)) {
-        const double z_near = near - (p - v0), z_far = farthest - (p - v0);
-        ++probed;
-        in_window += (z_near >= window.z_min - 1e-9 && z_far <= window.z_max + 1e-9) ? 1 : 0;
-        depth_min = std::min(depth_min, z_near);
-        depth_max = std::max(depth_max, z_far);
-      }
-    }
+    const std::vector<double> smooth = smoothPass(probe.pv, samples);
+    addPassKeys(a, raster, window, v0, k, wk, samples, smooth, probe, keys, depths);
   }
   if (keys.size() < 2) {
     throw InputError(where(index) +
                      ": raster finds no part surface under the passes: expected a view direction "
                      "that meets the part");
   }
-  report.depth_min = depth_min;
-  report.depth_max = depth_max;
+  report.depth_min = depths.depth_min;
+  report.depth_max = depths.depth_max;
   report.coverage_in_window =
-      probed ? static_cast<double>(in_window) / static_cast<double>(probed) : 0.0;
-  report.note = fmt::format("{} passes, {:.1f} mm apart", passes, toMm((w_max - w_min) / passes));
+      depths.probed ? static_cast<double>(depths.in_window) / static_cast<double>(depths.probed)
+                    : 0.0;
+  report.note =
+      fmt::format("{} passes, {:.1f} mm apart", passes, toMm((a.w_max - a.w_min) / passes));
   return keys;
 }
 

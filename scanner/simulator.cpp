@@ -227,6 +227,22 @@ struct ScanSimulator::Impl {
                Scratch& s,
                std::vector<CloudPoint>& out,
                SimulationStats& stats) const;
+  // The steps of profile().
+  void cullGroups(const std::array<Eigen::Isometry3d, kinematics::kNumJoints + 1>& link_frames,
+                  const Eigen::Isometry3d& X_WS,
+                  const Eigen::Isometry3d& X_WR,
+                  const RunSetup& setup,
+                  Scratch& s) const;
+  void collectCandidates(const RunSetup& setup, Scratch& s, SimulationStats& stats) const;
+  void applyCameraRule(const RunSetup& setup, Scratch& s, SimulationStats& stats) const;
+  void emitPoints(const ScanFrame& frame,
+                  std::uint32_t index,
+                  const RunSetup& setup,
+                  const Scratch& s,
+                  const Eigen::Isometry3d& X_WS,
+                  const Eigen::Isometry3d& X_WR,
+                  std::vector<CloudPoint>& out,
+                  SimulationStats& stats) const;
 };
 
 void ScanSimulator::Impl::addGroup(Group group) {
@@ -453,15 +469,34 @@ void ScanSimulator::Impl::profile(const ScanFrame& frame,
                                   Scratch& s,
                                   std::vector<CloudPoint>& out,
                                   SimulationStats& stats) const {
-  const SimulationSettings& settings = *setup.settings;
   const auto link_frames = cell.robot.linkFrames(frame.q);
   const Eigen::Isometry3d X_WS = cell.X_WB * link_frames[6] * cell.scanner.X_FS;
-  const Eigen::Isometry3d X_SW = X_WS.inverse();
   const Eigen::Isometry3d X_WR = setup.true_table.X_WR(frame.theta);
+  cullGroups(link_frames, X_WS, X_WR, setup, s);
 
-  // Groups whose bounding sphere reaches the profile's rays, with the rays' frame in theirs,
-  // X_GS, worked out only for those. (A sphere this test passes or fails depending on the
-  // rounding of its centre lies kCullMargin from every ray: no ray can hit it either way.)
+  const std::size_t n = setup.directions.size();
+  stats.laser_rays += n;
+  s.best.resize(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    s.best[k].slot = -1;
+    s.best[k].t = setup.t_far[k];
+  }
+  castFan(setup, s);
+  collectCandidates(setup, s, stats);
+  applyCameraRule(setup, s, stats);
+  emitPoints(frame, index, setup, s, X_WS, X_WR, out, stats);
+}
+
+// Groups whose bounding sphere reaches the profile's rays, with the rays' frame in theirs, X_GS,
+// worked out only for those. (A sphere this test passes or fails depending on the rounding of its
+// centre lies kCullMargin from every ray: no ray can hit it either way.)
+void ScanSimulator::Impl::cullGroups(
+    const std::array<Eigen::Isometry3d, kinematics::kNumJoints + 1>& link_frames,
+    const Eigen::Isometry3d& X_WS,
+    const Eigen::Isometry3d& X_WR,
+    const RunSetup& setup,
+    Scratch& s) const {
+  const Eigen::Isometry3d X_SW = X_WS.inverse();
   s.active.clear();
   for (std::size_t i = 0; i < groups.size(); ++i) {
     const Group& g = groups[i];
@@ -475,18 +510,14 @@ void ScanSimulator::Impl::profile(const ScanFrame& frame,
     s.active.push_back(
         {static_cast<int>(i), g.kind == GroupKind::kWorld ? X_WS : X_WG.inverse() * X_WS});
   }
+}
 
-  const std::size_t n = setup.directions.size();
-  stats.laser_rays += n;
-  s.best.resize(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    s.best[k].slot = -1;
-    s.best[k].t = setup.t_far[k];
-  }
-  castFan(setup, s);
-
+// The fan's hits inside the laser window, as candidates for the cameras.
+void ScanSimulator::Impl::collectCandidates(const RunSetup& setup,
+                                            Scratch& s,
+                                            SimulationStats& stats) const {
   s.candidates.clear();
-  for (std::size_t k = 0; k < n; ++k) {
+  for (std::size_t k = 0; k < setup.directions.size(); ++k) {
     const Hit& hit = s.best[k];
     if (hit.slot < 0) continue;
     ++stats.hits;
@@ -515,11 +546,15 @@ void ScanSimulator::Impl::profile(const ScanFrame& frame,
       c.part_triangle = static_cast<std::int32_t>(hit.triangle);
     }
   }
+}
 
-  // The camera rule (CameraRule): each pass tests the candidates still in question against
-  // one camera.
+// The camera rule (CameraRule): each pass tests the candidates still in question against one
+// camera; s.seen says which candidates are seen.
+void ScanSimulator::Impl::applyCameraRule(const RunSetup& setup,
+                                          Scratch& s,
+                                          SimulationStats& stats) const {
   const std::size_t m = s.candidates.size();
-  switch (settings.cameras) {
+  switch (setup.settings->cameras) {
     case CameraRule::kPositive:
     case CameraRule::kNegative:
       s.seen.assign(m, 1);
@@ -539,7 +574,18 @@ void ScanSimulator::Impl::profile(const ScanFrame& frame,
       for (std::size_t i = 0; i < m; ++i) s.seen[i] = s.seen[i] || s.seen_other[i];
       break;
   }
+}
 
+// The seen candidates as cloud points in the part frame, with the sensor noise.
+void ScanSimulator::Impl::emitPoints(const ScanFrame& frame,
+                                     std::uint32_t index,
+                                     const RunSetup& setup,
+                                     const Scratch& s,
+                                     const Eigen::Isometry3d& X_WS,
+                                     const Eigen::Isometry3d& X_WR,
+                                     std::vector<CloudPoint>& out,
+                                     SimulationStats& stats) const {
+  const SimulationSettings& settings = *setup.settings;
   const bool noisy = settings.sigma_longitudinal > 0.0 || settings.sigma_orthogonal > 0.0;
   std::optional<std::mt19937_64> rng;  // seeding costs ~300 words: only when noisy
   if (noisy) rng.emplace(mix(settings.seed ^ mix(index)));
@@ -548,7 +594,7 @@ void ScanSimulator::Impl::profile(const ScanFrame& frame,
       settings.simulated_table ? cell.table.X_WR(frame.theta) : X_WR;
   const Eigen::Isometry3d X_PS = (X_WR_model * cell.part.X_RP).inverse() * X_WS;
   const std::size_t first = out.size();
-  for (std::size_t i = 0; i < m; ++i) {
+  for (std::size_t i = 0; i < s.candidates.size(); ++i) {
     if (!s.seen[i]) {
       ++stats.occluded;
       continue;
@@ -664,19 +710,17 @@ std::size_t ScanSimulator::triangleCount() const {
   return count;
 }
 
-SimulatedCloud ScanSimulator::simulate(const std::vector<ScanFrame>& frames,
-                                       const LaserOptics& optics,
-                                       const SimulationSettings& settings) const {
-  // The job validates these; a caller that did not gets an exception, not garbage.
-  if (settings.rays_per_profile < 1 || !(settings.sigma_longitudinal >= 0.0) ||
-      !(settings.sigma_orthogonal >= 0.0)) {
-    throw std::invalid_argument(
-        "scanner simulation: expected rays_per_profile >= 1 and non-negative noise sigmas");
-  }
+namespace {
+
+// What every profile of a run shares: the window, the fan, the cameras and the box the rays
+// stay in. `cell_table` is the planner's table model, used unless the settings simulate another.
+RunSetup makeRunSetup(const kinematics::RotaryTableModel& cell_table,
+                      const LaserOptics& optics,
+                      const SimulationSettings& settings) {
   RunSetup setup;
   setup.settings = &settings;
   setup.window = laserWindow(optics);
-  setup.true_table = settings.simulated_table.value_or(impl_->cell.table);
+  setup.true_table = settings.simulated_table.value_or(cell_table);
   setup.cameras = cameraCentres(optics, settings.cameras);
   const std::vector<double> angles = fanAngles(setup.window, settings.rays_per_profile);
   for (const double alpha : angles) {
@@ -692,6 +736,21 @@ SimulatedCloud ScanSimulator::simulate(const std::vector<ScanFrame>& frames,
   for (const Eigen::Vector3d& c : setup.cameras) setup.reach.extend(c);
   setup.reach.min().array() -= kCullMargin;
   setup.reach.max().array() += kCullMargin;
+  return setup;
+}
+
+}  // namespace
+
+SimulatedCloud ScanSimulator::simulate(const std::vector<ScanFrame>& frames,
+                                       const LaserOptics& optics,
+                                       const SimulationSettings& settings) const {
+  // The job validates these; a caller that did not gets an exception, not garbage.
+  if (settings.rays_per_profile < 1 || !(settings.sigma_longitudinal >= 0.0) ||
+      !(settings.sigma_orthogonal >= 0.0)) {
+    throw std::invalid_argument(
+        "scanner simulation: expected rays_per_profile >= 1 and non-negative noise sigmas");
+  }
+  const RunSetup setup = makeRunSetup(impl_->cell.table, optics, settings);
 
   // The points reach fresh memory once. On one thread they go straight into the cloud; on
   // more, each thread appends its profiles' points to its own buffer, reused batch after
