@@ -624,10 +624,11 @@ TEST_F(Batch, ExitCodeZeroWhenEveryCaseHasAnOutcomeEvenWithoutAPath) {
   // A case that ended in an internal error (here: written into the results as a run would
   // write it) makes a resumed batch exit 1, as `plan` would: everything ran, something is a bug.
   std::string jsonl = readFile(out / "results.jsonl");
-  const std::size_t at = jsonl.find("\"status\": \"planned\", \"reason\": \"\"");
+  const std::string planned = "\"status\":\"planned\",\"reason\":\"\"";
+  const std::size_t at = jsonl.find(planned);
   ASSERT_NE(at, std::string::npos) << jsonl;
-  jsonl.replace(at, std::string("\"status\": \"planned\", \"reason\": \"\"").size(),
-                "\"status\": \"error\", \"reason\": \"internal error: boom (please report this)\"");
+  jsonl.replace(at, planned.size(),
+                "\"status\":\"error\",\"reason\":\"internal error: boom (please report this)\"");
   writeFile(out / "results.jsonl", jsonl);
   const Result resumed = batch(sweep, out, {"--resume"});
   EXPECT_EQ(resumed.exit_code, 1) << describe(resumed);

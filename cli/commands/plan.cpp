@@ -10,9 +10,10 @@
 #include <fmt/format.h>
 
 #include "cli/commands/commands.h"
+#include "cli/io/json.h"
 #include "cli/io/output.h"
-#include "cli/plot/image_io.h"
 #include "cli/planning.h"
+#include "cli/plot/image_io.h"
 #include "cli/verify.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"
@@ -75,28 +76,139 @@ void writePathFigure(const std::filesystem::path& dir,
               "Table-angle path over the map f, " + map.branches[branch].words(), legend);
 }
 
-void writeMatrixMm(JsonWriter& json, const std::string& key, const Eigen::Isometry3d& X) {
-  json.beginArray(key);
+// A 4x4 homogeneous matrix, row by row; the translation in mm.
+Json matrixMm(const Eigen::Isometry3d& X) {
+  Json rows = Json::array();
   for (int r = 0; r < 4; ++r) {
     std::vector<double> row;
     for (int c = 0; c < 4; ++c) row.push_back(c == 3 && r < 3 ? toMm(X(r, c)) : X(r, c));
-    json.beginArray();
-    for (double v : row) json.element(v);
-    json.endArray();
+    rows.push_back(row);
   }
-  json.endArray();
+  return rows;
 }
 
-void writeTerms(JsonWriter& json, const planner::ObjectiveTerms& t) {
-  json.value("J_s", t.total);
-  json.value("cost_f_s", t.cost_f);
-  json.value("cost_omega_s", t.cost_omega);
-  json.value("cost_alpha_s", t.cost_alpha);
+// The objective's terms, added to `json`.
+void addTerms(Json& json, const planner::ObjectiveTerms& t) {
+  json["J_s"] = t.total;
+  json["cost_f_s"] = t.cost_f;
+  json["cost_omega_s"] = t.cost_omega;
+  json["cost_alpha_s"] = t.cost_alpha;
+}
+
+const char* statusName(planner::PlanResult::Status status) {
+  return status == Status::kSolved ? "solved" : "no_path";
 }
 
 struct PlanTimes {
   double path = 0, map = 0, plan = 0, trajectory = 0, validation = 0, simulation = 0, total = 0;
 };
+
+Json plannerJson(const planner::ConfigMap& map, const PlanningOutcome& planning) {
+  const planner::PlanResult& chosen = planning.chosen.result;
+  Json json = {{"method", planning.chosen.method}, {"seconds", planning.chosen.seconds}};
+  if (planning.solved()) json["branch"] = map.branches[chosen.branch].words();
+  if (!chosen.detail.empty()) json["detail"] = chosen.detail;
+  return json;
+}
+
+Json refineJson(const planner::RefineResult& refine) {
+  return {{"improved", refine.improved},       {"J_before_s", refine.before.total},
+          {"J_after_s", refine.after.total},   {"seconds", refine.seconds},
+          {"evaluations", refine.evaluations}, {"algorithm", refine.algorithm},
+          {"stop_reason", refine.stop_reason}};
+}
+
+Json pathJson(const JobSpec& job,
+              const planner::ConfigMap& map,
+              const PlanningOutcome& planning,
+              const planner::TrajectoryBuild* trajectory) {
+  Json json = {{"samples", planning.theta.size()},
+               {"cycle_time_s", map.times.back() - map.times.front()},
+               {"map_min_f", planning.terms.min_f},
+               {"map_min_f_time_s", map.times[planning.terms.min_f_sample]},
+               {"max_abs_omega_deg_s", toDeg(planning.terms.max_abs_omega)},
+               {"max_abs_alpha_deg_s2", toDeg(planning.terms.max_abs_alpha)},
+               {"omega_max_deg_s", job.table.max_speed_deg_s},
+               {"alpha_max_deg_s2", job.table.max_accel_deg_s2}};
+  if (trajectory && trajectory->ok) {
+    const auto& s = trajectory->trajectory.samples[trajectory->min_f_sample];
+    json["min_f"] = trajectory->min_f;
+    json["min_f_time_s"] = s.t;
+    json["min_f_limit"] = s.limit;
+    json["min_clearance_mm"] = toMm(trajectory->min_clearance);
+  }
+  return json;
+}
+
+Json dpJson(const PlanningOutcome& planning) {
+  const planner::PlanResult& dp = *planning.dp;
+  Json json = {{"status", statusName(dp.status)},
+               {"angle_subdivisions", planning.dp_subdivisions},
+               {"seconds", dp.seconds}};
+  if (dp.status == Status::kSolved) json["J_s"] = dp.terms.total;
+  if (const auto gap = planning.dpGap()) json["gap_percent"] = 100.0 * *gap;
+  return json;
+}
+
+// The branches the chosen planner tried, and the planners it was compared with.
+void addBranches(Json& json, const planner::ConfigMap& map, const PlanningOutcome& planning) {
+  if (!planning.rejected.empty()) {
+    Json rejected = Json::array();
+    for (const auto& [b, why] : planning.rejected) {
+      rejected.push_back({{"branch", map.branches[b].words()}, {"reason", why}});
+    }
+    json["rejected"] = std::move(rejected);
+  }
+  Json branches = Json::array();
+  for (std::size_t b = 0; b < planning.chosen.branches.size(); ++b) {
+    const planner::PlanResult& r = planning.chosen.branches[b];
+    Json branch = {{"branch", map.branches[b].words()}, {"status", statusName(r.status)}};
+    if (r.status == Status::kSolved) {
+      branch["J_s"] = r.terms.total;
+    } else {
+      branch["reason"] = r.reason;
+    }
+    branches.push_back(std::move(branch));
+  }
+  json["branches"] = std::move(branches);
+  if (planning.others.empty()) return;
+  Json compare = Json::array();
+  for (const PlannerOutcome& o : planning.others) {
+    Json other = {
+        {"method", o.method}, {"status", statusName(o.result.status)}, {"seconds", o.seconds}};
+    if (o.result.status == Status::kSolved) {
+      addTerms(other, o.result.terms);
+    } else {
+      other["reason"] = o.result.reason;
+    }
+    compare.push_back(std::move(other));
+  }
+  json["compare"] = std::move(compare);
+}
+
+// The run's times, the map's size and the cell's frames.
+void addSetup(Json& json,
+              const JobSpec& job,
+              const kinematics::CellModel& cell,
+              const planner::ConfigMap& map,
+              const PlanTimes& times) {
+  json["times_s"] = {{"path", times.path},
+                     {"map", times.map},
+                     {"plan", times.plan},
+                     {"trajectory", times.trajectory},
+                     {"validation", times.validation},
+                     {"simulation", times.simulation},
+                     {"total", times.total}};
+  json["map"] = {{"angles", map.angles.size()},
+                 {"samples", map.times.size()},
+                 {"angle_step_deg", job.map.angle_step_deg},
+                 {"dt_s", job.scan.dt_s}};
+  json["cell"] = {{"units", "4x4 homogeneous matrices, rotation unitless, translation in mm"},
+                  {"X_WB", matrixMm(cell.X_WB)},
+                  {"X_WA", matrixMm(cell.table.X_WA)},
+                  {"X_RP", matrixMm(cell.part.X_RP)},
+                  {"X_FS", matrixMm(cell.scanner.X_FS)}};
+}
 
 std::string reportJson(const JobSpec& job,
                        const kinematics::CellModel& cell,
@@ -108,128 +220,26 @@ std::string reportJson(const JobSpec& job,
                        const std::string& status,
                        const std::string& reason,
                        const PlanTimes& times) {
-  JsonWriter json;
-  json.beginObject();
-  json.value("format", "scanplan plan report 1");
-  json.value("job", job.name);
-  json.value("job_hash", jobHash(job));
-  json.value("status", status);
-  if (!reason.empty()) json.value("reason", reason);
-  const planner::PlanResult& chosen = planning.chosen.result;
-  json.beginObject("planner");
-  json.value("method", planning.chosen.method);
-  json.value("seconds", planning.chosen.seconds);
-  if (planning.solved()) json.value("branch", map.branches[chosen.branch].words());
-  if (!chosen.detail.empty()) json.value("detail", chosen.detail);
-  json.endObject();
+  Json json;
+  json["format"] = "scanplan plan report 1";
+  json["job"] = job.name;
+  json["job_hash"] = jobHash(job);
+  json["status"] = status;
+  if (!reason.empty()) json["reason"] = reason;
+  json["planner"] = plannerJson(map, planning);
   if (planning.solved()) {
-    json.beginObject("objective");
-    writeTerms(json, planning.terms);
-    json.endObject();
-    if (planning.refine) {
-      json.beginObject("refine");
-      json.value("improved", planning.refine->improved);
-      json.value("J_before_s", planning.refine->before.total);
-      json.value("J_after_s", planning.refine->after.total);
-      json.value("seconds", planning.refine->seconds);
-      json.value("evaluations", planning.refine->evaluations);
-      json.value("algorithm", planning.refine->algorithm);
-      json.value("stop_reason", planning.refine->stop_reason);
-      json.endObject();
-    }
-    json.beginObject("path");
-    json.value("samples", static_cast<int>(planning.theta.size()));
-    json.value("cycle_time_s", map.times.back() - map.times.front());
-    json.value("map_min_f", planning.terms.min_f);
-    json.value("map_min_f_time_s", map.times[planning.terms.min_f_sample]);
-    json.value("max_abs_omega_deg_s", toDeg(planning.terms.max_abs_omega));
-    json.value("max_abs_alpha_deg_s2", toDeg(planning.terms.max_abs_alpha));
-    json.value("omega_max_deg_s", job.table.max_speed_deg_s);
-    json.value("alpha_max_deg_s2", job.table.max_accel_deg_s2);
-    if (trajectory && trajectory->ok) {
-      const auto& s = trajectory->trajectory.samples[trajectory->min_f_sample];
-      json.value("min_f", trajectory->min_f);
-      json.value("min_f_time_s", s.t);
-      json.value("min_f_limit", s.limit);
-      json.value("min_clearance_mm", toMm(trajectory->min_clearance));
-    }
-    json.endObject();
+    Json objective = Json::object();
+    addTerms(objective, planning.terms);
+    json["objective"] = std::move(objective);
+    if (planning.refine) json["refine"] = refineJson(*planning.refine);
+    json["path"] = pathJson(job, map, planning, trajectory);
   }
-  if (planning.dp) {
-    json.beginObject("dp_baseline");
-    json.value("status", planning.dp->status == Status::kSolved ? "solved" : "no_path");
-    json.value("angle_subdivisions", planning.dp_subdivisions);
-    json.value("seconds", planning.dp->seconds);
-    if (planning.dp->status == Status::kSolved) json.value("J_s", planning.dp->terms.total);
-    if (const auto gap = planning.dpGap()) json.value("gap_percent", 100.0 * *gap);
-    json.endObject();
-  }
-  if (!planning.rejected.empty()) {
-    json.beginArray("rejected");
-    for (const auto& [b, why] : planning.rejected) {
-      json.beginObject();
-      json.value("branch", map.branches[b].words());
-      json.value("reason", why);
-      json.endObject();
-    }
-    json.endArray();
-  }
-  json.beginArray("branches");
-  for (std::size_t b = 0; b < planning.chosen.branches.size(); ++b) {
-    const planner::PlanResult& r = planning.chosen.branches[b];
-    json.beginObject();
-    json.value("branch", map.branches[b].words());
-    json.value("status", r.status == Status::kSolved ? "solved" : "no_path");
-    if (r.status == Status::kSolved) {
-      json.value("J_s", r.terms.total);
-    } else {
-      json.value("reason", r.reason);
-    }
-    json.endObject();
-  }
-  json.endArray();
-  if (!planning.others.empty()) {
-    json.beginArray("compare");
-    for (const PlannerOutcome& o : planning.others) {
-      json.beginObject();
-      json.value("method", o.method);
-      json.value("status", o.result.status == Status::kSolved ? "solved" : "no_path");
-      json.value("seconds", o.seconds);
-      if (o.result.status == Status::kSolved) {
-        writeTerms(json, o.result.terms);
-      } else {
-        json.value("reason", o.result.reason);
-      }
-      json.endObject();
-    }
-    json.endArray();
-  }
-  if (validation) writeValidationJson(json, "validation", *validation);
-  if (simulation) writeSimulationJson(json, "simulation", *simulation);
-  json.beginObject("times_s");
-  json.value("path", times.path);
-  json.value("map", times.map);
-  json.value("plan", times.plan);
-  json.value("trajectory", times.trajectory);
-  json.value("validation", times.validation);
-  json.value("simulation", times.simulation);
-  json.value("total", times.total);
-  json.endObject();
-  json.beginObject("map");
-  json.value("angles", static_cast<int>(map.angles.size()));
-  json.value("samples", static_cast<int>(map.times.size()));
-  json.value("angle_step_deg", job.map.angle_step_deg);
-  json.value("dt_s", job.scan.dt_s);
-  json.endObject();
-  json.beginObject("cell");
-  json.value("units", "4x4 homogeneous matrices, rotation unitless, translation in mm");
-  writeMatrixMm(json, "X_WB", cell.X_WB);
-  writeMatrixMm(json, "X_WA", cell.table.X_WA);
-  writeMatrixMm(json, "X_RP", cell.part.X_RP);
-  writeMatrixMm(json, "X_FS", cell.scanner.X_FS);
-  json.endObject();
-  json.endObject();
-  return json.str();
+  if (planning.dp) json["dp_baseline"] = dpJson(planning);
+  addBranches(json, map, planning);
+  if (validation) json["validation"] = validationJson(*validation);
+  if (simulation) json["simulation"] = simulationJson(*simulation);
+  addSetup(json, job, cell, map, times);
+  return jsonDocument(json);
 }
 
 }  // namespace
