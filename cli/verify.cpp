@@ -127,51 +127,47 @@ std::string validationSummary(const planner::ValidationReport& r, std::size_t ma
   return s;
 }
 
-void writeValidationJson(JsonWriter& json,
-                         const std::string& key,
-                         const planner::ValidationReport& r) {
-  json.beginObject(key);
-  json.value("valid", r.valid);
-  json.value("poses", static_cast<int>(r.samples));
-  json.value("clearance_evaluations", static_cast<int>(r.poses_checked));
-  json.value("seconds", r.seconds);
-  json.value("min_distance_mm", toMm(r.min_distance));
-  json.value("min_distance_pair", r.min_distance_pair);
-  json.value("min_distance_time_s", r.min_distance_t);
-  json.value("proven_clearance_mm", toMm(r.proven_clearance));
-  json.beginArray("violations");
-  const auto user = [](const planner::Violation& v, double x) {
-    switch (v.kind) {
-      case planner::Violation::Kind::kCollision:
-        return toMm(x);
-      default:
-        return toDeg(x);  // rad, rad/s, rad/s² → deg, deg/s, deg/s²
-    }
-  };
-  for (const planner::Violation& v : r.violations) {
-    json.beginObject();
-    json.value("kind", planner::kindName(v.kind));
-    json.value("what", v.what);
-    json.value("time_s", v.t);
-    json.value("start_s", v.t_start);
-    json.value("end_s", v.t_end);
-    json.value("value", user(v, v.value));
-    json.value("limit", user(v, v.limit));
-    json.value("unit", v.kind == planner::Violation::Kind::kCollision ? "mm"
-                       : v.kind == planner::Violation::Kind::kJointSpeed ||
-                               v.kind == planner::Violation::Kind::kTableSpeed
-                           ? "deg/s"
-                       : v.kind == planner::Violation::Kind::kTableAccel ? "deg/s^2"
-                                                                         : "deg");
-    if (v.kind == planner::Violation::Kind::kCollision) {
-      json.beginArray("contact_mm");
-      for (int i = 0; i < 3; ++i) json.element(toMm(v.p_W(i)));
-      json.endArray();
-    }
-    json.endObject();
-  }
-  json.endArray();
-  json.endObject();
+namespace {
+
+// The unit a violation's value and limit are given in, as validationJson() converts them.
+const char* violationUnit(planner::Violation::Kind kind) {
+  using Kind = planner::Violation::Kind;
+  if (kind == Kind::kCollision) return "mm";
+  if (kind == Kind::kJointSpeed || kind == Kind::kTableSpeed) return "deg/s";
+  if (kind == Kind::kTableAccel) return "deg/s^2";
+  return "deg";
+}
+
+Json violationJson(const planner::Violation& v) {
+  const bool collision = v.kind == planner::Violation::Kind::kCollision;
+  // rad, rad/s, rad/s² → deg, deg/s, deg/s²; m → mm
+  const auto user = [&](double x) { return collision ? toMm(x) : toDeg(x); };
+  Json json = {{"kind", planner::kindName(v.kind)},
+               {"what", v.what},
+               {"time_s", v.t},
+               {"start_s", v.t_start},
+               {"end_s", v.t_end},
+               {"value", user(v.value)},
+               {"limit", user(v.limit)},
+               {"unit", violationUnit(v.kind)}};
+  if (collision) json["contact_mm"] = {toMm(v.p_W(0)), toMm(v.p_W(1)), toMm(v.p_W(2))};
+  return json;
+}
+
+}  // namespace
+
+Json validationJson(const planner::ValidationReport& r) {
+  Json violations = Json::array();
+  for (const planner::Violation& v : r.violations) violations.push_back(violationJson(v));
+  return {{"valid", r.valid},
+          {"poses", r.samples},
+          {"clearance_evaluations", r.poses_checked},
+          {"seconds", r.seconds},
+          {"min_distance_mm", toMm(r.min_distance)},
+          {"min_distance_pair", r.min_distance_pair},
+          {"min_distance_time_s", r.min_distance_t},
+          {"proven_clearance_mm", toMm(r.proven_clearance)},
+          {"violations", std::move(violations)}};
 }
 
 SimulationRun simulateTrajectory(const JobSpec& job,
@@ -275,29 +271,27 @@ std::string simulationSummary(const SimulationRun& run) {
   return text;
 }
 
-void writeSimulationJson(JsonWriter& json, const std::string& key, const SimulationRun& run) {
+Json simulationJson(const SimulationRun& run) {
   const scanner::SimulationStats& s = run.cloud.stats;
-  json.beginObject(key);
-  json.value("profiles", static_cast<int>(s.profiles));
-  json.value("laser_rays", static_cast<double>(s.laser_rays));
-  json.value("occlusion_rays", static_cast<double>(s.occlusion_rays));
-  json.value("points", static_cast<double>(s.points));
-  json.value("outside_window", static_cast<double>(s.outside_window));
-  json.value("occluded", static_cast<double>(s.occluded));
-  json.value("seconds", run.seconds);
-  json.beginObject("coverage");
-  json.value("covered_fraction", run.coverage.covered_fraction);
-  json.value("covered_area_mm2", run.coverage.covered_area * 1e6);
-  json.value("total_area_mm2", run.coverage.total_area * 1e6);
-  json.value("covered_triangles", static_cast<double>(run.coverage.covered_triangles));
-  json.value("triangles", static_cast<double>(run.coverage.hits.size()));
-  json.value("points_on_part", static_cast<double>(run.coverage.part_points));
-  json.value("density_mean_per_mm2", run.coverage.density_mean_per_mm2);
-  json.value("density_median_per_mm2", run.coverage.density_median_per_mm2);
-  json.value("density_p5_per_mm2", run.coverage.density_p5_per_mm2);
-  json.value("density_p95_per_mm2", run.coverage.density_p95_per_mm2);
-  json.endObject();
-  json.endObject();
+  const scanner::PartCoverage& c = run.coverage;
+  return {{"profiles", s.profiles},
+          {"laser_rays", s.laser_rays},
+          {"occlusion_rays", s.occlusion_rays},
+          {"points", s.points},
+          {"outside_window", s.outside_window},
+          {"occluded", s.occluded},
+          {"seconds", run.seconds},
+          {"coverage",
+           {{"covered_fraction", c.covered_fraction},
+            {"covered_area_mm2", c.covered_area * 1e6},
+            {"total_area_mm2", c.total_area * 1e6},
+            {"covered_triangles", c.covered_triangles},
+            {"triangles", c.hits.size()},
+            {"points_on_part", c.part_points},
+            {"density_mean_per_mm2", c.density_mean_per_mm2},
+            {"density_median_per_mm2", c.density_median_per_mm2},
+            {"density_p5_per_mm2", c.density_p5_per_mm2},
+            {"density_p95_per_mm2", c.density_p95_per_mm2}}}};
 }
 
 }  // namespace scanplan::cli

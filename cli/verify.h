@@ -5,10 +5,11 @@
 #include <filesystem>
 #include <string>
 
-#include "cli/io/output.h"
 #include "cli/config/job.h"
 #include "cli/config/problem.h"
 #include "pipeline/simulation.h"
+#include "cli/io/json.h"
+#include "cli/io/output.h"
 #include "kinematics/mesh.h"
 #include "kinematics/trajectory.h"
 #include "planner/validation.h"
@@ -25,10 +26,8 @@ kinematics::Trajectory loadTrajectoryFile(const std::filesystem::path& file);
 
 /// Validation summary lines for stdout (every violation, at most `max_lines` of them).
 std::string validationSummary(const planner::ValidationReport& report, std::size_t max_lines = 12);
-/// The report as a JSON object member `key`.
-void writeValidationJson(JsonWriter& json,
-                         const std::string& key,
-                         const planner::ValidationReport& report);
+/// The report as a JSON object (lengths in mm, angles in degrees, times in s).
+Json validationJson(const planner::ValidationReport& report);
 
 using SimulationRun = pipeline::SimulationRun;
 
@@ -44,7 +43,8 @@ void writeSimulationOutputs(const std::filesystem::path& dir,
                             const kinematics::TriangleMesh& part,
                             const SimulationRun& run);
 std::string simulationSummary(const SimulationRun& run);
-void writeSimulationJson(JsonWriter& json, const std::string& key, const SimulationRun& run);
+/// The run's counts and the coverage as a JSON object (areas in mm²).
+Json simulationJson(const SimulationRun& run);
 
 /// The robot programs of `formats` (names as in programFormatNames()) for the trajectory, into
 /// `dir`; returns one summary line (the folder as `shown_as`, the files, the fastest step as % of

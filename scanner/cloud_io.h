@@ -1,9 +1,7 @@
 #pragma once
 
 #include <cstddef>
-#include <istream>
 #include <ostream>
-#include <string>
 #include <vector>
 
 #include "kinematics/mesh.h"
@@ -32,21 +30,5 @@ void writeCoveragePly(std::ostream& out,
                       const PartCoverage& coverage,
                       const CoverageSettings& settings = {},
                       double max_per_mm2 = 0.0);
-
-/// The scalar properties of a PLY file's `vertex` element, as columns of doubles.
-struct PlyVertices {
-  std::string format;              ///< "ascii", "binary_little_endian" or "binary_big_endian"
-  std::vector<std::string> names;  ///< property names, in file order
-  std::vector<std::vector<double>> columns;
-  std::size_t count = 0;
-
-  /// The column of a property; throws std::out_of_range when there is none.
-  const std::vector<double>& column(const std::string& name) const;
-};
-
-/// Reads the `vertex` element of a PLY file (any of the three formats; scalar properties of
-/// the standard types; list properties and other elements are skipped). Throws InputError
-/// naming `source` for anything malformed or truncated.
-PlyVertices readPlyVertices(std::istream& in, const std::string& source);
 
 }  // namespace scanplan::scanner

@@ -27,6 +27,7 @@
 
 #include "cli/batch/batch.h"
 #include "cli/plot/image_io.h"
+#include "tests/io_support.h"
 #include "cli/config/job.h"
 #include "cli_support.h"
 #include "image_support.h"
@@ -130,7 +131,7 @@ cli::RgbImage svgRaster(const std::string& svg) {
   const std::size_t at = svg.find(prefix);
   EXPECT_NE(at, std::string::npos) << svg.substr(0, 400);
   if (at == std::string::npos) return {};
-  return cli::decodePng(unbase64(svg.substr(at + prefix.size())));
+  return test::decodePng(unbase64(svg.substr(at + prefix.size())));
 }
 
 // Where `area` sits pixel for pixel in the labelled `figure`: just inside the black frame that
@@ -311,7 +312,7 @@ TEST_F(Batch, SmallSweepGivesOneRowPerCaseSeedAndRepeatWithTheDpGap) {
   // top, the y-axis title on the left and the legend on the right, all in dark pixels.
   const std::string stem = "plots/J_s_vs_planner_ray_horizon";
   const std::string png_bytes = readFile(out / (stem + ".png"));
-  const cli::RgbImage png = cli::decodePng(png_bytes);
+  const cli::RgbImage png = test::decodePng(png_bytes);
   ASSERT_GT(png.width, 720 + 100);
   ASSERT_GT(png.height, 480 + 60);
   EXPECT_GT(darkPixels(png, 0, 0, png.width, 30), 100) << "title";
@@ -624,10 +625,11 @@ TEST_F(Batch, ExitCodeZeroWhenEveryCaseHasAnOutcomeEvenWithoutAPath) {
   // A case that ended in an internal error (here: written into the results as a run would
   // write it) makes a resumed batch exit 1, as `plan` would: everything ran, something is a bug.
   std::string jsonl = readFile(out / "results.jsonl");
-  const std::size_t at = jsonl.find("\"status\": \"planned\", \"reason\": \"\"");
+  const std::string planned = "\"status\":\"planned\",\"reason\":\"\"";
+  const std::size_t at = jsonl.find(planned);
   ASSERT_NE(at, std::string::npos) << jsonl;
-  jsonl.replace(at, std::string("\"status\": \"planned\", \"reason\": \"\"").size(),
-                "\"status\": \"error\", \"reason\": \"internal error: boom (please report this)\"");
+  jsonl.replace(at, planned.size(),
+                "\"status\":\"error\",\"reason\":\"internal error: boom (please report this)\"");
   writeFile(out / "results.jsonl", jsonl);
   const Result resumed = batch(sweep, out, {"--resume"});
   EXPECT_EQ(resumed.exit_code, 1) << describe(resumed);
@@ -817,7 +819,7 @@ TEST_F(Batch, ReportSurvivesDegenerateValues) {
     SCOPED_TRACE(stem);
     const fs::path png = out / "plots" / (std::string(stem) + ".png");
     ASSERT_TRUE(fs::exists(png));
-    const cli::RgbImage image = cli::decodePng(readFile(png));
+    const cli::RgbImage image = test::decodePng(readFile(png));
     EXPECT_GT(image.width, 720);
     EXPECT_LT(image.width, 720 + 600) << "tick values stay short";
     EXPECT_LT(image.height, 480 + 300);

@@ -13,6 +13,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "cli/plot/image_io.h"
+#include "tests/io_support.h"
 #include "cli/config/job.h"
 #include "cli_support.h"
 #include "kinematics/trajectory.h"
@@ -107,7 +108,7 @@ TEST_F(CliPlan, WritesTrajectoryReportAndPathFigure) {
   }
   expectReachesTargets(trajectory);
 
-  const cli::RgbImage figure = cli::decodePng(readFile(out() / "configmap_path.png"));
+  const cli::RgbImage figure = test::decodePng(readFile(out() / "configmap_path.png"));
   EXPECT_GE(figure.width, 180);
   EXPECT_TRUE(contains(readFile(out() / "configmap_path.svg"), "ray + refine J "));
 }

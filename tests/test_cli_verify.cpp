@@ -20,7 +20,7 @@
 #include "kinematics/mesh.h"
 #include "kinematics/trajectory.h"
 #include "kinematics/units.h"
-#include "scanner/cloud_io.h"
+#include "tests/io_support.h"
 #include "test_support.h"
 
 namespace {
@@ -136,7 +136,7 @@ TEST_F(CliVerify, SimulatedCloudLiesOnThePartAndCoverageIsReported) {
     EXPECT_TRUE(fs::exists(out / f)) << f;
   }
   std::ifstream in(out / "cloud.ply", std::ios::binary);
-  const scanner::PlyVertices cloud = scanner::readPlyVertices(in, "cloud.ply");
+  const test::PlyVertices cloud = test::readPlyVertices(in, "cloud.ply");
   ASSERT_GT(cloud.count, 1000u);
   EXPECT_EQ(cloud.format, "binary_little_endian");
   // Points in the part frame, mm: inside the part's box grown by a hair, or on the table top
@@ -174,7 +174,7 @@ TEST_F(CliVerify, PlannedCloudPointsLieOnThePartSurface) {
                 .exit_code,
             0);
   std::ifstream in(out / "cloud.ply", std::ios::binary);
-  const scanner::PlyVertices cloud = scanner::readPlyVertices(in, "cloud.ply");
+  const test::PlyVertices cloud = test::readPlyVertices(in, "cloud.ply");
   const cli::JobSpec job = cli::loadJob(kDemoJob);
   const kinematics::CellModel cell = cli::buildCell(job);
   const auto part = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options).mesh;

@@ -25,6 +25,7 @@
 #include <tbb/global_control.h>
 
 #include "cli/plot/image_io.h"
+#include "tests/io_support.h"
 #include "cli/config/job.h"
 #include "cli/config/spec.h"
 #include "collision/scene.h"
@@ -738,16 +739,16 @@ TEST_F(MapJob, MapCommandWritesLayersJsonAndImages) {
   const CliRun run = scanplan({"map", job.string(), "-o", out.string()}, dir_);
   ASSERT_EQ(run.exit_code, 0) << run.err;
 
-  const cli::NpyArray f = cli::readNpy(out / "configmap.npy");
+  const test::NpyArray f = test::readNpy(out / "configmap.npy");
   EXPECT_EQ(f.descr, "<f4");
   EXPECT_EQ(f.shape, (std::vector<std::size_t>{1, 36, 10}));
   ASSERT_EQ(f.raw.size(), 360u * sizeof(float));
-  const cli::NpyArray limit = cli::readNpy(out / "configmap_limit.npy");
+  const test::NpyArray limit = test::readNpy(out / "configmap_limit.npy");
   EXPECT_EQ(limit.descr, "|u1");
   EXPECT_EQ(limit.shape, f.shape);
   for (const char* layer :
        {"configmap_joint.npy", "configmap_singularity.npy", "configmap_clearance.npy"}) {
-    EXPECT_EQ(cli::readNpy(out / layer).shape, f.shape) << layer;
+    EXPECT_EQ(test::readNpy(out / layer).shape, f.shape) << layer;
   }
   // The same job in-process, branch RIGHTY ABOVE NOFLIP = index 0 of the 8-branch map: the
   // file holds exactly its f layer.
@@ -763,7 +764,7 @@ TEST_F(MapJob, MapCommandWritesLayersJsonAndImages) {
 
   // configmap.png is the map raster stretched into whole blocks (a cell per block) and framed
   // with axes and legend; the SVG's viewport says where the raster sits in the PNG.
-  const cli::RgbImage png = cli::decodePng(readText(out / "configmap.png"));
+  const cli::RgbImage png = test::decodePng(readText(out / "configmap.png"));
   const std::string svg = readText(out / "configmap.svg");
   const auto [crop_x, crop_y, crop_w, crop_h] = test::svgCrop(svg);
   ASSERT_GE(crop_x, 0);
@@ -787,8 +788,8 @@ TEST_F(MapJob, MapCommandWritesLayersJsonAndImages) {
     }
   }
   EXPECT_EQ(wrong, 0) << "pixels of the map raster that are not their cell's grey";
-  EXPECT_GT(cli::decodePng(readText(out / "configmap_cylinder.png")).width, 0);
-  EXPECT_GT(cli::decodePng(readText(out / "configmap_why.png")).width, 0);
+  EXPECT_GT(test::decodePng(readText(out / "configmap_cylinder.png")).width, 0);
+  EXPECT_GT(test::decodePng(readText(out / "configmap_why.png")).width, 0);
   const std::string why = readText(out / "configmap_why.svg");
   EXPECT_NE(why.find("<svg"), std::string::npos);
   EXPECT_NE(why.find("configmap_why.png"), std::string::npos);

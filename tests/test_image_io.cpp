@@ -1,4 +1,5 @@
 #include "cli/plot/image_io.h"
+#include "tests/io_support.h"
 
 #include "cli/commands/commands.h"
 #include "cli/config/job.h"
@@ -28,6 +29,10 @@
 #include <vector>
 
 namespace scanplan::cli {
+
+using test::decodePng;
+using test::NpyArray;
+using test::readNpy;
 
 // Printed by gtest when a colour comparison fails.
 void PrintTo(const Rgb& c, std::ostream* os) {

@@ -32,6 +32,7 @@
 #include "kinematics/shape.h"
 #include "kinematics/units.h"
 #include "scanner/cloud_io.h"
+#include "tests/io_support.h"
 #include "scanner/coverage.h"
 #include "scanner/laser_model.h"
 #include "scanner/path_generators.h"
@@ -874,7 +875,7 @@ TEST(CloudPly, HeaderIsStandardAndValuesRoundTrip) {
   EXPECT_EQ(bytes.substr(header.size(), 4), std::string("\x00\x00\x80\x3F", 4));
 
   std::istringstream in(bytes, std::ios::binary);
-  const scanner::PlyVertices v = scanner::readPlyVertices(in, "memory");
+  const test::PlyVertices v = test::readPlyVertices(in, "memory");
   EXPECT_EQ(v.format, "binary_little_endian");
   ASSERT_EQ(v.count, 3u);
   EXPECT_EQ(v.names, (std::vector<std::string>{"x", "y", "z", "time", "profile", "range_mm",
@@ -900,7 +901,7 @@ TEST(CloudPly, ReaderReadsAsciiAndRejectsTruncatedFiles) {
       "ply\r\nformat ascii 1.0\r\ncomment x\r\nelement face 1\r\nproperty list uchar int "
       "vertex_indices\r\nelement vertex 2\r\nproperty float x\r\nproperty uchar red\r\n"
       "end_header\r\n3 0 1 1\r\n1.5 7\r\n-2 255\r\n");
-  const scanner::PlyVertices v = scanner::readPlyVertices(ascii, "ascii");
+  const test::PlyVertices v = test::readPlyVertices(ascii, "ascii");
   ASSERT_EQ(v.count, 2u);
   EXPECT_EQ(v.column("x"), (std::vector<double>{1.5, -2.0}));
   EXPECT_EQ(v.column("red"), (std::vector<double>{7.0, 255.0}));
@@ -910,9 +911,9 @@ TEST(CloudPly, ReaderReadsAsciiAndRejectsTruncatedFiles) {
   std::string bytes = out.str();
   bytes.resize(bytes.size() - 3);
   std::istringstream truncated(bytes, std::ios::binary);
-  EXPECT_THROW(scanner::readPlyVertices(truncated, "t.ply"), InputError);
+  EXPECT_THROW(test::readPlyVertices(truncated, "t.ply"), InputError);
   std::istringstream not_ply("solid x\n");
-  EXPECT_THROW(scanner::readPlyVertices(not_ply, "x.stl"), InputError);
+  EXPECT_THROW(test::readPlyVertices(not_ply, "x.stl"), InputError);
 }
 
 // coverage.ply loads in assimp (what loadMesh uses) as the part, and carries the colours.
@@ -935,7 +936,7 @@ TEST(CoveragePly, LoadsAsThePartMeshWithDensityColours) {
   EXPECT_EQ(loaded.vertices.size(), 4u);  // welded again
   EXPECT_LT((loaded.bounds().max() - mesh.bounds().max()).norm(), 1e-9);
   std::ifstream in(file, std::ios::binary);
-  const scanner::PlyVertices v = scanner::readPlyVertices(in, file.string());
+  const test::PlyVertices v = test::readPlyVertices(in, file.string());
   ASSERT_EQ(v.count, 6u);
   // Triangle 0 has 4 points on 2 mm² (the scale's top: p95 = 2 /mm²), triangle 1 none.
   EXPECT_EQ(v.column("red")[0], 253);

@@ -10,10 +10,10 @@
 #include <tuple>
 
 #include <fmt/format.h>
-#include <yaml-cpp/yaml.h>
 
 #include "cli/batch/batch.h"
 #include "cli/batch/batch_internal.h"
+#include "cli/io/json.h"
 #include "cli/io/output.h"
 #include "kinematics/error.h"
 
@@ -24,39 +24,47 @@ namespace fs = std::filesystem;
 namespace detail {
 namespace {
 
-std::string jsonString(const std::string& s) {
-  std::string out = "\"";
-  for (const char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (c == '\n') {
-      out += "\\n";
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      out += fmt::format("\\u{:04x}", static_cast<int>(c));
-    } else {
-      out += c;
-    }
+Json rowJson(const BatchRow& row) {
+  Json params = Json::object();
+  for (const auto& [k, v] : row.params) params[k] = v;
+  Json json = {{"case_id", row.case_id},
+               {"index", row.index},
+               {"job", row.job},
+               {"params", std::move(params)},
+               {"seed", row.seed ? Json(*row.seed) : Json(nullptr)},
+               {"repeat", row.repeat},
+               {"method", row.method},
+               {"status", row.status},
+               {"reason", row.reason}};
+  for (std::size_t m = 0; m < kBatchMetrics.size(); ++m) {
+    const std::optional<double>& v = row.metrics[m];
+    json[kBatchMetrics[m]] = v && std::isfinite(*v) ? Json(*v) : Json(nullptr);
   }
-  return out + "\"";
+  json["map_reused"] = row.map_reused;
+  return json;
 }
 
-std::string jsonLine(const BatchRow& row) {
-  std::string out = fmt::format("{{\"case_id\": {}, \"index\": {}, \"job\": {}, \"params\": {{",
-                                jsonString(row.case_id), row.index, jsonString(row.job));
-  for (std::size_t i = 0; i < row.params.size(); ++i) {
-    out += fmt::format("{}{}: {}", i ? ", " : "", jsonString(row.params[i].first),
-                       jsonString(row.params[i].second));
+// A row of results.jsonl; throws Json::exception when a field is missing or of another type.
+BatchRow rowOf(const Json& json) {
+  BatchRow r;
+  r.case_id = json.at("case_id").get<std::string>();
+  r.index = json.at("index").get<std::size_t>();
+  r.job = json.at("job").get<std::string>();
+  for (const auto& [k, v] : json.at("params").items())
+    r.params.emplace_back(k, v.get<std::string>());
+  if (const auto seed = json.find("seed"); seed != json.end() && !seed->is_null()) {
+    r.seed = seed->get<int>();
   }
-  out += fmt::format(
-      "}}, \"seed\": {}, \"repeat\": {}, \"method\": {}, \"status\": {}, \"reason\": {}",
-      row.seed ? std::to_string(*row.seed) : std::string("null"), row.repeat,
-      jsonString(row.method), jsonString(row.status), jsonString(row.reason));
+  r.repeat = json.at("repeat").get<int>();
+  r.method = json.at("method").get<std::string>();
+  r.status = json.at("status").get<std::string>();
+  r.reason = json.at("reason").get<std::string>();
   for (std::size_t m = 0; m < kBatchMetrics.size(); ++m) {
-    out += fmt::format(", \"{}\": {}", kBatchMetrics[m], numberOrEmpty(row.metrics[m], "null"));
+    const auto v = json.find(kBatchMetrics[m]);
+    if (v != json.end() && !v->is_null()) r.metrics[m] = v->get<double>();
   }
-  out += fmt::format(", \"map_reused\": {}}}\n", row.map_reused ? "true" : "false");
-  return out;
+  r.map_reused = json.at("map_reused").get<bool>();
+  return r;
 }
 
 std::string csvField(const std::string& s) {
@@ -141,7 +149,7 @@ void writeResults(const fs::path& out,
   std::string csv = csvHeader(keys), jsonl;
   for (const BatchRow& r : rows) {
     csv += csvLine(r, keys);
-    jsonl += jsonLine(r);
+    jsonl += jsonLine(rowJson(r));
   }
   writeFileAtomically(out / "results.jsonl", jsonl);
   writeFileAtomically(out / "results.csv", csv);
@@ -157,7 +165,7 @@ RowSink::RowSink(const fs::path& out, std::vector<std::string> keys)
 }
 
 void RowSink::append(const BatchRow& row) {
-  const std::string json = jsonLine(row), csv = csvLine(row, keys_);
+  const std::string json = jsonLine(rowJson(row)), csv = csvLine(row, keys_);
   const std::lock_guard<std::mutex> lock(mutex_);
   jsonl_ << json << std::flush;
   csv_ << csv << std::flush;
@@ -172,26 +180,8 @@ std::vector<BatchRow> readBatchRows(const fs::path& jsonl) {
   while (std::getline(in, line)) {
     if (line.empty() || line.back() != '}') continue;  // torn by an interruption
     try {
-      const YAML::Node n = YAML::Load(line);
-      BatchRow r;
-      r.case_id = n["case_id"].as<std::string>();
-      r.index = n["index"].as<std::size_t>();
-      r.job = n["job"].as<std::string>();
-      for (const auto& kv : n["params"]) {
-        r.params.emplace_back(kv.first.as<std::string>(), kv.second.as<std::string>());
-      }
-      if (const YAML::Node seed = n["seed"]; seed && !seed.IsNull()) r.seed = seed.as<int>();
-      r.repeat = n["repeat"].as<int>();
-      r.method = n["method"].as<std::string>();
-      r.status = n["status"].as<std::string>();
-      r.reason = n["reason"].as<std::string>();
-      for (std::size_t m = 0; m < kBatchMetrics.size(); ++m) {
-        const YAML::Node v = n[kBatchMetrics[m]];
-        if (v && !v.IsNull()) r.metrics[m] = v.as<double>();
-      }
-      r.map_reused = n["map_reused"].as<bool>();
-      rows.push_back(std::move(r));
-    } catch (const YAML::Exception&) {
+      rows.push_back(detail::rowOf(Json::parse(line)));
+    } catch (const Json::exception&) {
       continue;
     }
   }

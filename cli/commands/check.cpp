@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include "cli/commands/commands.h"
+#include "cli/io/json.h"
 #include "cli/io/output.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"
@@ -79,46 +80,44 @@ ExitCode runCheck(const CheckOptions& options) {
   };
 
   if (options.json) {
-    JsonWriter json;
-    json.beginObject();
-    json.value("job", job.name);
-    json.value("table_deg", options.table_deg);
-    json.numbers("joints_deg", joints);
-    json.value("branch", robot.branchOf(q).words());
-    json.numbers("joint_factors", std::vector<double>(s.joint.begin(), s.joint.end()));
-    json.beginObject("singularity");
-    json.value("wrist", s.singularity.wrist).value("wrist_factor", s.wrist);
-    json.value("elbow", s.singularity.elbow).value("elbow_factor", s.elbow);
-    json.value("shoulder_mm", toMm(s.singularity.shoulder)).value("shoulder_factor", s.shoulder);
-    json.value("manipulability", s.singularity.manipulability);
-    json.endObject();
-    json.beginArray("pairs");
+    Json pairs = Json::array();
     for (std::size_t i = 0; i < scene.pairs().size(); ++i) {
       const auto& p = scene.pairs()[i];
       const auto& c = s.clearance.pairs[i];
-      json.beginObject();
-      json.value("a", bodies[static_cast<std::size_t>(p.a)].name);
-      json.value("b", bodies[static_cast<std::size_t>(p.b)].name);
-      json.value("distance_mm", toMm(c.distance));
-      json.value("beyond_d_high", c.beyond_bound);
-      json.value("penetrating", c.penetrating);
-      json.value("d_low_mm", toMm(p.thresholds.d_low));
-      json.value("d_high_mm", toMm(p.thresholds.d_high));
-      json.value("gamma", p.thresholds.gamma);
-      json.value("factor", c.factor);
+      Json pair = {{"a", bodies[static_cast<std::size_t>(p.a)].name},
+                   {"b", bodies[static_cast<std::size_t>(p.b)].name},
+                   {"distance_mm", toMm(c.distance)},
+                   {"beyond_d_high", c.beyond_bound},
+                   {"penetrating", c.penetrating},
+                   {"d_low_mm", toMm(p.thresholds.d_low)},
+                   {"d_high_mm", toMm(p.thresholds.d_high)},
+                   {"gamma", p.thresholds.gamma},
+                   {"factor", c.factor}};
       if (!c.beyond_bound) {
-        json.numbers("witness_a_mm", mmVector(c.p_a));
-        json.numbers("witness_b_mm", mmVector(c.p_b));
+        pair["witness_a_mm"] = mmVector(c.p_a);
+        pair["witness_b_mm"] = mmVector(c.p_b);
       }
-      json.endObject();
+      pairs.push_back(std::move(pair));
     }
-    json.endArray();
-    json.value("clearance_factor", s.clearance.factor);
-    json.value("collision", s.clearance.collision);
-    json.value("f", s.total);
-    json.value("limiting", s.limiting);
-    json.endObject();
-    std::fputs(json.str().c_str(), stdout);
+    Json json;
+    json["job"] = job.name;
+    json["table_deg"] = options.table_deg;
+    json["joints_deg"] = joints;
+    json["branch"] = robot.branchOf(q).words();
+    json["joint_factors"] = std::vector<double>(s.joint.begin(), s.joint.end());
+    json["singularity"] = {{"wrist", s.singularity.wrist},
+                           {"wrist_factor", s.wrist},
+                           {"elbow", s.singularity.elbow},
+                           {"elbow_factor", s.elbow},
+                           {"shoulder_mm", toMm(s.singularity.shoulder)},
+                           {"shoulder_factor", s.shoulder},
+                           {"manipulability", s.singularity.manipulability}};
+    json["pairs"] = std::move(pairs);
+    json["clearance_factor"] = s.clearance.factor;
+    json["collision"] = s.clearance.collision;
+    json["f"] = s.total;
+    json["limiting"] = s.limiting;
+    std::fputs(jsonDocument(json).c_str(), stdout);
   } else {
     std::string t;
     t += fmt::format("pose         table {} deg, joints {:.3f} deg  [{}{}]{}\n", options.table_deg,

@@ -5,8 +5,9 @@
 #include <fmt/format.h>
 
 #include "cli/commands/commands.h"
-#include "cli/io/output.h"
 #include "cli/config/robot_file.h"
+#include "cli/io/json.h"
+#include "cli/io/output.h"
 #include "kinematics/error.h"
 #include "kinematics/pose.h"
 #include "kinematics/units.h"
@@ -35,13 +36,14 @@ std::vector<double> toVector(const Eigen::VectorXd& v) { return {v.data(), v.dat
 
 std::vector<double> jointsDeg(const JointVector& q) { return toVector(q * kRadToDeg); }
 
-void writePose(JsonWriter& json, const Eigen::Isometry3d& X) {
-  json.numbers("position_mm", toVector(X.translation() * kMToMm));
-  json.beginArray("rotation_matrix");
-  for (int r = 0; r < 3; ++r) json.numbers({}, toVector(X.linear().row(r).transpose()));
-  json.endArray();
-  json.numbers("quaternion_wxyz", toVector(quaternionWxyz(X.linear())));
-  json.numbers("trans_zyz_deg", toVector(kinematics::zyzFromRotation(X.linear()) * kRadToDeg));
+// The pose's members, added to `json`.
+void addPose(Json& json, const Eigen::Isometry3d& X) {
+  json["position_mm"] = toVector(X.translation() * kMToMm);
+  Json rotation = Json::array();
+  for (int r = 0; r < 3; ++r) rotation.push_back(toVector(X.linear().row(r).transpose()));
+  json["rotation_matrix"] = std::move(rotation);
+  json["quaternion_wxyz"] = toVector(quaternionWxyz(X.linear()));
+  json["trans_zyz_deg"] = toVector(kinematics::zyzFromRotation(X.linear()) * kRadToDeg);
 }
 
 std::string poseText(const std::string& title, const Eigen::Isometry3d& X) {
@@ -113,24 +115,22 @@ ExitCode runFk(const FkOptions& options) {
   const auto sing = robot.singularity(q);
 
   if (options.json) {
-    JsonWriter json;
-    json.beginObject();
-    json.value("robot", robot.name());
-    json.numbers("joints_deg", values);
-    writePose(json, X_BF);
+    Json json;
+    json["robot"] = robot.name();
+    json["joints_deg"] = values;
+    addPose(json, X_BF);
     if (loaded.X_FS) {
-      json.beginObject("sensor");
-      writePose(json, X_BF * *loaded.X_FS);
-      json.endObject();
+      Json sensor = Json::object();
+      addPose(sensor, X_BF * *loaded.X_FS);
+      json["sensor"] = std::move(sensor);
     }
-    json.value("within_limits", in_limits);
-    json.value("branch", branch.words());
-    json.beginObject("singularity");
-    json.value("wrist", sing.wrist).value("elbow", sing.elbow);
-    json.value("shoulder_mm", toMm(sing.shoulder)).value("manipulability", sing.manipulability);
-    json.endObject();
-    json.endObject();
-    std::fputs(json.str().c_str(), stdout);
+    json["within_limits"] = in_limits;
+    json["branch"] = branch.words();
+    json["singularity"] = {{"wrist", sing.wrist},
+                           {"elbow", sing.elbow},
+                           {"shoulder_mm", toMm(sing.shoulder)},
+                           {"manipulability", sing.manipulability}};
+    std::fputs(jsonDocument(json).c_str(), stdout);
     return ExitCode::kOk;
   }
   std::string text = fmt::format("{}, joints (deg): {}\n", robot.name(), fmt::join(values, ", "));
@@ -180,24 +180,20 @@ ExitCode runIk(const IkOptions& options) {
   const auto solutions = robot.ik(X_BF, request);
 
   if (options.json) {
-    JsonWriter json;
-    json.beginObject();
-    json.value("robot", robot.name());
-    json.beginObject("target");
-    writePose(json, X_BF);
-    json.endObject();
-    json.value("reachable", !solutions.empty());
-    json.beginArray("solutions");
+    Json json;
+    json["robot"] = robot.name();
+    Json target = Json::object();
+    addPose(target, X_BF);
+    json["target"] = std::move(target);
+    json["reachable"] = !solutions.empty();
+    Json all = Json::array();
     for (const auto& s : solutions) {
-      json.beginObject();
-      json.value("branch", s.branch.words());
-      json.numbers("joints_deg", jointsDeg(s.q));
-      json.value("within_limits", s.within_limits);
-      json.endObject();
+      all.push_back({{"branch", s.branch.words()},
+                     {"joints_deg", jointsDeg(s.q)},
+                     {"within_limits", s.within_limits}});
     }
-    json.endArray();
-    json.endObject();
-    std::fputs(json.str().c_str(), stdout);
+    json["solutions"] = std::move(all);
+    std::fputs(jsonDocument(json).c_str(), stdout);
   } else if (solutions.empty()) {
     std::fputs(fmt::format("{}: no solution: the pose is out of reach{}\n", robot.name(),
                            options.within_limits_only ? " or outside the joint limits" : "")

@@ -10,9 +10,10 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include "cli/plot/bitmap_font.h"
 #include "cli/commands/commands.h"
+#include "cli/io/json.h"
 #include "cli/io/output.h"
+#include "cli/plot/bitmap_font.h"
 #include "cli/plot/image_io.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"
@@ -381,6 +382,41 @@ std::size_t bestBranch(const planner::ConfigMap& map) {
   return best;
 }
 
+namespace {
+
+// configmap.json: what the layers are, their axes and the branch the images show.
+Json mapJson(const JobSpec& job,
+             const planner::ConfigMap& map,
+             const std::vector<std::size_t>& shape,
+             std::size_t shown) {
+  Json json;
+  json["format"] = "scanplan configuration map 1";
+  json["job"] = job.name;
+  json["job_hash"] = jobHash(job);
+  json["shape"] = shape;
+  json["axes"] = {"branch", "angle_deg", "time_s"};
+  Json branches = Json::array();
+  for (const auto& b : map.branches) branches.push_back(b.words());
+  json["branch"] = std::move(branches);
+  std::vector<double> angles;
+  for (double a : map.angles) angles.push_back(toDeg(a));
+  json["angle_deg"] = angles;
+  json["time_s"] = map.times;
+  json["layers"] = {{"f", "configmap.npy"},
+                    {"joint", "configmap_joint.npy"},
+                    {"singularity", "configmap_singularity.npy"},
+                    {"clearance", "configmap_clearance.npy"},
+                    {"limit", "configmap_limit.npy"}};
+  Json codes = Json::object();
+  for (int k = 0; k < planner::kLimitCount; ++k)
+    codes[std::to_string(k)] = planner::limitName(static_cast<planner::Limit>(k));
+  json["limit_codes"] = std::move(codes);
+  json["images_branch"] = map.branches[shown].words();
+  return json;
+}
+
+}  // namespace
+
 void writeMapOutputs(const std::filesystem::path& dir,
                      const JobSpec& job,
                      const planner::ConfigMap& map) {
@@ -392,38 +428,7 @@ void writeMapOutputs(const std::filesystem::path& dir,
   writeNpy(dir / "configmap_limit.npy", map.limit, shape);
 
   const std::size_t shown = bestBranch(map);
-  JsonWriter json;
-  json.beginObject();
-  json.value("format", "scanplan configuration map 1");
-  json.value("job", job.name);
-  json.value("job_hash", jobHash(job));
-  json.beginArray("shape");
-  for (std::size_t n : shape) json.element(static_cast<double>(n));
-  json.endArray();
-  json.beginArray("axes");
-  json.value({}, "branch").value({}, "angle_deg").value({}, "time_s");
-  json.endArray();
-  json.beginArray("branch");
-  for (const auto& b : map.branches) json.value({}, b.words());
-  json.endArray();
-  std::vector<double> angles;
-  for (double a : map.angles) angles.push_back(toDeg(a));
-  json.numbers("angle_deg", angles);
-  json.numbers("time_s", map.times);
-  json.beginObject("layers");
-  json.value("f", "configmap.npy");
-  json.value("joint", "configmap_joint.npy");
-  json.value("singularity", "configmap_singularity.npy");
-  json.value("clearance", "configmap_clearance.npy");
-  json.value("limit", "configmap_limit.npy");
-  json.endObject();
-  json.beginObject("limit_codes");
-  for (int k = 0; k < planner::kLimitCount; ++k)
-    json.value(std::to_string(k), planner::limitName(static_cast<planner::Limit>(k)));
-  json.endObject();
-  json.value("images_branch", map.branches[shown].words());
-  json.endObject();
-  writeFileAtomically(dir / "configmap.json", json.str());
+  writeFileAtomically(dir / "configmap.json", jsonDocument(mapJson(job, map, shape, shown)));
 
   const std::string branch = map.branches[shown].words();
   FigureLabels grey_labels;

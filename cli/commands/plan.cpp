@@ -12,6 +12,7 @@
 #include "cli/commands/commands.h"
 #include "cli/io/output.h"
 #include "cli/plot/image_io.h"
+#include "cli/report/plan_report.h"
 #include "pipeline/plan_scan.h"
 #include "cli/verify.h"
 #include "collision/scene.h"
@@ -72,160 +73,6 @@ void writePathFigure(const std::filesystem::path& dir,
   }
   writeFigure(dir, "configmap_path", image, map,
               "Table-angle path over the map f, " + map.branches[branch].words(), legend);
-}
-
-void writeMatrixMm(JsonWriter& json, const std::string& key, const Eigen::Isometry3d& X) {
-  json.beginArray(key);
-  for (int r = 0; r < 4; ++r) {
-    std::vector<double> row;
-    for (int c = 0; c < 4; ++c) row.push_back(c == 3 && r < 3 ? toMm(X(r, c)) : X(r, c));
-    json.beginArray();
-    for (double v : row) json.element(v);
-    json.endArray();
-  }
-  json.endArray();
-}
-
-void writeTerms(JsonWriter& json, const planner::ObjectiveTerms& t) {
-  json.value("J_s", t.total);
-  json.value("cost_f_s", t.cost_f);
-  json.value("cost_omega_s", t.cost_omega);
-  json.value("cost_alpha_s", t.cost_alpha);
-}
-
-
-std::string reportJson(const JobSpec& job,
-                       const kinematics::CellModel& cell,
-                       const planner::ConfigMap& map,
-                       const pipeline::PathChoice& planning,
-                       const planner::TrajectoryBuild* trajectory,
-                       const planner::ValidationReport* validation,
-                       const SimulationRun* simulation,
-                       const std::string& status,
-                       const std::string& reason,
-                       const pipeline::StageTimes& times) {
-  JsonWriter json;
-  json.beginObject();
-  json.value("format", "scanplan plan report 1");
-  json.value("job", job.name);
-  json.value("job_hash", jobHash(job));
-  json.value("status", status);
-  if (!reason.empty()) json.value("reason", reason);
-  const planner::PlanResult& chosen = planning.chosen.result;
-  json.beginObject("planner");
-  json.value("method", planning.chosen.method);
-  json.value("seconds", planning.chosen.seconds);
-  if (planning.solved()) json.value("branch", map.branches[chosen.branch].words());
-  if (!chosen.detail.empty()) json.value("detail", chosen.detail);
-  json.endObject();
-  if (planning.solved()) {
-    json.beginObject("objective");
-    writeTerms(json, planning.terms);
-    json.endObject();
-    if (planning.refine) {
-      json.beginObject("refine");
-      json.value("improved", planning.refine->improved);
-      json.value("J_before_s", planning.refine->before.total);
-      json.value("J_after_s", planning.refine->after.total);
-      json.value("seconds", planning.refine->seconds);
-      json.value("evaluations", planning.refine->evaluations);
-      json.value("algorithm", planning.refine->algorithm);
-      json.value("stop_reason", planning.refine->stop_reason);
-      json.endObject();
-    }
-    json.beginObject("path");
-    json.value("samples", static_cast<int>(planning.theta.size()));
-    json.value("cycle_time_s", map.times.back() - map.times.front());
-    json.value("map_min_f", planning.terms.min_f);
-    json.value("map_min_f_time_s", map.times[planning.terms.min_f_sample]);
-    json.value("max_abs_omega_deg_s", toDeg(planning.terms.max_abs_omega));
-    json.value("max_abs_alpha_deg_s2", toDeg(planning.terms.max_abs_alpha));
-    json.value("omega_max_deg_s", job.table.max_speed_deg_s);
-    json.value("alpha_max_deg_s2", job.table.max_accel_deg_s2);
-    if (trajectory && trajectory->ok) {
-      const auto& s = trajectory->trajectory.samples[trajectory->min_f_sample];
-      json.value("min_f", trajectory->min_f);
-      json.value("min_f_time_s", s.t);
-      json.value("min_f_limit", s.limit);
-      json.value("min_clearance_mm", toMm(trajectory->min_clearance));
-    }
-    json.endObject();
-  }
-  if (planning.dp) {
-    json.beginObject("dp_baseline");
-    json.value("status", planning.dp->solved() ? "solved" : "no_path");
-    json.value("angle_subdivisions", planning.dp_subdivisions);
-    json.value("seconds", planning.dp->seconds);
-    if (planning.dp->solved()) json.value("J_s", planning.dp->terms.total);
-    if (const auto gap = planning.dpGap()) json.value("gap_percent", 100.0 * *gap);
-    json.endObject();
-  }
-  if (!planning.rejected.empty()) {
-    json.beginArray("rejected");
-    for (const auto& [b, why] : planning.rejected) {
-      json.beginObject();
-      json.value("branch", map.branches[b].words());
-      json.value("reason", why);
-      json.endObject();
-    }
-    json.endArray();
-  }
-  json.beginArray("branches");
-  for (std::size_t b = 0; b < planning.chosen.branches.size(); ++b) {
-    const planner::PlanResult& r = planning.chosen.branches[b];
-    json.beginObject();
-    json.value("branch", map.branches[b].words());
-    json.value("status", r.solved() ? "solved" : "no_path");
-    if (r.solved()) {
-      json.value("J_s", r.terms.total);
-    } else {
-      json.value("reason", r.reason);
-    }
-    json.endObject();
-  }
-  json.endArray();
-  if (!planning.others.empty()) {
-    json.beginArray("compare");
-    for (const pipeline::PlannerOutcome& o : planning.others) {
-      json.beginObject();
-      json.value("method", o.method);
-      json.value("status", o.result.solved() ? "solved" : "no_path");
-      json.value("seconds", o.seconds);
-      if (o.result.solved()) {
-        writeTerms(json, o.result.terms);
-      } else {
-        json.value("reason", o.result.reason);
-      }
-      json.endObject();
-    }
-    json.endArray();
-  }
-  if (validation) writeValidationJson(json, "validation", *validation);
-  if (simulation) writeSimulationJson(json, "simulation", *simulation);
-  json.beginObject("times_s");
-  json.value("path", times.path);
-  json.value("map", times.map);
-  json.value("plan", times.plan);
-  json.value("trajectory", times.trajectory);
-  json.value("validation", times.validation);
-  json.value("simulation", times.simulation);
-  json.value("total", times.total);
-  json.endObject();
-  json.beginObject("map");
-  json.value("angles", static_cast<int>(map.angles.size()));
-  json.value("samples", static_cast<int>(map.times.size()));
-  json.value("angle_step_deg", job.map.angle_step_deg);
-  json.value("dt_s", job.scan.dt_s);
-  json.endObject();
-  json.beginObject("cell");
-  json.value("units", "4x4 homogeneous matrices, rotation unitless, translation in mm");
-  writeMatrixMm(json, "X_WB", cell.X_WB);
-  writeMatrixMm(json, "X_WA", cell.table.X_WA);
-  writeMatrixMm(json, "X_RP", cell.part.X_RP);
-  writeMatrixMm(json, "X_FS", cell.scanner.X_FS);
-  json.endObject();
-  json.endObject();
-  return json.str();
 }
 
 // The cell, as the first lines of the summary.
@@ -351,19 +198,14 @@ ExitCode runPlan(const PlanOptions& options) {
   writeMapOutputs(out, job, prepared.map);
   summary += pathSummary(context) + mapSummary(MapRun{prepared.map, prepared.map_seconds});
   pipeline::StageTimes times = plan.times;
-  const auto finish = [&](const planner::TrajectoryBuild* trajectory) {
+  const auto finish = [&] {
     times.total = since(start);
-    writeFileAtomically(
-        out / "report.json",
-        reportJson(job, cell, prepared.map, plan.choice, trajectory,
-                   plan.validation ? &*plan.validation : nullptr,
-                   plan.simulation ? &*plan.simulation : nullptr,
-                   std::string(pipeline::scanStatusName(plan.status)), plan.reason, times));
+    writeFileAtomically(out / "report.json", planReportJson(job, cell, plan, times));
     stage.commit();
   };
   const std::string method = plan.choice.chosen.method;
   if (!plan.trajectory) {
-    finish(nullptr);
+    finish();
     summary += fmt::format("plan       NO PATH ({}): {}\n", method, plan.reason);
     summary += fmt::format("wrote      {}: job.yaml, report.json, {}\n", options.out_dir.string(),
                            kMapFilesNote);
@@ -375,7 +217,7 @@ ExitCode runPlan(const PlanOptions& options) {
   if (plan.status == pipeline::ScanStatus::kInvalidTrajectory) {
     // Kept for inspection under a name no robot-side tool picks up as the plan.
     writeFileAtomically(out / "trajectory_invalid.csv", kinematics::trajectoryToCsv(trajectory));
-    finish(&*plan.trajectory);
+    finish();
     summary += validationSummary(*plan.validation);
     summary += fmt::format(
         "plan       NOT VALID: the planned motion breaks the limits above\n"
@@ -389,7 +231,7 @@ ExitCode runPlan(const PlanOptions& options) {
   const std::string programs =
       writePrograms(out / "programs", "programs/", job, cell, trajectory, job.outputs.programs);
   if (plan.simulation) writeSimulationOutputs(out, job, problem.part, *plan.simulation);
-  finish(&*plan.trajectory);
+  finish();
   summary += choiceSummary(plan);
   if (plan.validation) summary += validationSummary(*plan.validation);
   summary += programs;

@@ -40,23 +40,20 @@ ExitCode runValidate(const VerifyOptions& options) {
   const collision::Scene scene(cell, clearanceConfig(job));
   const planner::ValidationReport report =
       planner::validateTrajectory(scene, trajectory, validationSettings(job));
-  JsonWriter json;
-  json.beginObject();
-  json.value("format", "scanplan validation report 1");
-  json.value("job", job.name);
-  json.value("job_hash", jobHash(job));
-  json.value("trajectory", options.trajectory_file.string());
-  json.value("frame_rate_hz", job.scanner.frame_rate_hz);
-  writeValidationJson(json, "validation", report);
-  json.endObject();
+  const std::string json = jsonDocument({{"format", "scanplan validation report 1"},
+                                         {"job", job.name},
+                                         {"job_hash", jobHash(job)},
+                                         {"trajectory", options.trajectory_file.string()},
+                                         {"frame_rate_hz", job.scanner.frame_rate_hz},
+                                         {"validation", validationJson(report)}});
   if (options.json) {
-    std::fputs(json.str().c_str(), stdout);
+    std::fputs(json.c_str(), stdout);
   } else {
     std::fputs(validationSummary(report, 50).c_str(), stdout);
   }
   if (!options.out_dir.empty()) {
     prepareOutputDir(options.out_dir);
-    writeFileAtomically(options.out_dir / "validation.json", json.str());
+    writeFileAtomically(options.out_dir / "validation.json", json);
   }
   return report.valid ? ExitCode::kOk : ExitCode::kNoPlan;
 }
@@ -69,15 +66,12 @@ ExitCode runSimulate(const VerifyOptions& options) {
   prepareOutputDir(options.out_dir);
   const SimulationRun run = simulateTrajectory(job, cell, part.mesh, trajectory);
   writeSimulationOutputs(options.out_dir, job, part.mesh, run);
-  JsonWriter json;
-  json.beginObject();
-  json.value("format", "scanplan simulation report 1");
-  json.value("job", job.name);
-  json.value("job_hash", jobHash(job));
-  json.value("trajectory", options.trajectory_file.string());
-  writeSimulationJson(json, "simulation", run);
-  json.endObject();
-  writeFileAtomically(options.out_dir / "simulation.json", json.str());
+  const Json json = {{"format", "scanplan simulation report 1"},
+                     {"job", job.name},
+                     {"job_hash", jobHash(job)},
+                     {"trajectory", options.trajectory_file.string()},
+                     {"simulation", simulationJson(run)}};
+  writeFileAtomically(options.out_dir / "simulation.json", jsonDocument(json));
   std::string text = simulationSummary(run);
   text += fmt::format("wrote      {}: cloud.ply, coverage.ply, cloud.png, simulation.json\n",
                       options.out_dir.string());

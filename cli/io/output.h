@@ -8,31 +8,6 @@
 
 namespace scanplan::cli {
 
-/// A small streaming JSON writer for reports and --json output: keys in insertion order,
-/// numbers in shortest round-trip form, non-finite numbers as null.
-class JsonWriter {
- public:
-  JsonWriter& beginObject(const std::string& key = {});
-  JsonWriter& endObject();
-  JsonWriter& beginArray(const std::string& key = {});
-  JsonWriter& endArray();
-  JsonWriter& value(const std::string& key, double v);
-  JsonWriter& value(const std::string& key, int v);
-  JsonWriter& value(const std::string& key, bool v);
-  JsonWriter& value(const std::string& key, const std::string& v);
-  JsonWriter& value(const std::string& key, const char* v) { return value(key, std::string(v)); }
-  JsonWriter& numbers(const std::string& key, const std::vector<double>& v);
-  /// Array elements (no key).
-  JsonWriter& element(double v) { return value({}, v); }
-  std::string str() const { return out_ + "\n"; }
-
- private:
-  void prefix(const std::string& key);
-  std::string out_;
-  std::vector<bool> first_{true};
-  int depth_ = 0;
-};
-
 /// Writes `content` to `file` through a temporary name in the same folder, then renames it
 /// into place, so an interrupted run never leaves a half-written file.
 void writeFileAtomically(const std::filesystem::path& file, const std::string& content);

@@ -234,23 +234,6 @@ std::string encodePng(const RgbImage& image) {
   return out;
 }
 
-RgbImage decodePng(const std::string& bytes) {
-  png_image png{};
-  png.version = PNG_IMAGE_VERSION;
-  const auto fail = [&png] {
-    png_image_free(&png);
-    return InputError(fmt::format("PNG data: {}", png.message));
-  };
-  if (png_image_begin_read_from_memory(&png, bytes.data(), bytes.size()) == 0) throw fail();
-  png.format = PNG_FORMAT_RGB;
-  RgbImage image;
-  image.width = static_cast<int>(png.width);
-  image.height = static_cast<int>(png.height);
-  image.rgb.resize(3 * pixelCount(image.width, image.height));
-  if (png_image_finish_read(&png, nullptr, image.rgb.data(), 0, nullptr) == 0) throw fail();
-  return image;
-}
-
 void writePng(const std::filesystem::path& file, const RgbImage& image) {
   std::string bytes;
   try {
@@ -281,53 +264,6 @@ void writeNpy(const std::filesystem::path& file,
   std::string out = npyHeader("|u1", shape);
   out.append(data.begin(), data.end());
   writeFileAtomically(file, out);
-}
-
-NpyArray readNpy(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  const auto fail = [&](const std::string& what) {
-    return InputError(fmt::format("{}: {}: expected a C-order .npy file", file.string(), what));
-  };
-  if (!in) throw fail("cannot read the file");
-  if (bytes.size() < 10 || bytes.compare(0, 6, "\x93NUMPY") != 0) throw fail("no .npy magic");
-  const auto byteAt = [&](std::size_t i) {
-    return static_cast<std::size_t>(static_cast<unsigned char>(bytes[i]));
-  };
-  if (byteAt(6) != 1) throw fail(fmt::format("format version {}", byteAt(6)));
-  const std::size_t start = 10, length = byteAt(8) | byteAt(9) << 8;
-  if (bytes.size() < start + length) throw fail("truncated header");
-  const std::string header = bytes.substr(start, length);
-  const auto valueAfter = [&](const std::string& key) {
-    const std::size_t at = header.find("'" + key + "':");
-    if (at == std::string::npos) throw fail("no '" + key + "' in the header");
-    return header.find_first_not_of(' ', at + key.size() + 3);
-  };
-  NpyArray array;
-  const std::size_t descr_at = valueAfter("descr") + 1;
-  array.descr = header.substr(descr_at, header.find('\'', descr_at) - descr_at);
-  if (header.compare(valueAfter("fortran_order"), 5, "False") != 0) throw fail("Fortran order");
-  const std::size_t shape_at = valueAfter("shape");
-  const std::size_t shape_end = header.find(')', shape_at);
-  if (header[shape_at] != '(' || shape_end == std::string::npos) throw fail("bad shape");
-  std::size_t count = 1;
-  for (std::size_t i = shape_at + 1; i < shape_end; ++i) {
-    if (std::isdigit(static_cast<unsigned char>(header[i])) == 0) continue;
-    std::size_t n = 0;
-    for (; std::isdigit(static_cast<unsigned char>(header[i])) != 0; ++i) {
-      n = 10 * n + static_cast<std::size_t>(header[i] - '0');
-    }
-    array.shape.push_back(n);
-    count *= n;
-  }
-  if (array.descr.size() < 3) throw fail("descr '" + array.descr + "'");
-  const std::size_t item_size = std::stoul(array.descr.substr(2));
-  array.raw = bytes.substr(start + length);
-  if (array.raw.size() != count * item_size) {
-    throw fail(
-        fmt::format("{} data bytes for {} items of {} bytes", array.raw.size(), count, item_size));
-  }
-  return array;
 }
 
 Rgb grey(double f) {

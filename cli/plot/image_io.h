@@ -40,8 +40,6 @@ void drawLine(RgbImage& image, double x0, double y0, double x1, double y1, Rgb c
 /// PNG bytes (8-bit RGB, no text or time chunks, fixed compression): the same image always
 /// gives the same bytes. Throws InputError for an empty or inconsistent image.
 std::string encodePng(const RgbImage& image);
-/// Decodes any PNG libpng reads, converted to 8-bit RGB; throws InputError on bad data.
-RgbImage decodePng(const std::string& bytes);
 /// encodePng written atomically to `file`; errors name the file.
 void writePng(const std::filesystem::path& file, const RgbImage& image);
 
@@ -53,15 +51,6 @@ void writeNpy(const std::filesystem::path& file,
 void writeNpy(const std::filesystem::path& file,
               const std::vector<std::uint8_t>& data,
               const std::vector<std::size_t>& shape);
-
-/// A .npy file as stored: dtype descriptor (e.g. "<f4"), shape and the raw data bytes.
-struct NpyArray {
-  std::string descr;
-  std::vector<std::size_t> shape;
-  std::string raw;
-};
-/// Reads a C-order .npy file, format 1.0; throws InputError naming the file.
-NpyArray readNpy(const std::filesystem::path& file);
 
 /// Grey level for a fraction: 0 → black, 1 → white, clamped; NaN → dark red (kNanColour).
 Rgb grey(double f);

@@ -1,0 +1,18 @@
+#pragma once
+
+#include <string>
+
+#include "cli/config/job.h"
+#include "kinematics/cell.h"
+#include "pipeline/plan_scan.h"
+
+namespace scanplan::cli {
+
+/// report.json of `plan` (format "scanplan plan report 1"): lengths in mm, angles in degrees,
+/// times in s. `times` are the stage times to report (the caller's total included).
+std::string planReportJson(const JobSpec& job,
+                           const kinematics::CellModel& cell,
+                           const pipeline::ScanPlan& plan,
+                           const pipeline::StageTimes& times);
+
+}  // namespace scanplan::cli
