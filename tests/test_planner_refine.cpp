@@ -372,7 +372,9 @@ TEST(Refine, OptimalPathComesBackUnchanged) {
   // (in continuous θ too, f being linear between grid angles), so refinement must hand back the
   // input itself, also when the kink is lopsided and the rounded model's minimum sits a little
   // off the grid angle.
-  for (const auto& [left, right] : {std::pair{0.05, 0.05}, std::pair{0.1, 0.01}}) {
+  for (const auto& slopes : {std::pair{0.05, 0.05}, std::pair{0.1, 0.01}}) {
+    const double left = slopes.first;  // not a binding: clang 14 cannot capture one
+    const double right = slopes.second;
     const ConfigMap map = makeMap(90, 100, 0.1, true, [&](std::size_t a, std::size_t) {
       const double d = static_cast<double>(a) - 40.0;
       return static_cast<float>(std::max(0.9 - (d < 0 ? -left * d : right * d), 0.05));

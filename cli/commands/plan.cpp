@@ -55,7 +55,8 @@ void writePathFigure(const std::filesystem::path& dir,
   std::vector<std::pair<Rgb, std::string>> legend;
   // Drawn in reverse so the chosen planner (first) ends on top.
   for (auto it = paths.rbegin(); it != paths.rend(); ++it) {
-    const auto& [method, theta] = *it;
+    const std::string& method = it->first;
+    const std::vector<double>& theta = it->second;  // not a binding: clang 14 cannot capture one
     const Rgb colour = methodColour(method);
     const auto point = [&](std::size_t k) {
       double u = (theta[k] - angle0) / span;  // 0..1 over the grid, wrapped for a full turn
