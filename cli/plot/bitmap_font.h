@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "cli/plot/figure.h"
 #include "cli/plot/image_io.h"
 
 namespace scanplan::cli {
@@ -33,39 +34,6 @@ inline int textHeight(int scale = 2) { return kGlyphHeight * (scale < 1 ? 1 : sc
 /// The longest prefix of `text` (with ".." when cut) that fits `width` pixels at `scale`.
 std::string fitText(const std::string& text, int width, int scale = 2);
 
-/// One line of a figure's legend: a mark in `colour`, then `text`.
-struct LegendEntry {
-  enum class Mark {
-    kSwatch,  ///< a filled square (a colour of the raster)
-    kLine,    ///< a short thick line (a path or a line through means)
-    kCross,   ///< an × (a point)
-    kNone,    ///< text only
-  };
-  Rgb colour;
-  std::string text;
-  Mark mark = Mark::kSwatch;
-  Rgb text_colour{0, 0, 0};
-  int space_before = 0;  ///< extra pixels above this line
-};
-
-/// What labelFigure writes around a plot's data raster.
-struct FigureLabels {
-  std::string title, x_label, y_label;
-  /// Axis values at the raster's left and right edges, and at its bottom and top edges. A flat
-  /// or non-finite range is widened as axisRange does (so there are always ticks).
-  double x0 = 0, x1 = 1, y0 = 0, y1 = 1;
-  /// Non-empty: x ticks at 0, 1, … labelled with these (each cut to its room) instead of numbers.
-  std::vector<std::string> categories;
-  /// Non-empty: y ticks at these values (in y0 … y1 units) with these labels instead of "nice"
-  /// numbers (an axis that is not linear in what it shows).
-  std::vector<std::pair<double, std::string>> y_marks;
-  /// Right of the plot, top to bottom.
-  std::vector<LegendEntry> legend;
-  /// Non-empty: under the legend, a grey bar from f = 0 (black, "forbidden") to 1 (white,
-  /// "free"), the grey() scale, with this title.
-  std::string colour_bar;
-};
-
 /// A labelled figure and where its data raster sits in it.
 struct LabelledFigure {
   RgbImage image;
@@ -77,28 +45,5 @@ struct LabelledFigure {
 /// bar) right, all in the bitmap font at scale 2. Deterministic. An empty raster is drawn as a
 /// 1 × 1 white one; a raster whose bytes do not match its size throws InputError.
 LabelledFigure labelFigure(const RgbImage& area, const FigureLabels& labels);
-
-/// A row of views of one scene (e.g. iso, top, front) under a title line, for the three-view
-/// pictures (path.png, cloud.png).
-struct ViewRow {
-  std::string title;
-  std::vector<RgbImage> views;  ///< side by side, each with its caption (ViewGrid::captions)
-  /// Non-empty: a horizontal colour scale after the title (the colours from 0 to 1, evenly),
-  /// with `scale_from` and `scale_to` written at its ends; left out when the row is too narrow
-  /// for it after the title.
-  std::vector<Rgb> scale;
-  std::string scale_from, scale_to;
-};
-
-/// Rows of views with a caption over each view and legend lines under the whole.
-struct ViewGrid {
-  std::vector<std::string> captions;  ///< one per column
-  std::vector<ViewRow> rows;
-  std::vector<LegendEntry> legend;  ///< under the views, left to right
-};
-
-/// The grid drawn into a white image in the bitmap font at scale 2: for each row its title (and
-/// colour scale), the view captions, the views pixel for pixel; the legend last. Deterministic.
-RgbImage drawViewGrid(const ViewGrid& grid);
 
 }  // namespace scanplan::cli
