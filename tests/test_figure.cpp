@@ -121,7 +121,8 @@ TEST(Figure, SvgIsVectorWithTheRasterEmbeddedAndItsWordsDescribed) {
   EXPECT_NE(svg.find("<symbol overflow=\"visible\" id=\"glyph"), std::string::npos) << "glyphs";
   EXPECT_NE(svg.find("<title>J, objective (s) against planner.ray.horizon</title>"),
             std::string::npos);
-  EXPECT_NE(svg.find("<desc>x: planner.ray.horizon; y: J, objective (s); ray; dp; case</desc>"),
+  EXPECT_NE(svg.find("<desc>x: planner.ray.horizon; y: J, objective (s); ray; dp; case; x ticks: "
+                     "10, 15, 20, 25, 30; y ticks: 20, 22, 24, 26, 28, 30</desc>"),
             std::string::npos);
   // Without a raster there is no image at all: the batch plots are pure vector.
   Figure plain;

@@ -240,65 +240,6 @@ TEST(Colours, CategoryPaletteHasEightDistinctColoursAndWraps) {
   EXPECT_EQ(categoryColour(0), (Rgb{230, 159, 0}));  // Okabe–Ito orange
 }
 
-SvgFigure mapFigure() {
-  SvgFigure figure;
-  figure.png_file = "maps/coverage.png";
-  figure.png_width = 1000;
-  figure.png_height = 360;
-  figure.title = "Coverage & overlap <per pass>";
-  figure.x_label = "table angle (deg)";
-  figure.y_label = "height (mm)";
-  figure.x_min = 0;
-  figure.x_max = 360;
-  figure.y_min = -1;
-  figure.y_max = 1;
-  figure.legend = {{categoryColour(0), "seen"}, {categoryColour(1), "missed"}};
-  return figure;
-}
-
-TEST(Svg, FigureHasImageTicksEscapedTextAndLegend) {
-  const std::string svg = svgFigure(mapFigure());
-  EXPECT_EQ(svg.rfind("<svg", 0), 0u);
-  EXPECT_NE(svg.find("</svg>"), std::string::npos);
-  EXPECT_NE(svg.find("href=\"maps/coverage.png\""), std::string::npos);
-  EXPECT_NE(svg.find("image-rendering: pixelated"), std::string::npos);
-  // 1000 × 360 scaled by 0.72 to fit 720 × 480.
-  EXPECT_NE(svg.find("width=\"720.0\" height=\"259.2\""), std::string::npos);
-  // 0..360: step 50 gives 8 ticks; -1..1: step 0.5 gives 5 ticks with one decimal.
-  for (const char* tick : {">0<", ">50<", ">350<", ">-1.0<", ">-0.5<", ">0.0<", ">1.0<"}) {
-    EXPECT_NE(svg.find(tick), std::string::npos) << tick;
-  }
-  EXPECT_EQ(svg.find(">400<"), std::string::npos);
-  EXPECT_NE(svg.find("Coverage &amp; overlap &lt;per pass&gt;"), std::string::npos);
-  EXPECT_NE(svg.find("table angle (deg)"), std::string::npos);
-  EXPECT_NE(svg.find("fill=\"rgb(86,180,233)\""), std::string::npos);
-  EXPECT_NE(svg.find(">missed<"), std::string::npos);
-}
-
-TEST(Svg, TextIsWellFormed) {
-  SvgFigure figure = mapFigure();
-  figure.x_min = 0.0012;  // reversed, small range
-  figure.x_max = -0.0031;
-  const std::string svg = svgFigure(figure);
-  // Every '&' starts an entity, and tags balance: each '<' has its '>' before the next '<'.
-  for (std::size_t at = svg.find('&'); at != std::string::npos; at = svg.find('&', at + 1)) {
-    const std::string entity = svg.substr(at, svg.find(';', at) - at + 1);
-    EXPECT_TRUE(entity == "&amp;" || entity == "&lt;" || entity == "&gt;" || entity == "&quot;")
-        << entity;
-  }
-  int open = 0;
-  for (const char c : svg) {
-    if (c == '<') {
-      EXPECT_EQ(open++, 0);
-    } else if (c == '>') {
-      EXPECT_EQ(--open, 0);
-    }
-  }
-  // Span 0.0043: steps 0.002 give two ticks, 0.001 five (-0.003 … 0.001), three decimals.
-  EXPECT_NE(svg.find(">-0.003<"), std::string::npos);
-  EXPECT_NE(svg.find(">0.001<"), std::string::npos);
-}
-
 // One big triangle in the plane z = 0 facing the viewer (identity view: depth = world z).
 // The fit maps the box [-1, 1]² to 125 px at the centre of a 200 × 150 image:
 // margin = 0.05 · 150 + 5 = 12.5 px, scale = min(175, 125) / 2 = 62.5 px per unit.
@@ -503,60 +444,6 @@ TEST(AxisRange, FlatNonFiniteAndHugeDataGiveAFiniteRangeWithTicks) {
   EXPECT_NEAR(hi, 25.4624787528 + 2.54624787528, 1e-9);
 }
 
-TEST(DrawLine, NonFiniteAndFarEndsAreSafeAndClipped) {
-  const double inf = std::numeric_limits<double>::infinity();
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  RgbImage image = RgbImage::filled(20, 10, kWhite);
-  const RgbImage blank = image;
-  drawLine(image, nan, 1, 5, 5, {0, 0, 0}, 2);
-  drawLine(image, 1, 1, inf, 5, {0, 0, 0}, 2);
-  drawLine(image, -1e300, -5, -1e300, 5, {0, 0, 0}, 2);  // far outside
-  EXPECT_EQ(image.rgb, blank.rgb);
-  // A horizontal line from far left to far right across row 4: every pixel of the row, quickly.
-  drawLine(image, -1e300, 4.5, 1e300, 4.5, {0, 0, 0}, 1);
-  for (int x = 0; x < 20; ++x) EXPECT_EQ(image.at(x, 4), (Rgb{0, 0, 0})) << x;
-  EXPECT_EQ(image.at(3, 3), kWhite);
-  // A diagonal through the image from far away: drawn where it crosses, nowhere else.
-  RgbImage a = RgbImage::filled(20, 10, kWhite);
-  drawLine(a, -1e6, -1e6, 1e6, 1e6, {1, 2, 3}, 1);
-  for (int x = 0; x < 10; ++x) EXPECT_EQ(a.at(x, x), (Rgb{1, 2, 3})) << x;
-  EXPECT_EQ(a.at(15, 2), kWhite);
-  EXPECT_EQ(a.at(2, 8), kWhite);
-}
-
-TEST(Svg, FlatAndNonFiniteRangesGiveFiniteCoordinatesAndTicks) {
-  for (const auto& [a, b] :
-       std::vector<std::pair<double, double>>{{25.46247875282346, 25.462478752823472},
-                                              {7, 7},
-                                              {std::numeric_limits<double>::quiet_NaN(), 1},
-                                              {0, std::numeric_limits<double>::infinity()}}) {
-    SvgFigure figure = mapFigure();
-    figure.x_min = figure.y_min = a;
-    figure.x_max = figure.y_max = b;
-    const std::string svg = svgFigure(figure);
-    EXPECT_EQ(svg.find("nan"), std::string::npos) << a << " " << b;
-    EXPECT_EQ(svg.find("inf"), std::string::npos) << a << " " << b;
-    EXPECT_GE(std::count(svg.begin(), svg.end(), '\n'), 10) << "ticks";
-  }
-}
-
-TEST(Svg, CropShowsOnlyTheDataAreaOfALabelledPng) {
-  SvgFigure figure = mapFigure();
-  figure.png_width = 1400;
-  figure.png_height = 700;
-  figure.crop_x = 90;
-  figure.crop_y = 40;
-  figure.crop_width = 1000;
-  figure.crop_height = 500;
-  const std::string svg = svgFigure(figure);
-  // Scaled by 0.72 to fit 720 × 480 from the crop's size, a viewport onto the crop.
-  EXPECT_NE(svg.find("width=\"720.0\" height=\"360.0\" viewBox=\"90 40 1000 500\""),
-            std::string::npos)
-      << svg;
-  EXPECT_NE(svg.find("width=\"1400\" height=\"700\""), std::string::npos) << svg;
-  EXPECT_NE(svg.find("href=\"maps/coverage.png\""), std::string::npos);
-}
-
 // ---- the configuration-map figures (map and plan commands) -----------------------------------
 
 // A synthetic 36-angle × 10-sample map with every f level, a NaN cell and every limit code.
@@ -642,8 +529,10 @@ TEST_F(ImageIoFiles, MapFiguresAreLabelledAndTheirRasterKeepsEveryCellsColour) {
   EXPECT_EQ(png.at(c.x - 1, c.y + 100), (Rgb{0, 0, 0}));
   EXPECT_EQ(png.at(c.x + c.w, c.y + 100), (Rgb{0, 0, 0}));
   // The SVG names its axes and bar in its description.
-  EXPECT_NE(svg.find("<desc>x: time (s); y: table angle (deg); colour bar: f</desc>"),
-            std::string::npos);
+  EXPECT_NE(svg.find("<desc>x: time (s); y: table angle (deg); colour bar: f; x ticks: 0, 1, 2, "
+                     "3, 4; y ticks: 0, 50, 100, 150, 200, 250, 300, 350</desc>"),
+            std::string::npos)
+      << "angle ticks up to 360 deg";
 
   // configmap_why.png: the same frame, each cell the colour of its limit (darker = lower f),
   // and a legend swatch per limit.

@@ -273,11 +273,16 @@ void drawFigure(Canvas& c, const Plan& plan, const Figure& figure) {
 }
 
 // Every word of the figure but the title, for the SVG's <desc>.
-std::string describe(const FigureLabels& text) {
+std::string describe(const Plan& plan, const FigureLabels& text) {
   std::string s = fmt::format("x: {}; y: {}", text.x_label, text.y_label);
   for (const LegendEntry& e : text.legend) s += "; " + e.text;
   if (!text.colour_bar.empty()) s += "; colour bar: " + text.colour_bar;
-  return s;
+  const auto list = [](const std::vector<Tick>& ticks) {
+    std::string out;
+    for (const Tick& t : ticks) out += (out.empty() ? "" : ", ") + t.text;
+    return out;
+  };
+  return s + "; x ticks: " + list(plan.x_ticks) + "; y ticks: " + list(plan.y_ticks);
 }
 
 }  // namespace
@@ -294,7 +299,7 @@ std::string figureSvg(const Figure& figure) {
   const Plan plan = planFigure(figure);
   return detail::renderSvg(
       plan.box.width, plan.box.height, [&](Canvas& c) { drawFigure(c, plan, figure); },
-      figure.labels.title, describe(figure.labels));
+      figure.labels.title, describe(plan, figure.labels));
 }
 
 std::string figurePdf(const Figure& figure) {
