@@ -7,6 +7,7 @@
 #include <cstring>
 #include <map>
 #include <memory>
+#include <numbers>
 #include <string>
 
 #include <cairo-pdf.h>
@@ -151,7 +152,7 @@ void Canvas::text(
   const double shift = align == Align::kLeft ? 0.0 : align == Align::kCentre ? width / 2 : width;
   cairo_save(cr_);
   cairo_translate(cr_, x, y);
-  if (up) cairo_rotate(cr_, -M_PI / 2);
+  if (up) cairo_rotate(cr_, -std::numbers::pi / 2);
   cairo_move_to(cr_, -shift, 0.0);
   setColour(cr_, colour);
   const std::string s(text);
