@@ -9,7 +9,7 @@
 #include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
-#include "cli/plot/bitmap_font.h"
+#include "cli/plot/figure.h"
 #include "cli/plot/image_io.h"
 #include "cli/programs/programs.h"
 #include "kinematics/error.h"

@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <cstdio>
 #include <string>
 
 #include "cli/plot/image_io.h"
@@ -23,18 +22,33 @@ inline int darkPixels(const cli::RgbImage& image, int x0, int y0, int x1, int y1
   return n;
 }
 
-/// Where a figure's data raster sits in its PNG (pixels), from the nested viewport of the SVG
-/// that svgFigure writes for a cropped figure.
+/// Where a figure's plot area (its data raster) sits in its PNG, in pixels.
 struct Crop {
   int x = 0, y = 0, w = 0, h = 0;
 };
-inline Crop svgCrop(const std::string& svg) {
-  Crop c;
-  const std::size_t at = svg.find("viewBox=\"", svg.find("<svg", 1));
-  EXPECT_NE(at, std::string::npos) << svg;
-  if (at == std::string::npos) return c;
-  EXPECT_EQ(std::sscanf(svg.c_str() + at, "viewBox=\"%d %d %d %d\"", &c.x, &c.y, &c.w, &c.h), 4);
-  return c;
+/// The plot area of a figure's pixels: just inside the 1 px black frame around it, found as the
+/// first row with a black run of at least `min_width` px (the frame's top edge) and the black
+/// column under the run's first pixel (its left edge). All zero when there is none.
+inline Crop plotArea(const cli::RgbImage& png, int min_width = 200) {
+  const cli::Rgb black{0, 0, 0};
+  for (int y = 0; y < png.height; ++y) {
+    int run = 0;
+    for (int x = 0; x <= png.width; ++x) {
+      if (x < png.width && png.at(x, y) == black) {
+        ++run;
+        continue;
+      }
+      if (run >= min_width) {
+        const int x0 = x - run;
+        int down = 0;
+        while (y + down < png.height && png.at(x0, y + down) == black) ++down;
+        return {x0 + 1, y + 1, run - 2, down - 2};
+      }
+      run = 0;
+    }
+  }
+  ADD_FAILURE() << "no plot frame in a " << png.width << " x " << png.height << " figure";
+  return {};
 }
 
 }  // namespace scanplan::test

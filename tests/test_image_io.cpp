@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -244,65 +245,6 @@ TEST(Colours, CategoryPaletteHasEightDistinctColoursAndWraps) {
   EXPECT_EQ(categoryColour(0), (Rgb{230, 159, 0}));  // Okabe–Ito orange
 }
 
-SvgFigure mapFigure() {
-  SvgFigure figure;
-  figure.png_file = "maps/coverage.png";
-  figure.png_width = 1000;
-  figure.png_height = 360;
-  figure.title = "Coverage & overlap <per pass>";
-  figure.x_label = "table angle (deg)";
-  figure.y_label = "height (mm)";
-  figure.x_min = 0;
-  figure.x_max = 360;
-  figure.y_min = -1;
-  figure.y_max = 1;
-  figure.legend = {{categoryColour(0), "seen"}, {categoryColour(1), "missed"}};
-  return figure;
-}
-
-TEST(Svg, FigureHasImageTicksEscapedTextAndLegend) {
-  const std::string svg = svgFigure(mapFigure());
-  EXPECT_EQ(svg.rfind("<svg", 0), 0u);
-  EXPECT_NE(svg.find("</svg>"), std::string::npos);
-  EXPECT_NE(svg.find("href=\"maps/coverage.png\""), std::string::npos);
-  EXPECT_NE(svg.find("image-rendering: pixelated"), std::string::npos);
-  // 1000 × 360 scaled by 0.72 to fit 720 × 480.
-  EXPECT_NE(svg.find("width=\"720.0\" height=\"259.2\""), std::string::npos);
-  // 0..360: step 50 gives 8 ticks; -1..1: step 0.5 gives 5 ticks with one decimal.
-  for (const char* tick : {">0<", ">50<", ">350<", ">-1.0<", ">-0.5<", ">0.0<", ">1.0<"}) {
-    EXPECT_NE(svg.find(tick), std::string::npos) << tick;
-  }
-  EXPECT_EQ(svg.find(">400<"), std::string::npos);
-  EXPECT_NE(svg.find("Coverage &amp; overlap &lt;per pass&gt;"), std::string::npos);
-  EXPECT_NE(svg.find("table angle (deg)"), std::string::npos);
-  EXPECT_NE(svg.find("fill=\"rgb(86,180,233)\""), std::string::npos);
-  EXPECT_NE(svg.find(">missed<"), std::string::npos);
-}
-
-TEST(Svg, TextIsWellFormed) {
-  SvgFigure figure = mapFigure();
-  figure.x_min = 0.0012;  // reversed, small range
-  figure.x_max = -0.0031;
-  const std::string svg = svgFigure(figure);
-  // Every '&' starts an entity, and tags balance: each '<' has its '>' before the next '<'.
-  for (std::size_t at = svg.find('&'); at != std::string::npos; at = svg.find('&', at + 1)) {
-    const std::string entity = svg.substr(at, svg.find(';', at) - at + 1);
-    EXPECT_TRUE(entity == "&amp;" || entity == "&lt;" || entity == "&gt;" || entity == "&quot;")
-        << entity;
-  }
-  int open = 0;
-  for (const char c : svg) {
-    if (c == '<') {
-      EXPECT_EQ(open++, 0);
-    } else if (c == '>') {
-      EXPECT_EQ(--open, 0);
-    }
-  }
-  // Span 0.0043: steps 0.002 give two ticks, 0.001 five (-0.003 … 0.001), three decimals.
-  EXPECT_NE(svg.find(">-0.003<"), std::string::npos);
-  EXPECT_NE(svg.find(">0.001<"), std::string::npos);
-}
-
 // One big triangle in the plane z = 0 facing the viewer (identity view: depth = world z).
 // The fit maps the box [-1, 1]² to 125 px at the centre of a 200 × 150 image:
 // margin = 0.05 · 150 + 5 = 12.5 px, scale = min(175, 125) / 2 = 62.5 px per unit.
@@ -507,60 +449,6 @@ TEST(AxisRange, FlatNonFiniteAndHugeDataGiveAFiniteRangeWithTicks) {
   EXPECT_NEAR(hi, 25.4624787528 + 2.54624787528, 1e-9);
 }
 
-TEST(DrawLine, NonFiniteAndFarEndsAreSafeAndClipped) {
-  const double inf = std::numeric_limits<double>::infinity();
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  RgbImage image = RgbImage::filled(20, 10, kWhite);
-  const RgbImage blank = image;
-  drawLine(image, nan, 1, 5, 5, {0, 0, 0}, 2);
-  drawLine(image, 1, 1, inf, 5, {0, 0, 0}, 2);
-  drawLine(image, -1e300, -5, -1e300, 5, {0, 0, 0}, 2);  // far outside
-  EXPECT_EQ(image.rgb, blank.rgb);
-  // A horizontal line from far left to far right across row 4: every pixel of the row, quickly.
-  drawLine(image, -1e300, 4.5, 1e300, 4.5, {0, 0, 0}, 1);
-  for (int x = 0; x < 20; ++x) EXPECT_EQ(image.at(x, 4), (Rgb{0, 0, 0})) << x;
-  EXPECT_EQ(image.at(3, 3), kWhite);
-  // A diagonal through the image from far away: drawn where it crosses, nowhere else.
-  RgbImage a = RgbImage::filled(20, 10, kWhite);
-  drawLine(a, -1e6, -1e6, 1e6, 1e6, {1, 2, 3}, 1);
-  for (int x = 0; x < 10; ++x) EXPECT_EQ(a.at(x, x), (Rgb{1, 2, 3})) << x;
-  EXPECT_EQ(a.at(15, 2), kWhite);
-  EXPECT_EQ(a.at(2, 8), kWhite);
-}
-
-TEST(Svg, FlatAndNonFiniteRangesGiveFiniteCoordinatesAndTicks) {
-  for (const auto& [a, b] :
-       std::vector<std::pair<double, double>>{{25.46247875282346, 25.462478752823472},
-                                              {7, 7},
-                                              {std::numeric_limits<double>::quiet_NaN(), 1},
-                                              {0, std::numeric_limits<double>::infinity()}}) {
-    SvgFigure figure = mapFigure();
-    figure.x_min = figure.y_min = a;
-    figure.x_max = figure.y_max = b;
-    const std::string svg = svgFigure(figure);
-    EXPECT_EQ(svg.find("nan"), std::string::npos) << a << " " << b;
-    EXPECT_EQ(svg.find("inf"), std::string::npos) << a << " " << b;
-    EXPECT_GE(std::count(svg.begin(), svg.end(), '\n'), 10) << "ticks";
-  }
-}
-
-TEST(Svg, CropShowsOnlyTheDataAreaOfALabelledPng) {
-  SvgFigure figure = mapFigure();
-  figure.png_width = 1400;
-  figure.png_height = 700;
-  figure.crop_x = 90;
-  figure.crop_y = 40;
-  figure.crop_width = 1000;
-  figure.crop_height = 500;
-  const std::string svg = svgFigure(figure);
-  // Scaled by 0.72 to fit 720 × 480 from the crop's size, a viewport onto the crop.
-  EXPECT_NE(svg.find("width=\"720.0\" height=\"360.0\" viewBox=\"90 40 1000 500\""),
-            std::string::npos)
-      << svg;
-  EXPECT_NE(svg.find("width=\"1400\" height=\"700\""), std::string::npos) << svg;
-  EXPECT_NE(svg.find("href=\"maps/coverage.png\""), std::string::npos);
-}
-
 // ---- the configuration-map figures (map and plan commands) -----------------------------------
 
 // A synthetic 36-angle × 10-sample map with every f level, a NaN cell and every limit code.
@@ -582,7 +470,7 @@ planner::ConfigMap syntheticMap() {
 
 using test::Crop;
 using test::darkPixels;
-using test::svgCrop;
+using test::plotArea;
 
 bool hasPixel(const RgbImage& image, int x0, int y0, int x1, int y1, Rgb colour) {
   for (int y = std::max(y0, 0); y < std::min(y1, image.height); ++y) {
@@ -598,10 +486,10 @@ TEST_F(ImageIoFiles, MapFiguresAreLabelledAndTheirRasterKeepsEveryCellsColour) {
   writeMapOutputs(dir_, JobSpec{}, map);
 
   // configmap.png: the 10 × 36 map enlarged to 1000 × 432 (100 × 12 px per cell: ~1000 px wide,
-  // 40 % as tall), framed with text; the SVG shows exactly that raster.
+  // 40 % as tall), framed with text; the SVG is the same figure in vectors around that raster.
   const RgbImage png = decodePng(readBytes(dir_ / "configmap.png"));
   const std::string svg = readBytes(dir_ / "configmap.svg");
-  const Crop c = svgCrop(svg);
+  const Crop c = plotArea(png);
   ASSERT_EQ(c.w, 1000);
   ASSERT_EQ(c.h, 432);
   EXPECT_GT(c.x, 40);
@@ -610,10 +498,14 @@ TEST_F(ImageIoFiles, MapFiguresAreLabelledAndTheirRasterKeepsEveryCellsColour) {
   EXPECT_LT(png.width, c.x + c.w + 400);
   EXPECT_GT(png.height, c.y + c.h + 40) << "x ticks and axis title";
   EXPECT_LT(png.height, c.y + c.h + 200);
-  EXPECT_NE(svg.find("href=\"configmap.png\""), std::string::npos);
-  EXPECT_NE(svg.find("width=\"" + std::to_string(png.width) + "\" height=\"" +
-                     std::to_string(png.height) + "\""),
-            std::string::npos);
+  // The SVG: the PNG's size in px (0.75 pt each), the raster embedded at its size, text as
+  // glyph outlines.
+  std::array<char, 64> view_box{};
+  std::snprintf(view_box.data(), view_box.size(), "viewBox=\"0 0 %g %g\"", 0.75 * png.width,
+                0.75 * png.height);
+  EXPECT_NE(svg.find(view_box.data()), std::string::npos) << view_box.data();
+  EXPECT_NE(svg.find("<image id=\"image1\" width=\"1000\" height=\"432\""), std::string::npos);
+  EXPECT_NE(svg.find("<symbol overflow=\"visible\" id=\"glyph"), std::string::npos);
   // Every pixel of the raster is its cell's grey (time →, angle ↑; NaN dark red).
   int wrong = 0;
   for (int y = 0; y < c.h; ++y) {
@@ -641,14 +533,16 @@ TEST_F(ImageIoFiles, MapFiguresAreLabelledAndTheirRasterKeepsEveryCellsColour) {
   EXPECT_GT(greys.size(), 150u) << "colour bar";
   EXPECT_EQ(png.at(c.x - 1, c.y + 100), (Rgb{0, 0, 0}));
   EXPECT_EQ(png.at(c.x + c.w, c.y + 100), (Rgb{0, 0, 0}));
-  // The SVG labels the axes with the map's values.
-  EXPECT_NE(svg.find(">time [s]<"), std::string::npos);
-  EXPECT_NE(svg.find(">350<"), std::string::npos) << "angle ticks up to 360 deg";
+  // The SVG names its axes and bar in its description.
+  EXPECT_NE(svg.find("<desc>x: time (s); y: table angle (deg); colour bar: f; x ticks: 0, 1, 2, "
+                     "3, 4; y ticks: 0, 50, 100, 150, 200, 250, 300, 350</desc>"),
+            std::string::npos)
+      << "angle ticks up to 360 deg";
 
   // configmap_why.png: the same frame, each cell the colour of its limit (darker = lower f),
   // and a legend swatch per limit.
   const RgbImage why = decodePng(readBytes(dir_ / "configmap_why.png"));
-  const Crop cw = svgCrop(readBytes(dir_ / "configmap_why.svg"));
+  const Crop cw = plotArea(why);
   ASSERT_EQ(cw.w, 1000);
   ASSERT_EQ(cw.h, 432);
   for (int a = 0; a < 36; ++a) {
@@ -676,11 +570,11 @@ TEST_F(ImageIoFiles, PathFigureHasALineLegendAndDegenerateMapsStillGiveFigures) 
   writeFigure(dir_, "configmap_path", raster, map, "Table-angle path",
               {{categoryColour(5), "ray J 27.39 s"}, {categoryColour(4), "dp J 25.49 s"}});
   const RgbImage png = decodePng(readBytes(dir_ / "configmap_path.png"));
-  const Crop c = svgCrop(readBytes(dir_ / "configmap_path.svg"));
+  const Crop c = plotArea(png);
   ASSERT_EQ(c.w, 1000);
   EXPECT_TRUE(hasPixel(png, c.x + c.w + 4, 0, png.width, png.height, categoryColour(5)));
   EXPECT_TRUE(hasPixel(png, c.x + c.w + 4, 0, png.width, png.height, categoryColour(4)));
-  EXPECT_NE(readBytes(dir_ / "configmap_path.svg").find(">dp J 25.49 s<"), std::string::npos);
+  EXPECT_NE(readBytes(dir_ / "configmap_path.svg").find("; dp J 25.49 s;"), std::string::npos);
 
   // One sample and one angle (flat axes), and an all-NaN map: figures, no error.
   planner::ConfigMap tiny;
@@ -692,7 +586,7 @@ TEST_F(ImageIoFiles, PathFigureHasALineLegendAndDegenerateMapsStillGiveFigures) 
   tiny.limit = {0};
   ASSERT_NO_THROW(writeMapOutputs(dir_, JobSpec{}, tiny));
   const RgbImage one = decodePng(readBytes(dir_ / "configmap.png"));
-  const Crop c1 = svgCrop(readBytes(dir_ / "configmap.svg"));
+  const Crop c1 = plotArea(one);
   EXPECT_EQ(c1.w, 1000);
   EXPECT_EQ(c1.h, 400);
   EXPECT_EQ(one.at(c1.x + 500, c1.y + 200), kNanColour);

@@ -2,18 +2,16 @@
 // and SVG.
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <limits>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
-
-#include <fmt/format.h>
 
 #include "cli/batch/batch.h"
 #include "cli/batch/batch_internal.h"
 #include "cli/io/output.h"
-#include "cli/plot/bitmap_font.h"
+#include "cli/plot/figure.h"
 #include "cli/plot/image_io.h"
 
 namespace scanplan::cli {
@@ -71,22 +69,76 @@ std::string metricLabel(std::size_t metric) {
   }
 }
 
-std::string base64(const std::string& bytes) {
-  static constexpr char kDigits[] =
-      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  out.reserve((bytes.size() + 2) / 3 * 4);
-  for (std::size_t i = 0; i < bytes.size(); i += 3) {
-    std::uint32_t v = static_cast<std::uint32_t>(static_cast<unsigned char>(bytes[i])) << 16;
-    if (i + 1 < bytes.size())
-      v |= static_cast<std::uint32_t>(static_cast<unsigned char>(bytes[i + 1])) << 8;
-    if (i + 2 < bytes.size()) v |= static_cast<unsigned char>(bytes[i + 2]);
-    out += kDigits[(v >> 18) & 63];
-    out += kDigits[(v >> 12) & 63];
-    out += i + 1 < bytes.size() ? kDigits[(v >> 6) & 63] : '=';
-    out += i + 2 < bytes.size() ? kDigits[v & 63] : '=';
+// What the axis shows of the cases: the distinct values of `key` in order (numbers sorted), and
+// whether they are all numbers (else categories at 0, 1, 2, …).
+struct XAxis {
+  std::vector<std::string> values;
+  bool numeric = true;
+  double position(const std::string& v) const {
+    if (numeric) return *numberOf(v);
+    return static_cast<double>(std::find(values.begin(), values.end(), v) - values.begin());
   }
-  return out;
+};
+
+XAxis xAxis(const std::vector<BatchRow>& rows, const std::string& key) {
+  XAxis axis;
+  for (const BatchRow& r : rows) {
+    const std::string v = paramValue(r, key);
+    if (std::find(axis.values.begin(), axis.values.end(), v) == axis.values.end()) {
+      axis.values.push_back(v);
+    }
+    axis.numeric = axis.numeric && numberOf(v).has_value();
+  }
+  if (axis.numeric) {
+    std::sort(
+        axis.values.begin(), axis.values.end(),
+        [](const std::string& a, const std::string& b) { return *numberOf(a) < *numberOf(b); });
+  }
+  return axis;
+}
+
+// Per planner, a cross per case and a line through the means at each value (side by side at one
+// value: 1.2 % of the axis apart); a legend swatch for each planner that has a value.
+void addPlanners(Figure& figure,
+                 const std::vector<BatchRow>& rows,
+                 const std::string& key,
+                 std::size_t metric,
+                 const XAxis& axis) {
+  std::vector<std::string> methods;
+  for (const BatchRow& r : rows) {
+    if (std::find(methods.begin(), methods.end(), r.method) == methods.end()) {
+      methods.push_back(r.method);
+    }
+  }
+  const double spread = (figure.labels.x1 - figure.labels.x0) * 0.012;
+  std::vector<Overlay> means;
+  for (std::size_t mi = 0; mi < methods.size(); ++mi) {
+    const Rgb colour = batchPlannerColour(methods[mi]);
+    const double offset =
+        (static_cast<double>(mi) - 0.5 * static_cast<double>(methods.size() - 1)) * spread;
+    Overlay cases{Overlay::Kind::kCrosses, {}, colour, 2.0};
+    Overlay line{Overlay::Kind::kLine, {}, colour, 2.0};
+    for (const std::string& v : axis.values) {
+      Mean mean;
+      for (const BatchRow& r : rows) {
+        if (r.method != methods[mi] || paramValue(r, key) != v) continue;
+        mean.add(r.metrics[metric]);
+        if (r.metrics[metric] && std::isfinite(*r.metrics[metric])) {
+          cases.points.emplace_back(axis.position(v) + offset, *r.metrics[metric]);
+        }
+      }
+      // The mean of huge values can overflow: no point then (a non-finite point breaks a line).
+      if (mean.n) line.points.emplace_back(axis.position(v) + offset, mean.sum / mean.n);
+    }
+    figure.overlays.push_back(std::move(cases));
+    // In the legend when it has a value here (a planner whose cases all failed has none).
+    if (!line.points.empty()) {
+      figure.labels.legend.push_back(
+          {colour, methods[mi].empty() ? std::string("(none)") : methods[mi]});
+    }
+    means.push_back(std::move(line));
+  }
+  for (Overlay& line : means) figure.overlays.push_back(std::move(line));
 }
 
 }  // namespace
@@ -99,34 +151,7 @@ bool writePlot(const fs::path& dir,
                const std::vector<BatchRow>& rows,
                const std::string& key,
                std::size_t metric) {
-  std::vector<std::string> values;  // distinct values of `key`, in order of appearance
-  bool numeric = true;
-  for (const BatchRow& r : rows) {
-    const std::string v = paramValue(r, key);
-    if (std::find(values.begin(), values.end(), v) == values.end()) values.push_back(v);
-    numeric = numeric && numberOf(v).has_value();
-  }
-  if (numeric) {
-    std::sort(values.begin(), values.end(), [](const std::string& a, const std::string& b) {
-      return *numberOf(a) < *numberOf(b);
-    });
-  }
-  std::vector<std::string> methods;
-  for (const BatchRow& r : rows) {
-    if (std::find(methods.begin(), methods.end(), r.method) == methods.end()) {
-      methods.push_back(r.method);
-    }
-  }
-  const auto position = [&](const std::string& v) {
-    if (numeric) return *numberOf(v);
-    return static_cast<double>(std::find(values.begin(), values.end(), v) - values.begin());
-  };
-  // Padded axis ranges; values equal up to rounding (e.g. the same J from two planners) make a
-  // flat range, centred on the value (axisRange), never one with ticks 1e-14 apart.
-  const std::pair<double, double> x_range =
-      axisRange(position(values.front()), position(values.back()));
-  const double x0 = x_range.first, x1 = x_range.second;
-  const double spread = (x1 - x0) * 0.012;  // planners side by side at one value
+  const XAxis axis = xAxis(rows, key);
   double lowest = std::numeric_limits<double>::infinity(), highest = -lowest;
   for (const BatchRow& r : rows) {
     if (r.metrics[metric] && std::isfinite(*r.metrics[metric])) {
@@ -135,94 +160,32 @@ bool writePlot(const fs::path& dir,
     }
   }
   if (!std::isfinite(lowest)) return false;
-  const std::pair<double, double> y_range = axisRange(lowest, highest);
-  const double y0 = y_range.first, y1 = y_range.second;
-  constexpr int kW = 720, kH = 480;
-  RgbImage image = RgbImage::filled(kW, kH, {255, 255, 255});
-  const auto px = [&](double x) { return (x - x0) / (x1 - x0) * kW; };
-  const auto py = [&](double y) { return (1.0 - (y - y0) / (y1 - y0)) * kH; };
-  // Light grid lines at the ticks the axes get.
-  constexpr Rgb kGrid{225, 225, 225};
-  for (const double v : niceTicks(y0, y1).values) drawLine(image, 0, py(v), kW, py(v), kGrid, 1);
-  std::vector<double> x_grid;
-  if (numeric) {
-    x_grid = niceTicks(x0, x1).values;
-  } else {
-    for (std::size_t i = 0; i < values.size(); ++i) x_grid.push_back(static_cast<double>(i));
-  }
-  for (const double v : x_grid) drawLine(image, px(v), 0, px(v), kH, kGrid, 1);
-  std::vector<std::pair<Rgb, std::string>> legend;  // the planners (the SVG's legend)
-  for (std::size_t mi = 0; mi < methods.size(); ++mi) {
-    const Rgb colour = batchPlannerColour(methods[mi]);
-    const double offset =
-        (static_cast<double>(mi) - 0.5 * static_cast<double>(methods.size() - 1)) * spread;
-    std::vector<std::pair<double, double>> means;
-    for (const std::string& v : values) {
-      Mean mean;
-      for (const BatchRow& r : rows) {
-        if (r.method != methods[mi] || paramValue(r, key) != v) continue;
-        mean.add(r.metrics[metric]);
-        if (r.metrics[metric] && std::isfinite(*r.metrics[metric])) {
-          const double x = px(position(v) + offset), y = py(*r.metrics[metric]);
-          drawLine(image, x - 3, y - 3, x + 3, y + 3, colour, 2);
-          drawLine(image, x - 3, y + 3, x + 3, y - 3, colour, 2);
-        }
-      }
-      // The mean of huge values can overflow: no point then (drawLine skips non-finite ends).
-      if (mean.n) means.emplace_back(px(position(v) + offset), py(mean.sum / mean.n));
-    }
-    for (std::size_t i = 1; i < means.size(); ++i) {
-      drawLine(image, means[i - 1].first, means[i - 1].second, means[i].first, means[i].second,
-               colour, 2);
-    }
-    // In the legend when it has a value here (a planner whose cases all failed has none).
-    if (!means.empty()) {
-      legend.emplace_back(colour, methods[mi].empty() ? std::string("(none)") : methods[mi]);
-    }
-  }
+  // Padded axis ranges; values equal up to rounding (e.g. the same J from two planners) make a
+  // flat range, centred on the value (axisRange), never one with ticks 1e-14 apart.
+  Figure figure;
+  FigureLabels& text = figure.labels;
+  std::tie(text.x0, text.x1) =
+      axisRange(axis.position(axis.values.front()), axis.position(axis.values.back()));
+  std::tie(text.y0, text.y1) = axisRange(lowest, highest);
+  figure.plot_width = 720;
+  figure.plot_height = 480;
+  figure.grid = true;  // light lines at the ticks
   const std::string x_name = key.empty() ? std::string("all cases") : key;
-  FigureLabels text;
   text.title = metricLabel(metric) + " against " + x_name;
   text.x_label = x_name;
   text.y_label = metricLabel(metric);
-  text.x0 = x0;
-  text.x1 = x1;
-  text.y0 = y0;
-  text.y1 = y1;
-  if (!numeric) {
-    text.categories = key.empty() ? std::vector<std::string>{"all"} : values;
+  if (!axis.numeric) {
+    text.categories = key.empty() ? std::vector<std::string>{"all"} : axis.values;
     for (std::string& c : text.categories) {
       if (c.empty()) c = "(not set)";  // an explicit case without this key
     }
   }
   // A swatch and name per planner, then what the marks mean.
+  addPlanners(figure, rows, key, metric, axis);
   constexpr Rgb kGreyText{90, 90, 90};
-  for (const auto& [colour, name] : legend) text.legend.push_back({colour, name});
   text.legend.push_back({kGreyText, "case", LegendEntry::Mark::kCross, kGreyText, 10});
   text.legend.push_back({kGreyText, "mean", LegendEntry::Mark::kLine, kGreyText});
-  writePng(dir / (stem + ".png"), labelFigure(image, text).image);
-  // The SVG: the same data raster, embedded, with the axes and text as SVG text.
-  SvgFigure figure;
-  figure.png_file = "data:image/png;base64," + base64(encodePng(image));
-  figure.png_width = kW;
-  figure.png_height = kH;
-  figure.title = text.title;
-  figure.x_label = x_name;
-  if (!numeric && !key.empty()) {
-    figure.x_label += " (";
-    for (std::size_t i = 0; i < values.size(); ++i) {
-      figure.x_label += fmt::format("{}{} = {}", i ? ", " : "", i,
-                                    values[i].empty() ? std::string("(not set)") : values[i]);
-    }
-    figure.x_label += ")";
-  }
-  figure.y_label = text.y_label;
-  figure.x_min = x0;
-  figure.x_max = x1;
-  figure.y_min = y0;
-  figure.y_max = y1;
-  figure.legend = legend;
-  writeFileAtomically(dir / (stem + ".svg"), svgFigure(figure));
+  writeFigureFiles(dir, stem, figure);
   return true;
 }
 

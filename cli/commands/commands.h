@@ -8,6 +8,7 @@
 #include <mutex>
 
 #include "cli/app.h"
+#include "cli/plot/figure.h"
 #include "cli/plot/image_io.h"
 #include "cli/config/job.h"
 #include "cli/config/problem.h"
@@ -73,13 +74,16 @@ std::string pathSummary(const PathContext& context);
 RgbImage pathPicture(const PathContext& context);
 /// The f layer of one branch, min-pooled to at most 2000 x 1200 px (time →, angle ↑).
 RgbImage mapGreyImage(const planner::ConfigMap& map, std::size_t branch);
-/// `stem`.png and `stem`.svg (the PNG framed with axes, title and legend).
+/// `stem`.png and `stem`.svg: the map raster `image` (time →, angle ↑) framed with axes, title,
+/// a colour bar of f and a legend line per path; `paths` are drawn over it in axis units (time
+/// in s, table angle in deg), one per legend entry.
 void writeFigure(const std::filesystem::path& dir,
                  const std::string& stem,
                  const RgbImage& image,
                  const planner::ConfigMap& map,
                  const std::string& title,
-                 std::vector<std::pair<Rgb, std::string>> legend);
+                 std::vector<std::pair<Rgb, std::string>> legend,
+                 std::vector<Overlay> paths = {});
 
 /// `validate` / `simulate`: a job and a trajectory file.
 struct VerifyOptions {

@@ -13,7 +13,7 @@
 #include "cli/commands/commands.h"
 #include "cli/io/json.h"
 #include "cli/io/output.h"
-#include "cli/plot/bitmap_font.h"
+#include "cli/plot/figure.h"
 #include "cli/plot/image_io.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"
@@ -91,8 +91,9 @@ void writeCylinderFigure(const std::filesystem::path& dir,
                          const planner::ConfigMap& map,
                          std::size_t branch) {
   const RgbImage raster = cylinderImage(map, branch);
-  const RgbImage area = upscale(raster, std::max(1, 1000 / std::max(raster.width, 1)), 1);
-  FigureLabels labels;
+  Figure figure;
+  figure.raster = upscale(raster, std::max(1, 1000 / std::max(raster.width, 1)), 1);
+  FigureLabels& labels = figure.labels;
   labels.title = "Configuration map f on a cylinder (Fig. 6b), " + map.branches[branch].words();
   labels.x_label = "time (s)";
   labels.y_label = "table angle (deg)";
@@ -114,7 +115,7 @@ void writeCylinderFigure(const std::filesystem::path& dir,
                    {{0, 0, 0}, "around 0 deg", LegendEntry::Mark::kNone},
                    {{0, 0, 0}, "below: back half,", LegendEntry::Mark::kNone, {0, 0, 0}, 6},
                    {{0, 0, 0}, "around 180 deg", LegendEntry::Mark::kNone}};
-  writePng(dir / "configmap_cylinder.png", labelFigure(area, labels).image);
+  writePng(dir / "configmap_cylinder.png", renderFigure(figure));
 }
 
 std::vector<kinematics::IkBranch> mapBranches(const JobSpec& job) {
@@ -128,20 +129,22 @@ std::vector<kinematics::IkBranch> mapBranches(const JobSpec& job) {
 
 namespace {
 
-// `stem`.png: the map raster, stretched to a readable aspect, framed with the title, axes (time
-// in s, table angle in deg), tick values and legend in the bitmap font; `stem`.svg: the same
-// raster (a crop of the PNG) with vector text.
+// `stem`.png and `stem`.svg: the map raster, stretched to a readable aspect, framed with the
+// title, axes (time in s, table angle in deg), tick values and legend; `overlays` over it.
 void writeMapFigure(const std::filesystem::path& dir,
                     const std::string& stem,
                     const RgbImage& raster,
                     const planner::ConfigMap& map,
-                    FigureLabels labels) {
-  // At least ~1000 px wide and 40 % as tall as wide (as the path figure, cli/commands/plan.cpp): a
-  // 1095 × 180 map is not a thin strip; nearest-neighbour blocks keep every cell's colour.
+                    FigureLabels labels,
+                    std::vector<Overlay> overlays = {}) {
+  // At least ~1000 px wide and 40 % as tall as wide: a 1095 × 180 map is not a thin strip;
+  // nearest-neighbour blocks keep every cell's colour.
   const int fx = std::max(1, 1000 / std::max(raster.width, 1));
   const int fy = std::max(
       1, (2 * raster.width * fx + 5 * raster.height - 1) / (5 * std::max(raster.height, 1)));
-  const RgbImage area = upscale(raster, fx, fy);
+  Figure figure;
+  figure.raster = upscale(raster, fx, fy);
+  figure.overlays = std::move(overlays);
   labels.x_label = "time (s)";
   labels.y_label = "table angle (deg)";
   labels.x0 = map.times.empty() ? 0.0 : map.times.front();
@@ -149,28 +152,8 @@ void writeMapFigure(const std::filesystem::path& dir,
   const double step = map.angles.size() > 1 ? map.angles[1] - map.angles[0] : 0.0;
   labels.y0 = map.angles.empty() ? 0.0 : toDeg(map.angles.front());
   labels.y1 = map.angles.empty() ? 360.0 : toDeg(map.angles.back() + step);
-  const LabelledFigure png = labelFigure(area, labels);
-  writePng(dir / (stem + ".png"), png.image);
-
-  SvgFigure figure;
-  figure.png_file = stem + ".png";
-  figure.png_width = png.image.width;
-  figure.png_height = png.image.height;
-  figure.crop_x = png.area_x;
-  figure.crop_y = png.area_y;
-  figure.crop_width = area.width;
-  figure.crop_height = area.height;
-  figure.title = labels.title;
-  figure.x_label = "time [s]";
-  figure.y_label = "table angle [deg]";
-  figure.x_min = labels.x0;
-  figure.x_max = labels.x1;
-  figure.y_min = labels.y0;
-  figure.y_max = labels.y1;
-  for (const LegendEntry& e : labels.legend) {
-    if (e.mark != LegendEntry::Mark::kNone) figure.legend.emplace_back(e.colour, e.text);
-  }
-  writeFileAtomically(dir / (stem + ".svg"), svgFigure(figure));
+  figure.labels = std::move(labels);
+  writeFigureFiles(dir, stem, figure);
 }
 
 }  // namespace
@@ -182,14 +165,15 @@ void writeFigure(const std::filesystem::path& dir,
                  const RgbImage& image,
                  const planner::ConfigMap& map,
                  const std::string& title,
-                 std::vector<std::pair<Rgb, std::string>> legend) {
+                 std::vector<std::pair<Rgb, std::string>> legend,
+                 std::vector<Overlay> paths) {
   FigureLabels labels;
   labels.title = title;
   for (auto& [colour, text] : legend) {
     labels.legend.push_back({colour, std::move(text), LegendEntry::Mark::kLine});
   }
   labels.colour_bar = "map f";
-  writeMapFigure(dir, stem, image, map, std::move(labels));
+  writeMapFigure(dir, stem, image, map, std::move(labels), std::move(paths));
 }
 
 RgbImage mapGreyImage(const planner::ConfigMap& map, std::size_t branch) {

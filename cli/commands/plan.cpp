@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numbers>
 #include <optional>
 
@@ -42,38 +43,37 @@ void writePathFigure(const std::filesystem::path& dir,
                      std::size_t branch,
                      const std::vector<std::pair<std::string, std::vector<double>>>& paths,
                      const std::vector<std::string>& labels) {
-  const RgbImage base = mapGreyImage(map, branch);
-  // Enlarged so the picture is at least ~1000 px wide and 40 % as tall as wide.
-  const int fx = std::max(1, 1000 / base.width);
-  const int fy = std::max(1, (2 * base.width * fx + 5 * base.height - 1) / (5 * base.height));
-  RgbImage image = upscale(base, fx, fy);
   const double angle0 = map.angles.front();
   const double span = map.angles.size() > 1
                           ? (map.angles[1] - map.angles[0]) * static_cast<double>(map.angles.size())
                           : 1.0;
   const double nt = static_cast<double>(map.times.size());
+  const double t0 = map.times.front(), t_span = map.times.back() - t0;
+  constexpr double kBreak = std::numeric_limits<double>::quiet_NaN();
   std::vector<std::pair<Rgb, std::string>> legend;
+  std::vector<Overlay> lines;
   // Drawn in reverse so the chosen planner (first) ends on top.
   for (auto it = paths.rbegin(); it != paths.rend(); ++it) {
-    const std::string& method = it->first;
-    const std::vector<double>& theta = it->second;  // not a binding: clang 14 cannot capture one
-    const Rgb colour = methodColour(method);
-    const auto point = [&](std::size_t k) {
+    const auto& [method, theta] = *it;
+    Overlay& line = lines.emplace_back();
+    line.colour = methodColour(method);
+    line.width_px = it == paths.rend() - 1 ? 3.0 : 2.0;
+    double last_u = 0.0;
+    for (std::size_t k = 0; k < theta.size(); ++k) {
       double u = (theta[k] - angle0) / span;  // 0..1 over the grid, wrapped for a full turn
       u -= std::floor(u);
-      return std::pair{(static_cast<double>(k) + 0.5) / nt * image.width, (1.0 - u) * image.height};
-    };
-    for (std::size_t k = 1; k < theta.size(); ++k) {
-      const auto [x0, y0] = point(k - 1);
-      const auto [x1, y1] = point(k);
-      if (std::abs(y1 - y0) > 0.5 * image.height) continue;  // wraps around the grid's seam
-      drawLine(image, x0, y0, x1, y1, colour, it == paths.rend() - 1 ? 3 : 2);
+      // A jump across the grid's seam breaks the line.
+      if (k > 0 && std::abs(u - last_u) > 0.5) line.points.emplace_back(kBreak, kBreak);
+      last_u = u;
+      line.points.emplace_back(t0 + (static_cast<double>(k) + 0.5) / nt * t_span,
+                               toDeg(angle0 + u * span));
     }
     legend.insert(legend.begin(),
-                  {colour, labels[static_cast<std::size_t>(paths.rend() - it - 1)]});
+                  {line.colour, labels[static_cast<std::size_t>(paths.rend() - it - 1)]});
   }
-  writeFigure(dir, "configmap_path", image, map,
-              "Table-angle path over the map f, " + map.branches[branch].words(), legend);
+  writeFigure(dir, "configmap_path", mapGreyImage(map, branch), map,
+              "Table-angle path over the map f, " + map.branches[branch].words(), legend,
+              std::move(lines));
 }
 
 // The cell, as the first lines of the summary.

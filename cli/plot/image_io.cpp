@@ -100,18 +100,6 @@ void checkShape(const std::filesystem::path& file,
   }
 }
 
-std::string xmlEscape(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    out += c == '&'   ? "&amp;"
-           : c == '<' ? "&lt;"
-           : c == '>' ? "&gt;"
-           : c == '"' ? "&quot;"
-                      : std::string(1, c);
-  }
-  return out;
-}
-
 std::uint8_t toByte(double v) {
   return static_cast<std::uint8_t>(std::lround(std::clamp(v, 0.0, 255.0)));
 }
@@ -287,65 +275,6 @@ RgbImage upscale(const RgbImage& image, int factor_x, int factor_y) {
   return out;
 }
 
-void drawLine(RgbImage& image, double x0, double y0, double x1, double y1, Rgb colour, int width) {
-  if (!std::isfinite(x0) || !std::isfinite(y0) || !std::isfinite(x1) || !std::isfinite(y1)) return;
-  width = std::clamp(width, 1, 64);
-  // Clipped (Cohen–Sutherland, in long double: differences of far ends neither overflow nor
-  // lose the image) to the image grown by the pen, so the stamps below are at most as many as
-  // the image's diagonal needs however far away the ends are.
-  using Real = long double;
-  const Real margin = width + 1, x_lo = -margin, x_hi = image.width + margin, y_lo = -margin,
-             y_hi = image.height + margin;
-  Real ax = x0, ay = y0, bx = x1, by = y1;
-  const auto outcode = [&](Real x, Real y) {
-    return (x < x_lo ? 1 : x > x_hi ? 2 : 0) | (y < y_lo ? 4 : y > y_hi ? 8 : 0);
-  };
-  int ca = outcode(ax, ay), cb = outcode(bx, by);
-  for (int i = 0; i < 8 && (ca | cb) != 0; ++i) {
-    if ((ca & cb) != 0) return;  // wholly on the outer side of one edge
-    const int c = ca != 0 ? ca : cb;
-    Real x = 0, y = 0;
-    if ((c & 8) != 0) {
-      y = y_hi;
-      x = ax + (bx - ax) * ((y_hi - ay) / (by - ay));
-    } else if ((c & 4) != 0) {
-      y = y_lo;
-      x = ax + (bx - ax) * ((y_lo - ay) / (by - ay));
-    } else if ((c & 2) != 0) {
-      x = x_hi;
-      y = ay + (by - ay) * ((x_hi - ax) / (bx - ax));
-    } else {
-      x = x_lo;
-      y = ay + (by - ay) * ((x_lo - ax) / (bx - ax));
-    }
-    if (c == ca) {
-      ax = x;
-      ay = y;
-      ca = outcode(ax, ay);
-    } else {
-      bx = x;
-      by = y;
-      cb = outcode(bx, by);
-    }
-  }
-  if ((ca | cb) != 0) return;
-  const double sx0 = static_cast<double>(ax), sy0 = static_cast<double>(ay);
-  const double sx1 = static_cast<double>(bx), sy1 = static_cast<double>(by);
-  const double length = std::hypot(sx1 - sx0, sy1 - sy0);
-  const int steps = std::max(1, static_cast<int>(std::ceil(2.0 * length)));
-  const int half = width / 2, extra = width % 2 == 0 ? 1 : 0;
-  for (int i = 0; i <= steps; ++i) {
-    const double s = static_cast<double>(i) / steps;
-    const int cx = static_cast<int>(std::floor(sx0 + s * (sx1 - sx0)));
-    const int cy = static_cast<int>(std::floor(sy0 + s * (sy1 - sy0)));
-    for (int ddy = -half; ddy <= half - extra; ++ddy)
-      for (int ddx = -half; ddx <= half - extra; ++ddx) {
-        const int x = cx + ddx, y = cy + ddy;
-        if (x >= 0 && y >= 0 && x < image.width && y < image.height) image.set(x, y, colour);
-      }
-  }
-}
-
 Rgb categoryColour(int k) {
   // Okabe & Ito (2008), "Color Universal Design"; black last, since maps are mostly grey.
   static constexpr std::array<Rgb, 8> kPalette{{{230, 159, 0},
@@ -357,113 +286,6 @@ Rgb categoryColour(int k) {
                                                 {204, 121, 167},
                                                 {0, 0, 0}}};
   return kPalette[static_cast<std::size_t>(((k % 8) + 8) % 8)];
-}
-
-std::string svgFigure(const SvgFigure& figure) {
-  // Character widths are estimates (7 px per character at 12 px sans-serif).
-  constexpr double kChar = 7.0, kTick = 5.0;
-  const bool cropped = figure.crop_width > 0 && figure.crop_height > 0;
-  const int shown_width = cropped ? figure.crop_width : figure.png_width;
-  const int shown_height = cropped ? figure.crop_height : figure.png_height;
-  const double scale =
-      std::min(720.0 / std::max(shown_width, 1), 480.0 / std::max(shown_height, 1));
-  const double pw = scale * std::max(shown_width, 1), ph = scale * std::max(shown_height, 1);
-  // A flat or non-finite range would put every tick and coordinate at infinity.
-  const auto range = [](double a, double b) {
-    return flatRange(a, b) || !std::isfinite(b - a) ? axisRange(a, b, 0.0) : std::pair{a, b};
-  };
-  const std::pair<double, double> x_range = range(figure.x_min, figure.x_max);
-  const std::pair<double, double> y_range = range(figure.y_min, figure.y_max);
-  const double x_min = x_range.first, x_max = x_range.second;
-  const double y_min = y_range.first, y_max = y_range.second;
-  const Ticks x_ticks = niceTicks(x_min, x_max);
-  const Ticks y_ticks = niceTicks(y_min, y_max);
-  const auto label = [](const Ticks& t, double v) { return tickLabel(t, v); };
-  std::size_t y_chars = 1, legend_chars = 0;
-  for (const double v : y_ticks.values) y_chars = std::max(y_chars, label(y_ticks, v).size());
-  for (const auto& entry : figure.legend)
-    legend_chars = std::max(legend_chars, entry.second.size());
-  const double left = 34 + kTick + 4 + kChar * static_cast<double>(y_chars);
-  const double top = figure.title.empty() ? 16 : 44;
-  const double right = figure.legend.empty() ? 24 : 44 + kChar * static_cast<double>(legend_chars);
-  const double width = left + pw + right;
-  const double height =
-      std::max(top + ph + 56, top + 20.0 * static_cast<double>(figure.legend.size()) + 16);
-  const auto px = [&](double v) { return left + (v - x_min) / (x_max - x_min) * pw; };
-  const auto py = [&](double v) { return top + (y_max - v) / (y_max - y_min) * ph; };
-
-  std::string s = fmt::format(
-      "<svg xmlns=\"http://www.w3.org/2000/svg\" xmlns:xlink=\"http://www.w3.org/1999/xlink\" "
-      "width=\"{0:.0f}\" height=\"{1:.0f}\" viewBox=\"0 0 {0:.0f} {1:.0f}\" "
-      "font-family=\"sans-serif\" font-size=\"12\">\n"
-      "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n",
-      std::ceil(width), std::ceil(height));
-  if (!figure.title.empty()) {
-    s += fmt::format(
-        "<text x=\"{:.1f}\" y=\"26\" text-anchor=\"middle\" font-size=\"16\">{}"
-        "</text>\n",
-        left + pw / 2, xmlEscape(figure.title));
-  }
-  const std::string href = xmlEscape(figure.png_file);
-  if (cropped) {
-    // A viewport onto the crop rectangle of the whole image (a nested svg clips to it).
-    s += fmt::format(
-        "<svg x=\"{1:.1f}\" y=\"{2:.1f}\" width=\"{3:.1f}\" height=\"{4:.1f}\" "
-        "viewBox=\"{5} {6} {7} {8}\" preserveAspectRatio=\"none\" overflow=\"hidden\">"
-        "<image href=\"{0}\" xlink:href=\"{0}\" x=\"0\" y=\"0\" width=\"{9}\" height=\"{10}\" "
-        "preserveAspectRatio=\"none\" image-rendering=\"optimizeSpeed\" "
-        "style=\"image-rendering: pixelated\"/></svg>\n",
-        href, left, top, pw, ph, figure.crop_x, figure.crop_y, figure.crop_width,
-        figure.crop_height, std::max(figure.png_width, 1), std::max(figure.png_height, 1));
-  } else {
-    s += fmt::format(
-        "<image href=\"{0}\" xlink:href=\"{0}\" x=\"{1:.1f}\" y=\"{2:.1f}\" width=\"{3:.1f}\" "
-        "height=\"{4:.1f}\" preserveAspectRatio=\"none\" image-rendering=\"optimizeSpeed\" "
-        "style=\"image-rendering: pixelated\"/>\n",
-        href, left, top, pw, ph);
-  }
-  s += fmt::format(
-      "<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"{:.1f}\" height=\"{:.1f}\" fill=\"none\" "
-      "stroke=\"black\"/>\n",
-      left, top, pw, ph);
-  for (const double v : x_ticks.values) {
-    const double x = px(v);
-    s += fmt::format(
-        "<line x1=\"{0:.1f}\" y1=\"{1:.1f}\" x2=\"{0:.1f}\" y2=\"{2:.1f}\" "
-        "stroke=\"black\"/><text x=\"{0:.1f}\" y=\"{3:.1f}\" "
-        "text-anchor=\"middle\">{4}</text>\n",
-        x, top + ph, top + ph + kTick, top + ph + kTick + 13, label(x_ticks, v));
-  }
-  for (const double v : y_ticks.values) {
-    const double y = py(v);
-    s += fmt::format(
-        "<line x1=\"{0:.1f}\" y1=\"{2:.1f}\" x2=\"{1:.1f}\" y2=\"{2:.1f}\" "
-        "stroke=\"black\"/><text x=\"{3:.1f}\" y=\"{4:.1f}\" "
-        "text-anchor=\"end\">{5}</text>\n",
-        left - kTick, left, y, left - kTick - 3, y + 4, label(y_ticks, v));
-  }
-  if (!figure.x_label.empty()) {
-    s += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n",
-                     left + pw / 2, top + ph + 42, xmlEscape(figure.x_label));
-  }
-  if (!figure.y_label.empty()) {
-    s += fmt::format(
-        "<text transform=\"translate(16 {:.1f}) rotate(-90)\" "
-        "text-anchor=\"middle\">{}</text>\n",
-        top + ph / 2, xmlEscape(figure.y_label));
-  }
-  for (std::size_t i = 0; i < figure.legend.size(); ++i) {
-    const double x = left + pw + 16, y = top + 20.0 * static_cast<double>(i);
-    s += fmt::format(
-        "<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"14\" height=\"14\" fill=\"{}\" "
-        "stroke=\"black\" stroke-width=\"0.5\"/><text x=\"{:.1f}\" y=\"{:.1f}\">{}"
-        "</text>\n",
-        x, y,
-        fmt::format("rgb({},{},{})", figure.legend[i].first.r, figure.legend[i].first.g,
-                    figure.legend[i].first.b),
-        x + 20, y + 11, xmlEscape(figure.legend[i].second));
-  }
-  return s + "</svg>\n";
 }
 
 RgbImage renderScene(const RenderRequest& request) {

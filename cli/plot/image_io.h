@@ -33,10 +33,6 @@ struct RgbImage {
 /// Nearest-neighbour enlargement by integer factors ≥ 1 (x and y). Throws InputError when the
 /// result would exceed 2^28 pixels.
 RgbImage upscale(const RgbImage& image, int factor_x, int factor_y);
-/// A straight segment from (x0, y0) to (x1, y1) (pixel units, pixel centres at +0.5), `width`
-/// pixels wide, clipped to the image. A segment with a non-finite end draws nothing.
-void drawLine(RgbImage& image, double x0, double y0, double x1, double y1, Rgb colour, int width);
-
 /// PNG bytes (8-bit RGB, no text or time chunks, fixed compression): the same image always
 /// gives the same bytes. Throws InputError for an empty or inconsistent image.
 std::string encodePng(const RgbImage& image);
@@ -81,27 +77,6 @@ bool flatRange(double a, double b);
 /// ([0, 1] when both are), and the values are clamped so that the span stays finite. The result
 /// has lo < hi and is never flat.
 std::pair<double, double> axisRange(double lo, double hi, double pad = 0.08);
-
-/// A standalone SVG figure around a PNG map image.
-struct SvgFigure {
-  /// href of the PNG: a path relative to the SVG file, or a data: URI (embedded).
-  std::string png_file;
-  /// PNG size in pixels.
-  int png_width = 0, png_height = 0;
-  /// The part of the PNG that is the plot (e.g. the data area of a PNG that has its own
-  /// labels): x, y, width and height in PNG pixels; a width or height ≤ 0: the whole PNG.
-  int crop_x = 0, crop_y = 0, crop_width = 0, crop_height = 0;
-  std::string title;
-  std::string x_label, y_label;
-  /// Axis values at the image's left and right edges, and at its bottom and top edges.
-  double x_min = 0, x_max = 1, y_min = 0, y_max = 1;
-  /// Swatch colour and text, listed to the right of the plot.
-  std::vector<std::pair<Rgb, std::string>> legend;
-};
-/// SVG text: the image (or its crop) scaled to fit a plot area of about 720 × 480 px with
-/// pixelated rendering, a frame with "nice" ticks (1, 2, 5 × 10^k), axis titles, title and
-/// legend. A flat or non-finite axis range is widened as axisRange does.
-std::string svgFigure(const SvgFigure& figure);
 
 /// An orthographic picture of a mesh and a path.
 struct RenderRequest {
