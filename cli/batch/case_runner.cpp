@@ -12,7 +12,6 @@
 #include "cli/batch/batch_internal.h"
 #include "cli/commands/commands.h"
 #include "cli/config/job.h"
-#include "cli/verify.h"
 #include "collision/scene.h"
 #include "kinematics/units.h"
 

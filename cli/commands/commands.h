@@ -8,10 +8,10 @@
 #include <mutex>
 
 #include "cli/app.h"
-#include "cli/plot/figure.h"
-#include "cli/plot/image_io.h"
 #include "cli/config/job.h"
 #include "cli/config/problem.h"
+#include "cli/plot/figure.h"
+#include "cli/plot/map_figures.h"
 #include "kinematics/mesh.h"
 #include "planner/config_map.h"
 
@@ -70,21 +70,6 @@ struct PathContext {
 PathContext buildPath(const JobSpec& job, const kinematics::CellModel& cell);
 /// The scanner window and path elements, one line each.
 std::string pathSummary(const PathContext& context);
-/// Three views of the path around the part.
-RgbImage pathPicture(const PathContext& context);
-/// The f layer of one branch, min-pooled to at most 2000 x 1200 px (time →, angle ↑).
-RgbImage mapGreyImage(const planner::ConfigMap& map, std::size_t branch);
-/// `stem`.png and `stem`.svg: the map raster `image` (time →, angle ↑) framed with axes, title,
-/// a colour bar of f and a legend line per path; `paths` are drawn over it in axis units (time
-/// in s, table angle in deg), one per legend entry.
-void writeFigure(const std::filesystem::path& dir,
-                 const std::string& stem,
-                 const RgbImage& image,
-                 const planner::ConfigMap& map,
-                 const std::string& title,
-                 std::vector<std::pair<Rgb, std::string>> legend,
-                 std::vector<Overlay> paths = {});
-
 /// `validate` / `simulate`: a job and a trajectory file.
 struct VerifyOptions {
   std::filesystem::path job_file;

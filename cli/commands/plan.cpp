@@ -12,13 +12,15 @@
 
 #include "cli/commands/commands.h"
 #include "cli/io/output.h"
+#include "cli/io/program_files.h"
+#include "cli/io/simulation_files.h"
 #include "cli/plot/image_io.h"
 #include "cli/report/plan_report.h"
-#include "pipeline/plan_scan.h"
-#include "cli/verify.h"
+#include "cli/report/verify_report.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"
 #include "kinematics/units.h"
+#include "pipeline/plan_scan.h"
 #include "planner/trajectory_builder.h"
 
 namespace scanplan::cli {
@@ -82,12 +84,12 @@ std::string cellSummary(const JobSpec& job,
                         const kinematics::LoadedMesh& part) {
   std::string s = fmt::format("job        {} ({})\n", job.name, job.source.string());
   s += fmt::format("robot      {}\n", cell.robot.name());
-  s += fmt::format(
-      "table      radius {} mm, axis at ({:.1f}, {:.1f}, {:.1f}) mm, {}\n", job.table.radius_mm,
-      toMm(cell.table.X_WA.translation().x()), toMm(cell.table.X_WA.translation().y()),
-      toMm(cell.table.X_WA.translation().z()),
-      job.table.continuous ? "continuous"
-                           : fmt::format("{} … {} deg", job.table.min_deg, job.table.max_deg));
+  s += fmt::format("table      radius {} mm, axis at ({:.1f}, {:.1f}, {:.1f}) mm, {}\n",
+                   job.table.radius_mm, toMm(cell.table.X_WA.translation().x()),
+                   toMm(cell.table.X_WA.translation().y()), toMm(cell.table.X_WA.translation().z()),
+                   job.table.continuous
+                       ? "continuous"
+                       : fmt::format("{} … {} deg", job.table.min_deg, job.table.max_deg));
   const Eigen::Vector3d size = part.mesh.bounds().sizes() * kMToMm;
   s += fmt::format("part       {}: {} triangles, {:.1f} x {:.1f} x {:.1f} mm, {}\n",
                    job.part.mesh.as_written, part.mesh.triangles.size(), size.x(), size.y(),
@@ -105,8 +107,9 @@ pipeline::ScanPlan runPipeline(const JobSpec& job,
   po.compare = options.compare;
   po.refine = options.refine;
   try {
-    return pipeline::planScan(problem, po, [&progress](std::string_view, std::size_t d,
-                                                       std::size_t n) { progress(d, n); });
+    return pipeline::planScan(
+        problem, po,
+        [&progress](std::string_view, std::size_t d, std::size_t n) { progress(d, n); });
   } catch (const InputError& e) {
     throw InputError(job.source.string() + ": " + e.what());
   }
@@ -135,10 +138,10 @@ std::string choiceSummary(const pipeline::ScanPlan& plan) {
                      c.dp->terms.total, step, 100.0 * *gap);
   }
   for (const pipeline::PlannerOutcome& o : c.others) {
-    s += o.result.solved() ? fmt::format("compare    {:<5} J = {:.3f} s in {:.2f} s\n", o.method,
-                                         o.result.terms.total, o.seconds)
-                           : fmt::format("compare    {:<5} no path: {}\n", o.method,
-                                         o.result.reason);
+    s += o.result.solved()
+             ? fmt::format("compare    {:<5} J = {:.3f} s in {:.2f} s\n", o.method,
+                           o.result.terms.total, o.seconds)
+             : fmt::format("compare    {:<5} no path: {}\n", o.method, o.result.reason);
   }
   const planner::TrajectoryBuild& tb = *plan.trajectory;
   const auto& worst = tb.trajectory.samples[tb.min_f_sample];
@@ -156,8 +159,8 @@ std::string choiceSummary(const pipeline::ScanPlan& plan) {
 void writeChoiceFigure(const std::filesystem::path& out, const pipeline::ScanPlan& plan) {
   const pipeline::PathChoice& c = plan.choice;
   std::vector<std::pair<std::string, std::vector<double>>> drawn{{c.chosen.method, c.theta}};
-  std::vector<std::string> labels{fmt::format("{}{} J {:.2f} s", c.chosen.method,
-                                              c.refine ? " + refine" : "", c.terms.total)};
+  std::vector<std::string> labels{
+      fmt::format("{}{} J {:.2f} s", c.chosen.method, c.refine ? " + refine" : "", c.terms.total)};
   for (const pipeline::PlannerOutcome& o : c.others) {
     if (!o.result.solved()) continue;
     drawn.emplace_back(o.method, o.result.theta);

@@ -8,12 +8,17 @@
 #include <spdlog/spdlog.h>
 
 #include "cli/commands/commands.h"
+#include "cli/config/problem.h"
 #include "cli/io/output.h"
+#include "cli/io/program_files.h"
+#include "cli/io/simulation_files.h"
+#include "cli/io/trajectory_file.h"
 #include "cli/programs/programs.h"
-#include "cli/verify.h"
+#include "cli/report/verify_report.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"
 #include "kinematics/units.h"
+#include "pipeline/simulation.h"
 
 namespace scanplan::cli {
 
@@ -64,7 +69,8 @@ ExitCode runSimulate(const VerifyOptions& options) {
   const kinematics::LoadedMesh part = loadPart(job, cell);
   const kinematics::Trajectory trajectory = loadTrajectory(options.trajectory_file);
   prepareOutputDir(options.out_dir);
-  const SimulationRun run = simulateTrajectory(job, cell, part.mesh, trajectory);
+  const pipeline::SimulationRun run = pipeline::simulateTrajectory(
+      cell, part.mesh, laserOptics(job), simulationSettings(job, cell), trajectory);
   writeSimulationOutputs(options.out_dir, job, part.mesh, run);
   const Json json = {{"format", "scanplan simulation report 1"},
                      {"job", job.name},

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "cli/io/json.h"
-#include "cli/verify.h"
+#include "cli/report/verify_report.h"
 #include "kinematics/units.h"
 
 namespace scanplan::cli {
@@ -108,8 +108,7 @@ void addBranches(Json& json, const planner::ConfigMap& map, const pipeline::Path
   if (planning.others.empty()) return;
   Json compare = Json::array();
   for (const pipeline::PlannerOutcome& o : planning.others) {
-    Json other = {
-        {"method", o.method}, {"status", resultStatus(o.result)}, {"seconds", o.seconds}};
+    Json other = {{"method", o.method}, {"status", resultStatus(o.result)}, {"seconds", o.seconds}};
     if (o.result.solved()) {
       addTerms(other, o.result.terms);
     } else {

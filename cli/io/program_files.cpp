@@ -1,0 +1,75 @@
+#include "cli/io/program_files.h"
+
+#include <algorithm>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <spdlog/spdlog.h>
+
+#include "cli/io/output.h"
+#include "cli/programs/programs.h"
+#include "kinematics/error.h"
+#include "kinematics/units.h"
+
+namespace scanplan::cli {
+
+namespace {
+
+// The summary's word on the formats against the robot's controller: a warning for another
+// vendor's language (its joint values are this robot's, not that vendor's), a note when the
+// robot file names no controller.
+std::string controllerNote(const RobotSpec& robot, const std::vector<std::string>& formats) {
+  const std::vector<std::string> foreign = foreignPrograms(robot, formats);
+  if (!foreign.empty()) {
+    const std::string warning =
+        fmt::format("{} {} not the language of robot '{}' (controller {}, writes {})",
+                    fmt::join(foreign, ", "), foreign.size() == 1 ? "is" : "are", robot.name,
+                    robot.controller, controllerProgramFormat(robot.controller));
+    spdlog::warn("programs: {}", warning);
+    return "; WARNING: " + warning;
+  }
+  if (controllerProgramFormat(robot.controller).empty()) {
+    return fmt::format("; robot '{}' names no controller (controller: none)", robot.name);
+  }
+  return "";
+}
+
+}  // namespace
+
+std::string writePrograms(const std::filesystem::path& dir,
+                          const std::string& shown_as,
+                          const JobSpec& job,
+                          const kinematics::CellModel& cell,
+                          const kinematics::Trajectory& trajectory,
+                          const std::vector<std::string>& formats) {
+  ProgramOptions options;
+  options.name = job.outputs.program_name;
+  options.job = job.name;
+  options.table_max_speed = deg(job.table.max_speed_deg_s);
+  std::vector<std::string> written;
+  double max_percent = 0.0;
+  std::size_t over = 0;
+  for (const std::string& name : formats) {
+    const auto format = parseProgramFormat(name);
+    if (!format)
+      throw InputError(fmt::format("program format '{}': expected one of {}", name,
+                                   fmt::join(programFormatNames(), ", ")));
+    const ProgramFiles files = writeProgram(trajectory, cell.robot, *format, options);
+    for (const auto& [file, content] : files.files) {
+      writeFileAtomically(dir / file, content);
+      written.push_back(file);
+    }
+    max_percent = std::max(max_percent, files.max_speed_percent);
+    over = std::max(over, files.over_speed_segments);
+  }
+  if (written.empty()) return "programs   none (outputs.programs is empty)\n";
+  return fmt::format(
+      "programs   {}: {}; fastest step {:.0f}% of an axis's max speed (joints, table){}{}\n",
+      shown_as, fmt::join(written, ", "), max_percent,
+      over == 0
+          ? std::string()
+          : fmt::format(", {} step(s) need more than 100% (marked WARNING, run slower)", over),
+      controllerNote(job.robot, formats));
+}
+
+}  // namespace scanplan::cli

@@ -1,0 +1,24 @@
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "cli/config/job.h"
+#include "kinematics/cell.h"
+#include "kinematics/trajectory.h"
+
+namespace scanplan::cli {
+
+/// The robot programs of `formats` (names as in programFormatNames()) for the trajectory, into
+/// `dir`; returns one summary line (the folder as `shown_as`, the files, the fastest step as % of
+/// the joints' max speed, steps that need more than 100 %, a warning for another vendor's
+/// language than the robot's controller).
+std::string writePrograms(const std::filesystem::path& dir,
+                          const std::string& shown_as,
+                          const JobSpec& job,
+                          const kinematics::CellModel& cell,
+                          const kinematics::Trajectory& trajectory,
+                          const std::vector<std::string>& formats);
+
+}  // namespace scanplan::cli

@@ -1,0 +1,99 @@
+#include "cli/io/simulation_files.h"
+
+#include <array>
+#include <cstdint>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "cli/io/output.h"
+#include "cli/plot/figure.h"
+#include "cli/plot/image_io.h"
+#include "kinematics/units.h"
+#include "scanner/cloud_io.h"
+
+namespace scanplan::cli {
+
+namespace {
+
+Rgb toRgb(const std::array<std::uint8_t, 3>& c) { return {c[0], c[1], c[2]}; }
+
+}  // namespace
+
+void writeSimulationOutputs(const std::filesystem::path& dir,
+                            const JobSpec& job,
+                            const kinematics::TriangleMesh& part,
+                            const pipeline::SimulationRun& run) {
+  {
+    std::ostringstream cloud(std::ios::binary);
+    scanner::writeCloudPly(cloud, run.cloud.points);
+    writeFileAtomically(dir / "cloud.ply", cloud.str());
+  }
+  scanner::CoverageSettings coverage_settings;
+  coverage_settings.min_points = static_cast<std::uint32_t>(job.simulation.coverage_min_points);
+  {
+    std::ostringstream coverage(std::ios::binary);
+    scanner::writeCoveragePly(coverage, part, run.coverage, coverage_settings);
+    writeFileAtomically(dir / "coverage.ply", coverage.str());
+  }
+
+  // cloud.png: top row the points (coloured by acquisition time), bottom row the part coloured
+  // by density; iso, top and front views, captioned, each row with its colour scale.
+  constexpr int kView = 480;
+  const double t_end = run.cloud.points.empty() ? 1.0 : run.cloud.points.back().t;
+  std::vector<Rgb> triangle_colours;
+  const double max_density = run.coverage.density_p95_per_mm2;
+  for (std::size_t i = 0; i < part.triangles.size(); ++i) {
+    const bool covered = run.coverage.hits[i] >= coverage_settings.min_points;
+    triangle_colours.push_back(toRgb(scanner::densityColour(
+        scanner::triangleDensityPerMm2(part, run.coverage, i), max_density, covered)));
+  }
+  ViewGrid grid;
+  grid.rows.resize(2);  // both rows first: references into the vector stay valid
+  ViewRow& cloud = grid.rows[0];
+  cloud.title =
+      fmt::format("Simulated cloud, {} points, by acquisition time:", run.cloud.points.size());
+  ViewRow& density = grid.rows[1];
+  density.title = fmt::format("Coverage, {:.1f}% of the area, point density:",
+                              100.0 * run.coverage.covered_fraction);
+  for (int i = 0; i < 64; ++i) {
+    const double u = i / 63.0;
+    cloud.scale.push_back(toRgb(scanner::densityColour(u, 1.0, true)));
+    density.scale.push_back(toRgb(scanner::densityColour(u * max_density, max_density, true)));
+  }
+  cloud.scale_from = "0 s";
+  cloud.scale_to = fmt::format("{:.0f} s", t_end);
+  density.scale_from = "0";
+  density.scale_to = fmt::format("{:.1f} points/mm² (95%)", max_density);
+  for (const NamedView& view : partViews()) {
+    grid.captions.push_back(view.name);
+    RenderRequest points;
+    points.width = points.height = kView;
+    points.R_view = view.R_view;
+    // Fit both rows to the part's box: invisible corner markers would show, so use the part.
+    points.vertices = part.vertices;
+    points.triangles = {};
+    for (const auto& p : run.cloud.points) {
+      points.dots.push_back(p.p_P);
+      const double u = t_end > 0.0 ? p.t / t_end : 0.0;
+      points.dot_colours.push_back(toRgb(scanner::densityColour(u, 1.0, true)));
+    }
+    cloud.views.push_back(renderScene(points));
+    RenderRequest mesh;
+    mesh.width = mesh.height = kView;
+    mesh.R_view = view.R_view;
+    mesh.vertices = part.vertices;
+    mesh.triangles = part.triangles;
+    mesh.triangle_colours = triangle_colours;
+    density.views.push_back(renderScene(mesh));
+  }
+  grid.legend = {{toRgb(scanner::densityColour(0.0, 1.0, false)),
+                  coverage_settings.min_points > 1
+                      ? fmt::format("not covered (fewer than {} points on the triangle)",
+                                    coverage_settings.min_points)
+                      : std::string("not covered (no point on the triangle)")}};
+  const RgbImage out = drawViewGrid(grid);
+  writePng(dir / "cloud.png", out);
+}
+
+}  // namespace scanplan::cli

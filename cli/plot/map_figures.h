@@ -1,0 +1,41 @@
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "cli/plot/figure.h"
+#include "cli/plot/image_io.h"
+#include "kinematics/mesh.h"
+#include "kinematics/scan_path.h"
+#include "planner/config_map.h"
+
+namespace scanplan::cli {
+
+/// The f layer of one branch, min-pooled to at most 2000 x 1200 px (time →, angle ↑).
+RgbImage mapGreyImage(const planner::ConfigMap& map, std::size_t branch);
+
+/// `stem`.png and `stem`.svg: the map raster `image` (time →, angle ↑) framed with axes, title,
+/// a colour bar of f and a legend line per path; `paths` are drawn over it in axis units (time
+/// in s, table angle in deg), one per legend entry.
+void writeFigure(const std::filesystem::path& dir,
+                 const std::string& stem,
+                 const RgbImage& image,
+                 const planner::ConfigMap& map,
+                 const std::string& title,
+                 std::vector<std::pair<Rgb, std::string>> legend,
+                 std::vector<Overlay> paths = {});
+
+/// configmap.png/.svg (f), configmap_why.png/.svg (the limiting constraint, darker where f is
+/// lower) and configmap_cylinder.png of branch `shown`, into `dir`.
+void writeMapFigures(const std::filesystem::path& dir,
+                     const planner::ConfigMap& map,
+                     std::size_t shown);
+
+/// Three views of the path (the laser origin, part frame) around the part, captioned, with start
+/// and end marked.
+RgbImage pathPicture(const kinematics::TriangleMesh& part, const kinematics::ScanPath& path);
+
+}  // namespace scanplan::cli

@@ -1,0 +1,121 @@
+#include "cli/report/verify_report.h"
+
+#include <fmt/format.h>
+
+#include "kinematics/units.h"
+
+namespace scanplan::cli {
+
+std::string validationSummary(const planner::ValidationReport& r, std::size_t max_lines) {
+  std::string s =
+      fmt::format("validation {}: {} poses, {} clearance evaluations in {:.2f} s; ",
+                  r.valid ? "valid" : fmt::format("INVALID, {} violation(s)", r.violations.size()),
+                  r.samples, r.poses_checked, r.seconds);
+  s += std::isfinite(r.min_distance)
+           ? fmt::format("min distance {:.1f} mm ({} at t = {:.2f} s); ", toMm(r.min_distance),
+                         r.min_distance_pair, r.min_distance_t)
+           : std::string("every pair beyond its d_high; ");
+  s += std::isfinite(r.proven_clearance)
+           ? fmt::format("proven clearance over the whole motion {:.1f} mm\n",
+                         toMm(r.proven_clearance))
+           : std::string("no pairs\n");
+  for (std::size_t i = 0; i < r.violations.size() && i < max_lines; ++i) {
+    s += "  " + planner::describe(r.violations[i]) + "\n";
+  }
+  if (r.violations.size() > max_lines) {
+    s += fmt::format("  … and {} more (report.json lists all)\n", r.violations.size() - max_lines);
+  }
+  if (r.first_collision) {
+    const Eigen::Vector3d p = r.first_collision->p_W * kMToMm;
+    s += fmt::format(
+        "  first collision: {} at t = {:.3f} s, contact at ({:.1f}, {:.1f}, {:.1f}) mm "
+        "(world)\n",
+        r.first_collision->what, r.first_collision->t, p.x(), p.y(), p.z());
+  }
+  return s;
+}
+
+namespace {
+
+// The unit a violation's value and limit are given in, as validationJson() converts them.
+const char* violationUnit(planner::Violation::Kind kind) {
+  using Kind = planner::Violation::Kind;
+  if (kind == Kind::kCollision) return "mm";
+  if (kind == Kind::kJointSpeed || kind == Kind::kTableSpeed) return "deg/s";
+  if (kind == Kind::kTableAccel) return "deg/s^2";
+  return "deg";
+}
+
+Json violationJson(const planner::Violation& v) {
+  const bool collision = v.kind == planner::Violation::Kind::kCollision;
+  // rad, rad/s, rad/s² → deg, deg/s, deg/s²; m → mm
+  const auto user = [&](double x) { return collision ? toMm(x) : toDeg(x); };
+  Json json = {{"kind", planner::kindName(v.kind)},
+               {"what", v.what},
+               {"time_s", v.t},
+               {"start_s", v.t_start},
+               {"end_s", v.t_end},
+               {"value", user(v.value)},
+               {"limit", user(v.limit)},
+               {"unit", violationUnit(v.kind)}};
+  if (collision) json["contact_mm"] = {toMm(v.p_W(0)), toMm(v.p_W(1)), toMm(v.p_W(2))};
+  return json;
+}
+
+}  // namespace
+
+Json validationJson(const planner::ValidationReport& r) {
+  Json violations = Json::array();
+  for (const planner::Violation& v : r.violations) violations.push_back(violationJson(v));
+  return {{"valid", r.valid},
+          {"poses", r.samples},
+          {"clearance_evaluations", r.poses_checked},
+          {"seconds", r.seconds},
+          {"min_distance_mm", toMm(r.min_distance)},
+          {"min_distance_pair", r.min_distance_pair},
+          {"min_distance_time_s", r.min_distance_t},
+          {"proven_clearance_mm", toMm(r.proven_clearance)},
+          {"violations", std::move(violations)}};
+}
+
+std::string simulationSummary(const pipeline::SimulationRun& run) {
+  const scanner::SimulationStats& s = run.cloud.stats;
+  std::string text = fmt::format(
+      "simulation {} profiles, {} laser + {} occlusion rays in {:.1f} s: {} points ({} outside "
+      "the window, {} hidden from the camera)\n",
+      s.profiles, s.laser_rays, s.occlusion_rays, run.seconds, s.points, s.outside_window,
+      s.occluded);
+  text += fmt::format(
+      "coverage   {:.1f}% of the part's area ({} of {} triangles); density {:.2f} points/mm² "
+      "(median {:.2f}, 5% {:.2f}, 95% {:.2f})\n",
+      100.0 * run.coverage.covered_fraction, run.coverage.covered_triangles,
+      run.coverage.hits.size(), run.coverage.density_mean_per_mm2,
+      run.coverage.density_median_per_mm2, run.coverage.density_p5_per_mm2,
+      run.coverage.density_p95_per_mm2);
+  return text;
+}
+
+Json simulationJson(const pipeline::SimulationRun& run) {
+  const scanner::SimulationStats& s = run.cloud.stats;
+  const scanner::PartCoverage& c = run.coverage;
+  return {{"profiles", s.profiles},
+          {"laser_rays", s.laser_rays},
+          {"occlusion_rays", s.occlusion_rays},
+          {"points", s.points},
+          {"outside_window", s.outside_window},
+          {"occluded", s.occluded},
+          {"seconds", run.seconds},
+          {"coverage",
+           {{"covered_fraction", c.covered_fraction},
+            {"covered_area_mm2", c.covered_area * 1e6},
+            {"total_area_mm2", c.total_area * 1e6},
+            {"covered_triangles", c.covered_triangles},
+            {"triangles", c.hits.size()},
+            {"points_on_part", c.part_points},
+            {"density_mean_per_mm2", c.density_mean_per_mm2},
+            {"density_median_per_mm2", c.density_median_per_mm2},
+            {"density_p5_per_mm2", c.density_p5_per_mm2},
+            {"density_p95_per_mm2", c.density_p95_per_mm2}}}};
+}
+
+}  // namespace scanplan::cli

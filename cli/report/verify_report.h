@@ -1,0 +1,24 @@
+#pragma once
+// What `plan`, `validate` and `simulate` say about a trajectory's validation and its simulated
+// scan: summary lines for the terminal and JSON objects for reports.
+
+#include <cstddef>
+#include <string>
+
+#include "cli/io/json.h"
+#include "pipeline/simulation.h"
+#include "planner/validation.h"
+
+namespace scanplan::cli {
+
+/// Validation summary lines for stdout (every violation, at most `max_lines` of them).
+std::string validationSummary(const planner::ValidationReport& report, std::size_t max_lines = 12);
+/// The report as a JSON object (lengths in mm, angles in degrees, times in s).
+Json validationJson(const planner::ValidationReport& report);
+
+/// The simulation's counts and coverage, two lines.
+std::string simulationSummary(const pipeline::SimulationRun& run);
+/// The run's counts and the coverage as a JSON object (areas in mm²).
+Json simulationJson(const pipeline::SimulationRun& run);
+
+}  // namespace scanplan::cli
