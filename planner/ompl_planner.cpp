@@ -456,6 +456,13 @@ std::vector<double> replayPath(const Problem& problem,
   return out;
 }
 
+// Our status for an OMPL result that is not (yet) an exact, checked path.
+PlanResult::Status unsolvedStatus(const ob::PlannerStatus& status) {
+  if (status == ob::PlannerStatus::APPROXIMATE_SOLUTION) return PlanResult::Status::kApproximate;
+  if (status == ob::PlannerStatus::TIMEOUT) return PlanResult::Status::kTimeout;
+  return PlanResult::Status::kNoPath;
+}
+
 }  // namespace
 
 PlanResult planOmpl(const ConfigMap& map,
@@ -507,10 +514,7 @@ PlanResult planOmpl(const ConfigMap& map,
   const ob::PlannerPtr planner = makePlanner(si, pdef, os);
 
   const SolveOutcome solved = solveWithin(*planner, os);
-  result.status = solved.status == ob::PlannerStatus::APPROXIMATE_SOLUTION
-                      ? PlanResult::Status::kApproximate
-                  : solved.status == ob::PlannerStatus::TIMEOUT ? PlanResult::Status::kTimeout
-                                                                : PlanResult::Status::kNoPath;
+  result.status = unsolvedStatus(solved.status);  // kExact once the path is checked below
   result.detail = solveDetail(os, solved, starts.size());
   if (solved.status != ob::PlannerStatus::EXACT_SOLUTION) {
     result.reason = unsolvedReason(map, os, solved, *pdef);
