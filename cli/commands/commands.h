@@ -68,8 +68,6 @@ struct PathContext {
 };
 /// Loads the part and generates the scan path; errors name the job.
 PathContext buildPath(const JobSpec& job, const kinematics::CellModel& cell);
-/// The scanner window and path elements, one line each.
-std::string pathSummary(const PathContext& context);
 /// `validate` / `simulate`: a job and a trajectory file.
 struct VerifyOptions {
   std::filesystem::path job_file;
@@ -106,8 +104,6 @@ struct MapRun {
 MapRun computeMap(const JobSpec& job,
                   const collision::Scene& scene,
                   const kinematics::ScanPath& path);
-/// One line for the map, one per branch.
-std::string mapSummary(const MapRun& run);
 /// path.csv and path.png into `dir`.
 void writePathOutputs(const std::filesystem::path& dir, const PathContext& context);
 /// The file list of writePathOutputs() + writeMapOutputs(), for summaries.

@@ -15,6 +15,7 @@
 #include "cli/io/output.h"
 #include "cli/plot/image_io.h"
 #include "cli/plot/map_figures.h"
+#include "cli/report/plan_summary.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"
 #include "kinematics/mesh.h"
@@ -70,24 +71,6 @@ PathContext buildPath(const JobSpec& job, const kinematics::CellModel& cell) {
   return context;
 }
 
-std::string pathSummary(const PathContext& c) {
-  std::string s = fmt::format(
-      "scanner    depth window {:.1f} … {:.1f} mm, line {:.1f} mm near, {:.1f} mm far (Eq. 5)\n",
-      toMm(c.window.z_min), toMm(c.window.z_max), 2 * toMm(c.window.y_near),
-      2 * toMm(c.window.y_far));
-  for (std::size_t i = 0; i < c.generated.elements.size(); ++i) {
-    const auto& e = c.generated.elements[i];
-    s += fmt::format(
-        "path[{}]    {:<9} t = {:.1f} … {:.1f} s, surface depth {:.1f} … {:.1f} mm, {:.0f}% of "
-        "probes in the window{}\n",
-        i, e.kind, e.start_time, e.start_time + e.duration, toMm(e.depth_min), toMm(e.depth_max),
-        100.0 * e.coverage_in_window, e.note.empty() ? "" : "; " + e.note);
-  }
-  s += fmt::format("samples    {} every {} s ({:.1f} s)\n", c.generated.path.samples.size(),
-                   c.generated.path.dt, c.generated.path.duration());
-  return s;
-}
-
 scanner::GeneratedPath generateScanPath(const JobSpec& job, const kinematics::CellModel& cell) {
   return buildPath(job, cell).generated;
 }
@@ -99,7 +82,7 @@ ExitCode runPath(const PlanOptions& options) {
   prepareOutputDir(options.out_dir);
   writeFileAtomically(options.out_dir / "path.csv", scanner::pathToCsv(context.generated.path));
   writePng(options.out_dir / "path.png", pathPicture(context.part.mesh, context.generated.path));
-  std::string text = pathSummary(context);
+  std::string text = pathSummary(context.window, context.generated);
   text += fmt::format(
       "wrote      {} (path.csv, path.png: iso, top and front views; green start, orange end)\n",
       options.out_dir.string());
@@ -123,28 +106,6 @@ MapRun computeMap(const JobSpec& job,
   return run;
 }
 
-std::string mapSummary(const MapRun& run) {
-  const planner::ConfigMap& map = run.map;
-  const std::size_t cells = map.cellsPerBranch();
-  std::string text = fmt::format(
-      "map        {} angles x {} samples x {} branch(es) = {} cells in {:.1f} s ({:.0f} cells/s)\n",
-      map.angles.size(), map.times.size(), map.branches.size(), cells * map.branches.size(),
-      run.seconds, static_cast<double>(cells) / run.seconds);
-  for (std::size_t b = 0; b < map.branches.size(); ++b) {
-    std::size_t feasible = 0;
-    double sum = 0.0;
-    for (std::size_t i = b * cells; i < (b + 1) * cells; ++i) {
-      feasible += map.f[i] > 0.0f ? 1u : 0u;
-      sum += map.f[i];
-    }
-    text +=
-        fmt::format("  {:<21} feasible {:5.1f}% of cells, mean f {:.3f}\n", map.branches[b].words(),
-                    100.0 * static_cast<double>(feasible) / static_cast<double>(cells),
-                    sum / static_cast<double>(cells));
-  }
-  return text;
-}
-
 void writePathOutputs(const std::filesystem::path& dir, const PathContext& context) {
   writeFileAtomically(dir / "path.csv", scanner::pathToCsv(context.generated.path));
   writePng(dir / "path.png", pathPicture(context.part.mesh, context.generated.path));
@@ -163,7 +124,7 @@ std::string buildAndWriteMaps(const JobSpec& job,
   const MapRun run = computeMap(job, scene, context.generated.path);
   writePathOutputs(out, context);
   writeMapOutputs(out, job, run.map);
-  return pathSummary(context) + mapSummary(run) +
+  return pathSummary(context.window, context.generated) + mapSummary(run.map, run.seconds) +
          fmt::format("wrote      {}: {}\n", out.string(), kMapFilesNote);
 }
 

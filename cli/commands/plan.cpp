@@ -16,6 +16,7 @@
 #include "cli/io/simulation_files.h"
 #include "cli/plot/image_io.h"
 #include "cli/report/plan_report.h"
+#include "cli/report/plan_summary.h"
 #include "cli/report/verify_report.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"
@@ -78,25 +79,6 @@ void writePathFigure(const std::filesystem::path& dir,
               std::move(lines));
 }
 
-// The cell, as the first lines of the summary.
-std::string cellSummary(const JobSpec& job,
-                        const kinematics::CellModel& cell,
-                        const kinematics::LoadedMesh& part) {
-  std::string s = fmt::format("job        {} ({})\n", job.name, job.source.string());
-  s += fmt::format("robot      {}\n", cell.robot.name());
-  s += fmt::format("table      radius {} mm, axis at ({:.1f}, {:.1f}, {:.1f}) mm, {}\n",
-                   job.table.radius_mm, toMm(cell.table.X_WA.translation().x()),
-                   toMm(cell.table.X_WA.translation().y()), toMm(cell.table.X_WA.translation().z()),
-                   job.table.continuous
-                       ? "continuous"
-                       : fmt::format("{} … {} deg", job.table.min_deg, job.table.max_deg));
-  const Eigen::Vector3d size = part.mesh.bounds().sizes() * kMToMm;
-  s += fmt::format("part       {}: {} triangles, {:.1f} x {:.1f} x {:.1f} mm, {}\n",
-                   job.part.mesh.as_written, part.mesh.triangles.size(), size.x(), size.y(),
-                   size.z(), part.mesh.isClosed() ? "closed" : "open (has holes)");
-  return s;
-}
-
 // planScan() with a progress line on a terminal; its input errors name the job file.
 pipeline::ScanPlan runPipeline(const JobSpec& job,
                                const pipeline::ScanProblem& problem,
@@ -113,46 +95,6 @@ pipeline::ScanPlan runPipeline(const JobSpec& job,
   } catch (const InputError& e) {
     throw InputError(job.source.string() + ": " + e.what());
   }
-}
-
-// The plan's lines after the map: the path, the choice, refinement, the DP gap, comparisons and
-// the trajectory.
-std::string choiceSummary(const pipeline::ScanPlan& plan) {
-  const planner::ConfigMap& map = plan.prepared->map;
-  const pipeline::PathChoice& c = plan.choice;
-  const planner::ObjectiveTerms& t = c.terms;
-  std::string s = fmt::format(
-      "plan       {} on {}: J = {:.3f} s (f {:.3f}, omega {:.3f}, alpha {:.3f}) in {:.2f} s\n",
-      c.chosen.method, map.branches[c.chosen.result.branch].words(), t.total, t.cost_f,
-      t.cost_omega, t.cost_alpha, c.chosen.seconds);
-  for (const auto& [b, why] : c.rejected) {
-    s += fmt::format("  rejected {} (lower J): {}\n", map.branches[b].words(), why);
-  }
-  if (c.refine) {
-    s += fmt::format("refine     J {:.3f} -> {:.3f} s ({})\n", c.refine->before.total,
-                     c.refine->after.total, c.refine->improved ? "improved" : "kept the input");
-  }
-  if (const auto gap = c.dpGap()) {
-    const double step = toDeg(map.angles[1] - map.angles[0]) / c.dp_subdivisions;
-    s += fmt::format("baseline   DP optimum J = {:.3f} s (grid {:.3g} deg): gap {:+.1f}%\n",
-                     c.dp->terms.total, step, 100.0 * *gap);
-  }
-  for (const pipeline::PlannerOutcome& o : c.others) {
-    s += o.result.solved()
-             ? fmt::format("compare    {:<5} J = {:.3f} s in {:.2f} s\n", o.method,
-                           o.result.terms.total, o.seconds)
-             : fmt::format("compare    {:<5} no path: {}\n", o.method, o.result.reason);
-  }
-  const planner::TrajectoryBuild& tb = *plan.trajectory;
-  const auto& worst = tb.trajectory.samples[tb.min_f_sample];
-  s += fmt::format(
-      "trajectory {} samples over {:.1f} s; table |omega| <= {:.1f} deg/s, |alpha| <= {:.1f} "
-      "deg/s^2; min f {:.3f} at t = {:.1f} s ({}); min clearance {}\n",
-      tb.trajectory.samples.size(), tb.trajectory.duration(), toDeg(t.max_abs_omega),
-      toDeg(t.max_abs_alpha), tb.min_f, worst.t, worst.limit,
-      std::isfinite(tb.min_clearance) ? fmt::format("{:.1f} mm", toMm(tb.min_clearance))
-                                      : std::string("beyond every d_high"));
-  return s;
 }
 
 // configmap_path.png/.svg: the chosen path and, with --compare, every other planner's.
@@ -200,7 +142,8 @@ ExitCode runPlan(const PlanOptions& options) {
   const PathContext context{part, prepared.window, prepared.path};
   writePathOutputs(out, context);
   writeMapOutputs(out, job, prepared.map);
-  summary += pathSummary(context) + mapSummary(MapRun{prepared.map, prepared.map_seconds});
+  summary +=
+      pathSummary(prepared.window, prepared.path) + mapSummary(prepared.map, prepared.map_seconds);
   pipeline::StageTimes times = plan.times;
   const auto finish = [&] {
     times.total = since(start);

@@ -1,0 +1,111 @@
+// The terminal summary of `path`, `map` and `plan`: one line per stage, aligned, in mm,
+// degrees and seconds.
+#include "cli/report/plan_summary.h"
+
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "kinematics/units.h"
+
+namespace scanplan::cli {
+
+// The cell, as the first lines of the summary.
+std::string cellSummary(const JobSpec& job,
+                        const kinematics::CellModel& cell,
+                        const kinematics::LoadedMesh& part) {
+  std::string s = fmt::format("job        {} ({})\n", job.name, job.source.string());
+  s += fmt::format("robot      {}\n", cell.robot.name());
+  s += fmt::format("table      radius {} mm, axis at ({:.1f}, {:.1f}, {:.1f}) mm, {}\n",
+                   job.table.radius_mm, toMm(cell.table.X_WA.translation().x()),
+                   toMm(cell.table.X_WA.translation().y()), toMm(cell.table.X_WA.translation().z()),
+                   job.table.continuous
+                       ? "continuous"
+                       : fmt::format("{} … {} deg", job.table.min_deg, job.table.max_deg));
+  const Eigen::Vector3d size = part.mesh.bounds().sizes() * kMToMm;
+  s += fmt::format("part       {}: {} triangles, {:.1f} x {:.1f} x {:.1f} mm, {}\n",
+                   job.part.mesh.as_written, part.mesh.triangles.size(), size.x(), size.y(),
+                   size.z(), part.mesh.isClosed() ? "closed" : "open (has holes)");
+  return s;
+}
+
+std::string pathSummary(const scanner::LaserWindow& window,
+                        const scanner::GeneratedPath& generated) {
+  std::string s = fmt::format(
+      "scanner    depth window {:.1f} … {:.1f} mm, line {:.1f} mm near, {:.1f} mm far (Eq. 5)\n",
+      toMm(window.z_min), toMm(window.z_max), 2 * toMm(window.y_near), 2 * toMm(window.y_far));
+  for (std::size_t i = 0; i < generated.elements.size(); ++i) {
+    const auto& e = generated.elements[i];
+    s += fmt::format(
+        "path[{}]    {:<9} t = {:.1f} … {:.1f} s, surface depth {:.1f} … {:.1f} mm, {:.0f}% of "
+        "probes in the window{}\n",
+        i, e.kind, e.start_time, e.start_time + e.duration, toMm(e.depth_min), toMm(e.depth_max),
+        100.0 * e.coverage_in_window, e.note.empty() ? "" : "; " + e.note);
+  }
+  s += fmt::format("samples    {} every {} s ({:.1f} s)\n", generated.path.samples.size(),
+                   generated.path.dt, generated.path.duration());
+  return s;
+}
+
+std::string mapSummary(const planner::ConfigMap& map, double seconds) {
+  const std::size_t cells = map.cellsPerBranch();
+  std::string text = fmt::format(
+      "map        {} angles x {} samples x {} branch(es) = {} cells in {:.1f} s ({:.0f} cells/s)\n",
+      map.angles.size(), map.times.size(), map.branches.size(), cells * map.branches.size(),
+      seconds, static_cast<double>(cells) / seconds);
+  for (std::size_t b = 0; b < map.branches.size(); ++b) {
+    std::size_t feasible = 0;
+    double sum = 0.0;
+    for (std::size_t i = b * cells; i < (b + 1) * cells; ++i) {
+      feasible += map.f[i] > 0.0f ? 1u : 0u;
+      sum += map.f[i];
+    }
+    text +=
+        fmt::format("  {:<21} feasible {:5.1f}% of cells, mean f {:.3f}\n", map.branches[b].words(),
+                    100.0 * static_cast<double>(feasible) / static_cast<double>(cells),
+                    sum / static_cast<double>(cells));
+  }
+  return text;
+}
+
+// The plan's lines after the map: the path, the choice, refinement, the DP gap, comparisons and
+// the trajectory.
+std::string choiceSummary(const pipeline::ScanPlan& plan) {
+  const planner::ConfigMap& map = plan.prepared->map;
+  const pipeline::PathChoice& c = plan.choice;
+  const planner::ObjectiveTerms& t = c.terms;
+  std::string s = fmt::format(
+      "plan       {} on {}: J = {:.3f} s (f {:.3f}, omega {:.3f}, alpha {:.3f}) in {:.2f} s\n",
+      c.chosen.method, map.branches[c.chosen.result.branch].words(), t.total, t.cost_f,
+      t.cost_omega, t.cost_alpha, c.chosen.seconds);
+  for (const auto& [b, why] : c.rejected) {
+    s += fmt::format("  rejected {} (lower J): {}\n", map.branches[b].words(), why);
+  }
+  if (c.refine) {
+    s += fmt::format("refine     J {:.3f} -> {:.3f} s ({})\n", c.refine->before.total,
+                     c.refine->after.total, c.refine->improved ? "improved" : "kept the input");
+  }
+  if (const auto gap = c.dpGap()) {
+    const double step = toDeg(map.angles[1] - map.angles[0]) / c.dp_subdivisions;
+    s += fmt::format("baseline   DP optimum J = {:.3f} s (grid {:.3g} deg): gap {:+.1f}%\n",
+                     c.dp->terms.total, step, 100.0 * *gap);
+  }
+  for (const pipeline::PlannerOutcome& o : c.others) {
+    s += o.result.solved()
+             ? fmt::format("compare    {:<5} J = {:.3f} s in {:.2f} s\n", o.method,
+                           o.result.terms.total, o.seconds)
+             : fmt::format("compare    {:<5} no path: {}\n", o.method, o.result.reason);
+  }
+  const planner::TrajectoryBuild& tb = *plan.trajectory;
+  const auto& worst = tb.trajectory.samples[tb.min_f_sample];
+  s += fmt::format(
+      "trajectory {} samples over {:.1f} s; table |omega| <= {:.1f} deg/s, |alpha| <= {:.1f} "
+      "deg/s^2; min f {:.3f} at t = {:.1f} s ({}); min clearance {}\n",
+      tb.trajectory.samples.size(), tb.trajectory.duration(), toDeg(t.max_abs_omega),
+      toDeg(t.max_abs_alpha), tb.min_f, worst.t, worst.limit,
+      std::isfinite(tb.min_clearance) ? fmt::format("{:.1f} mm", toMm(tb.min_clearance))
+                                      : std::string("beyond every d_high"));
+  return s;
+}
+
+}  // namespace scanplan::cli

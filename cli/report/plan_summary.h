@@ -1,0 +1,28 @@
+#pragma once
+
+#include <string>
+
+#include "cli/config/job.h"
+#include "kinematics/cell.h"
+#include "kinematics/mesh.h"
+#include "pipeline/plan_scan.h"
+#include "planner/config_map.h"
+#include "scanner/laser_model.h"
+#include "scanner/path_generators.h"
+
+namespace scanplan::cli {
+
+/// The job, robot, table and part lines.
+std::string cellSummary(const JobSpec& job,
+                        const kinematics::CellModel& cell,
+                        const kinematics::LoadedMesh& part);
+/// The scanner window and one line per path element, then the samples.
+std::string pathSummary(const scanner::LaserWindow& window,
+                        const scanner::GeneratedPath& generated);
+/// One line for the map (`seconds` to build it), one per branch.
+std::string mapSummary(const planner::ConfigMap& map, double seconds);
+/// The plan's lines after the map: the chosen path, rejected branches, refinement, the DP gap,
+/// comparisons and the trajectory. `plan` must hold a trajectory.
+std::string choiceSummary(const pipeline::ScanPlan& plan);
+
+}  // namespace scanplan::cli
