@@ -37,17 +37,23 @@ bool isInteger(const std::string& text) {
   return v && std::abs(*v) < 9e15 && *v == std::round(*v);
 }
 
-std::string omplLogOfJob(const std::vector<const BatchRow*>& rows,
-                         const std::vector<std::string>& keys) {
-  // The planner of a row: its method and the non-seed values it was given.
-  const auto methodOf = [](const BatchRow& r) {
-    if (!r.method.empty()) return r.method;
-    const std::string v = paramValue(r, "planner.method");  // a case that failed to load
-    return v.empty() ? std::string("none") : v;
-  };
-  std::vector<std::string> order;
+// The method of a row's planner.
+std::string methodOf(const BatchRow& r) {
+  if (!r.method.empty()) return r.method;
+  const std::string v = paramValue(r, "planner.method");  // a case that failed to load
+  return v.empty() ? std::string("none") : v;
+}
+
+// The rows grouped by planner: its method and the non-seed values it was given.
+struct PlannerGroups {
+  std::vector<std::string> order;  // the planner names, in the order of their first row
   std::map<std::string, std::vector<const BatchRow*>> planners;
   std::map<std::string, std::vector<std::string>> settings;  // "key = value" lines
+};
+
+PlannerGroups groupByPlanner(const std::vector<const BatchRow*>& rows,
+                             const std::vector<std::string>& keys) {
+  PlannerGroups groups;
   for (const BatchRow* r : rows) {
     std::string name = methodOf(*r);
     std::vector<std::string> common{"planner.method = " + methodOf(*r)};
@@ -60,13 +66,18 @@ std::string omplLogOfJob(const std::vector<const BatchRow*>& rows,
     for (char& c : name) {
       if (c == '\n' || c == '\r') c = ' ';
     }
-    if (!planners.count(name)) {
-      order.push_back(name);
-      settings[name] = common;
+    if (!groups.planners.count(name)) {
+      groups.order.push_back(name);
+      groups.settings[name] = common;
     }
-    planners[name].push_back(r);
+    groups.planners[name].push_back(r);
   }
-  // The seeds as run properties (numeric ones: the database types them).
+  return groups;
+}
+
+// The seeds as run properties, key → database type (numeric ones only: the database types them).
+std::vector<std::pair<std::string, const char*>> seedColumns(
+    const std::vector<const BatchRow*>& rows, const std::vector<std::string>& keys) {
   std::vector<std::pair<std::string, const char*>> seeds;
   for (const std::string& k : keys) {
     if (!isSeedKey(k)) continue;
@@ -80,9 +91,12 @@ std::string omplLogOfJob(const std::vector<const BatchRow*>& rows,
     }
     if (any && numeric) seeds.emplace_back(k, integer ? "INTEGER" : "REAL");
   }
+  return seeds;
+}
 
-  // Wall time spent: planning (the DP yardstick too), validation and simulation of every case,
-  // and each map once.
+// Wall time spent: planning (the DP yardstick too), validation and simulation of every case,
+// and each map once.
+double wallTimeSpent(const std::vector<const BatchRow*>& rows) {
   double total = 0.0;
   for (const BatchRow* r : rows) {
     for (const std::size_t m : {kPlanS, kDpS, kValidationS, kSimulationS}) {
@@ -90,27 +104,52 @@ std::string omplLogOfJob(const std::vector<const BatchRow*>& rows,
     }
     if (!r->map_reused) total += r->metrics[kMapS].value_or(0.0);
   }
-  std::size_t runs = planners.empty() ? 0 : planners[order.front()].size();
-  for (const auto& [name, group] : planners) {
+  return total;
+}
+
+// The runs per planner when every planner has the same number, else 0.
+std::size_t runsPerPlanner(const PlannerGroups& groups) {
+  std::size_t runs = groups.planners.empty() ? 0 : groups.planners.at(groups.order.front()).size();
+  for (const auto& [name, group] : groups.planners) {
     if (group.size() != runs) runs = 0;
   }
+  return runs;
+}
+
+std::string hostName() {
   char host[256] = "localhost";
   ::gethostname(host, sizeof host - 1);
   host[sizeof host - 1] = '\0';
+  return host[0] ? host : "localhost";
+}
+
+std::string localDateNow() {
   const std::time_t now = std::time(nullptr);
   std::tm local{};
   ::localtime_r(&now, &local);
   char date[64] = "unknown";
   std::strftime(date, sizeof date, "%Y-%m-%d %H:%M:%S", &local);
-  std::string experiment = fs::path(rows.front()->job).stem().string();
+  return date;
+}
+
+// The OMPL "problem": the base job's file stem, without white space.
+std::string experimentName(const std::string& job) {
+  std::string experiment = fs::path(job).stem().string();
   for (char& c : experiment) {
     if (std::isspace(static_cast<unsigned char>(c))) c = '_';
   }
+  return experiment.empty() ? "scanplan_batch" : experiment;
+}
 
+// The log's lines up to the planners: the experiment, its description, the run settings, the
+// enum type and the number of planners.
+std::string logHeader(const std::vector<const BatchRow*>& rows, const PlannerGroups& groups) {
+  const std::size_t runs = runsPerPlanner(groups);
+  const double total = wallTimeSpent(rows);
   std::string log = fmt::format("scanplan version {}\n", SCANPLAN_VERSION);
-  log += fmt::format("Experiment {}\n", experiment.empty() ? "scanplan_batch" : experiment);
-  log += fmt::format("Running on {}\n", host[0] ? host : "localhost");
-  log += fmt::format("Starting at {}\n", date);  // when this log was written
+  log += fmt::format("Experiment {}\n", experimentName(rows.front()->job));
+  log += fmt::format("Running on {}\n", hostName());
+  log += fmt::format("Starting at {}\n", localDateNow());  // when this log was written
   log += fmt::format(
       "<<<|\nscanplan batch of {}: the table angle over time planned on the job's configuration "
       "maps.\nPlanners are the settings of the sweep (planner.method and the varied values); "
@@ -131,80 +170,104 @@ std::string omplLogOfJob(const std::vector<const BatchRow*>& rows,
   log += "1 enum type\noutcome";
   for (const char* o : kBatchStatuses) log += fmt::format("|{}", o);
   log += "\n";
-  log += fmt::format("{} planners\n", order.size());
+  log += fmt::format("{} planners\n", groups.order.size());
+  return log;
+}
 
-  enum class Kind { kMetric, kSolved, kOutcome, kReused, kRepeat, kSweepSeed, kSeed };
-  struct Property {
-    Property(std::string n, Kind k, std::size_t m = 0, std::string seed_key = {})
-        : name(std::move(n)), kind(k), metric(m), key(std::move(seed_key)) {}
-    std::string name;  // with its type, as the log declares it
-    Kind kind;
-    std::size_t metric;  // kBatchMetrics index (kMetric)
-    std::string key;     // the seed key (kSeed)
-  };
+// A property of each run, as the log declares it and as a row gives its value.
+enum class PropertyKind { kMetric, kSolved, kOutcome, kReused, kRepeat, kSweepSeed, kSeed };
+struct Property {
+  Property(std::string n, PropertyKind k, std::size_t m = 0, std::string seed_key = {})
+      : name(std::move(n)), kind(k), metric(m), key(std::move(seed_key)) {}
+  std::string name;  // with its type, as the log declares it
+  PropertyKind kind;
+  std::size_t metric;  // kBatchMetrics index (kMetric)
+  std::string key;     // the seed key (kSeed)
+};
+
+std::vector<Property> runProperties(const std::vector<const BatchRow*>& rows,
+                                    const std::vector<std::pair<std::string, const char*>>& seeds) {
   std::vector<Property> properties{
-      {"time REAL", Kind::kMetric, kPlanS},
-      {"solved BOOLEAN", Kind::kSolved},
-      {"outcome ENUM", Kind::kOutcome},
-      {"best cost REAL", Kind::kMetric, kJ},
-      {"cost f REAL", Kind::kMetric, kCostF},
-      {"cost omega REAL", Kind::kMetric, kCostOmega},
-      {"cost alpha REAL", Kind::kMetric, kCostAlpha},
-      {"dp gap percent REAL", Kind::kMetric, kGap},
-      {"dp time REAL", Kind::kMetric, kDpS},
-      {"min f REAL", Kind::kMetric, kMinF},
-      {"solution clearance REAL", Kind::kMetric, kClearance},
-      {"max omega deg s REAL", Kind::kMetric, kOmega},
-      {"max alpha deg s2 REAL", Kind::kMetric, kAlpha},
-      {"cycle time REAL", Kind::kMetric, kCycle},
-      {"coverage REAL", Kind::kMetric, kCoverage},
-      {"map time REAL", Kind::kMetric, kMapS},
-      {"map reused BOOLEAN", Kind::kReused},
-      {"validation time REAL", Kind::kMetric, kValidationS},
-      {"simulation time REAL", Kind::kMetric, kSimulationS},
-      {"repeat INTEGER", Kind::kRepeat},
+      {"time REAL", PropertyKind::kMetric, kPlanS},
+      {"solved BOOLEAN", PropertyKind::kSolved},
+      {"outcome ENUM", PropertyKind::kOutcome},
+      {"best cost REAL", PropertyKind::kMetric, kJ},
+      {"cost f REAL", PropertyKind::kMetric, kCostF},
+      {"cost omega REAL", PropertyKind::kMetric, kCostOmega},
+      {"cost alpha REAL", PropertyKind::kMetric, kCostAlpha},
+      {"dp gap percent REAL", PropertyKind::kMetric, kGap},
+      {"dp time REAL", PropertyKind::kMetric, kDpS},
+      {"min f REAL", PropertyKind::kMetric, kMinF},
+      {"solution clearance REAL", PropertyKind::kMetric, kClearance},
+      {"max omega deg s REAL", PropertyKind::kMetric, kOmega},
+      {"max alpha deg s2 REAL", PropertyKind::kMetric, kAlpha},
+      {"cycle time REAL", PropertyKind::kMetric, kCycle},
+      {"coverage REAL", PropertyKind::kMetric, kCoverage},
+      {"map time REAL", PropertyKind::kMetric, kMapS},
+      {"map reused BOOLEAN", PropertyKind::kReused},
+      {"validation time REAL", PropertyKind::kMetric, kValidationS},
+      {"simulation time REAL", PropertyKind::kMetric, kSimulationS},
+      {"repeat INTEGER", PropertyKind::kRepeat},
   };
   if (std::any_of(rows.begin(), rows.end(), [](const BatchRow* r) { return r->seed; })) {
-    properties.emplace_back("seed INTEGER", Kind::kSweepSeed);
+    properties.emplace_back("seed INTEGER", PropertyKind::kSweepSeed);
   }
   for (const auto& [key, type] : seeds) {
-    properties.emplace_back(columnName(key) + " " + type, Kind::kSeed, 0, key);
+    properties.emplace_back(columnName(key) + " " + type, PropertyKind::kSeed, 0, key);
   }
-  const auto value = [](const Property& p, const BatchRow& r) -> std::string {
-    switch (p.kind) {
-      case Kind::kMetric:
-        return numberOrEmpty(r.metrics[p.metric], "");
-      case Kind::kSolved:
-        return r.status == "planned" ? "1" : "0";
-      case Kind::kOutcome: {
-        const auto* it = std::find_if(kBatchStatuses.begin(), kBatchStatuses.end(),
-                                      [&](const char* o) { return r.status == o; });
-        if (it == kBatchStatuses.end()) --it;  // an unknown status: error
-        return std::to_string(it - kBatchStatuses.begin());
-      }
-      case Kind::kReused:
-        return r.map_reused ? "1" : "0";
-      case Kind::kRepeat:
-        return std::to_string(r.repeat);
-      case Kind::kSweepSeed:
-        return r.seed ? std::to_string(*r.seed) : std::string();
-      case Kind::kSeed:
-        return paramValue(r, p.key);
+  return properties;
+}
+
+std::string propertyValue(const Property& p, const BatchRow& r) {
+  switch (p.kind) {
+    case PropertyKind::kMetric:
+      return numberOrEmpty(r.metrics[p.metric], "");
+    case PropertyKind::kSolved:
+      return r.status == "planned" ? "1" : "0";
+    case PropertyKind::kOutcome: {
+      const auto* it = std::find_if(kBatchStatuses.begin(), kBatchStatuses.end(),
+                                    [&](const char* o) { return r.status == o; });
+      if (it == kBatchStatuses.end()) --it;  // an unknown status: error
+      return std::to_string(it - kBatchStatuses.begin());
     }
-    return {};
-  };
-  for (const std::string& name : order) {
-    log += name + "\n";
-    log += fmt::format("{} common properties\n", settings[name].size());
-    for (const std::string& s : settings[name]) log += s + "\n";
-    log += fmt::format("{} properties for each run\n", properties.size());
-    for (const Property& p : properties) log += p.name + "\n";
-    log += fmt::format("{} runs\n", planners[name].size());
-    for (const BatchRow* r : planners[name]) {
-      for (const Property& p : properties) log += value(p, *r) + "; ";
-      log += "\n";
-    }
-    log += ".\n";
+    case PropertyKind::kReused:
+      return r.map_reused ? "1" : "0";
+    case PropertyKind::kRepeat:
+      return std::to_string(r.repeat);
+    case PropertyKind::kSweepSeed:
+      return r.seed ? std::to_string(*r.seed) : std::string();
+    case PropertyKind::kSeed:
+      return paramValue(r, p.key);
+  }
+  return {};
+}
+
+// One planner's block: its settings, the properties of each run and a line per run.
+std::string plannerBlock(const std::string& name,
+                         const std::vector<std::string>& settings,
+                         const std::vector<const BatchRow*>& runs,
+                         const std::vector<Property>& properties) {
+  std::string log = name + "\n";
+  log += fmt::format("{} common properties\n", settings.size());
+  for (const std::string& s : settings) log += s + "\n";
+  log += fmt::format("{} properties for each run\n", properties.size());
+  for (const Property& p : properties) log += p.name + "\n";
+  log += fmt::format("{} runs\n", runs.size());
+  for (const BatchRow* r : runs) {
+    for (const Property& p : properties) log += propertyValue(p, *r) + "; ";
+    log += "\n";
+  }
+  log += ".\n";
+  return log;
+}
+
+std::string omplLogOfJob(const std::vector<const BatchRow*>& rows,
+                         const std::vector<std::string>& keys) {
+  const PlannerGroups groups = groupByPlanner(rows, keys);
+  const std::vector<Property> properties = runProperties(rows, seedColumns(rows, keys));
+  std::string log = logHeader(rows, groups);
+  for (const std::string& name : groups.order) {
+    log += plannerBlock(name, groups.settings.at(name), groups.planners.at(name), properties);
   }
   return log;
 }

@@ -454,51 +454,66 @@ void describe(YamlOut& a, MapSpec& s) { describeMap(a, s); }
 
 namespace {
 
-// "planner.ray.horizon=20", "scan.paths[0].height_mm=60": sets that value in the YAML tree
-// (creating mappings on the way), so the reader validates it like any value of the file. The
-// value, and every key and mapping the override created, go into `origins`, so errors about
-// them name the override.
-void applyOverride(YAML::Node root, const std::string& text, OverrideOrigins& origins) {
-  // The key node of `key` in `map`, recorded as the override's when the override created it.
-  const auto recordKey = [&](const YAML::Node& map, const std::string& key) {
-    for (auto it = map.begin(); it != map.end(); ++it) {
-      if (it->first.IsScalar() && it->first.Scalar() == key) origins.add(it->first, text);
-    }
-  };
-  const auto bad = [&](const std::string& why) {
-    throw InputError(
-        fmt::format("--set '{}': {}: expected key.path=value, e.g. "
-                    "planner.ray.horizon=20 or scan.paths[0].height_mm=60",
-                    text, why));
-  };
-  const std::size_t eq = text.find('=');
-  if (eq == std::string::npos || eq == 0) bad("no key");
-  const std::string value = text.substr(eq + 1);
-  std::vector<std::pair<std::string, int>> steps;  // key, or index (key empty)
-  std::stringstream keys(text.substr(0, eq));
-  std::string segment;
-  while (std::getline(keys, segment, '.')) {
-    std::string key = segment;
-    std::vector<int> indices;
-    const std::size_t bracket = segment.find('[');
-    if (bracket != std::string::npos) {
-      key = segment.substr(0, bracket);
-      std::string rest = segment.substr(bracket);
-      while (!rest.empty()) {
-        const std::size_t close = rest.find(']');
-        if (rest[0] != '[' || close == std::string::npos) bad("'" + segment + "' is malformed");
-        const auto index = parseFiniteNumber(rest.substr(1, close - 1));
-        if (!index || *index < 0 || *index != std::floor(*index)) {
-          bad("'" + segment + "' has a bad list index");
-        }
-        indices.push_back(static_cast<int>(*index));
-        rest = rest.substr(close + 1);
-      }
-    }
-    if (key.empty()) bad("an empty key in '" + text.substr(0, eq) + "'");
-    steps.emplace_back(key, -1);
-    for (int i : indices) steps.emplace_back("", i);
+[[noreturn]] void badOverride(const std::string& text, const std::string& why) {
+  throw InputError(
+      fmt::format("--set '{}': {}: expected key.path=value, e.g. "
+                  "planner.ray.horizon=20 or scan.paths[0].height_mm=60",
+                  text, why));
+}
+
+// The key node of `key` in `map`, recorded as the override's when the override created it.
+void recordOverrideKey(const YAML::Node& map,
+                       const std::string& key,
+                       const std::string& text,
+                       OverrideOrigins& origins) {
+  for (auto it = map.begin(); it != map.end(); ++it) {
+    if (it->first.IsScalar() && it->first.Scalar() == key) origins.add(it->first, text);
   }
+}
+
+// A step of an override's key path: a key, or a list index (key empty).
+using OverrideStep = std::pair<std::string, int>;
+
+// The steps of one '.'-separated segment of the key path: "paths[0]" → paths, [0].
+void appendSegmentSteps(const std::string& text,
+                        std::size_t eq,
+                        const std::string& segment,
+                        std::vector<OverrideStep>& steps) {
+  std::string key = segment;
+  std::vector<int> indices;
+  const std::size_t bracket = segment.find('[');
+  if (bracket != std::string::npos) {
+    key = segment.substr(0, bracket);
+    std::string rest = segment.substr(bracket);
+    while (!rest.empty()) {
+      const std::size_t close = rest.find(']');
+      if (rest[0] != '[' || close == std::string::npos) {
+        badOverride(text, "'" + segment + "' is malformed");
+      }
+      const auto index = parseFiniteNumber(rest.substr(1, close - 1));
+      if (!index || *index < 0 || *index != std::floor(*index)) {
+        badOverride(text, "'" + segment + "' has a bad list index");
+      }
+      indices.push_back(static_cast<int>(*index));
+      rest = rest.substr(close + 1);
+    }
+  }
+  if (key.empty()) badOverride(text, "an empty key in '" + text.substr(0, eq) + "'");
+  steps.emplace_back(key, -1);
+  for (int i : indices) steps.emplace_back("", i);
+}
+
+// The node an override sets a value in, and its path as the messages print it.
+struct OverrideParent {
+  YAML::Node node;
+  std::string where;
+};
+
+// Walks all steps but the last from `root`, creating the mappings on the way.
+OverrideParent overrideParent(YAML::Node root,
+                              const std::vector<OverrideStep>& steps,
+                              const std::string& text,
+                              OverrideOrigins& origins) {
   YAML::Node node = root;
   std::string where;
   for (std::size_t i = 0; i + 1 < steps.size(); ++i) {
@@ -506,15 +521,17 @@ void applyOverride(YAML::Node root, const std::string& text, OverrideOrigins& or
     YAML::Node next;
     if (key.empty()) {
       if (!node.IsSequence() || static_cast<std::size_t>(index) >= node.size()) {
-        bad(fmt::format("{} has no item [{}]", where, index));
+        badOverride(text, fmt::format("{} has no item [{}]", where, index));
       }
       next.reset(node[static_cast<std::size_t>(index)]);
       where += fmt::format("[{}]", index);
     } else {
-      if (node.IsDefined() && !node.IsNull() && !node.IsMap()) bad(where + " is not a mapping");
+      if (node.IsDefined() && !node.IsNull() && !node.IsMap()) {
+        badOverride(text, where + " is not a mapping");
+      }
       if (!node[key].IsDefined()) {
         node[key] = YAML::Node(YAML::NodeType::Map);
-        recordKey(node, key);
+        recordOverrideKey(node, key, text, origins);
         origins.add(node[key], text);
       }
       next.reset(node[key]);
@@ -522,24 +539,51 @@ void applyOverride(YAML::Node root, const std::string& text, OverrideOrigins& or
     }
     node.reset(next);
   }
-  const auto& [key, index] = steps.back();
+  return {node, where};
+}
+
+// The override's value: a flow sequence or mapping is YAML, anything else a scalar.
+YAML::Node overrideValue(const std::string& text, const std::string& value) {
   YAML::Node v;
   try {
     v = !value.empty() && (value[0] == '[' || value[0] == '{') ? YAML::Load(value)
                                                                : YAML::Node(value);
   } catch (const YAML::Exception& e) {
-    bad("the value is malformed YAML: " + e.msg);
+    badOverride(text, "the value is malformed YAML: " + e.msg);
   }
+  return v;
+}
+
+// "planner.ray.horizon=20", "scan.paths[0].height_mm=60": sets that value in the YAML tree
+// (creating mappings on the way), so the reader validates it like any value of the file. The
+// value, and every key and mapping the override created, go into `origins`, so errors about
+// them name the override.
+void applyOverride(YAML::Node root, const std::string& text, OverrideOrigins& origins) {
+  const std::size_t eq = text.find('=');
+  if (eq == std::string::npos || eq == 0) badOverride(text, "no key");
+  const std::string value = text.substr(eq + 1);
+  std::vector<OverrideStep> steps;
+  std::stringstream keys(text.substr(0, eq));
+  for (std::string segment; std::getline(keys, segment, '.');) {
+    appendSegmentSteps(text, eq, segment, steps);
+  }
+  OverrideParent parent = overrideParent(root, steps, text, origins);
+  YAML::Node& node = parent.node;
+  const std::string& where = parent.where;
+  const auto& [key, index] = steps.back();
+  YAML::Node v = overrideValue(text, value);
   if (key.empty()) {
     if (!node.IsSequence() || static_cast<std::size_t>(index) >= node.size()) {
-      bad(fmt::format("{} has no item [{}]", where, index));
+      badOverride(text, fmt::format("{} has no item [{}]", where, index));
     }
     node[static_cast<std::size_t>(index)] = v;
   } else {
-    if (node.IsDefined() && !node.IsNull() && !node.IsMap()) bad(where + " is not a mapping");
+    if (node.IsDefined() && !node.IsNull() && !node.IsMap()) {
+      badOverride(text, where + " is not a mapping");
+    }
     const bool created = !node[key].IsDefined();
     node[key] = v;
-    if (created) recordKey(node, key);
+    if (created) recordOverrideKey(node, key, text, origins);
   }
   origins.add(v, text);
 }

@@ -288,7 +288,9 @@ Rgb categoryColour(int k) {
   return kPalette[static_cast<std::size_t>(((k % 8) + 8) % 8)];
 }
 
-RgbImage renderScene(const RenderRequest& request) {
+namespace {
+
+void checkRenderRequest(const RenderRequest& request) {
   const int w = request.width, h = request.height;
   if (w <= 0 || h <= 0) {
     throw InputError(fmt::format("render: image size {} × {}: expected positive", w, h));
@@ -302,48 +304,77 @@ RgbImage renderScene(const RenderRequest& request) {
                       t.x(), t.y(), t.z(), n_vertices));
     }
   }
-  RgbImage image = RgbImage::filled(w, h, request.background);
+}
 
-  // Fit the view: bounding box of everything in view coordinates.
-  std::vector<Eigen::Vector3d> mesh, path;
+// The scene in view coordinates, and the bounding box of everything in view (markers too).
+struct ViewScene {
+  std::vector<Eigen::Vector3d> mesh, path, dots;
   Eigen::AlignedBox3d box;
+};
+
+ViewScene viewScene(const RenderRequest& request) {
+  ViewScene scene;
   const auto project = [&](const std::vector<Eigen::Vector3d>& in,
                            std::vector<Eigen::Vector3d>& out) {
     for (const Eigen::Vector3d& p : in) {
       out.push_back(request.R_view * p);
-      if (out.back().allFinite()) box.extend(out.back());
+      if (out.back().allFinite()) scene.box.extend(out.back());
     }
   };
-  std::vector<Eigen::Vector3d> dots;
-  project(request.vertices, mesh);
-  project(request.polyline, path);
-  project(request.dots, dots);
+  project(request.vertices, scene.mesh);
+  project(request.polyline, scene.path);
+  project(request.dots, scene.dots);
   for (const auto& marker : request.markers) {
     const Eigen::Vector3d p = request.R_view * marker.first;
-    if (p.allFinite()) box.extend(p);
+    if (p.allFinite()) scene.box.extend(p);
   }
-  if (box.isEmpty()) return image;
+  return scene;
+}
+
+// View coordinates → screen pixels: x right, y down, depth kept.
+struct ScreenFit {
+  int w, h;
+  Eigen::Vector3d size, centre;  // of the box in view
+  double scale;                  // pixels per view unit
+  Eigen::Vector3d toScreen(const Eigen::Vector3d& p) const {
+    return {0.5 * w + (p.x() - centre.x()) * scale, 0.5 * h - (p.y() - centre.y()) * scale, p.z()};
+  }
+};
+
+// Fits a non-empty box in view coordinates to a w × h image with a margin.
+ScreenFit fitToScreen(const Eigen::AlignedBox3d& box, int w, int h) {
   const double margin = 0.05 * std::min(w, h) + 5;
   const Eigen::Vector3d size = box.sizes().cwiseMax(1e-12), centre = box.center();
   const double scale =
       std::max(1e-12, std::min((w - 2 * margin) / size.x(), (h - 2 * margin) / size.y()));
-  const auto toScreen = [&](const Eigen::Vector3d& p) -> Eigen::Vector3d {
-    return {0.5 * w + (p.x() - centre.x()) * scale, 0.5 * h - (p.y() - centre.y()) * scale, p.z()};
-  };
-  for (auto& p : mesh) p = toScreen(p);
-  for (auto& p : path) p = toScreen(p);
-  for (auto& p : dots) p = toScreen(p);
+  return {w, h, size, centre, scale};
+}
 
-  // Mesh: edge functions at pixel centres, z-buffer keeps the largest depth (nearest).
-  std::vector<double> depth(pixelCount(w, h), -std::numeric_limits<double>::infinity());
-  const auto edge = [](const Eigen::Vector3d& a, const Eigen::Vector3d& b, double x, double y) {
-    return (b.x() - a.x()) * (y - a.y()) - (b.y() - a.y()) * (x - a.x());
-  };
+double edgeFunction(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double x, double y) {
+  return (b.x() - a.x()) * (y - a.y()) - (b.y() - a.y()) * (x - a.x());
+}
+
+// The fill of triangle `ti` (its colour, else grey) at a Lambert shade.
+Rgb triangleFill(const RenderRequest& request, std::size_t ti, double shade) {
+  return ti < request.triangle_colours.size()
+             ? Rgb{toByte(shade * request.triangle_colours[ti].r),
+                   toByte(shade * request.triangle_colours[ti].g),
+                   toByte(shade * request.triangle_colours[ti].b)}
+             : Rgb{toByte(235.0 * shade), toByte(235.0 * shade), toByte(235.0 * shade)};
+}
+
+// Mesh: edge functions at pixel centres, z-buffer keeps the largest depth (nearest).
+void drawMesh(const RenderRequest& request,
+              const std::vector<Eigen::Vector3d>& mesh,
+              double scale,
+              std::vector<double>& depth,
+              RgbImage& image) {
+  const int w = image.width, h = image.height;
   for (const Eigen::Vector3i& t : request.triangles) {
     const Eigen::Vector3d& a = mesh[static_cast<std::size_t>(t.x())];
     const Eigen::Vector3d& b = mesh[static_cast<std::size_t>(t.y())];
     const Eigen::Vector3d& c = mesh[static_cast<std::size_t>(t.z())];
-    const double area = edge(a, b, c.x(), c.y());
+    const double area = edgeFunction(a, b, c.x(), c.y());
     if (!(std::abs(area) > 1e-12) || !a.allFinite() || !b.allFinite() || !c.allFinite()) continue;
     // Screen differences mapped back to view axes (times `scale`) for the Lambert term.
     const Eigen::Vector3d normal = (b - a)
@@ -352,11 +383,7 @@ RgbImage renderScene(const RenderRequest& request) {
     const double lambert = std::abs(normal.z()) / normal.norm();
     const double shade = 0.2 + 0.8 * lambert;
     const std::size_t ti = static_cast<std::size_t>(&t - request.triangles.data());
-    const Rgb fill = ti < request.triangle_colours.size()
-                         ? Rgb{toByte(shade * request.triangle_colours[ti].r),
-                               toByte(shade * request.triangle_colours[ti].g),
-                               toByte(shade * request.triangle_colours[ti].b)}
-                         : Rgb{toByte(235.0 * shade), toByte(235.0 * shade), toByte(235.0 * shade)};
+    const Rgb fill = triangleFill(request, ti, shade);
     const int x0 = std::max(0, static_cast<int>(std::floor(std::min({a.x(), b.x(), c.x()}))));
     const int x1 = std::min(w - 1, static_cast<int>(std::ceil(std::max({a.x(), b.x(), c.x()}))));
     const int y0 = std::max(0, static_cast<int>(std::floor(std::min({a.y(), b.y(), c.y()}))));
@@ -364,7 +391,7 @@ RgbImage renderScene(const RenderRequest& request) {
     for (int y = y0; y <= y1; ++y) {
       for (int x = x0; x <= x1; ++x) {
         const double sx = x + 0.5, sy = y + 0.5;
-        const double wa = edge(b, c, sx, sy) / area, wb = edge(c, a, sx, sy) / area;
+        const double wa = edgeFunction(b, c, sx, sy) / area, wb = edgeFunction(c, a, sx, sy) / area;
         const double wc = 1.0 - wa - wb;
         if (wa < 0 || wb < 0 || wc < 0) continue;
         const double z = wa * a.z() + wb * b.z() + wc * c.z();
@@ -376,25 +403,37 @@ RgbImage renderScene(const RenderRequest& request) {
       }
     }
   }
+}
 
-  // Dots: 1 px, the nearest wins; a mesh surface in front hides them.
-  const double dot_tolerance = 1e-3 * size.norm();
+// Dots: 1 px, the nearest wins; a mesh surface in front (closer than `tolerance`) hides them.
+void drawDots(const RenderRequest& request,
+              const std::vector<Eigen::Vector3d>& dots,
+              double tolerance,
+              std::vector<double>& depth,
+              RgbImage& image) {
+  const int w = image.width, h = image.height;
   for (std::size_t i = 0; i < dots.size(); ++i) {
     const Eigen::Vector3d& p = dots[i];
     if (!p.allFinite()) continue;
     const int x = static_cast<int>(std::floor(p.x())), y = static_cast<int>(std::floor(p.y()));
     if (x < 0 || y < 0 || x >= w || y >= h) continue;
     double& zbuf = depth[pixelIndex(w, x, y)];
-    if (p.z() + dot_tolerance < zbuf) continue;
+    if (p.z() + tolerance < zbuf) continue;
     zbuf = std::max(zbuf, p.z());
     image.set(x, y, i < request.dot_colours.size() ? request.dot_colours[i] : Rgb{});
   }
+}
 
-  // Path: 2 px wide, stamped every half pixel; behind the mesh in a lighter tint.
-  const Rgb colour = request.polyline_colour;
+// Path: 2 px wide, stamped every half pixel; behind the mesh (by more than `tolerance`) in a
+// lighter tint.
+void drawPath(const std::vector<Eigen::Vector3d>& path,
+              Rgb colour,
+              double tolerance,
+              const std::vector<double>& depth,
+              RgbImage& image) {
+  const int w = image.width, h = image.height;
   const Rgb tint{toByte(0.4 * colour.r + 153), toByte(0.4 * colour.g + 153),
                  toByte(0.4 * colour.b + 153)};
-  const double depth_tolerance = 1e-3 * size.norm();
   std::vector<bool> path_visible(pixelCount(w, h), false);
   for (std::size_t i = 0; i + 1 < path.size(); ++i) {
     const Eigen::Vector3d p0 = path[i], d = path[i + 1] - p0;
@@ -409,7 +448,7 @@ RgbImage renderScene(const RenderRequest& request) {
       for (int y = iy0; y <= iy1; ++y) {
         for (int x = ix0; x <= ix1; ++x) {
           const std::size_t at = pixelIndex(w, x, y);
-          if (p.z() >= depth[at] - depth_tolerance) {
+          if (p.z() >= depth[at] - tolerance) {
             path_visible[at] = true;
             image.set(x, y, colour);
           } else if (!path_visible[at]) {
@@ -419,10 +458,13 @@ RgbImage renderScene(const RenderRequest& request) {
       }
     }
   }
+}
 
-  // Markers: 7 px squares with a black outline, on top.
+// Markers: 7 px squares with a black outline, on top.
+void drawMarkers(const RenderRequest& request, const ScreenFit& fit, RgbImage& image) {
+  const int w = image.width, h = image.height;
   for (const auto& [point, marker_colour] : request.markers) {
-    const Eigen::Vector3d p = toScreen(request.R_view * point);
+    const Eigen::Vector3d p = fit.toScreen(request.R_view * point);
     if (!p.allFinite()) continue;
     const int cx = static_cast<int>(std::floor(p.x())), cy = static_cast<int>(std::floor(p.y()));
     for (int y = std::max(0, cy - 4); y <= std::min(h - 1, cy + 4); ++y) {
@@ -432,6 +474,29 @@ RgbImage renderScene(const RenderRequest& request) {
       }
     }
   }
+}
+
+}  // namespace
+
+RgbImage renderScene(const RenderRequest& request) {
+  checkRenderRequest(request);
+  const int w = request.width, h = request.height;
+  RgbImage image = RgbImage::filled(w, h, request.background);
+
+  // Fit the view: bounding box of everything in view coordinates.
+  ViewScene scene = viewScene(request);
+  if (scene.box.isEmpty()) return image;
+  const ScreenFit fit = fitToScreen(scene.box, w, h);
+  for (auto& p : scene.mesh) p = fit.toScreen(p);
+  for (auto& p : scene.path) p = fit.toScreen(p);
+  for (auto& p : scene.dots) p = fit.toScreen(p);
+
+  std::vector<double> depth(pixelCount(w, h), -std::numeric_limits<double>::infinity());
+  drawMesh(request, scene.mesh, fit.scale, depth, image);
+  const double depth_tolerance = 1e-3 * fit.size.norm();
+  drawDots(request, scene.dots, depth_tolerance, depth, image);
+  drawPath(scene.path, request.polyline_colour, depth_tolerance, depth, image);
+  drawMarkers(request, fit, image);
   return image;
 }
 

@@ -425,6 +425,164 @@ bool parseNumber(const std::string& text, double& value) {
   return end == s.c_str() + s.size() && std::isfinite(value);
 }
 
+// Reads a V+ program as `plan` writes it (readVplusProgram): a step comment
+// '; t=<s> s table=<deg> deg scan=<0|1>' before each MOVE #PPOINT(...), between .PROGRAM and
+// .END. Errors name the source and line.
+class VplusReader {
+ public:
+  explicit VplusReader(const std::string& source) : source_(source) {}
+
+  Trajectory read(const std::string& text) {
+    std::istringstream in(text);
+    std::string raw;
+    while (!ended_ && std::getline(in, raw)) {
+      ++line_number_;
+      const std::string line = trim(raw);
+      if (line.empty()) continue;
+      if (line[0] == ';') {
+        readComment(line);
+      } else {
+        readInstruction(line);
+      }
+    }
+    if (!in_program_) fail("no '.PROGRAM name()' line: expected a V+ program");
+    if (pending_) {
+      line_number_ = pending_line_;
+      fail("step comment without its MOVE #PPOINT(...)");
+    }
+    if (!ended_) fail("the program has no .END");
+    if (trajectory_.samples.empty()) fail("no MOVE #PPOINT(...) in the program");
+    return trajectory_;
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& what) const {
+    throw InputError(source_ + ":" + std::to_string(line_number_) + ": " + what);
+  }
+
+  // A comment: a step comment starts the sample its MOVE completes.
+  void readComment(const std::string& line) {
+    static const std::string kNum = R"([-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?)";
+    static const std::regex kStep("t=(" + kNum + ") s table=(" + kNum + ") deg scan=([01])");
+    const std::string comment = trim(line.substr(1));
+    if (comment.rfind("t=", 0) != 0) return;  // an ordinary comment
+    std::smatch m;
+    if (!std::regex_match(comment, m, kStep)) {
+      fail("step comment '" + line + "': expected '; t=<s> s table=<deg> deg scan=<0|1>'");
+    }
+    if (!in_program_) fail("step comment before .PROGRAM");
+    if (pending_) {
+      fail("step comment after the one on line " + std::to_string(pending_line_) +
+           ", which has no MOVE: expected one MOVE #PPOINT(...) per step comment");
+    }
+    TrajectorySample s;
+    s.t = std::strtod(m[1].str().c_str(), nullptr);
+    s.theta = std::strtod(m[2].str().c_str(), nullptr) * kDegToRad;
+    s.scanning = m[3].str() == "1";
+    s.f = std::numeric_limits<double>::quiet_NaN();
+    if (!std::isfinite(s.t) || !std::isfinite(s.theta)) fail("step comment: non-finite value");
+    if (!trajectory_.samples.empty() && !(s.t > trajectory_.samples.back().t)) {
+      fail("t=" + m[1].str() + " s is not after the previous step's " +
+           fixed(trajectory_.samples.back().t, kDecimals) +
+           " s: expected strictly increasing times");
+    }
+    pending_ = s;
+    pending_line_ = line_number_;
+  }
+
+  // An instruction, without a trailing comment.
+  void readInstruction(const std::string& line) {
+    static const std::regex kProgram(R"(\.PROGRAM\s+[A-Za-z][A-Za-z0-9._]*\s*\([^)]*\)\s*(;.*)?)",
+                                     std::regex::icase);
+    const std::string statement = trim(line.substr(0, line.find(';')));
+    const std::string keyword = upper(statement.substr(0, statement.find_first_of(" \t(")));
+    const std::string args = trim(statement.substr(keyword.size()));
+    if (!in_program_) {
+      if (keyword != ".PROGRAM" || !std::regex_match(line, kProgram)) {
+        fail("'" + line + "': expected '.PROGRAM name()' first");
+      }
+      in_program_ = true;
+      return;
+    }
+    if (keyword == ".END") {
+      if (!args.empty()) fail("'" + line + "': expected '.END'");
+      ended_ = true;
+    } else if (keyword == "MOVE") {
+      readMove(line, statement);
+    } else if (keyword == "SPEED" || keyword == "DURATION") {
+      checkSpeed(line, keyword, args);
+    } else if (keyword == "SIGNAL") {
+      if (!std::regex_match(args, std::regex(R"([-+]?[0-9]+(\s*,\s*[-+]?[0-9]+)*)"))) {
+        fail("'" + line + "': expected 'SIGNAL n[, m ...]'");
+      }
+    } else if (keyword == "BREAK" || keyword == "LEFTY" || keyword == "RIGHTY" ||
+               keyword == "ABOVE" || keyword == "BELOW" || keyword == "FLIP" ||
+               keyword == "NOFLIP") {
+      if (!args.empty()) fail("'" + line + "': expected '" + keyword + "' alone");
+    } else {
+      fail("'" + line +
+           "': not an instruction this reader knows (MOVE #PPOINT(...), SPEED, DURATION, BREAK, "
+           "SIGNAL, LEFTY/RIGHTY, ABOVE/BELOW, FLIP/NOFLIP, .END)");
+    }
+  }
+
+  // MOVE #PPOINT(j1, ..., j6) in degrees: completes the pending step's sample.
+  void readMove(const std::string& line, const std::string& statement) {
+    static const std::regex kMove(R"(MOVE\s+#PPOINT\s*\(([^)]*)\))", std::regex::icase);
+    std::smatch m;
+    if (!std::regex_match(statement, m, kMove)) {
+      fail("'" + line + "': expected 'MOVE #PPOINT(j1, j2, j3, j4, j5, j6)' (degrees)");
+    }
+    const std::string list = m[1].str();
+    std::vector<std::string> values;
+    std::stringstream cells(list);
+    for (std::string cell; std::getline(cells, cell, ',');) values.push_back(cell);
+    if (values.size() != static_cast<std::size_t>(kNumJoints)) {
+      fail("'" + line + "': " + std::to_string(values.size()) +
+           " joint values: expected 6 (degrees)");
+    }
+    if (!pending_) {
+      fail(
+          "MOVE without its step comment: expected '; t=<s> s table=<deg> deg scan=<0|1>' "
+          "before it");
+    }
+    for (int j = 0; j < kNumJoints; ++j) {
+      double v = 0.0;
+      if (!parseNumber(values[static_cast<std::size_t>(j)], v)) {
+        fail("'" + line + "': joint " + std::to_string(j + 1) + " '" +
+             trim(values[static_cast<std::size_t>(j)]) + "' is not a finite number");
+      }
+      pending_->q(j) = v * kDegToRad;
+    }
+    trajectory_.samples.push_back(*pending_);
+    pending_.reset();
+  }
+
+  // SPEED or DURATION <value> [ALWAYS] (SPEED also in MMPS): checked, not used.
+  void checkSpeed(const std::string& line,
+                  const std::string& keyword,
+                  const std::string& args) const {
+    std::istringstream words(args);
+    std::string value, rest;
+    words >> value;
+    std::getline(words, rest);
+    double v = 0.0;
+    const std::string tail = upper(trim(rest));
+    const bool units_ok = tail.empty() || tail == "ALWAYS" ||
+                          (keyword == "SPEED" && (tail == "MMPS" || tail == "MMPS ALWAYS"));
+    if (!parseNumber(value, v) || v < 0.0 || !units_ok) {
+      fail("'" + line + "': expected '" + keyword + " <value> [ALWAYS]'");
+    }
+  }
+
+  const std::string& source_;
+  Trajectory trajectory_;
+  int line_number_ = 0;
+  bool in_program_ = false, ended_ = false;
+  std::optional<TrajectorySample> pending_;  // the step comment waiting for its MOVE
+  int pending_line_ = 0;
+};
+
 }  // namespace
 
 const std::vector<std::string>& programFormatNames() {
@@ -496,129 +654,7 @@ ProgramFiles writeProgram(const Trajectory& trajectory,
 }
 
 Trajectory readVplusProgram(const std::string& text, const std::string& source) {
-  static const std::string kNum = R"([-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?)";
-  static const std::regex kProgram(R"(\.PROGRAM\s+[A-Za-z][A-Za-z0-9._]*\s*\([^)]*\)\s*(;.*)?)",
-                                   std::regex::icase);
-  static const std::regex kStep("t=(" + kNum + ") s table=(" + kNum + ") deg scan=([01])");
-  static const std::regex kMove(R"(MOVE\s+#PPOINT\s*\(([^)]*)\))", std::regex::icase);
-
-  Trajectory trajectory;
-  std::istringstream in(text);
-  std::string raw;
-  int line_number = 0;
-  bool in_program = false, ended = false;
-  std::optional<TrajectorySample> pending;  // the step comment waiting for its MOVE
-  int pending_line = 0;
-  const auto fail = [&](const std::string& what) {
-    throw InputError(source + ":" + std::to_string(line_number) + ": " + what);
-  };
-  while (!ended && std::getline(in, raw)) {
-    ++line_number;
-    const std::string line = trim(raw);
-    if (line.empty()) continue;
-    if (line[0] == ';') {
-      const std::string comment = trim(line.substr(1));
-      if (comment.rfind("t=", 0) != 0) continue;  // an ordinary comment
-      std::smatch m;
-      if (!std::regex_match(comment, m, kStep)) {
-        fail("step comment '" + line + "': expected '; t=<s> s table=<deg> deg scan=<0|1>'");
-      }
-      if (!in_program) fail("step comment before .PROGRAM");
-      if (pending) {
-        fail("step comment after the one on line " + std::to_string(pending_line) +
-             ", which has no MOVE: expected one MOVE #PPOINT(...) per step comment");
-      }
-      TrajectorySample s;
-      s.t = std::strtod(m[1].str().c_str(), nullptr);
-      s.theta = std::strtod(m[2].str().c_str(), nullptr) * kDegToRad;
-      s.scanning = m[3].str() == "1";
-      s.f = std::numeric_limits<double>::quiet_NaN();
-      if (!std::isfinite(s.t) || !std::isfinite(s.theta)) fail("step comment: non-finite value");
-      if (!trajectory.samples.empty() && !(s.t > trajectory.samples.back().t)) {
-        fail("t=" + m[1].str() + " s is not after the previous step's " +
-             fixed(trajectory.samples.back().t, kDecimals) +
-             " s: expected strictly increasing times");
-      }
-      pending = s;
-      pending_line = line_number;
-      continue;
-    }
-    // An instruction, without a trailing comment.
-    const std::string statement = trim(line.substr(0, line.find(';')));
-    const std::string keyword = upper(statement.substr(0, statement.find_first_of(" \t(")));
-    const std::string args = trim(statement.substr(keyword.size()));
-    if (!in_program) {
-      if (keyword != ".PROGRAM" || !std::regex_match(line, kProgram)) {
-        fail("'" + line + "': expected '.PROGRAM name()' first");
-      }
-      in_program = true;
-      continue;
-    }
-    if (keyword == ".END") {
-      if (!args.empty()) fail("'" + line + "': expected '.END'");
-      ended = true;
-    } else if (keyword == "MOVE") {
-      std::smatch m;
-      if (!std::regex_match(statement, m, kMove)) {
-        fail("'" + line + "': expected 'MOVE #PPOINT(j1, j2, j3, j4, j5, j6)' (degrees)");
-      }
-      const std::string list = m[1].str();
-      std::vector<std::string> values;
-      std::stringstream cells(list);
-      for (std::string cell; std::getline(cells, cell, ',');) values.push_back(cell);
-      if (values.size() != static_cast<std::size_t>(kNumJoints)) {
-        fail("'" + line + "': " + std::to_string(values.size()) +
-             " joint values: expected 6 (degrees)");
-      }
-      if (!pending) {
-        fail(
-            "MOVE without its step comment: expected '; t=<s> s table=<deg> deg scan=<0|1>' "
-            "before it");
-      }
-      for (int j = 0; j < kNumJoints; ++j) {
-        double v = 0.0;
-        if (!parseNumber(values[static_cast<std::size_t>(j)], v)) {
-          fail("'" + line + "': joint " + std::to_string(j + 1) + " '" +
-               trim(values[static_cast<std::size_t>(j)]) + "' is not a finite number");
-        }
-        pending->q(j) = v * kDegToRad;
-      }
-      trajectory.samples.push_back(*pending);
-      pending.reset();
-    } else if (keyword == "SPEED" || keyword == "DURATION") {
-      std::istringstream words(args);
-      std::string value, rest;
-      words >> value;
-      std::getline(words, rest);
-      double v = 0.0;
-      const std::string tail = upper(trim(rest));
-      const bool units_ok = tail.empty() || tail == "ALWAYS" ||
-                            (keyword == "SPEED" && (tail == "MMPS" || tail == "MMPS ALWAYS"));
-      if (!parseNumber(value, v) || v < 0.0 || !units_ok) {
-        fail("'" + line + "': expected '" + keyword + " <value> [ALWAYS]'");
-      }
-    } else if (keyword == "SIGNAL") {
-      if (!std::regex_match(args, std::regex(R"([-+]?[0-9]+(\s*,\s*[-+]?[0-9]+)*)"))) {
-        fail("'" + line + "': expected 'SIGNAL n[, m ...]'");
-      }
-    } else if (keyword == "BREAK" || keyword == "LEFTY" || keyword == "RIGHTY" ||
-               keyword == "ABOVE" || keyword == "BELOW" || keyword == "FLIP" ||
-               keyword == "NOFLIP") {
-      if (!args.empty()) fail("'" + line + "': expected '" + keyword + "' alone");
-    } else {
-      fail("'" + line +
-           "': not an instruction this reader knows (MOVE #PPOINT(...), SPEED, DURATION, BREAK, "
-           "SIGNAL, LEFTY/RIGHTY, ABOVE/BELOW, FLIP/NOFLIP, .END)");
-    }
-  }
-  if (!in_program) fail("no '.PROGRAM name()' line: expected a V+ program");
-  if (pending) {
-    line_number = pending_line;
-    fail("step comment without its MOVE #PPOINT(...)");
-  }
-  if (!ended) fail("the program has no .END");
-  if (trajectory.samples.empty()) fail("no MOVE #PPOINT(...) in the program");
-  return trajectory;
+  return VplusReader(source).read(text);
 }
 
 }  // namespace scanplan::cli
