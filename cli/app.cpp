@@ -20,6 +20,7 @@
 #include "cli/batch/batch.h"
 #include "cli/commands/commands.h"
 #include "kinematics/error.h"
+#include "planner/planner.h"
 
 namespace scanplan::cli {
 namespace {
@@ -180,7 +181,7 @@ void addPlanCommand(CLI::App& app, Commands& c) {
                   "Table-angle search: ray (Ray Shooting), dp (exact optimum "
                   "on the grid) or ompl; "
                   "default: the job's planner.method")
-      ->check(CLI::IsMember({"ray", "dp", "ompl"}));
+      ->check(CLI::IsMember(planner::plannerNames()));
   cmd->add_flag("--compare", plan.compare,
                 "Also run the other planners on the chosen branch: J side by "
                 "side, every path "

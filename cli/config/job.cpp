@@ -15,6 +15,7 @@
 #include "cli/programs/programs.h"
 #include "kinematics/error.h"
 #include "kinematics/units.h"
+#include "planner/planner.h"
 
 namespace scanplan::cli {
 namespace {
@@ -197,7 +198,7 @@ std::optional<double> parseFiniteNumber(const std::string& text) {
   return v;
 }
 
-inline const std::vector<std::string> kPlannerMethods = {"ray", "dp", "ompl"};
+const std::vector<std::string>& kPlannerMethods = planner::plannerNames();
 
 template <class A>
 void describeRay(A& a, RaySpec& s) {
