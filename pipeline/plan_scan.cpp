@@ -68,6 +68,14 @@ std::vector<kinematics::IkBranch> mapBranches(const MapSettings& settings) {
   return all;
 }
 
+planner::MapRequest mapRequest(const MapSettings& settings) {
+  planner::MapRequest request;
+  request.angle_step = settings.angle_step;
+  request.branches = mapBranches(settings);
+  request.memory_limit_bytes = settings.memory_limit_bytes;
+  return request;
+}
+
 void checkProblem(const ScanProblem& p) {
   require(!p.part.triangles.empty(), "part", "no triangles: expected a part mesh");
   require(!p.path.elements.empty(), "path.elements",
@@ -98,10 +106,7 @@ std::shared_ptr<const PreparedScan> prepareScan(const ScanProblem& problem,
   prepared->path = scanner::generatePath(problem.path, problem.part, raycaster, prepared->window);
   prepared->path_seconds = since(t);
   prepared->scene = std::make_unique<collision::Scene>(problem.cell, problem.clearance);
-  planner::MapRequest request;
-  request.angle_step = problem.map.angle_step;
-  request.branches = mapBranches(problem.map);
-  request.memory_limit_bytes = problem.map.memory_limit_bytes;
+  const planner::MapRequest request = mapRequest(problem.map);
   t = Clock::now();
   planner::ProgressFn map_progress;
   if (progress) map_progress = [&progress](std::size_t d, std::size_t n) { progress("map", d, n); };

@@ -12,6 +12,7 @@
 #include "collision/scene.h"
 #include "kinematics/cell.h"
 #include "kinematics/mesh.h"
+#include "planner/config_map.h"
 #include "planner/constraints.h"
 #include "planner/objective.h"
 #include "planner/planner.h"
@@ -80,5 +81,7 @@ void checkProblem(const ScanProblem& problem);
 
 /// The IK branches the maps cover: `settings.branches`, or all eight.
 std::vector<kinematics::IkBranch> mapBranches(const MapSettings& settings);
+/// The map request of `settings` for planner::buildConfigMap().
+planner::MapRequest mapRequest(const MapSettings& settings);
 
 }  // namespace scanplan::pipeline

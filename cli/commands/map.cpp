@@ -25,16 +25,6 @@
 #include "scanner/raycaster.h"
 
 namespace scanplan::cli {
-namespace {
-
-std::vector<kinematics::IkBranch> mapBranches(const JobSpec& job) {
-  if (job.map.branch != "auto") return {*parseBranch(job.map.branch)};
-  std::vector<kinematics::IkBranch> all;
-  for (int i = 0; i < 8; ++i) all.push_back(kinematics::IkBranch::fromIndex(i));
-  return all;
-}
-
-}  // namespace
 
 // A progress line on stderr, only on a terminal (scripts and CI logs stay clean).
 Progress::Progress(std::string label)
@@ -93,10 +83,7 @@ ExitCode runPath(const PlanOptions& options) {
 MapRun computeMap(const JobSpec& job,
                   const collision::Scene& scene,
                   const kinematics::ScanPath& path) {
-  planner::MapRequest request;
-  request.angle_step = deg(job.map.angle_step_deg);
-  request.branches = mapBranches(job);
-  request.memory_limit_bytes = static_cast<std::size_t>(job.map.memory_limit_mb * 1024.0 * 1024.0);
+  const planner::MapRequest request = pipeline::mapRequest(mapSettings(job));
   Progress progress("map");
   const auto start = std::chrono::steady_clock::now();
   MapRun run;
