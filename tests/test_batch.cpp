@@ -25,6 +25,7 @@
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <nlohmann/json.hpp>
 
 #include "cli/batch/batch.h"
 #include "tests/io_support.h"
@@ -395,6 +396,35 @@ TEST_F(Batch, PlanTimeIsThePlannersOwnAndDpTimeTheYardsticks) {
   EXPECT_FALSE(metric(rows[1], "dp_s").has_value()) << stable(rows[1]);
   EXPECT_FALSE(metric(rows[1], "dp_gap_percent").has_value()) << stable(rows[1]);
   EXPECT_FALSE(metric(rows[2], "dp_s").has_value()) << stable(rows[2]);
+}
+
+// One pipeline: a batch case and `plan` with the same settings give the same numbers (both run
+// pipeline::planPrepared on the maps of pipeline::prepareScan).
+TEST_F(Batch, ACaseGivesTheNumbersOfPlanWithTheSameSettings) {
+  const fs::path sweep = writeSweep("cases:\n  - {planner.method: ray}\n");
+  const fs::path out = dir_ / "out";
+  const Result run = batch(sweep, out, {"--jobs", "1"});
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  const std::vector<cli::BatchRow> rows = cli::readBatchRows(out / "results.jsonl");
+  ASSERT_EQ(rows.size(), 1u);
+  ASSERT_EQ(rows[0].status, "planned") << stable(rows[0]);
+
+  std::vector<std::string> plan_args{"plan", kDemoJob.string(), "-o", (dir_ / "plan").string()};
+  for (const std::string& o : kLightDemo) plan_args.insert(plan_args.end(), {"--set", o});
+  for (const char* o : {"simulation.enabled=false", "planner.refine.enabled=false",
+                        "planner.ompl.max_iterations=2000", "planner.method=ray"}) {
+    plan_args.insert(plan_args.end(), {"--set", o});
+  }
+  const Result plan = scanplan(plan_args);
+  ASSERT_EQ(plan.exit_code, 0) << describe(plan);
+  const auto report = nlohmann::json::parse(readFile(dir_ / "plan" / "report.json"));
+  const cli::BatchRow& r = rows[0];
+  EXPECT_EQ(metric(r, "J_s"), report["objective"]["J_s"].get<double>());
+  EXPECT_EQ(metric(r, "cost_f_s"), report["objective"]["cost_f_s"].get<double>());
+  EXPECT_EQ(metric(r, "dp_gap_percent"), report["dp_baseline"]["gap_percent"].get<double>());
+  EXPECT_EQ(metric(r, "min_f"), report["path"]["min_f"].get<double>());
+  EXPECT_EQ(metric(r, "min_clearance_mm"), report["path"]["min_clearance_mm"].get<double>());
+  EXPECT_EQ(metric(r, "max_omega_deg_s"), report["path"]["max_abs_omega_deg_s"].get<double>());
 }
 
 // A real interruption: the batch killed (SIGKILL) between cases, then --resume runs the rest,
