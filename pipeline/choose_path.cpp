@@ -72,10 +72,11 @@ bool acceptBest(const planner::ConfigMap& map,
       out.chosen.result = r;
       out.why_chosen =
           out.rejected.empty()
-              ? fmt::format("lowest J of {} solved branch(es)", order.size())
-              : fmt::format("lowest J of the {} solved branch(es) the arm can follow ({} with a "
-                            "lower J rejected)",
-                            order.size() - out.rejected.size(), out.rejected.size());
+              ? fmt::format("lowest J of {} solved branch(es), and the arm can follow it",
+                            order.size())
+              : fmt::format("lowest J the arm can follow: {} of {} solved branch(es) had a lower "
+                            "J but cannot be executed (see rejected)",
+                            out.rejected.size(), order.size());
       return true;
     }
     out.rejected.emplace_back(b, why);

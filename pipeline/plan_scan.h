@@ -77,10 +77,12 @@ struct PreparedScan {
   double map_seconds = 0.0;
 };
 
-/// Wall time of each stage, s.
+/// Wall time of each stage, s. `plan` is the whole path search without the trajectory checks
+/// (the chosen planner on every branch, refinement, the DP yardstick and any comparisons); `dp`
+/// is the yardstick's share of it (0 when the chosen planner is DP itself or none ran).
 struct StageTimes {
   double path = 0, map = 0, plan = 0, dp = 0, trajectory = 0, validation = 0, simulation = 0;
-  double total = 0;
+  double total = 0;  ///< planScan(): the whole call; a front end may put its own total here
 };
 
 /// How a plan ended.
