@@ -35,7 +35,7 @@ struct MapSettings {
 
 /// How the table-angle path is searched, refined and judged (DESIGN.md §5).
 struct PlanSettings {
-  std::string method = "ray";         ///< a planner::plannerNames() entry
+  std::string method = "ray";          ///< a planner::plannerNames() entry
   planner::PlannerSettings objective;  ///< weights and table bounds, SI
   bool continuous = true;              ///< the table turns without end
   std::optional<double> start_theta;   ///< rad, a fixed first table angle; nullopt: searched
@@ -49,9 +49,15 @@ struct PlanSettings {
 
 /// The scanner simulation along the planned motion (DESIGN.md §6).
 struct SimulationSettings {
-  double frame_rate_hz = 100.0;        ///< profiles per second while the path scans
+  double frame_rate_hz = 100.0;         ///< profiles per second while the path scans
   scanner::SimulationSettings scanner;  ///< fan, cameras, noise, real table error
   scanner::CoverageSettings coverage;
+  /// m, the point spacing an area sample is covered within; 0: the line's point pitch at the
+  /// middle of the depth window (line width there / (rays per profile − 1)).
+  double point_spacing = 0.0;
+  /// Area samples at most (one per (2 · point spacing)² of area, coarser when there would be
+  /// more): bounds the time and memory of the area coverage.
+  std::size_t max_area_samples = 200'000;
 };
 
 /// A whole planning problem: the cell (robot, table, part pose, scanner, obstacles), the part

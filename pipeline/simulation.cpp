@@ -1,11 +1,23 @@
 #include "pipeline/simulation.h"
 
+#include <algorithm>
 #include <chrono>
 #include <vector>
 
 #include "planner/validation.h"
 
 namespace scanplan::pipeline {
+
+namespace {
+
+// The distance between neighbouring points of one profile at the middle of the depth window.
+double midDepthPitch(const scanner::LaserOptics& optics, int rays_per_profile) {
+  const scanner::LaserWindow window = scanner::laserWindow(optics);
+  const double width = 2.0 * window.halfWidth(0.5 * (window.z_min + window.z_max));
+  return width / std::max(1, rays_per_profile - 1);
+}
+
+}  // namespace
 
 SimulationRun simulateTrajectory(const kinematics::CellModel& cell,
                                  const kinematics::TriangleMesh& part,
@@ -23,6 +35,18 @@ SimulationRun simulateTrajectory(const kinematics::CellModel& cell,
   run.frames = frames.size();
   run.cloud = simulator.simulate(frames, optics, settings.scanner);
   run.coverage = scanner::computeCoverage(part, run.cloud.points, settings.coverage);
+  run.point_spacing = settings.point_spacing > 0.0
+                          ? settings.point_spacing
+                          : midDepthPitch(optics, settings.scanner.rays_per_profile);
+  const scanner::AreaSampling sampling =
+      scanner::sampleArea(part, 2.0 * run.point_spacing, settings.max_area_samples);
+  std::vector<Eigen::Vector3d> on_part;
+  on_part.reserve(run.cloud.points.size());
+  for (const auto& p : run.cloud.points) {
+    if (p.part_triangle >= 0) on_part.push_back(p.p_P);
+  }
+  run.area_samples = sampling.samples.size();
+  run.area = scanner::areaCoverage(sampling, on_part, run.point_spacing);
   run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return run;
 }

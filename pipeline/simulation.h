@@ -6,6 +6,7 @@
 #include "kinematics/mesh.h"
 #include "kinematics/trajectory.h"
 #include "pipeline/problem.h"
+#include "scanner/area_coverage.h"
 #include "scanner/coverage.h"
 #include "scanner/laser_model.h"
 #include "scanner/simulator.h"
@@ -15,13 +16,17 @@ namespace scanplan::pipeline {
 /// One simulation run and the coverage of the part it gives.
 struct SimulationRun {
   scanner::SimulatedCloud cloud;
-  scanner::PartCoverage coverage;
-  std::size_t frames = 0;  ///< profiles acquired (densified samples with scanning on)
+  scanner::PartCoverage coverage;  ///< per triangle (hits, densities)
+  scanner::AreaCoverage area;      ///< on area samples: the covered fraction of the area
+  std::size_t area_samples = 0;
+  double point_spacing = 0.0;  ///< m, the radius `area` was measured with
+  std::size_t frames = 0;      ///< profiles acquired (densified samples with scanning on)
   double seconds = 0.0;
 };
 
 /// The scanner simulated along `trajectory`: a profile every 1/frame_rate_hz s while the path
-/// scans, with the settings' fan, cameras, noise and real-table error.
+/// scans, with the settings' fan, cameras, noise and real-table error; the coverage per triangle
+/// and on area (the points on the part against area samples, scanner/area_coverage.h).
 SimulationRun simulateTrajectory(const kinematics::CellModel& cell,
                                  const kinematics::TriangleMesh& part,
                                  const scanner::LaserOptics& optics,

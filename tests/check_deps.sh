@@ -24,6 +24,7 @@ module_rules=(
 third_party_rules=(
   "fcl/            collision/"
   "embree[0-9]*/   scanner/"
+  "nanoflann       scanner/"
   "ompl/           planner/"
   "nlopt           planner/"
   "yaml-cpp/       cli/"

@@ -96,7 +96,7 @@ void planCase(const JobSpec& job, const MapBundle& bundle, BatchRow& row) {
   if (plan.validation) m[kValidationS] = plan.times.validation;
   if (plan.simulation) {
     m[kSimulationS] = plan.times.simulation;
-    m[kCoverage] = plan.simulation->coverage.covered_fraction;
+    m[kCoverage] = plan.simulation->area.covered_fraction;
   }
 }
 

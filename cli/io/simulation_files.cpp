@@ -55,7 +55,7 @@ void writeSimulationOutputs(const std::filesystem::path& dir,
       fmt::format("Simulated cloud, {} points, by acquisition time:", run.cloud.points.size());
   ViewRow& density = grid.rows[1];
   density.title = fmt::format("Coverage, {:.1f}% of the area, point density:",
-                              100.0 * run.coverage.covered_fraction);
+                              100.0 * run.area.covered_fraction);
   for (int i = 0; i < 64; ++i) {
     const double u = i / 63.0;
     cloud.scale.push_back(toRgb(scanner::densityColour(u, 1.0, true)));

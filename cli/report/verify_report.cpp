@@ -86,8 +86,11 @@ std::string simulationSummary(const pipeline::SimulationRun& run) {
       s.profiles, s.laser_rays, s.occlusion_rays, run.seconds, s.points, s.outside_window,
       s.occluded);
   text += fmt::format(
-      "coverage   {:.1f}% of the part's area ({} of {} triangles); density {:.2f} points/mm² "
-      "(median {:.2f}, 5% {:.2f}, 95% {:.2f})\n",
+      "coverage   {:.1f}% of the part's area within {:.2f} mm of a point ({} area samples)\n",
+      100.0 * run.area.covered_fraction, toMm(run.point_spacing), run.area_samples);
+  text += fmt::format(
+      "triangles  {:.1f}% of the area on triangles with a point ({} of {} triangles); density "
+      "{:.2f} points/mm² (median {:.2f}, 5% {:.2f}, 95% {:.2f})\n",
       100.0 * run.coverage.covered_fraction, run.coverage.covered_triangles,
       run.coverage.hits.size(), run.coverage.density_mean_per_mm2,
       run.coverage.density_median_per_mm2, run.coverage.density_p5_per_mm2,
@@ -106,7 +109,10 @@ Json simulationJson(const pipeline::SimulationRun& run) {
           {"occluded", s.occluded},
           {"seconds", run.seconds},
           {"coverage",
-           {{"covered_fraction", c.covered_fraction},
+           {{"area_fraction", run.area.covered_fraction},
+            {"point_spacing_mm", toMm(run.point_spacing)},
+            {"area_samples", run.area_samples},
+            {"covered_fraction", c.covered_fraction},
             {"covered_area_mm2", c.covered_area * 1e6},
             {"total_area_mm2", c.total_area * 1e6},
             {"covered_triangles", c.covered_triangles},

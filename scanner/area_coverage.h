@@ -1,0 +1,54 @@
+#pragma once
+// Coverage measured on area, not triangles (DESIGN.md §11): the part's surface sampled
+// area-uniformly, a sample covered when a measured point lies within the point spacing of it.
+// Per-triangle counts overstate coverage on coarse meshes (one point on a large triangle counts
+// the whole triangle); area samples do not depend on how the mesh is cut.
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "kinematics/mesh.h"
+
+namespace scanplan::scanner {
+
+/// One area sample: a point on the surface with the normal of its triangle.
+struct AreaSample {
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();   ///< mesh frame, m
+  Eigen::Vector3d n = Eigen::Vector3d::UnitZ();  ///< unit outward normal (the winding's)
+  std::int32_t triangle = -1;
+};
+
+/// An area-uniform sampling of a mesh's surface: every sample stands for the same area.
+struct AreaSampling {
+  std::vector<AreaSample> samples;
+  double total_area = 0.0;       ///< m², the mesh's
+  double area_per_sample = 0.0;  ///< m²
+};
+
+/// Samples of the surface, about one per `spacing`² of area (systematic in the running area, so a
+/// triangle gets ⌊area/spacing²⌋ or one more; uniform inside each triangle from a seeded
+/// generator). At most `max_samples`: a larger count coarsens the spacing to fit. Deterministic.
+/// Throws std::invalid_argument for spacing ≤ 0 or non-finite, or max_samples 0.
+AreaSampling sampleArea(const kinematics::TriangleMesh& mesh,
+                        double spacing,
+                        std::size_t max_samples = 2'000'000,
+                        std::uint64_t seed = 1);
+
+/// Which samples have a point within `radius` (m) of them, and the covered fraction of the area.
+struct AreaCoverage {
+  std::vector<std::uint8_t> covered;  ///< 1 per covered sample, in sampling order
+  std::size_t covered_samples = 0;
+  double covered_fraction = 0.0;  ///< covered samples / samples (each stands for equal area)
+  double radius = 0.0;            ///< m, as asked
+};
+
+/// The coverage of `sampling` by `points` (same frame): a k-d tree over the points (nanoflann),
+/// the nearest point of every sample. Deterministic; parallel over samples.
+AreaCoverage areaCoverage(const AreaSampling& sampling,
+                          const std::vector<Eigen::Vector3d>& points,
+                          double radius);
+
+}  // namespace scanplan::scanner
