@@ -4,12 +4,14 @@
 #include <cmath>
 #include <random>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include "cli/config/job.h"
 #include "cli/config/problem.h"
+#include "kinematics/units.h"
 #include "map_support.h"
 #include "pipeline/plan_scan.h"
 #include "planner/dp_planner.h"
@@ -95,6 +97,53 @@ TEST(PlanScan, BadProblemsAreInputErrorsNamingTheField) {
   p = lightDemo();
   p.map.angle_step = std::nan("");
   EXPECT_TRUE(test::throwsInputError([&] { pipeline::planScan(p); }, {"map.angle_step"}));
+}
+
+// `part.place: table`: the part's lowest point on the table top and its box centred on the axis,
+// whatever the mesh's own origin (here the housing turned y-up and yawed 30°).
+TEST(PartPlacement, TableRestsTheLowestPointOnTheTopCentredOnTheAxis) {
+  const cli::JobSpec job = cli::loadJob(
+      test::sourceDir() / "data/jobs/demo.yaml",
+      {"part.up_axis=y", "part.place=table", "part.pose={xyz_mm: [0, 0, 0], rpy_deg: [0, 0, 30]}"});
+  const kinematics::CellModel cell = cli::buildCell(job);
+  const kinematics::LoadedMesh part = cli::loadPart(job, cell);
+  Eigen::AlignedBox3d box_R;
+  for (const Eigen::Vector3d& v : part.mesh.vertices) box_R.extend(cell.part.X_RP * v);
+  EXPECT_NEAR(box_R.min().z(), 0.0, 1e-12);
+  EXPECT_NEAR(box_R.center().x(), 0.0, 1e-12);
+  EXPECT_NEAR(box_R.center().y(), 0.0, 1e-12);
+  // The yaw is kept: the part frame's x axis is turned 30° about the table's z.
+  EXPECT_NEAR(std::atan2(cell.part.X_RP(1, 0), cell.part.X_RP(0, 0)), 30.0 * kDegToRad, 1e-12);
+}
+
+TEST(PartPlacement, APartBelowTheTableTopIsAnErrorNamingThePose) {
+  const cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo.yaml",
+                                        {"part.pose.xyz_mm=[0, 0, -5]"});
+  const kinematics::CellModel cell = cli::buildCell(job);
+  EXPECT_TRUE(test::throwsInputError([&] { cli::loadPart(job, cell); },
+                                     {"demo.yaml", "part.pose", "5.00 mm below the table top",
+                                      "part.place: table"}));
+}
+
+// Placed, ring heights count from the table top: a part lifted 40 mm (a riser) with rings at
+// 75 and 145 mm scans exactly where the part on the table with rings at 35 and 105 mm does.
+TEST(PartPlacement, PlacedRingHeightsCountFromTheTableTop) {
+  const auto path = [](std::vector<std::string> overrides) {
+    overrides.insert(overrides.begin(), test::kLightDemo.begin(), test::kLightDemo.end());
+    const cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo.yaml", overrides);
+    return cli::toProblem(job).path;
+  };
+  const scanplan::scanner::PathRequest on_table = path({});
+  const scanplan::scanner::PathRequest lifted = path(
+      {"part.place=table", "part.pose.xyz_mm=[0, 0, 40]",
+       "scan.paths=[{type: ring, height_mm: 75, tilt_deg: 25}, {type: ring, height_mm: 145, "
+       "tilt_deg: 60}]"});
+  ASSERT_EQ(on_table.elements.size(), 2u);
+  ASSERT_EQ(lifted.elements.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_NEAR(std::get<scanplan::scanner::RingSpec>(lifted.elements[i]).height,
+                std::get<scanplan::scanner::RingSpec>(on_table.elements[i]).height, 1e-12);
+  }
 }
 
 TEST(PlannerRegistry, NamesMakeEveryPlannerAndUnknownNamesNone) {

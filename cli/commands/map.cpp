@@ -48,13 +48,12 @@ PathContext buildPath(const JobSpec& job, const kinematics::CellModel& cell) {
                      "waypoints or file)");
   }
   PathContext context;
-  context.part = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
-  for (const std::string& w : context.part.report.warnings) spdlog::warn("part.mesh: {}", w);
+  context.part = loadPart(job, cell);
   context.window = scanner::laserWindow(laserOptics(job));
   const scanner::Raycaster raycaster(context.part.mesh);
   try {
-    context.generated =
-        scanner::generatePath(pathRequest(job), context.part.mesh, raycaster, context.window);
+    context.generated = scanner::generatePath(placedPathRequest(job, cell), context.part.mesh,
+                                              raycaster, context.window);
   } catch (const InputError& e) {
     throw InputError(job.source.string() + ": " + e.what());
   }

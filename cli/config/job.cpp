@@ -55,6 +55,8 @@ Eigen::Matrix3d upRotation(const std::string& up) {
   return Eigen::Matrix3d::Identity();
 }
 
+inline const std::vector<std::string> kPlacements = {"none", "table"};
+
 template <class A>
 void describePart(A& a, PartSpec& s) {
   a.require("mesh");
@@ -62,6 +64,7 @@ void describePart(A& a, PartSpec& s) {
   a.field("units", s.units, Expect::oneOf(kLengthUnits));
   a.field("scale", s.scale, Expect::positive());
   a.field("up_axis", s.up_axis, Expect::oneOf(kUpAxes));
+  a.field("place", s.place, Expect::oneOf(kPlacements));
   a.section("pose", s.pose);
 }
 
@@ -637,6 +640,27 @@ std::string jobHash(const JobSpec& job) {
   return fmt::format("{:016x}", h);
 }
 
+namespace {
+
+// X_RP that puts the part's lowest point on the table top and its bounding box centre on the
+// axis, after the pose's rotation; the pose's translation is an offset from there.
+Eigen::Isometry3d placedOnTable(const JobSpec& job, const kinematics::PartModel& part) {
+  kinematics::LoadedMesh mesh;
+  try {
+    mesh = kinematics::loadMesh(part.mesh.path, part.mesh.options);
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("{}: part.mesh: {}", job.source.string(), e.what()));
+  }
+  const Eigen::Isometry3d pose = toIsometry(job.part.pose);
+  Eigen::AlignedBox3d box;
+  for (const Eigen::Vector3d& v : mesh.mesh.vertices) box.extend(pose.linear() * v);
+  Eigen::Isometry3d X_RP = pose;
+  X_RP.translation() += Eigen::Vector3d(-box.center().x(), -box.center().y(), -box.min().z());
+  return X_RP;
+}
+
+}  // namespace
+
 kinematics::CellModel buildCell(const JobSpec& job) {
   const std::string robot_source =
       job.robot_file.resolved.empty() ? job.source.string() : job.robot_file.resolved.string();
@@ -658,6 +682,7 @@ kinematics::CellModel buildCell(const JobSpec& job) {
   cell.part.mesh = {job.part.mesh.resolved,
                     {toLengthUnit(job.part.units), job.part.scale, upRotation(job.part.up_axis)}};
   cell.part.X_RP = toIsometry(job.part.pose);
+  if (job.part.place == "table") cell.part.X_RP = placedOnTable(job, cell.part);
 
   cell.scanner.X_FS = toIsometry(job.scanner.mount);
   for (const ShapeSpec& shape : job.scanner.body) cell.scanner.body.push_back(toShape(shape));

@@ -38,6 +38,10 @@ struct PartSpec {
   std::string units = "mm";
   double scale = 1.0;
   std::string up_axis = "z";  ///< the file's up direction (x, y, z, -x, -y, -z), made +z
+  /// "table": the part's lowest point on the table top, its bounding box centred on the axis
+  /// (after units, scale, up_axis and the pose's rotation; pose.xyz_mm is then an offset from
+  /// there), and ring heights count from the table top. "none": the pose as given.
+  std::string place = "none";
   PoseSpec pose;
 };
 

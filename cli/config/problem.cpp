@@ -1,6 +1,9 @@
 #include "cli/config/problem.h"
 
+#include <algorithm>
 #include <cstdint>
+#include <limits>
+#include <variant>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -19,18 +22,57 @@ scanner::CameraRule cameraRule(const std::string& name) {
   return scanner::CameraRule::kPositive;
 }
 
+// The part on the table top: none of it below (beyond a rounding hair), and a warning when it
+// overhangs the table.
+void checkOnTable(const JobSpec& job,
+                  const kinematics::CellModel& cell,
+                  const kinematics::TriangleMesh& mesh) {
+  constexpr double kSunkTolerance = 1e-5;  // m: 0.01 mm, far above the float rounding of a mesh
+  double lowest = std::numeric_limits<double>::infinity(), widest = 0.0;
+  for (const Eigen::Vector3d& v : mesh.vertices) {
+    const Eigen::Vector3d p_R = cell.part.X_RP * v;
+    lowest = std::min(lowest, p_R.z());
+    widest = std::max(widest, p_R.head<2>().norm());
+  }
+  if (lowest < -kSunkTolerance) {
+    throw InputError(fmt::format(
+        "{}: part.pose: the part reaches {:.2f} mm below the table top (its lowest point is at "
+        "z = {:.2f} mm on the table): expected it to rest on the table; raise pose.xyz_mm z by "
+        "{:.2f}, or set part.place: table",
+        job.source.string(), toMm(-lowest), toMm(lowest), toMm(-lowest)));
+  }
+  if (widest > cell.table.radius) {
+    spdlog::warn(
+        "{}: part: the part reaches {:.1f} mm from the table axis, beyond the table's "
+        "radius of {:.1f} mm",
+        job.source.filename().string(), toMm(widest), toMm(cell.table.radius));
+  }
+}
+
 }  // namespace
 
 kinematics::LoadedMesh loadPart(const JobSpec& job, const kinematics::CellModel& cell) {
+  kinematics::LoadedMesh part;
   try {
-    kinematics::LoadedMesh part = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
-    for (const std::string& w : part.report.warnings) {
-      spdlog::warn("{}: part.mesh: {}", job.source.filename().string(), w);
-    }
-    return part;
+    part = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
   } catch (const InputError& e) {
     throw InputError(fmt::format("{}: part.mesh: {}", job.source.string(), e.what()));
   }
+  for (const std::string& w : part.report.warnings) {
+    spdlog::warn("{}: part.mesh: {}", job.source.filename().string(), w);
+  }
+  checkOnTable(job, cell, part.mesh);
+  return part;
+}
+
+scanner::PathRequest placedPathRequest(const JobSpec& job, const kinematics::CellModel& cell) {
+  scanner::PathRequest request = pathRequest(job);
+  if (job.part.place != "table") return request;
+  const double table_top_P = -cell.part.X_RP.translation().z();  // for a part turned about z
+  for (scanner::PathElement& e : request.elements) {
+    if (auto* ring = std::get_if<scanner::RingSpec>(&e)) ring->height += table_top_P;
+  }
+  return request;
 }
 
 pipeline::MapSettings mapSettings(const JobSpec& job) {
@@ -97,7 +139,7 @@ pipeline::ScanProblem toProblem(const JobSpec& job,
   pipeline::ScanProblem p(std::move(cell));
   p.name = job.name;
   p.optics = laserOptics(job);
-  p.path = pathRequest(job);
+  p.path = placedPathRequest(job, p.cell);
   p.clearance = clearanceConfig(job);
   p.constraints = constraintSettings(job);
   p.map = mapSettings(job);

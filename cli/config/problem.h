@@ -10,8 +10,14 @@
 
 namespace scanplan::cli {
 
-/// The job's part mesh (loader warnings logged); errors name the job file and `part.mesh`.
+/// The job's part mesh (loader warnings logged); errors name the job file and `part.mesh`. A part
+/// that reaches below the table top is an error naming `part.pose`; one that reaches beyond the
+/// table's radius, a warning.
 kinematics::LoadedMesh loadPart(const JobSpec& job, const kinematics::CellModel& cell);
+
+/// The scan path request (pathRequest()) for the part on `cell`'s table: with `part.place: table`
+/// ring heights count from the table top (along the part's z), so they move into the part frame.
+scanner::PathRequest placedPathRequest(const JobSpec& job, const kinematics::CellModel& cell);
 
 /// The whole job as a problem: the cell, the part mesh, the scan path request and every
 /// stage's settings (validation and simulation nullopt when the job turns them off).
