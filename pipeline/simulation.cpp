@@ -47,6 +47,12 @@ SimulationRun simulateTrajectory(const kinematics::CellModel& cell,
   }
   run.area_samples = sampling.samples.size();
   run.area = scanner::areaCoverage(sampling, on_part, run.point_spacing);
+  const std::vector<std::uint8_t> facing = scanner::facesTable(
+      sampling, cell.part.X_RP, settings.max_incidence, scanner::laserWindow(optics).z_max);
+  if (!facing.empty()) {
+    run.faces_table_fraction = static_cast<double>(std::count(facing.begin(), facing.end(), 1)) /
+                               static_cast<double>(facing.size());
+  }
   run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return run;
 }

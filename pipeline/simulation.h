@@ -20,7 +20,10 @@ struct SimulationRun {
   scanner::AreaCoverage area;      ///< on area samples: the covered fraction of the area
   std::size_t area_samples = 0;
   double point_spacing = 0.0;  ///< m, the radius `area` was measured with
-  std::size_t frames = 0;      ///< profiles acquired (densified samples with scanning on)
+  /// Share of the area that faces the table or lies on it (scanner::facesTable() at the depth
+  /// window's far end and the incidence limit): not scannable on this setup.
+  double faces_table_fraction = 0.0;
+  std::size_t frames = 0;  ///< profiles acquired (densified samples with scanning on)
   double seconds = 0.0;
 };
 

@@ -1,5 +1,6 @@
 #include "scanner/area_coverage.h"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -107,6 +108,23 @@ AreaCoverage areaCoverage(const AreaSampling& sampling,
   for (const std::uint8_t c : out.covered) out.covered_samples += c;
   out.covered_fraction =
       static_cast<double>(out.covered_samples) / static_cast<double>(sampling.samples.size());
+  return out;
+}
+
+std::vector<std::uint8_t> facesTable(const AreaSampling& sampling,
+                                     const Eigen::Isometry3d& X_RP,
+                                     double max_incidence,
+                                     double max_standoff) {
+  constexpr double kHalfPi = 1.5707963267948966;
+  std::vector<std::uint8_t> out(sampling.samples.size(), 0);
+  for (std::size_t i = 0; i < sampling.samples.size(); ++i) {
+    const AreaSample& s = sampling.samples[i];
+    const double z = (X_RP * s.p).z();
+    const double n_z = std::clamp((X_RP.linear() * s.n).z(), -1.0, 1.0);
+    const double best = std::min(std::asin(n_z) + max_incidence, kHalfPi);
+    // A hair of tolerance: a sample on the table top seen exactly edge-on is not scannable.
+    out[i] = z + max_standoff * std::sin(best) <= 1e-9 ? 1 : 0;
+  }
   return out;
 }
 

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "kinematics/mesh.h"
 
@@ -50,5 +51,18 @@ struct AreaCoverage {
 AreaCoverage areaCoverage(const AreaSampling& sampling,
                           const std::vector<Eigen::Vector3d>& points,
                           double radius);
+
+/// Which samples face the table or lie on it (the first class of the scannability certificate,
+/// DESIGN.md §11): no laser ray from a scanner above the table top can reach them within the
+/// incidence limit. With the part on the table by X_RP (R: table top frame, z up, the top at
+/// z = 0), a sample at height z with normal n (elevation ε = asin n_z) is seen at most from the
+/// elevation ε + `max_incidence`; from `max_standoff` away the scanner is then at height
+/// z + max_standoff · sin(min(ε + max_incidence, 90°)), which must be above the top. 1 where it is
+/// not (the sample faces the table), in sampling order. Other bodies are not considered: a
+/// sample this says 0 for may still be occluded.
+std::vector<std::uint8_t> facesTable(const AreaSampling& sampling,
+                                     const Eigen::Isometry3d& X_RP,
+                                     double max_incidence,
+                                     double max_standoff);
 
 }  // namespace scanplan::scanner

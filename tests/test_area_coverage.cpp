@@ -1,6 +1,7 @@
 // Coverage on area (scanner/area_coverage.h): samples lie on the surface, each stands for the
 // same area, and the covered fraction has known answers on a cube and a plate that do not depend
 // on how the mesh is cut; the k-d tree agrees with a brute-force nearest point.
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -18,6 +19,7 @@ using scanplan::scanner::AreaSampling;
 using scanplan::scanner::sampleArea;
 
 constexpr double kMm = 1e-3;
+constexpr double kPi = 3.141592653589793;
 
 // An axis-aligned cube of edge `a` centred at the origin, outward winding, 12 triangles.
 TriangleMesh cube(double a) {
@@ -154,6 +156,43 @@ TEST(AreaCoverage, NoPointsCoverNothing) {
   EXPECT_EQ(c.covered_samples, 0u);
   EXPECT_EQ(c.covered_fraction, 0.0);
   EXPECT_EQ(c.covered.size(), s.samples.size());
+}
+
+// The cube resting on the table (its centre 5 mm up): exactly the samples of its bottom face
+// (triangles 0 and 1: the vertices with z < 0) face the table; the sides and the top do not.
+TEST(FacesTable, ACubeOnTheTableFacesItWithExactlyItsBottom) {
+  const TriangleMesh m = cube(10 * kMm);
+  const AreaSampling s = sampleArea(m, 0.5 * kMm);
+  const Eigen::Isometry3d X_RP(Eigen::Translation3d(0.0, 0.0, 5 * kMm));
+  const auto faces = scanplan::scanner::facesTable(s, X_RP, 60.0 * kPi / 180.0, 0.2);
+  std::size_t flagged = 0;
+  for (std::size_t i = 0; i < s.samples.size(); ++i) {
+    const bool bottom = s.samples[i].triangle <= 1;
+    ASSERT_EQ(faces[i] != 0, bottom) << "sample " << i << " on triangle " << s.samples[i].triangle;
+    flagged += faces[i];
+  }
+  EXPECT_NEAR(static_cast<double>(flagged), 400.0, 2.0);  // the bottom's 100 of 600 mm²
+}
+
+// A face looking 70° below the horizon (n_z = −sin 70°) is seen from at most 10° below it with a
+// 60° incidence limit: from 196 mm away the scanner is 34 mm lower than the face. At 100 mm above
+// the table that is fine; at 20 mm the scanner would be under the table top.
+TEST(FacesTable, ADownwardFaceIsReachableOnlyHighEnoughAboveTheTable) {
+  const double tilt = 70.0 * kPi / 180.0;
+  // A 1 mm square at the origin with normal (cos 70°, 0, −sin 70°) (rotated about y).
+  TriangleMesh m = plate(1 * kMm, 1);
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(kPi - (kPi / 2 - tilt), Eigen::Vector3d::UnitY()).toRotationMatrix();
+  for (auto& v : m.vertices) v = R * v;
+  const AreaSampling s = sampleArea(m, 0.1 * kMm);
+  ASSERT_NEAR(s.samples.front().n.z(), -std::sin(tilt), 1e-12);
+  const auto at = [&](double z_mm) {
+    const Eigen::Isometry3d X_RP(Eigen::Translation3d(0.0, 0.0, z_mm * kMm));
+    const auto f = scanplan::scanner::facesTable(s, X_RP, 60.0 * kPi / 180.0, 0.196);
+    return std::count(f.begin(), f.end(), 1);
+  };
+  EXPECT_EQ(at(100.0), 0);                                   // 100 − 34 > 0
+  EXPECT_EQ(at(20.0), static_cast<long>(s.samples.size()));  // 20 − 34 < 0
 }
 
 }  // namespace

@@ -232,6 +232,22 @@ TEST_F(CliVerify, AreaCoverageRecomputedFromTheCloudFileMatchesTheReport) {
       << "report " << reported << " at " << radius_mm << " mm";
   // And the triangle count overstates it (the reason for measuring on area).
   EXPECT_GE(c["covered_fraction"].as<double>(), reported);
+  // The part's underside (downward triangles on the table top, z = 0) faces the table; the
+  // reported share is at least its area (minus sampling noise) and far from all of it.
+  double underside = 0.0, total = 0.0;
+  for (std::size_t i = 0; i < part.triangles.size(); ++i) {
+    const auto& t = part.triangles[i];
+    const Eigen::Vector3d a = part.vertices[static_cast<std::size_t>(t.x())];
+    const Eigen::Vector3d b = part.vertices[static_cast<std::size_t>(t.y())];
+    const Eigen::Vector3d d = part.vertices[static_cast<std::size_t>(t.z())];
+    const Eigen::Vector3d n = (b - a).cross(d - a).normalized();
+    total += areas[i];
+    if (n.z() < -0.999 && std::max({a.z(), b.z(), d.z()}) < 1e-9) underside += areas[i];
+  }
+  const double facing = c["faces_table_fraction"].as<double>();
+  EXPECT_GT(underside / total, 0.05);
+  EXPECT_GE(facing, underside / total - 0.005);
+  EXPECT_LT(facing, 0.5);
 }
 
 // The cloud `plan` writes lies on the part: every sampled point off the table top is within

@@ -86,8 +86,10 @@ std::string simulationSummary(const pipeline::SimulationRun& run) {
       s.profiles, s.laser_rays, s.occlusion_rays, run.seconds, s.points, s.outside_window,
       s.occluded);
   text += fmt::format(
-      "coverage   {:.1f}% of the part's area within {:.2f} mm of a point ({} area samples)\n",
-      100.0 * run.area.covered_fraction, toMm(run.point_spacing), run.area_samples);
+      "coverage   {:.1f}% of the part's area within {:.2f} mm of a point ({} area samples); "
+      "{:.1f}% faces or lies on the table\n",
+      100.0 * run.area.covered_fraction, toMm(run.point_spacing), run.area_samples,
+      100.0 * run.faces_table_fraction);
   text += fmt::format(
       "triangles  {:.1f}% of the area on triangles with a point ({} of {} triangles); density "
       "{:.2f} points/mm² (median {:.2f}, 5% {:.2f}, 95% {:.2f})\n",
@@ -112,6 +114,7 @@ Json simulationJson(const pipeline::SimulationRun& run) {
            {{"area_fraction", run.area.covered_fraction},
             {"point_spacing_mm", toMm(run.point_spacing)},
             {"area_samples", run.area_samples},
+            {"faces_table_fraction", run.faces_table_fraction},
             {"covered_fraction", c.covered_fraction},
             {"covered_area_mm2", c.covered_area * 1e6},
             {"total_area_mm2", c.total_area * 1e6},
