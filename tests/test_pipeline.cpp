@@ -2,6 +2,7 @@
 // pipeline's trajectory follows the scan path through the 7-DOF chain, is what the planners and
 // evaluate() say it is, and bad problems are refused with the field named.
 #include <cmath>
+#include <numbers>
 #include <random>
 #include <string>
 #include <variant>
@@ -11,6 +12,7 @@
 
 #include "cli/config/job.h"
 #include "cli/config/problem.h"
+#include "kinematics/placement.h"
 #include "kinematics/units.h"
 #include "map_support.h"
 #include "pipeline/plan_scan.h"
@@ -62,14 +64,14 @@ TEST(PlanScan, ReportedTermsAreEvaluateOfThePathAndTheDpYardstickIsTheDpPlanner)
   ASSERT_TRUE(plan.planned()) << plan.reason;
   const planner::ConfigMap& map = plan.prepared->map;
   const std::size_t b = plan.choice.chosen.result.branch;
-  const planner::ObjectiveTerms e = planner::evaluate(map, b, plan.choice.theta,
-                                                      problem.planning.objective, true);
+  const planner::ObjectiveTerms e =
+      planner::evaluate(map, b, plan.choice.theta, problem.planning.objective, true);
   EXPECT_TRUE(e.feasible);
   EXPECT_NEAR(e.total, plan.choice.terms.total, test::kSumTol * std::max(1.0, e.total));
   // The yardstick is DP through the registry on the same branch: the same path.
   ASSERT_TRUE(plan.choice.dp && plan.choice.dp->solved());
-  const planner::PlanResult dp = planner::planDpRefined(
-      map, b, problem.planning.objective, true, plan.choice.dp_subdivisions);
+  const planner::PlanResult dp =
+      planner::planDpRefined(map, b, problem.planning.objective, true, plan.choice.dp_subdivisions);
   EXPECT_EQ(dp.theta, plan.choice.dp->theta);
   EXPECT_TRUE(plan.choice.dpGap().has_value());
 }
@@ -117,12 +119,12 @@ TEST(PartPlacement, TableRestsTheLowestPointOnTheTopCentredOnTheAxis) {
 }
 
 TEST(PartPlacement, APartBelowTheTableTopIsAnErrorNamingThePose) {
-  const cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo.yaml",
-                                        {"part.pose.xyz_mm=[0, 0, -5]"});
+  const cli::JobSpec job =
+      cli::loadJob(test::sourceDir() / "data/jobs/demo.yaml", {"part.pose.xyz_mm=[0, 0, -5]"});
   const kinematics::CellModel cell = cli::buildCell(job);
-  EXPECT_TRUE(test::throwsInputError([&] { cli::loadPart(job, cell); },
-                                     {"demo.yaml", "part.pose", "5.00 mm below the table top",
-                                      "part.place: table"}));
+  EXPECT_TRUE(test::throwsInputError(
+      [&] { cli::loadPart(job, cell); },
+      {"demo.yaml", "part.pose", "5.00 mm below the table top", "part.place: table"}));
 }
 
 // Placed, ring heights count from the table top: a part lifted 40 mm (a riser) with rings at
@@ -134,16 +136,40 @@ TEST(PartPlacement, PlacedRingHeightsCountFromTheTableTop) {
     return cli::toProblem(job).path;
   };
   const scanplan::scanner::PathRequest on_table = path({});
-  const scanplan::scanner::PathRequest lifted = path(
-      {"part.place=table", "part.pose.xyz_mm=[0, 0, 40]",
-       "scan.paths=[{type: ring, height_mm: 75, tilt_deg: 25}, {type: ring, height_mm: 145, "
-       "tilt_deg: 60}]"});
+  const scanplan::scanner::PathRequest lifted =
+      path({"part.place=table", "part.pose.xyz_mm=[0, 0, 40]",
+            "scan.paths=[{type: ring, height_mm: 75, tilt_deg: 25}, {type: ring, height_mm: 145, "
+            "tilt_deg: 60}]"});
   ASSERT_EQ(on_table.elements.size(), 2u);
   ASSERT_EQ(lifted.elements.size(), 2u);
   for (std::size_t i = 0; i < 2; ++i) {
     EXPECT_NEAR(std::get<scanplan::scanner::RingSpec>(lifted.elements[i]).height,
                 std::get<scanplan::scanner::RingSpec>(on_table.elements[i]).height, 1e-12);
   }
+}
+
+// The geometry on its own: a unit cube at (10, 20, 30) yawed 45° rests with its lowest point at
+// 0 and its centre on the axis; its corners then reach √2/2 from the axis.
+TEST(PartPlacement, PlacedOnTableAndPartExtentOnAKnownCube) {
+  kinematics::TriangleMesh cube;
+  for (int i = 0; i < 8; ++i) {
+    cube.vertices.emplace_back(10.0 + (i & 1), 20.0 + ((i >> 1) & 1), 30.0 + ((i >> 2) & 1));
+  }
+  const Eigen::Isometry3d yaw(Eigen::AngleAxisd(std::numbers::pi / 4, Eigen::Vector3d::UnitZ()));
+  const Eigen::Isometry3d X_RP = kinematics::placedOnTable(cube, yaw);
+  const kinematics::PartExtent e = kinematics::partExtent(cube, X_RP);
+  EXPECT_NEAR(e.lowest, 0.0, 1e-12);
+  EXPECT_NEAR(e.widest, std::sqrt(0.5), 1e-12);
+  // Lifted 5 below the top by the pose: reaches 5 into the table.
+  Eigen::Isometry3d sunk = X_RP;
+  sunk.translation().z() -= 5.0;
+  EXPECT_NEAR(kinematics::partExtent(cube, sunk).lowest, -5.0, 1e-12);
+}
+
+TEST(PartPlacement, AnUnknownPlacementNamesTheKeyAndTheChoices) {
+  EXPECT_TRUE(test::throwsInputError(
+      [] { cli::loadJob(test::sourceDir() / "data/jobs/demo.yaml", {"part.place=floor"}); },
+      {"part.place", "floor", "none", "table"}));
 }
 
 TEST(PlannerRegistry, NamesMakeEveryPlannerAndUnknownNamesNone) {

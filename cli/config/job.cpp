@@ -14,6 +14,7 @@
 #include "cli/config/detail/describe.h"
 #include "cli/programs/programs.h"
 #include "kinematics/error.h"
+#include "kinematics/placement.h"
 #include "kinematics/units.h"
 #include "planner/planner.h"
 
@@ -642,21 +643,15 @@ std::string jobHash(const JobSpec& job) {
 
 namespace {
 
-// X_RP that puts the part's lowest point on the table top and its bounding box centre on the
-// axis, after the pose's rotation; the pose's translation is an offset from there.
-Eigen::Isometry3d placedOnTable(const JobSpec& job, const kinematics::PartModel& part) {
+// The job's part placed on the table (kinematics::placedOnTable); errors name the job file.
+Eigen::Isometry3d placedPart(const JobSpec& job, const kinematics::PartModel& part) {
   kinematics::LoadedMesh mesh;
   try {
     mesh = kinematics::loadMesh(part.mesh.path, part.mesh.options);
   } catch (const InputError& e) {
     throw InputError(fmt::format("{}: part.mesh: {}", job.source.string(), e.what()));
   }
-  const Eigen::Isometry3d pose = toIsometry(job.part.pose);
-  Eigen::AlignedBox3d box;
-  for (const Eigen::Vector3d& v : mesh.mesh.vertices) box.extend(pose.linear() * v);
-  Eigen::Isometry3d X_RP = pose;
-  X_RP.translation() += Eigen::Vector3d(-box.center().x(), -box.center().y(), -box.min().z());
-  return X_RP;
+  return kinematics::placedOnTable(mesh.mesh, toIsometry(job.part.pose));
 }
 
 }  // namespace
@@ -682,7 +677,7 @@ kinematics::CellModel buildCell(const JobSpec& job) {
   cell.part.mesh = {job.part.mesh.resolved,
                     {toLengthUnit(job.part.units), job.part.scale, upRotation(job.part.up_axis)}};
   cell.part.X_RP = toIsometry(job.part.pose);
-  if (job.part.place == "table") cell.part.X_RP = placedOnTable(job, cell.part);
+  if (job.part.place == "table") cell.part.X_RP = placedPart(job, cell.part);
 
   cell.scanner.X_FS = toIsometry(job.scanner.mount);
   for (const ShapeSpec& shape : job.scanner.body) cell.scanner.body.push_back(toShape(shape));

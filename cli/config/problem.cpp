@@ -9,6 +9,7 @@
 #include <spdlog/spdlog.h>
 
 #include "kinematics/error.h"
+#include "kinematics/placement.h"
 #include "kinematics/units.h"
 
 namespace scanplan::cli {
@@ -28,12 +29,7 @@ void checkOnTable(const JobSpec& job,
                   const kinematics::CellModel& cell,
                   const kinematics::TriangleMesh& mesh) {
   constexpr double kSunkTolerance = 1e-5;  // m: 0.01 mm, far above the float rounding of a mesh
-  double lowest = std::numeric_limits<double>::infinity(), widest = 0.0;
-  for (const Eigen::Vector3d& v : mesh.vertices) {
-    const Eigen::Vector3d p_R = cell.part.X_RP * v;
-    lowest = std::min(lowest, p_R.z());
-    widest = std::max(widest, p_R.head<2>().norm());
-  }
+  const auto [lowest, widest] = kinematics::partExtent(mesh, cell.part.X_RP);
   if (lowest < -kSunkTolerance) {
     throw InputError(fmt::format(
         "{}: part.pose: the part reaches {:.2f} mm below the table top (its lowest point is at "
