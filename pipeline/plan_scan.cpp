@@ -7,6 +7,7 @@
 
 #include "kinematics/error.h"
 #include "kinematics/units.h"
+#include "pipeline/auto_scan.h"
 #include "scanner/raycaster.h"
 
 namespace scanplan::pipeline {
@@ -59,6 +60,27 @@ void proveAndSimulate(const ScanProblem& problem, const PreparedScan& prepared, 
   plan.status = ScanStatus::kPlanned;
 }
 
+// The hand-written elements (if any), then the automatic passes as one more element.
+scanner::GeneratedPath autoPath(const ScanProblem& problem,
+                                PreparedScan& prepared,
+                                const scanner::Raycaster& raycaster,
+                                const ProgressFn& progress) {
+  scanner::GeneratedPath given;
+  if (!problem.path.elements.empty())
+    given = scanner::generatePath(problem.path, problem.part, raycaster, prepared.window);
+  std::function<void(std::size_t, std::size_t)> auto_progress;
+  if (progress) auto_progress = [&progress](std::size_t d, std::size_t n) { progress("auto", d, n); };
+  AutoScanPlan plan = planAutoScan(problem, *prepared.scene, given.path, auto_progress);
+  prepared.auto_scan = plan.report;
+  if (plan.element.samples.empty()) return given;
+  scanner::PathRequest request = problem.path;
+  request.elements.push_back(std::move(plan.element));
+  scanner::GeneratedPath path = scanner::generatePath(request, problem.part, raycaster, prepared.window);
+  path.elements.back().kind = "auto";
+  path.elements.back().note = fmt::format("{} passes", prepared.auto_scan->passes.size());
+  return path;
+}
+
 }  // namespace
 
 std::vector<kinematics::IkBranch> mapBranches(const MapSettings& settings) {
@@ -76,10 +98,24 @@ planner::MapRequest mapRequest(const MapSettings& settings) {
   return request;
 }
 
+void checkAutoScan(const AutoScanSettings& a) {
+  require(positive(a.max_incidence) && a.max_incidence < deg(90.0), "auto_scan.max_incidence",
+          fmt::format("{} rad: expected an angle in (0, 90) deg", a.max_incidence));
+  require(std::isfinite(a.point_spacing) && a.point_spacing >= 0.0, "auto_scan.point_spacing",
+          fmt::format("{} m: expected 0 (from the optics) or a spacing > 0", a.point_spacing));
+  require(positive(a.target_coverage) && a.target_coverage <= 1.0, "auto_scan.target_coverage",
+          fmt::format("{}: expected a fraction in (0, 1]", a.target_coverage));
+  require(a.max_passes >= 1, "auto_scan.max_passes", "0: expected at least 1");
+  require(positive(a.time_budget), "auto_scan.time_budget", "expected > 0 s");
+  require(positive(a.sample_spacing), "auto_scan.sample_spacing", "expected > 0 m");
+}
+
 void checkProblem(const ScanProblem& p) {
   require(!p.part.triangles.empty(), "part", "no triangles: expected a part mesh");
-  require(!p.path.elements.empty(), "path.elements",
-          "empty: expected at least one path element (ring, raster, waypoints or file)");
+  require(!p.path.elements.empty() || p.auto_scan, "path.elements",
+          "empty: expected at least one path element (ring, raster, waypoints or file) or "
+          "auto_scan");
+  if (p.auto_scan) checkAutoScan(*p.auto_scan);
   require(positive(p.path.dt), "path.dt", fmt::format("{}: expected a time step > 0 s", p.path.dt));
   require(positive(p.map.angle_step), "map.angle_step",
           fmt::format("{}: expected an angle step > 0 rad", p.map.angle_step));
@@ -103,9 +139,13 @@ std::shared_ptr<const PreparedScan> prepareScan(const ScanProblem& problem,
   auto t = Clock::now();
   prepared->window = scanner::laserWindow(problem.optics);
   const scanner::Raycaster raycaster(problem.part);
-  prepared->path = scanner::generatePath(problem.path, problem.part, raycaster, prepared->window);
-  prepared->path_seconds = since(t);
   prepared->scene = std::make_unique<collision::Scene>(problem.cell, problem.clearance);
+  if (problem.auto_scan) {
+    prepared->path = autoPath(problem, *prepared, raycaster, progress);
+  } else {
+    prepared->path = scanner::generatePath(problem.path, problem.part, raycaster, prepared->window);
+  }
+  prepared->path_seconds = since(t);
   const planner::MapRequest request = mapRequest(problem.map);
   t = Clock::now();
   planner::ProgressFn map_progress;

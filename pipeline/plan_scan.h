@@ -15,6 +15,7 @@
 
 #include "collision/scene.h"
 #include "kinematics/scan_path.h"
+#include "pipeline/auto_scan.h"
 #include "pipeline/problem.h"
 #include "pipeline/simulation.h"
 #include "planner/config_map.h"
@@ -73,6 +74,7 @@ struct PreparedScan {
   scanner::GeneratedPath path;
   std::unique_ptr<collision::Scene> scene;
   planner::ConfigMap map;
+  std::optional<AutoScanReport> auto_scan;  ///< when the problem asks for the automatic scan
   double path_seconds = 0.0;
   double map_seconds = 0.0;
 };

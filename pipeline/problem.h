@@ -63,6 +63,20 @@ struct SimulationSettings {
   double max_incidence = 1.0471975511965976;  // 60°
 };
 
+/// The automatic scan (DESIGN.md §11, job keys scan.auto), SI.
+struct AutoScanSettings {
+  /// rad, the largest angle between a surface normal and the laser ray, and the camera ray, for a
+  /// point to count.
+  double max_incidence = 1.0471975511965976;  // 60°
+  /// m, an area counts as covered when a point lies within this; 0: the line's point pitch at
+  /// the middle of the depth window. The passes move one spacing per profile.
+  double point_spacing = 0.0;
+  double target_coverage = 0.98;  ///< of the scannable area
+  std::size_t max_passes = 40;
+  double time_budget = 60.0;     ///< s of planning for choosing the passes
+  double sample_spacing = 0.003; ///< m between the area samples the passes are chosen on
+};
+
 /// A whole planning problem: the cell (robot, table, part pose, scanner, obstacles), the part
 /// mesh, the scan path request, the constraints and every stage's settings. SI throughout.
 struct ScanProblem {
@@ -73,6 +87,8 @@ struct ScanProblem {
   kinematics::TriangleMesh part;  ///< the part mesh, metres, part frame P
   scanner::LaserOptics optics;    ///< Eq. 5 geometry of the scanner
   scanner::PathRequest path;      ///< the scan path, relative to the part
+  /// Generate passes that cover the part (after `path`'s elements, which may be empty).
+  std::optional<AutoScanSettings> auto_scan;
   collision::ClearanceConfig clearance;
   planner::ConstraintSettings constraints;
   MapSettings map;

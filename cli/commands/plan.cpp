@@ -128,7 +128,7 @@ ExitCode runPlan(const PlanOptions& options) {
   OutputStage stage(options.out_dir, kPlanOutputs);
   const std::filesystem::path& out = stage.dir();
   writeFileAtomically(out / "job.yaml", jobToYaml(job));
-  if (job.scan.paths.empty()) {
+  if (job.scan.paths.empty() && !job.scan.auto_scan.enabled) {
     stage.commit();
     summary += reachCheck(job, cell, part);
     summary += fmt::format("wrote      {}\n", (options.out_dir / "job.yaml").string());
@@ -142,8 +142,9 @@ ExitCode runPlan(const PlanOptions& options) {
   const PathContext context{part, prepared.window, prepared.path};
   writePathOutputs(out, context);
   writeMapOutputs(out, job, prepared.map);
-  summary +=
-      pathSummary(prepared.window, prepared.path) + mapSummary(prepared.map, prepared.map_seconds);
+  summary += pathSummary(prepared.window, prepared.path);
+  if (prepared.auto_scan) summary += autoScanSummary(*prepared.auto_scan);
+  summary += mapSummary(prepared.map, prepared.map_seconds);
   pipeline::StageTimes times = plan.times;
   const auto finish = [&] {
     times.total = since(start);

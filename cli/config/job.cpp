@@ -174,11 +174,24 @@ void describePathElement(A& a, PathElementSpec& s) {
 }
 
 template <class A>
+void describeAuto(A& a, AutoSpec& s) {
+  a.field("max_incidence_deg", s.max_incidence_deg, Expect{1.0, 89.0, false, false, {}});
+  a.field("point_spacing_mm", s.point_spacing_mm, Expect{0.0, 100.0, false, false, {}});
+  a.field("target_coverage", s.target_coverage, Expect{0.01, 1.0, false, false, {}});
+  a.field("max_passes", s.max_passes, Expect::range(1, 1000));
+  a.field("time_budget_s", s.time_budget_s, Expect{0.1, 86400.0, false, false, {}});
+  a.field("sample_spacing_mm", s.sample_spacing_mm, Expect{0.2, 100.0, false, false, {}});
+}
+
+template <class A>
 void describeScan(A& a, ScanSpec& s) {
   a.field("dt_s", s.dt_s, Expect{0.001, 10.0, false, false, {}});
   a.field("transfer_speed_mm_s", s.transfer_speed_mm_s, Expect::positive());
   a.field("retreat_mm", s.retreat_mm, Expect::nonNegative());
   a.list("paths", s.paths, 0, 1000);
+  // Present means enabled; a job without it writes none (jobToYaml reads back the same job).
+  if constexpr (A::kReading) s.auto_scan.enabled = a.has("auto");
+  if (s.auto_scan.enabled) a.section("auto", s.auto_scan);
 }
 
 template <class A>
@@ -434,6 +447,8 @@ void describe(YamlIn& a, WaypointSpec& s) { describeWaypoint(a, s); }
 void describe(YamlOut& a, WaypointSpec& s) { describeWaypoint(a, s); }
 void describe(YamlIn& a, PathElementSpec& s) { describePathElement(a, s); }
 void describe(YamlOut& a, PathElementSpec& s) { describePathElement(a, s); }
+void describe(YamlIn& a, AutoSpec& s) { describeAuto(a, s); }
+void describe(YamlOut& a, AutoSpec& s) { describeAuto(a, s); }
 void describe(YamlIn& a, ScanSpec& s) { describeScan(a, s); }
 void describe(YamlOut& a, ScanSpec& s) { describeScan(a, s); }
 void describe(YamlIn& a, MapSpec& s) { describeMap(a, s); }

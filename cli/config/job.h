@@ -123,11 +123,23 @@ struct PathElementSpec {
 };
 
 /// `scan`: the scan path and its sampling.
+/// `scan.auto`: the automatic, coverage-driven scan (present: enabled).
+struct AutoSpec {
+  bool enabled = false;            ///< the job has a `scan.auto` mapping
+  double max_incidence_deg = 60.0; ///< laser and camera ray against the normal, for a point to count
+  double point_spacing_mm = 0.0;   ///< 0: the line's point pitch at mid depth
+  double target_coverage = 0.98;   ///< of the scannable area
+  int max_passes = 40;
+  double time_budget_s = 60.0;     ///< for choosing the passes
+  double sample_spacing_mm = 3.0;  ///< area samples the passes are chosen on
+};
+
 struct ScanSpec {
   double dt_s = 0.1;
   double transfer_speed_mm_s = 100.0;
   double retreat_mm = 50.0;
   std::vector<PathElementSpec> paths;
+  AutoSpec auto_scan;  ///< `scan.auto`
 };
 
 /// `map`: the configuration map grid.

@@ -129,6 +129,18 @@ pipeline::SimulationSettings simulationSettings(const JobSpec& job,
   return s;
 }
 
+pipeline::AutoScanSettings autoScanSettings(const JobSpec& job) {
+  const AutoSpec& a = job.scan.auto_scan;
+  pipeline::AutoScanSettings s;
+  s.max_incidence = deg(a.max_incidence_deg);
+  s.point_spacing = a.point_spacing_mm * kMmToM;
+  s.target_coverage = a.target_coverage;
+  s.max_passes = static_cast<std::size_t>(a.max_passes);
+  s.time_budget = a.time_budget_s;
+  s.sample_spacing = a.sample_spacing_mm * kMmToM;
+  return s;
+}
+
 pipeline::ScanProblem toProblem(const JobSpec& job,
                                 kinematics::CellModel cell,
                                 kinematics::TriangleMesh part) {
@@ -142,6 +154,13 @@ pipeline::ScanProblem toProblem(const JobSpec& job,
   p.planning = planSettings(job);
   if (job.validation.enabled) p.validation = validationSettings(job);
   if (job.simulation.enabled) p.simulation = simulationSettings(job, p.cell);
+  if (job.scan.auto_scan.enabled) {
+    p.auto_scan = autoScanSettings(job);
+    if (p.simulation) {  // coverage is measured the way the passes were chosen
+      p.simulation->point_spacing = p.auto_scan->point_spacing;
+      p.simulation->max_incidence = p.auto_scan->max_incidence;
+    }
+  }
   p.part = std::move(part);
   return p;
 }

@@ -21,6 +21,8 @@ scanner::PathRequest placedPathRequest(const JobSpec& job, const kinematics::Cel
 
 /// The whole job as a problem: the cell, the part mesh, the scan path request and every
 /// stage's settings (validation and simulation nullopt when the job turns them off).
+/// The automatic scan's settings (`scan.auto`), SI.
+pipeline::AutoScanSettings autoScanSettings(const JobSpec& job);
 pipeline::ScanProblem toProblem(const JobSpec& job);
 /// As above, with the cell and part mesh already built.
 pipeline::ScanProblem toProblem(const JobSpec& job,

@@ -47,6 +47,24 @@ std::string pathSummary(const scanner::LaserWindow& window,
   return s;
 }
 
+std::string autoScanSummary(const pipeline::AutoScanReport& r) {
+  std::size_t spins = 0;
+  for (const auto& p : r.passes) spins += p.kind == "spin" ? 1u : 0u;
+  std::string s = fmt::format(
+      "auto       {} passes ({} spins, {} strips) of {} candidates in {:.1f} s: {:.1f}% of the "
+      "scannable area planned ({} samples every {:.1f} mm); stopped: {}\n",
+      r.passes.size(), spins, r.passes.size() - spins, r.candidates, r.seconds,
+      100.0 * r.planned_fraction, r.counted, toMm(r.sample_spacing), r.stop);
+  s += fmt::format("           {:.1f} s scanning, {:.1f} s moving between passes{}\n", r.scan_time,
+                   r.transfer_time,
+                   r.unreachable.empty()
+                       ? std::string()
+                       : fmt::format("; {} passes out of the arm's reach replaced", r.unreachable.size()));
+  if (std::getenv("SCANPLAN_DEBUG_AUTO"))
+    for (const auto& p : r.passes) s += fmt::format("  DEBUG {:6.1f} {:5.1f} s {:.4f} {}\n", p.start_time, p.duration, p.gain, p.label);
+  return s;
+}
+
 std::string mapSummary(const planner::ConfigMap& map, double seconds) {
   const std::size_t cells = map.cellsPerBranch();
   std::string text = fmt::format(

@@ -17,6 +17,9 @@ std::string cellSummary(const JobSpec& job,
                         const kinematics::CellModel& cell,
                         const kinematics::LoadedMesh& part);
 /// The scanner window and one line per path element, then the samples.
+/// The automatic scan's passes and prediction (`scan.auto`).
+std::string autoScanSummary(const pipeline::AutoScanReport& report);
+
 std::string pathSummary(const scanner::LaserWindow& window,
                         const scanner::GeneratedPath& generated);
 /// One line for the map (`seconds` to build it), one per branch.

@@ -1,0 +1,65 @@
+#pragma once
+// The automatic scan (job keys scan.auto, DESIGN.md §11): candidate passes over the part placed
+// on the table, each evaluated on area samples with the scanner model, a greedy set cover of the
+// scannable area by new area per second, every chosen pass checked for reach on the cell (some
+// table angle where the arm follows it on one IK branch), the passes ordered to keep the
+// connecting moves short, and the whole program as one path element for the planners.
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "collision/scene.h"
+#include "pipeline/problem.h"
+#include "scanner/area_coverage.h"
+#include "scanner/path_generators.h"
+
+namespace scanplan::pipeline {
+
+/// One chosen pass as it runs in the program.
+struct AutoPass {
+  std::string kind;         ///< spin | strip
+  std::string label;        ///< what it is ("spin elevation 25 deg, line at 40 mm")
+  double start_time = 0.0;  ///< s from the start of the automatic element
+  double duration = 0.0;    ///< s of scanning
+  double gain = 0.0;        ///< share of the counted area it newly covers, as planned
+};
+
+/// What the automatic planner did.
+struct AutoScanReport {
+  std::size_t candidates = 0;  ///< passes generated and evaluated
+  std::size_t samples = 0;     ///< evaluation area samples
+  double sample_spacing = 0.0; ///< m between evaluation samples
+  std::size_t counted = 0;     ///< samples that count toward the target (scannable)
+  std::vector<AutoPass> passes;
+  std::vector<std::string> unreachable;  ///< candidates the reach check refused
+  double planned_fraction = 0.0;  ///< counted samples the chosen passes cover (the prediction)
+  double given_fraction = 0.0;    ///< of them, covered by the hand-written paths already
+  std::string stop;               ///< why the selection stopped
+  double scan_time = 0.0;         ///< s of scanning in the automatic element
+  double transfer_time = 0.0;     ///< s of moves between passes
+  double seconds = 0.0;           ///< planning time
+};
+
+/// The automatic element and its report.
+struct AutoScanPlan {
+  scanner::FileSpec element;  ///< part frame, timed keys (transfers not scanning)
+  AutoScanReport report;
+};
+
+/// The point spacing the automatic scan works to: settings.point_spacing, or the line's point
+/// pitch at the middle of the depth window for `rays_per_profile` rays.
+double autoPointSpacing(const AutoScanSettings& settings,
+                        const scanner::LaserOptics& optics,
+                        int rays_per_profile);
+
+/// Plans the automatic passes of `problem` (problem.auto_scan must be set). `given` is the
+/// hand-written part of the path (may be empty): its coverage counts first and the passes start
+/// where it ends. Throws InputError when no candidate pass sees the part.
+AutoScanPlan planAutoScan(const ScanProblem& problem,
+                          const collision::Scene& scene,
+                          const kinematics::ScanPath& given,
+                          const std::function<void(std::size_t, std::size_t)>& progress = {});
+
+}  // namespace scanplan::pipeline

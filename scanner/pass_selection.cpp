@@ -1,0 +1,314 @@
+#include "scanner/pass_selection.h"
+
+#include <algorithm>
+#include <cmath>
+#include <queue>
+
+#include "kinematics/scan_path.h"
+
+namespace scanplan::scanner {
+
+namespace {
+
+std::size_t newlyCovered(const ScanPass& pass,
+                         const std::vector<std::uint8_t>& counts,
+                         const std::vector<std::uint8_t>& covered) {
+  std::size_t n = 0;
+  for (std::uint32_t i : pass.covers) if (counts[i] && !covered[i]) ++n;
+  return n;
+}
+
+}  // namespace
+
+CoverResult greedyCover(const std::vector<ScanPass>& passes,
+                        const std::vector<std::uint8_t>& counts,
+                        std::vector<std::uint8_t> covered,
+                        const CoverSettings& settings,
+                        const std::function<bool(std::size_t)>& accept,
+                        const std::function<bool()>& keep_going) {
+  CoverResult r;
+  r.covered = std::move(covered);
+  r.covered.resize(counts.size(), 0);
+  for (std::size_t i = 0; i < counts.size(); ++i) {
+    if (!counts[i]) continue;
+    ++r.counted;
+    if (r.covered[i]) ++r.covered_counted;
+  }
+  const auto rate = [&](std::size_t p, std::size_t gain) {
+    return static_cast<double>(gain) / (passes[p].duration() + settings.pass_overhead);
+  };
+  // Lazy evaluation: a pass's gain only shrinks, so a stale rate is an upper bound.
+  std::priority_queue<std::pair<double, std::size_t>> queue;
+  for (std::size_t p = 0; p < passes.size(); ++p)
+    queue.push({rate(p, newlyCovered(passes[p], counts, r.covered)), passes.size() - p});
+  while (true) {
+    if (static_cast<double>(r.covered_counted) >= settings.target * static_cast<double>(r.counted)) {
+      r.stop = "target reached";
+      break;
+    }
+    if (queue.empty()) {
+      r.stop = "no gain";
+      break;
+    }
+    if (r.chosen.size() >= settings.max_passes) {
+      r.stop = "max_passes";
+      break;
+    }
+    if (keep_going && !keep_going()) {
+      r.stop = "stopped";
+      break;
+    }
+    const auto [stale, key] = queue.top();
+    queue.pop();
+    const std::size_t p = passes.size() - key;  // ties go to the earlier pass
+    const std::size_t gain = newlyCovered(passes[p], counts, r.covered);
+    if (gain < settings.min_gain) continue;
+    if (!queue.empty() && rate(p, gain) < queue.top().first) {
+      queue.push({rate(p, gain), key});
+      continue;
+    }
+    if (accept && !accept(p)) {
+      r.rejected.push_back(p);
+      continue;
+    }
+    r.chosen.push_back(p);
+    for (std::uint32_t i : passes[p].covers) {
+      if (!r.covered[i] && counts[i]) ++r.covered_counted;
+      r.covered[i] = 1;
+    }
+  }
+  return r;
+}
+
+// ---- transfers ----------------------------------------------------------------------------
+
+namespace {
+
+constexpr int kArcSegments = 16;
+
+struct Spherical {
+  double azimuth = 0.0, elevation = 0.0, radius = 0.0;
+};
+
+Spherical spherical(const Eigen::Vector3d& p, const Eigen::Vector3d& c) {
+  const Eigen::Vector3d d = p - c;
+  Spherical s;
+  s.radius = d.norm();
+  s.azimuth = std::atan2(d.y(), d.x());
+  s.elevation = s.radius > 1e-9 ? std::asin(std::clamp(d.z() / s.radius, -1.0, 1.0)) : 1.5707963;
+  return s;
+}
+
+Eigen::Vector3d point(const Spherical& s, const Eigen::Vector3d& c) {
+  return c + s.radius * Eigen::Vector3d(std::cos(s.elevation) * std::cos(s.azimuth),
+                                        std::cos(s.elevation) * std::sin(s.azimuth),
+                                        std::sin(s.elevation));
+}
+
+// The translation keys of a transfer: from, out on the sphere, the arc, in, to.
+std::vector<Eigen::Vector3d> transferPoints(const Eigen::Vector3d& a,
+                                            const Eigen::Vector3d& b,
+                                            const TransferSphere& sphere) {
+  Spherical sa = spherical(a, sphere.centre), sb = spherical(b, sphere.centre);
+  const double r = std::max({sphere.radius, sa.radius, sb.radius});
+  double turn = sb.azimuth - sa.azimuth;
+  turn = std::remainder(turn, 2.0 * 3.141592653589793);
+  std::vector<Eigen::Vector3d> pts{a};
+  for (int k = 0; k <= kArcSegments; ++k) {
+    const double s = static_cast<double>(k) / kArcSegments;
+    pts.push_back(point({sa.azimuth + s * turn, sa.elevation + s * (sb.elevation - sa.elevation), r},
+                        sphere.centre));
+  }
+  pts.push_back(b);
+  return pts;
+}
+
+double rotationAngle(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  return Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle();
+}
+
+}  // namespace
+
+double transferTime(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to, const TransferSphere& sphere) {
+  const auto pts = transferPoints(from.translation(), to.translation(), sphere);
+  double length = 0.0;
+  for (std::size_t i = 1; i < pts.size(); ++i) length += (pts[i] - pts[i - 1]).norm();
+  return std::max(length / sphere.speed, rotationAngle(from, to) / sphere.turn_speed);
+}
+
+Move transferMove(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to, const TransferSphere& sphere) {
+  const auto pts = transferPoints(from.translation(), to.translation(), sphere);
+  std::vector<double> along{0.0};
+  for (std::size_t i = 1; i < pts.size(); ++i) along.push_back(along.back() + (pts[i] - pts[i - 1]).norm());
+  const double total = transferTime(from, to, sphere);
+  Move move;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const double s = along.back() > 0.0 ? along[i] / along.back()
+                                       : static_cast<double>(i) / static_cast<double>(pts.size() - 1);
+    Eigen::Isometry3d X = kinematics::interpolatePose(from, to, s);
+    X.translation() = pts[i];
+    if (i > 0 && s * total <= move.t.back() + 1e-6) continue;  // a zero-length step
+    move.X_RS.push_back(X);
+    move.t.push_back(s * total);
+  }
+  if (move.t.size() < 2) {  // from == to: a pause long enough to be a move
+    move.X_RS.push_back(to);
+    move.t.push_back(1e-3);
+  }
+  return move;
+}
+
+// ---- ordering -----------------------------------------------------------------------------
+
+namespace {
+
+double azimuthOf(const Eigen::Isometry3d& X) { return std::atan2(X.translation().y(), X.translation().x()); }
+
+// Where a step enters and leaves, given where the head is.
+struct Ends {
+  Eigen::Isometry3d entry, exit;
+  double turn = 0.0;
+};
+
+Ends ends(const ScanPass& pass, bool reversed, const std::optional<Eigen::Isometry3d>& at) {
+  Ends e;
+  if (pass.kind == PassKind::kSpin) {
+    e.turn = at ? azimuthOf(*at) - azimuthOf(pass.X_RS.front()) : 0.0;
+    e.entry = Eigen::AngleAxisd(e.turn, Eigen::Vector3d::UnitZ()) * pass.X_RS.front();
+    e.exit = e.entry;  // a full turn
+    return e;
+  }
+  e.entry = reversed ? pass.X_RS.back() : pass.X_RS.front();
+  e.exit = reversed ? pass.X_RS.front() : pass.X_RS.back();
+  return e;
+}
+
+double tourCost(const std::vector<ScanPass>& passes,
+                const std::vector<TourStep>& tour,
+                const std::optional<Eigen::Isometry3d>& start,
+                const TransferSphere& sphere) {
+  std::optional<Eigen::Isometry3d> at = start;
+  double cost = 0.0;
+  for (const TourStep& s : tour) {
+    const Ends e = ends(passes[s.pass], s.reversed, at);
+    if (at) cost += transferTime(*at, e.entry, sphere);
+    at = e.exit;
+  }
+  return cost;
+}
+
+std::vector<TourStep> nearestNeighbour(const std::vector<ScanPass>& passes,
+                                       std::vector<std::size_t> left,
+                                       std::optional<Eigen::Isometry3d> at,
+                                       const TransferSphere& sphere) {
+  std::vector<TourStep> tour;
+  while (!left.empty()) {
+    double best = 1e300;
+    std::size_t best_k = 0;
+    bool best_rev = false;
+    for (std::size_t k = 0; k < left.size(); ++k) {
+      for (bool rev : {false, true}) {
+        const Ends e = ends(passes[left[k]], rev, at);
+        const double c = at ? transferTime(*at, e.entry, sphere) : 0.0;
+        if (c < best - 1e-12) {
+          best = c;
+          best_k = k;
+          best_rev = rev;
+        }
+      }
+    }
+    tour.push_back({left[best_k], best_rev, 0.0});
+    at = ends(passes[left[best_k]], best_rev, at).exit;
+    left.erase(left.begin() + static_cast<std::ptrdiff_t>(best_k));
+  }
+  return tour;
+}
+
+void twoOpt(const std::vector<ScanPass>& passes,
+            std::vector<TourStep>& tour,
+            const std::optional<Eigen::Isometry3d>& start,
+            const TransferSphere& sphere) {
+  double cost = tourCost(passes, tour, start, sphere);
+  for (int round = 0; round < 50; ++round) {
+    bool improved = false;
+    for (std::size_t i = 0; i < tour.size(); ++i) {
+      for (std::size_t j = i; j < tour.size(); ++j) {
+        std::vector<TourStep> next = tour;
+        std::reverse(next.begin() + static_cast<std::ptrdiff_t>(i),
+                     next.begin() + static_cast<std::ptrdiff_t>(j) + 1);
+        for (std::size_t k = i; k <= j; ++k) next[k].reversed = !next[k].reversed;
+        const double c = tourCost(passes, next, start, sphere);
+        if (c < cost - 1e-9) {
+          tour = std::move(next);
+          cost = c;
+          improved = true;
+        }
+      }
+    }
+    if (!improved) break;
+  }
+}
+
+// Fills in each spin's turn, now that the order is fixed.
+void settleTurns(const std::vector<ScanPass>& passes,
+                 std::vector<TourStep>& tour,
+                 std::optional<Eigen::Isometry3d> at) {
+  for (TourStep& s : tour) {
+    const Ends e = ends(passes[s.pass], s.reversed, at);
+    s.turn = e.turn;
+    at = e.exit;
+  }
+}
+
+}  // namespace
+
+std::vector<TourStep> orderPasses(const std::vector<ScanPass>& passes,
+                                  const std::vector<std::size_t>& chosen,
+                                  const std::optional<Eigen::Isometry3d>& start,
+                                  const TransferSphere& sphere) {
+  std::vector<TourStep> best;
+  if (start) {
+    best = nearestNeighbour(passes, chosen, start, sphere);
+  } else {
+    double best_cost = 1e300;
+    for (std::size_t k = 0; k < chosen.size(); ++k) {
+      std::vector<std::size_t> left = chosen;
+      left.erase(left.begin() + static_cast<std::ptrdiff_t>(k));
+      std::vector<TourStep> tour{{chosen[k], false, 0.0}};
+      const auto rest = nearestNeighbour(passes, left, ends(passes[chosen[k]], false, {}).exit, sphere);
+      tour.insert(tour.end(), rest.begin(), rest.end());
+      const double c = tourCost(passes, tour, start, sphere);
+      if (c < best_cost - 1e-12) {
+        best_cost = c;
+        best = std::move(tour);
+      }
+    }
+  }
+  twoOpt(passes, best, start, sphere);
+  settleTurns(passes, best, start);
+  return best;
+}
+
+ScanPass stepPass(const std::vector<ScanPass>& passes, const TourStep& step) {
+  ScanPass p = passes[step.pass];
+  if (p.kind == PassKind::kSpin && step.turn != 0.0) p = rotatedPass(p, step.turn);
+  if (step.reversed) {
+    std::reverse(p.X_RS.begin(), p.X_RS.end());
+    std::reverse(p.azimuth.begin(), p.azimuth.end());
+    const double end = p.t.back();
+    std::reverse(p.t.begin(), p.t.end());
+    for (double& t : p.t) t = end - t;
+  }
+  return p;
+}
+
+double tourTransferTime(const std::vector<ScanPass>& passes,
+                        const std::vector<TourStep>& tour,
+                        const std::optional<Eigen::Isometry3d>& start,
+                        const TransferSphere& sphere) {
+  std::vector<TourStep> unturned = tour;
+  for (TourStep& s : unturned) s.turn = 0.0;
+  return tourCost(passes, unturned, start, sphere);
+}
+
+}  // namespace scanplan::scanner

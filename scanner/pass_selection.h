@@ -1,0 +1,94 @@
+#pragma once
+// Choosing and ordering scan passes (DESIGN.md §11): a greedy weighted set cover of the area
+// samples (new area per second of scanning), then a tour through the chosen passes, each run
+// either way, that keeps the connecting moves short (nearest neighbour, then 2-opt), and the
+// connecting moves themselves: out to a safe sphere around the part, along it, and in.
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "scanner/scan_passes.h"
+
+namespace scanplan::scanner {
+
+struct CoverSettings {
+  double target = 0.98;          ///< of the samples that count
+  std::size_t max_passes = 40;   ///< passes chosen at most
+  double pass_overhead = 3.0;    ///< s added to a pass's time in its gain (its approach)
+  std::size_t min_gain = 1;      ///< samples: stop when the best pass adds fewer
+};
+
+struct CoverResult {
+  std::vector<std::size_t> chosen;    ///< pass indices, in the order chosen
+  std::vector<std::size_t> rejected;  ///< passes the filter refused
+  std::vector<std::uint8_t> covered;  ///< per sample
+  std::size_t counted = 0;            ///< samples that count
+  std::size_t covered_counted = 0;    ///< of those, covered
+  std::string stop;                   ///< "target reached", "no gain", "max_passes", "stopped"
+};
+
+/// Lazy greedy set cover: repeatedly the pass with the most newly covered counting samples per
+/// second (duration + overhead), until `target` of the counting samples are covered, no pass
+/// adds min_gain, max_passes are chosen or `keep_going` says stop. `accept` is asked once per
+/// pass before it is chosen (e.g. a reachability check); refused passes are never asked again.
+/// `counts[i]`: sample i counts toward the target; `covered`: samples covered before any pass.
+CoverResult greedyCover(const std::vector<ScanPass>& passes,
+                        const std::vector<std::uint8_t>& counts,
+                        std::vector<std::uint8_t> covered,
+                        const CoverSettings& settings,
+                        const std::function<bool(std::size_t)>& accept = {},
+                        const std::function<bool()>& keep_going = {});
+
+/// The safe sphere the connecting moves run on (R frame): no part of the head inside it can
+/// touch the part.
+struct TransferSphere {
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  double radius = 0.3;       ///< m
+  double speed = 0.1;        ///< m/s
+  double turn_speed = 0.5;   ///< rad/s of head rotation
+};
+
+/// A timed move of the head (R frame): keys and their times from the start of the move.
+struct Move {
+  std::vector<Eigen::Isometry3d> X_RS;
+  std::vector<double> t;
+};
+
+/// The move from `from` to `to`: radially out to the sphere, along it (azimuth and elevation
+/// about its centre interpolated, so it never dips below the lower end), radially in; the head
+/// turns evenly over the whole move. Starts at `from` (t = 0) and ends at `to`.
+Move transferMove(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to, const TransferSphere& sphere);
+/// The duration of transferMove(), s, without building it.
+double transferTime(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to, const TransferSphere& sphere);
+
+/// One step of a tour: a pass, run backwards or not; a spin turned to start where the head is.
+struct TourStep {
+  std::size_t pass = 0;
+  bool reversed = false;
+  double turn = 0.0;  ///< rad about R's z applied to a spin (rotatedPass)
+};
+
+/// Orders `chosen` (indices into passes) to keep the transfers short: nearest neighbour from
+/// `start` (or from each pass, the best kept), then 2-opt moves that reverse a stretch of the
+/// tour (and each pass in it). Deterministic.
+std::vector<TourStep> orderPasses(const std::vector<ScanPass>& passes,
+                                  const std::vector<std::size_t>& chosen,
+                                  const std::optional<Eigen::Isometry3d>& start,
+                                  const TransferSphere& sphere);
+
+/// The pass of a step as it is run: turned and reversed (times restart at 0).
+ScanPass stepPass(const std::vector<ScanPass>& passes, const TourStep& step);
+
+/// Total transfer time of a tour from `start`, s.
+double tourTransferTime(const std::vector<ScanPass>& passes,
+                        const std::vector<TourStep>& tour,
+                        const std::optional<Eigen::Isometry3d>& start,
+                        const TransferSphere& sphere);
+
+}  // namespace scanplan::scanner

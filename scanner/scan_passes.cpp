@@ -1,0 +1,416 @@
+#include "scanner/scan_passes.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+#include <nanoflann.hpp>
+
+#include "kinematics/units.h"
+#include "kinematics/scan_path.h"
+#include "scanner/simulator.h"
+
+namespace scanplan::scanner {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kStation = 0.002;     // m between probed strip stations
+constexpr double kSpinStation = 2.0;   // deg between probed spin stations
+constexpr double kSmoothing = 0.015;   // m, the conservative standoff window (strips)
+constexpr int kSpinSmoothing = 4;      // stations either side (spins)
+constexpr int kStripKeyEvery = 3;      // stations per strip key
+
+Eigen::Isometry3d frame(const Eigen::Vector3d& p, const Eigen::Vector3d& z, const Eigen::Vector3d& x) {
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  const Eigen::Vector3d zn = z.normalized();
+  const Eigen::Vector3d xn = (x - x.dot(zn) * zn).normalized();
+  X.linear().col(0) = xn;
+  X.linear().col(1) = zn.cross(xn);
+  X.linear().col(2) = zn;
+  X.translation() = p;
+  return X;
+}
+
+double zMid(const LaserWindow& w) { return 0.5 * (w.z_min + w.z_max); }
+
+// The surface under a whole line: the head's probe origin o (far before the part), looking along
+// v, the line along y. Returns the head's advance along v from o that centres the seen depths in
+// the window (never nearer than z_min to anything), NaN when no ray meets the part; `rho` grows
+// to the largest distance of a part hit from the table axis.
+double probeLine(const PartOnTable& scene,
+                 const LaserWindow& window,
+                 const Eigen::Vector3d& o,
+                 const Eigen::Vector3d& v,
+                 const Eigen::Vector3d& y,
+                 double& rho) {
+  const double half = 0.9 * window.y_near;
+  double nearest = 1e30, farthest = -1e30;
+  bool part = false;
+  for (int k = -3; k <= 3; ++k) {
+    const auto hit = scene.cast(o + (half * k / 3.0) * y, v);
+    if (!hit) continue;
+    nearest = std::min(nearest, hit->distance);
+    if (!scene.onPart(*hit)) continue;
+    part = true;
+    farthest = std::max(farthest, hit->distance);
+    rho = std::max(rho, (o + (half * k / 3.0) * y + hit->distance * v).head<2>().norm());
+  }
+  if (!part) return kNaN;
+  return std::min(0.5 * (nearest + farthest) - zMid(window), nearest - window.z_min);
+}
+
+// The most conservative (least advanced) standoff within ±reach stations; NaN stations take the
+// least advanced of all. Circular for closed passes.
+std::vector<double> smoothStandoff(const std::vector<double>& advance, int reach, bool circular) {
+  double fallback = 1e30;
+  for (double a : advance)
+    if (!std::isnan(a)) fallback = std::min(fallback, a);
+  const int n = static_cast<int>(advance.size());
+  std::vector<double> out(advance.size());
+  for (int i = 0; i < n; ++i) {
+    double m = 1e30;
+    for (int j = i - reach; j <= i + reach; ++j) {
+      int k = j;
+      if (circular) k = ((j % n) + n) % n;
+      if (k < 0 || k >= n) continue;
+      const double a = advance[static_cast<std::size_t>(k)];
+      m = std::min(m, std::isnan(a) ? fallback : a);
+    }
+    out[static_cast<std::size_t>(i)] = m;
+  }
+  return out;
+}
+
+// One point spacing per profile on a surface the motion meets at the incidence limit: the
+// profiles lie point_spacing · cos(max_incidence) apart along the head's path.
+double scanSpeed(const PassSettings& s) {
+  return s.point_spacing * std::cos(s.max_incidence) * s.frame_rate;
+}
+
+// Largest distance of a part vertex from the origin of R, and the part's height and radius.
+struct PartSpan {
+  double reach = 0.0, rho = 0.0, z_top = 0.0;
+};
+PartSpan partSpan(const kinematics::TriangleMesh& part) {
+  PartSpan s;
+  for (const Eigen::Vector3d& p : part.vertices) {
+    s.reach = std::max(s.reach, p.norm());
+    s.rho = std::max(s.rho, p.head<2>().norm());
+    s.z_top = std::max(s.z_top, p.z());
+  }
+  return s;
+}
+
+// One spin: elevation e (rad, view down from horizontal), the line centre at u along the line
+// direction in the plane through the axis, the camera ahead (+1) or behind (−1).
+bool spinPass(const PartOnTable& scene,
+              const PassSettings& settings,
+              double e,
+              double u,
+              int camera_side,
+              double far,
+              ScanPass& pass) {
+  const int n = static_cast<int>(std::lround(360.0 / kSpinStation));
+  std::vector<double> advance(static_cast<std::size_t>(n));
+  std::vector<Eigen::Vector3d> origin(advance.size()), view(advance.size()), tangent(advance.size());
+  double rho = 0.0;
+  for (int j = 0; j < n; ++j) {
+    const double phi = deg(kSpinStation * j);
+    const Eigen::Vector3d r(std::cos(phi), std::sin(phi), 0.0), z = Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3d line = -std::sin(e) * r + std::cos(e) * z;
+    const Eigen::Vector3d v = -std::cos(e) * r - std::sin(e) * z;
+    const auto i = static_cast<std::size_t>(j);
+    view[i] = v;
+    tangent[i] = z.cross(r);
+    origin[i] = u * line - far * v;
+    advance[i] = probeLine(scene, settings.window, origin[i], v, line, rho);
+  }
+  if (std::all_of(advance.begin(), advance.end(), [](double a) { return std::isnan(a); }))
+    return false;
+  const std::vector<double> smooth = smoothStandoff(advance, kSpinSmoothing, true);
+  const double omega = std::min(scanSpeed(settings) / std::max(rho, 1e-3), settings.max_spin_rate);
+  pass.kind = PassKind::kSpin;
+  pass.label = fmt::format("spin elevation {:.0f} deg, line at {:.0f} mm{}", toDeg(e), toMm(u),
+                           camera_side > 0 ? "" : ", camera behind");
+  for (int j = 0; j <= n; ++j) {
+    const auto i = static_cast<std::size_t>(j % n);
+    const double phi = deg(kSpinStation * j);
+    pass.t.push_back(phi / omega);
+    pass.azimuth.push_back(phi);
+    pass.X_RS.push_back(
+        frame(origin[i] + smooth[i] * view[i], view[i], camera_side * tangent[i]));
+  }
+  return true;
+}
+
+void addSpins(const PartOnTable& scene, const PassSettings& settings, std::vector<ScanPass>& out) {
+  if (!(settings.max_spin_rate > 0.0)) return;
+  const PartSpan span = partSpan(scene.part());
+  const double spacing = 2.0 * settings.window.y_near * (1.0 - settings.overlap);
+  for (double e_deg : {-20.0, 0.0, 25.0, 50.0, 70.0, 90.0}) {
+    const double e = deg(e_deg);
+    // The part's (ρ, z) profile projected on the line direction (−sin e, cos e).
+    double lo = 1e30, hi = -1e30;
+    for (double rho : {0.0, span.rho})
+      for (double z : {0.0, span.z_top}) {
+        lo = std::min(lo, -rho * std::sin(e) + z * std::cos(e));
+        hi = std::max(hi, -rho * std::sin(e) + z * std::cos(e));
+      }
+    const int lines = std::max(1, static_cast<int>(std::ceil((hi - lo) / spacing)));
+    for (int k = 0; k < lines; ++k) {
+      const double u = lo + (hi - lo) * (k + 0.5) / lines;
+      for (int side : {1, -1}) {
+        ScanPass pass;
+        if (spinPass(scene, settings, e, u, side, span.reach + std::abs(u) + 0.05, pass))
+          out.push_back(std::move(pass));
+      }
+    }
+  }
+}
+
+// A strip's axes: v the view, u along the strip, w across; the part's extent on them.
+struct StripAxes {
+  Eigen::Vector3d u, v, w;
+  double u_min = 1e30, u_max = -1e30, w_min = 1e30, w_max = -1e30, v_min = 1e30;
+};
+
+StripAxes stripAxes(const kinematics::TriangleMesh& part, const Eigen::Vector3d& v, const Eigen::Vector3d& u) {
+  StripAxes a{u, v, v.cross(u)};
+  for (const Eigen::Vector3d& p : part.vertices) {
+    a.u_min = std::min(a.u_min, p.dot(a.u));
+    a.u_max = std::max(a.u_max, p.dot(a.u));
+    a.w_min = std::min(a.w_min, p.dot(a.w));
+    a.w_max = std::max(a.w_max, p.dot(a.w));
+    a.v_min = std::min(a.v_min, p.dot(a.v));
+  }
+  return a;
+}
+
+// One strip at w across, the camera ahead (+1) or behind (−1) along +u.
+bool stripPass(const PartOnTable& scene,
+               const PassSettings& settings,
+               const StripAxes& a,
+               double w,
+               int camera_side,
+               ScanPass& pass) {
+  const double start = a.u_min - settings.lead;
+  const int n = static_cast<int>(std::ceil((a.u_max - a.u_min + 2.0 * settings.lead) / kStation)) + 1;
+  const Eigen::Vector3d plane = w * a.w + (a.v_min - 0.1) * a.v;
+  std::vector<double> advance(static_cast<std::size_t>(n));
+  double rho = 0.0;
+  int first = n, last = -1;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d o = plane + (start + kStation * i) * a.u;
+    advance[static_cast<std::size_t>(i)] = probeLine(scene, settings.window, o, a.v, a.w, rho);
+    if (!std::isnan(advance[static_cast<std::size_t>(i)])) {
+      first = std::min(first, i);
+      last = i;
+    }
+  }
+  if (last < 0) return false;
+  const int lead = static_cast<int>(std::ceil(settings.lead / kStation));
+  first = std::max(0, first - lead);
+  last = std::min(n - 1, last + lead);
+  const std::vector<double> smooth =
+      smoothStandoff(advance, static_cast<int>(kSmoothing / kStation), false);
+  pass.kind = PassKind::kStrip;
+  for (int i = first;; i = std::min(i + kStripKeyEvery, last)) {
+    const Eigen::Vector3d o =
+        plane + (start + kStation * i) * a.u + smooth[static_cast<std::size_t>(i)] * a.v;
+    const Eigen::Isometry3d X = frame(o, a.v, camera_side * a.u);
+    const double t = pass.t.empty() ? 0.0
+                                    : pass.t.back() + (o - pass.X_RS.back().translation()).norm() /
+                                                          scanSpeed(settings);
+    pass.t.push_back(t);
+    pass.X_RS.push_back(X);
+    if (i == last) break;
+  }
+  return pass.t.size() >= 2;
+}
+
+// View directions (from the head toward the part) sampled on the sphere: straight down, then
+// rings of azimuths at lower elevations; each with its strip directions.
+std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> stripViews() {
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> views;
+  const Eigen::Vector3d down = -Eigen::Vector3d::UnitZ();
+  views.push_back({down, Eigen::Vector3d::UnitX()});
+  views.push_back({down, Eigen::Vector3d::UnitY()});
+  const std::pair<double, int> rings[] = {{70.0, 8}, {50.0, 12}, {30.0, 12}, {10.0, 12}, {-10.0, 12}};
+  for (const auto& [elevation, count] : rings) {
+    for (int k = 0; k < count; ++k) {
+      const double phi = deg(360.0 * k / count), e = deg(elevation);
+      const Eigen::Vector3d r(std::cos(phi), std::sin(phi), 0.0);
+      const Eigen::Vector3d v = -std::cos(e) * r - std::sin(e) * Eigen::Vector3d::UnitZ();
+      const Eigen::Vector3d across = Eigen::Vector3d::UnitZ().cross(r);  // horizontal
+      views.push_back({v, across});
+      views.push_back({v, v.cross(across).normalized()});  // up the part
+    }
+  }
+  return views;
+}
+
+void addStrips(const PartOnTable& scene, const PassSettings& settings, std::vector<ScanPass>& out) {
+  const double spacing = 2.0 * settings.window.y_near * (1.0 - settings.overlap);
+  for (const auto& [v, u] : stripViews()) {
+    const StripAxes a = stripAxes(scene.part(), v, u);
+    const int strips = std::max(1, static_cast<int>(std::ceil((a.w_max - a.w_min) / spacing)));
+    for (int k = 0; k < strips; ++k) {
+      const double w = a.w_min + (a.w_max - a.w_min) * (k + 0.5) / strips;
+      for (int side : {1, -1}) {
+        ScanPass pass;
+        if (!stripPass(scene, settings, a, w, side, pass)) continue;
+        const double e = std::asin(std::clamp(-v.z(), -1.0, 1.0));
+        pass.label = fmt::format("strip view elevation {:.0f} deg azimuth {:.0f} deg, {} of {}{}",
+                                 toDeg(e), toDeg(std::atan2(-v.y(), -v.x())), k + 1, strips,
+                                 side > 0 ? "" : ", camera behind");
+        out.push_back(std::move(pass));
+      }
+    }
+  }
+}
+
+}  // namespace
+
+const char* passKindName(PassKind kind) {
+  switch (kind) {
+    case PassKind::kSpin:
+      return "spin";
+    case PassKind::kStrip:
+      return "strip";
+    case PassKind::kGiven:
+      return "given";
+  }
+  return "?";
+}
+
+std::vector<ScanPass> candidatePasses(const PartOnTable& scene, const PassSettings& settings) {
+  std::vector<ScanPass> out;
+  addSpins(scene, settings, out);
+  addStrips(scene, settings, out);
+  return out;
+}
+
+// ---- evaluation ---------------------------------------------------------------------------
+
+struct SampleIndex::Tree {
+  struct Points {
+    const AreaSampling& s;
+    std::size_t kdtree_get_point_count() const { return s.samples.size(); }
+    double kdtree_get_pt(std::size_t i, std::size_t d) const {
+      return s.samples[i].p[static_cast<Eigen::Index>(d)];
+    }
+    template <class Box>
+    bool kdtree_get_bbox(Box&) const {
+      return false;
+    }
+  };
+  using Index = nanoflann::
+      KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Points>, Points, 3, std::uint32_t>;
+  explicit Tree(const AreaSampling& s) : points{s}, index(3, points) { index.buildIndex(); }
+  Points points;
+  Index index;
+};
+
+SampleIndex::SampleIndex(const AreaSampling& sampling)
+    : sampling_(sampling), tree_(std::make_unique<Tree>(sampling)) {}
+SampleIndex::~SampleIndex() = default;
+
+void SampleIndex::near(const Eigen::Vector3d& p,
+                       const Eigen::Vector3d& n,
+                       double radius,
+                       std::vector<std::uint32_t>& out) const {
+  std::vector<std::pair<std::uint32_t, double>> found;
+  tree_->index.radiusSearch(p.data(), radius * radius, found, nanoflann::SearchParams(32, 0.f, false));
+  for (const auto& [i, d2] : found) {
+    if (sampling_.samples[i].n.dot(n) >= 0.5) out.push_back(i);
+  }
+}
+
+namespace {
+
+// The measured points of one profile at head pose X (R frame), each with its winding normal.
+void profilePoints(const PartOnTable& scene,
+                   const PassSettings& settings,
+                   const std::vector<double>& fan,
+                   const Eigen::Isometry3d& X,
+                   std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>& out) {
+  const double cos_max = std::cos(settings.max_incidence);
+  const auto& part = scene.part();
+  for (const double alpha : fan) {
+    const Eigen::Vector3d d_S(0.0, std::sin(alpha), std::cos(alpha));
+    const Eigen::Vector3d d = X.linear() * d_S;
+    const auto hit = scene.cast(X.translation(), d, 0.0, settings.window.z_max / std::cos(alpha));
+    if (!hit || !scene.onPart(*hit)) continue;
+    if (!settings.window.contains(hit->distance * d_S.y(), hit->distance * d_S.z())) continue;
+    const Eigen::Vector3i& f = part.triangles[hit->triangle];
+    const Eigen::Vector3d& a = part.vertices[static_cast<std::size_t>(f[0])];
+    const Eigen::Vector3d n = (part.vertices[static_cast<std::size_t>(f[1])] - a)
+                                  .cross(part.vertices[static_cast<std::size_t>(f[2])] - a)
+                                  .normalized();
+    if (-n.dot(d) < cos_max) continue;
+    const Eigen::Vector3d p = X.translation() + hit->distance * d;
+    for (const Eigen::Vector3d& c_S : settings.cameras) {
+      const Eigen::Vector3d c = X * c_S;
+      if (n.dot((c - p).normalized()) >= cos_max && scene.clear(p + 1e-5 * n, c)) {
+        out.push_back({p, n});
+        break;
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void evaluatePass(ScanPass& pass,
+                  const PartOnTable& scene,
+                  const PassSettings& settings,
+                  const SampleIndex& index) {
+  const std::vector<double> fan = fanAngles(settings.window, settings.eval_rays);
+  std::vector<std::uint8_t> hit(index.sampling().samples.size(), 0);
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> points;
+  std::vector<std::uint32_t> near;
+  for (std::size_t k = 0; k + 1 < pass.X_RS.size(); ++k) {
+    const Eigen::Isometry3d &a = pass.X_RS[k], &b = pass.X_RS[k + 1];
+    const double travel = (b.translation() - a.translation()).norm();
+    const int steps = std::max(1, static_cast<int>(std::ceil(travel / settings.eval_step)));
+    for (int s = 0; s < steps + (k + 2 == pass.X_RS.size() ? 1 : 0); ++s) {
+      points.clear();
+      profilePoints(scene, settings, fan, kinematics::interpolatePose(a, b, double(s) / steps), points);
+      for (const auto& [p, n] : points) {
+        near.clear();
+        index.near(p, n, settings.eval_radius, near);
+        for (std::uint32_t i : near) hit[i] = 1;
+      }
+    }
+  }
+  pass.covers.clear();
+  for (std::size_t i = 0; i < hit.size(); ++i)
+    if (hit[i]) pass.covers.push_back(static_cast<std::uint32_t>(i));
+}
+
+void evaluatePasses(std::vector<ScanPass>& passes,
+                    const PartOnTable& scene,
+                    const PassSettings& settings,
+                    const SampleIndex& index,
+                    const std::function<void(std::size_t, std::size_t)>& progress) {
+  std::atomic<std::size_t> done{0};
+  tbb::parallel_for(std::size_t{0}, passes.size(), [&](std::size_t i) {
+    evaluatePass(passes[i], scene, settings, index);
+    const std::size_t n = done.fetch_add(1) + 1;
+    if (progress) progress(n, passes.size());
+  });
+}
+
+ScanPass rotatedPass(const ScanPass& pass, double angle) {
+  ScanPass out = pass;
+  const Eigen::Isometry3d R(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ()));
+  for (Eigen::Isometry3d& X : out.X_RS) X = R * X;
+  for (double& a : out.azimuth) a += angle;
+  return out;
+}
+
+}  // namespace scanplan::scanner

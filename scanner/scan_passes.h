@@ -1,0 +1,107 @@
+#pragma once
+// Candidate laser-line passes for the automatic scan (DESIGN.md §11) and what each one covers.
+// Everything is in the table-top frame R at table angle 0 (scanner/part_on_table.h): the table
+// turns about R's z axis, so a pass's azimuth around the part is free and the arm only has to
+// reach its view elevation.
+//
+// Two families:
+// - spins: the head holds a pose in the world while the table turns a full revolution; in R the
+//   head circles the axis with its laser plane through the axis, at a view elevation and an
+//   offset along the line (a band of the part's surface of revolution);
+// - strips: straight passes across the part seen from a view direction sampled on the sphere,
+//   the table standing still.
+// Each follows the surface: per profile the standoff puts the depths seen under the whole line
+// (several rays cast across it) in the middle of the depth window, never nearer than its near
+// end, smoothed to the most conservative standoff nearby.
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "scanner/area_coverage.h"
+#include "scanner/laser_model.h"
+#include "scanner/part_on_table.h"
+
+namespace scanplan::scanner {
+
+/// What a pass must respect and how finely candidates are evaluated, SI.
+struct PassSettings {
+  LaserWindow window;                    ///< the laser's depth window (Eq. 5)
+  std::vector<Eigen::Vector3d> cameras;  ///< camera centres in S; a point needs one of them
+  double max_incidence = 1.0471975511965976;  ///< rad, laser and camera ray vs the normal
+  double point_spacing = 2.5e-4;              ///< m, the spacing the passes must achieve
+  double frame_rate = 100.0;                  ///< Hz, profiles per second
+  double max_spin_rate = 0.4;  ///< rad/s, the table's turning rate in a spin; 0: no spins
+  double overlap = 0.25;       ///< of the line width between neighbouring passes
+  double lead = 0.01;          ///< m, a strip runs on this far beyond the part
+  int eval_rays = 41;            ///< fan rays per evaluated profile
+  double eval_step = 0.0015;     ///< m, scanner travel between evaluated profiles
+  double eval_radius = 0.0012;   ///< m, a sample within this of an evaluated point is covered
+};
+
+enum class PassKind : std::uint8_t { kSpin, kStrip, kGiven };
+const char* passKindName(PassKind kind);  ///< "spin", "strip", "given"
+
+/// One pass: keyed scanner poses (R frame) with their times; scanning along all of it.
+struct ScanPass {
+  PassKind kind = PassKind::kStrip;
+  std::string label;                    ///< e.g. "spin elevation 25 deg, offset 12 mm"
+  std::vector<double> t;                ///< s from the pass start, per key, increasing
+  std::vector<Eigen::Isometry3d> X_RS;  ///< scanner frame S in R, per key
+  /// Spins: the azimuth (rad, about R's z) the head has turned by at each key; the pass can
+  /// start at any azimuth (rotate every pose about z).
+  std::vector<double> azimuth;
+  std::vector<std::uint32_t> covers;  ///< evaluation samples it covers, ascending
+  double duration() const { return t.empty() ? 0.0 : t.back() - t.front(); }
+};
+
+/// Every candidate pass over the part (spins first, then strips), keys only (not evaluated).
+/// Spins need max_spin_rate > 0. Deterministic.
+std::vector<ScanPass> candidatePasses(const PartOnTable& scene, const PassSettings& settings);
+
+/// Area samples and a spatial index over them, for evaluating many passes.
+class SampleIndex {
+ public:
+  explicit SampleIndex(const AreaSampling& sampling);
+  ~SampleIndex();
+  SampleIndex(const SampleIndex&) = delete;
+  SampleIndex& operator=(const SampleIndex&) = delete;
+  const AreaSampling& sampling() const { return sampling_; }
+  /// Samples within `radius` of `p` whose normal is within 60° of `n`, appended to `out`.
+  void near(const Eigen::Vector3d& p,
+            const Eigen::Vector3d& n,
+            double radius,
+            std::vector<std::uint32_t>& out) const;
+
+ private:
+  struct Tree;
+  const AreaSampling& sampling_;
+  std::unique_ptr<Tree> tree_;
+};
+
+/// Fills `pass.covers`: the samples (of `index`, R frame) that a measured point of the pass
+/// lands near. Profiles every eval_step of head travel, eval_rays fan rays each; a ray yields a
+/// point when it hits the part first inside the window trapezoid, within max_incidence of the
+/// normal, and a camera sees the point within max_incidence with nothing in between.
+void evaluatePass(ScanPass& pass,
+                  const PartOnTable& scene,
+                  const PassSettings& settings,
+                  const SampleIndex& index);
+
+/// evaluatePass() over all passes, in parallel (TBB); the result does not depend on threads.
+/// `progress` (passes done, passes in all) is called from worker threads: serialise inside.
+void evaluatePasses(std::vector<ScanPass>& passes,
+                    const PartOnTable& scene,
+                    const PassSettings& settings,
+                    const SampleIndex& index,
+                    const std::function<void(std::size_t, std::size_t)>& progress = {});
+
+/// The pass turned about R's z by `angle` (rad): a spin started at another azimuth.
+ScanPass rotatedPass(const ScanPass& pass, double angle);
+
+}  // namespace scanplan::scanner

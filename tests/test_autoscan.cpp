@@ -1,0 +1,201 @@
+// The automatic scan (scan.auto): the set cover, the transfers and the tour on small known
+// instances, and whole automatic plans of synthetic parts with known answers, checked by the
+// simulated cloud (not by the planner's own prediction).
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numeric>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "cli/config/job.h"
+#include "cli/config/problem.h"
+#include "kinematics/units.h"
+#include "pipeline/plan_scan.h"
+#include "scanner/area_coverage.h"
+#include "scanner/pass_selection.h"
+#include "scanner/scan_passes.h"
+#include "test_support.h"
+
+namespace {
+
+using namespace scanplan;
+using scanner::ScanPass;
+
+ScanPass coverPass(std::vector<std::uint32_t> covers, double duration) {
+  ScanPass p;
+  p.covers = std::move(covers);
+  p.t = {0.0, duration};
+  p.X_RS = {Eigen::Isometry3d::Identity(), Eigen::Isometry3d::Identity()};
+  return p;
+}
+
+TEST(GreedyCover, TakesTheBestAreaPerSecondFirstAndStopsAtTheTarget) {
+  // 10 samples; pass 0 covers 6 slowly, pass 1 covers 4 fast, pass 2 covers the rest.
+  const std::vector<ScanPass> passes{coverPass({0, 1, 2, 3, 4, 5}, 20.0),
+                                     coverPass({0, 1, 2, 3}, 1.0), coverPass({6, 7, 8, 9}, 2.0)};
+  scanner::CoverSettings s;
+  s.pass_overhead = 0.0;
+  s.target = 1.0;
+  const std::vector<std::uint8_t> counts(10, 1);
+  const auto r = scanner::greedyCover(passes, counts, {}, s);
+  EXPECT_EQ(r.chosen, (std::vector<std::size_t>{1, 2, 0}));
+  EXPECT_EQ(r.covered_counted, 10u);
+  EXPECT_EQ(r.stop, "target reached");
+
+  s.target = 0.8;  // 8 of 10 after passes 1 and 2
+  EXPECT_EQ(scanner::greedyCover(passes, counts, {}, s).chosen, (std::vector<std::size_t>{1, 2}));
+}
+
+TEST(GreedyCover, SkipsRefusedPassesAndSamplesThatDoNotCount) {
+  const std::vector<ScanPass> passes{coverPass({0, 1, 2, 3}, 1.0), coverPass({0, 1}, 1.0),
+                                     coverPass({4, 5}, 1.0)};
+  std::vector<std::uint8_t> counts{1, 1, 1, 1, 1, 1};
+  scanner::CoverSettings s;
+  s.target = 1.0;
+  std::vector<std::size_t> asked;
+  const auto r = scanner::greedyCover(passes, counts, {}, s, [&](std::size_t p) {
+    asked.push_back(p);
+    return p != 0;
+  });
+  EXPECT_EQ(r.rejected, (std::vector<std::size_t>{0}));
+  EXPECT_EQ(r.chosen, (std::vector<std::size_t>{1, 2}));
+  EXPECT_EQ(r.covered_counted, 4u);  // 2 and 3 only pass 0 covers
+  EXPECT_EQ(r.stop, "no gain");
+  EXPECT_EQ(std::count(asked.begin(), asked.end(), 0u), 1);  // never asked twice
+
+  counts = {1, 1, 0, 0, 0, 0};  // only 0 and 1 count; pass 1 is as good as pass 0 there
+  const auto only = scanner::greedyCover(passes, counts, {}, s);
+  EXPECT_EQ(only.counted, 2u);
+  EXPECT_EQ(only.chosen.size(), 1u);
+  EXPECT_EQ(only.stop, "target reached");
+}
+
+Eigen::Isometry3d poseAt(const Eigen::Vector3d& p) {
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.translation() = p;
+  return X;
+}
+
+TEST(Transfer, StaysOutsideTheSafeSphereAndEndsWhereAsked) {
+  scanner::TransferSphere sphere;
+  sphere.centre = Eigen::Vector3d(0, 0, 0.05);
+  sphere.radius = 0.3;
+  const Eigen::Isometry3d a = poseAt({0.2, 0.0, 0.1});
+  Eigen::Isometry3d b = poseAt({-0.15, 0.1, 0.02});
+  b.linear() = Eigen::AngleAxisd(2.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const scanner::Move m = scanner::transferMove(a, b, sphere);
+  ASSERT_GE(m.X_RS.size(), 3u);
+  EXPECT_LT((m.X_RS.front().translation() - a.translation()).norm(), 1e-12);
+  EXPECT_LT((m.X_RS.back().translation() - b.translation()).norm(), 1e-12);
+  EXPECT_LT((m.X_RS.back().linear() - b.linear()).norm(), 1e-9);
+  EXPECT_NEAR(m.t.back(), scanner::transferTime(a, b, sphere), 1e-9);
+  const double lowest = std::min((a.translation() - sphere.centre).z(), (b.translation() - sphere.centre).z());
+  for (std::size_t i = 1; i + 1 < m.X_RS.size(); ++i) {
+    const Eigen::Vector3d d = m.X_RS[i].translation() - sphere.centre;
+    EXPECT_GT(m.t[i], m.t[i - 1]);
+    if (i >= 2 && i + 2 < m.X_RS.size()) {  // on the arc: the sphere, between the end heights
+      EXPECT_NEAR(d.norm(), sphere.radius, 1e-9);
+      EXPECT_GE(std::asin(d.z() / d.norm()) + 1e-9,
+                std::min(std::asin(lowest / (a.translation() - sphere.centre).norm()),
+                         std::asin((b.translation() - sphere.centre).z() /
+                                   (b.translation() - sphere.centre).norm())));
+    }
+  }
+}
+
+TEST(OrderPasses, TwoOptNeverLosesToTheGivenOrderAndRunsEveryPassOnce) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-0.2, 0.2);
+  std::vector<ScanPass> passes;
+  for (int k = 0; k < 14; ++k) {
+    ScanPass p;
+    p.X_RS = {poseAt({u(rng), u(rng), 0.1 + 0.5 * u(rng)}), poseAt({u(rng), u(rng), 0.1})};
+    p.t = {0.0, 5.0};
+    passes.push_back(p);
+  }
+  scanner::TransferSphere sphere;
+  sphere.radius = 0.25;
+  std::vector<std::size_t> chosen(passes.size());
+  std::iota(chosen.begin(), chosen.end(), 0);
+  std::vector<scanner::TourStep> given;
+  for (std::size_t i : chosen) given.push_back({i, false, 0.0});
+  const auto tour = scanner::orderPasses(passes, chosen, std::nullopt, sphere);
+  ASSERT_EQ(tour.size(), passes.size());
+  std::vector<std::size_t> seen;
+  for (const auto& s : tour) seen.push_back(s.pass);
+  std::sort(seen.begin(), seen.end());
+  EXPECT_EQ(seen, chosen);
+  const double ordered = scanner::tourTransferTime(passes, tour, std::nullopt, sphere);
+  EXPECT_LT(ordered, scanner::tourTransferTime(passes, given, std::nullopt, sphere));
+  // A reversed step runs the pass backwards: it starts where the pass ends.
+  for (const auto& s : tour) {
+    const ScanPass run = scanner::stepPass(passes, s);
+    const auto& orig = passes[s.pass];
+    EXPECT_TRUE(run.X_RS.front().isApprox(s.reversed ? orig.X_RS.back() : orig.X_RS.front()));
+    EXPECT_DOUBLE_EQ(run.t.front(), 0.0);
+  }
+}
+
+// An ASCII STL of an axis-aligned box, mm.
+std::filesystem::path writeBoxStl(const std::filesystem::path& file, double sx, double sy, double sz) {
+  const Eigen::Vector3d s(sx, sy, sz);
+  std::ofstream out(file);
+  out << "solid box\n";
+  const auto quad = [&](Eigen::Vector3d a, Eigen::Vector3d b, Eigen::Vector3d c, Eigen::Vector3d d) {
+    for (const auto& t : {std::array<Eigen::Vector3d, 3>{a, b, c}, std::array<Eigen::Vector3d, 3>{a, c, d}}) {
+      const Eigen::Vector3d n = (t[1] - t[0]).cross(t[2] - t[0]).normalized();
+      out << "facet normal " << n.x() << ' ' << n.y() << ' ' << n.z() << "\nouter loop\n";
+      for (const auto& v : t) out << "vertex " << v.x() << ' ' << v.y() << ' ' << v.z() << '\n';
+      out << "endloop\nendfacet\n";
+    }
+  };
+  const auto P = [&](int x, int y, int z) { return Eigen::Vector3d(x * s.x(), y * s.y(), z * s.z()); };
+  quad(P(0, 0, 0), P(0, 1, 0), P(1, 1, 0), P(1, 0, 0));  // bottom, −z
+  quad(P(0, 0, 1), P(1, 0, 1), P(1, 1, 1), P(0, 1, 1));  // top
+  quad(P(0, 0, 0), P(1, 0, 0), P(1, 0, 1), P(0, 0, 1));  // −y
+  quad(P(0, 1, 0), P(0, 1, 1), P(1, 1, 1), P(1, 1, 0));  // +y
+  quad(P(0, 0, 0), P(0, 0, 1), P(0, 1, 1), P(0, 1, 0));  // −x
+  quad(P(1, 0, 0), P(1, 1, 0), P(1, 1, 1), P(1, 0, 1));  // +x
+  out << "endsolid box\n";
+  return file;
+}
+
+// The demo cell with `mesh` placed on the table, scanned automatically at a 1 mm point spacing
+// on one branch (fast enough for a unit test).
+pipeline::ScanProblem autoProblem(const std::filesystem::path& mesh) {
+  return cli::toProblem(cli::loadJob(
+      test::sourceDir() / "data/jobs/demo.yaml",
+      {"part.mesh=" + mesh.string(), "part.place=table", "scan.paths=[]",
+       "scan.auto={point_spacing_mm: 1.0, sample_spacing_mm: 4}", "scan.dt_s=0.2",
+       "map.branch=RIGHTY ABOVE NOFLIP", "map.angle_step_deg=4", "scanner.rays_per_profile=80"}));
+}
+
+TEST(AutoScan, ACubeOnTheTableIsCoveredExceptItsBottom) {
+  const auto dir = std::filesystem::temp_directory_path() / "scanplan_test_autoscan";
+  std::filesystem::create_directories(dir);
+  const pipeline::ScanProblem problem = autoProblem(writeBoxStl(dir / "cube.stl", 60, 60, 60));
+  const pipeline::ScanPlan plan = pipeline::planScan(problem);
+  ASSERT_TRUE(plan.planned()) << plan.reason;
+  ASSERT_TRUE(plan.prepared->auto_scan && plan.simulation && plan.validation);
+  EXPECT_TRUE(plan.validation->valid);
+  const auto& report = *plan.prepared->auto_scan;
+  EXPECT_GE(report.planned_fraction, 0.98);
+  // Exactly the bottom (a sixth of the area) faces the table; the rest is covered.
+  const auto& sim = *plan.simulation;
+  EXPECT_NEAR(sim.faces_table_fraction, 1.0 / 6.0, 0.01);
+  EXPECT_GE(sim.area.covered_fraction, 0.98 * (1.0 - sim.faces_table_fraction));
+  // Recomputed from the cloud's points on the part, independently sampled.
+  const scanner::AreaSampling sampling = scanner::sampleArea(problem.part, 2e-3, 100000, 99);
+  std::vector<Eigen::Vector3d> points;
+  for (const auto& p : sim.cloud.points)
+    if (p.part_triangle >= 0 && p.incidence <= deg(60.0)) points.push_back(p.p_P);
+  const auto again = scanner::areaCoverage(sampling, points, sim.point_spacing);
+  EXPECT_NEAR(again.covered_fraction, sim.area.covered_fraction, 0.01);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
