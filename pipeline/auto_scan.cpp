@@ -4,9 +4,10 @@
 #include <chrono>
 #include <cmath>
 #include <optional>
-#include <cstdlib>
 
 #include <fmt/format.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
 
 #include "collision/clearance.h"
 #include "kinematics/error.h"
@@ -14,6 +15,7 @@
 #include "planner/config_map.h"
 #include "scanner/pass_selection.h"
 #include "scanner/scan_passes.h"
+#include "scanner/scannability.h"
 #include "scanner/simulator.h"
 
 namespace scanplan::pipeline {
@@ -21,6 +23,10 @@ namespace scanplan::pipeline {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+constexpr std::size_t kMaxSamples = 400'000;  // evaluation samples at most (memory, time)
+constexpr std::size_t kMaxAimed = 600;        // aimed candidate passes at most
+constexpr double kTargetMargin = 0.01;        // planned coverage over the target (see below)
 
 double since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -30,7 +36,35 @@ int raysPerProfile(const ScanProblem& p) {
   return p.simulation ? p.simulation->scanner.rays_per_profile : 200;
 }
 
-scanner::PassSettings passSettings(const ScanProblem& p) {
+// The largest d_low of the pairs between the scanner and the part or the table: the margin the
+// housing keeps from them.
+double housingMargin(const collision::Scene& scene) {
+  double margin = 0.0;
+  const auto& bodies = scene.bodies();
+  for (const collision::PairInfo& pair : scene.pairs()) {
+    const auto& a = bodies[static_cast<std::size_t>(pair.a)];
+    const auto& b = bodies[static_cast<std::size_t>(pair.b)];
+    const bool scanner = a.motion == collision::BodyMotion::kScanner || b.motion == collision::BodyMotion::kScanner;
+    const bool table_side = a.motion == collision::BodyMotion::kTable || b.motion == collision::BodyMotion::kTable;
+    if (scanner && table_side) margin = std::max(margin, pair.thresholds.d_low);
+  }
+  return margin;
+}
+
+// The housing's shapes as boxes in S (their tessellations' bounds).
+std::vector<Eigen::AlignedBox3d> housingBoxes(const ScanProblem& p, double margin) {
+  std::vector<Eigen::AlignedBox3d> boxes;
+  for (const kinematics::Shape& shape : p.cell.scanner.body) {
+    const kinematics::TriangleMesh m = kinematics::shapeSurface(shape);
+    Eigen::AlignedBox3d box = m.bounds();
+    box.min().array() -= margin;
+    box.max().array() += margin;
+    boxes.push_back(box);
+  }
+  return boxes;
+}
+
+scanner::PassSettings passSettings(const ScanProblem& p, const collision::Scene& scene) {
   const AutoScanSettings& a = *p.auto_scan;
   scanner::PassSettings s;
   s.window = scanner::laserWindow(p.optics);
@@ -42,11 +76,12 @@ scanner::PassSettings passSettings(const ScanProblem& p) {
   const kinematics::RotaryTableModel& table = p.cell.table;
   // A spin turns the table a whole revolution; leave a fifth of its speed for the planner.
   s.max_spin_rate = table.continuous ? 0.8 * (table.max_speed > 0.0 ? table.max_speed : 0.5) : 0.0;
+  s.housing = housingBoxes(p, housingMargin(scene));
   return s;
 }
 
 // Can the arm follow `pass` (R frame) with the table at one angle (strips) or turning with the
-// head (spins) on one IK branch, f > 0 at 60 poses evenly in time along it? Table angles every 10°.
+// head (spins) on one IK branch, f > 0 every 0.25 s along it? Table angles every 10°.
 class ReachCheck {
  public:
   ReachCheck(const ScanProblem& problem, const collision::Scene& scene)
@@ -83,9 +118,10 @@ class ReachCheck {
     Eigen::Isometry3d X_RS;
     double turn = 0.0;  // rad the table turns with a spin's head by then
   };
-  // 60 poses evenly in time along the pass, between its keys as the path will interpolate them.
+  // Poses every 0.25 s (20 at least, 400 at most) along the pass, between its keys as the path
+  // will interpolate them.
   static std::vector<Timed> timedPoses(const scanner::ScanPass& pass) {
-    constexpr int kPoses = 60;
+    const int kPoses = std::clamp(static_cast<int>(std::ceil(pass.duration() / 0.25)) + 1, 20, 400);
     std::vector<Timed> out;
     std::size_t k = 0;
     for (int i = 0; i < kPoses; ++i) {
@@ -168,76 +204,194 @@ double autoPointSpacing(const AutoScanSettings& settings,
   return 2.0 * w.halfWidth(0.5 * (w.z_min + w.z_max)) / std::max(1, rays_per_profile - 1);
 }
 
+namespace {
+
+// The certificate's first pass: classes and a witness pose per scannable sample.
+std::vector<scanner::SampleClass> certify(const scanner::PartOnTable& part,
+                                          const scanner::PassSettings& pass,
+                                          const scanner::AreaSampling& sampling,
+                                          std::vector<Eigen::Isometry3d>& witnesses) {
+  scanner::ScannabilitySettings s;
+  s.max_incidence = pass.max_incidence;
+  s.window = pass.window;
+  s.cameras = pass.cameras;
+  s.housing = pass.housing;
+  s.housing_spacing = pass.housing_spacing;
+  s.directions = 48;  // bore walls are seen from few directions; 24 x 8 misses a few percent
+  s.rolls = 12;
+  return scanner::classifyScannability(sampling, part, s, &witnesses);
+}
+
+// Aimed passes for the scannable samples no general candidate covers, each from its witness;
+// a sample an aimed pass already covers gets none of its own. At most `limit`.
+std::vector<scanner::ScanPass> aimedPasses(const scanner::PartOnTable& part,
+                                           const scanner::PassSettings& pass,
+                                           const scanner::SampleIndex& index,
+                                           const std::vector<scanner::SampleClass>& classes,
+                                           const std::vector<Eigen::Isometry3d>& witnesses,
+                                           const std::vector<scanner::ScanPass>& general,
+                                           std::size_t limit) {
+  std::vector<std::uint8_t> reached(classes.size(), 0);
+  for (const auto& p : general)
+    for (std::uint32_t i : p.covers) reached[i] = 1;
+  std::vector<scanner::ScanPass> out;
+  for (std::size_t i = 0; i < classes.size() && out.size() < limit; ++i) {
+    if (classes[i] != scanner::SampleClass::kScannable || reached[i]) continue;
+    scanner::ScanPass aimed = scanner::aimedPass(part, pass, witnesses[i]);
+    reached[i] = 1;
+    if (aimed.X_RS.empty()) continue;
+    scanner::evaluatePass(aimed, part, pass, index);
+    for (std::uint32_t k : aimed.covers) reached[k] = 1;
+    if (!aimed.covers.empty()) out.push_back(std::move(aimed));
+  }
+  return out;
+}
+
+// Which passes the arm can follow (ReachCheck), in parallel.
+std::vector<std::uint8_t> reachable(const ScanProblem& problem,
+                                    const collision::Scene& scene,
+                                    const std::vector<scanner::ScanPass>& passes) {
+  std::vector<std::uint8_t> ok(passes.size(), 0);
+  tbb::enumerable_thread_specific<ReachCheck> checks(std::cref(problem), std::cref(scene));
+  tbb::parallel_for(std::size_t{0}, passes.size(),
+                    [&](std::size_t p) { ok[p] = checks.local()(passes[p]) ? 1 : 0; });
+  return ok;
+}
+
+// Scannable samples that some pass sees but no reachable one: out of the arm's reach.
+void markOutOfReach(std::vector<scanner::SampleClass>& classes,
+                    const std::vector<scanner::ScanPass>& passes,
+                    const std::vector<std::uint8_t>& reach) {
+  std::vector<std::uint8_t> seen(classes.size(), 0), open(classes.size(), 0);
+  for (std::size_t p = 0; p < passes.size(); ++p) {
+    for (std::uint32_t i : passes[p].covers) {
+      seen[i] = 1;
+      if (reach[p]) open[i] = 1;
+    }
+  }
+  for (std::size_t i = 0; i < classes.size(); ++i) {
+    if (classes[i] == scanner::SampleClass::kScannable && seen[i] && !open[i])
+      classes[i] = scanner::SampleClass::kOutOfReach;
+  }
+}
+
+// The program: transfers (not scanning) and the passes in tour order, part frame.
+void buildElement(const ScanProblem& problem,
+                  const std::vector<scanner::ScanPass>& passes,
+                  const std::vector<scanner::TourStep>& tour,
+                  std::optional<Eigen::Isometry3d> at,
+                  const scanner::TransferSphere& sphere,
+                  const std::vector<double>& gain,
+                  AutoScanPlan& plan) {
+  const Eigen::Isometry3d X_PR = problem.cell.part.X_RP.inverse();
+  for (const scanner::TourStep& step : tour) {
+    const scanner::ScanPass pass = scanner::stepPass(passes, step);
+    if (at) {
+      const scanner::Move move = scanner::transferMove(*at, pass.X_RS.front(), sphere);
+      if (plan.element.samples.empty()) plan.element.samples.push_back({0.0, X_PR * *at, false});
+      append(plan.element, move.X_RS, move.t, false, X_PR);
+    }
+    const double begin = plan.element.samples.empty() ? 0.0 : plan.element.samples.back().t;
+    append(plan.element, pass.X_RS, pass.t, true, X_PR);
+    plan.report.passes.push_back({scanner::passKindName(pass.kind), pass.label, begin,
+                                  pass.duration(), gain[step.pass]});
+    plan.report.scan_time += pass.duration();
+    at = pass.X_RS.back();
+  }
+}
+
+// Each chosen pass's share of the counted samples, in the order chosen.
+std::vector<double> gains(const std::vector<scanner::ScanPass>& passes,
+                          const scanner::CoverResult& chosen,
+                          const std::vector<std::uint8_t>& counts,
+                          std::vector<std::uint8_t> seen) {
+  std::vector<double> gain(passes.size(), 0.0);
+  const double counted = std::max<double>(1.0, static_cast<double>(chosen.counted));
+  for (std::size_t p : chosen.chosen) {
+    std::size_t n = 0;
+    for (std::uint32_t i : passes[p].covers) {
+      if (counts[i] && !seen[i]) ++n;
+      seen[i] = 1;
+    }
+    gain[p] = static_cast<double>(n) / counted;
+  }
+  return gain;
+}
+
+// The evaluation samples and their classes in the part frame, for the report.
+void keepCertificate(const scanner::AreaSampling& sampling_R,
+                     const Eigen::Isometry3d& X_RP,
+                     std::vector<scanner::SampleClass> classes,
+                     AutoScanReport& report) {
+  const Eigen::Isometry3d X_PR = X_RP.inverse();
+  report.sampling = sampling_R;
+  for (auto& s : report.sampling.samples) {
+    s.p = X_PR * s.p;
+    s.n = X_PR.linear() * s.n;
+  }
+  report.classes = std::move(classes);
+}
+
+}  // namespace
+
 AutoScanPlan planAutoScan(const ScanProblem& problem,
                           const collision::Scene& scene,
                           const kinematics::ScanPath& given,
                           const std::function<void(std::size_t, std::size_t)>& progress) {
   const auto start = Clock::now();
   const AutoScanSettings& settings = *problem.auto_scan;
-  const scanner::PassSettings pass_settings = passSettings(problem);
+  const scanner::PassSettings pass_settings = passSettings(problem, scene);
   const kinematics::RotaryTableModel& table = problem.cell.table;
   const scanner::PartOnTable part(problem.part, problem.cell.part.X_RP, {table.radius, table.height});
-  const scanner::AreaSampling sampling = scanner::sampleArea(part.part(), settings.sample_spacing, 400'000);
+  const scanner::AreaSampling sampling =
+      scanner::sampleArea(part.part(), settings.sample_spacing, kMaxSamples);
   const scanner::SampleIndex index(sampling);
 
   AutoScanPlan plan;
   AutoScanReport& report = plan.report;
   report.samples = sampling.samples.size();
   report.sample_spacing = std::sqrt(sampling.area_per_sample);
-  std::vector<std::uint8_t> counts = scanner::facesTable(sampling, Eigen::Isometry3d::Identity(),
-                                                         settings.max_incidence, pass_settings.window.z_max);
-  for (auto& c : counts) c = c ? 0 : 1;
+  std::vector<Eigen::Isometry3d> witnesses;
+  std::vector<scanner::SampleClass> classes = certify(part, pass_settings, sampling, witnesses);
 
-  std::vector<scanner::ScanPass> passes = givenPasses(given, problem.cell.part.X_RP);
-  const std::size_t given_count = passes.size();
-  std::vector<scanner::ScanPass> candidates = scanner::candidatePasses(part, pass_settings);
-  passes.insert(passes.end(), std::make_move_iterator(candidates.begin()),
-                std::make_move_iterator(candidates.end()));
-  scanner::evaluatePasses(passes, part, pass_settings, index, progress);
-  report.candidates = passes.size() - given_count;
-
+  std::vector<scanner::ScanPass> given_passes = givenPasses(given, problem.cell.part.X_RP);
+  scanner::evaluatePasses(given_passes, part, pass_settings, index);
   std::vector<std::uint8_t> covered(sampling.samples.size(), 0);
-  for (std::size_t p = 0; p < given_count; ++p)
-    for (std::uint32_t i : passes[p].covers) covered[i] = 1;
-  std::vector<scanner::ScanPass> auto_passes(passes.begin() + static_cast<std::ptrdiff_t>(given_count), passes.end());
+  for (const auto& p : given_passes)
+    for (std::uint32_t i : p.covers) covered[i] = 1;
+  std::vector<scanner::ScanPass> passes = scanner::candidatePasses(part, pass_settings);
+  scanner::evaluatePasses(passes, part, pass_settings, index, progress);
+  std::vector<scanner::ScanPass> aimed =
+      aimedPasses(part, pass_settings, index, classes, witnesses, passes, kMaxAimed);
+  report.aimed = aimed.size();
+  passes.insert(passes.end(), std::make_move_iterator(aimed.begin()), std::make_move_iterator(aimed.end()));
+  report.candidates = passes.size();
 
-  ReachCheck reach(problem, scene);
-  if (std::getenv("SCANPLAN_DEBUG_AUTO")) {
-    std::vector<std::uint8_t> any(counts.size(), 0), reachable(counts.size(), 0);
-    std::size_t nr = 0;
-    for (auto& p : auto_passes) {
-      for (auto i : p.covers) any[i] = 1;
-      const bool ok = reach(p);
-      nr += ok;
-      if (ok) for (auto i : p.covers) reachable[i] = 1;
-      else fmt::print("unreachable: {}\n", p.label);
-    }
-    std::size_t a = 0, r = 0, c = 0;
-    for (std::size_t i = 0; i < counts.size(); ++i) { c += counts[i]; a += counts[i] && any[i]; r += counts[i] && reachable[i]; }
-    if (FILE* f = std::fopen("/tmp/uncovered.xyz", "w")) {
-      for (std::size_t i = 0; i < counts.size(); ++i)
-        if (counts[i] && !any[i]) { const auto& q = sampling.samples[i]; std::fprintf(f, "%g %g %g %g %g %g\n", q.p.x(), q.p.y(), q.p.z(), q.n.x(), q.n.y(), q.n.z()); }
-      std::fclose(f);
-    }
-    fmt::print("DEBUG counted {} any {} reachable {} ({} reachable passes)\n", c, double(a)/c, double(r)/c, nr);
-  }
+  const std::vector<std::uint8_t> reach = reachable(problem, scene, passes);
+  for (std::size_t p = 0; p < passes.size(); ++p)
+    if (!reach[p]) report.unreachable.push_back(passes[p].label);
+  markOutOfReach(classes, passes, reach);
+  std::vector<std::uint8_t> counts(classes.size());
+  for (std::size_t i = 0; i < classes.size(); ++i)
+    counts[i] = classes[i] == scanner::SampleClass::kScannable ? 1 : 0;
   scanner::CoverSettings cover;
-  cover.target = settings.target_coverage;
+  // A margin over the target: the evaluation samples and points are coarser than the simulated
+  // cloud, which covers a little less than planned at the edges of each pass.
+  cover.target = std::min(1.0, settings.target_coverage + kTargetMargin);
   cover.max_passes = settings.max_passes;
   const scanner::CoverResult chosen = scanner::greedyCover(
-      auto_passes, counts, covered, cover,
-      [&](std::size_t p) { return reach(auto_passes[p]); },
+      passes, counts, covered, cover, [&](std::size_t p) { return reach[p] != 0; },
       [&] { return since(start) < settings.time_budget; });
   report.counted = chosen.counted;
   report.stop = chosen.stop;
-  for (std::size_t p : chosen.rejected) report.unreachable.push_back(auto_passes[p].label);
   const double counted = std::max<double>(1.0, static_cast<double>(chosen.counted));
   report.planned_fraction = static_cast<double>(chosen.covered_counted) / counted;
   std::size_t given_covered = 0;
   for (std::size_t i = 0; i < counts.size(); ++i) given_covered += (counts[i] && covered[i]) ? 1u : 0u;
   report.given_fraction = static_cast<double>(given_covered) / counted;
+  keepCertificate(sampling, problem.cell.part.X_RP, classes, report);
   if (chosen.chosen.empty()) {
-    if (given_count == 0)
+    if (given_passes.empty())
       throw InputError("scan.auto: no reachable pass sees the part: expected a part within the "
                        "scanner's view and the arm's reach (see the map's limits)");
     report.seconds = since(start);
@@ -247,54 +401,9 @@ AutoScanPlan planAutoScan(const ScanProblem& problem,
   const scanner::TransferSphere sphere = transferSphere(problem, part.part());
   std::optional<Eigen::Isometry3d> at;
   if (!given.samples.empty()) at = problem.cell.part.X_RP * given.samples.back().X_PS;
-  const std::vector<scanner::TourStep> tour = scanner::orderPasses(auto_passes, chosen.chosen, at, sphere);
-  report.transfer_time = scanner::tourTransferTime(auto_passes, tour, at, sphere);
-
-  // The gain of each pass in the order chosen (the tour reorders them).
-  std::vector<double> gain(auto_passes.size(), 0.0);
-  {
-    std::vector<std::uint8_t> seen = covered;
-    for (std::size_t p : chosen.chosen) {
-      std::size_t n = 0;
-      for (std::uint32_t i : auto_passes[p].covers) {
-        if (counts[i] && !seen[i]) ++n;
-        seen[i] = 1;
-      }
-      gain[p] = static_cast<double>(n) / counted;
-    }
-  }
-  const Eigen::Isometry3d X_PR = problem.cell.part.X_RP.inverse();
-  for (const scanner::TourStep& step : tour) {
-    const scanner::ScanPass pass = scanner::stepPass(auto_passes, step);
-    if (at) {
-      const scanner::Move move = scanner::transferMove(*at, pass.X_RS.front(), sphere);
-      if (plan.element.samples.empty()) plan.element.samples.push_back({0.0, X_PR * *at, false});
-      append(plan.element, move.X_RS, move.t, false, X_PR);
-    }
-    const double begin = plan.element.samples.empty() ? 0.0 : plan.element.samples.back().t;
-    append(plan.element, pass.X_RS, pass.t, true, X_PR);
-    report.passes.push_back({scanner::passKindName(pass.kind), pass.label, begin, pass.duration(),
-                             gain[step.pass]});
-    report.scan_time += pass.duration();
-    at = pass.X_RS.back();
-  }
-  if (const char* tt = std::getenv("SCANPLAN_DEBUG_T")) {
-    const double want = std::atof(tt);
-    fmt::print("element {} samples, {} .. {}\n", plan.element.samples.size(), plan.element.samples.front().t, plan.element.samples.back().t);
-    collision::ClearanceEvaluator ev(scene);
-    for (const auto& smp : plan.element.samples) {
-      if (std::abs(smp.t - want) > 0.5) continue;
-      fmt::print("sample at {}\n", smp.t);
-      std::string line = fmt::format("t {:.2f}:", smp.t);
-      for (double th = 0; th < 360; th += 10) {
-        const auto sol = problem.cell.robot.ik(problem.cell.flangeTarget(deg(th), smp.X_PS));
-        float best = 0;
-        for (const auto& b : mapBranches(problem.map)) best = std::max(best, planner::scoreCell(scene, problem.constraints, ev, sol, b, deg(th), false).f);
-        line += fmt::format(" {:.2f}", best);
-      }
-      fmt::print("{}\n", line);
-    }
-  }
+  const std::vector<scanner::TourStep> tour = scanner::orderPasses(passes, chosen.chosen, at, sphere);
+  report.transfer_time = scanner::tourTransferTime(passes, tour, at, sphere);
+  buildElement(problem, passes, tour, at, sphere, gains(passes, chosen, counts, covered), plan);
   report.seconds = since(start);
   return plan;
 }

@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,7 @@
 #include "pipeline/problem.h"
 #include "scanner/area_coverage.h"
 #include "scanner/path_generators.h"
+#include "scanner/scannability.h"
 
 namespace scanplan::pipeline {
 
@@ -40,6 +42,11 @@ struct AutoScanReport {
   double scan_time = 0.0;         ///< s of scanning in the automatic element
   double transfer_time = 0.0;     ///< s of moves between passes
   double seconds = 0.0;           ///< planning time
+  std::size_t aimed = 0;          ///< of the candidates, aimed at surfaces the others miss
+  /// The certificate before simulation: the evaluation samples (part frame P) and why each can
+  /// or cannot be scanned (kOutOfReach: every pass that sees it was refused by the reach check).
+  scanner::AreaSampling sampling;
+  std::vector<scanner::SampleClass> classes;
 };
 
 /// The automatic element and its report.

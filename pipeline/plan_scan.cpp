@@ -56,6 +56,8 @@ void proveAndSimulate(const ScanProblem& problem, const PreparedScan& prepared, 
     plan.simulation = simulateTrajectory(problem.cell, problem.part, problem.optics,
                                          *problem.simulation, trajectory);
     plan.times.simulation = plan.simulation->seconds;
+    if (prepared.auto_scan && !prepared.auto_scan->classes.empty())
+      plan.certificate = certify(plan.simulation->sampling, plan.simulation->area, *prepared.auto_scan);
   }
   plan.status = ScanStatus::kPlanned;
 }

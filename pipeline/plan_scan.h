@@ -16,6 +16,7 @@
 #include "collision/scene.h"
 #include "kinematics/scan_path.h"
 #include "pipeline/auto_scan.h"
+#include "pipeline/certificate.h"
 #include "pipeline/problem.h"
 #include "pipeline/simulation.h"
 #include "planner/config_map.h"
@@ -107,6 +108,8 @@ struct ScanPlan {
   std::optional<planner::TrajectoryBuild> trajectory;
   std::optional<planner::ValidationReport> validation;
   std::optional<SimulationRun> simulation;
+  /// With the automatic scan and the simulation: every area sample covered or why not.
+  std::optional<Certificate> certificate;
   StageTimes times;
   bool planned() const { return status == ScanStatus::kPlanned; }
 };

@@ -38,12 +38,13 @@ SimulationRun simulateTrajectory(const kinematics::CellModel& cell,
   run.point_spacing = settings.point_spacing > 0.0
                           ? settings.point_spacing
                           : midDepthPitch(optics, settings.scanner.rays_per_profile);
-  const scanner::AreaSampling sampling =
-      scanner::sampleArea(part, 2.0 * run.point_spacing, settings.max_area_samples);
+  run.sampling = scanner::sampleArea(part, 2.0 * run.point_spacing, settings.max_area_samples);
+  const scanner::AreaSampling& sampling = run.sampling;
+  // A point counts when it lies on the part and the laser met the surface within the limit.
   std::vector<Eigen::Vector3d> on_part;
   on_part.reserve(run.cloud.points.size());
   for (const auto& p : run.cloud.points) {
-    if (p.part_triangle >= 0) on_part.push_back(p.p_P);
+    if (p.part_triangle >= 0 && p.incidence <= settings.max_incidence) on_part.push_back(p.p_P);
   }
   run.area_samples = sampling.samples.size();
   run.area = scanner::areaCoverage(sampling, on_part, run.point_spacing);

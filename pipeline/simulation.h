@@ -17,6 +17,7 @@ namespace scanplan::pipeline {
 struct SimulationRun {
   scanner::SimulatedCloud cloud;
   scanner::PartCoverage coverage;  ///< per triangle (hits, densities)
+  scanner::AreaSampling sampling;  ///< the area samples (part frame) `area` covers
   scanner::AreaCoverage area;      ///< on area samples: the covered fraction of the area
   std::size_t area_samples = 0;
   double point_spacing = 0.0;  ///< m, the radius `area` was measured with

@@ -105,4 +105,26 @@ void writeCoveragePly(std::ostream& out,
   }
 }
 
+void writeLabelledSamplesPly(std::ostream& out,
+                             const std::vector<Eigen::Vector3d>& points,
+                             const std::vector<Eigen::Vector3d>& normals,
+                             const std::vector<std::uint8_t>& labels,
+                             const std::vector<std::string>& reasons) {
+  out << "ply\n"
+      << "format binary_little_endian 1.0\n"
+      << "comment scanplan surface samples: part frame, mm; unit normals; reason:";
+  for (std::size_t i = 0; i < reasons.size(); ++i) out << ' ' << i << " = " << reasons[i];
+  out << "\nelement vertex " << points.size() << "\n"
+      << "property float x\nproperty float y\nproperty float z\n"
+      << "property float nx\nproperty float ny\nproperty float nz\n"
+      << "property uchar reason\n"
+      << "end_header\n";
+  LittleEndianWriter w(out);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    for (int k = 0; k < 3; ++k) w.f32(toMm(points[i][k]));
+    for (int k = 0; k < 3; ++k) w.f32(normals[i][k]);
+    w.u8(labels[i]);
+  }
+}
+
 }  // namespace scanplan::scanner

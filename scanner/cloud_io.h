@@ -1,7 +1,9 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <ostream>
+#include <string>
 #include <vector>
 
 #include "kinematics/mesh.h"
@@ -30,5 +32,15 @@ void writeCoveragePly(std::ostream& out,
                       const PartCoverage& coverage,
                       const CoverageSettings& settings = {},
                       double max_per_mm2 = 0.0);
+
+/// Writes labelled surface samples (uncovered.ply): PLY 1.0, binary little-endian, one `vertex`
+/// per sample with float x, y, z (mm), float nx, ny, nz (unit normal) and uchar reason, the
+/// index into `reasons`, whose names the header lists in a comment ("reason 1 = occluded").
+/// Points in the caller's frame, m.
+void writeLabelledSamplesPly(std::ostream& out,
+                             const std::vector<Eigen::Vector3d>& points,
+                             const std::vector<Eigen::Vector3d>& normals,
+                             const std::vector<std::uint8_t>& labels,
+                             const std::vector<std::string>& reasons);
 
 }  // namespace scanplan::scanner

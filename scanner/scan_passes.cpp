@@ -11,6 +11,7 @@
 
 #include "kinematics/units.h"
 #include "kinematics/scan_path.h"
+#include "scanner/scannability.h"
 #include "scanner/simulator.h"
 
 namespace scanplan::scanner {
@@ -108,6 +109,7 @@ PartSpan partSpan(const kinematics::TriangleMesh& part) {
 // One spin: elevation e (rad, view down from horizontal), the line centre at u along the line
 // direction in the plane through the axis, the camera ahead (+1) or behind (−1).
 bool spinPass(const PartOnTable& scene,
+              const HousingCheck& housing,
               const PassSettings& settings,
               double e,
               double u,
@@ -143,11 +145,15 @@ bool spinPass(const PartOnTable& scene,
     pass.azimuth.push_back(phi);
     pass.X_RS.push_back(
         frame(origin[i] + smooth[i] * view[i], view[i], camera_side * tangent[i]));
+    if (j < n && !housing.fits(pass.X_RS.back())) return false;
   }
   return true;
 }
 
-void addSpins(const PartOnTable& scene, const PassSettings& settings, std::vector<ScanPass>& out) {
+void addSpins(const PartOnTable& scene,
+              const HousingCheck& housing,
+              const PassSettings& settings,
+              std::vector<ScanPass>& out) {
   if (!(settings.max_spin_rate > 0.0)) return;
   const PartSpan span = partSpan(scene.part());
   const double spacing = 2.0 * settings.window.y_near * (1.0 - settings.overlap);
@@ -165,7 +171,7 @@ void addSpins(const PartOnTable& scene, const PassSettings& settings, std::vecto
       const double u = lo + (hi - lo) * (k + 0.5) / lines;
       for (int side : {1, -1}) {
         ScanPass pass;
-        if (spinPass(scene, settings, e, u, side, span.reach + std::abs(u) + 0.05, pass))
+        if (spinPass(scene, housing, settings, e, u, side, span.reach + std::abs(u) + 0.05, pass))
           out.push_back(std::move(pass));
       }
     }
@@ -192,6 +198,7 @@ StripAxes stripAxes(const kinematics::TriangleMesh& part, const Eigen::Vector3d&
 
 // One strip at w across, the camera ahead (+1) or behind (−1) along +u.
 bool stripPass(const PartOnTable& scene,
+               const HousingCheck& housing,
                const PassSettings& settings,
                const StripAxes& a,
                double w,
@@ -218,16 +225,25 @@ bool stripPass(const PartOnTable& scene,
   const std::vector<double> smooth =
       smoothStandoff(advance, static_cast<int>(kSmoothing / kStation), false);
   pass.kind = PassKind::kStrip;
+  // Keys where the housing fits; the strip is the longest unbroken run of them.
+  std::vector<Eigen::Isometry3d> run, best;
   for (int i = first;; i = std::min(i + kStripKeyEvery, last)) {
     const Eigen::Vector3d o =
         plane + (start + kStation * i) * a.u + smooth[static_cast<std::size_t>(i)] * a.v;
     const Eigen::Isometry3d X = frame(o, a.v, camera_side * a.u);
-    const double t = pass.t.empty() ? 0.0
-                                    : pass.t.back() + (o - pass.X_RS.back().translation()).norm() /
-                                                          scanSpeed(settings);
-    pass.t.push_back(t);
-    pass.X_RS.push_back(X);
+    if (housing.fits(X)) {
+      run.push_back(X);
+    } else {
+      run.clear();
+    }
+    if (run.size() > best.size()) best = run;
     if (i == last) break;
+  }
+  for (const Eigen::Isometry3d& X : best) {
+    pass.t.push_back(pass.t.empty() ? 0.0
+                                    : pass.t.back() + (X.translation() - pass.X_RS.back().translation()).norm() /
+                                                          scanSpeed(settings));
+    pass.X_RS.push_back(X);
   }
   return pass.t.size() >= 2;
 }
@@ -253,7 +269,10 @@ std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> stripViews() {
   return views;
 }
 
-void addStrips(const PartOnTable& scene, const PassSettings& settings, std::vector<ScanPass>& out) {
+void addStrips(const PartOnTable& scene,
+               const HousingCheck& housing,
+               const PassSettings& settings,
+               std::vector<ScanPass>& out) {
   const double spacing = 2.0 * settings.window.y_near * (1.0 - settings.overlap);
   for (const auto& [v, u] : stripViews()) {
     const StripAxes a = stripAxes(scene.part(), v, u);
@@ -262,7 +281,7 @@ void addStrips(const PartOnTable& scene, const PassSettings& settings, std::vect
       const double w = a.w_min + (a.w_max - a.w_min) * (k + 0.5) / strips;
       for (int side : {1, -1}) {
         ScanPass pass;
-        if (!stripPass(scene, settings, a, w, side, pass)) continue;
+        if (!stripPass(scene, housing, settings, a, w, side, pass)) continue;
         const double e = std::asin(std::clamp(-v.z(), -1.0, 1.0));
         pass.label = fmt::format("strip view elevation {:.0f} deg azimuth {:.0f} deg, {} of {}{}",
                                  toDeg(e), toDeg(std::atan2(-v.y(), -v.x())), k + 1, strips,
@@ -288,10 +307,45 @@ const char* passKindName(PassKind kind) {
 }
 
 std::vector<ScanPass> candidatePasses(const PartOnTable& scene, const PassSettings& settings) {
+  const HousingCheck housing(scene, settings.housing, settings.housing_spacing);
   std::vector<ScanPass> out;
-  addSpins(scene, settings, out);
-  addStrips(scene, settings, out);
+  addSpins(scene, housing, settings, out);
+  addStrips(scene, housing, settings, out);
   return out;
+}
+
+ScanPass aimedPass(const PartOnTable& scene,
+                   const PassSettings& settings,
+                   const Eigen::Isometry3d& witness,
+                   double half_length) {
+  const HousingCheck housing(scene, settings.housing, settings.housing_spacing);
+  const Eigen::Vector3d x = witness.linear().col(0);
+  const int steps = std::max(1, static_cast<int>(std::ceil(half_length / (kStation * kStripKeyEvery))));
+  // The longest run of fitting keys that holds the witness itself.
+  std::vector<Eigen::Isometry3d> keys;
+  for (int i = -steps; i <= steps; ++i) {
+    Eigen::Isometry3d X = witness;
+    X.translation() += (half_length * i / steps) * x;
+    if (housing.fits(X)) {
+      keys.push_back(X);
+    } else if (i < 0) {
+      keys.clear();
+    } else {
+      break;
+    }
+  }
+  ScanPass pass;
+  pass.kind = PassKind::kStrip;
+  const Eigen::Vector3d p = witness.translation() + zMid(settings.window) * witness.linear().col(2);
+  pass.label = fmt::format("aimed at ({:.0f}, {:.0f}, {:.0f}) mm", toMm(p.x()), toMm(p.y()), toMm(p.z()));
+  for (const Eigen::Isometry3d& X : keys) {
+    pass.t.push_back(pass.t.empty() ? 0.0
+                                    : pass.t.back() + (X.translation() - pass.X_RS.back().translation()).norm() /
+                                                          scanSpeed(settings));
+    pass.X_RS.push_back(X);
+  }
+  if (pass.X_RS.size() < 2) pass = {};
+  return pass;
 }
 
 // ---- evaluation ---------------------------------------------------------------------------
@@ -328,6 +382,13 @@ void SampleIndex::near(const Eigen::Vector3d& p,
   for (const auto& [i, d2] : found) {
     if (sampling_.samples[i].n.dot(n) >= 0.5) out.push_back(i);
   }
+}
+
+std::uint32_t SampleIndex::nearest(const Eigen::Vector3d& p) const {
+  std::uint32_t index = 0;
+  double d2 = 0.0;
+  tree_->index.knnSearch(p.data(), 1, &index, &d2);
+  return index;
 }
 
 namespace {

@@ -39,6 +39,10 @@ struct PassSettings {
   double max_spin_rate = 0.4;  ///< rad/s, the table's turning rate in a spin; 0: no spins
   double overlap = 0.25;       ///< of the line width between neighbouring passes
   double lead = 0.01;          ///< m, a strip runs on this far beyond the part
+  /// The scanner housing in S (m), grown by the clearance to keep from the part and the table:
+  /// strips are cut to the stretch where it fits, spins dropped where it does not. Empty: none.
+  std::vector<Eigen::AlignedBox3d> housing;
+  double housing_spacing = 0.015;  ///< m, the housing test's grid (HousingCheck)
   int eval_rays = 41;            ///< fan rays per evaluated profile
   double eval_step = 0.0015;     ///< m, scanner travel between evaluated profiles
   double eval_radius = 0.0012;   ///< m, a sample within this of an evaluated point is covered
@@ -64,6 +68,15 @@ struct ScanPass {
 /// Spins need max_spin_rate > 0. Deterministic.
 std::vector<ScanPass> candidatePasses(const PartOnTable& scene, const PassSettings& settings);
 
+/// A short straight pass through a head pose that sees a sample (a scannability witness, R
+/// frame): the pose moved along its x_S by up to ±half_length at a constant standoff, cut to
+/// where the housing fits. For the surfaces the general candidates miss (bore walls, pockets).
+/// Empty keys when not even the witness fits.
+ScanPass aimedPass(const PartOnTable& scene,
+                   const PassSettings& settings,
+                   const Eigen::Isometry3d& witness,
+                   double half_length = 0.03);
+
 /// Area samples and a spatial index over them, for evaluating many passes.
 class SampleIndex {
  public:
@@ -77,6 +90,8 @@ class SampleIndex {
             const Eigen::Vector3d& n,
             double radius,
             std::vector<std::uint32_t>& out) const;
+  /// The sample nearest to `p`. Precondition: at least one sample.
+  std::uint32_t nearest(const Eigen::Vector3d& p) const;
 
  private:
   struct Tree;

@@ -197,31 +197,38 @@ bool insidePart(const Vector3d& p, const PartOnTable& scene) {
 }
 
 // The box placed at X_RS meets the part or the table (see the header for what can slip through).
-bool boxMeetsScene(const HousingBox& h, const Eigen::Isometry3d& X_RS, const Search& search) {
+bool boxMeetsScene(const HousingBox& h,
+                   const Eigen::Isometry3d& X_RS,
+                   const PartOnTable& scene,
+                   const Eigen::AlignedBox3d& part_bounds,
+                   const Eigen::AlignedBox3d& table_bounds) {
   Eigen::AlignedBox3d placed;
   for (int k = 0; k < 8; ++k) {
     placed.extend(X_RS * h.box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(k)));
   }
   // Far from both bodies' bounds: no ray can hit.
-  if (!placed.intersects(search.part_bounds) && !placed.intersects(search.table_bounds)) {
+  if (!placed.intersects(part_bounds) && !placed.intersects(table_bounds)) {
     return false;
   }
   for (const Segment& seg : h.segments) {
     const Vector3d a = X_RS * seg.a;
     const Vector3d d = X_RS.linear() * (seg.b - seg.a);
-    if (search.scene.cast(a, d, 0.0, d.norm())) return true;
+    if (scene.cast(a, d, 0.0, d.norm())) return true;
   }
   const Vector3d centre = X_RS * h.box.center();
-  return insideTable(centre, search.scene.table()) || insidePart(centre, search.scene);
+  return insideTable(centre, scene.table()) || insidePart(centre, scene);
 }
 
 bool housingFits(const Eigen::Isometry3d& X_RS, const Search& search) {
   return std::none_of(search.housing.begin(), search.housing.end(),
-                      [&](const HousingBox& h) { return boxMeetsScene(h, X_RS, search); });
+                      [&](const HousingBox& h) {
+                        return boxMeetsScene(h, X_RS, search.scene, search.part_bounds,
+                                             search.table_bounds);
+                      });
 }
 
 // Steps 2–5 of the header for one sample that does not face the table.
-SampleClass classifySample(const AreaSample& s, const Search& search) {
+SampleClass classifySample(const AreaSample& s, const Search& search, Eigen::Isometry3d& witness) {
   const ScannabilitySettings& st = search.settings;
   bool seen = false;
   for (int k = 0; k < st.directions; ++k) {
@@ -237,11 +244,26 @@ SampleClass classifySample(const AreaSample& s, const Search& search) {
         X_RS.translation() = s.p + standoff * d;
         if (!cameraSees(s, X_RS, search)) continue;
         seen = true;
-        if (housingFits(X_RS, search)) return SampleClass::kScannable;
+        if (housingFits(X_RS, search)) {
+          witness = X_RS;
+          return SampleClass::kScannable;
+        }
       }
     }
   }
   return seen ? SampleClass::kNoStandoff : SampleClass::kOccluded;
+}
+
+// The part's and the table's bounds, padded by 1 mm: the tessellation and Embree's float
+// coordinates stray a little.
+void sceneBounds(const PartOnTable& scene, Eigen::AlignedBox3d& part, Eigen::AlignedBox3d& table) {
+  const Vector3d pad = Vector3d::Constant(1e-3);
+  part = scene.part().bounds();
+  part.extend(part.min() - pad).extend(part.max() + pad);
+  const TableTop& top = scene.table();
+  table = Eigen::AlignedBox3d(Vector3d(-top.radius, -top.radius, -top.height),
+                              Vector3d(top.radius, top.radius, 0.0));
+  table.extend(table.min() - pad).extend(table.max() + pad);
 }
 
 Search makeSearch(const PartOnTable& scene, const ScannabilitySettings& settings) {
@@ -252,15 +274,7 @@ Search makeSearch(const PartOnTable& scene, const ScannabilitySettings& settings
   for (const Eigen::AlignedBox3d& box : settings.housing) {
     search.housing.push_back(housingBox(box, settings.housing_spacing));
   }
-  // Padded by 1 mm: the tessellation and Embree's float coordinates stray a little.
-  const Vector3d pad = Vector3d::Constant(1e-3);
-  search.part_bounds = scene.part().bounds();
-  search.part_bounds.extend(search.part_bounds.min() - pad).extend(search.part_bounds.max() + pad);
-  const TableTop& table = scene.table();
-  search.table_bounds = Eigen::AlignedBox3d(Vector3d(-table.radius, -table.radius, -table.height),
-                                            Vector3d(table.radius, table.radius, 0.0));
-  search.table_bounds.extend(search.table_bounds.min() - pad)
-      .extend(search.table_bounds.max() + pad);
+  sceneBounds(scene, search.part_bounds, search.table_bounds);
   return search;
 }
 
@@ -276,14 +290,19 @@ const char* sampleClassName(SampleClass c) {
       return "occluded";
     case SampleClass::kNoStandoff:
       return "no_standoff";
+    case SampleClass::kOutOfReach:
+      return "out_of_reach";
   }
   return "unknown";
 }
 
 std::vector<SampleClass> classifyScannability(const AreaSampling& sampling,
                                               const PartOnTable& scene,
-                                              const ScannabilitySettings& settings) {
+                                              const ScannabilitySettings& settings,
+                                              std::vector<Eigen::Isometry3d>* witnesses) {
   validate(settings);
+  std::vector<Eigen::Isometry3d> poses(witnesses ? sampling.samples.size() : 0,
+                                       Eigen::Isometry3d::Identity());
   const Search search = makeSearch(scene, settings);
   const std::vector<std::uint8_t> faces = facesTable(sampling, Eigen::Isometry3d::Identity(),
                                                      settings.max_incidence, settings.window.z_max);
@@ -292,10 +311,40 @@ std::vector<SampleClass> classifyScannability(const AreaSampling& sampling,
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size(), 8),
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                        if (!faces[i]) out[i] = classifySample(sampling.samples[i], search);
+                        Eigen::Isometry3d witness = Eigen::Isometry3d::Identity();
+                        if (!faces[i]) out[i] = classifySample(sampling.samples[i], search, witness);
+                        if (witnesses) poses[i] = witness;
                       }
                     });
+  if (witnesses) *witnesses = std::move(poses);
   return out;
+}
+
+struct HousingCheck::Impl {
+  const PartOnTable& scene;
+  std::vector<HousingBox> boxes;
+  Eigen::AlignedBox3d part_bounds, table_bounds;
+};
+
+HousingCheck::HousingCheck(const PartOnTable& scene,
+                           const std::vector<Eigen::AlignedBox3d>& housing,
+                           double spacing)
+    : impl_(std::make_unique<Impl>(Impl{scene, {}, {}, {}})) {
+  require(std::isfinite(spacing) && spacing > 0.0, "housing spacing must be finite and > 0");
+  for (const Eigen::AlignedBox3d& box : housing) {
+    require(!box.isEmpty() && finite(box.min()) && finite(box.max()),
+            "housing boxes must be non-empty and finite");
+    impl_->boxes.push_back(housingBox(box, spacing));
+  }
+  sceneBounds(scene, impl_->part_bounds, impl_->table_bounds);
+}
+
+HousingCheck::~HousingCheck() = default;
+
+bool HousingCheck::fits(const Eigen::Isometry3d& X_RS) const {
+  return std::none_of(impl_->boxes.begin(), impl_->boxes.end(), [&](const HousingBox& h) {
+    return boxMeetsScene(h, X_RS, impl_->scene, impl_->part_bounds, impl_->table_bounds);
+  });
 }
 
 }  // namespace scanplan::scanner

@@ -4,6 +4,7 @@
 // is not a planner's failure; the classes say which limit stands in the way.
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
@@ -20,7 +21,10 @@ enum class SampleClass : std::uint8_t {
   kScannable = 0,   ///< some scanner pose sees it within the limits and fits
   kFacesTable = 1,  ///< faces the table or lies on it (facesTable())
   kOccluded = 2,    ///< no free line of sight for the laser and a camera within the incidence limit
-  kNoStandoff = 3,  ///< lines of sight exist but the housing fits at no standoff in the window
+  kNoStandoff = 3,
+  /// Scannable, but every pass the automatic scan found that sees it is out of the arm's reach
+  /// (set by the automatic scan, never by classifyScannability()).
+  kOutOfReach = 4,  ///< lines of sight exist but the housing fits at no standoff in the window
 };
 
 /// "scannable", "faces_table", "occluded", "no_standoff" (the names reports use).
@@ -81,8 +85,30 @@ struct ScannabilitySettings {
 /// outside [0, π/2]; a window not finite or not 0 < z_min ≤ z_max; no cameras or a non-finite
 /// one; an empty or non-finite housing box; housing_spacing not finite and > 0, or so small that
 /// a box needs more than a million segments.
+/// `witnesses`, when given, receives per sample the head pose X_RS (R frame) that showed it
+/// scannable (identity for the other classes): a view the automatic scan can aim a pass from.
 std::vector<SampleClass> classifyScannability(const AreaSampling& sampling,
                                               const PartOnTable& scene,
-                                              const ScannabilitySettings& settings);
+                                              const ScannabilitySettings& settings,
+                                              std::vector<Eigen::Isometry3d>* witnesses = nullptr);
+
+/// The scanner housing against the part and the table: its boxes (scanner frame S, m, already
+/// grown by the clearance wanted) tested with ray segments on a grid no coarser than `spacing`
+/// (the same test classifyScannability() uses; features smaller than the grid can slip through).
+class HousingCheck {
+ public:
+  HousingCheck(const PartOnTable& scene,
+               const std::vector<Eigen::AlignedBox3d>& housing,
+               double spacing = 0.005);
+  ~HousingCheck();
+  HousingCheck(const HousingCheck&) = delete;
+  HousingCheck& operator=(const HousingCheck&) = delete;
+  /// No box of the housing at head pose X_RS (R frame) meets the part or the table.
+  bool fits(const Eigen::Isometry3d& X_RS) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace scanplan::scanner

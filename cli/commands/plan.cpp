@@ -117,7 +117,8 @@ void writeChoiceFigure(const std::filesystem::path& out, const pipeline::ScanPla
 // is removed (no trajectory.csv or program of an earlier run beside a new report).
 const std::vector<std::string> kPlanOutputs{
     "job.yaml", "report.json", "trajectory.csv", "trajectory_invalid.csv", "programs", "path.csv",
-    "path.png", "configmap*",  "cloud.ply",      "coverage.ply",           "cloud.png"};
+    "path.png", "configmap*",  "cloud.ply",      "coverage.ply",           "cloud.png",
+    "uncovered.ply", "certificate.png"};
 
 ExitCode runPlan(const PlanOptions& options) {
   const auto start = Clock::now();
@@ -179,15 +180,20 @@ ExitCode runPlan(const PlanOptions& options) {
   const std::string programs =
       writePrograms(out / "programs", "programs/", job, cell, trajectory, job.outputs.programs);
   if (plan.simulation) writeSimulationOutputs(out, job, problem.part, *plan.simulation);
+  if (plan.certificate)
+    writeCertificateOutputs(out, problem.part, plan.simulation->sampling, *plan.certificate);
   finish();
   summary += choiceSummary(plan);
   if (plan.validation) summary += validationSummary(*plan.validation);
   summary += programs;
   if (plan.simulation) summary += simulationSummary(*plan.simulation);
+  if (plan.certificate) summary += certificateSummary(*plan.certificate);
   summary += fmt::format(
       "wrote      {}: job.yaml, trajectory.csv, programs/, report.json, configmap_path.png/.svg, "
       "{}{}\n",
-      options.out_dir.string(), plan.simulation ? "cloud.ply, coverage.ply, cloud.png, " : "",
+      options.out_dir.string(),
+      std::string(plan.simulation ? "cloud.ply, coverage.ply, cloud.png, " : "") +
+          (plan.certificate ? "uncovered.ply, certificate.png, " : ""),
       kMapFilesNote);
   summary += fmt::format(
       "time       {:.1f} s (path {:.1f}, map {:.1f}, plan {:.1f}, trajectory {:.1f}, validation "

@@ -96,4 +96,76 @@ void writeSimulationOutputs(const std::filesystem::path& dir,
   writePng(dir / "cloud.png", out);
 }
 
+namespace {
+
+// One colour per certificate class (Okabe–Ito, colour-blind safe), in CoverageClass order.
+constexpr std::array<Rgb, pipeline::kCoverageClasses> kClassColours{{
+    {0, 158, 115},    // covered: green
+    {230, 159, 0},    // scannable, not covered: orange
+    {150, 150, 150},  // faces the table: grey
+    {0, 114, 178},    // occluded: blue
+    {204, 121, 167},  // no standoff fits the housing: purple
+    {213, 94, 0},     // out of reach: vermilion
+}};
+
+constexpr std::array<const char*, pipeline::kCoverageClasses> kClassLabels{
+    "covered", "scannable, not covered", "faces the table", "occluded",
+    "no standoff fits the housing", "out of the arm's reach"};
+
+void writeUncoveredPly(const std::filesystem::path& file,
+                       const scanner::AreaSampling& sampling,
+                       const pipeline::Certificate& certificate) {
+  std::vector<Eigen::Vector3d> points, normals;
+  std::vector<std::uint8_t> labels;
+  for (std::size_t i = 0; i < sampling.samples.size(); ++i) {
+    const auto c = certificate.classes[i];
+    if (c == pipeline::CoverageClass::kCovered) continue;
+    points.push_back(sampling.samples[i].p);
+    normals.push_back(sampling.samples[i].n);
+    labels.push_back(static_cast<std::uint8_t>(c));
+  }
+  std::vector<std::string> reasons;
+  for (std::size_t c = 0; c < pipeline::kCoverageClasses; ++c)
+    reasons.emplace_back(pipeline::coverageClassName(static_cast<pipeline::CoverageClass>(c)));
+  std::ostringstream out(std::ios::binary);
+  scanner::writeLabelledSamplesPly(out, points, normals, labels, reasons);
+  writeFileAtomically(file, out.str());
+}
+
+}  // namespace
+
+void writeCertificateOutputs(const std::filesystem::path& dir,
+                             const kinematics::TriangleMesh& part,
+                             const scanner::AreaSampling& sampling,
+                             const pipeline::Certificate& certificate) {
+  writeUncoveredPly(dir / "uncovered.ply", sampling, certificate);
+  constexpr int kView = 480;
+  // The samples lifted 0.3 mm off the surface, so the grey part hides those on its far side
+  // but not the ones on the side facing the viewer.
+  const double lift = 3e-4;
+  ViewGrid grid;
+  grid.rows.resize(1);
+  ViewRow& row = grid.rows[0];
+  row.title = fmt::format(
+      "Scannability certificate: {:.1f}% of the area scannable, {:.1f}% of that covered",
+      100.0 * certificate.scannable_fraction, 100.0 * certificate.covered_of_scannable);
+  for (const NamedView& view : partViews()) {
+    grid.captions.push_back(view.name);
+    RenderRequest r;
+    r.width = r.height = kView;
+    r.R_view = view.R_view;
+    r.vertices = part.vertices;
+    r.triangles = part.triangles;
+    for (std::size_t i = 0; i < sampling.samples.size(); ++i) {
+      r.dots.push_back(sampling.samples[i].p + lift * sampling.samples[i].n);
+      r.dot_colours.push_back(kClassColours[static_cast<std::size_t>(certificate.classes[i])]);
+    }
+    row.views.push_back(renderScene(r));
+  }
+  for (std::size_t c = 0; c < pipeline::kCoverageClasses; ++c)
+    grid.legend.push_back({kClassColours[c], fmt::format("{} {:.1f}%", kClassLabels[c],
+                                                         100.0 * certificate.fraction[c])});
+  writePng(dir / "certificate.png", drawViewGrid(grid));
+}
+
 }  // namespace scanplan::cli

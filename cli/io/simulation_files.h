@@ -4,6 +4,7 @@
 
 #include "cli/config/job.h"
 #include "kinematics/mesh.h"
+#include "pipeline/certificate.h"
 #include "pipeline/simulation.h"
 
 namespace scanplan::cli {
@@ -13,5 +14,12 @@ void writeSimulationOutputs(const std::filesystem::path& dir,
                             const JobSpec& job,
                             const kinematics::TriangleMesh& part,
                             const pipeline::SimulationRun& run);
+
+/// The scannability certificate (scan.auto): uncovered.ply (the area samples not covered, each
+/// with its reason) and certificate.png (the part's samples coloured by class, three sides).
+void writeCertificateOutputs(const std::filesystem::path& dir,
+                             const kinematics::TriangleMesh& part,
+                             const scanner::AreaSampling& sampling,
+                             const pipeline::Certificate& certificate);
 
 }  // namespace scanplan::cli

@@ -59,9 +59,16 @@ std::string autoScanSummary(const pipeline::AutoScanReport& r) {
                    r.transfer_time,
                    r.unreachable.empty()
                        ? std::string()
-                       : fmt::format("; {} passes out of the arm's reach replaced", r.unreachable.size()));
-  if (std::getenv("SCANPLAN_DEBUG_AUTO"))
-    for (const auto& p : r.passes) s += fmt::format("  DEBUG {:6.1f} {:5.1f} s {:.4f} {}\n", p.start_time, p.duration, p.gain, p.label);
+                       : fmt::format("; {} candidates out of the arm's reach", r.unreachable.size()));
+  std::array<std::size_t, 5> count{};
+  for (const auto c : r.classes) ++count[static_cast<std::size_t>(c)];
+  const double n = std::max<double>(1.0, static_cast<double>(r.classes.size()));
+  s += fmt::format(
+      "           certificate: {:.1f}% scannable, {:.1f}% out of the arm's reach, {:.1f}% faces the "
+      "table, {:.1f}% occluded, {:.1f}% no standoff fits the housing\n",
+      100.0 * static_cast<double>(count[0]) / n, 100.0 * static_cast<double>(count[4]) / n,
+      100.0 * static_cast<double>(count[1]) / n, 100.0 * static_cast<double>(count[2]) / n,
+      100.0 * static_cast<double>(count[3]) / n);
   return s;
 }
 

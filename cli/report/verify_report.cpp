@@ -100,6 +100,27 @@ std::string simulationSummary(const pipeline::SimulationRun& run) {
   return text;
 }
 
+std::string certificateSummary(const pipeline::Certificate& c) {
+  return fmt::format(
+      "certificate {:.1f}% of the area scannable, {:.1f}% of that covered; not scannable: {:.1f}% "
+      "faces the table, {:.1f}% occluded, {:.1f}% no standoff fits the housing, {:.1f}% out of "
+      "the arm's reach\n",
+      100.0 * c.scannable_fraction, 100.0 * c.covered_of_scannable, 100.0 * c.fraction[2],
+      100.0 * c.fraction[3], 100.0 * c.fraction[4], 100.0 * c.fraction[5]);
+}
+
+Json certificateJson(const pipeline::SimulationRun& run, const pipeline::Certificate& c) {
+  Json by_reason = Json::object();
+  for (std::size_t k = 0; k < pipeline::kCoverageClasses; ++k)
+    by_reason[pipeline::coverageClassName(static_cast<pipeline::CoverageClass>(k))] = c.fraction[k];
+  return {{"area_fraction", run.area.covered_fraction},
+          {"point_spacing_mm", toMm(run.point_spacing)},
+          {"area_samples", run.area_samples},
+          {"scannable_fraction", c.scannable_fraction},
+          {"covered_of_scannable", c.covered_of_scannable},
+          {"by_reason", by_reason}};
+}
+
 Json simulationJson(const pipeline::SimulationRun& run) {
   const scanner::SimulationStats& s = run.cloud.stats;
   const scanner::PartCoverage& c = run.coverage;

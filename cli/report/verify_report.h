@@ -6,6 +6,7 @@
 #include <string>
 
 #include "cli/io/json.h"
+#include "pipeline/certificate.h"
 #include "pipeline/simulation.h"
 #include "planner/validation.h"
 
@@ -18,6 +19,11 @@ Json validationJson(const planner::ValidationReport& report);
 
 /// The simulation's counts and coverage, two lines.
 std::string simulationSummary(const pipeline::SimulationRun& run);
+/// The certificate's line: the scannable share of the area, how much of it is covered, and why
+/// the rest cannot be scanned.
+std::string certificateSummary(const pipeline::Certificate& certificate);
+/// report.json's `coverage`: area_fraction, scannable_fraction, covered_of_scannable, by_reason.
+Json certificateJson(const pipeline::SimulationRun& run, const pipeline::Certificate& certificate);
 /// The run's counts and the coverage as a JSON object (areas in mm²).
 Json simulationJson(const pipeline::SimulationRun& run);
 

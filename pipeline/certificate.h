@@ -1,0 +1,43 @@
+#pragma once
+// The scannability certificate after the simulation (DESIGN.md §11): every area sample of the
+// part is covered by the simulated cloud, or it says why not — scannable but missed, facing the
+// table, occluded, no standoff fits the housing, or out of the arm's reach. The reasons come
+// from the automatic scan's classification of its (coarser) evaluation samples: a sample not
+// covered takes the class of the nearest evaluation sample.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "pipeline/auto_scan.h"
+#include "scanner/area_coverage.h"
+
+namespace scanplan::pipeline {
+
+enum class CoverageClass : std::uint8_t {
+  kCovered = 0,
+  kMissed = 1,      ///< scannable, not covered
+  kFacesTable = 2,  ///< faces the table or lies on it
+  kOccluded = 3,    ///< no free line of sight for the laser and a camera within the incidence limit
+  kNoStandoff = 4,  ///< no standoff in the depth window fits the housing
+  kOutOfReach = 5,  ///< every pass that sees it is out of the arm's reach
+};
+inline constexpr std::size_t kCoverageClasses = 6;
+/// "covered", "scannable_not_covered", "faces_table", "occluded", "no_standoff", "out_of_reach".
+const char* coverageClassName(CoverageClass c);
+
+struct Certificate {
+  std::vector<CoverageClass> classes;              ///< per area sample
+  std::array<double, kCoverageClasses> fraction{};  ///< of the area, per class
+  double scannable_fraction = 0.0;   ///< covered or missed: the area some reachable pass sees
+  double covered_of_scannable = 0.0; ///< covered / scannable
+};
+
+/// The certificate of `sampling` (part frame) covered as `covered` says, with the reasons of
+/// `report` (whose sampling is in the part frame too). Precondition: report.classes not empty.
+Certificate certify(const scanner::AreaSampling& sampling,
+                    const scanner::AreaCoverage& covered,
+                    const AutoScanReport& report);
+
+}  // namespace scanplan::pipeline
