@@ -356,7 +356,7 @@ void addExamples(const Commands& c) {
       {c.check_cmd,
        {"scanplan check data/jobs/demo.yaml --table 30 "
         "--joints=-20,-40,120,0,40,0",
-        "scanplan check data/jobs/demo.yaml --table 40 --time 5 --json",
+        "scanplan check data/jobs/demo_rings.yaml --table 40 --time 5 --json",
         "scanplan check data/jobs/demo.yaml --table 30 "
         "--joints=-20,-40,120,0,40,0 --set "
         "constraints.clearance.d_high_mm=60"}},

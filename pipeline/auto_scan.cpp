@@ -81,7 +81,7 @@ scanner::PassSettings passSettings(const ScanProblem& p, const collision::Scene&
 }
 
 // Can the arm follow `pass` (R frame) with the table at one angle (strips) or turning with the
-// head (spins) on one IK branch, f > 0 every 0.25 s along it? Table angles every 10°.
+// head (spins) on one IK branch, f > 0 at its keys and every 0.25 s between? Table angles every 10°.
 class ReachCheck {
  public:
   ReachCheck(const ScanProblem& problem, const collision::Scene& scene)
@@ -118,14 +118,16 @@ class ReachCheck {
     Eigen::Isometry3d X_RS;
     double turn = 0.0;  // rad the table turns with a spin's head by then
   };
-  // Poses every 0.25 s (20 at least, 400 at most) along the pass, between its keys as the path
-  // will interpolate them.
+  // The pass's keys and poses every 0.25 s between them (400 at most), as the path will
+  // interpolate them: a corner between two sampled times can be the one pose that fails.
   static std::vector<Timed> timedPoses(const scanner::ScanPass& pass) {
-    const int kPoses = std::clamp(static_cast<int>(std::ceil(pass.duration() / 0.25)) + 1, 20, 400);
+    const int between = std::clamp(static_cast<int>(std::ceil(pass.duration() / 0.25)), 1, 400);
+    std::vector<double> times(pass.t.begin(), pass.t.end());
+    for (int i = 1; i < between; ++i) times.push_back(pass.t.front() + pass.duration() * i / between);
+    std::sort(times.begin(), times.end());
     std::vector<Timed> out;
     std::size_t k = 0;
-    for (int i = 0; i < kPoses; ++i) {
-      const double t = pass.t.front() + pass.duration() * i / (kPoses - 1);
+    for (const double t : times) {
       while (k + 2 < pass.t.size() && pass.t[k + 1] < t) ++k;
       const double span = pass.t[k + 1] - pass.t[k];
       const double s = span > 0.0 ? std::clamp((t - pass.t[k]) / span, 0.0, 1.0) : 0.0;

@@ -63,24 +63,23 @@ void proveAndSimulate(const ScanProblem& problem, const PreparedScan& prepared, 
 }
 
 // The hand-written elements (if any), then the automatic passes as one more element.
-scanner::GeneratedPath autoPath(const ScanProblem& problem,
-                                PreparedScan& prepared,
-                                const scanner::Raycaster& raycaster,
-                                const ProgressFn& progress) {
-  scanner::GeneratedPath given;
+void autoPath(const ScanProblem& problem,
+              const collision::Scene& scene,
+              const scanner::Raycaster& raycaster,
+              const ProgressFn& progress,
+              ScanPathResult& out) {
   if (!problem.path.elements.empty())
-    given = scanner::generatePath(problem.path, problem.part, raycaster, prepared.window);
+    out.path = scanner::generatePath(problem.path, problem.part, raycaster, out.window);
   std::function<void(std::size_t, std::size_t)> auto_progress;
   if (progress) auto_progress = [&progress](std::size_t d, std::size_t n) { progress("auto", d, n); };
-  AutoScanPlan plan = planAutoScan(problem, *prepared.scene, given.path, auto_progress);
-  prepared.auto_scan = plan.report;
-  if (plan.element.samples.empty()) return given;
+  AutoScanPlan plan = planAutoScan(problem, scene, out.path.path, auto_progress);
+  out.auto_scan = std::move(plan.report);
+  if (plan.element.samples.empty()) return;
   scanner::PathRequest request = problem.path;
   request.elements.push_back(std::move(plan.element));
-  scanner::GeneratedPath path = scanner::generatePath(request, problem.part, raycaster, prepared.window);
-  path.elements.back().kind = "auto";
-  path.elements.back().note = fmt::format("{} passes", prepared.auto_scan->passes.size());
-  return path;
+  out.path = scanner::generatePath(request, problem.part, raycaster, out.window);
+  out.path.elements.back().kind = "auto";
+  out.path.elements.back().note = fmt::format("{} passes", out.auto_scan->passes.size());
 }
 
 }  // namespace
@@ -134,19 +133,31 @@ void checkProblem(const ScanProblem& p) {
   }
 }
 
+ScanPathResult scanPath(const ScanProblem& problem,
+                        const collision::Scene& scene,
+                        const ProgressFn& progress) {
+  checkProblem(problem);
+  ScanPathResult out;
+  out.window = scanner::laserWindow(problem.optics);
+  const scanner::Raycaster raycaster(problem.part);
+  if (problem.auto_scan) {
+    autoPath(problem, scene, raycaster, progress, out);
+  } else {
+    out.path = scanner::generatePath(problem.path, problem.part, raycaster, out.window);
+  }
+  return out;
+}
+
 std::shared_ptr<const PreparedScan> prepareScan(const ScanProblem& problem,
                                                 const ProgressFn& progress) {
   checkProblem(problem);
   auto prepared = std::make_shared<PreparedScan>();
   auto t = Clock::now();
   prepared->window = scanner::laserWindow(problem.optics);
-  const scanner::Raycaster raycaster(problem.part);
   prepared->scene = std::make_unique<collision::Scene>(problem.cell, problem.clearance);
-  if (problem.auto_scan) {
-    prepared->path = autoPath(problem, *prepared, raycaster, progress);
-  } else {
-    prepared->path = scanner::generatePath(problem.path, problem.part, raycaster, prepared->window);
-  }
+  ScanPathResult path = scanPath(problem, *prepared->scene, progress);
+  prepared->path = std::move(path.path);
+  prepared->auto_scan = std::move(path.auto_scan);
   prepared->path_seconds = since(t);
   const planner::MapRequest request = mapRequest(problem.map);
   t = Clock::now();

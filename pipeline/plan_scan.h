@@ -114,6 +114,19 @@ struct ScanPlan {
   bool planned() const { return status == ScanStatus::kPlanned; }
 };
 
+/// The scan path of a problem: its hand-written elements, then (with auto_scan) the automatic
+/// passes as one more element, and what the automatic planner did.
+struct ScanPathResult {
+  scanner::LaserWindow window;
+  scanner::GeneratedPath path;
+  std::optional<AutoScanReport> auto_scan;
+};
+/// The path stage alone (checkProblem first); `scene` is the problem's cell (the automatic scan
+/// checks its passes for reach on it). Throws InputError for a path that cannot be built.
+ScanPathResult scanPath(const ScanProblem& problem,
+                        const collision::Scene& scene,
+                        const ProgressFn& progress = {});
+
 /// The scan path and the maps of `problem` (checked first with checkProblem()).
 std::shared_ptr<const PreparedScan> prepareScan(const ScanProblem& problem,
                                                 const ProgressFn& progress = {});

@@ -72,7 +72,7 @@ struct AutoScanSettings {
   /// the middle of the depth window. The passes move one spacing per profile.
   double point_spacing = 0.0;
   double target_coverage = 0.98;  ///< of the scannable area
-  std::size_t max_passes = 40;
+  std::size_t max_passes = 250;
   double time_budget = 60.0;     ///< s of planning for choosing the passes
   double sample_spacing = 0.003; ///< m between the area samples the passes are chosen on
 };

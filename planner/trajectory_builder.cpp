@@ -76,6 +76,44 @@ std::string jumpReason(const kinematics::RobotModel& robot,
                    k, path.samples[k].t, joint + 1, toDeg(step), branch.words());
 }
 
+// The joint that turns a whole turn from `prev` to `q` while every other joint steps less than
+// kMaxJointStep; -1 when there is none.
+int wholeTurnJoint(const kinematics::JointVector& prev, const kinematics::JointVector& q) {
+  int joint = -1;
+  for (int j = 0; j < kinematics::kNumJoints; ++j) {
+    const double d = q(j) - prev(j);
+    if (std::abs(d) <= kMaxJointStep) continue;
+    if (joint >= 0 || std::abs(std::abs(d) - 2.0 * std::numbers::pi) > kMaxJointStep) return -1;
+    joint = j;
+  }
+  return joint;
+}
+
+// Where the track must jump a whole turn of one joint at sample k and the path does not scan
+// there, the joint unwinds over the stretch of non-scanning samples before k instead (a move
+// between passes): it turns by that whole turn evenly over the stretch, the flange rolling about
+// the joint's axis off the planned pose. Only when the stretch is long enough at 80% of the
+// joint's speed limit. False: no such stretch (the track stays broken).
+bool unwindBefore(const kinematics::RobotModel& robot,
+                  const kinematics::ScanPath& path,
+                  std::size_t k,
+                  const kinematics::JointVector& next,
+                  std::vector<kinematics::JointVector>& q) {
+  if (path.samples[k].scanning) return false;
+  const int j = wholeTurnJoint(q.back(), next);
+  if (j < 0) return false;
+  std::size_t a = k - 1;
+  while (a > 0 && !path.samples[a].scanning) --a;
+  const double span = path.samples[k].t - path.samples[a].t;
+  const double turn = std::round((next(j) - q.back()(j)) / (2.0 * std::numbers::pi)) * 2.0 *
+                      std::numbers::pi;
+  const double speed = robot.joint(j).max_speed;
+  if (!(span > 0.0) || (speed > 0.0 && std::abs(turn) / span > 0.8 * speed)) return false;
+  for (std::size_t i = a + 1; i < k; ++i)
+    q[i](j) += turn * (path.samples[i].t - path.samples[a].t) / span;
+  return true;
+}
+
 // Follows the start solution q0 continuously: at each sample the solution nearest the last.
 Track followTrack(const kinematics::RobotModel& robot,
                   const ConstraintSettings& settings,
@@ -99,7 +137,7 @@ Track followTrack(const kinematics::RobotModel& robot,
         nearest = &q;
       }
     }
-    if (nearest_step > kMaxJointStep) {
+    if (nearest_step > kMaxJointStep && !unwindBefore(robot, path, k, *nearest, track.q)) {
       track.broken = jumpReason(robot, path, branch, k, prev, *nearest, nearest_step);
       break;
     }

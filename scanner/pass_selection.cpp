@@ -224,23 +224,59 @@ std::vector<TourStep> nearestNeighbour(const std::vector<ScanPass>& passes,
   return tour;
 }
 
+// The transfer time into each step and where the head is before it.
+struct TourState {
+  std::vector<double> into;                     // transfer into step k (0 for a first step)
+  std::vector<std::optional<Eigen::Isometry3d>> before;  // the head before step k
+};
+
+TourState tourState(const std::vector<ScanPass>& passes,
+                    const std::vector<TourStep>& tour,
+                    std::optional<Eigen::Isometry3d> at,
+                    const TransferSphere& sphere) {
+  TourState st;
+  for (const TourStep& s : tour) {
+    st.before.push_back(at);
+    const Ends e = ends(passes[s.pass], s.reversed, at);
+    st.into.push_back(at ? transferTime(*at, e.entry, sphere) : 0.0);
+    at = e.exit;
+  }
+  return st;
+}
+
+// 2-opt: reverse a stretch [i, j] of the tour (each pass in it runs the other way) when that
+// shortens the transfers. Only the transfers from i up to the first strip after j change (a
+// spin's entry depends on where the head comes from; a strip's exit does not), so each move is
+// judged on that window.
 void twoOpt(const std::vector<ScanPass>& passes,
             std::vector<TourStep>& tour,
             const std::optional<Eigen::Isometry3d>& start,
             const TransferSphere& sphere) {
-  double cost = tourCost(passes, tour, start, sphere);
+  const std::size_t n = tour.size();
   for (int round = 0; round < 50; ++round) {
     bool improved = false;
-    for (std::size_t i = 0; i < tour.size(); ++i) {
-      for (std::size_t j = i; j < tour.size(); ++j) {
-        std::vector<TourStep> next = tour;
-        std::reverse(next.begin() + static_cast<std::ptrdiff_t>(i),
-                     next.begin() + static_cast<std::ptrdiff_t>(j) + 1);
-        for (std::size_t k = i; k <= j; ++k) next[k].reversed = !next[k].reversed;
-        const double c = tourCost(passes, next, start, sphere);
-        if (c < cost - 1e-9) {
-          tour = std::move(next);
-          cost = c;
+    for (std::size_t i = 0; i < n; ++i) {
+      TourState st = tourState(passes, tour, start, sphere);
+      for (std::size_t j = i; j < n; ++j) {
+        std::size_t m = j + 1;
+        while (m < n && passes[tour[m].pass].kind == PassKind::kSpin) ++m;
+        const std::size_t last = std::min(m, n - 1);
+        double before = 0.0;
+        for (std::size_t k = i; k <= last; ++k) before += st.into[k];
+        std::optional<Eigen::Isometry3d> at = st.before[i];
+        double after = 0.0;
+        for (std::size_t k = i; k <= last && after < before; ++k) {
+          const TourStep s = k <= j ? TourStep{tour[i + j - k].pass, !tour[i + j - k].reversed, 0.0}
+                                    : tour[k];
+          const Ends e = ends(passes[s.pass], s.reversed, at);
+          if (at) after += transferTime(*at, e.entry, sphere);
+          at = e.exit;
+        }
+        if (after < before - 1e-9) {
+          std::reverse(tour.begin() + static_cast<std::ptrdiff_t>(i),
+                       tour.begin() + static_cast<std::ptrdiff_t>(j) + 1);
+          for (std::size_t k = i; k <= j; ++k) tour[k].reversed = !tour[k].reversed;
+          st = tourState(passes, tour, start, sphere);
           improved = true;
         }
       }
@@ -270,8 +306,11 @@ std::vector<TourStep> orderPasses(const std::vector<ScanPass>& passes,
   if (start) {
     best = nearestNeighbour(passes, chosen, start, sphere);
   } else {
+    // Nearest neighbour from up to 12 first passes spread over the chosen ones (each run is
+    // O(n²) transfers; from every pass it would be O(n³)).
     double best_cost = 1e300;
-    for (std::size_t k = 0; k < chosen.size(); ++k) {
+    const std::size_t step = std::max<std::size_t>(1, chosen.size() / 12);
+    for (std::size_t k = 0; k < chosen.size(); k += step) {
       std::vector<std::size_t> left = chosen;
       left.erase(left.begin() + static_cast<std::ptrdiff_t>(k));
       std::vector<TourStep> tour{{chosen[k], false, 0.0}};

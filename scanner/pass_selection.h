@@ -19,7 +19,7 @@ namespace scanplan::scanner {
 
 struct CoverSettings {
   double target = 0.98;          ///< of the samples that count
-  std::size_t max_passes = 40;   ///< passes chosen at most
+  std::size_t max_passes = 250;  ///< passes chosen at most
   double pass_overhead = 3.0;    ///< s added to a pass's time in its gain (its approach)
   std::size_t min_gain = 1;      ///< samples: stop when the best pass adds fewer
 };
@@ -75,7 +75,7 @@ struct TourStep {
 };
 
 /// Orders `chosen` (indices into passes) to keep the transfers short: nearest neighbour from
-/// `start` (or from each pass, the best kept), then 2-opt moves that reverse a stretch of the
+/// `start` (or from up to 12 first passes, the best kept), then 2-opt moves that reverse a stretch of the
 /// tour (and each pass in it). Deterministic.
 std::vector<TourStep> orderPasses(const std::vector<ScanPass>& passes,
                                   const std::vector<std::size_t>& chosen,

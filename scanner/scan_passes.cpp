@@ -279,15 +279,17 @@ void addStrips(const PartOnTable& scene,
     const int strips = std::max(1, static_cast<int>(std::ceil((a.w_max - a.w_min) / spacing)));
     for (int k = 0; k < strips; ++k) {
       const double w = a.w_min + (a.w_max - a.w_min) * (k + 0.5) / strips;
-      for (int side : {1, -1}) {
-        ScanPass pass;
-        if (!stripPass(scene, housing, settings, a, w, side, pass)) continue;
-        const double e = std::asin(std::clamp(-v.z(), -1.0, 1.0));
-        pass.label = fmt::format("strip view elevation {:.0f} deg azimuth {:.0f} deg, {} of {}{}",
-                                 toDeg(e), toDeg(std::atan2(-v.y(), -v.x())), k + 1, strips,
-                                 side > 0 ? "" : ", camera behind");
-        out.push_back(std::move(pass));
-      }
+      // The camera ahead of the laser turning counter-clockwise about the table axis (as in a
+      // spin): every strip then holds the head the same way round seen from the robot, once the
+      // table brings it in front, so the wrist does not wind up from pass to pass.
+      const Eigen::Vector3d centre = 0.5 * (a.u_min + a.u_max) * a.u + w * a.w;
+      const int side = Eigen::Vector3d::UnitZ().cross(centre).dot(a.u) < 0.0 ? -1 : 1;
+      ScanPass pass;
+      if (!stripPass(scene, housing, settings, a, w, side, pass)) continue;
+      const double e = std::asin(std::clamp(-v.z(), -1.0, 1.0));
+      pass.label = fmt::format("strip view elevation {:.0f} deg azimuth {:.0f} deg, {} of {}",
+                               toDeg(e), toDeg(std::atan2(-v.y(), -v.x())), k + 1, strips);
+      out.push_back(std::move(pass));
     }
   }
 }

@@ -168,7 +168,7 @@ std::filesystem::path writeBoxStl(const std::filesystem::path& file, double sx, 
 // on one branch (fast enough for a unit test).
 pipeline::ScanProblem autoProblem(const std::filesystem::path& mesh) {
   return cli::toProblem(cli::loadJob(
-      test::sourceDir() / "data/jobs/demo.yaml",
+      test::sourceDir() / "data/jobs/demo_rings.yaml",
       {"part.mesh=" + mesh.string(), "part.place=table", "scan.paths=[]",
        "scan.auto={point_spacing_mm: 1.0, sample_spacing_mm: 4}", "scan.dt_s=0.2",
        "map.branch=RIGHTY ABOVE NOFLIP", "map.angle_step_deg=4", "scanner.rays_per_profile=80"}));

@@ -40,7 +40,7 @@ namespace {
 using namespace scanplan;
 using namespace scanplan::test;
 
-const fs::path kDemoJob = fs::path(SCANPLAN_SOURCE_DIR) / "data/jobs/demo.yaml";
+const fs::path kDemoJob = fs::path(SCANPLAN_SOURCE_DIR) / "data/jobs/demo_rings.yaml";
 
 // The fixed settings of every case: the light demo, no simulation, no refinement so that the DP
 // gap compares grid paths with the grid optimum (refinement can take a path below DP's grid
@@ -690,7 +690,7 @@ TEST_F(Batch, OmplBenchmarkLogLoadsIntoThePlannerArenaDatabase) {
   for (std::string line; std::getline(lines, line);) {
     (line.starts_with("run|") ? runs : other).push_back(line);
   }
-  EXPECT_EQ(other, (std::vector<std::string>{"experiments 1 demo 2", "planners 4", "outcomes 5"}));
+  EXPECT_EQ(other, (std::vector<std::string>{"experiments 1 demo_rings 2", "planners 4", "outcomes 5"}));
 
   // What each case should be: planner = method and the non-seed values, its runs the seeds.
   std::vector<std::string> expected;

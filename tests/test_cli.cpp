@@ -25,7 +25,7 @@ using namespace scanplan::test;
 
 const fs::path kSourceDir = SCANPLAN_SOURCE_DIR;
 const std::string kViper = (kSourceDir / "data/robots/viper_s650.yaml").string();
-const std::string kDemoJob = (kSourceDir / "data/jobs/demo.yaml").string();
+const std::string kDemoJob = (kSourceDir / "data/jobs/demo_rings.yaml").string();
 
 // The JSON prints 17 significant digits and the DH chain is a handful of products of mm-sized
 // numbers, so the golden poses of DESIGN.md §3.1 come out within rounding noise (~1e-13 mm).
@@ -614,7 +614,7 @@ TEST_F(Cli, QuietDropsTheSummaryAndGlobalOptionsWorkAfterTheCommand) {
   EXPECT_TRUE(contains(run.err, "scanplan: debug: done in ")) << run.err;
   run = scanplan({"-v", "job", "show", kDemoJob, "--set", "table.radius_mm=250"});
   EXPECT_EQ(run.exit_code, 0) << describe(run);
-  EXPECT_TRUE(contains(run.err, "job demo (" + kDemoJob + "): robot Adept Viper s650") &&
+  EXPECT_TRUE(contains(run.err, "job demo_rings (" + kDemoJob + "): robot Adept Viper s650") &&
               contains(run.err, "--set table.radius_mm=250"))
       << run.err;
   EXPECT_FALSE(contains(run.out, "debug")) << run.out;

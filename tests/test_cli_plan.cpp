@@ -26,7 +26,7 @@ using namespace scanplan;
 using namespace scanplan::test;
 
 const fs::path kSourceDir = SCANPLAN_SOURCE_DIR;
-const std::string kDemoJob = (kSourceDir / "data/jobs/demo.yaml").string();
+const std::string kDemoJob = (kSourceDir / "data/jobs/demo_rings.yaml").string();
 // The demo, lightened (test::kLightDemo) so a plan takes about a second.
 std::vector<std::string> lightDemo() {
   std::vector<std::string> args;

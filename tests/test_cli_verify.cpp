@@ -31,7 +31,7 @@ using namespace scanplan;
 using namespace scanplan::test;
 
 const fs::path kSourceDir = SCANPLAN_SOURCE_DIR;
-const std::string kDemoJob = (kSourceDir / "data/jobs/demo.yaml").string();
+const std::string kDemoJob = (kSourceDir / "data/jobs/demo_rings.yaml").string();
 
 std::vector<std::string> withLightDemo(std::vector<std::string> args) {
   for (const std::string& o : kLightDemo) {

@@ -190,7 +190,7 @@ INSTANTIATE_TEST_SUITE_P(WorldFrames, AnalyticPrimitives, ::testing::Values(0, 1
 
 // The bundled demo cell, built through the job file as a user would.
 struct DemoCell {
-  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo.yaml");
+  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml");
   Scene scene{cli::buildCell(job), cli::clearanceConfig(job)};
 };
 

@@ -63,7 +63,7 @@ constexpr double kFloatRel = 1e-6;
 // 10° angle steps (36 angles), every branch: 2 880 cells.
 
 cli::JobSpec shortDemoJob() {
-  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo.yaml");
+  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml");
   cli::PathElementSpec ring;
   ring.type = "ring";
   ring.height_mm = 50.0;
@@ -650,7 +650,7 @@ TEST(ConfigMap, BranchWordsGivingBothWordsOfAPairAreRejected) {
 }
 
 std::string demoJobText() {
-  std::ifstream in(test::sourceDir() / "data/jobs/demo.yaml");
+  std::ifstream in(test::sourceDir() / "data/jobs/demo_rings.yaml");
   std::stringstream s;
   s << in.rdbuf();
   std::string text = s.str();

@@ -106,8 +106,8 @@ class JobFile : public ::testing::Test {
 };
 
 TEST_F(JobFile, BundledDemoJobAndRobotsLoadAndBuild) {
-  const JobSpec demo = loadJob(kSource / "data/jobs/demo.yaml");
-  EXPECT_EQ(demo.name, "demo");
+  const JobSpec demo = loadJob(kSource / "data/jobs/demo_rings.yaml");
+  EXPECT_EQ(demo.name, "demo_rings");
   EXPECT_EQ(demo.robot_file.resolved, (kSource / "data/robots/viper_s650.yaml").lexically_normal());
   EXPECT_EQ(demo.part.mesh.resolved, (kSource / "data/parts/demo_housing.stl").lexically_normal());
   const kinematics::CellModel cell = buildCell(demo);
@@ -124,7 +124,7 @@ TEST_F(JobFile, BundledDemoJobAndRobotsLoadAndBuild) {
 
 // `part.up_axis` turns the file's up direction into +z at load: the part's extents permute.
 TEST_F(JobFile, PartUpAxisRotatesTheMeshAtLoad) {
-  const JobSpec z = loadJob(kSource / "data/jobs/demo.yaml");
+  const JobSpec z = loadJob(kSource / "data/jobs/demo_rings.yaml");
   // `-> Eigen::Vector3d`: a deduced return type would be Eigen's expression for max − min of a
   // box that dies with the lambda (AddressSanitizer: stack-use-after-scope).
   const Eigen::Vector3d size_z = [&]() -> Eigen::Vector3d {
@@ -138,7 +138,7 @@ TEST_F(JobFile, PartUpAxisRotatesTheMeshAtLoad) {
   for (const auto& [up, expect] : cases) {
     SCOPED_TRACE(up);
     const JobSpec job =
-        loadJob(kSource / "data/jobs/demo.yaml", {std::string("part.up_axis=") + up});
+        loadJob(kSource / "data/jobs/demo_rings.yaml", {std::string("part.up_axis=") + up});
     const kinematics::CellModel cell = buildCell(job);
     const auto mesh = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options).mesh;
     EXPECT_LT((mesh.bounds().sizes() - expect).norm(), 1e-9);
@@ -146,13 +146,13 @@ TEST_F(JobFile, PartUpAxisRotatesTheMeshAtLoad) {
     const Eigen::Matrix3d& R = cell.part.mesh.options.rotation;
     EXPECT_NEAR(R.determinant(), 1.0, 1e-12);
   }
-  EXPECT_THROW(loadJob(kSource / "data/jobs/demo.yaml", {"part.up_axis=w"}), InputError);
+  EXPECT_THROW(loadJob(kSource / "data/jobs/demo_rings.yaml", {"part.up_axis=w"}), InputError);
 }
 
 // The comment line names the job the text was resolved from, so it differs between the two
 // files; everything after it must match byte for byte.
 TEST_F(JobFile, JobToYamlRoundTripsAndSpellsOutEveryDefault) {
-  const std::string first = jobToYaml(loadJob(kSource / "data/jobs/demo.yaml"));
+  const std::string first = jobToYaml(loadJob(kSource / "data/jobs/demo_rings.yaml"));
   for (const char* key : {"max_accel_deg_s2", "eccentricity_mm", "tilt_deg", "robot_base",
                           "dh:", "opw:", "theta_offset_deg", "direction", "signs",
                           "links:", "units: mm", "scale: 1", "continuous: true"}) {
@@ -400,7 +400,7 @@ TEST_F(JobFile, RobotFilesWhoseOpwDisagreesWithDhOrWithFiveRowsAreRejected) {
 // `controller:` says which program language the robot runs; `plan` writes that one and the CSV
 // unless outputs.programs says otherwise.
 TEST_F(JobFile, TheRobotsControllerChoosesTheDefaultPrograms) {
-  const JobSpec demo = loadJob(kSource / "data/jobs/demo.yaml");
+  const JobSpec demo = loadJob(kSource / "data/jobs/demo_rings.yaml");
   EXPECT_EQ(demo.robot.controller, "adept_vplus");
   EXPECT_EQ(demo.outputs.programs, (std::vector<std::string>{"vplus", "csv"}));
   const JobSpec kuka = loadJob(kSource / "data/jobs/kuka_demo.yaml");
@@ -426,14 +426,14 @@ TEST_F(JobFile, TheRobotsControllerChoosesTheDefaultPrograms) {
 
   // outputs.programs overrides; another vendor's language is found (the CSV is nobody's).
   const JobSpec over =
-      loadJob(kSource / "data/jobs/demo.yaml", {"outputs.programs=[krl, vplus, csv, rapid]"});
+      loadJob(kSource / "data/jobs/demo_rings.yaml", {"outputs.programs=[krl, vplus, csv, rapid]"});
   EXPECT_EQ(over.outputs.programs, (std::vector<std::string>{"krl", "vplus", "csv", "rapid"}));
   EXPECT_EQ(foreignPrograms(over.robot, over.outputs.programs),
             (std::vector<std::string>{"krl", "rapid"}));
   // export's --format names are case-insensitive.
   EXPECT_EQ(foreignPrograms(over.robot, {"VPLUS", "KRL"}), std::vector<std::string>{"KRL"});
   EXPECT_TRUE(
-      loadJob(kSource / "data/jobs/demo.yaml", {"outputs.programs=[]"}).outputs.programs.empty());
+      loadJob(kSource / "data/jobs/demo_rings.yaml", {"outputs.programs=[]"}).outputs.programs.empty());
 
   // `job show` prints it, and the printed job loads back to the same programs.
   const std::string shown = jobToYaml(kuka);

@@ -32,7 +32,7 @@ pipeline::ScanProblem lightDemo(std::vector<std::string> extra = {}) {
   overrides.push_back("map.angle_step_deg=2");
   overrides.push_back("simulation.enabled=false");
   for (auto& e : extra) overrides.push_back(std::move(e));
-  return cli::toProblem(cli::loadJob(test::sourceDir() / "data/jobs/demo.yaml", overrides));
+  return cli::toProblem(cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", overrides));
 }
 
 // Positions agree to 1 µm and orientations to 1 µrad: IK solutions reproduce FK to ~1e-12 m,
@@ -105,7 +105,7 @@ TEST(PlanScan, BadProblemsAreInputErrorsNamingTheField) {
 // whatever the mesh's own origin (here the housing turned y-up and yawed 30°).
 TEST(PartPlacement, TableRestsTheLowestPointOnTheTopCentredOnTheAxis) {
   const cli::JobSpec job = cli::loadJob(
-      test::sourceDir() / "data/jobs/demo.yaml",
+      test::sourceDir() / "data/jobs/demo_rings.yaml",
       {"part.up_axis=y", "part.place=table", "part.pose={xyz_mm: [0, 0, 0], rpy_deg: [0, 0, 30]}"});
   const kinematics::CellModel cell = cli::buildCell(job);
   const kinematics::LoadedMesh part = cli::loadPart(job, cell);
@@ -120,11 +120,11 @@ TEST(PartPlacement, TableRestsTheLowestPointOnTheTopCentredOnTheAxis) {
 
 TEST(PartPlacement, APartBelowTheTableTopIsAnErrorNamingThePose) {
   const cli::JobSpec job =
-      cli::loadJob(test::sourceDir() / "data/jobs/demo.yaml", {"part.pose.xyz_mm=[0, 0, -5]"});
+      cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", {"part.pose.xyz_mm=[0, 0, -5]"});
   const kinematics::CellModel cell = cli::buildCell(job);
   EXPECT_TRUE(test::throwsInputError(
       [&] { cli::loadPart(job, cell); },
-      {"demo.yaml", "part.pose", "5.00 mm below the table top", "part.place: table"}));
+      {"demo_rings.yaml", "part.pose", "5.00 mm below the table top", "part.place: table"}));
 }
 
 // Placed, ring heights count from the table top: a part lifted 40 mm (a riser) with rings at
@@ -132,7 +132,7 @@ TEST(PartPlacement, APartBelowTheTableTopIsAnErrorNamingThePose) {
 TEST(PartPlacement, PlacedRingHeightsCountFromTheTableTop) {
   const auto path = [](std::vector<std::string> overrides) {
     overrides.insert(overrides.begin(), test::kLightDemo.begin(), test::kLightDemo.end());
-    const cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo.yaml", overrides);
+    const cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", overrides);
     return cli::toProblem(job).path;
   };
   const scanplan::scanner::PathRequest on_table = path({});
@@ -168,7 +168,7 @@ TEST(PartPlacement, PlacedOnTableAndPartExtentOnAKnownCube) {
 
 TEST(PartPlacement, AnUnknownPlacementNamesTheKeyAndTheChoices) {
   EXPECT_TRUE(test::throwsInputError(
-      [] { cli::loadJob(test::sourceDir() / "data/jobs/demo.yaml", {"part.place=floor"}); },
+      [] { cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", {"part.place=floor"}); },
       {"part.place", "floor", "none", "table"}));
 }
 

@@ -427,7 +427,7 @@ TEST_F(Programs, KrlTableCanLeadWhenItsSpeedIsKnown) {
 // The seed's point (§7.3): a program is checked before it is sent. A smooth motion in the demo
 // cell, written as CSV and V+ and read back, passes validation like the plan itself.
 TEST(ProgramsValidate, ReadBackProgramsPassValidation) {
-  const cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo.yaml",
+  const cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml",
                                         {"scan.dt_s=0.2", "map.angle_step_deg=2"});
   const kinematics::CellModel cell = cli::buildCell(job);
   const collision::Scene scene(cell, cli::clearanceConfig(job));

@@ -412,7 +412,7 @@ const DemoPath& demoPath() {
     DemoPath d;
     // The two rings and the head these tests were written for, whatever the demo uses today.
     d.job = cli::loadJob(
-        test::sourceDir() / "data/jobs/demo.yaml",
+        test::sourceDir() / "data/jobs/demo_rings.yaml",
         {"scanner.optics={a_mm: 100, b_mm: 100, phi_deg: 60, gamma_deg: 10}",
          "scan.paths=[{type: ring, height_mm: 50, tilt_deg: 20, speed_deg_s: 20}, {type: ring, "
          "height_mm: 100, tilt_deg: 50, speed_deg_s: 20}]"});

@@ -103,7 +103,7 @@ TriangleMesh blockWithHole(double w, double h, double hole, double depth) {
   return m;
 }
 
-// The demo head (data/jobs/demo.yaml): camera 100 mm beside the laser, depth window
+// The demo head (data/jobs/demo_rings.yaml): camera 100 mm beside the laser, depth window
 // 107 … 196 mm, housing 170 × 70 × 90 mm around laser and camera.
 ScannabilitySettings demoHead() {
   ScannabilitySettings s;

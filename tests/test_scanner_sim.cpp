@@ -69,7 +69,7 @@ constexpr double kBackendTol = 1e-9;  // m
 // The demo cell with the head these tests were written for (depth window 136 … 184 mm, the
 // camera 100 mm out along the beam), whatever the bundled demo uses today.
 cli::JobSpec demoJob() {
-  return cli::loadJob(test::sourceDir() / "data/jobs/demo.yaml",
+  return cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml",
                       {"scanner.optics={a_mm: 100, b_mm: 100, phi_deg: 60, gamma_deg: 10}",
                        "scanner.body=[{type: box, size_mm: [60, 90, 110], pose: {xyz_mm: [0, "
                        "0, -55]}}]"});

@@ -134,7 +134,7 @@ struct DemoPlan {
 };
 
 DemoPlan demo() {
-  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo.yaml", test::kLightDemo);
+  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", test::kLightDemo);
   kinematics::CellModel cell = cli::buildCell(job);
   scanner::GeneratedPath path = cli::generateScanPath(job, cell);
   return {std::move(job), std::move(cell), std::move(path)};

@@ -72,7 +72,7 @@ struct DemoCell {
 };
 
 DemoCell demoCell() {
-  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo.yaml", test::kLightDemo);
+  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", test::kLightDemo);
   kinematics::CellModel cell = cli::buildCell(job);
   return {std::move(job), std::move(cell)};
 }

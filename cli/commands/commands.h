@@ -13,6 +13,7 @@
 #include "cli/plot/figure.h"
 #include "cli/plot/map_figures.h"
 #include "kinematics/mesh.h"
+#include "pipeline/plan_scan.h"
 #include "planner/config_map.h"
 
 namespace scanplan::cli {
@@ -65,6 +66,7 @@ struct PathContext {
   kinematics::LoadedMesh part;
   scanner::LaserWindow window;
   scanner::GeneratedPath generated;
+  std::optional<pipeline::AutoScanReport> auto_scan;  ///< with scan.auto
 };
 /// Loads the part and generates the scan path; errors name the job.
 PathContext buildPath(const JobSpec& job, const kinematics::CellModel& cell);

@@ -42,18 +42,29 @@ void Progress::operator()(std::size_t done, std::size_t total) {
 }
 
 PathContext buildPath(const JobSpec& job, const kinematics::CellModel& cell) {
-  if (job.scan.paths.empty()) {
+  if (job.scan.paths.empty() && !job.scan.auto_scan.enabled) {
     throw InputError(job.source.string() +
                      ": scan.paths: empty: expected at least one path element (ring, raster, "
-                     "waypoints or file)");
+                     "waypoints or file) or scan.auto");
   }
   PathContext context;
   context.part = loadPart(job, cell);
   context.window = scanner::laserWindow(laserOptics(job));
-  const scanner::Raycaster raycaster(context.part.mesh);
   try {
-    context.generated = scanner::generatePath(placedPathRequest(job, cell), context.part.mesh,
-                                              raycaster, context.window);
+    if (job.scan.auto_scan.enabled) {
+      // The automatic passes depend on the whole cell (reach): the pipeline's path stage.
+      const collision::Scene scene(cell, clearanceConfig(job));
+      Progress progress("auto");
+      pipeline::ScanPathResult path = pipeline::scanPath(
+          toProblem(job, cell, context.part.mesh), scene,
+          [&progress](std::string_view, std::size_t d, std::size_t n) { progress(d, n); });
+      context.generated = std::move(path.path);
+      context.auto_scan = std::move(path.auto_scan);
+    } else {
+      const scanner::Raycaster raycaster(context.part.mesh);
+      context.generated = scanner::generatePath(placedPathRequest(job, cell), context.part.mesh,
+                                                raycaster, context.window);
+    }
   } catch (const InputError& e) {
     throw InputError(job.source.string() + ": " + e.what());
   }
@@ -72,6 +83,7 @@ ExitCode runPath(const PlanOptions& options) {
   writeFileAtomically(options.out_dir / "path.csv", scanner::pathToCsv(context.generated.path));
   writePng(options.out_dir / "path.png", pathPicture(context.part.mesh, context.generated.path));
   std::string text = pathSummary(context.window, context.generated);
+  if (context.auto_scan) text += autoScanSummary(*context.auto_scan);
   text += fmt::format(
       "wrote      {} (path.csv, path.png: iso, top and front views; green start, orange end)\n",
       options.out_dir.string());
@@ -110,7 +122,9 @@ std::string buildAndWriteMaps(const JobSpec& job,
   const MapRun run = computeMap(job, scene, context.generated.path);
   writePathOutputs(out, context);
   writeMapOutputs(out, job, run.map);
-  return pathSummary(context.window, context.generated) + mapSummary(run.map, run.seconds) +
+  return pathSummary(context.window, context.generated) +
+         (context.auto_scan ? autoScanSummary(*context.auto_scan) : std::string()) +
+         mapSummary(run.map, run.seconds) +
          fmt::format("wrote      {}: {}\n", out.string(), kMapFilesNote);
 }
 

@@ -140,7 +140,7 @@ ExitCode runPlan(const PlanOptions& options) {
   const pipeline::ScanProblem problem = toProblem(job, cell, part.mesh);
   const pipeline::ScanPlan plan = runPipeline(job, problem, options);
   const pipeline::PreparedScan& prepared = *plan.prepared;
-  const PathContext context{part, prepared.window, prepared.path};
+  const PathContext context{part, prepared.window, prepared.path, std::nullopt};
   writePathOutputs(out, context);
   writeMapOutputs(out, job, prepared.map);
   summary += pathSummary(prepared.window, prepared.path);

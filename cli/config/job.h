@@ -129,7 +129,7 @@ struct AutoSpec {
   double max_incidence_deg = 60.0; ///< laser and camera ray against the normal, for a point to count
   double point_spacing_mm = 0.0;   ///< 0: the line's point pitch at mid depth
   double target_coverage = 0.98;   ///< of the scannable area
-  int max_passes = 40;
+  int max_passes = 250;
   double time_budget_s = 60.0;     ///< for choosing the passes
   double sample_spacing_mm = 3.0;  ///< area samples the passes are chosen on
 };

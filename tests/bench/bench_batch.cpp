@@ -43,7 +43,7 @@ Timing run(const fs::path& sweep, const fs::path& out, int jobs, bool reuse, int
 
 int main(int argc, char** argv) {
   const int repeats = argc > 1 ? std::max(1, std::atoi(argv[1])) : 2;
-  const fs::path job = fs::absolute("data/jobs/demo.yaml");
+  const fs::path job = fs::absolute("data/jobs/demo_rings.yaml");
   if (!fs::exists(job)) {
     std::fprintf(stderr, "run from the repository root (no %s)\n", job.c_str());
     return 2;

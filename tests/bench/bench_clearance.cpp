@@ -96,7 +96,7 @@ double mean(const std::vector<double>& v) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::string job_file = argc > 1 ? argv[1] : "data/jobs/demo.yaml";
+  const std::string job_file = argc > 1 ? argv[1] : "data/jobs/demo_rings.yaml";
   const int paths = argc > 2 ? std::max(1, std::atoi(argv[2])) : 80;
   const cli::JobSpec job = cli::loadJob(job_file);
   const kinematics::CellModel cell = cli::buildCell(job);

@@ -38,7 +38,7 @@ bool identical(const planner::ConfigMap& a, const planner::ConfigMap& b) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::string job_file = argc > 1 ? argv[1] : "data/jobs/demo.yaml";
+  const std::string job_file = argc > 1 ? argv[1] : "data/jobs/demo_rings.yaml";
   const int subsample = argc > 2 ? std::max(1, std::atoi(argv[2])) : 25;
   const tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 2);
 

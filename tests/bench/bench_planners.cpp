@@ -145,7 +145,7 @@ planner::ConfigMap demoMap(const std::string& job_file, std::size_t samples, dou
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::string job_file = argc > 1 ? argv[1] : "data/jobs/demo.yaml";
+  const std::string job_file = argc > 1 ? argv[1] : "data/jobs/demo_rings.yaml";
   const tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 2);
   planner::PlannerSettings s;  // the documented defaults (k_omega 1, k_alpha 0.1, 30°/s, 60°/s²)
   std::printf(

@@ -207,7 +207,7 @@ int main(int argc, char** argv) {
   const bool single = mode == "single";
   const bool with_brute_force = mode.empty();
 
-  const cli::JobSpec job = cli::loadJob("data/jobs/demo.yaml");
+  const cli::JobSpec job = cli::loadJob("data/jobs/demo_rings.yaml");
   kinematics::CellModel cell = cli::buildCell(job);
   const scanner::LaserOptics optics = cli::laserOptics(job);
 
