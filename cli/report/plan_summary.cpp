@@ -36,6 +36,11 @@ std::string pathSummary(const scanner::LaserWindow& window,
       toMm(window.z_min), toMm(window.z_max), 2 * toMm(window.y_near), 2 * toMm(window.y_far));
   for (std::size_t i = 0; i < generated.elements.size(); ++i) {
     const auto& e = generated.elements[i];
+    if (e.kind == "auto") {  // its own lines follow (autoScanSummary)
+      s += fmt::format("path[{}]    {:<9} t = {:.1f} … {:.1f} s, {}\n", i, e.kind, e.start_time,
+                       e.start_time + e.duration, e.note);
+      continue;
+    }
     s += fmt::format(
         "path[{}]    {:<9} t = {:.1f} … {:.1f} s, surface depth {:.1f} … {:.1f} mm, {:.0f}% of "
         "probes in the window{}\n",
@@ -64,8 +69,8 @@ std::string autoScanSummary(const pipeline::AutoScanReport& r) {
   for (const auto c : r.classes) ++count[static_cast<std::size_t>(c)];
   const double n = std::max<double>(1.0, static_cast<double>(r.classes.size()));
   s += fmt::format(
-      "           certificate: {:.1f}% scannable, {:.1f}% out of the arm's reach, {:.1f}% faces the "
-      "table, {:.1f}% occluded, {:.1f}% no standoff fits the housing\n",
+      "           before the scan: {:.1f}% scannable, {:.1f}% out of the arm's reach, {:.1f}% faces "
+      "the table, {:.1f}% occluded, {:.1f}% no standoff fits the housing\n",
       100.0 * static_cast<double>(count[0]) / n, 100.0 * static_cast<double>(count[4]) / n,
       100.0 * static_cast<double>(count[1]) / n, 100.0 * static_cast<double>(count[2]) / n,
       100.0 * static_cast<double>(count[3]) / n);
