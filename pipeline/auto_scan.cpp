@@ -334,6 +334,51 @@ void keepCertificate(const scanner::AreaSampling& sampling_R,
   report.classes = std::move(classes);
 }
 
+// Every candidate: the general spins and strips, then passes aimed at what they miss; evaluated.
+std::vector<scanner::ScanPass> candidates(const scanner::PartOnTable& part,
+                                          const scanner::PassSettings& pass,
+                                          const scanner::SampleIndex& index,
+                                          const std::vector<scanner::SampleClass>& classes,
+                                          const std::vector<Eigen::Isometry3d>& witnesses,
+                                          const std::function<void(std::size_t, std::size_t)>& progress,
+                                          std::size_t& aimed_count) {
+  std::vector<scanner::ScanPass> passes = scanner::candidatePasses(part, pass);
+  scanner::evaluatePasses(passes, part, pass, index, progress);
+  std::vector<scanner::ScanPass> aimed =
+      aimedPasses(part, pass, index, classes, witnesses, passes, kMaxAimed);
+  aimed_count = aimed.size();
+  passes.insert(passes.end(), std::make_move_iterator(aimed.begin()),
+                std::make_move_iterator(aimed.end()));
+  return passes;
+}
+
+// The samples the hand-written path covers already.
+std::vector<std::uint8_t> givenCoverage(const kinematics::ScanPath& given,
+                                        const Eigen::Isometry3d& X_RP,
+                                        const scanner::PartOnTable& part,
+                                        const scanner::PassSettings& pass,
+                                        const scanner::SampleIndex& index) {
+  std::vector<scanner::ScanPass> passes = givenPasses(given, X_RP);
+  scanner::evaluatePasses(passes, part, pass, index);
+  std::vector<std::uint8_t> covered(index.sampling().samples.size(), 0);
+  for (const auto& p : passes)
+    for (std::uint32_t i : p.covers) covered[i] = 1;
+  return covered;
+}
+
+void reportCover(const scanner::CoverResult& chosen,
+                 const std::vector<std::uint8_t>& counts,
+                 const std::vector<std::uint8_t>& given,
+                 AutoScanReport& report) {
+  report.counted = chosen.counted;
+  report.stop = chosen.stop;
+  const double counted = std::max<double>(1.0, static_cast<double>(chosen.counted));
+  report.planned_fraction = static_cast<double>(chosen.covered_counted) / counted;
+  std::size_t given_covered = 0;
+  for (std::size_t i = 0; i < counts.size(); ++i) given_covered += (counts[i] && given[i]) ? 1u : 0u;
+  report.given_fraction = static_cast<double>(given_covered) / counted;
+}
+
 }  // namespace
 
 AutoScanPlan planAutoScan(const ScanProblem& problem,
@@ -344,7 +389,8 @@ AutoScanPlan planAutoScan(const ScanProblem& problem,
   const AutoScanSettings& settings = *problem.auto_scan;
   const scanner::PassSettings pass_settings = passSettings(problem, scene);
   const kinematics::RotaryTableModel& table = problem.cell.table;
-  const scanner::PartOnTable part(problem.part, problem.cell.part.X_RP, {table.radius, table.height});
+  const Eigen::Isometry3d& X_RP = problem.cell.part.X_RP;
+  const scanner::PartOnTable part(problem.part, X_RP, {table.radius, table.height});
   const scanner::AreaSampling sampling =
       scanner::sampleArea(part.part(), settings.sample_spacing, kMaxSamples);
   const scanner::SampleIndex index(sampling);
@@ -355,18 +401,9 @@ AutoScanPlan planAutoScan(const ScanProblem& problem,
   report.sample_spacing = std::sqrt(sampling.area_per_sample);
   std::vector<Eigen::Isometry3d> witnesses;
   std::vector<scanner::SampleClass> classes = certify(part, pass_settings, sampling, witnesses);
-
-  std::vector<scanner::ScanPass> given_passes = givenPasses(given, problem.cell.part.X_RP);
-  scanner::evaluatePasses(given_passes, part, pass_settings, index);
-  std::vector<std::uint8_t> covered(sampling.samples.size(), 0);
-  for (const auto& p : given_passes)
-    for (std::uint32_t i : p.covers) covered[i] = 1;
-  std::vector<scanner::ScanPass> passes = scanner::candidatePasses(part, pass_settings);
-  scanner::evaluatePasses(passes, part, pass_settings, index, progress);
-  std::vector<scanner::ScanPass> aimed =
-      aimedPasses(part, pass_settings, index, classes, witnesses, passes, kMaxAimed);
-  report.aimed = aimed.size();
-  passes.insert(passes.end(), std::make_move_iterator(aimed.begin()), std::make_move_iterator(aimed.end()));
+  const std::vector<std::uint8_t> covered = givenCoverage(given, X_RP, part, pass_settings, index);
+  const std::vector<scanner::ScanPass> passes =
+      candidates(part, pass_settings, index, classes, witnesses, progress, report.aimed);
   report.candidates = passes.size();
 
   const std::vector<std::uint8_t> reach = reachable(problem, scene, passes);
@@ -384,25 +421,18 @@ AutoScanPlan planAutoScan(const ScanProblem& problem,
   const scanner::CoverResult chosen = scanner::greedyCover(
       passes, counts, covered, cover, [&](std::size_t p) { return reach[p] != 0; },
       [&] { return since(start) < settings.time_budget; });
-  report.counted = chosen.counted;
-  report.stop = chosen.stop;
-  const double counted = std::max<double>(1.0, static_cast<double>(chosen.counted));
-  report.planned_fraction = static_cast<double>(chosen.covered_counted) / counted;
-  std::size_t given_covered = 0;
-  for (std::size_t i = 0; i < counts.size(); ++i) given_covered += (counts[i] && covered[i]) ? 1u : 0u;
-  report.given_fraction = static_cast<double>(given_covered) / counted;
-  keepCertificate(sampling, problem.cell.part.X_RP, classes, report);
+  reportCover(chosen, counts, covered, report);
+  keepCertificate(sampling, X_RP, classes, report);
   if (chosen.chosen.empty()) {
-    if (given_passes.empty())
+    if (given.samples.empty())
       throw InputError("scan.auto: no reachable pass sees the part: expected a part within the "
                        "scanner's view and the arm's reach (see the map's limits)");
     report.seconds = since(start);
     return plan;
   }
-
   const scanner::TransferSphere sphere = transferSphere(problem, part.part());
   std::optional<Eigen::Isometry3d> at;
-  if (!given.samples.empty()) at = problem.cell.part.X_RP * given.samples.back().X_PS;
+  if (!given.samples.empty()) at = X_RP * given.samples.back().X_PS;
   const std::vector<scanner::TourStep> tour = scanner::orderPasses(passes, chosen.chosen, at, sphere);
   report.transfer_time = scanner::tourTransferTime(passes, tour, at, sphere);
   buildElement(problem, passes, tour, at, sphere, gains(passes, chosen, counts, covered), plan);

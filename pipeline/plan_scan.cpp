@@ -62,6 +62,19 @@ void proveAndSimulate(const ScanProblem& problem, const PreparedScan& prepared, 
   plan.status = ScanStatus::kPlanned;
 }
 
+// The automatic scan's settings, named as the problem's fields.
+void checkAutoScan(const AutoScanSettings& a) {
+  require(positive(a.max_incidence) && a.max_incidence < deg(90.0), "auto_scan.max_incidence",
+          fmt::format("{} rad: expected an angle in (0, 90) deg", a.max_incidence));
+  require(std::isfinite(a.point_spacing) && a.point_spacing >= 0.0, "auto_scan.point_spacing",
+          fmt::format("{} m: expected 0 (from the optics) or a spacing > 0", a.point_spacing));
+  require(positive(a.target_coverage) && a.target_coverage <= 1.0, "auto_scan.target_coverage",
+          fmt::format("{}: expected a fraction in (0, 1]", a.target_coverage));
+  require(a.max_passes >= 1, "auto_scan.max_passes", "0: expected at least 1");
+  require(positive(a.time_budget), "auto_scan.time_budget", "expected > 0 s");
+  require(positive(a.sample_spacing), "auto_scan.sample_spacing", "expected > 0 m");
+}
+
 // The hand-written elements (if any), then the automatic passes as one more element.
 void autoPath(const ScanProblem& problem,
               const collision::Scene& scene,
@@ -99,17 +112,6 @@ planner::MapRequest mapRequest(const MapSettings& settings) {
   return request;
 }
 
-void checkAutoScan(const AutoScanSettings& a) {
-  require(positive(a.max_incidence) && a.max_incidence < deg(90.0), "auto_scan.max_incidence",
-          fmt::format("{} rad: expected an angle in (0, 90) deg", a.max_incidence));
-  require(std::isfinite(a.point_spacing) && a.point_spacing >= 0.0, "auto_scan.point_spacing",
-          fmt::format("{} m: expected 0 (from the optics) or a spacing > 0", a.point_spacing));
-  require(positive(a.target_coverage) && a.target_coverage <= 1.0, "auto_scan.target_coverage",
-          fmt::format("{}: expected a fraction in (0, 1]", a.target_coverage));
-  require(a.max_passes >= 1, "auto_scan.max_passes", "0: expected at least 1");
-  require(positive(a.time_budget), "auto_scan.time_budget", "expected > 0 s");
-  require(positive(a.sample_spacing), "auto_scan.sample_spacing", "expected > 0 m");
-}
 
 void checkProblem(const ScanProblem& p) {
   require(!p.part.triangles.empty(), "part", "no triangles: expected a part mesh");

@@ -197,4 +197,53 @@ TEST(BuildTrajectory, UnreachableSampleIsNotOkAndNamed) {
   EXPECT_NE(built.reason.find("unreachable"), std::string::npos) << built.reason;
 }
 
+// The head rolling three whole turns about its laser axis in place: joint 6 (±360°) cannot follow
+// it continuously. While the path does not scan, the wrist unwinds a turn over the stretch
+// instead (the flange rolls off the planned pose there); while it scans, the track breaks.
+TEST(BuildTrajectory, WristUnwindsAWholeTurnOnlyWhereThePathDoesNotScan) {
+  const DemoPlan d = demo();
+  const collision::Scene scene(d.cell, cli::clearanceConfig(d.job));
+  const Eigen::Isometry3d X0 = d.path.path.samples.front().X_PS;
+  // A table angle where the first pose is reachable on the demo's usual branch.
+  const kinematics::IkBranch branch = *cli::parseBranch("RIGHTY ABOVE NOFLIP");
+  double theta = -1.0;
+  for (double a = 0.0; a < 360.0 && theta < 0.0; a += 5.0) {
+    for (const auto& s : d.cell.robot.ik(d.cell.flangeTarget(deg(a), X0)))
+      if (s.branch == branch) theta = deg(a);
+  }
+  ASSERT_GE(theta, 0.0);
+  kinematics::ScanPath roll;
+  roll.dt = 0.1;
+  for (int k = 0; k <= 300; ++k) {  // 30 s, 36°/s about z_S
+    const double t = 0.1 * k;
+    Eigen::Isometry3d X = X0;
+    X.linear() = X0.linear() * Eigen::AngleAxisd(deg(36.0) * t, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    roll.samples.push_back({t, X, k == 0});
+  }
+  const std::vector<double> thetas(roll.samples.size(), theta);
+  const planner::TrajectoryBuild moving =
+      planner::buildTrajectory(scene, cli::constraintSettings(d.job), roll, thetas, branch);
+  ASSERT_TRUE(moving.ok) << moving.reason;
+  const auto& q = moving.trajectory.samples;
+  for (std::size_t k = 0; k < q.size(); ++k) {
+    EXPECT_TRUE(d.cell.robot.withinLimits(q[k].q)) << k;
+    if (k > 0) {
+      EXPECT_LT((q[k].q - q[k - 1].q).cwiseAbs().maxCoeff(), deg(10.0)) << k;
+    }
+  }
+  // Joints 1–5 are the IK's throughout: the flange sits where planned, only rolled about z.
+  for (std::size_t k = 0; k < q.size(); k += 10) {
+    const Eigen::Isometry3d want = d.cell.flangeTarget(theta, roll.samples[k].X_PS);
+    const Eigen::Isometry3d got = d.cell.robot.fk(q[k].q);
+    EXPECT_LT((got.translation() - want.translation()).norm(), 1e-9) << k;
+    EXPECT_LT((got.linear().col(2) - want.linear().col(2)).norm(), 1e-9) << k;
+  }
+  for (auto& s : roll.samples) s.scanning = true;
+  const planner::TrajectoryBuild scanning =
+      planner::buildTrajectory(scene, cli::constraintSettings(d.job), roll, thetas, branch);
+  EXPECT_FALSE(scanning.ok);
+  EXPECT_NE(scanning.reason.find("joint 6 would have to pass its limit"), std::string::npos)
+      << scanning.reason;
+}
+
 }  // namespace

@@ -111,6 +111,28 @@ void writeChoiceFigure(const std::filesystem::path& out, const pipeline::ScanPla
   writePathFigure(out, plan.prepared->map, c.chosen.result.branch, drawn, labels);
 }
 
+// The outputs of a valid plan: trajectory.csv, the programs, the simulation's and the
+// certificate's files; returns their summary lines.
+std::string writePlannedOutputs(const std::filesystem::path& out,
+                                const JobSpec& job,
+                                const kinematics::CellModel& cell,
+                                const pipeline::ScanProblem& problem,
+                                const pipeline::ScanPlan& plan) {
+  const kinematics::Trajectory& trajectory = plan.trajectory->trajectory;
+  writeFileAtomically(out / "trajectory.csv", kinematics::trajectoryToCsv(trajectory));
+  const std::string programs =
+      writePrograms(out / "programs", "programs/", job, cell, trajectory, job.outputs.programs);
+  if (plan.simulation) writeSimulationOutputs(out, job, problem.part, *plan.simulation);
+  if (plan.certificate)
+    writeCertificateOutputs(out, problem.part, plan.simulation->sampling, *plan.certificate);
+  std::string summary = choiceSummary(plan);
+  if (plan.validation) summary += validationSummary(*plan.validation);
+  summary += programs;
+  if (plan.simulation) summary += simulationSummary(*plan.simulation);
+  if (plan.certificate) summary += certificateSummary(*plan.certificate);
+  return summary;
+}
+
 }  // namespace
 
 // Everything `plan` may write into its output folder: on each run, what it does not write again
@@ -176,18 +198,8 @@ ExitCode runPlan(const PlanOptions& options) {
     std::fputs(summary.c_str(), stdout);
     return ExitCode::kNoPlan;
   }
-  writeFileAtomically(out / "trajectory.csv", kinematics::trajectoryToCsv(trajectory));
-  const std::string programs =
-      writePrograms(out / "programs", "programs/", job, cell, trajectory, job.outputs.programs);
-  if (plan.simulation) writeSimulationOutputs(out, job, problem.part, *plan.simulation);
-  if (plan.certificate)
-    writeCertificateOutputs(out, problem.part, plan.simulation->sampling, *plan.certificate);
+  summary += writePlannedOutputs(out, job, cell, problem, plan);
   finish();
-  summary += choiceSummary(plan);
-  if (plan.validation) summary += validationSummary(*plan.validation);
-  summary += programs;
-  if (plan.simulation) summary += simulationSummary(*plan.simulation);
-  if (plan.certificate) summary += certificateSummary(*plan.certificate);
   summary += fmt::format(
       "wrote      {}: job.yaml, trajectory.csv, programs/, report.json, configmap_path.png/.svg, "
       "{}{}\n",
