@@ -51,6 +51,19 @@ Eigen::Isometry3d poseFromXyzRpy(const Eigen::Vector3d& xyz, const Eigen::Vector
   return X;
 }
 
+Eigen::Isometry3d frameFromAxes(const Eigen::Vector3d& p,
+                                const Eigen::Vector3d& z,
+                                const Eigen::Vector3d& x) {
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  const Eigen::Vector3d zn = z.normalized();
+  const Eigen::Vector3d xn = (x - x.dot(zn) * zn).normalized();
+  X.linear().col(0) = xn;
+  X.linear().col(1) = zn.cross(xn);
+  X.linear().col(2) = zn;
+  X.translation() = p;
+  return X;
+}
+
 double rotationDistance(const Eigen::Matrix3d& A, const Eigen::Matrix3d& B) {
   // atan2 form stays accurate for tiny angles, where acos((tr-1)/2) loses half the digits.
   const Eigen::Matrix3d D = A.transpose() * B;

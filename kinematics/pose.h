@@ -25,6 +25,12 @@ Eigen::Isometry3d poseFromXyzRpy(const Eigen::Vector3d& xyz, const Eigen::Vector
 /// Angle (rad, in [0, π]) of the rotation that takes A onto B.
 double rotationDistance(const Eigen::Matrix3d& A, const Eigen::Matrix3d& B);
 
+/// The frame at `p` whose z axis is along `z` and whose x axis is `x` made orthogonal to it
+/// (y = z × x). Precondition: z ≠ 0 and x not parallel to z.
+Eigen::Isometry3d frameFromAxes(const Eigen::Vector3d& p,
+                                const Eigen::Vector3d& z,
+                                const Eigen::Vector3d& x);
+
 /// Wraps an angle into (-π, π].
 double wrapToPi(double angle);
 

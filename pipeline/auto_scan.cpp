@@ -44,8 +44,10 @@ double housingMargin(const collision::Scene& scene) {
   for (const collision::PairInfo& pair : scene.pairs()) {
     const auto& a = bodies[static_cast<std::size_t>(pair.a)];
     const auto& b = bodies[static_cast<std::size_t>(pair.b)];
-    const bool scanner = a.motion == collision::BodyMotion::kScanner || b.motion == collision::BodyMotion::kScanner;
-    const bool table_side = a.motion == collision::BodyMotion::kTable || b.motion == collision::BodyMotion::kTable;
+    const bool scanner =
+        a.motion == collision::BodyMotion::kScanner || b.motion == collision::BodyMotion::kScanner;
+    const bool table_side =
+        a.motion == collision::BodyMotion::kTable || b.motion == collision::BodyMotion::kTable;
     if (scanner && table_side) margin = std::max(margin, pair.thresholds.d_low);
   }
   return margin;
@@ -81,11 +83,14 @@ scanner::PassSettings passSettings(const ScanProblem& p, const collision::Scene&
 }
 
 // Can the arm follow `pass` (R frame) with the table at one angle (strips) or turning with the
-// head (spins) on one IK branch, f > 0 at its keys and every 0.25 s between? Table angles every 10°.
+// head (spins) on one IK branch, f > 0 at its keys and every 0.25 s between? Table angles every
+// 10°.
 class ReachCheck {
  public:
   ReachCheck(const ScanProblem& problem, const collision::Scene& scene)
-      : problem_(problem), scene_(scene), evaluator_(scene),
+      : problem_(problem),
+        scene_(scene),
+        evaluator_(scene),
         branches_(mapBranches(problem.map)),
         angles_(planner::mapAngles(problem.cell.table, deg(10.0))) {}
 
@@ -123,7 +128,8 @@ class ReachCheck {
   static std::vector<Timed> timedPoses(const scanner::ScanPass& pass) {
     const int between = std::clamp(static_cast<int>(std::ceil(pass.duration() / 0.25)), 1, 400);
     std::vector<double> times(pass.t.begin(), pass.t.end());
-    for (int i = 1; i < between; ++i) times.push_back(pass.t.front() + pass.duration() * i / between);
+    for (int i = 1; i < between; ++i)
+      times.push_back(pass.t.front() + pass.duration() * i / between);
     std::sort(times.begin(), times.end());
     std::vector<Timed> out;
     std::size_t k = 0;
@@ -133,7 +139,8 @@ class ReachCheck {
       const double s = span > 0.0 ? std::clamp((t - pass.t[k]) / span, 0.0, 1.0) : 0.0;
       Timed pose{kinematics::interpolatePose(pass.X_RS[k], pass.X_RS[k + 1], s), 0.0};
       if (pass.kind == scanner::PassKind::kSpin)
-        pose.turn = pass.azimuth[k] + s * (pass.azimuth[k + 1] - pass.azimuth[k]) - pass.azimuth.front();
+        pose.turn =
+            pass.azimuth[k] + s * (pass.azimuth[k + 1] - pass.azimuth[k]) - pass.azimuth.front();
       out.push_back(pose);
     }
     return out;
@@ -147,7 +154,8 @@ class ReachCheck {
 };
 
 // The scanning stretches of the hand-written path as passes (R frame).
-std::vector<scanner::ScanPass> givenPasses(const kinematics::ScanPath& given, const Eigen::Isometry3d& X_RP) {
+std::vector<scanner::ScanPass> givenPasses(const kinematics::ScanPath& given,
+                                           const Eigen::Isometry3d& X_RP) {
   std::vector<scanner::ScanPass> out;
   scanner::ScanPass run;
   const auto flush = [&] {
@@ -170,7 +178,8 @@ std::vector<scanner::ScanPass> givenPasses(const kinematics::ScanPath& given, co
 
 // The safe sphere: around the part's bounding sphere, grown by the head's reach from its laser
 // origin (the housing) and a margin.
-scanner::TransferSphere transferSphere(const ScanProblem& p, const kinematics::TriangleMesh& part_R) {
+scanner::TransferSphere transferSphere(const ScanProblem& p,
+                                       const kinematics::TriangleMesh& part_R) {
   Eigen::AlignedBox3d box = part_R.bounds();
   scanner::TransferSphere s;
   s.centre = box.center();
@@ -295,8 +304,8 @@ void buildElement(const ScanProblem& problem,
     }
     const double begin = plan.element.samples.empty() ? 0.0 : plan.element.samples.back().t;
     append(plan.element, pass.X_RS, pass.t, true, X_PR);
-    plan.report.passes.push_back({scanner::passKindName(pass.kind), pass.label, begin,
-                                  pass.duration(), gain[step.pass]});
+    plan.report.passes.push_back(
+        {scanner::passKindName(pass.kind), pass.label, begin, pass.duration(), gain[step.pass]});
     plan.report.scan_time += pass.duration();
     at = pass.X_RS.back();
   }
@@ -335,13 +344,14 @@ void keepCertificate(const scanner::AreaSampling& sampling_R,
 }
 
 // Every candidate: the general spins and strips, then passes aimed at what they miss; evaluated.
-std::vector<scanner::ScanPass> candidates(const scanner::PartOnTable& part,
-                                          const scanner::PassSettings& pass,
-                                          const scanner::SampleIndex& index,
-                                          const std::vector<scanner::SampleClass>& classes,
-                                          const std::vector<Eigen::Isometry3d>& witnesses,
-                                          const std::function<void(std::size_t, std::size_t)>& progress,
-                                          std::size_t& aimed_count) {
+std::vector<scanner::ScanPass> candidates(
+    const scanner::PartOnTable& part,
+    const scanner::PassSettings& pass,
+    const scanner::SampleIndex& index,
+    const std::vector<scanner::SampleClass>& classes,
+    const std::vector<Eigen::Isometry3d>& witnesses,
+    const std::function<void(std::size_t, std::size_t)>& progress,
+    std::size_t& aimed_count) {
   std::vector<scanner::ScanPass> passes = scanner::candidatePasses(part, pass);
   scanner::evaluatePasses(passes, part, pass, index, progress);
   std::vector<scanner::ScanPass> aimed =
@@ -375,7 +385,8 @@ void reportCover(const scanner::CoverResult& chosen,
   const double counted = std::max<double>(1.0, static_cast<double>(chosen.counted));
   report.planned_fraction = static_cast<double>(chosen.covered_counted) / counted;
   std::size_t given_covered = 0;
-  for (std::size_t i = 0; i < counts.size(); ++i) given_covered += (counts[i] && given[i]) ? 1u : 0u;
+  for (std::size_t i = 0; i < counts.size(); ++i)
+    given_covered += (counts[i] && given[i]) ? 1u : 0u;
   report.given_fraction = static_cast<double>(given_covered) / counted;
 }
 
@@ -425,15 +436,17 @@ AutoScanPlan planAutoScan(const ScanProblem& problem,
   keepCertificate(sampling, X_RP, classes, report);
   if (chosen.chosen.empty()) {
     if (given.samples.empty())
-      throw InputError("scan.auto: no reachable pass sees the part: expected a part within the "
-                       "scanner's view and the arm's reach (see the map's limits)");
+      throw InputError(
+          "scan.auto: no reachable pass sees the part: expected a part within the "
+          "scanner's view and the arm's reach (see the map's limits)");
     report.seconds = since(start);
     return plan;
   }
   const scanner::TransferSphere sphere = transferSphere(problem, part.part());
   std::optional<Eigen::Isometry3d> at;
   if (!given.samples.empty()) at = X_RP * given.samples.back().X_PS;
-  const std::vector<scanner::TourStep> tour = scanner::orderPasses(passes, chosen.chosen, at, sphere);
+  const std::vector<scanner::TourStep> tour =
+      scanner::orderPasses(passes, chosen.chosen, at, sphere);
   report.transfer_time = scanner::tourTransferTime(passes, tour, at, sphere);
   buildElement(problem, passes, tour, at, sphere, gains(passes, chosen, counts, covered), plan);
   report.seconds = since(start);

@@ -30,10 +30,10 @@ struct AutoPass {
 
 /// What the automatic planner did.
 struct AutoScanReport {
-  std::size_t candidates = 0;  ///< passes generated and evaluated
-  std::size_t samples = 0;     ///< evaluation area samples
-  double sample_spacing = 0.0; ///< m between evaluation samples
-  std::size_t counted = 0;     ///< samples that count toward the target (scannable)
+  std::size_t candidates = 0;   ///< passes generated and evaluated
+  std::size_t samples = 0;      ///< evaluation area samples
+  double sample_spacing = 0.0;  ///< m between evaluation samples
+  std::size_t counted = 0;      ///< samples that count toward the target (scannable)
   std::vector<AutoPass> passes;
   std::vector<std::string> unreachable;  ///< candidates the reach check refused
   double planned_fraction = 0.0;  ///< counted samples the chosen passes cover (the prediction)

@@ -28,10 +28,10 @@ inline constexpr std::size_t kCoverageClasses = 6;
 const char* coverageClassName(CoverageClass c);
 
 struct Certificate {
-  std::vector<CoverageClass> classes;              ///< per area sample
+  std::vector<CoverageClass> classes;               ///< per area sample
   std::array<double, kCoverageClasses> fraction{};  ///< of the area, per class
-  double scannable_fraction = 0.0;   ///< covered or missed: the area some reachable pass sees
-  double covered_of_scannable = 0.0; ///< covered / scannable
+  double scannable_fraction = 0.0;    ///< covered or missed: the area some reachable pass sees
+  double covered_of_scannable = 0.0;  ///< covered / scannable
 };
 
 /// The certificate of `sampling` (part frame) covered as `covered` says, with the reasons of

@@ -57,7 +57,8 @@ void proveAndSimulate(const ScanProblem& problem, const PreparedScan& prepared, 
                                          *problem.simulation, trajectory);
     plan.times.simulation = plan.simulation->seconds;
     if (prepared.auto_scan && !prepared.auto_scan->classes.empty())
-      plan.certificate = certify(plan.simulation->sampling, plan.simulation->area, *prepared.auto_scan);
+      plan.certificate =
+          certify(plan.simulation->sampling, plan.simulation->area, *prepared.auto_scan);
   }
   plan.status = ScanStatus::kPlanned;
 }
@@ -84,7 +85,8 @@ void autoPath(const ScanProblem& problem,
   if (!problem.path.elements.empty())
     out.path = scanner::generatePath(problem.path, problem.part, raycaster, out.window);
   std::function<void(std::size_t, std::size_t)> auto_progress;
-  if (progress) auto_progress = [&progress](std::size_t d, std::size_t n) { progress("auto", d, n); };
+  if (progress)
+    auto_progress = [&progress](std::size_t d, std::size_t n) { progress("auto", d, n); };
   AutoScanPlan plan = planAutoScan(problem, scene, out.path.path, auto_progress);
   out.auto_scan = std::move(plan.report);
   if (plan.element.samples.empty()) return;
@@ -111,7 +113,6 @@ planner::MapRequest mapRequest(const MapSettings& settings) {
   request.memory_limit_bytes = settings.memory_limit_bytes;
   return request;
 }
-
 
 void checkProblem(const ScanProblem& p) {
   require(!p.part.triangles.empty(), "part", "no triangles: expected a part mesh");
@@ -191,7 +192,8 @@ ScanPlan planPrepared(const ScanProblem& problem,
   plan.times.plan = since(t) - plan.times.trajectory;
   if (plan.choice.dp && plan.choice.chosen.method != "dp") plan.times.dp = plan.choice.dp->seconds;
   if (!plan.choice.solved()) {
-    plan.status = plan.choice.rejected.empty() ? ScanStatus::kNoPath : ScanStatus::kNoExecutablePath;
+    plan.status =
+        plan.choice.rejected.empty() ? ScanStatus::kNoPath : ScanStatus::kNoExecutablePath;
     plan.reason = plan.choice.chosen.result.reason;
     plan.trajectory.reset();
     return plan;

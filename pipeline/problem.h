@@ -73,8 +73,8 @@ struct AutoScanSettings {
   double point_spacing = 0.0;
   double target_coverage = 0.98;  ///< of the scannable area
   std::size_t max_passes = 250;
-  double time_budget = 60.0;     ///< s of planning for choosing the passes
-  double sample_spacing = 0.003; ///< m between the area samples the passes are chosen on
+  double time_budget = 60.0;      ///< s of planning for choosing the passes
+  double sample_spacing = 0.003;  ///< m between the area samples the passes are chosen on
 };
 
 /// A whole planning problem: the cell (robot, table, part pose, scanner, obstacles), the part

@@ -105,8 +105,8 @@ bool unwindBefore(const kinematics::RobotModel& robot,
   std::size_t a = k - 1;
   while (a > 0 && !path.samples[a].scanning) --a;
   const double span = path.samples[k].t - path.samples[a].t;
-  const double turn = std::round((next(j) - q.back()(j)) / (2.0 * std::numbers::pi)) * 2.0 *
-                      std::numbers::pi;
+  const double turn =
+      std::round((next(j) - q.back()(j)) / (2.0 * std::numbers::pi)) * 2.0 * std::numbers::pi;
   const double speed = robot.joint(j).max_speed;
   if (!(span > 0.0) || (speed > 0.0 && std::abs(turn) / span > 0.8 * speed)) return false;
   for (std::size_t i = a + 1; i < k; ++i)

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <queue>
 
+#include "kinematics/pose.h"
 #include "kinematics/scan_path.h"
 
 namespace scanplan::scanner {
@@ -14,7 +15,8 @@ std::size_t newlyCovered(const ScanPass& pass,
                          const std::vector<std::uint8_t>& counts,
                          const std::vector<std::uint8_t>& covered) {
   std::size_t n = 0;
-  for (std::uint32_t i : pass.covers) if (counts[i] && !covered[i]) ++n;
+  for (std::uint32_t i : pass.covers)
+    if (counts[i] && !covered[i]) ++n;
   return n;
 }
 
@@ -42,7 +44,8 @@ CoverResult greedyCover(const std::vector<ScanPass>& passes,
   for (std::size_t p = 0; p < passes.size(); ++p)
     queue.push({rate(p, newlyCovered(passes[p], counts, r.covered)), passes.size() - p});
   while (true) {
-    if (static_cast<double>(r.covered_counted) >= settings.target * static_cast<double>(r.counted)) {
+    if (static_cast<double>(r.covered_counted) >=
+        settings.target * static_cast<double>(r.counted)) {
       r.stop = "target reached";
       break;
     }
@@ -116,35 +119,39 @@ std::vector<Eigen::Vector3d> transferPoints(const Eigen::Vector3d& a,
   std::vector<Eigen::Vector3d> pts{a};
   for (int k = 0; k <= kArcSegments; ++k) {
     const double s = static_cast<double>(k) / kArcSegments;
-    pts.push_back(point({sa.azimuth + s * turn, sa.elevation + s * (sb.elevation - sa.elevation), r},
-                        sphere.centre));
+    pts.push_back(
+        point({sa.azimuth + s * turn, sa.elevation + s * (sb.elevation - sa.elevation), r},
+              sphere.centre));
   }
   pts.push_back(b);
   return pts;
 }
 
-double rotationAngle(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
-  return Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle();
-}
-
 }  // namespace
 
-double transferTime(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to, const TransferSphere& sphere) {
+double transferTime(const Eigen::Isometry3d& from,
+                    const Eigen::Isometry3d& to,
+                    const TransferSphere& sphere) {
   const auto pts = transferPoints(from.translation(), to.translation(), sphere);
   double length = 0.0;
   for (std::size_t i = 1; i < pts.size(); ++i) length += (pts[i] - pts[i - 1]).norm();
-  return std::max(length / sphere.speed, rotationAngle(from, to) / sphere.turn_speed);
+  return std::max(length / sphere.speed,
+                  kinematics::rotationDistance(from.linear(), to.linear()) / sphere.turn_speed);
 }
 
-Move transferMove(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to, const TransferSphere& sphere) {
+Move transferMove(const Eigen::Isometry3d& from,
+                  const Eigen::Isometry3d& to,
+                  const TransferSphere& sphere) {
   const auto pts = transferPoints(from.translation(), to.translation(), sphere);
   std::vector<double> along{0.0};
-  for (std::size_t i = 1; i < pts.size(); ++i) along.push_back(along.back() + (pts[i] - pts[i - 1]).norm());
+  for (std::size_t i = 1; i < pts.size(); ++i)
+    along.push_back(along.back() + (pts[i] - pts[i - 1]).norm());
   const double total = transferTime(from, to, sphere);
   Move move;
   for (std::size_t i = 0; i < pts.size(); ++i) {
-    const double s = along.back() > 0.0 ? along[i] / along.back()
-                                       : static_cast<double>(i) / static_cast<double>(pts.size() - 1);
+    const double s = along.back() > 0.0
+                         ? along[i] / along.back()
+                         : static_cast<double>(i) / static_cast<double>(pts.size() - 1);
     Eigen::Isometry3d X = kinematics::interpolatePose(from, to, s);
     X.translation() = pts[i];
     if (i > 0 && s * total <= move.t.back() + 1e-6) continue;  // a zero-length step
@@ -162,7 +169,9 @@ Move transferMove(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to, co
 
 namespace {
 
-double azimuthOf(const Eigen::Isometry3d& X) { return std::atan2(X.translation().y(), X.translation().x()); }
+double azimuthOf(const Eigen::Isometry3d& X) {
+  return std::atan2(X.translation().y(), X.translation().x());
+}
 
 // Where a step enters and leaves, given where the head is.
 struct Ends {
@@ -226,7 +235,7 @@ std::vector<TourStep> nearestNeighbour(const std::vector<ScanPass>& passes,
 
 // The transfer time into each step and where the head is before it.
 struct TourState {
-  std::vector<double> into;                     // transfer into step k (0 for a first step)
+  std::vector<double> into;  // transfer into step k (0 for a first step)
   std::vector<std::optional<Eigen::Isometry3d>> before;  // the head before step k
 };
 
@@ -266,8 +275,8 @@ void twoOpt(const std::vector<ScanPass>& passes,
         std::optional<Eigen::Isometry3d> at = st.before[i];
         double after = 0.0;
         for (std::size_t k = i; k <= last && after < before; ++k) {
-          const TourStep s = k <= j ? TourStep{tour[i + j - k].pass, !tour[i + j - k].reversed, 0.0}
-                                    : tour[k];
+          const TourStep s =
+              k <= j ? TourStep{tour[i + j - k].pass, !tour[i + j - k].reversed, 0.0} : tour[k];
           const Ends e = ends(passes[s.pass], s.reversed, at);
           if (at) after += transferTime(*at, e.entry, sphere);
           at = e.exit;
@@ -314,7 +323,8 @@ std::vector<TourStep> orderPasses(const std::vector<ScanPass>& passes,
       std::vector<std::size_t> left = chosen;
       left.erase(left.begin() + static_cast<std::ptrdiff_t>(k));
       std::vector<TourStep> tour{{chosen[k], false, 0.0}};
-      const auto rest = nearestNeighbour(passes, left, ends(passes[chosen[k]], false, {}).exit, sphere);
+      const auto rest =
+          nearestNeighbour(passes, left, ends(passes[chosen[k]], false, {}).exit, sphere);
       tour.insert(tour.end(), rest.begin(), rest.end());
       const double c = tourCost(passes, tour, start, sphere);
       if (c < best_cost - 1e-12) {

@@ -49,9 +49,9 @@ CoverResult greedyCover(const std::vector<ScanPass>& passes,
 /// touch the part.
 struct TransferSphere {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-  double radius = 0.3;       ///< m
-  double speed = 0.1;        ///< m/s
-  double turn_speed = 0.5;   ///< rad/s of head rotation
+  double radius = 0.3;      ///< m
+  double speed = 0.1;       ///< m/s
+  double turn_speed = 0.5;  ///< rad/s of head rotation
 };
 
 /// A timed move of the head (R frame): keys and their times from the start of the move.
@@ -63,9 +63,13 @@ struct Move {
 /// The move from `from` to `to`: radially out to the sphere, along it (azimuth and elevation
 /// about its centre interpolated, so it never dips below the lower end), radially in; the head
 /// turns evenly over the whole move. Starts at `from` (t = 0) and ends at `to`.
-Move transferMove(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to, const TransferSphere& sphere);
+Move transferMove(const Eigen::Isometry3d& from,
+                  const Eigen::Isometry3d& to,
+                  const TransferSphere& sphere);
 /// The duration of transferMove(), s, without building it.
-double transferTime(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to, const TransferSphere& sphere);
+double transferTime(const Eigen::Isometry3d& from,
+                    const Eigen::Isometry3d& to,
+                    const TransferSphere& sphere);
 
 /// One step of a tour: a pass, run backwards or not; a spin turned to start where the head is.
 struct TourStep {
@@ -75,8 +79,8 @@ struct TourStep {
 };
 
 /// Orders `chosen` (indices into passes) to keep the transfers short: nearest neighbour from
-/// `start` (or from up to 12 first passes, the best kept), then 2-opt moves that reverse a stretch of the
-/// tour (and each pass in it). Deterministic.
+/// `start` (or from up to 12 first passes, the best kept), then 2-opt moves that reverse a stretch
+/// of the tour (and each pass in it). Deterministic.
 std::vector<TourStep> orderPasses(const std::vector<ScanPass>& passes,
                                   const std::vector<std::size_t>& chosen,
                                   const std::optional<Eigen::Isometry3d>& start,

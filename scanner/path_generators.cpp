@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "kinematics/error.h"
+#include "kinematics/pose.h"
 #include "kinematics/units.h"
 
 namespace scanplan::scanner {
@@ -26,23 +27,6 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 std::string where(std::size_t index) { return "scan.paths[" + std::to_string(index) + "]"; }
 
-Eigen::Isometry3d frame(const Eigen::Vector3d& p,
-                        const Eigen::Vector3d& z,
-                        const Eigen::Vector3d& x) {
-  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-  const Eigen::Vector3d zn = z.normalized();
-  const Eigen::Vector3d xn = (x - x.dot(zn) * zn).normalized();
-  X.linear().col(0) = xn;
-  X.linear().col(1) = zn.cross(xn);
-  X.linear().col(2) = zn;
-  X.translation() = p;
-  return X;
-}
-
-double rotationAngle(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
-  return Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle();
-}
-
 // Appends a straight move to `to` at `speed` (m/s), orientation limited to `rot_speed` (rad/s).
 void moveTo(std::vector<Key>& keys,
             const Eigen::Isometry3d& to,
@@ -50,8 +34,9 @@ void moveTo(std::vector<Key>& keys,
             double rot_speed,
             bool scanning) {
   const Key& from = keys.back();
-  const double dt = std::max({(to.translation() - from.X.translation()).norm() / speed,
-                              rotationAngle(from.X, to) / rot_speed, 1e-6});
+  const double dt =
+      std::max({(to.translation() - from.X.translation()).norm() / speed,
+                kinematics::rotationDistance(from.X.linear(), to.linear()) / rot_speed, 1e-6});
   keys.push_back({from.t + dt, to, scanning});
 }
 
@@ -130,8 +115,8 @@ std::vector<Key> ringKeys(const RingSpec& ring,
   for (int i = 0; i < steps; ++i) {
     const double phi = ring.start + ring.extent * i / (steps - 1);
     const Eigen::Vector3d z = view(phi);
-    keys.push_back(
-        {std::abs(phi - ring.start) / ring.speed, frame(aim - L * z, z, tangent(phi)), true});
+    keys.push_back({std::abs(phi - ring.start) / ring.speed,
+                    kinematics::frameFromAxes(aim - L * z, z, tangent(phi)), true});
   }
   return keys;
 }
@@ -256,7 +241,7 @@ void addPassKeys(const RasterAxes& a,
     const int i = forward ? n : samples - 1 - n;
     const double s = a.u_min - raster.lead + step * i;
     const double p = smooth[static_cast<std::size_t>(i)];
-    const Eigen::Isometry3d X = frame(s * u + wk * w + p * v, v, motion);
+    const Eigen::Isometry3d X = kinematics::frameFromAxes(s * u + wk * w + p * v, v, motion);
     // The move from the previous key acquires when it overlaps the part's extent at all.
     const bool on_part = std::max(s, s_prev) >= a.u_min && std::min(s, s_prev) <= a.u_max;
     s_prev = s;

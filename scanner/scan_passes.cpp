@@ -9,8 +9,9 @@
 #include <tbb/parallel_for.h>
 #include <nanoflann.hpp>
 
-#include "kinematics/units.h"
+#include "kinematics/pose.h"
 #include "kinematics/scan_path.h"
+#include "kinematics/units.h"
 #include "scanner/scannability.h"
 #include "scanner/simulator.h"
 
@@ -19,22 +20,11 @@ namespace scanplan::scanner {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kStation = 0.002;     // m between probed strip stations
-constexpr double kSpinStation = 2.0;   // deg between probed spin stations
-constexpr double kSmoothing = 0.015;   // m, the conservative standoff window (strips)
-constexpr int kSpinSmoothing = 4;      // stations either side (spins)
-constexpr int kStripKeyEvery = 3;      // stations per strip key
-
-Eigen::Isometry3d frame(const Eigen::Vector3d& p, const Eigen::Vector3d& z, const Eigen::Vector3d& x) {
-  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-  const Eigen::Vector3d zn = z.normalized();
-  const Eigen::Vector3d xn = (x - x.dot(zn) * zn).normalized();
-  X.linear().col(0) = xn;
-  X.linear().col(1) = zn.cross(xn);
-  X.linear().col(2) = zn;
-  X.translation() = p;
-  return X;
-}
+constexpr double kStation = 0.002;    // m between probed strip stations
+constexpr double kSpinStation = 2.0;  // deg between probed spin stations
+constexpr double kSmoothing = 0.015;  // m, the conservative standoff window (strips)
+constexpr int kSpinSmoothing = 4;     // stations either side (spins)
+constexpr int kStripKeyEvery = 3;     // stations per strip key
 
 double zMid(const LaserWindow& w) { return 0.5 * (w.z_min + w.z_max); }
 
@@ -118,7 +108,8 @@ bool spinPass(const PartOnTable& scene,
               ScanPass& pass) {
   const int n = static_cast<int>(std::lround(360.0 / kSpinStation));
   std::vector<double> advance(static_cast<std::size_t>(n));
-  std::vector<Eigen::Vector3d> origin(advance.size()), view(advance.size()), tangent(advance.size());
+  std::vector<Eigen::Vector3d> origin(advance.size()), view(advance.size()),
+      tangent(advance.size());
   double rho = 0.0;
   for (int j = 0; j < n; ++j) {
     const double phi = deg(kSpinStation * j);
@@ -143,8 +134,8 @@ bool spinPass(const PartOnTable& scene,
     const double phi = deg(kSpinStation * j);
     pass.t.push_back(phi / omega);
     pass.azimuth.push_back(phi);
-    pass.X_RS.push_back(
-        frame(origin[i] + smooth[i] * view[i], view[i], camera_side * tangent[i]));
+    pass.X_RS.push_back(kinematics::frameFromAxes(origin[i] + smooth[i] * view[i], view[i],
+                                                  camera_side * tangent[i]));
     if (j < n && !housing.fits(pass.X_RS.back())) return false;
   }
   return true;
@@ -184,7 +175,9 @@ struct StripAxes {
   double u_min = 1e30, u_max = -1e30, w_min = 1e30, w_max = -1e30, v_min = 1e30;
 };
 
-StripAxes stripAxes(const kinematics::TriangleMesh& part, const Eigen::Vector3d& v, const Eigen::Vector3d& u) {
+StripAxes stripAxes(const kinematics::TriangleMesh& part,
+                    const Eigen::Vector3d& v,
+                    const Eigen::Vector3d& u) {
   StripAxes a{u, v, v.cross(u)};
   for (const Eigen::Vector3d& p : part.vertices) {
     a.u_min = std::min(a.u_min, p.dot(a.u));
@@ -205,7 +198,8 @@ bool stripPass(const PartOnTable& scene,
                int camera_side,
                ScanPass& pass) {
   const double start = a.u_min - settings.lead;
-  const int n = static_cast<int>(std::ceil((a.u_max - a.u_min + 2.0 * settings.lead) / kStation)) + 1;
+  const int n =
+      static_cast<int>(std::ceil((a.u_max - a.u_min + 2.0 * settings.lead) / kStation)) + 1;
   const Eigen::Vector3d plane = w * a.w + (a.v_min - 0.1) * a.v;
   std::vector<double> advance(static_cast<std::size_t>(n));
   double rho = 0.0;
@@ -230,7 +224,7 @@ bool stripPass(const PartOnTable& scene,
   for (int i = first;; i = std::min(i + kStripKeyEvery, last)) {
     const Eigen::Vector3d o =
         plane + (start + kStation * i) * a.u + smooth[static_cast<std::size_t>(i)] * a.v;
-    const Eigen::Isometry3d X = frame(o, a.v, camera_side * a.u);
+    const Eigen::Isometry3d X = kinematics::frameFromAxes(o, a.v, camera_side * a.u);
     if (housing.fits(X)) {
       run.push_back(X);
     } else {
@@ -240,9 +234,10 @@ bool stripPass(const PartOnTable& scene,
     if (i == last) break;
   }
   for (const Eigen::Isometry3d& X : best) {
-    pass.t.push_back(pass.t.empty() ? 0.0
-                                    : pass.t.back() + (X.translation() - pass.X_RS.back().translation()).norm() /
-                                                          scanSpeed(settings));
+    pass.t.push_back(
+        pass.t.empty() ? 0.0
+                       : pass.t.back() + (X.translation() - pass.X_RS.back().translation()).norm() /
+                                             scanSpeed(settings));
     pass.X_RS.push_back(X);
   }
   return pass.t.size() >= 2;
@@ -255,7 +250,8 @@ std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> stripViews() {
   const Eigen::Vector3d down = -Eigen::Vector3d::UnitZ();
   views.push_back({down, Eigen::Vector3d::UnitX()});
   views.push_back({down, Eigen::Vector3d::UnitY()});
-  const std::pair<double, int> rings[] = {{70.0, 8}, {50.0, 12}, {30.0, 12}, {10.0, 12}, {-10.0, 12}};
+  const std::pair<double, int> rings[] = {
+      {70.0, 8}, {50.0, 12}, {30.0, 12}, {10.0, 12}, {-10.0, 12}};
   for (const auto& [elevation, count] : rings) {
     for (int k = 0; k < count; ++k) {
       const double phi = deg(360.0 * k / count), e = deg(elevation);
@@ -322,7 +318,8 @@ ScanPass aimedPass(const PartOnTable& scene,
                    double half_length) {
   const HousingCheck housing(scene, settings.housing, settings.housing_spacing);
   const Eigen::Vector3d x = witness.linear().col(0);
-  const int steps = std::max(1, static_cast<int>(std::ceil(half_length / (kStation * kStripKeyEvery))));
+  const int steps =
+      std::max(1, static_cast<int>(std::ceil(half_length / (kStation * kStripKeyEvery))));
   // The longest run of fitting keys that holds the witness itself.
   std::vector<Eigen::Isometry3d> keys;
   for (int i = -steps; i <= steps; ++i) {
@@ -339,11 +336,13 @@ ScanPass aimedPass(const PartOnTable& scene,
   ScanPass pass;
   pass.kind = PassKind::kStrip;
   const Eigen::Vector3d p = witness.translation() + zMid(settings.window) * witness.linear().col(2);
-  pass.label = fmt::format("aimed at ({:.0f}, {:.0f}, {:.0f}) mm", toMm(p.x()), toMm(p.y()), toMm(p.z()));
+  pass.label =
+      fmt::format("aimed at ({:.0f}, {:.0f}, {:.0f}) mm", toMm(p.x()), toMm(p.y()), toMm(p.z()));
   for (const Eigen::Isometry3d& X : keys) {
-    pass.t.push_back(pass.t.empty() ? 0.0
-                                    : pass.t.back() + (X.translation() - pass.X_RS.back().translation()).norm() /
-                                                          scanSpeed(settings));
+    pass.t.push_back(
+        pass.t.empty() ? 0.0
+                       : pass.t.back() + (X.translation() - pass.X_RS.back().translation()).norm() /
+                                             scanSpeed(settings));
     pass.X_RS.push_back(X);
   }
   if (pass.X_RS.size() < 2) pass = {};
@@ -364,8 +363,10 @@ struct SampleIndex::Tree {
       return false;
     }
   };
-  using Index = nanoflann::
-      KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Points>, Points, 3, std::uint32_t>;
+  using Index = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Points>,
+                                                    Points,
+                                                    3,
+                                                    std::uint32_t>;
   explicit Tree(const AreaSampling& s) : points{s}, index(3, points) { index.buildIndex(); }
   Points points;
   Index index;
@@ -380,7 +381,8 @@ void SampleIndex::near(const Eigen::Vector3d& p,
                        double radius,
                        std::vector<std::uint32_t>& out) const {
   std::vector<std::pair<std::uint32_t, double>> found;
-  tree_->index.radiusSearch(p.data(), radius * radius, found, nanoflann::SearchParams(32, 0.f, false));
+  tree_->index.radiusSearch(p.data(), radius * radius, found,
+                            nanoflann::SearchParams(32, 0.f, false));
   for (const auto& [i, d2] : found) {
     if (sampling_.samples[i].n.dot(n) >= 0.5) out.push_back(i);
   }
@@ -442,7 +444,8 @@ void evaluatePass(ScanPass& pass,
     const int steps = std::max(1, static_cast<int>(std::ceil(travel / settings.eval_step)));
     for (int s = 0; s < steps + (k + 2 == pass.X_RS.size() ? 1 : 0); ++s) {
       points.clear();
-      profilePoints(scene, settings, fan, kinematics::interpolatePose(a, b, double(s) / steps), points);
+      profilePoints(scene, settings, fan, kinematics::interpolatePose(a, b, double(s) / steps),
+                    points);
       for (const auto& [p, n] : points) {
         near.clear();
         index.near(p, n, settings.eval_radius, near);

@@ -31,8 +31,8 @@ namespace scanplan::scanner {
 
 /// What a pass must respect and how finely candidates are evaluated, SI.
 struct PassSettings {
-  LaserWindow window;                    ///< the laser's depth window (Eq. 5)
-  std::vector<Eigen::Vector3d> cameras;  ///< camera centres in S; a point needs one of them
+  LaserWindow window;                         ///< the laser's depth window (Eq. 5)
+  std::vector<Eigen::Vector3d> cameras;       ///< camera centres in S; a point needs one of them
   double max_incidence = 1.0471975511965976;  ///< rad, laser and camera ray vs the normal
   double point_spacing = 2.5e-4;              ///< m, the spacing the passes must achieve
   double frame_rate = 100.0;                  ///< Hz, profiles per second
@@ -43,9 +43,9 @@ struct PassSettings {
   /// strips are cut to the stretch where it fits, spins dropped where it does not. Empty: none.
   std::vector<Eigen::AlignedBox3d> housing;
   double housing_spacing = 0.015;  ///< m, the housing test's grid (HousingCheck)
-  int eval_rays = 41;            ///< fan rays per evaluated profile
-  double eval_step = 0.0015;     ///< m, scanner travel between evaluated profiles
-  double eval_radius = 0.0012;   ///< m, a sample within this of an evaluated point is covered
+  int eval_rays = 41;              ///< fan rays per evaluated profile
+  double eval_step = 0.0015;       ///< m, scanner travel between evaluated profiles
+  double eval_radius = 0.0012;     ///< m, a sample within this of an evaluated point is covered
 };
 
 enum class PassKind : std::uint8_t { kSpin, kStrip, kGiven };

@@ -220,11 +220,9 @@ bool boxMeetsScene(const HousingBox& h,
 }
 
 bool housingFits(const Eigen::Isometry3d& X_RS, const Search& search) {
-  return std::none_of(search.housing.begin(), search.housing.end(),
-                      [&](const HousingBox& h) {
-                        return boxMeetsScene(h, X_RS, search.scene, search.part_bounds,
-                                             search.table_bounds);
-                      });
+  return std::none_of(search.housing.begin(), search.housing.end(), [&](const HousingBox& h) {
+    return boxMeetsScene(h, X_RS, search.scene, search.part_bounds, search.table_bounds);
+  });
 }
 
 // Steps 2–5 of the header for one sample that does not face the table.
@@ -312,7 +310,8 @@ std::vector<SampleClass> classifyScannability(const AreaSampling& sampling,
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t i = range.begin(); i != range.end(); ++i) {
                         Eigen::Isometry3d witness = Eigen::Isometry3d::Identity();
-                        if (!faces[i]) out[i] = classifySample(sampling.samples[i], search, witness);
+                        if (!faces[i])
+                          out[i] = classifySample(sampling.samples[i], search, witness);
                         if (witnesses) poses[i] = witness;
                       }
                     });

@@ -93,7 +93,8 @@ TEST(Transfer, StaysOutsideTheSafeSphereAndEndsWhereAsked) {
   EXPECT_LT((m.X_RS.back().translation() - b.translation()).norm(), 1e-12);
   EXPECT_LT((m.X_RS.back().linear() - b.linear()).norm(), 1e-9);
   EXPECT_NEAR(m.t.back(), scanner::transferTime(a, b, sphere), 1e-9);
-  const double lowest = std::min((a.translation() - sphere.centre).z(), (b.translation() - sphere.centre).z());
+  const double lowest =
+      std::min((a.translation() - sphere.centre).z(), (b.translation() - sphere.centre).z());
   for (std::size_t i = 1; i + 1 < m.X_RS.size(); ++i) {
     const Eigen::Vector3d d = m.X_RS[i].translation() - sphere.centre;
     EXPECT_GT(m.t[i], m.t[i - 1]);
@@ -141,19 +142,26 @@ TEST(OrderPasses, TwoOptNeverLosesToTheGivenOrderAndRunsEveryPassOnce) {
 }
 
 // An ASCII STL of an axis-aligned box, mm.
-std::filesystem::path writeBoxStl(const std::filesystem::path& file, double sx, double sy, double sz) {
+std::filesystem::path writeBoxStl(const std::filesystem::path& file,
+                                  double sx,
+                                  double sy,
+                                  double sz) {
   const Eigen::Vector3d s(sx, sy, sz);
   std::ofstream out(file);
   out << "solid box\n";
-  const auto quad = [&](Eigen::Vector3d a, Eigen::Vector3d b, Eigen::Vector3d c, Eigen::Vector3d d) {
-    for (const auto& t : {std::array<Eigen::Vector3d, 3>{a, b, c}, std::array<Eigen::Vector3d, 3>{a, c, d}}) {
+  const auto quad = [&](Eigen::Vector3d a, Eigen::Vector3d b, Eigen::Vector3d c,
+                        Eigen::Vector3d d) {
+    for (const auto& t :
+         {std::array<Eigen::Vector3d, 3>{a, b, c}, std::array<Eigen::Vector3d, 3>{a, c, d}}) {
       const Eigen::Vector3d n = (t[1] - t[0]).cross(t[2] - t[0]).normalized();
       out << "facet normal " << n.x() << ' ' << n.y() << ' ' << n.z() << "\nouter loop\n";
       for (const auto& v : t) out << "vertex " << v.x() << ' ' << v.y() << ' ' << v.z() << '\n';
       out << "endloop\nendfacet\n";
     }
   };
-  const auto P = [&](int x, int y, int z) { return Eigen::Vector3d(x * s.x(), y * s.y(), z * s.z()); };
+  const auto P = [&](int x, int y, int z) {
+    return Eigen::Vector3d(x * s.x(), y * s.y(), z * s.z());
+  };
   quad(P(0, 0, 0), P(0, 1, 0), P(1, 1, 0), P(1, 0, 0));  // bottom, −z
   quad(P(0, 0, 1), P(1, 0, 1), P(1, 1, 1), P(0, 1, 1));  // top
   quad(P(0, 0, 0), P(1, 0, 0), P(1, 0, 1), P(0, 0, 1));  // −y

@@ -28,12 +28,12 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/batch/batch.h"
-#include "tests/io_support.h"
 #include "cli/config/job.h"
 #include "cli/plot/image_io.h"
 #include "cli_support.h"
 #include "image_support.h"
 #include "test_support.h"
+#include "tests/io_support.h"
 
 namespace {
 
@@ -367,8 +367,8 @@ TEST_F(Batch, SmallSweepGivesOneRowPerCaseSeedAndRepeatWithTheDpGap) {
   EXPECT_EQ(readFile(out / (stem + ".png")), png_bytes) << "the same figure";
 }
 
-// The pipeline also runs the DP yardstick (planner.dp_gap): plan_s is the planner's time without it,
-// dp_s the yardstick's. The yardstick is made slow here (a grid 8 times finer than the map's:
+// The pipeline also runs the DP yardstick (planner.dp_gap): plan_s is the planner's time without
+// it, dp_s the yardstick's. The yardstick is made slow here (a grid 8 times finer than the map's:
 // 0.2 s against ray's 0.03 s on an idle machine), so that a plan_s that still held it would be
 // larger than dp_s.
 TEST_F(Batch, PlanTimeIsThePlannersOwnAndDpTimeTheYardsticks) {
@@ -690,7 +690,8 @@ TEST_F(Batch, OmplBenchmarkLogLoadsIntoThePlannerArenaDatabase) {
   for (std::string line; std::getline(lines, line);) {
     (line.starts_with("run|") ? runs : other).push_back(line);
   }
-  EXPECT_EQ(other, (std::vector<std::string>{"experiments 1 demo_rings 2", "planners 4", "outcomes 5"}));
+  EXPECT_EQ(other,
+            (std::vector<std::string>{"experiments 1 demo_rings 2", "planners 4", "outcomes 5"}));
 
   // What each case should be: planner = method and the non-seed values, its runs the seeds.
   std::vector<std::string> expected;

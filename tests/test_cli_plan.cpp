@@ -12,13 +12,13 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "cli/plot/image_io.h"
-#include "tests/io_support.h"
 #include "cli/config/job.h"
+#include "cli/plot/image_io.h"
 #include "cli_support.h"
 #include "kinematics/trajectory.h"
 #include "kinematics/units.h"
 #include "test_support.h"
+#include "tests/io_support.h"
 
 namespace {
 

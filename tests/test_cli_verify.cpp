@@ -22,8 +22,8 @@
 #include "kinematics/mesh.h"
 #include "kinematics/trajectory.h"
 #include "kinematics/units.h"
-#include "tests/io_support.h"
 #include "test_support.h"
+#include "tests/io_support.h"
 
 namespace {
 
@@ -171,8 +171,8 @@ TEST_F(CliVerify, SimulatedCloudLiesOnThePartAndCoverageIsReported) {
 // voxel hash instead of a k-d tree, at the report's point spacing: within 1 % of the report.
 TEST_F(CliVerify, AreaCoverageRecomputedFromTheCloudFileMatchesTheReport) {
   const fs::path out = dir_ / "sim";
-  ASSERT_EQ(scanplan(withLightDemo({"simulate", kDemoJob, "-t", plannedTrajectory().string(),
-                                    "-o", out.string()}))
+  ASSERT_EQ(scanplan(withLightDemo({"simulate", kDemoJob, "-t", plannedTrajectory().string(), "-o",
+                                    out.string()}))
                 .exit_code,
             0);
   const YAML::Node c = YAML::LoadFile((out / "simulation.json").string())["simulation"]["coverage"];

@@ -24,10 +24,9 @@
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
-#include "cli/plot/image_io.h"
-#include "tests/io_support.h"
 #include "cli/config/job.h"
 #include "cli/config/spec.h"
+#include "cli/plot/image_io.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"
 #include "kinematics/mesh.h"
@@ -37,6 +36,7 @@
 #include "scanner/path_generators.h"
 #include "scanner/raycaster.h"
 #include "tests/image_support.h"
+#include "tests/io_support.h"
 #include "tests/test_support.h"
 
 extern char** environ;

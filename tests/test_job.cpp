@@ -432,8 +432,8 @@ TEST_F(JobFile, TheRobotsControllerChoosesTheDefaultPrograms) {
             (std::vector<std::string>{"krl", "rapid"}));
   // export's --format names are case-insensitive.
   EXPECT_EQ(foreignPrograms(over.robot, {"VPLUS", "KRL"}), std::vector<std::string>{"KRL"});
-  EXPECT_TRUE(
-      loadJob(kSource / "data/jobs/demo_rings.yaml", {"outputs.programs=[]"}).outputs.programs.empty());
+  EXPECT_TRUE(loadJob(kSource / "data/jobs/demo_rings.yaml", {"outputs.programs=[]"})
+                  .outputs.programs.empty());
 
   // `job show` prints it, and the printed job loads back to the same programs.
   const std::string shown = jobToYaml(kuka);

@@ -119,8 +119,8 @@ TEST(PartPlacement, TableRestsTheLowestPointOnTheTopCentredOnTheAxis) {
 }
 
 TEST(PartPlacement, APartBelowTheTableTopIsAnErrorNamingThePose) {
-  const cli::JobSpec job =
-      cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", {"part.pose.xyz_mm=[0, 0, -5]"});
+  const cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml",
+                                        {"part.pose.xyz_mm=[0, 0, -5]"});
   const kinematics::CellModel cell = cli::buildCell(job);
   EXPECT_TRUE(test::throwsInputError(
       [&] { cli::loadPart(job, cell); },
@@ -132,7 +132,8 @@ TEST(PartPlacement, APartBelowTheTableTopIsAnErrorNamingThePose) {
 TEST(PartPlacement, PlacedRingHeightsCountFromTheTableTop) {
   const auto path = [](std::vector<std::string> overrides) {
     overrides.insert(overrides.begin(), test::kLightDemo.begin(), test::kLightDemo.end());
-    const cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", overrides);
+    const cli::JobSpec job =
+        cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", overrides);
     return cli::toProblem(job).path;
   };
   const scanplan::scanner::PathRequest on_table = path({});

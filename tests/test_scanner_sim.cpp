@@ -32,13 +32,13 @@
 #include "kinematics/shape.h"
 #include "kinematics/units.h"
 #include "scanner/cloud_io.h"
-#include "tests/io_support.h"
 #include "scanner/coverage.h"
 #include "scanner/laser_model.h"
 #include "scanner/path_generators.h"
 #include "scanner/raycaster.h"
 #include "scanner/simulator.h"
 #include "tests/geometry_support.h"
+#include "tests/io_support.h"
 #include "tests/test_support.h"
 
 namespace {

@@ -12,11 +12,11 @@
 #include "cli/commands/commands.h"
 #include "cli/config/job.h"
 #include "cli/config/problem.h"
-#include "pipeline/plan_scan.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"
 #include "kinematics/trajectory.h"
 #include "kinematics/units.h"
+#include "pipeline/plan_scan.h"
 #include "planner/config_map.h"
 #include "planner/trajectory_builder.h"
 #include "test_support.h"
@@ -134,7 +134,8 @@ struct DemoPlan {
 };
 
 DemoPlan demo() {
-  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", test::kLightDemo);
+  cli::JobSpec job =
+      cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", test::kLightDemo);
   kinematics::CellModel cell = cli::buildCell(job);
   scanner::GeneratedPath path = cli::generateScanPath(job, cell);
   return {std::move(job), std::move(cell), std::move(path)};
@@ -147,7 +148,8 @@ TEST(BuildTrajectory, JointsReproduceTheTargetPosesAndStayContinuous) {
   // As `plan` does: a branch's path is accepted only when it can be followed continuously.
   planner::TrajectoryBuild built;
   const pipeline::PathChoice plan = pipeline::choosePath(
-      run.map, cli::planSettings(d.job), {.method = "ray"}, [&](std::size_t b, const std::vector<double>& theta) {
+      run.map, cli::planSettings(d.job), {.method = "ray"},
+      [&](std::size_t b, const std::vector<double>& theta) {
         built = planner::buildTrajectory(scene, cli::constraintSettings(d.job), d.path.path, theta,
                                          run.map.branches[b]);
         return built.ok && built.min_f > 0.0 ? std::string() : "not ok: " + built.reason;
@@ -217,7 +219,8 @@ TEST(BuildTrajectory, WristUnwindsAWholeTurnOnlyWhereThePathDoesNotScan) {
   for (int k = 0; k <= 300; ++k) {  // 30 s, 36°/s about z_S
     const double t = 0.1 * k;
     Eigen::Isometry3d X = X0;
-    X.linear() = X0.linear() * Eigen::AngleAxisd(deg(36.0) * t, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    X.linear() =
+        X0.linear() * Eigen::AngleAxisd(deg(36.0) * t, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     roll.samples.push_back({t, X, k == 0});
   }
   const std::vector<double> thetas(roll.samples.size(), theta);

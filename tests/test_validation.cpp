@@ -17,12 +17,12 @@
 #include "cli/commands/commands.h"
 #include "cli/config/job.h"
 #include "cli/config/problem.h"
-#include "pipeline/plan_scan.h"
 #include "collision/clearance.h"
 #include "collision/scene.h"
 #include "kinematics/shape.h"
 #include "kinematics/trajectory.h"
 #include "kinematics/units.h"
+#include "pipeline/plan_scan.h"
 #include "planner/trajectory_builder.h"
 #include "planner/validation.h"
 #include "test_support.h"
@@ -72,7 +72,8 @@ struct DemoCell {
 };
 
 DemoCell demoCell() {
-  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", test::kLightDemo);
+  cli::JobSpec job =
+      cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", test::kLightDemo);
   kinematics::CellModel cell = cli::buildCell(job);
   return {std::move(job), std::move(cell)};
 }

@@ -83,15 +83,16 @@ void writePathFigure(const std::filesystem::path& dir,
 pipeline::ScanPlan runPipeline(const JobSpec& job,
                                const pipeline::ScanProblem& problem,
                                const PlanOptions& options) {
-  Progress progress("map");
+  Progress map("map"), passes("auto (candidate passes)");
   pipeline::PlanOptions po;
   po.method = options.planner;
   po.compare = options.compare;
   po.refine = options.refine;
   try {
-    return pipeline::planScan(
-        problem, po,
-        [&progress](std::string_view, std::size_t d, std::size_t n) { progress(d, n); });
+    return pipeline::planScan(problem, po,
+                              [&](std::string_view stage, std::size_t d, std::size_t n) {
+                                (stage == "auto" ? passes : map)(d, n);
+                              });
   } catch (const InputError& e) {
     throw InputError(job.source.string() + ": " + e.what());
   }
@@ -138,9 +139,10 @@ std::string writePlannedOutputs(const std::filesystem::path& out,
 // Everything `plan` may write into its output folder: on each run, what it does not write again
 // is removed (no trajectory.csv or program of an earlier run beside a new report).
 const std::vector<std::string> kPlanOutputs{
-    "job.yaml", "report.json", "trajectory.csv", "trajectory_invalid.csv", "programs", "path.csv",
-    "path.png", "configmap*",  "cloud.ply",      "coverage.ply",           "cloud.png",
-    "uncovered.ply", "certificate.png"};
+    "job.yaml",       "report.json",  "trajectory.csv", "trajectory_invalid.csv",
+    "programs",       "path.csv",     "path.png",       "configmap*",
+    "cloud.ply",      "coverage.ply", "cloud.png",      "uncovered.ply",
+    "certificate.png"};
 
 ExitCode runPlan(const PlanOptions& options) {
   const auto start = Clock::now();

@@ -125,10 +125,11 @@ struct PathElementSpec {
 /// `scan`: the scan path and its sampling.
 /// `scan.auto`: the automatic, coverage-driven scan (present: enabled).
 struct AutoSpec {
-  bool enabled = false;            ///< the job has a `scan.auto` mapping
-  double max_incidence_deg = 60.0; ///< laser and camera ray against the normal, for a point to count
-  double point_spacing_mm = 0.0;   ///< 0: the line's point pitch at mid depth
-  double target_coverage = 0.98;   ///< of the scannable area
+  bool enabled = false;  ///< the job has a `scan.auto` mapping
+  double max_incidence_deg =
+      60.0;                       ///< laser and camera ray against the normal, for a point to count
+  double point_spacing_mm = 0.0;  ///< 0: the line's point pitch at mid depth
+  double target_coverage = 0.98;  ///< of the scannable area
   int max_passes = 250;
   double time_budget_s = 60.0;     ///< for choosing the passes
   double sample_spacing_mm = 3.0;  ///< area samples the passes are chosen on

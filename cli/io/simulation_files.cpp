@@ -109,8 +109,8 @@ constexpr std::array<Rgb, pipeline::kCoverageClasses> kClassColours{{
 }};
 
 constexpr std::array<const char*, pipeline::kCoverageClasses> kClassLabels{
-    "covered", "scannable, not covered", "faces the table", "occluded",
-    "no standoff fits the housing", "out of the arm's reach"};
+    "covered",  "scannable, not covered",       "faces the table",
+    "occluded", "no standoff fits the housing", "out of the arm's reach"};
 
 void writeUncoveredPly(const std::filesystem::path& file,
                        const scanner::AreaSampling& sampling,

@@ -146,15 +146,23 @@ void addSetup(Json& json,
 Json autoScanJson(const pipeline::AutoScanReport& r) {
   Json passes = Json::array();
   for (const auto& p : r.passes) {
-    passes.push_back({{"kind", p.kind}, {"label", p.label}, {"start_s", p.start_time},
-                      {"duration_s", p.duration}, {"gain", p.gain}});
+    passes.push_back({{"kind", p.kind},
+                      {"label", p.label},
+                      {"start_s", p.start_time},
+                      {"duration_s", p.duration},
+                      {"gain", p.gain}});
   }
-  return {{"candidates", r.candidates},         {"aimed_candidates", r.aimed},
+  return {{"candidates", r.candidates},
+          {"aimed_candidates", r.aimed},
           {"unreachable_candidates", r.unreachable.size()},
-          {"evaluation_samples", r.samples},    {"sample_spacing_mm", toMm(r.sample_spacing)},
-          {"planned_fraction", r.planned_fraction}, {"given_fraction", r.given_fraction},
-          {"stop", r.stop},                     {"scan_s", r.scan_time},
-          {"transfer_s", r.transfer_time},      {"seconds", r.seconds},
+          {"evaluation_samples", r.samples},
+          {"sample_spacing_mm", toMm(r.sample_spacing)},
+          {"planned_fraction", r.planned_fraction},
+          {"given_fraction", r.given_fraction},
+          {"stop", r.stop},
+          {"scan_s", r.scan_time},
+          {"transfer_s", r.transfer_time},
+          {"seconds", r.seconds},
           {"passes", passes}};
 }
 
@@ -185,7 +193,8 @@ std::string planReportJson(const JobSpec& job,
   if (plan.validation) json["validation"] = validationJson(*plan.validation);
   if (plan.simulation) json["simulation"] = simulationJson(*plan.simulation);
   if (plan.certificate) json["coverage"] = certificateJson(*plan.simulation, *plan.certificate);
-  if (plan.prepared && plan.prepared->auto_scan) json["auto_scan"] = autoScanJson(*plan.prepared->auto_scan);
+  if (plan.prepared && plan.prepared->auto_scan)
+    json["auto_scan"] = autoScanJson(*plan.prepared->auto_scan);
   addSetup(json, job, cell, map, times);
   return jsonDocument(json);
 }

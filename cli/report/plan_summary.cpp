@@ -62,14 +62,15 @@ std::string autoScanSummary(const pipeline::AutoScanReport& r) {
       100.0 * r.planned_fraction, r.counted, toMm(r.sample_spacing), r.stop);
   s += fmt::format("           {:.1f} s scanning, {:.1f} s moving between passes{}\n", r.scan_time,
                    r.transfer_time,
-                   r.unreachable.empty()
-                       ? std::string()
-                       : fmt::format("; {} candidates out of the arm's reach", r.unreachable.size()));
+                   r.unreachable.empty() ? std::string()
+                                         : fmt::format("; {} candidates out of the arm's reach",
+                                                       r.unreachable.size()));
   std::array<std::size_t, 5> count{};
   for (const auto c : r.classes) ++count[static_cast<std::size_t>(c)];
   const double n = std::max<double>(1.0, static_cast<double>(r.classes.size()));
   s += fmt::format(
-      "           before the scan: {:.1f}% scannable, {:.1f}% out of the arm's reach, {:.1f}% faces "
+      "           before the scan: {:.1f}% scannable, {:.1f}% out of the arm's reach, {:.1f}% "
+      "faces "
       "the table, {:.1f}% occluded, {:.1f}% no standoff fits the housing\n",
       100.0 * static_cast<double>(count[0]) / n, 100.0 * static_cast<double>(count[4]) / n,
       100.0 * static_cast<double>(count[1]) / n, 100.0 * static_cast<double>(count[2]) / n,

@@ -83,10 +83,10 @@ std::vector<Quad> blockWithHole(double x, double y, double z, double h, double d
   q.push_back({V(0, y0, z), V(x0, y0, z), V(x0, y1, z), V(0, y1, z)});
   q.push_back({V(x1, y0, z), V(x, y0, z), V(x, y1, z), V(x1, y1, z)});
   // Hole walls, normals into the hole.
-  q.push_back({V(x0, y0, zb), V(x0, y0, z), V(x1, y0, z), V(x1, y0, zb)});   // +y facing
-  q.push_back({V(x0, y1, zb), V(x1, y1, zb), V(x1, y1, z), V(x0, y1, z)});   // −y facing
-  q.push_back({V(x0, y0, zb), V(x0, y1, zb), V(x0, y1, z), V(x0, y0, z)});   // +x facing
-  q.push_back({V(x1, y0, zb), V(x1, y0, z), V(x1, y1, z), V(x1, y1, zb)});   // −x facing
+  q.push_back({V(x0, y0, zb), V(x0, y0, z), V(x1, y0, z), V(x1, y0, zb)});  // +y facing
+  q.push_back({V(x0, y1, zb), V(x1, y1, zb), V(x1, y1, z), V(x0, y1, z)});  // −y facing
+  q.push_back({V(x0, y0, zb), V(x0, y1, zb), V(x0, y1, z), V(x0, y0, z)});  // +x facing
+  q.push_back({V(x1, y0, zb), V(x1, y0, z), V(x1, y1, z), V(x1, y1, zb)});  // −x facing
   if (depth < z) {
     q.push_back({V(x0, y0, zb), V(x1, y0, zb), V(x1, y1, zb), V(x0, y1, zb)});  // floor, up
     q.push_back({V(0, 0, 0), V(0, y, 0), V(x, y, 0), V(x, 0, 0)});              // bottom
@@ -143,7 +143,8 @@ std::vector<Part> parts(const fs::path& scratch) {
 }
 
 // The area within the point spacing of a point, from the cloud alone (another sampling).
-double independentCoverage(const pipeline::ScanProblem& problem, const pipeline::SimulationRun& sim) {
+double independentCoverage(const pipeline::ScanProblem& problem,
+                           const pipeline::SimulationRun& sim) {
   const auto sampling = scanner::sampleArea(problem.part, 2.0 * sim.point_spacing, 150'000, 424242);
   std::vector<Eigen::Vector3d> points;
   const double limit = problem.simulation->max_incidence;
@@ -214,8 +215,10 @@ int main(int argc, char** argv) {
   std::string filter;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--quick") quick = true;
-    else filter = a;
+    if (a == "--quick")
+      quick = true;
+    else
+      filter = a;
   }
   const fs::path scratch = fs::temp_directory_path() / "scanplan_bench_autoscan";
   fs::create_directories(scratch);
@@ -223,9 +226,9 @@ int main(int argc, char** argv) {
   if (quick) extra.push_back("scan.auto.point_spacing_mm=1.0");
   std::printf("bench_autoscan: the demo cell (Viper s650, 400 mm table), scan.auto%s\n",
               quick ? " at 1 mm (--quick)" : " as in data/jobs/demo.yaml (0.5 mm)");
-  std::printf("%-26s %8s %9s %9s %9s %6s %6s %8s %8s %8s %5s %7s\n", "part", "area_mm2",
-              "scannbl%", "covered%", "of_scan%", "delta", "passes", "prog_s", "plan_s",
-              "cpu_s", "valid", "clr_mm");
+  std::printf("%-26s %8s %9s %9s %9s %6s %6s %8s %8s %8s %5s %7s\n", "part", "area_mm2", "scannbl%",
+              "covered%", "of_scan%", "delta", "passes", "prog_s", "plan_s", "cpu_s", "valid",
+              "clr_mm");
   std::vector<Row> rows;
   for (const Part& part : parts(scratch)) {
     if (!filter.empty() && part.name.find(filter) == std::string::npos) continue;
@@ -243,11 +246,12 @@ int main(int argc, char** argv) {
     rows.push_back(r);
   }
   if (rows.size() >= 2 && rows[0].name.starts_with("demo_housing (hand") && rows[1].scannable > 0) {
-    std::printf("\nhand-written vs automatic on the housing: %.1f%% vs %.1f%% of the scannable area "
-                "(%.1fx), program %.0f s vs %.0f s\n",
-                100 * rows[0].covered / rows[1].scannable, 100 * rows[1].of_scannable,
-                rows[1].of_scannable / (rows[0].covered / rows[1].scannable), rows[0].program_s,
-                rows[1].program_s);
+    std::printf(
+        "\nhand-written vs automatic on the housing: %.1f%% vs %.1f%% of the scannable area "
+        "(%.1fx), program %.0f s vs %.0f s\n",
+        100 * rows[0].covered / rows[1].scannable, 100 * rows[1].of_scannable,
+        rows[1].of_scannable / (rows[0].covered / rows[1].scannable), rows[0].program_s,
+        rows[1].program_s);
   }
   fs::remove_all(scratch);
   return 0;
