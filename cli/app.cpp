@@ -190,6 +190,11 @@ void addPlanCommand(CLI::App& app, Commands& c) {
                 "Refine the path with NLopt even when the job turns it off: refinement "
                 "is on "
                 "by default (the job's planner.refine.enabled), this overrides a false");
+  cmd->add_option("--setups", plan.setups,
+                  "2: with scan.auto, also plan a second program with the part turned onto "
+                  "another face it rests on, for the area that faces the table; its files go "
+                  "to OUT/setup2, the combined coverage into the summary and report.json")
+      ->check(CLI::Range(1, 2));
   addOverrides(*cmd, plan.overrides);
 }
 
@@ -334,7 +339,8 @@ void addExamples(const Commands& c) {
   const std::vector<std::pair<CLI::App*, std::vector<const char*>>> examples{
       {c.plan_cmd,
        {"scanplan plan data/jobs/demo.yaml -o out/demo",
-        "scanplan plan data/jobs/demo.yaml -o out/dp --planner dp --compare"}},
+        "scanplan plan data/jobs/demo.yaml -o out/dp --planner dp --compare",
+        "scanplan plan data/jobs/demo.yaml -o out/two --setups 2"}},
       {c.validate_cmd, {"scanplan validate data/jobs/demo.yaml -t out/demo/trajectory.csv"}},
       {c.simulate_cmd,
        {"scanplan simulate data/jobs/demo.yaml -t out/demo/trajectory.csv -o "

@@ -20,4 +20,18 @@ struct PartExtent {
 };
 PartExtent partExtent(const TriangleMesh& mesh, const Eigen::Isometry3d& X_RP);
 
+/// The centre of mass of the solid a closed, outward-wound mesh bounds (uniform density), in the
+/// mesh's frame, m: the volume-weighted centroids of the tetrahedra from the origin to each
+/// triangle. The area centroid when the volume is (near) zero.
+Eigen::Vector3d solidCentroid(const TriangleMesh& mesh);
+
+/// The part placed by X_RP rests stably on the table top: its centre of mass lies over the
+/// convex hull of the points it touches the top with (vertices within `contact` of the lowest,
+/// m), at least `margin` inside it. A part touching at fewer than 3 non-collinear points does
+/// not rest stably.
+bool restsStably(const TriangleMesh& mesh,
+                 const Eigen::Isometry3d& X_RP,
+                 double contact = 5e-4,
+                 double margin = 2e-3);
+
 }  // namespace scanplan::kinematics

@@ -14,7 +14,10 @@
 #include "cli/config/job.h"
 #include "cli/config/problem.h"
 #include "kinematics/units.h"
+#include "kinematics/mesh.h"
+#include "kinematics/placement.h"
 #include "pipeline/plan_scan.h"
+#include "pipeline/setups.h"
 #include "scanner/area_coverage.h"
 #include "scanner/pass_selection.h"
 #include "scanner/scan_passes.h"
@@ -203,6 +206,45 @@ TEST(AutoScan, ACubeOnTheTableIsCoveredExceptItsBottom) {
     if (p.part_triangle >= 0 && p.incidence <= deg(60.0)) points.push_back(p.p_P);
   const auto again = scanner::areaCoverage(sampling, points, sim.point_spacing);
   EXPECT_NEAR(again.covered_fraction, sim.area.covered_fraction, 0.01);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Placement, ABoxRestsOnAFaceNotOnAnEdgeAndItsCentroidIsItsCentre) {
+  const auto dir = std::filesystem::temp_directory_path() / "scanplan_test_rest";
+  std::filesystem::create_directories(dir);
+  const auto box = kinematics::loadMesh(writeBoxStl(dir / "box.stl", 80, 40, 20)).mesh;
+  EXPECT_LT((kinematics::solidCentroid(box) - Eigen::Vector3d(0.04, 0.02, 0.01)).norm(), 1e-12);
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  EXPECT_TRUE(kinematics::restsStably(box, kinematics::placedOnTable(box, pose)));
+  pose.linear() = Eigen::AngleAxisd(deg(90.0), Eigen::Vector3d::UnitY()).toRotationMatrix();
+  EXPECT_TRUE(kinematics::restsStably(box, kinematics::placedOnTable(box, pose)));  // on its end
+  pose.linear() = Eigen::AngleAxisd(deg(45.0), Eigen::Vector3d::UnitX()).toRotationMatrix();
+  EXPECT_FALSE(kinematics::restsStably(box, kinematics::placedOnTable(box, pose)));  // an edge
+  pose.linear() = Eigen::AngleAxisd(deg(10.0), Eigen::Vector3d::UnitY()).toRotationMatrix();
+  EXPECT_FALSE(kinematics::restsStably(box, kinematics::placedOnTable(box, pose)));  // a tilt
+  std::filesystem::remove_all(dir);
+}
+
+TEST(AutoScan, ASecondSetupTurnsTheCubeOverAndBothCoverItAll) {
+  const auto dir = std::filesystem::temp_directory_path() / "scanplan_test_setups";
+  std::filesystem::create_directories(dir);
+  const pipeline::ScanProblem problem = autoProblem(writeBoxStl(dir / "cube.stl", 60, 60, 60));
+  const pipeline::ScanPlan first = pipeline::planScan(problem);
+  ASSERT_TRUE(first.planned() && first.certificate) << first.reason;
+  const auto setup = pipeline::chooseSecondSetup(problem, first);
+  ASSERT_TRUE(setup.has_value());
+  // The bottom (a sixth) comes into view; the turned cube still rests on the table top.
+  EXPECT_NEAR(setup->gain, first.certificate->fraction[2], 1e-12);
+  EXPECT_GT(setup->gain, 0.1);
+  EXPECT_NEAR(kinematics::partExtent(problem.part, setup->X_RP).lowest, 0.0, 1e-12);
+  const pipeline::ScanProblem turned = pipeline::secondSetupProblem(problem, *setup);
+  const pipeline::ScanPlan second = pipeline::planScan(turned);
+  ASSERT_TRUE(second.planned() && second.certificate) << second.reason;
+  EXPECT_TRUE(second.validation->valid);
+  const pipeline::CombinedCoverage both = pipeline::combineSetups(first, second);
+  EXPECT_GE(both.area_fraction, 0.98);
+  EXPECT_GE(both.area_fraction, first.simulation->area.covered_fraction + 0.1);
+  EXPECT_GE(both.covered_of_scannable, 0.98);
   std::filesystem::remove_all(dir);
 }
 

@@ -45,6 +45,7 @@ struct PlanOptions {
   std::string planner;                 ///< --planner: empty = the job's planner.method
   bool compare = false;                ///< --compare: run every planner, draw every path
   bool refine = false;                 ///< --refine: NLopt refinement whatever the job says
+  int setups = 1;                      ///< --setups 2: a second program, the part turned over
 };
 
 /// A progress line on stderr, only on a terminal (scripts and CI logs stay clean). Callable

@@ -22,6 +22,7 @@
 #include "kinematics/error.h"
 #include "kinematics/units.h"
 #include "pipeline/plan_scan.h"
+#include "pipeline/setups.h"
 #include "planner/trajectory_builder.h"
 
 namespace scanplan::cli {
@@ -134,15 +135,71 @@ std::string writePlannedOutputs(const std::filesystem::path& out,
   return summary;
 }
 
+// --setups 2: the part turned onto another face it rests on, a second program into OUT/setup2,
+// and the coverage of both setups together.
+struct SecondSetupRun {
+  Json json = Json::object();  // report.json's `setups`
+  std::string summary;
+  bool ok = true;
+};
+
+SecondSetupRun planSecondSetup(const std::filesystem::path& out,
+                               const JobSpec& job,
+                               const pipeline::ScanProblem& problem,
+                               const pipeline::ScanPlan& first,
+                               const PlanOptions& options) {
+  SecondSetupRun r;
+  const auto setup = first.certificate ? pipeline::chooseSecondSetup(problem, first) : std::nullopt;
+  if (!setup) {
+    const char* why = first.certificate ? "no other face the part rests on shows more of it"
+                                        : "it needs scan.auto and the simulation";
+    r.summary = fmt::format("setup 2    not planned: {}\n", why);
+    r.json["setups"] = {{"second", {{"status", "not_planned"}, {"reason", why}}}};
+    return r;
+  }
+  const pipeline::ScanProblem second = pipeline::secondSetupProblem(problem, *setup);
+  const pipeline::ScanPlan plan = runPipeline(job, second, options);
+  const std::filesystem::path dir = out / "setup2";
+  std::filesystem::create_directories(dir);
+  Json json = {{"turn", setup->turn},
+               {"gain", setup->gain},
+               {"status", std::string(pipeline::scanStatusName(plan.status))},
+               {"folder", "setup2"}};
+  r.summary = fmt::format(
+      "setup 2    the part {}: {:.1f}% of its area faced the table and comes into view\n",
+      setup->turn, 100.0 * setup->gain);
+  if (plan.prepared->auto_scan) r.summary += autoScanSummary(*plan.prepared->auto_scan);
+  if (plan.planned()) {
+    writeChoiceFigure(dir, plan);
+    r.summary += writePlannedOutputs(dir, job, second.cell, second, plan);
+    const pipeline::CombinedCoverage c = pipeline::combineSetups(first, plan);
+    r.summary += fmt::format(
+        "setups     both: {:.1f}% of the part's area covered; {:.1f}% scannable in one setup or "
+        "the other, {:.1f}% of that covered (setup 2's files in {})\n",
+        100.0 * c.area_fraction, 100.0 * c.scannable_fraction, 100.0 * c.covered_of_scannable,
+        (options.out_dir / "setup2").string());
+    json["combined"] = {{"area_fraction", c.area_fraction},
+                        {"scannable_fraction", c.scannable_fraction},
+                        {"covered_of_scannable", c.covered_of_scannable}};
+  } else {
+    r.ok = false;
+    r.summary += fmt::format("setup 2    NOT PLANNED ({}): {}\n",
+                             pipeline::scanStatusName(plan.status), plan.reason);
+  }
+  writeFileAtomically(dir / "report.json", planReportJson(job, second.cell, plan, plan.times));
+  r.json["setups"] = {{"second", json}};
+  return r;
+}
+
 }  // namespace
 
 // Everything `plan` may write into its output folder: on each run, what it does not write again
 // is removed (no trajectory.csv or program of an earlier run beside a new report).
 const std::vector<std::string> kPlanOutputs{
-    "job.yaml",       "report.json",  "trajectory.csv", "trajectory_invalid.csv",
-    "programs",       "path.csv",     "path.png",       "configmap*",
-    "cloud.ply",      "coverage.ply", "cloud.png",      "uncovered.ply",
-    "certificate.png"};
+    "job.yaml",        "report.json",  "trajectory.csv", "trajectory_invalid.csv",
+    "programs",        "path.csv",     "path.png",       "configmap*",
+    "cloud.ply",       "coverage.ply", "cloud.png",      "uncovered.ply",
+    "certificate.png", "setup2"};
 
 ExitCode runPlan(const PlanOptions& options) {
   const auto start = Clock::now();
@@ -171,9 +228,10 @@ ExitCode runPlan(const PlanOptions& options) {
   if (prepared.auto_scan) summary += autoScanSummary(*prepared.auto_scan);
   summary += mapSummary(prepared.map, prepared.map_seconds);
   pipeline::StageTimes times = plan.times;
+  Json setups = Json::object();
   const auto finish = [&] {
     times.total = since(start);
-    writeFileAtomically(out / "report.json", planReportJson(job, cell, plan, times));
+    writeFileAtomically(out / "report.json", planReportJson(job, cell, plan, times, setups));
     stage.commit();
   };
   const std::string method = plan.choice.chosen.method;
@@ -201,13 +259,21 @@ ExitCode runPlan(const PlanOptions& options) {
     return ExitCode::kNoPlan;
   }
   summary += writePlannedOutputs(out, job, cell, problem, plan);
+  bool all_planned = true;
+  if (options.setups == 2) {
+    SecondSetupRun second = planSecondSetup(out, job, problem, plan, options);
+    summary += second.summary;
+    setups = std::move(second.json);
+    all_planned = second.ok;
+  }
   finish();
   summary += fmt::format(
       "wrote      {}: job.yaml, trajectory.csv, programs/, report.json, configmap_path.png/.svg, "
       "{}{}\n",
       options.out_dir.string(),
       std::string(plan.simulation ? "cloud.ply, coverage.ply, cloud.png, " : "") +
-          (plan.certificate ? "uncovered.ply, certificate.png, " : ""),
+          (plan.certificate ? "uncovered.ply, certificate.png, " : "") +
+          (setups.contains("setups") ? "setup2/, " : ""),
       kMapFilesNote);
   summary += fmt::format(
       "time       {:.1f} s (path {:.1f}, map {:.1f}, plan {:.1f}, trajectory {:.1f}, validation "
@@ -215,7 +281,7 @@ ExitCode runPlan(const PlanOptions& options) {
       since(start), times.path, times.map, times.plan, times.trajectory, times.validation,
       times.simulation);
   std::fputs(summary.c_str(), stdout);
-  return ExitCode::kOk;
+  return all_planned ? ExitCode::kOk : ExitCode::kNoPlan;
 }
 
 }  // namespace scanplan::cli

@@ -171,7 +171,8 @@ Json autoScanJson(const pipeline::AutoScanReport& r) {
 std::string planReportJson(const JobSpec& job,
                            const kinematics::CellModel& cell,
                            const pipeline::ScanPlan& plan,
-                           const pipeline::StageTimes& times) {
+                           const pipeline::StageTimes& times,
+                           const Json& extra) {
   const planner::ConfigMap& map = plan.prepared->map;
   const pipeline::PathChoice& planning = plan.choice;
   Json json;
@@ -196,6 +197,8 @@ std::string planReportJson(const JobSpec& job,
   if (plan.prepared && plan.prepared->auto_scan)
     json["auto_scan"] = autoScanJson(*plan.prepared->auto_scan);
   addSetup(json, job, cell, map, times);
+  if (extra.is_object())
+    for (const auto& [key, value] : extra.items()) json[key] = value;
   return jsonDocument(json);
 }
 
