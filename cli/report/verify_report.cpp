@@ -101,12 +101,25 @@ std::string simulationSummary(const pipeline::SimulationRun& run) {
 }
 
 std::string certificateSummary(const pipeline::Certificate& c) {
-  return fmt::format(
+  std::string text = fmt::format(
       "certificate {:.1f}% of the area scannable, {:.1f}% of that covered; not scannable: {:.1f}% "
       "faces the table, {:.1f}% occluded, {:.1f}% no standoff fits the housing, {:.1f}% out of "
       "the arm's reach\n",
       100.0 * c.scannable_fraction, 100.0 * c.covered_of_scannable, 100.0 * c.fraction[2],
       100.0 * c.fraction[3], 100.0 * c.fraction[4], 100.0 * c.fraction[5]);
+  if (c.fraction[5] >= 0.01) {
+    text += fmt::format(
+        "note       {:.1f}% of the area is seen only by passes out of the arm's reach: the table "
+        "closer to the robot, another part.pose or plan --setups 2 may reach it\n",
+        100.0 * c.fraction[5]);
+  }
+  if (c.fraction[2] >= 0.05) {
+    text += fmt::format(
+        "note       {:.1f}% of the area faces the table: plan --setups 2 turns the part over for "
+        "it\n",
+        100.0 * c.fraction[2]);
+  }
+  return text;
 }
 
 Json certificateJson(const pipeline::SimulationRun& run, const pipeline::Certificate& c) {
