@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <exception>
+#include <fstream>
 #include <sstream>
 #include <string>
 #include <system_error>
@@ -34,6 +35,67 @@ constexpr double kDegenerateAreaRatio = 1e-12;
   throw InputError("mesh file '" + path.string() + "' " + what);
 }
 
+constexpr std::uintmax_t kMaxMeshBytes = std::uintmax_t{2} << 30;  // 2 GB
+constexpr std::size_t kMaxHeader = 64 << 10;                       // PLY header bytes
+
+// The first `n` bytes of a file.
+std::string head(const std::filesystem::path& path, std::size_t n) {
+  std::ifstream in(path, std::ios::binary);
+  std::string text(n, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(n));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  return text;
+}
+
+// A PLY header must end within 64 kB and its element counts fit the file: a header alone, or
+// one claiming a billion vertices, is refused before the loader sees it (which loops or
+// allocates without end on them).
+void checkPlyHeader(const std::filesystem::path& path, std::uintmax_t size) {
+  const std::string text = head(path, kMaxHeader);
+  const std::size_t end = text.find("end_header");
+  if (text.rfind("ply", 0) != 0 || end == std::string::npos) {
+    fail(path,
+         "has no complete PLY header ('ply' … 'end_header' in the first 64 kB); expected a "
+         "PLY mesh");
+  }
+  std::istringstream lines(text.substr(0, end));
+  std::uintmax_t needed = 0;  // at least a byte per element (binary), two per number (ASCII)
+  for (std::string line; std::getline(lines, line);) {
+    std::istringstream words(line);
+    std::string word, name;
+    double count = 0.0;
+    if (words >> word >> name >> count && word == "element") {
+      if (!(count >= 0.0) || count > 1e10) fail(path, "has a PLY element count of " + line);
+      needed += static_cast<std::uintmax_t>(count);
+    }
+  }
+  if (needed > size) {
+    fail(path, "claims " + std::to_string(needed) + " PLY elements in " + std::to_string(size) +
+                   " bytes: a truncated or corrupt file");
+  }
+}
+
+// An OFF header's counts must fit the file (each vertex and face takes a few bytes at least).
+void checkOffHeader(const std::filesystem::path& path, std::uintmax_t size) {
+  std::istringstream in(head(path, kMaxHeader));
+  std::vector<std::string> counts;
+  for (std::string word; counts.size() < 2 && in >> word;) {
+    if (word[0] == '#') {
+      std::getline(in, word);
+    } else if (word.find("OFF") == std::string::npos) {
+      counts.push_back(word);
+    }
+  }
+  if (counts.size() < 2) return;  // the loader says what is wrong
+  const double vertices = std::strtod(counts[0].c_str(), nullptr);
+  const double faces = std::strtod(counts[1].c_str(), nullptr);
+  if (!(vertices >= 0.0) || !(faces >= 0.0) ||
+      vertices * 6.0 + faces * 8.0 > static_cast<double>(size)) {
+    fail(path, "claims " + counts[0] + " vertices and " + counts[1] + " faces in " +
+                   std::to_string(size) + " bytes: a truncated or corrupt OFF file");
+  }
+}
+
 void checkFile(const std::filesystem::path& path) {
   std::error_code ec;
   const auto status = std::filesystem::status(path, ec);
@@ -49,9 +111,17 @@ void checkFile(const std::filesystem::path& path) {
   if (ext != ".stl" && ext != ".obj" && ext != ".ply" && ext != ".off") {
     fail(path, "has unsupported extension '" + ext + "'; supported: " + kSupported);
   }
-  if (std::filesystem::file_size(path, ec) == 0 && !ec) {
-    fail(path, "is empty (0 bytes); expected a triangle mesh");
+  if (!std::filesystem::is_regular_file(status)) {
+    fail(path, "is not a regular file (a pipe, socket or device); expected a mesh file");
   }
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (size == 0 && !ec) fail(path, "is empty (0 bytes); expected a triangle mesh");
+  if (!ec && size > kMaxMeshBytes) {
+    fail(path, "is " + std::to_string(size >> 20) + " MB; expected at most " +
+                   std::to_string(kMaxMeshBytes >> 20) + " MB");
+  }
+  if (ext == ".ply") checkPlyHeader(path, size);
+  if (ext == ".off") checkOffHeader(path, size);
 }
 
 Eigen::Vector3d toEigen(const aiVector3D& v) { return {v.x, v.y, v.z}; }

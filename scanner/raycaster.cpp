@@ -7,6 +7,10 @@
 
 namespace scanplan::scanner {
 
+namespace {
+constexpr double kFarthest = 1e6;  // m: a ray origin farther out meets nothing
+}  // namespace
+
 struct Raycaster::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
@@ -52,6 +56,12 @@ std::optional<RayHit> Raycaster::cast(const Eigen::Vector3d& origin,
                                       double t_near,
                                       double t_far) const {
   const Eigen::Vector3d d = direction.normalized();
+  // Embree asserts a valid ray (finite, 0 ≤ t_near ≤ t_far) and works in float: anything else,
+  // or an origin beyond any cell, meets nothing.
+  if (!origin.allFinite() || !d.allFinite() || origin.cwiseAbs().maxCoeff() > kFarthest ||
+      !(t_near >= 0.0) || !(t_far >= t_near)) {
+    return std::nullopt;
+  }
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRayHit rh{};

@@ -26,6 +26,7 @@ class Raycaster {
   Raycaster& operator=(const Raycaster&) = delete;
 
   /// Nearest hit along origin + s·d̂ for s in [t_near, t_far] (m), d̂ = direction normalised.
+  /// No hit for a non-finite ray, an origin beyond 1000 km or not 0 ≤ t_near ≤ t_far.
   std::optional<RayHit> cast(const Eigen::Vector3d& origin,
                              const Eigen::Vector3d& direction,
                              double t_near = 0.0,

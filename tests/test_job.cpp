@@ -577,5 +577,29 @@ TEST_F(JobFile, SourceIsThePathAsGiven) {
       << "job show names the resolved file";
 }
 
+// Numbers no cell can mean stop at the reader, before they reach Embree or FCL (a ring height of
+// 1e300 mm aborted inside Embree): lengths within a kilometre, everything within 1e9.
+TEST(JobLimits, HugeNumbersAreRefusedNamingTheKey) {
+  const auto error = [](const std::string& set) {
+    try {
+      loadJob(kSource / "data/jobs/demo_rings.yaml", {set});
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string ring = error("scan.paths[0].height_mm=1e300");
+  EXPECT_NE(ring.find("scan.paths[0].height_mm: 1e+300: expected a number within ±1e+06"),
+            std::string::npos)
+      << ring;
+  const std::string base = error("robot_base.xyz_mm=[0, 2e6, 0]");
+  EXPECT_NE(base.find("robot_base.xyz_mm[1]"), std::string::npos) << base;
+  EXPECT_NE(base.find("±1e+06"), std::string::npos) << base;
+  const std::string rate = error("scanner.frame_rate_hz=1e12");
+  EXPECT_NE(rate.find("scanner.frame_rate_hz"), std::string::npos) << rate;
+  EXPECT_EQ(error("scan.paths[0].height_mm=900000"), "no error");  // within: it may not see the
+                                                                   // part, the path says so
+}
+
 }  // namespace
 }  // namespace scanplan::cli

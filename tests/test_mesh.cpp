@@ -3,6 +3,7 @@
 #include "kinematics/error.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -411,7 +412,7 @@ TEST_F(MeshLoadTest, GarbageAndFacelessFilesAreInputErrors) {
       {"garbage.stl", "this is not a mesh at all, just some words\n", "could not be read"},
       {"garbage_solid.stl", "solid x\n nonsense here\nendsolid x\n", "could not be read"},
       {"garbage.off", "garbage\n", "could not be read"},
-      {"garbage.ply", "garbage\n", "could not be read"},
+      {"garbage.ply", "garbage\n", "no complete PLY header"},
       {"points_only.obj", "v 0 0 0\nv 1 0 0\np 1\nl 1 2\n", "no triangles"}};
   for (const auto& c : cases) {
     EXPECT_TRUE(containsAll(loadError(write(c.name, c.text)), {c.name, c.says}));
@@ -539,4 +540,31 @@ TEST(SharedRobotMeshes, ViperLinksLoadInMetres) {
 }
 
 }  // namespace
+// Inputs that made the loader loop, allocate without end or wait forever (issue 17): each is
+// refused by the pre-check, quickly, naming the file.
+TEST_F(MeshLoadTest, TruncatedHeadersHugeCountsAndPipesAreRefusedBeforeTheLoader) {
+  const auto header_only = write("header.ply", "ply\nformat ascii 1.0\n");
+  EXPECT_NE(loadError(header_only).find("no complete PLY header"), std::string::npos)
+      << loadError(header_only);
+  const auto billion = write("billion.ply",
+                             "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\n"
+                             "property float x\nproperty float y\nproperty float z\nend_header\n");
+  EXPECT_NE(loadError(billion).find("claims 1000000000 PLY elements"), std::string::npos)
+      << loadError(billion);
+  const auto off = write("huge.off", "OFF\n# a comment\n2147483648 1 0\n0 0 0\n");
+  EXPECT_NE(loadError(off).find("claims 2147483648 vertices"), std::string::npos) << loadError(off);
+  const fs::path fifo = dir_ / "pipe.stl";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_NE(loadError(fifo).find("is not a regular file"), std::string::npos) << loadError(fifo);
+  for (const auto& p : {header_only, billion, off, fifo})
+    EXPECT_NE(loadError(p).find(p.filename().string()), std::string::npos);
+  // A well-formed small PLY still loads (the pre-check counts what the header claims).
+  const auto good = write("tri.ply",
+                          "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                          "property float y\nproperty float z\nelement face 1\n"
+                          "property list uchar int vertex_indices\nend_header\n"
+                          "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  EXPECT_EQ(loadError(good), "<no exception>");
+}
+
 }  // namespace scanplan::kinematics

@@ -513,6 +513,12 @@ TEST_F(Programs, MalformedVplusNamesTheLine) {
       {"bad speed", lineOf("    SPEED", 2), "    SPEED fast", "expected 'SPEED <value> [ALWAYS]'"},
       {"move without comment", lineOf("; t=", 2), "; a plain comment",
        "MOVE without its step comment"},
+      // 30 kB in one line overflowed std::regex's recursion (exit 139) before the bound.
+      {"huge move line", lineOf("    MOVE", 2),
+       "    MOVE #PPOINT(" + std::string(30000, ' ') + "1, 2, 3, 4, 5, 6)",
+       "characters ('    MOVE #PPOINT("},
+      {"long non-matching line", lineOf("    MOVE", 2), "    MOVE #PPOINT(" + std::string(900, '1'),
+       "expected 'MOVE #PPOINT(j1, j2, j3, j4, j5, j6)'"},
   };
   for (const Case& c : cases) {
     std::vector<std::string> edited = original;
@@ -530,6 +536,7 @@ TEST_F(Programs, MalformedVplusNamesTheLine) {
       EXPECT_EQ(message.rfind("scan.v2:" + std::to_string(expected_line) + ": ", 0), 0u)
           << c.what << ": " << message;
       EXPECT_NE(message.find(c.message), std::string::npos) << c.what << ": " << message;
+      EXPECT_LT(message.size(), 400u) << c.what << ": the line is echoed clipped";
     }
   }
   // Whole-file errors.

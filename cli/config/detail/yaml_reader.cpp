@@ -254,6 +254,21 @@ void YamlIn::fail(const std::string& key,
       fmt::format("{}: {}: {}: expected {}", where(n), fieldPath(key), value, expected));
 }
 
+namespace {
+
+// No cell is a kilometre across, and the ray caster and the collision library work in float:
+// lengths (keys in _mm) stay within ±1e6 mm, every other number within ±1e9, whatever a key's
+// own range allows. Empty when `v` is within; else what to expect.
+std::string beyondMagnitude(const std::string& key, double v) {
+  const bool length = key.size() > 3 && key.compare(key.size() - 3, 3, "_mm") == 0;
+  const double cap = length ? 1e6 : 1e9;
+  if (std::abs(v) <= cap) return {};
+  return fmt::format("a number within ±{} ({})", formatNumber(cap),
+                     length ? "lengths in mm: a kilometre" : "a bound on every number");
+}
+
+}  // namespace
+
 void YamlIn::field(const char* key, double& value, const Expect& expect) {
   if (!has(key)) return;
   const YAML::Node n = node_[key];
@@ -273,6 +288,8 @@ void YamlIn::field(const char* key, double& value, const Expect& expect) {
     fail(key, nodeText(n) + " is not a number", expect.describe("number") + hint);
   }
   if (!expect.accepts(v)) fail(key, formatNumber(v), expect.describe("number"));
+  if (const std::string limit = beyondMagnitude(key, v); !limit.empty())
+    fail(key, formatNumber(v), limit);
   value = v;
 }
 
@@ -380,6 +397,10 @@ void YamlIn::numbers(const char* key,
     if (!expect.accepts(v)) {
       throw InputError(fmt::format("{}: {}: {}: expected {}", where(item), fieldPath(sub),
                                    formatNumber(v), expect.describe("number")));
+    }
+    if (const std::string limit = beyondMagnitude(key, v); !limit.empty()) {
+      throw InputError(fmt::format("{}: {}: {}: expected {}", where(item), fieldPath(sub),
+                                   formatNumber(v), limit));
     }
     values[i] = v;
   }
