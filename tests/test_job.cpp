@@ -601,5 +601,37 @@ TEST(JobLimits, HugeNumbersAreRefusedNamingTheKey) {
                                                                    // part, the path says so
 }
 
+// A billion-laughs alias bomb in a 340-byte --set value took all memory ("internal error:
+// std::bad_alloc" under a 4 GB limit); runaway nesting too. Both stop at the reader, quickly.
+TEST(JobLimits, AliasBombsAndDeepNestingAreRefused) {
+  std::string bomb = "{a: &a [x,x,x,x,x,x,x,x,x,x]";
+  std::string previous = "a";
+  for (const std::string k : {"b", "c", "d", "e", "f", "g", "h", "i"}) {
+    bomb += ", " + k + ": &" + k + " [";
+    for (int n = 0; n < 10; ++n) bomb += (n ? ",*" : "*") + previous;
+    bomb += "]";
+    previous = k;
+  }
+  bomb += "}";
+  try {
+    loadJob(kSource / "data/jobs/demo_rings.yaml", {"name=" + bomb});
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("expands to more than 1000000 nodes"), std::string::npos) << what;
+    EXPECT_LT(what.size(), 400u) << "the value is quoted clipped";
+  }
+  const fs::path deep = fs::temp_directory_path() / "scanplan_test_deep.yaml";
+  std::ofstream(deep) << "name: " << std::string(200, '[') << std::string(200, ']') << "\n";
+  try {
+    loadJob(deep);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("nests deeper than 64 levels"), std::string::npos)
+        << e.what();
+  }
+  fs::remove(deep);
+}
+
 }  // namespace
 }  // namespace scanplan::cli

@@ -15,6 +15,7 @@
 
 #include "cli/batch/batch.h"
 #include "cli/batch/batch_internal.h"
+#include "cli/config/detail/yaml_reader.h"
 #include "cli/config/job.h"
 #include "kinematics/error.h"
 
@@ -117,6 +118,7 @@ YAML::Node loadRoot(const fs::path& file) {
     throw InputError(
         fmt::format("{}:{}:{}: {}", file.string(), e.mark.line + 1, e.mark.column + 1, e.msg));
   }
+  checkYamlSize(root, file.string());
   if (!root.IsMap()) throw InputError(file.string() + ": expected a mapping (jobs, vary, …)");
   for (const auto& kv : root) {
     const auto key = kv.first.as<std::string>();

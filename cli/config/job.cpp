@@ -475,10 +475,12 @@ void describe(YamlOut& a, MapSpec& s) { describeMap(a, s); }
 namespace {
 
 [[noreturn]] void badOverride(const std::string& text, const std::string& why) {
+  // The override quoted as far as 80 characters: a hostile value is not echoed whole.
+  const std::string quoted = text.size() <= 80 ? text : text.substr(0, 80) + "…";
   throw InputError(
       fmt::format("--set '{}': {}: expected key.path=value, e.g. "
                   "planner.ray.horizon=20 or scan.paths[0].height_mm=60",
-                  text, why));
+                  quoted, why));
 }
 
 // The key node of `key` in `map`, recorded as the override's when the override created it.
@@ -570,6 +572,11 @@ YAML::Node overrideValue(const std::string& text, const std::string& value) {
                                                                : YAML::Node(value);
   } catch (const YAML::Exception& e) {
     badOverride(text, "the value is malformed YAML: " + e.msg);
+  }
+  try {
+    checkYamlSize(v, "the value");
+  } catch (const InputError& e) {
+    badOverride(text, e.what());
   }
   return v;
 }

@@ -117,6 +117,46 @@ std::string Expect::describe(const char* kind) const {
   return s;
 }
 
+namespace {
+
+// Counts the nodes as a reader would visit them (an alias counts again each time it is used),
+// stopping at the limits: the size and depth a document may have.
+void countNodes(const YAML::Node& node,
+                std::size_t depth,
+                std::size_t& count,
+                std::size_t& deepest) {
+  ++count;
+  deepest = std::max(deepest, depth);
+  if (count > kMaxYamlNodes || depth > kMaxYamlDepth) return;
+  if (node.IsSequence() || node.IsMap()) {
+    for (auto it = node.begin(); it != node.end(); ++it) {
+      if (node.IsMap()) {
+        countNodes(it->second, depth + 1, count, deepest);
+      } else {
+        countNodes(*it, depth + 1, count, deepest);
+      }
+      if (count > kMaxYamlNodes || deepest > kMaxYamlDepth) return;
+    }
+  }
+}
+
+}  // namespace
+
+void checkYamlSize(const YAML::Node& root, const std::string& where) {
+  std::size_t count = 0, deepest = 0;
+  countNodes(root, 0, count, deepest);
+  if (count > kMaxYamlNodes) {
+    throw InputError(fmt::format(
+        "{}: the YAML expands to more than {} nodes (aliases count each time they are used): "
+        "expected a job-sized document",
+        where, kMaxYamlNodes));
+  }
+  if (deepest > kMaxYamlDepth) {
+    throw InputError(fmt::format("{}: the YAML nests deeper than {} levels: expected a job", where,
+                                 kMaxYamlDepth));
+  }
+}
+
 YAML::Node loadYamlFile(const std::filesystem::path& file) {
   std::error_code ec;
   if (!std::filesystem::exists(file, ec)) {
@@ -134,6 +174,7 @@ YAML::Node loadYamlFile(const std::filesystem::path& file) {
     throw InputError(fmt::format("{}:{}:{}: malformed YAML: {}", file.string(), e.mark.line + 1,
                                  e.mark.column + 1, e.msg));
   }
+  checkYamlSize(root, file.string());
   if (!root.IsMap()) {
     throw InputError(
         fmt::format("{}: the file holds {}, expected a YAML mapping of keys", file.string(),

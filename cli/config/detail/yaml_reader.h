@@ -214,6 +214,13 @@ class YamlOut {
   bool paths_as_written_ = false;
 };
 
+/// Limits on a YAML document, counted as a reader visits it (an alias each time it is used): a
+/// billion-laughs alias bomb or runaway nesting stops here, not in an allocation.
+inline constexpr std::size_t kMaxYamlNodes = 1'000'000;
+inline constexpr std::size_t kMaxYamlDepth = 64;
+/// Throws InputError naming `where` when `root` exceeds them.
+void checkYamlSize(const YAML::Node& root, const std::string& where);
+
 /// Loads a YAML file (a mapping at the top), turning parse errors into InputError with
 /// file:line:column.
 YAML::Node loadYamlFile(const std::filesystem::path& file);
