@@ -272,8 +272,8 @@ void addBatchCommand(CLI::App& app, Commands& c) {
                          "results.jsonl, summary.md, plots, an OMPL benchmark log");
   cmd->add_option("sweep", batch.sweep_file, "Sweep file (YAML)");
   cmd->add_option("-o,--out", batch.out_dir, "Output folder (created)");
-  cmd->add_option("-j,--jobs", batch.jobs, "Threads in all (default: every core)")
-      ->check(CLI::PositiveNumber);
+  cmd->add_option("-j,--jobs", batch.jobs, "Threads in all (default: every core; at most 1024)")
+      ->check(CLI::Range(1, 1024));
   cmd->add_option("--shard", batch.shard, "Run only slice I of N (1-based), e.g. 2/8")
       ->type_name("I/N");
   cmd->add_flag("--resume", batch.resume, "Skip the cases OUT/results.jsonl already has");

@@ -343,6 +343,20 @@ void keepCertificate(const scanner::AreaSampling& sampling_R,
   report.classes = std::move(classes);
 }
 
+// The candidates' probing grows with the square of the part's size: a part in mm declared in m
+// would run for hours. Refused beyond 5 million probed stations (a part about 2.4 m across).
+void checkPartSize(const ScanProblem& problem, const scanner::PassSettings& pass) {
+  const double size = problem.part.bounds().diagonal().norm();
+  const double spacing = 2.0 * pass.window.y_near * (1.0 - pass.overlap);
+  const double stations = 56.0 * (size / spacing) * (size / 0.002);
+  if (!(stations <= 5e6)) {
+    throw InputError(fmt::format(
+        "part: {:.0f} mm across (its box diagonal) is too large to scan with a {:.0f} mm line: "
+        "expected a part within about 2 m (check part.units and part.scale)",
+        toMm(size), toMm(2.0 * pass.window.y_near)));
+  }
+}
+
 // Every candidate: the general spins and strips, then passes aimed at what they miss; evaluated.
 std::vector<scanner::ScanPass> candidates(
     const scanner::PartOnTable& part,
@@ -401,6 +415,7 @@ AutoScanPlan planAutoScan(const ScanProblem& problem,
   const scanner::PassSettings pass_settings = passSettings(problem, scene);
   const kinematics::RotaryTableModel& table = problem.cell.table;
   const Eigen::Isometry3d& X_RP = problem.cell.part.X_RP;
+  checkPartSize(problem, pass_settings);
   const scanner::PartOnTable part(problem.part, X_RP, {table.radius, table.height});
   const scanner::AreaSampling sampling =
       scanner::sampleArea(part.part(), settings.sample_spacing, kMaxSamples);

@@ -24,6 +24,8 @@ struct Key {
 };
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr std::size_t kMaxPathSamples = 2'000'000;  // samples of a whole path
+constexpr double kMaxStations = 2e6;                // probed raster stations of one element
 
 std::string where(std::size_t index) { return "scan.paths[" + std::to_string(index) + "]"; }
 
@@ -280,9 +282,18 @@ std::vector<Key> rasterKeys(const RasterSpec& raster,
   const RasterAxes a = rasterAxes(raster, part, index);
   const double spacing = 2.0 * window.y_near * (1.0 - raster.overlap);
   const double v0 = a.v_min - 0.1;  // probe plane, before the part along the view
-  const int passes = std::max(1, static_cast<int>(std::ceil((a.w_max - a.w_min) / spacing)));
-  const int samples =
-      static_cast<int>(std::ceil((a.u_max - a.u_min + 2.0 * raster.lead) / kRasterStep)) + 1;
+  const double pass_count = std::ceil((a.w_max - a.w_min) / spacing);
+  const double station_count = std::ceil((a.u_max - a.u_min + 2.0 * raster.lead) / kRasterStep) + 1;
+  if (!(pass_count * station_count <= kMaxStations)) {
+    throw InputError(fmt::format(
+        "{}: the raster would probe {:.3g} stations ({:.0f} passes of {:.0f}): expected at most "
+        "{:.0f} (check lead_mm and the part's units and scale: it spans {:.0f} x {:.0f} mm "
+        "here)",
+        where(index), pass_count * station_count, pass_count, station_count, kMaxStations,
+        toMm(a.u_max - a.u_min), toMm(a.w_max - a.w_min)));
+  }
+  const int passes = std::max(1, static_cast<int>(pass_count));
+  const int samples = static_cast<int>(station_count);
 
   std::vector<Key> keys;
   RasterDepths depths;
@@ -380,9 +391,16 @@ GeneratedPath generatePath(const PathRequest& request,
   }
   if (all.empty()) throw InputError("scan.paths: empty: expected at least one path element");
 
-  // Sample every dt by interpolation between keys.
+  // Sample every dt by interpolation between keys; a path too long to sample is refused first
+  // (a ring at 1e-6 °/s or a part a thousand times too large would fill the memory).
   out.path.dt = request.dt;
   const double total = all.back().t;
+  if (!(total / request.dt <= static_cast<double>(kMaxPathSamples))) {
+    throw InputError(fmt::format(
+        "scan.paths: the path takes {:.0f} s, {:.0f} samples every {} s: expected at most {} "
+        "samples (check the speeds, scan.dt_s and the part's units and scale)",
+        total, total / request.dt, request.dt, kMaxPathSamples));
+  }
   const auto n = static_cast<std::size_t>(std::floor(total / request.dt + 1e-9)) + 1;
   std::size_t k = 0;
   for (std::size_t i = 0; i < n; ++i) {

@@ -13,9 +13,10 @@
 
 #include "cli/config/job.h"
 #include "cli/config/problem.h"
-#include "kinematics/units.h"
+#include "kinematics/error.h"
 #include "kinematics/mesh.h"
 #include "kinematics/placement.h"
+#include "kinematics/units.h"
 #include "pipeline/plan_scan.h"
 #include "pipeline/setups.h"
 #include "scanner/area_coverage.h"
@@ -246,6 +247,27 @@ TEST(AutoScan, ASecondSetupTurnsTheCubeOverAndBothCoverItAll) {
   EXPECT_GE(both.area_fraction, first.simulation->area.covered_fraction + 0.1);
   EXPECT_GE(both.covered_of_scannable, 0.98);
   std::filesystem::remove_all(dir);
+}
+
+// Work that scales with the input is estimated before it starts (issue 17): a ring at 1e-6 °/s,
+// a raster with a kilometre of lead, a part in mm declared in metres.
+TEST(AutoScan, OversizedWorkIsRefusedBeforeItStarts) {
+  const auto error = [](const std::string& job, const std::vector<std::string>& set) {
+    try {
+      pipeline::planScan(cli::toProblem(cli::loadJob(test::sourceDir() / job, set)));
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(error("data/jobs/demo_rings.yaml", {"scan.paths[0].speed_deg_s=1e-6"})
+                .find("expected at most 2000000 samples"),
+            std::string::npos);
+  EXPECT_NE(error("data/jobs/demo_rings.yaml", {"scan.paths[3].lead_mm=1e6"})
+                .find("scan.paths[3]: the raster would probe"),
+            std::string::npos);
+  EXPECT_NE(error("data/jobs/demo.yaml", {"part.units=m"}).find("too large to scan"),
+            std::string::npos);
 }
 
 }  // namespace
