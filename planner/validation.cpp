@@ -1,5 +1,7 @@
 #include "planner/validation.h"
 
+#include "kinematics/error.h"
+
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -34,8 +36,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kDistanceSlack = 5e-5;  // m
 // Joint angles read back from a trajectory CSV are exact to 12 significant digits: a joint at
 // its limit must not fail on the last printed digit.
-constexpr double kLimitTolerance = 1e-9;  // rad
-constexpr std::size_t kMaxSamples = 100'000'000;
+constexpr double kLimitTolerance = 1e-9;        // rad
+constexpr std::size_t kMaxSamples = 5'000'000;  // densified poses (about 1.3 GB)
 // Each bisection halves the motion bound; 60 halvings take any real motion far below any
 // resolution. Reaching it ends the refinement with a (conservative) collision span.
 constexpr int kMaxDepth = 60;
@@ -495,14 +497,15 @@ kinematics::Trajectory densify(const kinematics::Trajectory& trajectory, double 
     }
     // A ratio within 1e-9 of a whole number is that number (no sliver step from rounding).
     const double n = std::max(1.0, std::ceil(span / dt - 1e-9));
-    if (n > static_cast<double>(kMaxSamples)) {
-      throw std::invalid_argument("densify: more than 1e8 samples: step too small");
+    if (n > static_cast<double>(kMaxSamples) ||
+        total + static_cast<std::size_t>(n) - 1 > kMaxSamples) {
+      throw InputError(fmt::format(
+          "the trajectory's {:.0f} s sampled every {} s would be more than {} poses: expected a "
+          "shorter trajectory or a lower rate (scanner.frame_rate_hz)",
+          in.back().t - in.front().t, dt, kMaxSamples));
     }
     steps[k] = static_cast<std::size_t>(n);
     total += steps[k] - 1;
-    if (total > kMaxSamples) {
-      throw std::invalid_argument("densify: more than 1e8 samples: step too small");
-    }
   }
   kinematics::Trajectory out;
   out.samples.reserve(total);

@@ -91,7 +91,8 @@ struct ValidationReport {
 /// cut into n = ⌈(t_k+1 − t_k)/dt⌉ equal steps. New samples: f unknown (NaN), scanning when
 /// both ends scan, X_PS interpolated (translation linear, rotation slerp: the target, not the
 /// pose the joints reach), limit empty. Throws std::invalid_argument when dt is not positive and
-/// finite, the times are not strictly increasing, or more than 10⁸ samples would result.
+/// finite or the times are not strictly increasing; InputError (before allocating) when more
+/// than 5·10⁶ samples would result.
 kinematics::Trajectory densify(const kinematics::Trajectory& trajectory, double dt);
 
 /// Proves a trajectory executable before it goes to the robot, on the densified motion

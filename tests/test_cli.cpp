@@ -215,6 +215,14 @@ TEST_F(Cli, UsageErrorsExitTwo) {
       << run.err;
 }
 
+// A device or a pipe as the trajectory was read without end (/dev/zero filled the memory):
+// refused as not a regular file, exit 4, naming it.
+TEST_F(Cli, ADeviceAsTheTrajectoryIsBadInput) {
+  const Result run = scanplan({"validate", kDemoJob, "-t", "/dev/zero"});
+  EXPECT_EQ(run.exit_code, 4) << describe(run);
+  EXPECT_TRUE(contains(run.err, "/dev/zero: is not a regular file")) << run.err;
+}
+
 // DESIGN.md §3.1 (standard DH, zero offsets). q = 0: the α's of J1/J3 cancel, so the flange
 // sits at x = a1 + a2 + a3 = 75 + 270 − 90 = 255, z = d1 + d4 + d6 = 335 + 295 + 80 = 710 mm.
 // q2 = −90 stands the upper arm up (J3 at z = 335 + 270) and q3 = 180 points the forearm along

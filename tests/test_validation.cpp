@@ -19,6 +19,7 @@
 #include "cli/config/problem.h"
 #include "collision/clearance.h"
 #include "collision/scene.h"
+#include "kinematics/error.h"
 #include "kinematics/shape.h"
 #include "kinematics/trajectory.h"
 #include "kinematics/units.h"
@@ -194,6 +195,19 @@ TEST(Densify, RejectsABadStepAndTimesThatDoNotIncrease) {
   EXPECT_EQ(planner::densify(tr, 5.0).samples.size(), 2u);  // a step longer than the interval
   tr.samples[1].t = 0.0;
   EXPECT_THROW(planner::densify(tr, 0.1), std::invalid_argument);
+  // Too many poses is the input's fault (a 100 000 s trajectory at 100 Hz): an InputError
+  // naming the duration and the bound, before anything is allocated.
+  tr.samples[1].t = 100000.0;
+  try {
+    planner::densify(tr, 0.01);
+    ADD_FAILURE() << "no error";
+  } catch (const scanplan::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(
+                  "100000 s sampled every 0.01 s would be more than 5000000 poses"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(planner::densify(tr, 1000.0).samples.size(), 101u);
 }
 
 // A joint faster than its max_speed is one kJointSpeed run with its joint, value and limit.

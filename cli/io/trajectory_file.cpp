@@ -13,10 +13,24 @@ namespace scanplan::cli {
 
 namespace {
 
+constexpr std::uintmax_t kMaxTrajectoryBytes = std::uintmax_t{1} << 30;  // 1 GB
+
 std::string readWhole(const std::filesystem::path& file) {
   std::error_code ec;
-  if (!std::filesystem::exists(file, ec)) {
+  const auto status = std::filesystem::status(file, ec);
+  if (!std::filesystem::exists(status)) {
     throw InputError(fmt::format("{}: file does not exist", file.string()));
+  }
+  // A pipe or a device would be read without end (a FIFO waits, /dev/zero fills the memory).
+  if (!std::filesystem::is_regular_file(status)) {
+    throw InputError(fmt::format(
+        "{}: is not a regular file (a directory, pipe or device): expected a trajectory file",
+        file.string()));
+  }
+  const std::uintmax_t size = std::filesystem::file_size(file, ec);
+  if (!ec && size > kMaxTrajectoryBytes) {
+    throw InputError(fmt::format("{}: is {} MB: expected a trajectory file of at most {} MB",
+                                 file.string(), size >> 20, kMaxTrajectoryBytes >> 20));
   }
   std::ifstream in(file, std::ios::binary);
   if (!in) throw InputError(fmt::format("{}: cannot be read", file.string()));
