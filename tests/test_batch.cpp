@@ -754,6 +754,16 @@ TEST_F(Batch, BadKeyInTheSweepFailsBeforeAnythingRuns) {
   EXPECT_TRUE(contains(value.err, "planner.ray.horizon")) << value.err;
   EXPECT_FALSE(fs::exists(out));
 
+  // A list as a key and a repeated key were "internal error" (issue 17).
+  const Result list_key = batch(writeSweep("vary:\n  [planner.method]: [ray]\n"), out);
+  EXPECT_EQ(list_key.exit_code, 4) << describe(list_key);
+  EXPECT_TRUE(contains(list_key.err, "vary: a list used as a key")) << list_key.err;
+  const Result repeated =
+      batch(writeSweep("vary:\n  planner.method: [ray]\n  planner.method: [dp]\n"), out);
+  EXPECT_EQ(repeated.exit_code, 4) << describe(repeated);
+  EXPECT_TRUE(contains(repeated.err, "vary: planner.method: given twice")) << repeated.err;
+  EXPECT_FALSE(fs::exists(out));
+
   const Result top = batch(writeSweep("varry:\n  planner.ray.horizon: [10]\n"), out);
   EXPECT_EQ(top.exit_code, 4) << describe(top);
   EXPECT_TRUE(contains(top.err, "varry: unknown key")) << top.err;

@@ -34,6 +34,28 @@ std::string where(const fs::path& file, const YAML::Node& node) {
                      : file.string();
 }
 
+// A mapping's key as text: a plain scalar, once per mapping (yaml-cpp keeps the first of
+// repeated keys and converts a list key by throwing: both were an "internal error").
+std::string keyText(const fs::path& file,
+                    const YAML::Node& key,
+                    const std::string& in,
+                    std::vector<std::string>& seen) {
+  if (!key.IsScalar() || key.Scalar().empty()) {
+    throw InputError(where(file, key) + ": " + in + ": a " +
+                     (key.IsSequence() ? "list"
+                      : key.IsMap()    ? "mapping"
+                                       : "null") +
+                     " used as a key: expected a plain key name");
+  }
+  const std::string text = key.Scalar();
+  if (std::find(seen.begin(), seen.end(), text) != seen.end()) {
+    throw InputError(where(file, key) + ": " + in + ": " + text +
+                     ": given twice: expected each key once");
+  }
+  seen.push_back(text);
+  return text;
+}
+
 // A value as --set takes it: scalars as written, lists and maps as flow YAML.
 std::string valueText(const YAML::Node& node) {
   if (node.IsScalar()) return node.Scalar();
@@ -74,8 +96,9 @@ std::vector<std::string> valueList(const fs::path& file,
       throw InputError(
           fmt::format("{}.{}: '{}': expected a finite number", at, name, valueText(n)));
     };
+    std::vector<std::string> seen;
     for (const auto& kv : node) {
-      const auto name = kv.first.as<std::string>();
+      const auto name = keyText(file, kv.first, field, seen);
       if (name != "from" && name != "to" && name != "step") {
         throw InputError(fmt::format("{}: unknown key '{}': expected from, to, step", at, name));
       }
@@ -120,8 +143,9 @@ YAML::Node loadRoot(const fs::path& file) {
   }
   checkYamlSize(root, file.string());
   if (!root.IsMap()) throw InputError(file.string() + ": expected a mapping (jobs, vary, …)");
+  std::vector<std::string> top;
   for (const auto& kv : root) {
-    const auto key = kv.first.as<std::string>();
+    const auto key = keyText(file, kv.first, "the sweep", top);
     if (key != "jobs" && key != "set" && key != "vary" && key != "cases" && key != "seeds" &&
         key != "repeats") {
       throw InputError(
@@ -192,8 +216,9 @@ std::vector<std::pair<std::string, std::vector<std::string>>> readGrid(
   std::vector<std::pair<std::string, std::vector<std::string>>> grid;
   if (const YAML::Node vary = root["vary"]) {
     if (!vary.IsMap()) throw InputError(where(file, vary) + ": vary: expected key: [values]");
+    std::vector<std::string> seen;
     for (const auto& kv : vary) {
-      const auto key = kv.first.as<std::string>();
+      const auto key = keyText(file, kv.first, "vary", seen);
       grid.emplace_back(key, valueList(file, key, kv.second));
       keys.push_back(key);
     }
@@ -233,8 +258,9 @@ std::size_t readCases(const fs::path& file,
         throw InputError(where(file, c) + ": cases: expected a mapping key: value per case");
       }
       Setting s;
+      std::vector<std::string> seen;
       for (const auto& kv : c) {
-        const auto key = kv.first.as<std::string>();
+        const auto key = keyText(file, kv.first, "cases", seen);
         s.emplace_back(key, valueText(kv.second));
         if (std::find(keys.begin(), keys.end(), key) == keys.end()) keys.push_back(key);
       }
