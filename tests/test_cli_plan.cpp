@@ -67,6 +67,26 @@ void expectReachesTargets(const kinematics::Trajectory& trajectory) {
   EXPECT_LT(worst_rot, 1e-9);
 }
 
+// A second run into a folder another run is writing is refused, naming the holder's pid; the
+// lock of a run that was killed is stale and taken over (issue 17).
+TEST_F(CliPlan, AFolderInUseIsRefusedAndAStaleLockTakenOver) {
+  fs::create_directories(out());
+  std::ofstream(out() / ".scanplan-lock") << ::getpid() << "\n";  // this test process: alive
+  const Result busy = plan({"--set", "simulation.enabled=false"});
+  EXPECT_EQ(busy.exit_code, 4) << describe(busy);
+  EXPECT_TRUE(contains(busy.err, "is in use by pid " + std::to_string(::getpid()))) << busy.err;
+  EXPECT_FALSE(fs::exists(out() / "report.json")) << "nothing written";
+  // A pid that has exited: a child that ends at once.
+  const pid_t child = ::fork();
+  if (child == 0) ::_exit(0);
+  ::waitpid(child, nullptr, 0);
+  std::ofstream(out() / ".scanplan-lock") << child << "\n";
+  const Result run = plan({"--set", "simulation.enabled=false"});
+  EXPECT_EQ(run.exit_code, 0) << describe(run);
+  EXPECT_TRUE(fs::exists(out() / "report.json"));
+  EXPECT_FALSE(fs::exists(out() / ".scanplan-lock")) << "released when done";
+}
+
 TEST_F(CliPlan, WritesTrajectoryReportAndPathFigure) {
   const Result run = plan({});
   ASSERT_EQ(run.exit_code, 0) << describe(run);

@@ -3,10 +3,12 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <string_view>
 #include <system_error>
 
+#include <fcntl.h>
 #include <signal.h>
 #include <unistd.h>
 
@@ -48,11 +50,60 @@ void prepareOutputDir(const std::filesystem::path& dir) {
   }
 }
 
+namespace {
+
+constexpr const char* kLockName = ".scanplan-lock";
+
+bool alive(long pid) {
+  return pid > 0 && (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH);
+}
+
+// The pid a lock file names, or 0 when it names none.
+long lockHolder(const std::filesystem::path& lock) {
+  std::ifstream in(lock);
+  long pid = 0;
+  in >> pid;
+  return in ? pid : 0;
+}
+
+}  // namespace
+
+// Takes OUT's lock: O_EXCL creation of OUT/.scanplan-lock holding our pid. A lock whose process
+// is gone is stale: removed and taken. A live holder (another run, or this process) is an
+// InputError naming it.
+void OutputStage::lock() {
+  const std::filesystem::path lock = out_ / kLockName;
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    const int fd = ::open(lock.c_str(), O_CREAT | O_EXCL | O_WRONLY, 0644);
+    if (fd >= 0) {
+      const std::string pid = std::to_string(static_cast<long>(::getpid())) + "\n";
+      const bool written = ::write(fd, pid.data(), pid.size()) == static_cast<ssize_t>(pid.size());
+      ::close(fd);
+      if (!written) break;
+      locked_ = true;
+      return;
+    }
+    if (errno != EEXIST) break;
+    const long holder = lockHolder(lock);
+    if (holder > 0 && alive(holder)) {
+      throw InputError(fmt::format(
+          "{} is in use by pid {} (another scanplan run writing there): wait for it, or choose "
+          "another output folder",
+          out_.string(), holder));
+    }
+    std::error_code ignored;
+    std::filesystem::remove(lock, ignored);  // stale: its run was killed
+  }
+  throw InputError(fmt::format("{}: cannot create the lock file {}: {}", out_.string(), kLockName,
+                               std::strerror(errno)));
+}
+
 OutputStage::OutputStage(std::filesystem::path out_dir, std::vector<std::string> owned)
     : out_(std::move(out_dir)), owned_(std::move(owned)) {
   std::error_code ec;
   created_out_ = !std::filesystem::exists(out_, ec);
   prepareOutputDir(out_);
+  lock();
   stage_ = out_ / fmt::format(".scanplan-staging-{}", static_cast<long>(::getpid()));
   // Staging folders of runs that were killed (their process is gone, or it was an earlier run
   // with our pid): removed, so they do not pile up. A live run's folder is left alone.
@@ -69,16 +120,25 @@ OutputStage::OutputStage(std::filesystem::path out_dir, std::vector<std::string>
   }
   std::filesystem::create_directory(stage_, ec);
   if (ec) {
+    unlock();
     throw InputError(
         fmt::format("{}: cannot create a staging folder: {}", out_.string(), ec.message()));
   }
 }
 
-OutputStage::~OutputStage() {
-  if (committed_) return;
+void OutputStage::unlock() {
+  if (!locked_) return;
   std::error_code ec;
-  std::filesystem::remove_all(stage_, ec);
-  if (created_out_ && std::filesystem::is_empty(out_, ec)) std::filesystem::remove(out_, ec);
+  std::filesystem::remove(out_ / kLockName, ec);
+  locked_ = false;
+}
+
+OutputStage::~OutputStage() {
+  std::error_code ec;
+  if (!committed_) std::filesystem::remove_all(stage_, ec);
+  unlock();
+  if (!committed_ && created_out_ && std::filesystem::is_empty(out_, ec))
+    std::filesystem::remove(out_, ec);
 }
 
 bool OutputStage::owned(const std::string& name) const {

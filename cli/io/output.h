@@ -16,7 +16,9 @@ void writeFileAtomically(const std::filesystem::path& file, const std::string& c
 void prepareOutputDir(const std::filesystem::path& dir);
 
 /// One command run's outputs, written into a staging folder inside the output folder and moved
-/// into place together by commit(). A run that fails or is interrupted leaves the output folder
+/// into place together by commit(). The folder is locked meanwhile (OUT/.scanplan-lock holds
+/// the pid): a second run into it is an InputError "OUT is in use by pid N"; the lock of a
+/// killed run is stale and taken over. A run that fails or is interrupted leaves the output folder
 /// as it was (and removes it again if the run created it); on commit, files of an earlier run
 /// that this run does not write are removed, so a stale trajectory.csv or program never sits
 /// next to a new report.
@@ -38,12 +40,15 @@ class OutputStage {
 
  private:
   bool owned(const std::string& name) const;
+  void lock();
+  void unlock();
 
   std::filesystem::path out_;
   std::filesystem::path stage_;
   std::vector<std::string> owned_;
   bool created_out_ = false;
   bool committed_ = false;
+  bool locked_ = false;
 };
 
 /// Quaternion (w, x, y, z) with w ≥ 0.
