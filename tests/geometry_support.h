@@ -1,10 +1,24 @@
 #pragma once
 
 // Brute-force geometry for checking simulated points against meshes (test_scanner_sim,
-// test_cli_verify).
+// test_cli_verify), and small meshes with known answers.
 #include <Eigen/Core>
 
+#include "kinematics/mesh.h"
+
 namespace scanplan::test {
+
+/// An axis-aligned cube of edge `a` centred at the origin, outward winding, 12 triangles.
+inline kinematics::TriangleMesh centredCube(double a) {
+  kinematics::TriangleMesh box;
+  for (int i = 0; i < 8; ++i) {
+    box.vertices.emplace_back(0.5 * a * ((i & 1) ? 1 : -1), 0.5 * a * ((i & 2) ? 1 : -1),
+                              0.5 * a * ((i & 4) ? 1 : -1));
+  }
+  box.triangles = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                   {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+  return box;
+}
 
 /// Closest distance from p to the triangle abc (Ericson, Real-Time Collision Detection, 5.1.5),
 /// in the units of its arguments.

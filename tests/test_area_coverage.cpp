@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include "geometry_support.h"
+
 #include "scanner/area_coverage.h"
 
 namespace {
@@ -20,18 +22,6 @@ using scanplan::scanner::sampleArea;
 
 constexpr double kMm = 1e-3;
 constexpr double kPi = 3.141592653589793;
-
-// An axis-aligned cube of edge `a` centred at the origin, outward winding, 12 triangles.
-TriangleMesh cube(double a) {
-  TriangleMesh box;
-  for (int i = 0; i < 8; ++i) {
-    box.vertices.emplace_back(0.5 * a * ((i & 1) ? 1 : -1), 0.5 * a * ((i & 2) ? 1 : -1),
-                              0.5 * a * ((i & 4) ? 1 : -1));
-  }
-  box.triangles = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
-                   {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
-  return box;
-}
 
 // The square [0, a]² at z = 0 cut into n × n cells of two triangles each.
 TriangleMesh plate(double a, int n) {
@@ -74,7 +64,7 @@ bool onTriangle(const TriangleMesh& m, const scanplan::scanner::AreaSample& s) {
 }
 
 TEST(AreaSampling, SamplesLieOnTheirTrianglesAndSplitTheAreaEvenly) {
-  const TriangleMesh m = cube(10 * kMm);  // 600 mm²
+  const TriangleMesh m = scanplan::test::centredCube(10 * kMm);  // 600 mm²
   const AreaSampling s = sampleArea(m, 0.5 * kMm);
   EXPECT_NEAR(s.total_area, 600e-6, 1e-12);
   ASSERT_EQ(s.samples.size(), 2400u);  // 600 mm² / 0.25 mm²
@@ -90,7 +80,7 @@ TEST(AreaSampling, SamplesLieOnTheirTrianglesAndSplitTheAreaEvenly) {
 }
 
 TEST(AreaSampling, IsDeterministicAndHonoursTheCap) {
-  const TriangleMesh m = cube(10 * kMm);
+  const TriangleMesh m = scanplan::test::centredCube(10 * kMm);
   const AreaSampling a = sampleArea(m, 0.5 * kMm, 2'000'000, 7);
   const AreaSampling b = sampleArea(m, 0.5 * kMm, 2'000'000, 7);
   ASSERT_EQ(a.samples.size(), b.samples.size());
@@ -105,7 +95,7 @@ TEST(AreaSampling, IsDeterministicAndHonoursTheCap) {
 TEST(AreaCoverage, TopFaceCoveredGivesItsAreaPlusTheRimWithinTheRadius) {
   // Points densely on the top face of a 10 mm cube, radius 0.5 mm: the top (100 mm²) and a
   // 0.5 mm strip at the top of each side (4 × 5 mm²) are covered: 120 / 600 = 0.2.
-  const TriangleMesh m = cube(10 * kMm);
+  const TriangleMesh m = scanplan::test::centredCube(10 * kMm);
   const AreaSampling s = sampleArea(m, 0.2 * kMm);
   const auto points = grid(-5 * kMm, 5 * kMm, -5 * kMm, 5 * kMm, 5 * kMm, 0.02 * kMm);
   const auto c = areaCoverage(s, points, 0.5 * kMm);
@@ -120,7 +110,7 @@ TEST(AreaCoverage, TopFaceCoveredGivesItsAreaPlusTheRimWithinTheRadius) {
 }
 
 TEST(AreaCoverage, NearestPointAgreesWithBruteForce) {
-  const TriangleMesh m = cube(10 * kMm);
+  const TriangleMesh m = scanplan::test::centredCube(10 * kMm);
   const AreaSampling s = sampleArea(m, 0.5 * kMm);
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-6 * kMm, 6 * kMm);
@@ -151,7 +141,7 @@ TEST(AreaCoverage, DoesNotDependOnHowTheMeshIsCut) {
 }
 
 TEST(AreaCoverage, NoPointsCoverNothing) {
-  const AreaSampling s = sampleArea(cube(10 * kMm), 1 * kMm);
+  const AreaSampling s = sampleArea(scanplan::test::centredCube(10 * kMm), 1 * kMm);
   const auto c = areaCoverage(s, {}, 1 * kMm);
   EXPECT_EQ(c.covered_samples, 0u);
   EXPECT_EQ(c.covered_fraction, 0.0);
@@ -161,7 +151,7 @@ TEST(AreaCoverage, NoPointsCoverNothing) {
 // The cube resting on the table (its centre 5 mm up): exactly the samples of its bottom face
 // (triangles 0 and 1: the vertices with z < 0) face the table; the sides and the top do not.
 TEST(FacesTable, ACubeOnTheTableFacesItWithExactlyItsBottom) {
-  const TriangleMesh m = cube(10 * kMm);
+  const TriangleMesh m = scanplan::test::centredCube(10 * kMm);
   const AreaSampling s = sampleArea(m, 0.5 * kMm);
   const Eigen::Isometry3d X_RP(Eigen::Translation3d(0.0, 0.0, 5 * kMm));
   const auto faces = scanplan::scanner::facesTable(s, X_RP, 60.0 * kPi / 180.0, 0.2);

@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include "geometry_support.h"
+
 #include "scanner/scannability.h"
 
 namespace {
@@ -25,18 +27,6 @@ using scanplan::scanner::TableTop;
 
 constexpr double kMm = 1e-3;
 constexpr TableTop kTable{0.2, 0.15};
-
-// An axis-aligned cube of edge `a` centred at the origin, outward winding, 12 triangles.
-TriangleMesh cube(double a) {
-  TriangleMesh box;
-  for (int i = 0; i < 8; ++i) {
-    box.vertices.emplace_back(0.5 * a * ((i & 1) ? 1 : -1), 0.5 * a * ((i & 2) ? 1 : -1),
-                              0.5 * a * ((i & 4) ? 1 : -1));
-  }
-  box.triangles = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
-                   {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
-  return box;
-}
 
 // Appends the planar quad p0 p1 p2 p3 (in order around it) as two triangles wound so that their
 // normal points along `outward`.
@@ -117,7 +107,8 @@ ScannabilitySettings demoHead() {
 
 // A cube of edge `a` resting on the table, centred on its axis.
 PartOnTable cubeOnTable(double a) {
-  return PartOnTable(cube(a), Eigen::Isometry3d(Eigen::Translation3d(0.0, 0.0, 0.5 * a)), kTable);
+  return PartOnTable(scanplan::test::centredCube(a),
+                     Eigen::Isometry3d(Eigen::Translation3d(0.0, 0.0, 0.5 * a)), kTable);
 }
 
 // Every sample of a 60 mm cube on the table: its bottom lies on the table (facesTable), every
