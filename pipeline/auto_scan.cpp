@@ -27,6 +27,7 @@ using Clock = std::chrono::steady_clock;
 constexpr std::size_t kMaxSamples = 400'000;  // evaluation samples at most (memory, time)
 constexpr std::size_t kMaxAimed = 600;        // aimed candidate passes at most
 constexpr double kTargetMargin = 0.01;        // planned coverage over the target (see below)
+constexpr double kMaxStations = 5e6;          // probed strip stations of the candidates
 
 double since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -344,16 +345,17 @@ void keepCertificate(const scanner::AreaSampling& sampling_R,
 }
 
 // The candidates' probing grows with the square of the part's size: a part in mm declared in m
-// would run for hours. Refused beyond 5 million probed stations (a part about 2.4 m across).
+// would run for hours. Refused beyond 5 million probed strip stations (a part about 2 m across).
 void checkPartSize(const ScanProblem& problem, const scanner::PassSettings& pass) {
-  const double size = problem.part.bounds().diagonal().norm();
-  const double spacing = 2.0 * pass.window.y_near * (1.0 - pass.overlap);
-  const double stations = 56.0 * (size / spacing) * (size / 0.002);
-  if (!(stations <= 5e6)) {
+  std::vector<Eigen::Vector3d> part_R;
+  part_R.reserve(problem.part.vertices.size());
+  for (const Eigen::Vector3d& v : problem.part.vertices)
+    part_R.push_back(problem.cell.part.X_RP * v);
+  if (!(scanner::candidateStations(part_R, pass) <= kMaxStations)) {
     throw InputError(fmt::format(
         "part: {:.0f} mm across (its box diagonal) is too large to scan with a {:.0f} mm line: "
         "expected a part within about 2 m (check part.units and part.scale)",
-        toMm(size), toMm(2.0 * pass.window.y_near)));
+        toMm(problem.part.bounds().diagonal().norm()), toMm(2.0 * pass.window.y_near)));
   }
 }
 

@@ -88,6 +88,7 @@ CoverResult greedyCover(const std::vector<ScanPass>& passes,
 namespace {
 
 constexpr int kArcSegments = 16;
+constexpr std::size_t kMaxTwoOptWork = 20'000'000;  // transfers judged by 2-opt at most
 
 struct Spherical {
   double azimuth = 0.0, elevation = 0.0, radius = 0.0;
@@ -262,9 +263,11 @@ void twoOpt(const std::vector<ScanPass>& passes,
             const std::optional<Eigen::Isometry3d>& start,
             const TransferSphere& sphere) {
   const std::size_t n = tour.size();
-  for (int round = 0; round < 50; ++round) {
+  // Each round is O(n²) windows; the work is capped so a tour of many passes stays seconds.
+  std::size_t work = 0;
+  for (int round = 0; round < 50 && work < kMaxTwoOptWork; ++round) {
     bool improved = false;
-    for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t i = 0; i < n && work < kMaxTwoOptWork; ++i) {
       TourState st = tourState(passes, tour, start, sphere);
       for (std::size_t j = i; j < n; ++j) {
         std::size_t m = j + 1;
@@ -274,7 +277,7 @@ void twoOpt(const std::vector<ScanPass>& passes,
         for (std::size_t k = i; k <= last; ++k) before += st.into[k];
         std::optional<Eigen::Isometry3d> at = st.before[i];
         double after = 0.0;
-        for (std::size_t k = i; k <= last && after < before; ++k) {
+        for (std::size_t k = i; k <= last && after < before; ++k, ++work) {
           const TourStep s =
               k <= j ? TourStep{tour[i + j - k].pass, !tour[i + j - k].reversed, 0.0} : tour[k];
           const Ends e = ends(passes[s.pass], s.reversed, at);

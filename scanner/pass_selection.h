@@ -80,7 +80,7 @@ struct TourStep {
 
 /// Orders `chosen` (indices into passes) to keep the transfers short: nearest neighbour from
 /// `start` (or from up to 12 first passes, the best kept), then 2-opt moves that reverse a stretch
-/// of the tour (and each pass in it). Deterministic.
+/// of the tour (and each pass in it), judging 2·10⁷ transfers at most. Deterministic.
 std::vector<TourStep> orderPasses(const std::vector<ScanPass>& passes,
                                   const std::vector<std::size_t>& chosen,
                                   const std::optional<Eigen::Isometry3d>& start,

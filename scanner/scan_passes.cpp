@@ -304,6 +304,19 @@ const char* passKindName(PassKind kind) {
   return "?";
 }
 
+double candidateStations(const std::vector<Eigen::Vector3d>& part_R, const PassSettings& settings) {
+  kinematics::TriangleMesh points;
+  points.vertices = part_R;
+  const double spacing = 2.0 * settings.window.y_near * (1.0 - settings.overlap);
+  double stations = 0.0;
+  for (const auto& [v, u] : stripViews()) {
+    const StripAxes a = stripAxes(points, v, u);
+    stations += std::max(1.0, std::ceil((a.w_max - a.w_min) / spacing)) *
+                std::ceil((a.u_max - a.u_min + 2.0 * settings.lead) / kStation);
+  }
+  return stations;
+}
+
 std::vector<ScanPass> candidatePasses(const PartOnTable& scene, const PassSettings& settings) {
   const HousingCheck housing(scene, settings.housing, settings.housing_spacing);
   std::vector<ScanPass> out;

@@ -64,6 +64,10 @@ struct ScanPass {
   double duration() const { return t.empty() ? 0.0 : t.back() - t.front(); }
 };
 
+/// The strip stations candidatePasses() probes for a part with these vertices (R frame): the
+/// work it grows with (the square of the part's size), to check before generating.
+double candidateStations(const std::vector<Eigen::Vector3d>& part_R, const PassSettings& settings);
+
 /// Every candidate pass over the part (spins first, then strips), keys only (not evaluated).
 /// Spins need max_spin_rate > 0. Deterministic.
 std::vector<ScanPass> candidatePasses(const PartOnTable& scene, const PassSettings& settings);
