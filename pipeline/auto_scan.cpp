@@ -83,14 +83,19 @@ scanner::PassSettings passSettings(const ScanProblem& p, const collision::Scene&
   return s;
 }
 
-// Can the arm follow `pass` (R frame) with the table at one angle (strips) or turning with the
-// head (spins) on one IK branch, f > 0 at its keys and every 0.25 s between? Table angles every
-// 10°.
+// Can the arm follow `pass` (R frame), backed off along the laser to the transfer sphere before
+// and after it, with the table at one angle (strips) or turning with the head (spins) on one IK
+// branch, f > 0 at its keys, every 0.25 s between and every 10 mm on the legs? Table angles
+// every 10°. (A spin the tour turns to start elsewhere keeps its legs' shape in the world only
+// when the sphere's centre is on the table axis; off it, they differ a little.)
 class ReachCheck {
  public:
-  ReachCheck(const ScanProblem& problem, const collision::Scene& scene)
+  ReachCheck(const ScanProblem& problem,
+             const collision::Scene& scene,
+             const scanner::TransferSphere& sphere)
       : problem_(problem),
         scene_(scene),
+        sphere_(sphere),
         evaluator_(scene),
         branches_(mapBranches(problem.map)),
         angles_(planner::mapAngles(problem.cell.table, deg(10.0))) {}
@@ -98,7 +103,7 @@ class ReachCheck {
   bool operator()(const scanner::ScanPass& pass) {
     const kinematics::CellModel& cell = problem_.cell;
     const Eigen::Isometry3d X_PR = cell.part.X_RP.inverse();
-    const std::vector<Timed> poses = timedPoses(pass);
+    const std::vector<Timed> poses = withLegs(timedPoses(pass));
     for (const double theta0 : angles_) {
       std::vector<bool> alive(branches_.size(), true);
       bool any = true;
@@ -147,8 +152,22 @@ class ReachCheck {
     return out;
   }
 
+  // The pass's poses, then the legs to and from the sphere (each with the table where it is at
+  // that end): f > 0 on a branch at all of them, in any order, so the pass's own poses, which
+  // fail most often, go first.
+  std::vector<Timed> withLegs(const std::vector<Timed>& poses) const {
+    constexpr double kLegStep = 0.02;  // m
+    std::vector<Timed> all = poses;
+    for (const Timed& end : {poses.front(), poses.back()}) {
+      const auto leg = scanner::backOffLeg(end.X_RS, sphere_, kLegStep);
+      for (auto it = leg.begin() + 1; it != leg.end(); ++it) all.push_back({*it, end.turn});
+    }
+    return all;
+  }
+
   const ScanProblem& problem_;
   const collision::Scene& scene_;
+  const scanner::TransferSphere& sphere_;
   collision::ClearanceEvaluator evaluator_;
   std::vector<kinematics::IkBranch> branches_;
   std::vector<double> angles_;
@@ -262,9 +281,11 @@ std::vector<scanner::ScanPass> aimedPasses(const scanner::PartOnTable& part,
 // Which passes the arm can follow (ReachCheck), in parallel.
 std::vector<std::uint8_t> reachable(const ScanProblem& problem,
                                     const collision::Scene& scene,
+                                    const scanner::TransferSphere& sphere,
                                     const std::vector<scanner::ScanPass>& passes) {
   std::vector<std::uint8_t> ok(passes.size(), 0);
-  tbb::enumerable_thread_specific<ReachCheck> checks(std::cref(problem), std::cref(scene));
+  tbb::enumerable_thread_specific<ReachCheck> checks(std::cref(problem), std::cref(scene),
+                                                     std::cref(sphere));
   tbb::parallel_for(std::size_t{0}, passes.size(),
                     [&](std::size_t p) { ok[p] = checks.local()(passes[p]) ? 1 : 0; });
   return ok;
@@ -434,7 +455,8 @@ AutoScanPlan planAutoScan(const ScanProblem& problem,
       candidates(part, pass_settings, index, classes, witnesses, progress, report.aimed);
   report.candidates = passes.size();
 
-  const std::vector<std::uint8_t> reach = reachable(problem, scene, passes);
+  const scanner::TransferSphere sphere = transferSphere(problem, part.part());
+  const std::vector<std::uint8_t> reach = reachable(problem, scene, sphere, passes);
   for (std::size_t p = 0; p < passes.size(); ++p)
     if (!reach[p]) report.unreachable.push_back(passes[p].label);
   markOutOfReach(classes, passes, reach);
@@ -459,7 +481,6 @@ AutoScanPlan planAutoScan(const ScanProblem& problem,
     report.seconds = since(start);
     return plan;
   }
-  const scanner::TransferSphere sphere = transferSphere(problem, part.part());
   std::optional<Eigen::Isometry3d> at;
   if (!given.samples.empty()) at = X_RP * given.samples.back().X_PS;
   const std::vector<scanner::TourStep> tour =

@@ -7,7 +7,7 @@ namespace scanplan::scanner {
 namespace {
 
 kinematics::TriangleMesh partAndTable(const kinematics::TriangleMesh& part_R, TableTop table) {
-  kinematics::Shape top{kinematics::Cylinder{table.radius, table.height}, {}};
+  kinematics::Shape top{kinematics::Cylinder{table.radius, table.height}};  // X_BG: identity
   top.X_BG.translation() = Eigen::Vector3d(0.0, 0.0, -0.5 * table.height);
   const kinematics::TriangleMesh cylinder = kinematics::shapeSurface(top);
   kinematics::TriangleMesh all = part_R;

@@ -109,23 +109,85 @@ Eigen::Vector3d point(const Spherical& s, const Eigen::Vector3d& c) {
                                         std::sin(s.elevation));
 }
 
-// The translation keys of a transfer: from, out on the sphere, the arc, in, to.
-std::vector<Eigen::Vector3d> transferPoints(const Eigen::Vector3d& a,
-                                            const Eigen::Vector3d& b,
-                                            const TransferSphere& sphere) {
-  Spherical sa = spherical(a, sphere.centre), sb = spherical(b, sphere.centre);
-  const double r = std::max({sphere.radius, sa.radius, sb.radius});
-  double turn = sb.azimuth - sa.azimuth;
-  turn = std::remainder(turn, 2.0 * 3.141592653589793);
-  std::vector<Eigen::Vector3d> pts{a};
-  for (int k = 0; k <= kArcSegments; ++k) {
-    const double s = static_cast<double>(k) / kArcSegments;
-    pts.push_back(
-        point({sa.azimuth + s * turn, sa.elevation + s * (sb.elevation - sa.elevation), r},
-              sphere.centre));
-  }
-  pts.push_back(b);
-  return pts;
+// How far the head backs away from X along its laser (−z_S) to reach the sphere, m (0 when X is
+// on or outside it).
+double backOff(const Eigen::Isometry3d& X, const TransferSphere& sphere) {
+  const Eigen::Vector3d d = X.translation() - sphere.centre;
+  const Eigen::Vector3d z = X.linear().col(2);
+  const double c = d.squaredNorm() - sphere.radius * sphere.radius;
+  if (c >= 0.0) return 0.0;
+  const double b = d.dot(z);
+  return b + std::sqrt(b * b - c);  // the positive root of s² − 2bs + c = 0
+}
+
+// The head at X moved `s` m back along its laser.
+Eigen::Isometry3d backedOff(const Eigen::Isometry3d& X, double s) {
+  Eigen::Isometry3d out = X;
+  out.translation() -= s * X.linear().col(2);
+  return out;
+}
+
+// The arc between two poses on or outside the sphere: azimuth, elevation and radius about its
+// centre interpolated; the head turns with the azimuth and, relative to that, evenly (slerp).
+Eigen::Isometry3d arcPose(const Eigen::Isometry3d& a,
+                          const Eigen::Isometry3d& b,
+                          const TransferSphere& sphere,
+                          double s) {
+  const Spherical sa = spherical(a.translation(), sphere.centre);
+  const Spherical sb = spherical(b.translation(), sphere.centre);
+  const double turn = std::remainder(sb.azimuth - sa.azimuth, 2.0 * 3.141592653589793);
+  const Eigen::Quaterniond qa(a.linear());
+  const Eigen::Quaterniond qb(Eigen::AngleAxisd(-turn, Eigen::Vector3d::UnitZ()) * b.linear());
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() = Eigen::AngleAxisd(s * turn, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
+                 qa.slerp(s, qb).toRotationMatrix();
+  out.translation() =
+      point({sa.azimuth + s * turn, sa.elevation + s * (sb.elevation - sa.elevation),
+             sa.radius + s * (sb.radius - sa.radius)},
+            sphere.centre);
+  return out;
+}
+
+// A bound on the arc's length from a to b, m: its speed |dp/ds| = sqrt(Δr² + r²(Δel² +
+// cos²(el) Δaz²)) at its largest radius and cosine, so that crossing it in (bound / speed) s keeps
+// every part of it within the speed. Close to the length: r and el change little along an arc.
+double arcBound(const Spherical& a, const Spherical& b, double turn) {
+  const double dr = b.radius - a.radius, del = b.elevation - a.elevation;
+  const double r = std::max(a.radius, b.radius);
+  const bool level = (a.elevation <= 0.0) != (b.elevation <= 0.0);  // crosses el = 0
+  const double c = level ? 1.0 : std::max(std::cos(a.elevation), std::cos(b.elevation));
+  return std::sqrt(dr * dr + r * r * (del * del + c * c * turn * turn));
+}
+
+// The three legs of a transfer: back off, arc, approach.
+struct Legs {
+  Eigen::Isometry3d out, in;                    // where the head leaves and rejoins the sphere
+  double back = 0.0, arc = 0.0, forward = 0.0;  // lengths, m (the arc's a bound: arcBound)
+  double rotation = 0.0;                        // rad the head turns on the arc
+};
+
+Legs legs(const Eigen::Isometry3d& from,
+          const Eigen::Isometry3d& to,
+          const TransferSphere& sphere) {
+  Legs l;
+  l.back = backOff(from, sphere);
+  l.forward = backOff(to, sphere);
+  l.out = backedOff(from, l.back);
+  l.in = backedOff(to, l.forward);
+  const Spherical sa = spherical(l.out.translation(), sphere.centre);
+  const Spherical sb = spherical(l.in.translation(), sphere.centre);
+  const double turn = std::remainder(sb.azimuth - sa.azimuth, 2.0 * 3.141592653589793);
+  l.arc = arcBound(sa, sb, turn);
+  // The head turns with the azimuth and by the rest about another axis: the sum bounds its
+  // angle along the arc.
+  const Eigen::Matrix3d unturned =
+      Eigen::AngleAxisd(-turn, Eigen::Vector3d::UnitZ()).toRotationMatrix() * to.linear();
+  l.rotation = std::abs(turn) + kinematics::rotationDistance(from.linear(), unturned);
+  return l;
+}
+
+double arcTime(const Legs& l, const TransferSphere& sphere) {
+  return std::max(l.arc / sphere.speed, l.rotation / sphere.turn_speed);
 }
 
 }  // namespace
@@ -133,37 +195,45 @@ std::vector<Eigen::Vector3d> transferPoints(const Eigen::Vector3d& a,
 double transferTime(const Eigen::Isometry3d& from,
                     const Eigen::Isometry3d& to,
                     const TransferSphere& sphere) {
-  const auto pts = transferPoints(from.translation(), to.translation(), sphere);
-  double length = 0.0;
-  for (std::size_t i = 1; i < pts.size(); ++i) length += (pts[i] - pts[i - 1]).norm();
-  return std::max(length / sphere.speed,
-                  kinematics::rotationDistance(from.linear(), to.linear()) / sphere.turn_speed);
+  const Legs l = legs(from, to, sphere);
+  return (l.back + l.forward) / sphere.speed + arcTime(l, sphere);
 }
 
 Move transferMove(const Eigen::Isometry3d& from,
                   const Eigen::Isometry3d& to,
                   const TransferSphere& sphere) {
-  const auto pts = transferPoints(from.translation(), to.translation(), sphere);
-  std::vector<double> along{0.0};
-  for (std::size_t i = 1; i < pts.size(); ++i)
-    along.push_back(along.back() + (pts[i] - pts[i - 1]).norm());
-  const double total = transferTime(from, to, sphere);
+  const Legs l = legs(from, to, sphere);
   Move move;
-  for (std::size_t i = 0; i < pts.size(); ++i) {
-    const double s = along.back() > 0.0
-                         ? along[i] / along.back()
-                         : static_cast<double>(i) / static_cast<double>(pts.size() - 1);
-    Eigen::Isometry3d X = kinematics::interpolatePose(from, to, s);
-    X.translation() = pts[i];
-    if (i > 0 && s * total <= move.t.back() + 1e-6) continue;  // a zero-length step
+  const auto add = [&move](const Eigen::Isometry3d& X, double t) {
+    if (!move.t.empty() && t <= move.t.back() + 1e-6) return;  // a zero-length step
     move.X_RS.push_back(X);
-    move.t.push_back(s * total);
+    move.t.push_back(t);
+  };
+  add(from, 0.0);
+  const double t_out = l.back / sphere.speed, t_arc = arcTime(l, sphere);
+  add(l.out, t_out);
+  for (int k = 1; k < kArcSegments; ++k) {
+    const double s = static_cast<double>(k) / kArcSegments;
+    add(arcPose(l.out, l.in, sphere, s), t_out + s * t_arc);
   }
+  add(l.in, t_out + t_arc);
+  add(to, t_out + t_arc + l.forward / sphere.speed);
   if (move.t.size() < 2) {  // from == to: a pause long enough to be a move
     move.X_RS.push_back(to);
     move.t.push_back(1e-3);
   }
+  move.X_RS.back() = to;
   return move;
+}
+
+std::vector<Eigen::Isometry3d> backOffLeg(const Eigen::Isometry3d& X,
+                                          const TransferSphere& sphere,
+                                          double step) {
+  const double length = backOff(X, sphere);
+  const int n = std::max(1, static_cast<int>(std::ceil(length / std::max(step, 1e-6))));
+  std::vector<Eigen::Isometry3d> out;
+  for (int k = 0; k <= n; ++k) out.push_back(backedOff(X, length * k / n));
+  return out;
 }
 
 // ---- ordering -----------------------------------------------------------------------------

@@ -60,12 +60,18 @@ struct Move {
   std::vector<double> t;
 };
 
-/// The move from `from` to `to`: radially out to the sphere, along it (azimuth and elevation
-/// about its centre interpolated, so it never dips below the lower end), radially in; the head
-/// turns evenly over the whole move. Starts at `from` (t = 0) and ends at `to`.
+/// The move from `from` to `to`: straight back along the laser (−z_S, holding the head still)
+/// out to the sphere, along it (azimuth, elevation and radius about its centre interpolated, the
+/// head turning with the azimuth and evenly besides), and in along the laser of `to`. Its speed
+/// keeps within `speed` and `turn_speed`. Starts at `from` (t = 0) and ends at `to`.
 Move transferMove(const Eigen::Isometry3d& from,
                   const Eigen::Isometry3d& to,
                   const TransferSphere& sphere);
+/// The first leg of transferMove() from X (and, run backwards, the last into X): X backed off
+/// along its laser to the sphere, a key every `step` m or less, X first.
+std::vector<Eigen::Isometry3d> backOffLeg(const Eigen::Isometry3d& X,
+                                          const TransferSphere& sphere,
+                                          double step);
 /// The duration of transferMove(), s, without building it.
 double transferTime(const Eigen::Isometry3d& from,
                     const Eigen::Isometry3d& to,

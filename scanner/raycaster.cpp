@@ -1,5 +1,7 @@
 #include "scanner/raycaster.h"
 
+#include "scanner/embree_mesh.h"
+
 #include <embree3/rtcore.h>
 
 #include <cmath>
@@ -28,22 +30,7 @@ Raycaster::Raycaster(const kinematics::TriangleMesh& mesh) : impl_(std::make_uni
   if (!impl_->device) throw std::runtime_error("Embree: cannot create a device");
   impl_->scene = rtcNewScene(impl_->device);
   rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
-  RTCGeometry geometry = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0,
-                                                               RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                                               mesh.vertices.size()));
-  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
-    for (int k = 0; k < 3; ++k)
-      vertices[3 * i + static_cast<std::size_t>(k)] = static_cast<float>(mesh.vertices[i](k));
-  }
-  auto* indices = static_cast<unsigned*>(
-      rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                              3 * sizeof(unsigned), mesh.triangles.size()));
-  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
-    for (int k = 0; k < 3; ++k)
-      indices[3 * i + static_cast<std::size_t>(k)] = static_cast<unsigned>(mesh.triangles[i](k));
-  }
-  rtcCommitGeometry(geometry);
+  RTCGeometry geometry = embreeTriangles(impl_->device, mesh);
   rtcAttachGeometry(impl_->scene, geometry);
   rtcReleaseGeometry(geometry);
   rtcCommitScene(impl_->scene);

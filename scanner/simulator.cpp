@@ -1,5 +1,7 @@
 #include "scanner/simulator.h"
 
+#include "scanner/embree_mesh.h"
+
 #include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -273,26 +275,7 @@ void ScanSimulator::Impl::addGroup(Group group) {
     group.scene = rtcNewScene(device);
     rtcSetSceneBuildQuality(group.scene, RTC_BUILD_QUALITY_HIGH);
     for (std::size_t i = 0; i < group.meshes.size(); ++i) {
-      const kinematics::TriangleMesh& mesh = group.meshes[i].mesh;
-      RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-      auto* vertices = static_cast<float*>(
-          rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                  3 * sizeof(float), mesh.vertices.size()));
-      for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
-        for (int k = 0; k < 3; ++k) {
-          vertices[3 * v + static_cast<std::size_t>(k)] = static_cast<float>(mesh.vertices[v](k));
-        }
-      }
-      auto* indices = static_cast<unsigned*>(
-          rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                  3 * sizeof(unsigned), mesh.triangles.size()));
-      for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-        for (int k = 0; k < 3; ++k) {
-          indices[3 * t + static_cast<std::size_t>(k)] =
-              static_cast<unsigned>(mesh.triangles[t](k));
-        }
-      }
-      rtcCommitGeometry(geometry);
+      RTCGeometry geometry = embreeTriangles(device, group.meshes[i].mesh);
       rtcAttachGeometryByID(group.scene, geometry, static_cast<unsigned>(i));
       rtcReleaseGeometry(geometry);
     }

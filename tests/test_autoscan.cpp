@@ -11,11 +11,15 @@
 
 #include <gtest/gtest.h>
 
+#include <tbb/task_arena.h>
+
 #include "cli/config/job.h"
 #include "cli/config/problem.h"
+#include "collision/scene.h"
 #include "kinematics/error.h"
 #include "kinematics/mesh.h"
 #include "kinematics/placement.h"
+#include "kinematics/pose.h"
 #include "kinematics/units.h"
 #include "pipeline/plan_scan.h"
 #include "pipeline/setups.h"
@@ -84,30 +88,45 @@ Eigen::Isometry3d poseAt(const Eigen::Vector3d& p) {
   return X;
 }
 
-TEST(Transfer, StaysOutsideTheSafeSphereAndEndsWhereAsked) {
+// The head at p looking at c (its laser, z_S, towards it), its x axis as level as can be.
+Eigen::Isometry3d lookingAt(const Eigen::Vector3d& p, const Eigen::Vector3d& c) {
+  return kinematics::frameFromAxes(p, c - p, Eigen::Vector3d::UnitZ().cross(c - p));
+}
+
+// Backs straight off along the laser to the sphere, turns only on it (with the azimuth, so the
+// head keeps facing the centre when both ends do), comes straight in; within both speeds.
+TEST(Transfer, BacksOffAlongTheLaserTurnsOnTheSphereAndKeepsItsSpeeds) {
   scanner::TransferSphere sphere;
   sphere.centre = Eigen::Vector3d(0, 0, 0.05);
   sphere.radius = 0.3;
-  const Eigen::Isometry3d a = poseAt({0.2, 0.0, 0.1});
-  Eigen::Isometry3d b = poseAt({-0.15, 0.1, 0.02});
-  b.linear() = Eigen::AngleAxisd(2.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const Eigen::Vector3d c = sphere.centre;
+  const Eigen::Isometry3d a = lookingAt({0.2, 0.0, 0.1}, c);
+  const Eigen::Isometry3d b = lookingAt({-0.15, 0.1, 0.02}, c);
   const scanner::Move m = scanner::transferMove(a, b, sphere);
-  ASSERT_GE(m.X_RS.size(), 3u);
-  EXPECT_LT((m.X_RS.front().translation() - a.translation()).norm(), 1e-12);
-  EXPECT_LT((m.X_RS.back().translation() - b.translation()).norm(), 1e-12);
-  EXPECT_LT((m.X_RS.back().linear() - b.linear()).norm(), 1e-9);
+  ASSERT_GE(m.X_RS.size(), 5u);
+  EXPECT_TRUE(m.X_RS.front().isApprox(a, 1e-12));
+  EXPECT_TRUE(m.X_RS.back().isApprox(b, 1e-12));
   EXPECT_NEAR(m.t.back(), scanner::transferTime(a, b, sphere), 1e-9);
-  const double lowest =
-      std::min((a.translation() - sphere.centre).z(), (b.translation() - sphere.centre).z());
-  for (std::size_t i = 1; i + 1 < m.X_RS.size(); ++i) {
-    const Eigen::Vector3d d = m.X_RS[i].translation() - sphere.centre;
-    EXPECT_GT(m.t[i], m.t[i - 1]);
-    if (i >= 2 && i + 2 < m.X_RS.size()) {  // on the arc: the sphere, between the end heights
-      EXPECT_NEAR(d.norm(), sphere.radius, 1e-9);
-      EXPECT_GE(std::asin(d.z() / d.norm()) + 1e-9,
-                std::min(std::asin(lowest / (a.translation() - sphere.centre).norm()),
-                         std::asin((b.translation() - sphere.centre).z() /
-                                   (b.translation() - sphere.centre).norm())));
+  const std::size_t n = m.X_RS.size();
+  // The legs: straight back along each end's laser, the head held still, out to the sphere.
+  for (const auto& [end, leg] : {std::pair{a, m.X_RS[1]}, std::pair{b, m.X_RS[n - 2]}}) {
+    EXPECT_NEAR((leg.translation() - c).norm(), sphere.radius, 1e-9);
+    EXPECT_LT((leg.linear() - end.linear()).norm(), 1e-12);
+    const Eigen::Vector3d back = end.translation() - leg.translation();
+    EXPECT_NEAR(back.normalized().dot(end.linear().col(2)), 1.0, 1e-9);
+  }
+  for (std::size_t i = 1; i < n; ++i) {
+    ASSERT_GT(m.t[i], m.t[i - 1]);
+    const double dt = m.t[i] - m.t[i - 1];
+    const Eigen::Isometry3d& p = m.X_RS[i - 1];
+    const Eigen::Isometry3d& q = m.X_RS[i];
+    EXPECT_LE((q.translation() - p.translation()).norm(), sphere.speed * dt * (1 + 1e-9)) << i;
+    EXPECT_LE(kinematics::rotationDistance(p.linear(), q.linear()),
+              sphere.turn_speed * dt * (1 + 1e-9) + 1e-12)
+        << i;
+    if (i + 1 < n) {  // on the arc: on the sphere, facing the centre
+      EXPECT_NEAR((q.translation() - c).norm(), sphere.radius, 1e-9) << i;
+      EXPECT_NEAR(q.linear().col(2).dot((c - q.translation()).normalized()), 1.0, 1e-9) << i;
     }
   }
 }
@@ -207,6 +226,33 @@ TEST(AutoScan, ACubeOnTheTableIsCoveredExceptItsBottom) {
     if (p.part_triangle >= 0 && p.incidence <= deg(60.0)) points.push_back(p.p_P);
   const auto again = scanner::areaCoverage(sampling, points, sim.point_spacing);
   EXPECT_NEAR(again.covered_fraction, sim.area.covered_fraction, 0.01);
+  std::filesystem::remove_all(dir);
+}
+
+// Same job, same bytes: on one thread and on all of them, twice. Compares the poses bit for bit
+// and the certificate's classes (they once depended on uninitialised memory).
+TEST(AutoScan, ThePlanIsTheSameOnOneThreadAndOnAll) {
+  const auto dir = std::filesystem::temp_directory_path() / "scanplan_test_autoscan_same";
+  std::filesystem::create_directories(dir);
+  const pipeline::ScanProblem problem = autoProblem(writeBoxStl(dir / "box.stl", 70, 40, 50));
+  const collision::Scene scene(problem.cell, problem.clearance);
+  const auto plan = [&] { return pipeline::scanPath(problem, scene); };
+  pipeline::ScanPathResult serial;
+  tbb::task_arena(1).execute([&] { serial = plan(); });
+  for (int run = 0; run < 2; ++run) {
+    const pipeline::ScanPathResult again = plan();
+    ASSERT_TRUE(serial.auto_scan && again.auto_scan);
+    EXPECT_TRUE(serial.auto_scan->classes == again.auto_scan->classes);
+    EXPECT_EQ(serial.auto_scan->passes.size(), again.auto_scan->passes.size());
+    const auto& a = serial.path.path.samples;
+    const auto& b = again.path.path.samples;
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      ASSERT_EQ(a[k].t, b[k].t) << k;
+      ASSERT_TRUE(a[k].X_PS.matrix() == b[k].X_PS.matrix()) << "sample " << k;
+      ASSERT_EQ(a[k].scanning, b[k].scanning) << k;
+    }
+  }
   std::filesystem::remove_all(dir);
 }
 

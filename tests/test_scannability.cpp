@@ -111,6 +111,31 @@ PartOnTable cubeOnTable(double a) {
                      Eigen::Isometry3d(Eigen::Translation3d(0.0, 0.0, 0.5 * a)), kTable);
 }
 
+// The table is the cylinder it says, whatever the stack held before: rays straight down beside
+// the part land on the top at z = 0 inside the radius and miss outside it; level rays towards
+// the axis meet the side at the radius (less the tessellation's chord). The table's pose once
+// came from an uninitialised transform, which made plans differ from run to run.
+TEST(PartOnTable, TheTableIsACylinderUnderTheTopOnTheAxis) {
+  const PartOnTable scene = cubeOnTable(60 * kMm);
+  const double r = kTable.radius, h = kTable.height;
+  for (int k = 0; k < 24; ++k) {
+    const double a = 2.0 * 3.141592653589793 * (k + 0.25) / 24.0;
+    const Vector3d u(std::cos(a), std::sin(a), 0.0);
+    const auto top = scene.cast(0.9 * r * u + Vector3d(0, 0, 0.5), -Vector3d::UnitZ());
+    ASSERT_TRUE(top) << "angle " << a;
+    EXPECT_NEAR(top->distance, 0.5, 1e-6);
+    EXPECT_GT(top->normal.z(), 0.999);
+    EXPECT_FALSE(scene.cast(1.05 * r * u + Vector3d(0, 0, 0.5), -Vector3d::UnitZ()));
+    for (const double z : {-0.01 * h, -0.5 * h, -0.99 * h}) {
+      const auto side = scene.cast(2.0 * r * u + Vector3d(0, 0, z), -u);
+      ASSERT_TRUE(side) << "angle " << a << " z " << z;
+      EXPECT_GE(side->distance, r - 1e-6);
+      EXPECT_LE(side->distance, r + 1e-4 + 1e-6);  // inscribed within the 0.1 mm chord tolerance
+    }
+    EXPECT_FALSE(scene.cast(2.0 * r * u + Vector3d(0, 0, -1.01 * h), -u));
+  }
+}
+
 // Every sample of a 60 mm cube on the table: its bottom lies on the table (facesTable), every
 // other face is seen from straight on or, near the table, from above at up to 60°, with the
 // camera on the far side of the laser and the housing clear of the table (checked by hand for
