@@ -114,12 +114,14 @@ void writeChoiceFigure(const std::filesystem::path& out, const pipeline::ScanPla
 }
 
 // The outputs of a valid plan: trajectory.csv, the programs, the simulation's and the
-// certificate's files; returns their summary lines.
+// certificate's files; returns their summary lines (`second`: of the second setup, which does
+// not suggest another).
 std::string writePlannedOutputs(const std::filesystem::path& out,
                                 const JobSpec& job,
                                 const kinematics::CellModel& cell,
                                 const pipeline::ScanProblem& problem,
-                                const pipeline::ScanPlan& plan) {
+                                const pipeline::ScanPlan& plan,
+                                bool second = false) {
   const kinematics::Trajectory& trajectory = plan.trajectory->trajectory;
   writeFileAtomically(out / "trajectory.csv", kinematics::trajectoryToCsv(trajectory));
   const std::string programs =
@@ -131,7 +133,7 @@ std::string writePlannedOutputs(const std::filesystem::path& out,
   if (plan.validation) summary += validationSummary(*plan.validation);
   summary += programs;
   if (plan.simulation) summary += simulationSummary(*plan.simulation);
-  if (plan.certificate) summary += certificateSummary(*plan.certificate);
+  if (plan.certificate) summary += certificateSummary(*plan.certificate, !second);
   return summary;
 }
 
@@ -171,7 +173,7 @@ SecondSetupRun planSecondSetup(const std::filesystem::path& out,
   if (plan.prepared->auto_scan) r.summary += autoScanSummary(*plan.prepared->auto_scan);
   if (plan.planned()) {
     writeChoiceFigure(dir, plan);
-    r.summary += writePlannedOutputs(dir, job, second.cell, second, plan);
+    r.summary += writePlannedOutputs(dir, job, second.cell, second, plan, true);
     const pipeline::CombinedCoverage c = pipeline::combineSetups(first, plan);
     r.summary += fmt::format(
         "setups     both: {:.1f}% of the part's area covered; {:.1f}% scannable in one setup or "

@@ -100,13 +100,14 @@ std::string simulationSummary(const pipeline::SimulationRun& run) {
   return text;
 }
 
-std::string certificateSummary(const pipeline::Certificate& c) {
+std::string certificateSummary(const pipeline::Certificate& c, bool suggest_setups) {
   std::string text = fmt::format(
       "certificate {:.1f}% of the area scannable, {:.1f}% of that covered; not scannable: {:.1f}% "
       "faces the table, {:.1f}% occluded, {:.1f}% no standoff fits the housing, {:.1f}% out of "
       "the arm's reach\n",
       100.0 * c.scannable_fraction, 100.0 * c.covered_of_scannable, 100.0 * c.fraction[2],
       100.0 * c.fraction[3], 100.0 * c.fraction[4], 100.0 * c.fraction[5]);
+  if (!suggest_setups) return text;
   if (c.fraction[5] >= 0.01) {
     text += fmt::format(
         "note       {:.1f}% of the area is seen only by passes out of the arm's reach: the table "

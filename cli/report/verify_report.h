@@ -20,8 +20,9 @@ Json validationJson(const planner::ValidationReport& report);
 /// The simulation's counts and coverage, two lines.
 std::string simulationSummary(const pipeline::SimulationRun& run);
 /// The certificate's line: the scannable share of the area, how much of it is covered, and why
-/// the rest cannot be scanned.
-std::string certificateSummary(const pipeline::Certificate& certificate);
+/// the rest cannot be scanned; with `suggest_setups`, notes on what another setup could add.
+std::string certificateSummary(const pipeline::Certificate& certificate,
+                               bool suggest_setups = true);
 /// report.json's `coverage`: area_fraction, scannable_fraction, covered_of_scannable, by_reason.
 Json certificateJson(const pipeline::SimulationRun& run, const pipeline::Certificate& certificate);
 /// The run's counts and the coverage as a JSON object (areas in mm²).
