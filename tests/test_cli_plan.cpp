@@ -3,6 +3,8 @@
 // no-path exit code, and --set errors.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -47,6 +49,8 @@ class CliPlan : public Cli {
     return scanplan(args);
   }
   fs::path out() const { return dir_ / "out"; }
+  // The lock and staging folders live beside OUT: `.out.scanplan-lock`, `.out.scanplan-staging-N`.
+  fs::path beside(const std::string& what) const { return dir_ / (".out.scanplan-" + what); }
   // JSON is YAML: yaml-cpp reads the report.
   YAML::Node report() const { return YAML::LoadFile((out() / "report.json").string()); }
 };
@@ -71,7 +75,7 @@ void expectReachesTargets(const kinematics::Trajectory& trajectory) {
 // lock of a run that was killed is stale and taken over (issue 17).
 TEST_F(CliPlan, AFolderInUseIsRefusedAndAStaleLockTakenOver) {
   fs::create_directories(out());
-  std::ofstream(out() / ".scanplan-lock") << ::getpid() << "\n";  // this test process: alive
+  std::ofstream(beside("lock")) << ::getpid() << "\n";  // this test process: alive
   const Result busy = plan({"--set", "simulation.enabled=false"});
   EXPECT_EQ(busy.exit_code, 4) << describe(busy);
   EXPECT_TRUE(contains(busy.err, "is in use by pid " + std::to_string(::getpid()))) << busy.err;
@@ -80,11 +84,11 @@ TEST_F(CliPlan, AFolderInUseIsRefusedAndAStaleLockTakenOver) {
   const pid_t child = ::fork();
   if (child == 0) ::_exit(0);
   ::waitpid(child, nullptr, 0);
-  std::ofstream(out() / ".scanplan-lock") << child << "\n";
+  std::ofstream(beside("lock")) << child << "\n";
   const Result run = plan({"--set", "simulation.enabled=false"});
   EXPECT_EQ(run.exit_code, 0) << describe(run);
   EXPECT_TRUE(fs::exists(out() / "report.json"));
-  EXPECT_FALSE(fs::exists(out() / ".scanplan-lock")) << "released when done";
+  EXPECT_FALSE(fs::exists(beside("lock"))) << "released when done";
 }
 
 TEST_F(CliPlan, WritesTrajectoryReportAndPathFigure) {
@@ -193,11 +197,17 @@ TEST_F(CliPlan, UnreachableCellExitsThreeWithAReportThatSaysWhy) {
   EXPECT_TRUE(tmpFiles(out()).empty());
 }
 
-// Staging folders left in `dir`, if any.
+// Staging folders (or old outputs set aside) left in `dir` or beside it, if any.
 std::vector<fs::path> stagingFolders(const fs::path& dir) {
   std::vector<fs::path> out;
-  for (const auto& e : fs::directory_iterator(dir)) {
-    if (e.path().filename().string().starts_with(".scanplan-staging")) out.push_back(e.path());
+  for (const fs::path& d : {dir, dir.parent_path()}) {
+    std::error_code ec;  // `dir` may not exist
+    for (const auto& e : fs::directory_iterator(d, ec)) {
+      const std::string name = e.path().filename().string();
+      if (name.find(".scanplan-staging") != std::string::npos ||
+          name.find(".scanplan-old") != std::string::npos)
+        out.push_back(e.path());
+    }
   }
   return out;
 }
@@ -207,6 +217,8 @@ TEST_F(CliPlan, ReplanningIntoTheSameFolderLeavesNothingOfTheEarlierPlan) {
   ASSERT_TRUE(fs::exists(out() / "trajectory.csv"));
   ASSERT_TRUE(fs::exists(out() / "programs"));
   writeFile(out() / "notes.txt", "the user's own file");
+  fs::create_directories(out() / "mine" / "deeper");
+  writeFile(out() / "mine" / "deeper" / "a.txt", "the user's own folder");
   // Same folder, nothing reachable: the earlier trajectory and programs must not survive beside
   // the new report (a robot-side tool would pick them up as the plan).
   const Result run = plan({"--set", "table.axis.xyz_mm=[3000, 0, 0]"});
@@ -218,6 +230,7 @@ TEST_F(CliPlan, ReplanningIntoTheSameFolderLeavesNothingOfTheEarlierPlan) {
   }
   EXPECT_TRUE(fs::exists(out() / "configmap.npy"));  // this run's maps
   EXPECT_EQ(readFile(out() / "notes.txt"), "the user's own file");
+  EXPECT_EQ(readFile(out() / "mine" / "deeper" / "a.txt"), "the user's own folder");
   EXPECT_TRUE(stagingFolders(out()).empty());
 }
 
@@ -243,8 +256,9 @@ TEST_F(CliPlan, StagingFoldersOfKilledRunsAreCleanedUp) {
   if (child == 0) ::_exit(0);
   int status = 0;
   ASSERT_EQ(::waitpid(child, &status, 0), child);  // `child` is now a pid of no process
-  const fs::path dead = out() / (".scanplan-staging-" + std::to_string(child));
-  const fs::path alive = out() / (".scanplan-staging-" + std::to_string(::getpid()));
+  const fs::path dead = beside("staging-" + std::to_string(child));
+  const fs::path alive = beside("staging-" + std::to_string(::getpid()));
+  fs::create_directories(out());
   fs::create_directories(dead);
   fs::create_directories(alive);
   writeFile(dead / "report.json", "{}");
@@ -254,6 +268,61 @@ TEST_F(CliPlan, StagingFoldersOfKilledRunsAreCleanedUp) {
   EXPECT_FALSE(fs::exists(dead));
   EXPECT_TRUE(fs::exists(alive / "report.json")) << "another run's folder, still in use";
   EXPECT_EQ(stagingFolders(out()), std::vector<fs::path>{alive});
+}
+
+// Starts `scanplan plan` (the light demo) into `out`, stdout and stderr into `log`; its pid.
+pid_t startPlan(const fs::path& out, const fs::path& log) {
+  std::vector<std::string> args{SCANPLAN_BINARY, "plan", kDemoJob, "-o", out.string()};
+  for (const std::string& a : lightDemo()) args.push_back(a);
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const int fd = ::open(log.c_str(), O_CREAT | O_WRONLY | O_TRUNC, 0644);
+    ::dup2(fd, 1);
+    ::dup2(fd, 2);
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  return pid;
+}
+
+// The exit code of `pid` once it ends.
+int exitCode(pid_t pid) {
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+// SIGINT and SIGTERM in the middle of a run: exit 130 / 143, OUT as it was (the earlier run's
+// files byte for byte, or no OUT at all), no staging folder or lock left. The signal comes once
+// the run has started writing (its staging folder exists) or, on a fast machine, after it ended
+// (then OUT is the new complete output, exit 0).
+TEST_F(CliPlan, AnInterruptedRunLeavesTheOutputAsItWasAndSaysSo) {
+  for (const auto& [sig, code] : {std::pair{SIGINT, 130}, std::pair{SIGTERM, 143}}) {
+    ASSERT_EQ(plan({}).exit_code, 0);
+    const std::string report_before = readFile(out() / "report.json");
+    for (const bool existing : {true, false}) {
+      if (!existing) fs::remove_all(out());
+      const pid_t pid = startPlan(out(), dir_ / "log.txt");
+      const fs::path stage = beside("staging-" + std::to_string(pid));
+      for (int k = 0; k < 2000 && !fs::exists(stage) && ::waitpid(pid, nullptr, WNOHANG) == 0; ++k)
+        ::usleep(5000);
+      ::kill(pid, sig);
+      const int got = exitCode(pid);
+      const std::string log = readFile(dir_ / "log.txt");
+      EXPECT_TRUE(stagingFolders(out()).empty()) << log;
+      EXPECT_FALSE(fs::exists(beside("lock"))) << log;
+      if (got == 0) continue;  // it had finished
+      EXPECT_EQ(got, code) << log;
+      EXPECT_TRUE(contains(log, sig == SIGINT ? "stopped by SIGINT" : "stopped by SIGTERM")) << log;
+      if (existing)
+        EXPECT_EQ(readFile(out() / "report.json"), report_before) << log;
+      else
+        EXPECT_FALSE(fs::exists(out())) << log;
+    }
+  }
 }
 
 TEST_F(CliPlan, ALateErrorIntoANewFolderLeavesNoFolder) {

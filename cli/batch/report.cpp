@@ -80,10 +80,10 @@ std::string tallyLine(const BatchStats& stats) {
 
 }  // namespace detail
 
+using detail::rowKeys;
 using detail::sortRows;
 using detail::tally;
 using detail::tallyLine;
-using detail::rowKeys;
 using detail::writeReport;
 using detail::writeResults;
 
@@ -91,6 +91,7 @@ ExitCode runBatchReport(const fs::path& out_dir) {
   if (!fs::is_regular_file(out_dir / "results.jsonl")) {
     throw InputError(out_dir.string() + ": no results.jsonl: expected the folder of a batch run");
   }
+  const OutputLock lock(out_dir);
   std::vector<BatchRow> rows = readBatchRows(out_dir / "results.jsonl");
   sortRows(rows);
   writeReport(out_dir, rows);
@@ -130,6 +131,7 @@ ExitCode runBatchMerge(const std::vector<fs::path>& inputs, const fs::path& out_
   }
   sortRows(rows);
   prepareOutputDir(out_dir);
+  const OutputLock lock(out_dir);
   writeResults(out_dir, rows, rowKeys(rows));
   writeReport(out_dir, rows);
   std::printf("merged     %zu case(s) from %zu folder(s) into %s\n", rows.size(), inputs.size(),

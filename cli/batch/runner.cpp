@@ -186,6 +186,7 @@ BatchStats runBatchCases(const BatchOptions& options) {
   BatchStats stats;
 
   prepareOutputDir(out);
+  const OutputLock lock(out);  // results are appended as cases finish: one run per folder
   const std::set<std::string> done = startResults(options, sweep, shard, shards);
   std::vector<const SweepCase*> todo;
   for (const SweepCase& c : sweep.cases) {

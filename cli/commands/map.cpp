@@ -78,10 +78,10 @@ scanner::GeneratedPath generateScanPath(const JobSpec& job, const kinematics::Ce
 ExitCode runPath(const PlanOptions& options) {
   const JobSpec job = loadJob(options.job_file, options.overrides);
   const kinematics::CellModel cell = buildCell(job);
+  OutputStage stage(options.out_dir, {"path.csv", "path.png"});
   const PathContext context = buildPath(job, cell);
-  prepareOutputDir(options.out_dir);
-  writeFileAtomically(options.out_dir / "path.csv", scanner::pathToCsv(context.generated.path));
-  writePng(options.out_dir / "path.png", pathPicture(context.part.mesh, context.generated.path));
+  writePathOutputs(stage.dir(), context);
+  stage.commit();
   std::string text = pathSummary(context.window, context.generated);
   if (context.auto_scan) text += autoScanSummary(*context.auto_scan);
   text += fmt::format(
@@ -116,12 +116,13 @@ const char* const kMapFilesNote =
 std::string buildAndWriteMaps(const JobSpec& job,
                               const kinematics::CellModel& cell,
                               const std::filesystem::path& out) {
+  OutputStage stage(out, {"path.csv", "path.png", "configmap*"});
   const PathContext context = buildPath(job, cell);
   const collision::Scene scene(cell, clearanceConfig(job));
-  prepareOutputDir(out);
   const MapRun run = computeMap(job, scene, context.generated.path);
-  writePathOutputs(out, context);
-  writeMapOutputs(out, job, run.map);
+  writePathOutputs(stage.dir(), context);
+  writeMapOutputs(stage.dir(), job, run.map);
+  stage.commit();
   return pathSummary(context.window, context.generated) +
          (context.auto_scan ? autoScanSummary(*context.auto_scan) : std::string()) +
          mapSummary(run.map, run.seconds) +

@@ -57,8 +57,9 @@ ExitCode runValidate(const VerifyOptions& options) {
     std::fputs(validationSummary(report, 50).c_str(), stdout);
   }
   if (!options.out_dir.empty()) {
-    prepareOutputDir(options.out_dir);
-    writeFileAtomically(options.out_dir / "validation.json", json);
+    OutputStage stage(options.out_dir, {"validation.json"});
+    writeFileAtomically(stage.dir() / "validation.json", json);
+    stage.commit();
   }
   return report.valid ? ExitCode::kOk : ExitCode::kNoPlan;
 }
@@ -68,16 +69,17 @@ ExitCode runSimulate(const VerifyOptions& options) {
   const kinematics::CellModel cell = buildCell(job);
   const kinematics::LoadedMesh part = loadPart(job, cell);
   const kinematics::Trajectory trajectory = loadTrajectory(options.trajectory_file);
-  prepareOutputDir(options.out_dir);
+  OutputStage stage(options.out_dir, {"cloud.ply", "coverage.ply", "cloud.png", "simulation.json"});
   const pipeline::SimulationRun run = pipeline::simulateTrajectory(
       cell, part.mesh, laserOptics(job), simulationSettings(job, cell), trajectory);
-  writeSimulationOutputs(options.out_dir, job, part.mesh, run);
+  writeSimulationOutputs(stage.dir(), job, part.mesh, run);
   const Json json = {{"format", "scanplan simulation report 1"},
                      {"job", job.name},
                      {"job_hash", jobHash(job)},
                      {"trajectory", options.trajectory_file.string()},
                      {"simulation", simulationJson(run)}};
-  writeFileAtomically(options.out_dir / "simulation.json", jsonDocument(json));
+  writeFileAtomically(stage.dir() / "simulation.json", jsonDocument(json));
+  stage.commit();
   std::string text = simulationSummary(run);
   text += fmt::format("wrote      {}: cloud.ply, coverage.ply, cloud.png, simulation.json\n",
                       options.out_dir.string());
@@ -102,11 +104,11 @@ ExitCode runExport(const VerifyOptions& options) {
       formats.push_back(name);
     }
   }
-  prepareOutputDir(options.out_dir);
-  std::fputs(
-      writePrograms(options.out_dir, options.out_dir.string(), job, cell, trajectory, formats)
-          .c_str(),
-      stdout);
+  OutputStage stage(options.out_dir, {});  // replaces the programs it writes, keeps the rest
+  const std::string summary =
+      writePrograms(stage.dir(), options.out_dir.string(), job, cell, trajectory, formats);
+  stage.commit();
+  std::fputs(summary.c_str(), stdout);
   return ExitCode::kOk;
 }
 

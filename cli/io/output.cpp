@@ -1,39 +1,65 @@
 #include "cli/io/output.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <mutex>
 #include <string_view>
 #include <system_error>
+#include <thread>
 
 #include <fcntl.h>
+#include <pthread.h>
 #include <signal.h>
 #include <unistd.h>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include "kinematics/error.h"
 
 namespace scanplan::cli {
+namespace {
+
+// Writes all of `content` to the new file `path`; the OS's reason on failure, or nothing.
+std::string writeAll(const std::filesystem::path& path, const std::string& content) {
+  const int fd = ::open(path.c_str(), O_CREAT | O_TRUNC | O_WRONLY | O_CLOEXEC, 0644);
+  if (fd < 0) return std::strerror(errno);
+  std::size_t done = 0;
+  while (done < content.size()) {
+    const ssize_t n = ::write(fd, content.data() + done, content.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const std::string why = n < 0 ? std::strerror(errno) : "the disk took nothing";
+      ::close(fd);
+      return why;
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  // close() reports deferred write errors (e.g. a full disk on a network file system).
+  return ::close(fd) == 0 ? std::string() : std::string(std::strerror(errno));
+}
+
+}  // namespace
+
 void writeFileAtomically(const std::filesystem::path& file, const std::string& content) {
   std::error_code ec;
   if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path(), ec);
   const std::filesystem::path tmp = file.string() + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out << content;
-    out.flush();
-    if (!out) {
-      std::filesystem::remove(tmp, ec);
-      throw InputError(fmt::format("{}: cannot write the file", file.string()));
-    }
+  const std::string why = writeAll(tmp, content);
+  if (!why.empty()) {
+    std::filesystem::remove(tmp, ec);
+    throw InputError(fmt::format("{}: cannot write the file: {}", file.string(), why));
   }
   std::filesystem::rename(tmp, file, ec);
   if (ec) {
     std::filesystem::remove(tmp, ec);
-    throw InputError(fmt::format("{}: cannot move the finished file into place", file.string()));
+    throw InputError(fmt::format("{}: cannot move the finished file into place: {}", file.string(),
+                                 ec.message()));
   }
 }
 
@@ -52,93 +78,204 @@ void prepareOutputDir(const std::filesystem::path& dir) {
 
 namespace {
 
-constexpr const char* kLockName = ".scanplan-lock";
+namespace fs = std::filesystem;
+
+// What an interrupt removes: staging folders and locks (whole), folders made for OUT (if empty).
+// Publishing holds the mutex, so an interrupt waits for it to finish.
+struct Cleanup {
+  std::mutex mutex;
+  std::vector<fs::path> remove;
+  std::vector<fs::path> remove_if_empty;
+};
+
+Cleanup& cleanup() {
+  static Cleanup c;
+  return c;
+}
+
+void track(std::vector<fs::path> Cleanup::*list, const fs::path& p) {
+  const std::lock_guard<std::mutex> guard(cleanup().mutex);
+  (cleanup().*list).push_back(p);
+}
+
+void untrack(std::vector<fs::path> Cleanup::*list, const fs::path& p) {
+  const std::lock_guard<std::mutex> guard(cleanup().mutex);
+  auto& v = cleanup().*list;
+  v.erase(std::remove(v.begin(), v.end(), p), v.end());
+}
 
 bool alive(long pid) {
   return pid > 0 && (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH);
 }
 
 // The pid a lock file names, or 0 when it names none.
-long lockHolder(const std::filesystem::path& lock) {
+long lockHolder(const fs::path& lock) {
   std::ifstream in(lock);
   long pid = 0;
   in >> pid;
   return in ? pid : 0;
 }
 
+// OUT as an absolute path without a trailing separator; a symbolic link to a folder is followed
+// (the folder it names is published).
+fs::path absoluteOut(const fs::path& out) {
+  fs::path p = fs::absolute(out).lexically_normal();
+  if (!p.has_filename() && p.has_parent_path() && p != p.root_path()) p = p.parent_path();
+  std::error_code ec;
+  if (fs::is_symlink(p, ec)) {
+    const fs::path target = fs::canonical(p, ec);
+    if (ec) throw InputError(fmt::format("{}: the output folder is a broken link", out.string()));
+    return target;
+  }
+  return p;
+}
+
+// A hidden name beside OUT: `.NAME.scanplan-<what>`.
+fs::path beside(const fs::path& out, const std::string& what) {
+  return out.parent_path() / ("." + out.filename().string() + ".scanplan-" + what);
+}
+
+// Names `prefix` followed by a pid whose process is gone (or is ours: an earlier run that had
+// our pid). Any other name: false.
+bool leftBehind(const std::string& name, const std::string& prefix) {
+  if (!name.starts_with(prefix) || name.size() == prefix.size()) return false;
+  char* end = nullptr;
+  const long pid = std::strtol(name.c_str() + prefix.size(), &end, 10);
+  if (*end != '\0' || pid <= 0) return false;
+  return pid == static_cast<long>(::getpid()) || !alive(pid);
+}
+
 }  // namespace
 
-// Takes OUT's lock: O_EXCL creation of OUT/.scanplan-lock holding our pid. A lock whose process
-// is gone is stale: removed and taken. A live holder (another run, or this process) is an
-// InputError naming it.
-void OutputStage::lock() {
-  const std::filesystem::path lock = out_ / kLockName;
+OutputLock::OutputLock(const fs::path& out_dir) : file_(beside(absoluteOut(out_dir), "lock")) {
   for (int attempt = 0; attempt < 2; ++attempt) {
-    const int fd = ::open(lock.c_str(), O_CREAT | O_EXCL | O_WRONLY, 0644);
+    const int fd = ::open(file_.c_str(), O_CREAT | O_EXCL | O_WRONLY | O_CLOEXEC, 0644);
     if (fd >= 0) {
       const std::string pid = std::to_string(static_cast<long>(::getpid())) + "\n";
       const bool written = ::write(fd, pid.data(), pid.size()) == static_cast<ssize_t>(pid.size());
       ::close(fd);
       if (!written) break;
-      locked_ = true;
+      track(&Cleanup::remove, file_);
       return;
     }
     if (errno != EEXIST) break;
-    const long holder = lockHolder(lock);
+    const long holder = lockHolder(file_);
     if (holder > 0 && alive(holder)) {
       throw InputError(fmt::format(
           "{} is in use by pid {} (another scanplan run writing there): wait for it, or choose "
           "another output folder",
-          out_.string(), holder));
+          out_dir.string(), holder));
     }
     std::error_code ignored;
-    std::filesystem::remove(lock, ignored);  // stale: its run was killed
+    fs::remove(file_, ignored);  // stale: its run was killed
   }
-  throw InputError(fmt::format("{}: cannot create the lock file {}: {}", out_.string(), kLockName,
-                               std::strerror(errno)));
+  const int error = errno;
+  throw InputError(fmt::format("{}: cannot create the lock file {}: {}", out_dir.string(),
+                               file_.string(), std::strerror(error)));
 }
 
-OutputStage::OutputStage(std::filesystem::path out_dir, std::vector<std::string> owned)
-    : out_(std::move(out_dir)), owned_(std::move(owned)) {
+OutputLock::~OutputLock() {
   std::error_code ec;
-  created_out_ = !std::filesystem::exists(out_, ec);
-  prepareOutputDir(out_);
-  lock();
-  stage_ = out_ / fmt::format(".scanplan-staging-{}", static_cast<long>(::getpid()));
-  // Staging folders of runs that were killed (their process is gone, or it was an earlier run
-  // with our pid): removed, so they do not pile up. A live run's folder is left alone.
-  constexpr std::string_view kPrefix = ".scanplan-staging-";
-  for (const auto& entry : std::filesystem::directory_iterator(out_, ec)) {
-    const std::string name = entry.path().filename().string();
-    if (!name.starts_with(kPrefix)) continue;
-    char* end = nullptr;
-    const long pid = std::strtol(name.c_str() + kPrefix.size(), &end, 10);
-    const bool dead = pid <= 0 || *end != '\0' || pid == static_cast<long>(::getpid()) ||
-                      (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH);
+  fs::remove(file_, ec);
+  untrack(&Cleanup::remove, file_);
+}
+
+namespace {
+
+// Removes what killed runs left beside OUT (their staging folders, and the old OUT a fallback
+// publish had moved aside) and inside it (staging folders of older versions). An old OUT of a
+// run killed between its two renames is put back when OUT is missing.
+void removeLeftovers(const fs::path& out) {
+  std::error_code ec;
+  const std::string name = out.filename().string();
+  const std::string staging = "." + name + ".scanplan-staging-",
+                    old = "." + name + ".scanplan-old-";
+  for (const auto& e : fs::directory_iterator(out.parent_path(), ec)) {
+    const std::string n = e.path().filename().string();
     std::error_code ignored;
-    if (dead) std::filesystem::remove_all(entry.path(), ignored);
+    if (leftBehind(n, staging)) fs::remove_all(e.path(), ignored);
+    if (!leftBehind(n, old)) continue;
+    if (!fs::exists(out, ignored)) fs::rename(e.path(), out, ignored);
+    fs::remove_all(e.path(), ignored);
   }
-  std::filesystem::create_directory(stage_, ec);
-  if (ec) {
-    unlock();
-    throw InputError(
-        fmt::format("{}: cannot create a staging folder: {}", out_.string(), ec.message()));
+  for (const auto& e : fs::directory_iterator(out, ec)) {
+    std::error_code ignored;
+    if (leftBehind(e.path().filename().string(), ".scanplan-staging-"))
+      fs::remove_all(e.path(), ignored);
   }
 }
 
-void OutputStage::unlock() {
-  if (!locked_) return;
+// Copies the tree at `from` to `to` with hard links for its files (a copy where a link is
+// refused); false when it holds something else (a device, a FIFO, a socket) or is too deep or
+// large to mirror, for the caller to fall back.
+bool linkTree(const fs::path& from, const fs::path& to, int depth, std::size_t& entries) {
+  constexpr int kMaxDepth = 64;
+  constexpr std::size_t kMaxEntries = 100'000;
+  if (depth > kMaxDepth || ++entries > kMaxEntries) return false;
   std::error_code ec;
-  std::filesystem::remove(out_ / kLockName, ec);
-  locked_ = false;
+  const fs::file_status st = fs::symlink_status(from, ec);
+  if (fs::is_symlink(st)) {
+    fs::copy_symlink(from, to, ec);
+  } else if (fs::is_directory(st)) {
+    fs::create_directory(to, ec);
+    for (const auto& e : fs::directory_iterator(from, ec)) {
+      if (!linkTree(e.path(), to / e.path().filename(), depth + 1, entries)) return false;
+    }
+  } else if (fs::is_regular_file(st)) {
+    if (::link(from.c_str(), to.c_str()) != 0) fs::copy_file(from, to, ec);
+  } else {
+    return false;
+  }
+  return !ec;
+}
+
+// The working folder is OUT or inside it: exchanging OUT would leave the shell in the old one.
+bool workingInside(const fs::path& out) {
+  std::error_code ec;
+  const fs::path cwd = fs::current_path(ec);
+  const auto [o, c] = std::mismatch(out.begin(), out.end(), cwd.begin(), cwd.end());
+  return !ec && o == out.end();
+}
+
+}  // namespace
+
+OutputStage::OutputStage(fs::path out_dir, std::vector<std::string> owned)
+    : out_(absoluteOut(out_dir)), owned_(std::move(owned)) {
+  std::error_code ec;
+  if (fs::exists(out_, ec) && !fs::is_directory(out_, ec)) {
+    throw InputError(fmt::format("{}: output folder is an existing file: expected a folder path",
+                                 out_dir.string()));
+  }
+  for (fs::path p = out_.parent_path(); !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
+    if (p == p.parent_path()) break;
+    created_parents_.push_back(p);
+  }
+  fs::create_directories(out_.parent_path(), ec);
+  if (ec) {
+    throw InputError(
+        fmt::format("{}: cannot create the folder it goes in: {}", out_dir.string(), ec.message()));
+  }
+  for (const fs::path& p : created_parents_) track(&Cleanup::remove_if_empty, p);
+  lock_ = std::make_unique<OutputLock>(out_);
+  removeLeftovers(out_);
+  stage_ = beside(out_, fmt::format("staging-{}", static_cast<long>(::getpid())));
+  track(&Cleanup::remove, stage_);
+  fs::create_directory(stage_, ec);
+  if (ec) {
+    throw InputError(fmt::format("{}: cannot create a staging folder {}: {}", out_dir.string(),
+                                 stage_.string(), ec.message()));
+  }
 }
 
 OutputStage::~OutputStage() {
   std::error_code ec;
-  if (!committed_) std::filesystem::remove_all(stage_, ec);
-  unlock();
-  if (!committed_ && created_out_ && std::filesystem::is_empty(out_, ec))
-    std::filesystem::remove(out_, ec);
+  if (!committed_) fs::remove_all(stage_, ec);
+  untrack(&Cleanup::remove, stage_);
+  lock_.reset();
+  for (const fs::path& p : created_parents_) {
+    if (!committed_ && fs::is_empty(p, ec)) fs::remove(p, ec);
+    untrack(&Cleanup::remove_if_empty, p);
+  }
 }
 
 bool OutputStage::owned(const std::string& name) const {
@@ -150,7 +287,49 @@ bool OutputStage::owned(const std::string& name) const {
 }
 
 void OutputStage::commit() {
-  namespace fs = std::filesystem;
+  const std::lock_guard<std::mutex> guard(cleanup().mutex);  // an interrupt waits for this
+  std::error_code ec;
+  if (!fs::exists(out_, ec)) {
+    fs::rename(stage_, out_, ec);
+    if (ec) {
+      throw InputError(fmt::format("{}: cannot move the finished output into place: {}",
+                                   out_.string(), ec.message()));
+    }
+  } else if (!exchange()) {
+    commitByEntries();
+  }
+  committed_ = true;
+}
+
+// The staging folder, with OUT's other entries linked in, exchanged with OUT in one step; false
+// when that cannot be done here.
+bool OutputStage::exchange() {
+  std::size_t entries = 0;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(out_, ec)) {
+    const fs::path name = e.path().filename();
+    if (owned(name.string()) || fs::exists(stage_ / name)) continue;
+    carried_.push_back(name);
+    if (!linkTree(e.path(), stage_ / name, 0, entries)) return false;
+  }
+  if (ec || workingInside(out_)) return false;
+  if (::renameat2(AT_FDCWD, stage_.c_str(), AT_FDCWD, out_.c_str(), RENAME_EXCHANGE) != 0) {
+    const int error = errno;
+    if (error == EINVAL || error == ENOSYS || error == EOPNOTSUPP || error == EBUSY ||
+        error == EXDEV || error == EPERM)
+      return false;
+    throw InputError(fmt::format("{}: cannot publish the finished output: {}", out_.string(),
+                                 std::strerror(error)));
+  }
+  fs::remove_all(stage_, ec);  // the old OUT
+  return true;
+}
+
+// The fallback: one rename per entry (a kill between them can mix old and new files).
+void OutputStage::commitByEntries() {
+  spdlog::warn(
+      "{}: this file system cannot swap folders in one step; moving the outputs one by one",
+      out_.string());
   std::error_code ec;
   std::vector<fs::path> earlier, staged;  // listed first: the loops below change the folders
   for (const fs::directory_entry& e : fs::directory_iterator(out_)) earlier.push_back(e.path());
@@ -160,6 +339,8 @@ void OutputStage::commit() {
     if (owned(name) && !fs::exists(stage_ / name)) fs::remove_all(p, ec);
   }
   for (const fs::path& p : staged) {
+    if (std::find(carried_.begin(), carried_.end(), p.filename()) != carried_.end())
+      continue;  // linked in for an exchange: already in OUT
     const fs::path target = out_ / p.filename();
     if (fs::is_directory(p)) fs::remove_all(target, ec);  // a folder is replaced as a whole
     fs::rename(p, target, ec);
@@ -168,8 +349,34 @@ void OutputStage::commit() {
                                    target.string(), ec.message()));
     }
   }
-  fs::remove(stage_, ec);
-  committed_ = true;
+  fs::remove_all(stage_, ec);
+}
+
+void installInterruptHandler() {
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGINT);
+  sigaddset(&set, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &set, nullptr);
+  std::thread([set] {
+    int sig = 0;
+    while (sigwait(&set, &sig) != 0) {
+    }
+    const std::lock_guard<std::mutex> guard(cleanup().mutex);  // a publish finishes first
+    for (const fs::path& p : cleanup().remove) {
+      std::error_code ec;
+      for (int attempt = 0; attempt < 5 && fs::exists(p, ec); ++attempt) fs::remove_all(p, ec);
+    }
+    for (auto it = cleanup().remove_if_empty.rbegin(); it != cleanup().remove_if_empty.rend();
+         ++it) {
+      std::error_code ec;
+      if (fs::is_empty(*it, ec)) fs::remove(*it, ec);
+    }
+    const char* what = sig == SIGINT ? "SIGINT" : "SIGTERM";
+    std::fprintf(stderr, "scanplan: stopped by %s; outputs left as they were\n", what);
+    std::fflush(stderr);
+    ::_exit(128 + sig);
+  }).detach();
 }
 
 Eigen::Vector4d quaternionWxyz(const Eigen::Matrix3d& R) {

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -9,24 +10,43 @@
 namespace scanplan::cli {
 
 /// Writes `content` to `file` through a temporary name in the same folder, then renames it
-/// into place, so an interrupted run never leaves a half-written file.
+/// into place, so an interrupted run never leaves a half-written file. A failure is an
+/// InputError naming the file and the OS's reason (e.g. "No space left on device").
 void writeFileAtomically(const std::filesystem::path& file, const std::string& content);
 
 /// Creates the output folder (and parents); an existing file in the way is an InputError.
 void prepareOutputDir(const std::filesystem::path& dir);
 
-/// One command run's outputs, written into a staging folder inside the output folder and moved
-/// into place together by commit(). The folder is locked meanwhile (OUT/.scanplan-lock holds
-/// the pid): a second run into it is an InputError "OUT is in use by pid N"; the lock of a
-/// killed run is stale and taken over. A run that fails or is interrupted leaves the output folder
-/// as it was (and removes it again if the run created it); on commit, files of an earlier run
-/// that this run does not write are removed, so a stale trajectory.csv or program never sits
-/// next to a new report.
+/// An exclusive claim on an output folder OUT: the file `.NAME.scanplan-lock` beside it (NAME is
+/// OUT's name) holds our pid, created with O_EXCL. A second claim while the holder lives is an
+/// InputError "OUT is in use by pid N"; the lock of a run that is gone is stale and taken over.
+/// Released (and unregistered from the interrupt handler) on destruction.
+class OutputLock {
+ public:
+  explicit OutputLock(const std::filesystem::path& out_dir);
+  ~OutputLock();
+  OutputLock(const OutputLock&) = delete;
+  OutputLock& operator=(const OutputLock&) = delete;
+
+ private:
+  std::filesystem::path file_;
+};
+
+/// One command run's outputs, written into a staging folder beside OUT
+/// (`.NAME.scanplan-staging-<pid>`, same file system) and published by commit() in one step:
+/// the staging folder, completed with hard links to the files of OUT this command does not own,
+/// takes OUT's place by an atomic exchange of the two folders (renameat2 RENAME_EXCHANGE), or by
+/// one rename when OUT is new. A kill at any moment leaves the old complete OUT or the new one.
+/// Where the file system cannot exchange folders (or OUT is the working folder or a mount
+/// point), commit() falls back to one rename per entry and says so in a warning. OUT is locked
+/// meanwhile (OutputLock). A run that fails or is interrupted leaves OUT as it was, and no OUT
+/// when it did not exist; staging folders of runs that are gone are removed by the next run.
 class OutputStage {
  public:
   /// `owned`: the names this command writes into the folder (files or folders; a trailing '*'
-  /// matches any name with that prefix). Creates the output folder and the staging folder; an
-  /// existing file in the way is an InputError.
+  /// matches any name with that prefix): on commit, the owned entries it did not write again
+  /// are dropped, everything else in OUT is kept. An existing file in OUT's place is an
+  /// InputError.
   OutputStage(std::filesystem::path out_dir, std::vector<std::string> owned);
   ~OutputStage();
   OutputStage(const OutputStage&) = delete;
@@ -34,22 +54,29 @@ class OutputStage {
 
   /// Where to write this run's outputs.
   const std::filesystem::path& dir() const { return stage_; }
-  /// Moves every staged entry into the output folder and removes the owned entries it did not
-  /// stage.
+  /// Publishes the staged outputs as OUT (see the class comment).
   void commit();
 
  private:
   bool owned(const std::string& name) const;
-  void lock();
-  void unlock();
+  void carryOver() const;
+  bool exchange();
+  void commitByEntries();
 
   std::filesystem::path out_;
   std::filesystem::path stage_;
   std::vector<std::string> owned_;
-  bool created_out_ = false;
+  std::vector<std::filesystem::path> carried_;          // OUT's other entries, linked in
+  std::vector<std::filesystem::path> created_parents_;  // made for OUT, removed on failure
+  std::unique_ptr<OutputLock> lock_;
   bool committed_ = false;
-  bool locked_ = false;
 };
+
+/// SIGINT and SIGTERM end the process cleanly: the staging folders and locks of the running
+/// command are removed (a publish under way finishes first), a line says so on stderr, and the
+/// exit code is 130 (SIGINT) or 143 (SIGTERM). Call once, first thing in main(), before any
+/// thread starts: it blocks both signals in every thread and waits for them in its own.
+void installInterruptHandler();
 
 /// Quaternion (w, x, y, z) with w ≥ 0.
 Eigen::Vector4d quaternionWxyz(const Eigen::Matrix3d& R);
