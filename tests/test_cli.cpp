@@ -2,6 +2,8 @@
 // stdout and stderr. Golden files live in tests/golden/; SCANPLAN_UPDATE_GOLDEN=1 rewrites them.
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -15,7 +17,9 @@
 
 #include "cli/commands/commands.h"
 #include "cli/config/job.h"
+#include "cli/io/output.h"
 #include "cli_support.h"
+#include "kinematics/error.h"
 #include "kinematics/units.h"
 #include "test_support.h"
 
@@ -656,3 +660,96 @@ TEST_F(Cli, MeshErrorsNameTheJobAsGiven) {
 }
 
 }  // namespace
+
+// ---- OutputStage: publishing a folder in one step --------------------------------------------
+
+namespace {
+
+using scanplan::cli::OutputStage;
+
+void write(const fs::path& file, const std::string& text) {
+  fs::create_directories(file.parent_path());
+  std::ofstream(file, std::ios::binary) << text;
+}
+
+std::string read(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// Every name in `dir` and beside it that only a run in progress should leave.
+std::vector<std::string> leftovers(const fs::path& dir) {
+  std::vector<std::string> out;
+  for (const auto& e : fs::directory_iterator(dir.parent_path())) {
+    const std::string n = e.path().filename().string();
+    if (n.find(".scanplan-") != std::string::npos) out.push_back(n);
+  }
+  return out;
+}
+
+// An earlier run's OUT: an owned file this run writes again, one it does not, the user's file
+// and folder.
+void earlierRun(const fs::path& out) {
+  write(out / "report.json", "old report");
+  write(out / "trajectory.csv", "old trajectory");
+  write(out / "notes.txt", "mine");
+  write(out / "mine" / "a.txt", "mine too");
+}
+
+void expectPublished(const fs::path& out) {
+  EXPECT_EQ(read(out / "report.json"), "new report");
+  EXPECT_FALSE(fs::exists(out / "trajectory.csv")) << "owned, not written again: dropped";
+  EXPECT_EQ(read(out / "notes.txt"), "mine");
+  EXPECT_EQ(read(out / "mine" / "a.txt"), "mine too");
+  EXPECT_TRUE(leftovers(out).empty());
+}
+
+}  // namespace
+
+TEST_F(Cli, AStagedOutputReplacesTheOwnedFilesAndKeepsTheUsersOwn) {
+  const fs::path out = dir_ / "out";
+  earlierRun(out);
+  struct stat before {
+  }, after{};
+  ASSERT_EQ(::stat((out / "notes.txt").c_str(), &before), 0);
+  {
+    OutputStage stage(out, {"report.json", "trajectory.csv"});
+    write(stage.dir() / "report.json", "new report");
+    EXPECT_EQ(read(out / "report.json"), "old report") << "nothing changes before commit";
+    stage.commit();
+  }
+  expectPublished(out);
+  ASSERT_EQ(::stat((out / "notes.txt").c_str(), &after), 0);
+  EXPECT_EQ(after.st_ino, before.st_ino) << "the user's file itself, not a copy";
+}
+
+// With the working folder inside OUT the folders are not exchanged: entries move one by one,
+// with the same result.
+TEST_F(Cli, AStagedOutputFallsBackToMovingEntriesWhenOutIsTheWorkingFolder) {
+  const fs::path out = dir_ / "out";
+  earlierRun(out);
+  const fs::path cwd = fs::current_path();
+  fs::current_path(out);
+  {
+    OutputStage stage(".", {"report.json", "trajectory.csv"});
+    write(stage.dir() / "report.json", "new report");
+    stage.commit();
+  }
+  fs::current_path(cwd);
+  expectPublished(out);
+}
+
+TEST_F(Cli, AnAbandonedStageLeavesNoFolderAndALockedFolderIsRefused) {
+  const fs::path out = dir_ / "new" / "deeper" / "out";
+  {
+    OutputStage stage(out, {"report.json"});
+    write(stage.dir() / "report.json", "never published");
+    try {
+      OutputStage second(out, {"report.json"});
+      ADD_FAILURE() << "a second stage into a locked folder";
+    } catch (const scanplan::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("is in use by pid"), std::string::npos) << e.what();
+    }
+  }  // destroyed without commit: an error or an interrupt
+  EXPECT_FALSE(fs::exists(dir_ / "new")) << "the folders made for OUT are removed again";
+}

@@ -310,14 +310,26 @@ bool OutputStage::exchange() {
     const fs::path name = e.path().filename();
     if (owned(name.string()) || fs::exists(stage_ / name)) continue;
     carried_.push_back(name);
-    if (!linkTree(e.path(), stage_ / name, 0, entries)) return false;
+    if (!linkTree(e.path(), stage_ / name, 0, entries)) {
+      why_ = fmt::format("{} holds a special file or too many entries", name.string());
+      return false;
+    }
   }
-  if (ec || workingInside(out_)) return false;
+  if (ec) {
+    why_ = ec.message();
+    return false;
+  }
+  if (workingInside(out_)) {
+    why_ = "it is the working folder or holds it";
+    return false;
+  }
   if (::renameat2(AT_FDCWD, stage_.c_str(), AT_FDCWD, out_.c_str(), RENAME_EXCHANGE) != 0) {
     const int error = errno;
     if (error == EINVAL || error == ENOSYS || error == EOPNOTSUPP || error == EBUSY ||
-        error == EXDEV || error == EPERM)
+        error == EXDEV || error == EPERM) {
+      why_ = std::strerror(error);
       return false;
+    }
     throw InputError(fmt::format("{}: cannot publish the finished output: {}", out_.string(),
                                  std::strerror(error)));
   }
@@ -327,9 +339,8 @@ bool OutputStage::exchange() {
 
 // The fallback: one rename per entry (a kill between them can mix old and new files).
 void OutputStage::commitByEntries() {
-  spdlog::warn(
-      "{}: this file system cannot swap folders in one step; moving the outputs one by one",
-      out_.string());
+  spdlog::warn("{}: cannot be swapped in one step ({}); moving the outputs one by one",
+               out_.string(), why_);
   std::error_code ec;
   std::vector<fs::path> earlier, staged;  // listed first: the loops below change the folders
   for (const fs::directory_entry& e : fs::directory_iterator(out_)) earlier.push_back(e.path());

@@ -69,6 +69,7 @@ class OutputStage {
   std::vector<std::filesystem::path> carried_;          // OUT's other entries, linked in
   std::vector<std::filesystem::path> created_parents_;  // made for OUT, removed on failure
   std::unique_ptr<OutputLock> lock_;
+  std::string why_;  // why the folders were not exchanged
   bool committed_ = false;
 };
 
