@@ -13,7 +13,8 @@ int segmentsFor(double radius, const TessellationOptions& options) {
   int n = options.min_segments;
   if (radius > options.chord_tolerance && options.chord_tolerance > 0.0) {
     const double half_angle = std::acos(1.0 - options.chord_tolerance / radius);
-    n = static_cast<int>(std::ceil(std::numbers::pi / half_angle));
+    // Clamped as a double: a tiny tolerance asks for more segments than an int holds.
+    n = static_cast<int>(std::min(std::ceil(std::numbers::pi / half_angle), 1e6));
   } else if (options.chord_tolerance <= 0.0) {
     n = options.max_segments;
   }

@@ -526,6 +526,22 @@ TEST_F(Batch, SeedsGoIntoEverySeedKeyOfTheJob) {
 // The README's sweep example, as written there: it loads (every value checked on the demo job)
 // and expands to (2 planners x 3 horizons + 1 explicit case) x 3 seeds.
 // The README's sweep example is the bundled data/sweeps/planners.yaml, word for word, and loads.
+// A range whose step is tiny asks for more values than any integer holds: refused with the
+// count, before it is cast (issue 17: float-cast-overflow).
+TEST_F(Batch, ARangeOfTooManyValuesIsRefusedWithItsCount) {
+  for (const char* range : {"{from: 0, to: 1, step: 1e-300}", "{from: -1e9, to: 1e9, step: 1}"}) {
+    const fs::path file = writeSweep(std::string("vary:\n  planner.ray.horizon: ") + range + "\n");
+    try {
+      cli::loadSweep(file);
+      ADD_FAILURE() << range << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("expected at most 100000"), std::string::npos)
+          << e.what();
+      EXPECT_NE(std::string(e.what()).find("planner.ray.horizon"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST_F(Batch, ReadmeSweepExampleIsTheBundledSweepAndLoads) {
   const std::string readme = readFile(sourceDir() / "README.md");
   const std::size_t section = readme.find("### `scanplan batch");

@@ -108,8 +108,14 @@ std::vector<std::string> valueList(const fs::path& file,
       throw InputError(fmt::format("{}: from {} to {} step {}: expected step > 0 and to >= from",
                                    at, from, to, step));
     }
-    const auto n = static_cast<std::size_t>(std::floor((to - from) / step + 1e-9)) + 1;
-    if (n > 100000) throw InputError(fmt::format("{}: {} values: expected at most 100000", at, n));
+    // Counted in double first: a tiny step makes more values than any integer holds.
+    const double count = std::floor((to - from) / step + 1e-9) + 1.0;
+    if (!(count <= 100000.0)) {
+      throw InputError(
+          fmt::format("{}: from {} to {} step {}: {:.3g} values: expected at most 100000", at, from,
+                      to, step, count));
+    }
+    const auto n = static_cast<std::size_t>(count);
     for (std::size_t i = 0; i < n; ++i) {
       values.push_back(numberText(from + static_cast<double>(i) * step));
     }
