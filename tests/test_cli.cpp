@@ -2,6 +2,7 @@
 // stdout and stderr. Golden files live in tests/golden/; SCANPLAN_UPDATE_GOLDEN=1 rewrites them.
 #include <gtest/gtest.h>
 
+#include <sys/mount.h>
 #include <sys/stat.h>
 
 #include <algorithm>
@@ -752,4 +753,25 @@ TEST_F(Cli, AnAbandonedStageLeavesNoFolderAndALockedFolderIsRefused) {
     }
   }  // destroyed without commit: an error or an interrupt
   EXPECT_FALSE(fs::exists(dir_ / "new")) << "the folders made for OUT are removed again";
+}
+
+// A full disk names the file as the user asked for it (under OUT, not the staging folder) and
+// the system's reason, exits 4 and leaves no OUT. Needs a small tmpfs: skipped where this
+// process may not mount one.
+TEST_F(Cli, AFullDiskNamesTheFileAndTheReason) {
+  const fs::path disk = dir_ / "disk";
+  fs::create_directories(disk);
+  if (::mount("tmpfs", disk.c_str(), "tmpfs", 0, "size=256k") != 0)
+    GTEST_SKIP() << "cannot mount a tmpfs here";
+  const fs::path job = fs::path(SCANPLAN_SOURCE_DIR) / "data/jobs/demo_rings.yaml";
+  std::vector<std::string> args{"plan", job.string(), "-o", (disk / "out").string()};
+  for (const std::string& o : scanplan::test::kLightDemo) args.insert(args.end(), {"--set", o});
+  const Result run = scanplan(args);
+  const bool out_left = fs::exists(disk / "out");
+  ::umount(disk.c_str());
+  EXPECT_EQ(run.exit_code, 4) << describe(run);
+  EXPECT_TRUE(contains(run.err, (disk / "out").string() + "/")) << run.err;
+  EXPECT_TRUE(contains(run.err, "No space left on device")) << run.err;
+  EXPECT_FALSE(contains(run.err, "staging")) << run.err;
+  EXPECT_FALSE(out_left);
 }

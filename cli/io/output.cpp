@@ -25,6 +25,17 @@
 namespace scanplan::cli {
 namespace {
 
+// Staging folders and the OUT each stands for, so messages name the file the user asked for.
+struct Shown {
+  std::mutex mutex;
+  std::vector<std::pair<std::filesystem::path, std::filesystem::path>> stage_to_out;
+};
+
+Shown& shown() {
+  static Shown s;
+  return s;
+}
+
 // Writes all of `content` to the new file `path`; the OS's reason on failure, or nothing.
 std::string writeAll(const std::filesystem::path& path, const std::string& content) {
   const int fd = ::open(path.c_str(), O_CREAT | O_TRUNC | O_WRONLY | O_CLOEXEC, 0644);
@@ -46,6 +57,19 @@ std::string writeAll(const std::filesystem::path& path, const std::string& conte
 
 }  // namespace
 
+// `file` as the user will find it: under OUT, not under its staging folder.
+std::string shownName(const std::filesystem::path& file) {
+  const std::lock_guard<std::mutex> guard(shown().mutex);
+  for (const auto& [stage, out] : shown().stage_to_out) {
+    const auto [s, f] = std::mismatch(stage.begin(), stage.end(), file.begin(), file.end());
+    if (s != stage.end()) continue;
+    std::filesystem::path p = out;
+    for (auto it = f; it != file.end(); ++it) p /= *it;
+    return p.string();
+  }
+  return file.string();
+}
+
 void writeFileAtomically(const std::filesystem::path& file, const std::string& content) {
   std::error_code ec;
   if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path(), ec);
@@ -53,7 +77,7 @@ void writeFileAtomically(const std::filesystem::path& file, const std::string& c
   const std::string why = writeAll(tmp, content);
   if (!why.empty()) {
     std::filesystem::remove(tmp, ec);
-    throw InputError(fmt::format("{}: cannot write the file: {}", file.string(), why));
+    throw InputError(fmt::format("{}: cannot write the file: {}", shownName(file), why));
   }
   std::filesystem::rename(tmp, file, ec);
   if (ec) {
@@ -260,6 +284,10 @@ OutputStage::OutputStage(fs::path out_dir, std::vector<std::string> owned)
   removeLeftovers(out_);
   stage_ = beside(out_, fmt::format("staging-{}", static_cast<long>(::getpid())));
   track(&Cleanup::remove, stage_);
+  {
+    const std::lock_guard<std::mutex> guard(shown().mutex);
+    shown().stage_to_out.emplace_back(stage_, out_dir);
+  }
   fs::create_directory(stage_, ec);
   if (ec) {
     throw InputError(fmt::format("{}: cannot create a staging folder {}: {}", out_dir.string(),
@@ -271,6 +299,12 @@ OutputStage::~OutputStage() {
   std::error_code ec;
   if (!committed_) fs::remove_all(stage_, ec);
   untrack(&Cleanup::remove, stage_);
+  {
+    const std::lock_guard<std::mutex> guard(shown().mutex);
+    auto& v = shown().stage_to_out;
+    v.erase(std::remove_if(v.begin(), v.end(), [&](const auto& e) { return e.first == stage_; }),
+            v.end());
+  }
   lock_.reset();
   for (const fs::path& p : created_parents_) {
     if (!committed_ && fs::is_empty(p, ec)) fs::remove(p, ec);
