@@ -151,6 +151,27 @@ void inspectFaces(const aiScene& scene, MeshLoadReport& report) {
   }
 }
 
+// assimp's triangulation aborts the process (an always-on assertion) when a mesh claims polygons
+// it does not have: a face with no vertex index (a PLY face list of length 0 passes assimp's
+// own validation) counts as a polygon. Such files are refused before triangulating.
+void checkTriangulable(const std::filesystem::path& path, const aiScene& scene) {
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+    const aiMesh& mesh = *scene.mMeshes[m];
+    bool polygon = false;
+    for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+      if (mesh.mFaces[f].mNumIndices == 0) {
+        fail(path,
+             "face " + std::to_string(f + 1) +
+                 " has no vertex index; expected 3 or more per face (1 or 2: a point or line)");
+      }
+      polygon = polygon || mesh.mFaces[f].mNumIndices > 3;
+    }
+    if ((mesh.mPrimitiveTypes & aiPrimitiveType_POLYGON) != 0 && !polygon) {
+      fail(path, "declares polygons but has none; expected a consistent face list");
+    }
+  }
+}
+
 // Importers may hang meshes below nodes with transforms (OBJ puts each group in a node), so
 // the tree is walked with accumulated transforms; a mesh used by two nodes is copied twice.
 void collect(const aiScene& scene,
@@ -286,14 +307,20 @@ LoadedMesh loadMesh(const std::filesystem::path& path, const MeshLoadOptions& op
                                                           aiComponent_TANGENTS_AND_BITANGENTS);
   const aiScene* scene = nullptr;
   try {
-    scene = importer.ReadFile(path.string(), aiProcess_Triangulate | aiProcess_RemoveComponent |
-                                                 aiProcess_ValidateDataStructure);
+    scene = importer.ReadFile(path.string(),
+                              aiProcess_RemoveComponent | aiProcess_ValidateDataStructure);
+    if (scene != nullptr) {
+      checkTriangulable(path, *scene);
+      scene = importer.ApplyPostProcessing(aiProcess_Triangulate);
+    }
     if (scene != nullptr) {
       inspectFaces(*scene, result.report);
       // Normals must go first: assimp keeps STL corners apart because each carries its
       // facet's normal, and welding only merges vertices identical in every attribute.
       scene = importer.ApplyPostProcessing(aiProcess_DropNormals | aiProcess_JoinIdenticalVertices);
     }
+  } catch (const InputError&) {
+    throw;
   } catch (const std::exception& e) {
     fail(path, std::string("could not be read: ") + e.what());
   }

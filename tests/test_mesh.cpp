@@ -567,4 +567,17 @@ TEST_F(MeshLoadTest, TruncatedHeadersHugeCountsAndPipesAreRefusedBeforeTheLoader
   EXPECT_EQ(loadError(good), "<no exception>");
 }
 
+// Found by fuzzing (tests/fuzz, mesh): a PLY face of length 0 passes assimp's validation and
+// counts as a polygon, and assimp's triangulation then aborted the process (an assertion in
+// TriangulateProcess). The loader refuses the face first.
+TEST_F(MeshLoadTest, FaceWithNoVertexIndexIsAnInputErrorNotAnAbort) {
+  const auto empty_face = write("empty_face.ply",
+                                "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                                "property float y\nproperty float z\nelement face 2\n"
+                                "property list uchar int vertex_indices\nend_header\n"
+                                "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n0\n");
+  EXPECT_TRUE(containsAll(loadError(empty_face),
+                          {"empty_face.ply", "face 2 has no vertex index", "expected 3 or more"}));
+}
+
 }  // namespace scanplan::kinematics
