@@ -798,7 +798,7 @@ TEST_F(Batch, BadKeyInTheSweepFailsBeforeAnythingRuns) {
 // the seeds cost two loads (the smallest and the largest) however many there are.
 TEST_F(Batch, HugeSweepsAreRefusedBeforeTheyAreExpanded) {
   const auto load = [&](const std::string& body) {
-    return [=] { cli::loadSweep(writeSweep(body)); };
+    return [this, body] { cli::loadSweep(writeSweep(body)); };
   };
   EXPECT_TRUE(throwsInputError(
       load("repeats: 2000000000\n"),
