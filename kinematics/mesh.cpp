@@ -49,25 +49,33 @@ std::string head(const std::filesystem::path& path, std::size_t n) {
 
 // A PLY header must end within 64 kB and its element counts fit the file: a header alone, or
 // one claiming a billion vertices, is refused before the loader sees it (which loops or
-// allocates without end on them).
+// allocates without end on them). Its last line must be `end_header` alone: with more on that
+// line (`end_header0 0 0`) assimp's PLY reader seeks at the end of the file for ever.
 void checkPlyHeader(const std::filesystem::path& path, std::uintmax_t size) {
   const std::string text = head(path, kMaxHeader);
-  const std::size_t end = text.find("end_header");
-  if (text.rfind("ply", 0) != 0 || end == std::string::npos) {
-    fail(path,
-         "has no complete PLY header ('ply' … 'end_header' in the first 64 kB); expected a "
-         "PLY mesh");
-  }
-  std::istringstream lines(text.substr(0, end));
+  std::istringstream lines(text);
   std::uintmax_t needed = 0;  // at least a byte per element (binary), two per number (ASCII)
-  for (std::string line; std::getline(lines, line);) {
+  bool ended = false;
+  for (std::string line; !ended && std::getline(lines, line);) {
     std::istringstream words(line);
     std::string word, name;
     double count = 0.0;
-    if (words >> word >> name >> count && word == "element") {
-      if (!(count >= 0.0) || count > 1e10) fail(path, "has a PLY element count of " + line);
-      needed += static_cast<std::uintmax_t>(count);
+    if (!(words >> word) || word.rfind("end_header", 0) != 0) {
+      if (word == "element" && words >> name >> count) {
+        if (!(count >= 0.0) || count > 1e10) fail(path, "has a PLY element count of " + line);
+        needed += static_cast<std::uintmax_t>(count);
+      }
+      continue;
     }
+    if (word != "end_header" || words >> name) {
+      fail(path, "has more than 'end_header' on the PLY header's last line; expected it alone");
+    }
+    ended = true;
+  }
+  if (text.rfind("ply", 0) != 0 || !ended) {
+    fail(path,
+         "has no complete PLY header ('ply' … 'end_header' in the first 64 kB); expected a "
+         "PLY mesh");
   }
   if (needed > size) {
     fail(path, "claims " + std::to_string(needed) + " PLY elements in " + std::to_string(size) +
