@@ -9,6 +9,11 @@
 #include "kinematics/mesh.h"
 #include "tests/fuzz/fuzz_support.h"
 
+// Debian's libassimp 5.2 leaks an importer structure (about 1.3 kB) when it gives up on some
+// malformed PLY files; that is assimp's, not ours, and a scanplan process ends soon after.
+// Leaks allocated by scanplan's own code (no assimp frame in their stack) are still reported.
+extern "C" const char* __lsan_default_suppressions() { return "leak:libassimp.so\n"; }
+
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace scanplan;
   if (size == 0) return 0;
