@@ -14,8 +14,8 @@ packages=(
   # for tests: OMPL's ompl_benchmark_statistics reads `batch`'s log, GNU parallel runs shards
   ompl-demos parallel
 )
-# CI also builds with the second compiler (.ci/run).
-if [ "${CI:-}" = "true" ]; then packages+=(clang-14); fi
+# CI also builds with the second compiler, and runs the fuzz tests with its libFuzzer (.ci/run).
+if [ "${CI:-}" = "true" ]; then packages+=(clang-14 libclang-rt-14-dev); fi
 
 missing=()
 for p in "${packages[@]}"; do

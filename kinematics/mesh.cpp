@@ -49,25 +49,33 @@ std::string head(const std::filesystem::path& path, std::size_t n) {
 
 // A PLY header must end within 64 kB and its element counts fit the file: a header alone, or
 // one claiming a billion vertices, is refused before the loader sees it (which loops or
-// allocates without end on them).
+// allocates without end on them). Its last line must be `end_header` alone: with more on that
+// line (`end_header0 0 0`) assimp's PLY reader seeks at the end of the file for ever.
 void checkPlyHeader(const std::filesystem::path& path, std::uintmax_t size) {
   const std::string text = head(path, kMaxHeader);
-  const std::size_t end = text.find("end_header");
-  if (text.rfind("ply", 0) != 0 || end == std::string::npos) {
-    fail(path,
-         "has no complete PLY header ('ply' … 'end_header' in the first 64 kB); expected a "
-         "PLY mesh");
-  }
-  std::istringstream lines(text.substr(0, end));
+  std::istringstream lines(text);
   std::uintmax_t needed = 0;  // at least a byte per element (binary), two per number (ASCII)
-  for (std::string line; std::getline(lines, line);) {
+  bool ended = false;
+  for (std::string line; !ended && std::getline(lines, line);) {
     std::istringstream words(line);
     std::string word, name;
     double count = 0.0;
-    if (words >> word >> name >> count && word == "element") {
-      if (!(count >= 0.0) || count > 1e10) fail(path, "has a PLY element count of " + line);
-      needed += static_cast<std::uintmax_t>(count);
+    if (!(words >> word) || word.rfind("end_header", 0) != 0) {
+      if (word == "element" && words >> name >> count) {
+        if (!(count >= 0.0) || count > 1e10) fail(path, "has a PLY element count of " + line);
+        needed += static_cast<std::uintmax_t>(count);
+      }
+      continue;
     }
+    if (word != "end_header" || words >> name) {
+      fail(path, "has more than 'end_header' on the PLY header's last line; expected it alone");
+    }
+    ended = true;
+  }
+  if (text.rfind("ply", 0) != 0 || !ended) {
+    fail(path,
+         "has no complete PLY header ('ply' … 'end_header' in the first 64 kB); expected a "
+         "PLY mesh");
   }
   if (needed > size) {
     fail(path, "claims " + std::to_string(needed) + " PLY elements in " + std::to_string(size) +
@@ -147,6 +155,27 @@ void inspectFaces(const aiScene& scene, MeshLoadReport& report) {
                                      toEigen(mesh.mNormals[idx[1]]) +
                                      toEigen(mesh.mNormals[idx[2]]);
       if (winding.dot(stored) < 0.0) ++report.normals_disagreeing;
+    }
+  }
+}
+
+// assimp's triangulation aborts the process (an always-on assertion) when a mesh claims polygons
+// it does not have: a face with no vertex index (a PLY face list of length 0 passes assimp's
+// own validation) counts as a polygon. Such files are refused before triangulating.
+void checkTriangulable(const std::filesystem::path& path, const aiScene& scene) {
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+    const aiMesh& mesh = *scene.mMeshes[m];
+    bool polygon = false;
+    for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+      if (mesh.mFaces[f].mNumIndices == 0) {
+        fail(path,
+             "face " + std::to_string(f + 1) +
+                 " has no vertex index; expected 3 or more per face (1 or 2: a point or line)");
+      }
+      polygon = polygon || mesh.mFaces[f].mNumIndices > 3;
+    }
+    if ((mesh.mPrimitiveTypes & aiPrimitiveType_POLYGON) != 0 && !polygon) {
+      fail(path, "declares polygons but has none; expected a consistent face list");
     }
   }
 }
@@ -286,14 +315,20 @@ LoadedMesh loadMesh(const std::filesystem::path& path, const MeshLoadOptions& op
                                                           aiComponent_TANGENTS_AND_BITANGENTS);
   const aiScene* scene = nullptr;
   try {
-    scene = importer.ReadFile(path.string(), aiProcess_Triangulate | aiProcess_RemoveComponent |
-                                                 aiProcess_ValidateDataStructure);
+    scene = importer.ReadFile(path.string(),
+                              aiProcess_RemoveComponent | aiProcess_ValidateDataStructure);
+    if (scene != nullptr) {
+      checkTriangulable(path, *scene);
+      scene = importer.ApplyPostProcessing(aiProcess_Triangulate);
+    }
     if (scene != nullptr) {
       inspectFaces(*scene, result.report);
       // Normals must go first: assimp keeps STL corners apart because each carries its
       // facet's normal, and welding only merges vertices identical in every attribute.
       scene = importer.ApplyPostProcessing(aiProcess_DropNormals | aiProcess_JoinIdenticalVertices);
     }
+  } catch (const InputError&) {
+    throw;
   } catch (const std::exception& e) {
     fail(path, std::string("could not be read: ") + e.what());
   }

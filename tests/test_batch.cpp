@@ -808,6 +808,29 @@ TEST_F(Batch, BadKeyInTheSweepFailsBeforeAnythingRuns) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+// Found by fuzzing (tests/fuzz, yaml_sweep): `repeats: 2000000000` or a grid of three 100-value
+// ranges expanded billions of cases (out of memory), and 2 000 seeds loaded the job 2 000 times
+// (minutes). The size is now refused from the lists' lengths before anything is expanded, and
+// the seeds cost two loads (the smallest and the largest) however many there are.
+TEST_F(Batch, HugeSweepsAreRefusedBeforeTheyAreExpanded) {
+  const auto load = [&](const std::string& body) {
+    return [this, body] { cli::loadSweep(writeSweep(body)); };
+  };
+  EXPECT_TRUE(throwsInputError(
+      load("repeats: 2000000000\n"),
+      {"sweep.yaml", "2e+09 cases", "2000000000 repeat(s)", "expected at most 100000"}));
+  EXPECT_TRUE(throwsInputError(
+      load("vary:\n  planner.ray.horizon: {from: 1, to: 100}\n"
+           "  planner.ray.rays: {from: 1, to: 100}\n  planner.ray.starts: {from: 1, to: 100}\n"),
+      {"1e+06 cases", "1e+06 setting(s)", "expected at most 100000"}));
+  EXPECT_TRUE(throwsInputError(load("vary:\n  planner.ray.horizon: {from: 1, to: 400}\n"),
+                               {"load the job(s) 401 times", "400 varied value(s)",
+                                "expected at most 300; split the sweep"}));
+  const cli::Sweep seeds = cli::loadSweep(writeSweep("seeds: {from: 1, to: 2000}\n"));
+  EXPECT_EQ(seeds.cases.size(), 2000u);
+  EXPECT_TRUE(throwsInputError(load("seeds: [1, 2, -3]\n"), {"seeds: '-3'"}));
+}
+
 // A results.jsonl row as a batch writes it (metrics in kBatchMetrics order, "null" when absent).
 std::string jsonRow(int index,
                     const std::string& method,

@@ -567,4 +567,32 @@ TEST_F(MeshLoadTest, TruncatedHeadersHugeCountsAndPipesAreRefusedBeforeTheLoader
   EXPECT_EQ(loadError(good), "<no exception>");
 }
 
+// Found by fuzzing (tests/fuzz, mesh): a PLY face of length 0 passes assimp's validation and
+// counts as a polygon, and assimp's triangulation then aborted the process (an assertion in
+// TriangulateProcess). The loader refuses the face first.
+TEST_F(MeshLoadTest, FaceWithNoVertexIndexIsAnInputErrorNotAnAbort) {
+  const auto empty_face = write("empty_face.ply",
+                                "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                                "property float y\nproperty float z\nelement face 2\n"
+                                "property list uchar int vertex_indices\nend_header\n"
+                                "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n0\n");
+  EXPECT_TRUE(containsAll(loadError(empty_face),
+                          {"empty_face.ply", "face 2 has no vertex index", "expected 3 or more"}));
+}
+
+// Found by fuzzing (tests/fuzz, mesh): with more than `end_header` on the header's last line,
+// assimp's PLY reader never returned (it seeks at the end of the file for ever). Refused first;
+// trailing blanks and CRLF stay fine.
+TEST_F(MeshLoadTest, PlyEndHeaderWithMoreOnItsLineIsAnInputErrorNotAHang) {
+  const std::string header =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\n";
+  const std::string body = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  const auto glued = write("glued.ply", header + "end_header0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  EXPECT_TRUE(containsAll(loadError(glued), {"glued.ply", "more than 'end_header'"}));
+  const auto words = write("words.ply", header + "end_header 0\n" + body);
+  EXPECT_TRUE(containsAll(loadError(words), {"words.ply", "more than 'end_header'"}));
+  EXPECT_EQ(loadError(write("blank.ply", header + "end_header \t\r\n" + body)), "<no exception>");
+}
+
 }  // namespace scanplan::kinematics

@@ -39,7 +39,7 @@ std::string where(const fs::path& file, const YAML::Node& node) {
 std::string keyText(const fs::path& file,
                     const YAML::Node& key,
                     const std::string& in,
-                    std::vector<std::string>& seen) {
+                    std::set<std::string>& seen) {
   if (!key.IsScalar() || key.Scalar().empty()) {
     throw InputError(where(file, key) + ": " + in + ": a " +
                      (key.IsSequence() ? "list"
@@ -48,11 +48,10 @@ std::string keyText(const fs::path& file,
                      " used as a key: expected a plain key name");
   }
   const std::string text = key.Scalar();
-  if (std::find(seen.begin(), seen.end(), text) != seen.end()) {
+  if (!seen.insert(text).second) {
     throw InputError(where(file, key) + ": " + in + ": " + text +
                      ": given twice: expected each key once");
   }
-  seen.push_back(text);
   return text;
 }
 
@@ -96,7 +95,7 @@ std::vector<std::string> valueList(const fs::path& file,
       throw InputError(
           fmt::format("{}.{}: '{}': expected a finite number", at, name, valueText(n)));
     };
-    std::vector<std::string> seen;
+    std::set<std::string> seen;
     for (const auto& kv : node) {
       const auto name = keyText(file, kv.first, field, seen);
       if (name != "from" && name != "to" && name != "step") {
@@ -137,6 +136,10 @@ std::string caseId(const std::string& job, const std::vector<std::string>& overr
 
 using Setting = std::vector<std::pair<std::string, std::string>>;
 
+// README "Limits and failure behaviour".
+constexpr double kMaxSweepCases = 100000;
+constexpr double kMaxSweepChecks = 300;
+
 YAML::Node loadRoot(const fs::path& file) {
   YAML::Node root;
   try {
@@ -149,7 +152,7 @@ YAML::Node loadRoot(const fs::path& file) {
   }
   checkYamlSize(root, file.string());
   if (!root.IsMap()) throw InputError(file.string() + ": expected a mapping (jobs, vary, …)");
-  std::vector<std::string> top;
+  std::set<std::string> top;
   for (const auto& kv : root) {
     const auto key = keyText(file, kv.first, "the sweep", top);
     if (key != "jobs" && key != "set" && key != "vary" && key != "cases" && key != "seeds" &&
@@ -199,6 +202,7 @@ int readRepeats(const fs::path& file, const YAML::Node& root) {
 // The seeds: every case runs once per seed, with the seed in each of the job's seed keys.
 std::vector<int> readSeeds(const fs::path& file, const YAML::Node& root) {
   std::vector<int> seeds;
+  std::set<int> seen;
   if (const YAML::Node n = root["seeds"]) {
     for (const std::string& v : valueList(file, "seeds", n)) {
       const std::optional<double> seed = numberOf(v);
@@ -207,7 +211,7 @@ std::vector<int> readSeeds(const fs::path& file, const YAML::Node& root) {
                                      where(file, n), v));
       }
       const int value = static_cast<int>(*seed);
-      if (std::find(seeds.begin(), seeds.end(), value) != seeds.end()) {
+      if (!seen.insert(value).second) {
         throw InputError(fmt::format("{}: seeds: {} is listed twice", where(file, n), value));
       }
       seeds.push_back(value);
@@ -222,7 +226,7 @@ std::vector<std::pair<std::string, std::vector<std::string>>> readGrid(
   std::vector<std::pair<std::string, std::vector<std::string>>> grid;
   if (const YAML::Node vary = root["vary"]) {
     if (!vary.IsMap()) throw InputError(where(file, vary) + ": vary: expected key: [values]");
-    std::vector<std::string> seen;
+    std::set<std::string> seen;
     for (const auto& kv : vary) {
       const auto key = keyText(file, kv.first, "vary", seen);
       grid.emplace_back(key, valueList(file, key, kv.second));
@@ -264,7 +268,7 @@ std::size_t readCases(const fs::path& file,
         throw InputError(where(file, c) + ": cases: expected a mapping key: value per case");
       }
       Setting s;
-      std::vector<std::string> seen;
+      std::set<std::string> seen;
       for (const auto& kv : c) {
         const auto key = keyText(file, kv.first, "cases", seen);
         s.emplace_back(key, valueText(kv.second));
@@ -319,6 +323,13 @@ void checkJob(const fs::path& file,
   }
 }
 
+// The smallest and the largest of `values` (nothing when empty).
+std::vector<int> extremes(const std::vector<int>& values) {
+  if (values.empty()) return {};
+  const auto [lo, hi] = std::minmax_element(values.begin(), values.end());
+  return *lo == *hi ? std::vector<int>{*lo} : std::vector<int>{*lo, *hi};
+}
+
 // The job files, resolved against the sweep file, each checked with `set`, each seed and each
 // value of the grid before anything runs.
 std::vector<fs::path> resolveJobs(
@@ -335,7 +346,9 @@ std::vector<fs::path> resolveJobs(
           fmt::format("{}: jobs: '{}': no such file ({})", file.string(), j, p.string()));
     }
     checkJob(file, p, fixed, "set");
-    for (const int seed : seeds) {
+    // readSeeds took each seed from the seed keys' own range: the smallest and the largest
+    // stand for all of them (one load each, however many seeds there are).
+    for (const int seed : extremes(seeds)) {
       std::vector<std::string> o = fixed;
       for (std::string& s : seedOverrides(seed)) o.push_back(std::move(s));
       checkJob(file, p, o, fmt::format("seeds: {}", seed));
@@ -388,6 +401,45 @@ void expandCases(Sweep& sweep,
   }
 }
 
+// The size of the sweep, from the lengths of its lists, refused before anything is expanded or
+// loaded: the cases (a `repeats` or a grid product in the billions filled the memory) and the job
+// loads that check its values (each takes milliseconds).
+void refuseHugeSweep(const fs::path& file,
+                     std::size_t jobs,
+                     const std::vector<std::pair<std::string, std::vector<std::string>>>& grid,
+                     const YAML::Node& root,
+                     std::size_t seeds,
+                     int repeats) {
+  const YAML::Node explicit_cases = root["cases"];
+  const double explicit_count = explicit_cases && explicit_cases.IsSequence()
+                                    ? static_cast<double>(explicit_cases.size())
+                                    : 0.0;
+  double product = grid.empty() ? 0.0 : 1.0, values = 0.0;
+  for (const auto& [key, list] : grid) {
+    product *= static_cast<double>(list.size());
+    values += static_cast<double>(list.size());
+  }
+  const double n_jobs = static_cast<double>(jobs), n_seeds = static_cast<double>(seeds);
+  const double cases =
+      n_jobs * std::max(1.0, product + explicit_count) * std::max(1.0, n_seeds) * repeats;
+  if (cases > kMaxSweepCases) {
+    throw InputError(fmt::format(
+        "{}: {:.4g} cases ({} job(s) x {:.4g} setting(s) x {} seed(s) x {} repeat(s)): expected at "
+        "most {:.0f} (vary, cases, seeds, repeats, jobs)",
+        file.string(), cases, jobs, std::max(1.0, product + explicit_count),
+        std::max<std::size_t>(seeds, 1), repeats, kMaxSweepCases));
+  }
+  const double loads = n_jobs * (1.0 + std::min(n_seeds, 2.0) + values + explicit_count);
+  if (loads > kMaxSweepChecks) {
+    throw InputError(fmt::format(
+        "{}: checking every value would load the job(s) {:.0f} times ({} job(s) x (1 + {} for "
+        "the seeds + {:.0f} varied value(s) + {:.0f} case(s))): expected at most {:.0f}; split "
+        "the sweep",
+        file.string(), loads, jobs, std::min<std::size_t>(seeds, 2), values, explicit_count,
+        kMaxSweepChecks));
+  }
+}
+
 }  // namespace
 
 bool inShard(const std::string& id, int shard, int count) {
@@ -406,6 +458,7 @@ Sweep loadSweep(const fs::path& file) {
 
   // The grid (last key fastest), then the explicit cases.
   const auto grid = readGrid(file, root, sweep.keys);
+  refuseHugeSweep(file, jobs.size(), grid, root, sweep.seeds.size(), repeats);
   std::vector<Setting> settings = expandGrid(grid);
   const std::size_t explicit_count = readCases(file, root, sweep.keys, settings);
   if (settings.empty()) settings.emplace_back();

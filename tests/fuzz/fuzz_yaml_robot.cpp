@@ -1,0 +1,16 @@
+// Robot files as `scanplan fk --robot` reads them: loadRobotFile, then the kinematic model
+// (OPW checked against DH).
+#include <cstddef>
+#include <cstdint>
+
+#include "cli/config/robot_file.h"
+#include "tests/fuzz/fuzz_support.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using namespace scanplan;
+  const auto file = fuzz::writeInput("robots_input.yaml", data, size);
+  return fuzz::expectInputErrors([&] {
+    const cli::RobotSpec robot = cli::loadRobotFile(file);
+    (void)cli::buildRobotModel(robot, file.string());
+  });
+}
