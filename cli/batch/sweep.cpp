@@ -108,8 +108,12 @@ std::vector<std::string> valueList(const fs::path& file,
       throw InputError(fmt::format("{}: from {} to {} step {}: expected step > 0 and to >= from",
                                    at, from, to, step));
     }
-    const auto n = static_cast<std::size_t>(std::floor((to - from) / step + 1e-9)) + 1;
-    if (n > 100000) throw InputError(fmt::format("{}: {} values: expected at most 100000", at, n));
+    // Counted in double first: a tiny step would overflow the integer count.
+    const double count = std::floor((to - from) / step + 1e-9) + 1.0;
+    if (!(count <= 100000.0)) {
+      throw InputError(fmt::format("{}: {:.6g} values: expected at most 100000", at, count));
+    }
+    const auto n = static_cast<std::size_t>(count);
     for (std::size_t i = 0; i < n; ++i) {
       values.push_back(numberText(from + static_cast<double>(i) * step));
     }
@@ -132,6 +136,7 @@ std::string caseId(const std::string& job, const std::vector<std::string>& overr
 using Setting = std::vector<std::pair<std::string, std::string>>;
 
 YAML::Node loadRoot(const fs::path& file) {
+  requireYamlFile(file);
   YAML::Node root;
   try {
     root = YAML::LoadFile(file.string());
@@ -172,6 +177,26 @@ std::vector<std::string> strings(const fs::path& file, const YAML::Node& root, c
     out.push_back(v.Scalar());
   }
   return out;
+}
+
+// The cases a sweep would make (jobs × grid × seeds × repeats), refused over kMaxSweepCases
+// before they are made.
+constexpr double kMaxSweepCases = 1e6;
+
+void refuseHugeSweep(const fs::path& file,
+                     const std::vector<std::pair<std::string, std::vector<std::string>>>& grid,
+                     std::size_t jobs,
+                     std::size_t seeds,
+                     int repeats) {
+  double cases = static_cast<double>(jobs) * static_cast<double>(std::max<std::size_t>(seeds, 1)) *
+                 static_cast<double>(repeats);
+  for (const auto& [key, values] : grid) cases *= static_cast<double>(values.size());
+  if (cases > kMaxSweepCases) {
+    throw InputError(fmt::format(
+        "{}: vary, seeds and repeats make {:.3g} cases ({} job(s), {} seed(s), {} repeat(s)): "
+        "expected at most {:.0f}",
+        file.string(), cases, jobs, seeds, repeats, kMaxSweepCases));
+  }
 }
 
 int readRepeats(const fs::path& file, const YAML::Node& root) {
@@ -400,6 +425,7 @@ Sweep loadSweep(const fs::path& file) {
 
   // The grid (last key fastest), then the explicit cases.
   const auto grid = readGrid(file, root, sweep.keys);
+  refuseHugeSweep(file, grid, jobs.size(), sweep.seeds.size(), repeats);
   std::vector<Setting> settings = expandGrid(grid);
   const std::size_t explicit_count = readCases(file, root, sweep.keys, settings);
   if (settings.empty()) settings.emplace_back();
