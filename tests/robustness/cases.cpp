@@ -74,11 +74,12 @@ std::string lastTime(std::string csv, const std::string& t_s) {
 }
 
 // Row 3's column `column` (0-based) replaced by `value`.
-std::string cell(std::string csv, int column, const std::string& value) {
+std::string cell(const std::string& csv, int column, const std::string& value) {
   std::size_t at = 0;
   for (int line = 0; line < 3; ++line) at = csv.find('\n', at) + 1;
   for (int c = 0; c < column; ++c) at = csv.find(',', at) + 1;
-  return csv.replace(at, csv.find_first_of(",\n", at) - at, value);
+  const std::size_t end = csv.find_first_of(",\n", at);
+  return csv.substr(0, at) + value + csv.substr(end);
 }
 
 std::vector<Case> issueJobCases() {
