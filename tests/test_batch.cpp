@@ -906,4 +906,18 @@ TEST_F(Batch, ReportSurvivesDegenerateValues) {
   ASSERT_EQ(none.exit_code, 0) << describe(none);
 }
 
+// Robustness catalogue (issue 17): repeats: 1000000000 ran out of memory making the cases
+// (an internal error), and a range with a tiny step overflowed its count and ran one case.
+TEST_F(Batch, HugeSweepsAreRefusedBeforeTheCasesAreMade) {
+  for (const auto& [body, expect] :
+       {std::pair<std::string, std::string>{"repeats: 1000000000\n", "repeats"},
+        {"vary:\n  planner.k_omega: {from: 0, to: 1, step: 1e-300}\n", "expected at most 100000"},
+        {"vary:\n  planner.ray.horizon: {from: 1, to: 1000, step: 1}\n"
+         "  planner.ray.rays: {from: 1, to: 1000, step: 1}\n  planner.k_omega: [1, 2]\n",
+         "cases"}}) {
+    SCOPED_TRACE(body);
+    EXPECT_TRUE(test::throwsInputError([&] { cli::loadSweep(writeSweep(body)); }, {expect}));
+  }
+}
+
 }  // namespace

@@ -660,6 +660,14 @@ TEST_F(Cli, MeshErrorsNameTheJobAsGiven) {
   EXPECT_FALSE(contains(run.err, "error: " + job.string())) << run.err;
 }
 
+// Robustness catalogue (issue 17): fk and check took --joints=1e300,… (fk printed a pose).
+TEST(CliArguments, NumberListsRefuseNumbersBeyondTheLimit) {
+  EXPECT_TRUE(throwsInputError(
+      [] { scanplan::cli::parseNumberList("1e300,0,0,0,0,0", 6, "--joints", "joints"); },
+      {"--joints", "1e300", "within ±1e9"}));
+  EXPECT_EQ(scanplan::cli::parseNumberList("1e9,0,0,0,0,-1e9", 6, "--joints", "joints").size(), 6u);
+}
+
 }  // namespace
 
 // ---- OutputStage: publishing a folder in one step --------------------------------------------

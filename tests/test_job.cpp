@@ -7,6 +7,7 @@
 #include "tests/test_support.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -631,6 +632,14 @@ TEST(JobLimits, AliasBombsAndDeepNestingAreRefused) {
         << e.what();
   }
   fs::remove(deep);
+}
+
+// Robustness catalogue (issue 17): a FIFO as the job file was read until a writer came, forever.
+TEST_F(JobFile, FifoAsJobOrRobotFileIsRefusedNotReadForever) {
+  const fs::path fifo = dir_ / "job.yaml";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
+  EXPECT_TRUE(loadFails(fifo, {"job.yaml", "not a regular file"}));
+  EXPECT_TRUE(throwsInputError([&] { loadRobotFile(fifo); }, {"job.yaml", "not a regular file"}));
 }
 
 }  // namespace

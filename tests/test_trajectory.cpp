@@ -249,4 +249,15 @@ TEST(BuildTrajectory, WristUnwindsAWholeTurnOnlyWhereThePathDoesNotScan) {
       << scanning.reason;
 }
 
+// Robustness catalogue (issue 17): a 5 MB first line was quoted whole in the message.
+TEST(TrajectoryCsv, LongLinesAreClippedInMessages) {
+  try {
+    kinematics::parseTrajectoryCsv(std::string(5 << 20, '1') + "\n", "t.csv");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_LT(std::string(e.what()).size(), 400u);
+    EXPECT_NE(std::string(e.what()).find("characters"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace

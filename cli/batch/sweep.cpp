@@ -141,6 +141,7 @@ constexpr double kMaxSweepCases = 100000;
 constexpr double kMaxSweepChecks = 300;
 
 YAML::Node loadRoot(const fs::path& file) {
+  requireYamlFile(file);
   YAML::Node root;
   try {
     root = YAML::LoadFile(file.string());

@@ -177,9 +177,9 @@ std::string checkText(const collision::Scene& scene,
 }  // namespace
 
 ExitCode runCheck(const CheckOptions& options) {
-  if (!std::isfinite(options.table_deg)) {
-    throw InputError(
-        fmt::format("--table: {}: expected a finite table angle in degrees", options.table_deg));
+  if (!std::isfinite(options.table_deg) || std::abs(options.table_deg) > 1e9) {
+    throw InputError(fmt::format(
+        "--table: {}: expected a finite table angle in degrees (within ±1e9)", options.table_deg));
   }
   const JobSpec job = loadJob(options.job_file, options.overrides);
   const collision::Scene scene(buildCell(job), clearanceConfig(job));

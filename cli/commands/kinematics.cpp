@@ -89,9 +89,12 @@ std::vector<double> parseNumberList(const std::string& text,
       used = 0;
     }
     while (used < item.size() && std::isspace(static_cast<unsigned char>(item[used]))) ++used;
-    if (used == 0 || used != item.size() || !std::isfinite(v)) {
-      throw InputError(fmt::format("{}: '{}' in '{}' is not a finite number: expected {}", option,
-                                   item, text, what));
+    // ±1e9, the bound of every number in the job files (README "Limits"): 1e300 mm or degrees
+    // is no pose, and its products overflow.
+    if (used == 0 || used != item.size() || !std::isfinite(v) || std::abs(v) > 1e9) {
+      throw InputError(
+          fmt::format("{}: '{}' in '{}' is not a finite number within ±1e9: expected {}", option,
+                      item, text, what));
     }
     values.push_back(v);
   }

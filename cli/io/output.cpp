@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <mutex>
 #include <string_view>
 #include <system_error>
@@ -25,6 +26,11 @@
 namespace scanplan::cli {
 namespace {
 
+std::mutex& creationMutex() {
+  static std::mutex m;
+  return m;
+}
+
 // Staging folders and the OUT each stands for, so messages name the file the user asked for.
 struct Shown {
   std::mutex mutex;
@@ -38,7 +44,15 @@ Shown& shown() {
 
 // Writes all of `content` to the new file `path`; the OS's reason on failure, or nothing.
 std::string writeAll(const std::filesystem::path& path, const std::string& content) {
-  const int fd = ::open(path.c_str(), O_CREAT | O_TRUNC | O_WRONLY | O_CLOEXEC, 0644);
+  int fd = -1;
+  {
+    // Folders and files come into being under this lock, which an interrupt takes and keeps:
+    // nothing appears in a staging folder while, or after, it is removed.
+    const std::lock_guard<std::mutex> guard(creationMutex());
+    std::error_code ec;
+    if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path(), ec);
+    fd = ::open(path.c_str(), O_CREAT | O_TRUNC | O_WRONLY | O_CLOEXEC, 0644);
+  }
   if (fd < 0) return std::strerror(errno);
   std::size_t done = 0;
   while (done < content.size()) {
@@ -72,7 +86,6 @@ std::string shownName(const std::filesystem::path& file) {
 
 void writeFileAtomically(const std::filesystem::path& file, const std::string& content) {
   std::error_code ec;
-  if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path(), ec);
   const std::filesystem::path tmp = file.string() + ".tmp";
   const std::string why = writeAll(tmp, content);
   if (!why.empty()) {
@@ -154,9 +167,17 @@ fs::path absoluteOut(const fs::path& out) {
   return p;
 }
 
+// The start of the hidden names beside OUT: `.NAME`, NAME cut to 150 bytes plus a hash of the
+// rest when it is long (a file name holds 255 bytes at most).
+std::string hiddenStem(const fs::path& out) {
+  const std::string name = out.filename().string();
+  if (name.size() <= 150) return "." + name;
+  return fmt::format(".{}-{:016x}", name.substr(0, 150), std::hash<std::string>{}(name));
+}
+
 // A hidden name beside OUT: `.NAME.scanplan-<what>`.
 fs::path beside(const fs::path& out, const std::string& what) {
-  return out.parent_path() / ("." + out.filename().string() + ".scanplan-" + what);
+  return out.parent_path() / (hiddenStem(out) + ".scanplan-" + what);
 }
 
 // Names `prefix` followed by a pid whose process is gone (or is ours: an earlier run that had
@@ -408,6 +429,7 @@ void installInterruptHandler() {
     while (sigwait(&set, &sig) != 0) {
     }
     const std::lock_guard<std::mutex> guard(cleanup().mutex);  // a publish finishes first
+    creationMutex().lock();  // kept: no writer creates anything from here on
     for (const fs::path& p : cleanup().remove) {
       std::error_code ec;
       for (int attempt = 0; attempt < 5 && fs::exists(p, ec); ++attempt) fs::remove_all(p, ec);

@@ -157,14 +157,30 @@ void checkYamlSize(const YAML::Node& root, const std::string& where) {
   }
 }
 
-YAML::Node loadYamlFile(const std::filesystem::path& file) {
+void requireYamlFile(const std::filesystem::path& file) {
   std::error_code ec;
-  if (!std::filesystem::exists(file, ec)) {
+  const auto status = std::filesystem::status(file, ec);
+  if (!std::filesystem::exists(status)) {
     throw InputError(fmt::format("{}: file does not exist", file.string()));
   }
-  if (std::filesystem::is_directory(file, ec)) {
+  if (std::filesystem::is_directory(status)) {
     throw InputError(fmt::format("{}: is a directory, expected a YAML file", file.string()));
   }
+  // A pipe or device would be read until it ends, which may be never.
+  if (!std::filesystem::is_regular_file(status)) {
+    throw InputError(
+        fmt::format("{}: is not a regular file (a pipe, socket or device): expected a YAML file",
+                    file.string()));
+  }
+  const auto bytes = std::filesystem::file_size(file, ec);
+  if (!ec && bytes > kMaxYamlFileBytes) {
+    throw InputError(fmt::format("{}: {} bytes: expected a YAML file of at most {} bytes",
+                                 file.string(), bytes, kMaxYamlFileBytes));
+  }
+}
+
+YAML::Node loadYamlFile(const std::filesystem::path& file) {
+  requireYamlFile(file);
   std::ifstream in(file);
   if (!in) throw InputError(fmt::format("{}: cannot be read", file.string()));
   YAML::Node root;

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <limits>
 #include <memory>
@@ -218,11 +219,17 @@ class YamlOut {
 /// billion-laughs alias bomb or runaway nesting stops here, not in an allocation.
 inline constexpr std::size_t kMaxYamlNodes = 1'000'000;
 inline constexpr std::size_t kMaxYamlDepth = 64;
+/// Job, robot and sweep files: at most this many bytes (a job is a few kB).
+inline constexpr std::uintmax_t kMaxYamlFileBytes = 64u << 20;
 /// Throws InputError naming `where` when `root` exceeds them.
 void checkYamlSize(const YAML::Node& root, const std::string& where);
 
 /// Loads a YAML file (a mapping at the top), turning parse errors into InputError with
 /// file:line:column.
 YAML::Node loadYamlFile(const std::filesystem::path& file);
+
+/// Throws InputError naming `file` unless it is a regular file of at most kMaxYamlFileBytes (a
+/// FIFO or device would be read until it ends, which may be never).
+void requireYamlFile(const std::filesystem::path& file);
 
 }  // namespace scanplan::cli
