@@ -3,6 +3,7 @@
 // the job's key list (generated.cpp). tests/robustness/README.md says how to add one.
 
 #include <string>
+#include <initializer_list>
 #include <vector>
 
 #include "tests/robustness/runner.h"
@@ -17,6 +18,8 @@ std::vector<Case> generatedCases();  // every numeric key of the job × hostile 
 
 /// Helpers shared by the case files (defined in cases.cpp).
 Case meshFileCase(const std::string& name, InputFile file, std::vector<int> exits = {4});
+// The cases of several groups, in order.
+std::vector<Case> concat(std::initializer_list<std::vector<Case>> parts);
 Case trajectoryFileCase(const std::string& name, InputFile file, std::vector<int> exits = {4});
 std::string trajectoryCell(std::string csv, int column, const std::string& value);
 const std::string& offText();

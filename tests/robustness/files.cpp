@@ -225,12 +225,8 @@ std::vector<Case> sweepFileCases() {
 }  // namespace
 
 std::vector<Case> fileCases() {
-  std::vector<Case> all;
-  for (auto part : {jobFileCases(), moreJobFileCases(), meshFileCases(), trajectoryFileCases(),
-                    sweepFileCases()}) {
-    all.insert(all.end(), part.begin(), part.end());
-  }
-  return all;
+  return concat({jobFileCases(), moreJobFileCases(), meshFileCases(), trajectoryFileCases(),
+                 sweepFileCases()});
 }
 
 }  // namespace scanplan::robustness
