@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstddef>
 #include <stdexcept>
 #include <string>
 
@@ -12,5 +13,13 @@ class InputError : public std::runtime_error {
  public:
   explicit InputError(const std::string& message) : std::runtime_error(message) {}
 };
+
+/// `text` as quoted in an InputError: at most `n` characters, a longer one cut with "…" and its
+/// length (a hostile file's line or value may be megabytes).
+inline std::string clipForMessage(const std::string& text, std::size_t n = 80) {
+  return text.size() <= n
+             ? text
+             : text.substr(0, n) + "… (" + std::to_string(text.size()) + " characters)";
+}
 
 }  // namespace scanplan

@@ -38,13 +38,6 @@ std::vector<std::string> splitCells(const std::string& line) {
   return cells;
 }
 
-// A line quoted in a message: at most 80 characters (a hostile file's line may be megabytes).
-std::string clipped(const std::string& line) {
-  return line.size() <= 80
-             ? line
-             : line.substr(0, 80) + "… (" + std::to_string(line.size()) + " characters)";
-}
-
 std::string header(std::size_t columns) {
   std::string h;
   for (std::size_t i = 0; i < columns; ++i) h += (i ? "," : "") + std::string(kColumns[i]);
@@ -91,7 +84,7 @@ Trajectory parseTrajectoryCsv(const std::string& text, const std::string& source
         if (line == header(n)) columns = n;
       }
       if (columns == 0) {
-        fail("header '" + clipped(line) + "': expected '" + header(std::size(kColumns)) +
+        fail("header '" + clipForMessage(line) + "': expected '" + header(std::size(kColumns)) +
              "' (the limit column may be left out)");
       }
       continue;
@@ -111,7 +104,7 @@ Trajectory parseTrajectoryCsv(const std::string& text, const std::string& source
       char* end = nullptr;
       v[c] = std::strtod(cell.c_str(), &end);
       if (cell.empty() || end != cell.c_str() + cell.size() || !std::isfinite(v[c])) {
-        fail("column " + std::string(kColumns[c]) + ": '" + clipped(cell) +
+        fail("column " + std::string(kColumns[c]) + ": '" + clipForMessage(cell) +
              "' is not a finite number" + (c == 8 ? " (or empty / nan for unknown)" : ""));
       }
     }

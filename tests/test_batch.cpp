@@ -920,4 +920,14 @@ TEST_F(Batch, HugeSweepsAreRefusedBeforeTheCasesAreMade) {
   }
 }
 
+// Found by fuzzing in CI (yaml_sweep): a job path the OS cannot look at (a name over 255
+// bytes: ENAMETOOLONG) threw std::filesystem_error from the existence check, an internal error.
+TEST_F(Batch, AJobPathTheSystemCannotLookAtIsNoSuchFile) {
+  const std::string name(300, 'j');
+  const fs::path file = dir_ / "long.yaml";
+  writeFile(file, "jobs: ['./" + name + "/demo.yaml']\n");
+  EXPECT_TRUE(throwsInputError([&] { cli::loadSweep(file); },
+                               {"long.yaml", "jobs: './jjjj", "(312 characters)", "no such file"}));
+}
+
 }  // namespace

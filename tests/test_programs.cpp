@@ -516,7 +516,7 @@ TEST_F(Programs, MalformedVplusNamesTheLine) {
       // 30 kB in one line overflowed std::regex's recursion (exit 139) before the bound.
       {"huge move line", lineOf("    MOVE", 2),
        "    MOVE #PPOINT(" + std::string(30000, ' ') + "1, 2, 3, 4, 5, 6)",
-       "characters ('    MOVE #PPOINT("},
+       "… (30034 characters)': expected a line of at most 1000 characters"},
       {"long non-matching line", lineOf("    MOVE", 2), "    MOVE #PPOINT(" + std::string(900, '1'),
        "expected 'MOVE #PPOINT(j1, j2, j3, j4, j5, j6)'"},
   };

@@ -88,7 +88,7 @@ using detail::writeReport;
 using detail::writeResults;
 
 ExitCode runBatchReport(const fs::path& out_dir) {
-  if (!fs::is_regular_file(out_dir / "results.jsonl")) {
+  if (!isRegularFile(out_dir / "results.jsonl")) {
     throw InputError(out_dir.string() + ": no results.jsonl: expected the folder of a batch run");
   }
   const OutputLock lock(out_dir);
@@ -116,7 +116,7 @@ ExitCode runBatchMerge(const std::vector<fs::path>& inputs, const fs::path& out_
   };
   const std::string columns = inputs.empty() ? std::string() : header(inputs.front());
   for (const fs::path& in : inputs) {
-    if (!fs::is_regular_file(in / "results.jsonl")) {
+    if (!isRegularFile(in / "results.jsonl")) {
       throw InputError(in.string() + ": no results.jsonl: expected the folder of a batch run");
     }
     if (const std::string h = header(in); h != columns) {

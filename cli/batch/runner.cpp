@@ -61,7 +61,7 @@ std::set<std::string> startResults(const BatchOptions& options,
                                    int shards) {
   const fs::path& out = options.out_dir;
   std::set<std::string> done;
-  if (!fs::exists(out / "results.jsonl")) {
+  if (std::error_code ec; !fs::exists(out / "results.jsonl", ec)) {
     writeResults(out, {}, sweep.keys);
     return done;
   }

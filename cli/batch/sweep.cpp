@@ -17,6 +17,7 @@
 #include "cli/batch/batch_internal.h"
 #include "cli/config/detail/yaml_reader.h"
 #include "cli/config/job.h"
+#include "cli/io/output.h"
 #include "kinematics/error.h"
 
 namespace scanplan::cli {
@@ -342,9 +343,9 @@ std::vector<fs::path> resolveJobs(
   std::vector<fs::path> job_files;
   for (const std::string& j : jobs) {
     fs::path p = fs::path(j).is_absolute() ? fs::path(j) : file.parent_path() / j;
-    if (!fs::is_regular_file(p)) {
-      throw InputError(
-          fmt::format("{}: jobs: '{}': no such file ({})", file.string(), j, p.string()));
+    if (!isRegularFile(p)) {
+      throw InputError(fmt::format("{}: jobs: '{}': no such file ({})", file.string(),
+                                   clipForMessage(j), clipForMessage(p.string())));
     }
     checkJob(file, p, fixed, "set");
     // readSeeds took each seed from the seed keys' own range: the smallest and the largest

@@ -475,8 +475,7 @@ void describe(YamlOut& a, MapSpec& s) { describeMap(a, s); }
 namespace {
 
 [[noreturn]] void badOverride(const std::string& text, const std::string& why) {
-  // The override quoted as far as 80 characters: a hostile value is not echoed whole.
-  const std::string quoted = text.size() <= 80 ? text : text.substr(0, 80) + "…";
+  const std::string quoted = clipForMessage(text);  // a hostile value is not echoed whole
   throw InputError(
       fmt::format("--set '{}': {}: expected key.path=value, e.g. "
                   "planner.ray.horizon=20 or scan.paths[0].height_mm=60",

@@ -100,6 +100,11 @@ void writeFileAtomically(const std::filesystem::path& file, const std::string& c
   }
 }
 
+bool isRegularFile(const std::filesystem::path& file) noexcept {
+  std::error_code ec;
+  return std::filesystem::is_regular_file(file, ec);
+}
+
 void prepareOutputDir(const std::filesystem::path& dir) {
   std::error_code ec;
   if (std::filesystem::exists(dir, ec) && !std::filesystem::is_directory(dir, ec)) {
@@ -363,7 +368,8 @@ bool OutputStage::exchange() {
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(out_, ec)) {
     const fs::path name = e.path().filename();
-    if (owned(name.string()) || fs::exists(stage_ / name)) continue;
+    std::error_code missing;
+    if (owned(name.string()) || fs::exists(stage_ / name, missing)) continue;
     carried_.push_back(name);
     if (!linkTree(e.path(), stage_ / name, 0, entries)) {
       why_ = fmt::format("{} holds a special file or too many entries", name.string());

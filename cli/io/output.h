@@ -14,6 +14,10 @@ namespace scanplan::cli {
 /// InputError naming the file and the OS's reason (e.g. "No space left on device").
 void writeFileAtomically(const std::filesystem::path& file, const std::string& content);
 
+/// Whether `file` is a regular file (following links). Never throws: a path the OS cannot
+/// look at (too long, a component not a folder, no permission) is not one.
+bool isRegularFile(const std::filesystem::path& file) noexcept;
+
 /// Creates the output folder (and parents); an existing file in the way is an InputError.
 void prepareOutputDir(const std::filesystem::path& dir);
 

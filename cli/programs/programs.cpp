@@ -430,12 +430,6 @@ bool parseNumber(const std::string& text, double& value) {
 // .END. Errors name the source and line.
 class VplusReader {
   static constexpr std::size_t kMaxLine = 1000;  // characters in a program line
-  static constexpr std::size_t kEcho = 80;       // characters of a line quoted in a message
-
-  // `text` cut to `n` characters, "…" marking the cut.
-  static std::string clip(const std::string& text, std::size_t n = kEcho) {
-    return text.size() <= n ? text : text.substr(0, n) + "…";
-  }
 
  public:
   explicit VplusReader(const std::string& source) : source_(source) {}
@@ -448,8 +442,8 @@ class VplusReader {
       // Bounded before any pattern sees it (std::regex recurses per character: a 30 kB line
       // overflowed the stack); V+ itself keeps a program line far shorter.
       if (raw.size() > kMaxLine) {
-        fail("a line of " + std::to_string(raw.size()) + " characters ('" + clip(raw) +
-             "'): expected at most " + std::to_string(kMaxLine));
+        fail("'" + clipForMessage(raw) + "': expected a line of at most " +
+             std::to_string(kMaxLine) + " characters");
       }
       const std::string line = trim(raw);
       if (line.empty()) continue;
@@ -482,7 +476,8 @@ class VplusReader {
     if (comment.rfind("t=", 0) != 0) return;  // an ordinary comment
     std::smatch m;
     if (!std::regex_match(comment, m, kStep)) {
-      fail("step comment '" + clip(line) + "': expected '; t=<s> s table=<deg> deg scan=<0|1>'");
+      fail("step comment '" + clipForMessage(line) +
+           "': expected '; t=<s> s table=<deg> deg scan=<0|1>'");
     }
     if (!in_program_) fail("step comment before .PROGRAM");
     if (pending_) {
@@ -513,13 +508,13 @@ class VplusReader {
     const std::string args = trim(statement.substr(keyword.size()));
     if (!in_program_) {
       if (keyword != ".PROGRAM" || !std::regex_match(line, kProgram)) {
-        fail("'" + clip(line) + "': expected '.PROGRAM name()' first");
+        fail("'" + clipForMessage(line) + "': expected '.PROGRAM name()' first");
       }
       in_program_ = true;
       return;
     }
     if (keyword == ".END") {
-      if (!args.empty()) fail("'" + clip(line) + "': expected '.END'");
+      if (!args.empty()) fail("'" + clipForMessage(line) + "': expected '.END'");
       ended_ = true;
     } else if (keyword == "MOVE") {
       readMove(line, statement);
@@ -527,12 +522,12 @@ class VplusReader {
       checkSpeed(line, keyword, args);
     } else if (keyword == "SIGNAL") {
       if (!std::regex_match(args, std::regex(R"([-+]?[0-9]+(\s*,\s*[-+]?[0-9]+)*)"))) {
-        fail("'" + clip(line) + "': expected 'SIGNAL n[, m ...]'");
+        fail("'" + clipForMessage(line) + "': expected 'SIGNAL n[, m ...]'");
       }
     } else if (keyword == "BREAK" || keyword == "LEFTY" || keyword == "RIGHTY" ||
                keyword == "ABOVE" || keyword == "BELOW" || keyword == "FLIP" ||
                keyword == "NOFLIP") {
-      if (!args.empty()) fail("'" + clip(line) + "': expected '" + keyword + "' alone");
+      if (!args.empty()) fail("'" + clipForMessage(line) + "': expected '" + keyword + "' alone");
     } else {
       fail("'" + line +
            "': not an instruction this reader knows (MOVE #PPOINT(...), SPEED, DURATION, BREAK, "
@@ -545,14 +540,15 @@ class VplusReader {
     static const std::regex kMove(R"(MOVE\s+#PPOINT\s*\(([^)]*)\))", std::regex::icase);
     std::smatch m;
     if (!std::regex_match(statement, m, kMove)) {
-      fail("'" + clip(line) + "': expected 'MOVE #PPOINT(j1, j2, j3, j4, j5, j6)' (degrees)");
+      fail("'" + clipForMessage(line) +
+           "': expected 'MOVE #PPOINT(j1, j2, j3, j4, j5, j6)' (degrees)");
     }
     const std::string list = m[1].str();
     std::vector<std::string> values;
     std::stringstream cells(list);
     for (std::string cell; std::getline(cells, cell, ',');) values.push_back(cell);
     if (values.size() != static_cast<std::size_t>(kNumJoints)) {
-      fail("'" + clip(line) + "': " + std::to_string(values.size()) +
+      fail("'" + clipForMessage(line) + "': " + std::to_string(values.size()) +
            " joint values: expected 6 (degrees)");
     }
     if (!pending_) {
@@ -563,7 +559,7 @@ class VplusReader {
     for (int j = 0; j < kNumJoints; ++j) {
       double v = 0.0;
       if (!parseNumber(values[static_cast<std::size_t>(j)], v)) {
-        fail("'" + clip(line) + "': joint " + std::to_string(j + 1) + " '" +
+        fail("'" + clipForMessage(line) + "': joint " + std::to_string(j + 1) + " '" +
              trim(values[static_cast<std::size_t>(j)]) + "' is not a finite number");
       }
       pending_->q(j) = v * kDegToRad;
@@ -585,7 +581,7 @@ class VplusReader {
     const bool units_ok = tail.empty() || tail == "ALWAYS" ||
                           (keyword == "SPEED" && (tail == "MMPS" || tail == "MMPS ALWAYS"));
     if (!parseNumber(value, v) || v < 0.0 || !units_ok) {
-      fail("'" + clip(line) + "': expected '" + keyword + " <value> [ALWAYS]'");
+      fail("'" + clipForMessage(line) + "': expected '" + keyword + " <value> [ALWAYS]'");
     }
   }
 
