@@ -5,8 +5,9 @@
 # what is printed is its final statistics, or on a failure the report that ended the run and a
 # command that replays the input.
 # Usage: tests/fuzz/run.sh HARNESS_BINARY SEED_DIR WORK_DIR SECONDS [libFuzzer options…]
-# (the ctests pass -seed=1: the same inputs in the same order on every machine, a slower one
-# running a prefix of a faster one's sequence, so a CI failure reproduces here.)
+# (The ctests pass -seed=1. That does not make a run repeatable: libFuzzer keeps the inputs that
+# reach new code, and what a run covers varies a little from run to run (threads, timing), so
+# the sequences part. Hence the input is printed: a CI failure replays from its bytes.)
 set -uo pipefail
 binary=$1 seeds=$2 work=$3 seconds=$4
 shift 4
