@@ -55,9 +55,9 @@ std::optional<RayHit> Raycaster::cast(const Eigen::Vector3d& origin,
   rh.ray.org_x = static_cast<float>(origin.x());
   rh.ray.org_y = static_cast<float>(origin.y());
   rh.ray.org_z = static_cast<float>(origin.z());
-  rh.ray.dir_x = static_cast<float>(d.x());
-  rh.ray.dir_y = static_cast<float>(d.y());
-  rh.ray.dir_z = static_cast<float>(d.z());
+  rh.ray.dir_x = embreeDirection(d.x());
+  rh.ray.dir_y = embreeDirection(d.y());
+  rh.ray.dir_z = embreeDirection(d.z());
   rh.ray.tnear = static_cast<float>(t_near);
   rh.ray.tfar =
       std::isfinite(t_far) ? static_cast<float>(t_far) : std::numeric_limits<float>::infinity();

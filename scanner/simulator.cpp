@@ -120,9 +120,9 @@ void fillLane(Packet& ray,
   ray.org_x[j] = static_cast<float>(o.x());
   ray.org_y[j] = static_cast<float>(o.y());
   ray.org_z[j] = static_cast<float>(o.z());
-  ray.dir_x[j] = static_cast<float>(d.x());
-  ray.dir_y[j] = static_cast<float>(d.y());
-  ray.dir_z[j] = static_cast<float>(d.z());
+  ray.dir_x[j] = embreeDirection(d.x());
+  ray.dir_y[j] = embreeDirection(d.y());
+  ray.dir_z[j] = embreeDirection(d.z());
   ray.tfar[j] = static_cast<float>(t_far);
 }
 

@@ -434,7 +434,10 @@ TEST(ScannerSimulation, WallBetweenHitAndCameraRemovesExactlyTheShadowedPoints) 
 }
 
 // A plate on the flange 100 mm in front of the laser origin (closer than z_min): the rays that
-// hit it end there, outside the window, and leave a gap in the line on the plane.
+// hit it end there, outside the window, and leave a gap in the line on the plane. The fan lies in
+// the link's x = 0 plane, its rays' x components ±1e-19 of rounding noise: before
+// embreeDirection() Embree lost their sign and let a packet of 4 rays through the plate (which
+// packet depended on the last bit of the joint angles).
 TEST(ScannerSimulation, RobotLinkInTheFanShadowsThePart) {
   CellModel cell = planeCell();
   kinematics::RobotDefinition def = cell.robot.definition();
