@@ -11,7 +11,6 @@
 
 namespace scanplan::planner {
 
-
 /// The exact optimum of the discretised problem (DESIGN.md §5.2): dynamic programming over
 /// (grid angle, previous step). The path sits on grid angles and moves an integer number d_k of
 /// grid steps Δθ per time sample, with |d_k|·Δθ/Δt ≤ ω_max and, from the second step on,
@@ -56,5 +55,15 @@ PlanResult planDpRefined(const ConfigMap& map,
                          bool continuous,
                          int subdivisions,
                          std::optional<double> start_theta = {});
+
+namespace detail {
+/// planDp with each layer relaxed the straightforward way (DESIGN.md §5.2, one (angle, step)
+/// cell at a time): the reference planDp must equal bit for bit (tests, bench_dp).
+PlanResult planDpReference(const ConfigMap& map,
+                           std::size_t branch,
+                           const PlannerSettings& settings,
+                           bool continuous,
+                           std::optional<double> start_theta = {});
+}  // namespace detail
 
 }  // namespace scanplan::planner

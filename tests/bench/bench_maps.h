@@ -1,0 +1,68 @@
+#pragma once
+// The maps the planner benchmarks share: seeded synthetic maps and the demo job's map.
+
+#include <cmath>
+#include <cstddef>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "cli/commands/commands.h"
+#include "cli/config/job.h"
+#include "collision/scene.h"
+#include "planner/config_map.h"
+
+namespace scanplan::bench {
+
+// f from seeded Gaussian bumps over (θ, t), zero below a threshold: open corridors that drift,
+// split and close, like a real map's feasible bands.
+inline planner::ConfigMap syntheticMap(std::size_t na, std::size_t nt, double dt, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  struct Bump {
+    double theta, t, sigma_theta, sigma_t, height;
+  };
+  const double t_end = static_cast<double>(nt - 1) * dt;
+  std::vector<Bump> bumps(40);
+  for (Bump& b : bumps) {
+    b = {2.0 * std::numbers::pi * u(rng), t_end * u(rng), 0.2 + 0.6 * u(rng), 2.0 + 8.0 * u(rng),
+         0.3 + 0.7 * u(rng)};
+  }
+  planner::ConfigMap map;
+  for (std::size_t i = 0; i < na; ++i)
+    map.angles.push_back(2.0 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(na));
+  for (std::size_t k = 0; k < nt; ++k) map.times.push_back(static_cast<double>(k) * dt);
+  map.branches.resize(1);
+  map.f.resize(na * nt);
+  for (std::size_t a = 0; a < na; ++a) {
+    for (std::size_t k = 0; k < nt; ++k) {
+      double v = 0.05;
+      for (const Bump& b : bumps) {
+        const double d =
+            std::remainder(map.angles[a] - b.theta, 2 * std::numbers::pi) / b.sigma_theta;
+        const double e = (map.times[k] - b.t) / b.sigma_t;
+        v += b.height * std::exp(-0.5 * (d * d + e * e));
+      }
+      v = std::min(v, 1.0);
+      map.f[map.index(0, a, k)] = v < 0.2 ? 0.0f : static_cast<float>(v);
+    }
+  }
+  return map;
+}
+
+// The demo job's map on its best branch, the scan path sampled so it has `samples` samples.
+inline planner::ConfigMap demoMap(const std::string& job_file, std::size_t samples, double& dt) {
+  cli::JobSpec job = cli::loadJob(job_file, {"map.branch=RIGHTY ABOVE NOFLIP"});
+  const kinematics::CellModel cell0 = cli::buildCell(job);
+  const double duration = cli::generateScanPath(job, cell0).path.duration();
+  dt = duration / static_cast<double>(samples - 1);
+  job =
+      cli::loadJob(job_file, {"map.branch=RIGHTY ABOVE NOFLIP", "scan.dt_s=" + std::to_string(dt)});
+  const kinematics::CellModel cell = cli::buildCell(job);
+  const kinematics::ScanPath path = cli::generateScanPath(job, cell).path;
+  const collision::Scene scene(cell, cli::clearanceConfig(job));
+  return cli::computeMap(job, scene, path).map;
+}
+
+}  // namespace scanplan::bench
