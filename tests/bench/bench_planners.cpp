@@ -25,6 +25,7 @@
 #include "planner/ray_shooting.h"
 #include "planner/refine.h"
 #include "tests/bench/bench_maps.h"
+#include "tests/bench/bench_timing.h"
 
 using namespace scanplan;
 using bench::demoMap;
@@ -32,6 +33,16 @@ using bench::syntheticMap;
 using planner::PlanResult;
 
 namespace {
+
+// A planner's result with `seconds` replaced by the process's CPU time over the call (its
+// threads' work; a shared machine's other work does not count).
+template <class F>
+auto cpuTimed(F&& f) {
+  const double start = bench::processCpuSeconds();
+  auto r = f();
+  r.seconds = bench::processCpuSeconds() - start;
+  return r;
+}
 
 void line(const char* name, const PlanResult& r, double dp_j) {
   if (r.status != PlanResult::Status::kExact) {
@@ -51,7 +62,8 @@ void refined(const char* name,
              bool continuous,
              double dp_j) {
   if (r.status != PlanResult::Status::kExact) return;
-  const planner::RefineResult x = planner::refinePath(map, branch, r.theta, s, continuous);
+  const planner::RefineResult x =
+      cpuTimed([&] { return planner::refinePath(map, branch, r.theta, s, continuous); });
   std::printf("  %-26s %9.1f ms   J = %9.4f s  (was %.4f; %s)  gap to DP %+7.2f%%\n", name,
               1e3 * x.seconds, x.after.total, x.before.total, x.improved ? "improved" : "kept",
               100.0 * (x.after.total - dp_j) / dp_j);
@@ -65,13 +77,16 @@ void compare(const char* title,
   std::printf("%s: %zu angles x %zu samples, dt %.4f s\n", title, map.angles.size(),
               map.times.size(), map.times[1] - map.times[0]);
   const int r = planner::autoAngleSubdivisions(map, branch, s, continuous);
-  const PlanResult dp1 = planner::planDp(map, branch, s, continuous);
-  const PlanResult dp = planner::planDpRefined(map, branch, s, continuous, r);
+  const PlanResult dp1 = cpuTimed([&] { return planner::planDp(map, branch, s, continuous); });
+  const PlanResult dp =
+      cpuTimed([&] { return planner::planDpRefined(map, branch, s, continuous, r); });
   const double dp_j = dp.status == PlanResult::Status::kExact ? dp.terms.total : NAN;
-  const PlanResult ray = planner::planRayShooting(map, branch, s, continuous, {});
+  const PlanResult ray =
+      cpuTimed([&] { return planner::planRayShooting(map, branch, s, continuous, {}); });
   planner::OmplSettings os;
   os.time_limit_s = 2.0;
-  const PlanResult ompl = planner::planOmpl(map, branch, s, continuous, os);
+  const PlanResult ompl =
+      cpuTimed([&] { return planner::planOmpl(map, branch, s, continuous, os); });
   line("dp (map grid)", dp1, dp_j);
   line(("dp (grid / " + std::to_string(r) + ") = DP").c_str(), dp, dp_j);
   line("ray (21 rays, H 15, 36 st.)", ray, dp_j);
@@ -87,7 +102,9 @@ void compare(const char* title,
       rs.rays = rays;
       const std::string name =
           "ray (" + std::to_string(rays) + " rays, H " + std::to_string(horizon) + ")";
-      line(name.c_str(), planner::planRayShooting(map, branch, s, continuous, rs), dp_j);
+      line(name.c_str(),
+           cpuTimed([&] { return planner::planRayShooting(map, branch, s, continuous, rs); }),
+           dp_j);
     }
   }
   std::printf("  targets: ray <= 50 ms: %s (%.1f ms); dp <= 2 s: %s (%.2f s)\n\n",
@@ -102,8 +119,8 @@ int main(int argc, char** argv) {
   const tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 2);
   planner::PlannerSettings s;  // the documented defaults (k_omega 1, k_alpha 0.1, 30°/s, 60°/s²)
   std::printf(
-      "bench_planners: 2 threads; J in s (the objective of DESIGN.md §5); gap = (J - "
-      "J_DP) / J_DP\n\n");
+      "bench_planners: 2 threads; times are the process's CPU time (both threads' work); J in s "
+      "(the objective of DESIGN.md §5); gap = (J - J_DP) / J_DP\n\n");
   for (const unsigned seed : {7u, 8u}) {
     const std::string title = "synthetic map (seed " + std::to_string(seed) + ")";
     compare(title.c_str(), syntheticMap(360, 1000, 0.1, seed), 0, s, true);
