@@ -204,11 +204,9 @@ std::vector<Case> sweepFileCases() {
                          .names = {"r"}});
   };
   report("batch_report_garbage", garbage("r/results.jsonl", 3000));
-  cases.back().xfail = "TODO: batch report drops unreadable rows silently (exit 0)";
   report("batch_report_empty", text("r/results.jsonl", ""));
   cases.back().exits = {0, 4};  // no rows yet: an empty report
   report("batch_report_bad_row", text("r/results.jsonl", "{\"case_id\": 5, \"J_s\": \"x\"}\n"));
-  cases.back().xfail = "TODO: batch report accepts a row of the wrong types (exit 0)";
   report("batch_report_fifo", fifo("r/results.jsonl"));
   report("batch_report_no_results", text("r/other.txt", ""));
   cases.push_back(Case{.name = "batch_merge_garbage",
@@ -217,8 +215,7 @@ std::vector<Case> sweepFileCases() {
                        .files = {folder("a"), folder("b"), garbage("a/results.jsonl", 3000),
                                  text("b/results.jsonl", "{}\n")},
                        .names = {"results.jsonl"},
-                       .out = OutState::kExisting,
-                       .xfail = "TODO: batch merge drops unreadable rows silently (exit 0)"});
+                       .out = OutState::kExisting});
   return cases;
 }
 
