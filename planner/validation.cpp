@@ -500,7 +500,7 @@ kinematics::Trajectory densify(const kinematics::Trajectory& trajectory, double 
     if (n > static_cast<double>(kMaxSamples) ||
         total + static_cast<std::size_t>(n) - 1 > kMaxSamples) {
       throw InputError(fmt::format(
-          "the trajectory's {:.0f} s sampled every {} s would be more than {} poses: expected a "
+          "the trajectory's {:.6g} s sampled every {} s would be more than {} poses: expected a "
           "shorter trajectory or a lower rate (scanner.frame_rate_hz)",
           in.back().t - in.front().t, dt, kMaxSamples));
     }
