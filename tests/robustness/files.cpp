@@ -150,7 +150,6 @@ std::vector<Case> trajectoryFileCases() {
   csv("csv_nan_joint", [](std::string s) { return trajectoryCell(s, 2, "nan"); });
   csv("csv_inf_table", [](std::string s) { return trajectoryCell(s, 1, "inf"); });
   csv("csv_huge_joint", [](std::string s) { return trajectoryCell(s, 3, "1e300"); });
-  cases.back().xfail = "TODO: validation's collision refinement runs out of memory (bad_alloc)";
   csv("csv_text_joint", [](std::string s) { return trajectoryCell(s, 4, "abc"); });
   csv("csv_time_backwards", [](std::string s) { return trajectoryCell(s, 0, "-5"); });
   csv("csv_missing_column", [](std::string s) { return trajectoryCell(s, 5, ""); });
