@@ -124,7 +124,6 @@ std::vector<Case> issueFileCases() {
       meshCase("off_2pow31_vertices", text("m.off", "OFF\n2147483648 1 0\n0 0 0\n3 0 1 2\n")));
   cases.push_back(meshCase("off_face_index_out_of_range",
                            text("m.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n")));
-  cases.back().xfail = "TODO: the bad face is dropped; the error names the ring, not m.off";
   cases.push_back(meshCase("off_negative_face_index",
                            text("m.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n")));
   cases.push_back(meshCase("ply_header_only", text("m.ply", kPlyHeader)));
