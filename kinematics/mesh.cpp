@@ -1,6 +1,7 @@
 #include "kinematics/mesh.h"
 
 #include "kinematics/error.h"
+#include "kinematics/mesh_file.h"
 #include "kinematics/units.h"
 
 #include <assimp/config.h>
@@ -9,22 +10,17 @@
 #include <assimp/Importer.hpp>
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <exception>
-#include <fstream>
 #include <sstream>
 #include <string>
-#include <system_error>
 #include <utility>
 #include <vector>
 
 namespace scanplan::kinematics {
 namespace {
-
-constexpr const char* kSupported = ".stl .obj .ply .off";
 
 // Relative to the bounding-box diagonal squared so a file is judged alike in mm and in m. A
 // triangle of area 1e-12·diag² (sides ~1e-6·diag) is at the resolution of the float32
@@ -32,104 +28,7 @@ constexpr const char* kSupported = ".stl .obj .ply .off";
 constexpr double kDegenerateAreaRatio = 1e-12;
 
 [[noreturn]] void fail(const std::filesystem::path& path, const std::string& what) {
-  throw InputError("mesh file '" + path.string() + "' " + what);
-}
-
-constexpr std::uintmax_t kMaxMeshBytes = std::uintmax_t{2} << 30;  // 2 GB
-constexpr std::size_t kMaxHeader = 64 << 10;                       // PLY header bytes
-
-// The first `n` bytes of a file.
-std::string head(const std::filesystem::path& path, std::size_t n) {
-  std::ifstream in(path, std::ios::binary);
-  std::string text(n, '\0');
-  in.read(text.data(), static_cast<std::streamsize>(n));
-  text.resize(static_cast<std::size_t>(in.gcount()));
-  return text;
-}
-
-// A PLY header must end within 64 kB and its element counts fit the file: a header alone, or
-// one claiming a billion vertices, is refused before the loader sees it (which loops or
-// allocates without end on them). Its last line must be `end_header` alone: with more on that
-// line (`end_header0 0 0`) assimp's PLY reader seeks at the end of the file for ever.
-void checkPlyHeader(const std::filesystem::path& path, std::uintmax_t size) {
-  const std::string text = head(path, kMaxHeader);
-  std::istringstream lines(text);
-  std::uintmax_t needed = 0;  // at least a byte per element (binary), two per number (ASCII)
-  bool ended = false;
-  for (std::string line; !ended && std::getline(lines, line);) {
-    std::istringstream words(line);
-    std::string word, name;
-    double count = 0.0;
-    if (!(words >> word) || word.rfind("end_header", 0) != 0) {
-      if (word == "element" && words >> name >> count) {
-        if (!(count >= 0.0) || count > 1e10) fail(path, "has a PLY element count of " + line);
-        needed += static_cast<std::uintmax_t>(count);
-      }
-      continue;
-    }
-    if (word != "end_header" || words >> name) {
-      fail(path, "has more than 'end_header' on the PLY header's last line; expected it alone");
-    }
-    ended = true;
-  }
-  if (text.rfind("ply", 0) != 0 || !ended) {
-    fail(path,
-         "has no complete PLY header ('ply' … 'end_header' in the first 64 kB); expected a "
-         "PLY mesh");
-  }
-  if (needed > size) {
-    fail(path, "claims " + std::to_string(needed) + " PLY elements in " + std::to_string(size) +
-                   " bytes: a truncated or corrupt file");
-  }
-}
-
-// An OFF header's counts must fit the file (each vertex and face takes a few bytes at least).
-void checkOffHeader(const std::filesystem::path& path, std::uintmax_t size) {
-  std::istringstream in(head(path, kMaxHeader));
-  std::vector<std::string> counts;
-  for (std::string word; counts.size() < 2 && in >> word;) {
-    if (word[0] == '#') {
-      std::getline(in, word);
-    } else if (word.find("OFF") == std::string::npos) {
-      counts.push_back(word);
-    }
-  }
-  if (counts.size() < 2) return;  // the loader says what is wrong
-  const double vertices = std::strtod(counts[0].c_str(), nullptr);
-  const double faces = std::strtod(counts[1].c_str(), nullptr);
-  if (!(vertices >= 0.0) || !(faces >= 0.0) ||
-      vertices * 6.0 + faces * 8.0 > static_cast<double>(size)) {
-    fail(path, "claims " + counts[0] + " vertices and " + counts[1] + " faces in " +
-                   std::to_string(size) + " bytes: a truncated or corrupt OFF file");
-  }
-}
-
-void checkFile(const std::filesystem::path& path) {
-  std::error_code ec;
-  const auto status = std::filesystem::status(path, ec);
-  if (!std::filesystem::exists(status)) {
-    fail(path, "does not exist; expected an existing " + std::string(kSupported) + " file");
-  }
-  if (std::filesystem::is_directory(status)) {
-    fail(path, "is a directory; expected a " + std::string(kSupported) + " file");
-  }
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (ext != ".stl" && ext != ".obj" && ext != ".ply" && ext != ".off") {
-    fail(path, "has unsupported extension '" + ext + "'; supported: " + kSupported);
-  }
-  if (!std::filesystem::is_regular_file(status)) {
-    fail(path, "is not a regular file (a pipe, socket or device); expected a mesh file");
-  }
-  const std::uintmax_t size = std::filesystem::file_size(path, ec);
-  if (size == 0 && !ec) fail(path, "is empty (0 bytes); expected a triangle mesh");
-  if (!ec && size > kMaxMeshBytes) {
-    fail(path, "is " + std::to_string(size >> 20) + " MB; expected at most " +
-                   std::to_string(kMaxMeshBytes >> 20) + " MB");
-  }
-  if (ext == ".ply") checkPlyHeader(path, size);
-  if (ext == ".off") checkOffHeader(path, size);
+  detail::failMesh(path, what);
 }
 
 Eigen::Vector3d toEigen(const aiVector3D& v) { return {v.x, v.y, v.z}; }
@@ -161,22 +60,31 @@ void inspectFaces(const aiScene& scene, MeshLoadReport& report) {
 
 // assimp's triangulation aborts the process (an always-on assertion) when a mesh claims polygons
 // it does not have: a face with no vertex index (a PLY face list of length 0 passes assimp's
-// own validation) counts as a polygon. Such files are refused before triangulating.
+// own validation) counts as a polygon. Such files are refused before triangulating, and so is
+// a mesh whose polygons make more triangles than the limit (the pre-check counts a binary PLY's
+// faces, not their corners): triangulating and welding take the time and memory.
 void checkTriangulable(const std::filesystem::path& path, const aiScene& scene) {
+  std::size_t triangles = 0;
   for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
     const aiMesh& mesh = *scene.mMeshes[m];
     bool polygon = false;
     for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
-      if (mesh.mFaces[f].mNumIndices == 0) {
+      const unsigned corners = mesh.mFaces[f].mNumIndices;
+      if (corners == 0) {
         fail(path,
              "face " + std::to_string(f + 1) +
                  " has no vertex index; expected 3 or more per face (1 or 2: a point or line)");
       }
-      polygon = polygon || mesh.mFaces[f].mNumIndices > 3;
+      polygon = polygon || corners > 3;
+      triangles += corners >= 3 ? corners - 2 : 0;
     }
     if ((mesh.mPrimitiveTypes & aiPrimitiveType_POLYGON) != 0 && !polygon) {
       fail(path, "declares polygons but has none; expected a consistent face list");
     }
+  }
+  if (triangles > detail::kMaxMeshTriangles) {
+    fail(path, "has " + std::to_string(triangles) + " triangles; expected at most " +
+                   std::to_string(detail::kMaxMeshTriangles) + " (simplify the mesh)");
   }
 }
 
@@ -306,7 +214,7 @@ LoadedMesh loadMesh(const std::filesystem::path& path, const MeshLoadOptions& op
     what << "cannot be loaded with scale " << options.scale << "; expected a finite number > 0";
     fail(path, what.str());
   }
-  checkFile(path);
+  detail::checkMeshFile(path);
 
   LoadedMesh result;
   Assimp::Importer importer;
@@ -334,7 +242,7 @@ LoadedMesh loadMesh(const std::filesystem::path& path, const MeshLoadOptions& op
   }
   if (scene == nullptr || scene->mRootNode == nullptr) {
     fail(path, std::string("could not be read: ") + importer.GetErrorString() +
-                   "; expected a well-formed " + kSupported + " mesh");
+                   "; expected a well-formed .stl .obj .ply .off mesh");
   }
 
   // Checked in file units, before any transform smears a NaN over all three coordinates.

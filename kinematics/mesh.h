@@ -50,7 +50,8 @@ struct LoadedMesh {
 
 /// Loads STL (ASCII and binary), OBJ, PLY or OFF through assimp, welds identical vertices and
 /// converts to metres. Throws scanplan::InputError naming the file when it is missing, empty,
-/// truncated, malformed or holds no triangles.
+/// truncated, malformed, holds no triangles, or is larger than the loader's bounds (1 GB,
+/// 4 000 000 triangles: kinematics/mesh_file.h, checked before assimp does the work).
 LoadedMesh loadMesh(const std::filesystem::path& path, const MeshLoadOptions& options = {});
 
 }  // namespace scanplan::kinematics

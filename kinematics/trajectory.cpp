@@ -38,6 +38,20 @@ std::vector<std::string> splitCells(const std::string& line) {
   return cells;
 }
 
+// Angles (table, joints) within ±kMaxTrajectoryAngleDeg, positions within
+// ±kMaxTrajectoryLengthMm; `fail` reports the column and the value.
+template <class Fail>
+void checkMagnitude(std::size_t column, double value, const Fail& fail) {
+  const bool angle = column >= 1 && column <= 7;
+  const bool length = column >= 10 && column <= 12;
+  const double cap = angle ? kMaxTrajectoryAngleDeg : kMaxTrajectoryLengthMm;
+  if ((angle || length) && std::abs(value) > cap) {
+    fail("column " + std::string(kColumns[column]) + ": " + number(value) + ": expected " +
+         (angle ? "an angle" : "a position") + " within ±" + number(cap) +
+         (angle ? " deg" : " mm"));
+  }
+}
+
 std::string header(std::size_t columns) {
   std::string h;
   for (std::size_t i = 0; i < columns; ++i) h += (i ? "," : "") + std::string(kColumns[i]);
@@ -107,6 +121,7 @@ Trajectory parseTrajectoryCsv(const std::string& text, const std::string& source
         fail("column " + std::string(kColumns[c]) + ": '" + clipForMessage(cell) +
              "' is not a finite number" + (c == 8 ? " (or empty / nan for unknown)" : ""));
       }
+      checkMagnitude(c, v[c], fail);
     }
     TrajectorySample s;
     s.t = v[0];

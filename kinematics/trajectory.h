@@ -28,6 +28,14 @@ struct Trajectory {
   double duration() const { return samples.empty() ? 0.0 : samples.back().t; }
 };
 
+/// The largest joint or table angle a trajectory file may hold, degrees: no axis turns through
+/// this (the demo's continuous table turns about 30 000° in a 20-minute scan), and far beyond
+/// it the collision check between two samples has no end.
+inline constexpr double kMaxTrajectoryAngleDeg = 1e6;
+/// The largest scanner position coordinate a trajectory file may hold, mm (a kilometre, as for
+/// every length in a job).
+inline constexpr double kMaxTrajectoryLengthMm = 1e6;
+
 /// The CSV interchange format (header included):
 ///   t_s,table_deg,j1_deg,…,j6_deg,f,scanning,px_mm,py_mm,pz_mm,qw,qx,qy,qz,limit
 /// Angles in degrees, positions in mm, the quaternion of X_PS with qw ≥ 0; 12 significant
@@ -37,7 +45,8 @@ std::string trajectoryToCsv(const Trajectory& trajectory);
 /// Reads trajectoryToCsv()'s format, or a hand-written file with the same columns (the `limit`
 /// column may be left out; `f` may be empty or "nan" when unknown). Comment lines start with #.
 /// Errors (InputError) name `source`, the line, the column and the value: wrong header, wrong
-/// column count, non-numbers, NaN or infinite values, times not strictly increasing, a
+/// column count, non-numbers, NaN or infinite values, angles beyond ±kMaxTrajectoryAngleDeg
+/// and positions beyond ±kMaxTrajectoryLengthMm, times not strictly increasing, a
 /// quaternion that is not unit length (within 1e-6), scanning not 0 or 1, no samples.
 Trajectory parseTrajectoryCsv(const std::string& text, const std::string& source);
 

@@ -6,6 +6,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <numeric>
 #include <optional>
@@ -15,8 +16,10 @@
 #include <variant>
 
 #include <fmt/format.h>
+#include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include "collision/clearance.h"
 #include "kinematics/mesh.h"
@@ -38,6 +41,8 @@ constexpr double kDistanceSlack = 5e-5;  // m
 // its limit must not fail on the last printed digit.
 constexpr double kLimitTolerance = 1e-9;        // rad
 constexpr std::size_t kMaxSamples = 5'000'000;  // densified poses (about 1.3 GB)
+// Bisection poses in the worst case (boundRefinement()): about as long as checking kMaxSamples.
+constexpr std::size_t kMaxRefinementPoses = 5'000'000;
 // Each bisection halves the motion bound; 60 halvings take any real motion far below any
 // resolution. Reaching it ends the refinement with a (conservative) collision span.
 constexpr int kMaxDepth = 60;
@@ -265,6 +270,35 @@ struct IntervalOutcome {
   double proven = kInf;         // lowest certified distance of the proven (sub)intervals
 };
 
+// A pair over an interval [a, b]: its motion bound L and what the end distances prove.
+struct PairJudgement {
+  bool in_contact = false;  // penetrating at both ends: one run, not refined
+  double motion = 0.0;      // L, m
+  double certified = 0.0;   // > 0: proven at least this far apart over the interval
+};
+
+PairJudgement judgePair(const detail::BodyBound& body_a,
+                        const detail::BodyBound& body_b,
+                        const std::array<double, kNumJoints>& dq,
+                        double dtheta,
+                        const PairSample& sa,
+                        const PairSample& sb) {
+  PairJudgement j;
+  j.in_contact = sa.penetrating && sb.penetrating;
+  j.motion = detail::pairMotion(body_a, body_b, dq, dtheta);
+  // With true end distances δ ≥ d − s: δ(u) ≥ max(δ_a − L·u, δ_b − L·(1 − u)) over the
+  // interval (u ∈ [0, 1]), whose minimum is min(δ_a, δ_b, (δ_a + δ_b − L)/2).
+  const double da = sa.distance - kDistanceSlack, db = sb.distance - kDistanceSlack;
+  j.certified = std::min({da, db, 0.5 * (da + db - j.motion)});
+  return j;
+}
+
+std::array<double, kNumJoints> jointMotion(const Pose& a, const Pose& b) {
+  std::array<double, kNumJoints> dq{};
+  for (int j = 0; j < kNumJoints; ++j) dq[static_cast<std::size_t>(j)] = std::abs(b.q(j) - a.q(j));
+  return dq;
+}
+
 // Conservative advancement by bisection over one densified interval (see validateTrajectory()).
 class IntervalRefiner {
  public:
@@ -281,30 +315,25 @@ class IntervalRefiner {
               const PoseCheck& cb,
               const std::vector<int>& open,
               int depth) {
-    std::array<double, kNumJoints> dq{};
-    for (int j = 0; j < kNumJoints; ++j)
-      dq[static_cast<std::size_t>(j)] = std::abs(b.q(j) - a.q(j));
+    const std::array<double, kNumJoints> dq = jointMotion(a, b);
     const double dtheta = std::abs(b.theta - a.theta);
     std::vector<int> unresolved;
     for (const int p : open) {
       const auto i = static_cast<std::size_t>(p);
       const PairSample &sa = ca[i], &sb = cb[i];
-      if (sa.penetrating && sb.penetrating) {  // in contact at both ends: one run, not refined
+      const collision::PairInfo& pair = pairs_[i];
+      const PairJudgement j =
+          judgePair(bodies_[static_cast<std::size_t>(pair.a)],
+                    bodies_[static_cast<std::size_t>(pair.b)], dq, dtheta, sa, sb);
+      if (j.in_contact) {
         out_.spans.push_back({p, a.t, b.t, 0.0, sa.p_W});
         continue;
       }
-      const collision::PairInfo& pair = pairs_[i];
-      const double L = detail::pairMotion(bodies_[static_cast<std::size_t>(pair.a)],
-                                          bodies_[static_cast<std::size_t>(pair.b)], dq, dtheta);
-      // With true end distances δ ≥ d − s: δ(u) ≥ max(δ_a − L·u, δ_b − L·(1 − u)) over the
-      // interval (u ∈ [0, 1]), whose minimum is min(δ_a, δ_b, (δ_a + δ_b − L)/2).
-      const double da = sa.distance - kDistanceSlack, db = sb.distance - kDistanceSlack;
-      const double certified = std::min({da, db, 0.5 * (da + db - L)});
-      if (certified > 0.0) {
-        out_.proven = std::min(out_.proven, certified);
+      if (j.certified > 0.0) {
+        out_.proven = std::min(out_.proven, j.certified);
         continue;
       }
-      if (L <= resolution_ || depth >= kMaxDepth) {
+      if (j.motion <= resolution_ || depth >= kMaxDepth) {
         out_.spans.push_back({p, a.t, b.t, std::min(sa.distance, sb.distance), sa.p_W});
         continue;
       }
@@ -500,7 +529,7 @@ kinematics::Trajectory densify(const kinematics::Trajectory& trajectory, double 
     if (n > static_cast<double>(kMaxSamples) ||
         total + static_cast<std::size_t>(n) - 1 > kMaxSamples) {
       throw InputError(fmt::format(
-          "the trajectory's {:.0f} s sampled every {} s would be more than {} poses: expected a "
+          "the trajectory's {:.6g} s sampled every {} s would be more than {} poses: expected a "
           "shorter trajectory or a lower rate (scanner.frame_rate_hz)",
           in.back().t - in.front().t, dt, kMaxSamples));
     }
@@ -562,6 +591,72 @@ struct ClearanceSweep {
   std::vector<IntervalOutcome> intervals;  // one per pair of consecutive poses
 };
 
+// The largest motion bound over [a, b] of a pair its end distances do not prove apart (0: none).
+double unprovenMotion(const std::vector<collision::PairInfo>& pairs,
+                      const std::vector<detail::BodyBound>& bodies,
+                      const Pose& a,
+                      const PoseCheck& ca,
+                      const Pose& b,
+                      const PoseCheck& cb) {
+  const std::array<double, kNumJoints> dq = jointMotion(a, b);
+  const double dtheta = std::abs(b.theta - a.theta);
+  double unproven = 0.0;
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    const PairJudgement j =
+        judgePair(bodies[static_cast<std::size_t>(pairs[i].a)],
+                  bodies[static_cast<std::size_t>(pairs[i].b)], dq, dtheta, ca[i], cb[i]);
+    if (!j.in_contact && !(j.certified > 0.0)) unproven = std::max(unproven, j.motion);
+  }
+  return unproven;
+}
+
+// The bisection's worst case over an interval whose largest unproven motion bound is `motion`:
+// it splits until every open pair is proven or its bound is at most the resolution (a halving
+// halves every bound), so it checks at most 2^D − 1 poses, D the halvings that bring `motion`
+// to the resolution (at most kMaxDepth).
+double worstRefinement(double motion, double resolution) {
+  if (!(motion > resolution)) return 0.0;
+  const double depth = std::min<double>(kMaxDepth, std::ceil(std::log2(motion / resolution)));
+  return std::exp2(depth) - 1.0;
+}
+
+// Refuses, before it runs, a refinement whose worst case exceeds kMaxRefinementPoses: a joint
+// turning thousands of degrees between two samples would have its interval split without end
+// (time, and a collision span per piece).
+void boundRefinement(const std::vector<collision::PairInfo>& pairs,
+                     const std::vector<detail::BodyBound>& bodies,
+                     const std::vector<Pose>& poses,
+                     const std::vector<PoseCheck>& checks,
+                     double resolution) {
+  const auto motion = [&](std::size_t k) {
+    return unprovenMotion(pairs, bodies, poses[k], checks[k], poses[k + 1], checks[k + 1]);
+  };
+  const auto worst = [&](std::size_t k) { return worstRefinement(motion(k), resolution); };
+  const double total = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, poses.size() - 1), 0.0,
+      [&](const tbb::blocked_range<std::size_t>& r, double sum) {
+        for (std::size_t k = r.begin(); k != r.end(); ++k) sum += worst(k);
+        return sum;
+      },
+      std::plus<>());
+  if (total <= static_cast<double>(kMaxRefinementPoses)) return;
+  std::size_t at = 0;  // the interval with the most, for the message
+  double most = 0.0;
+  for (std::size_t k = 0; k + 1 < poses.size(); ++k) {
+    if (const double w = worst(k); w > most) {
+      most = w;
+      at = k;
+    }
+  }
+  throw InputError(fmt::format(
+      "the continuous collision check could need up to {:.3g} poses between the densified "
+      "samples, more than {} (the most, {:.3g}, between t = {:.6g} and {:.6g} s, where a body "
+      "may move {:.3g} m): expected smaller joint and table steps between samples, or a coarser "
+      "validation.collision_resolution_mm than {:.6g}",
+      total, kMaxRefinementPoses, most, poses[at].t, poses[at + 1].t, motion(at),
+      toMm(resolution)));
+}
+
 ClearanceSweep sweepClearance(const collision::Scene& scene,
                               const std::vector<kinematics::TrajectorySample>& samples,
                               double resolution) {
@@ -578,6 +673,7 @@ ClearanceSweep sweepClearance(const collision::Scene& scene,
   checks.resize(n);
   tbb::parallel_for(std::size_t{0}, n,
                     [&](std::size_t k) { checks[k] = checkPose(evaluators.local(), poses[k]); });
+  boundRefinement(pairs, bodies, poses, checks, resolution);
   std::vector<int> all_pairs(pairs.size());
   std::iota(all_pairs.begin(), all_pairs.end(), 0);
   sweep.intervals.resize(n - 1);

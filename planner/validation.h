@@ -127,7 +127,10 @@ kinematics::Trajectory densify(const kinematics::Trajectory& trajectory, double 
 /// entry (the worst value and its time, plus the run's start and end). Poses and intervals are
 /// checked in parallel (TBB, one ClearanceEvaluator per thread); the report does not depend on
 /// the thread count. Throws std::invalid_argument for an empty trajectory, settings out of range,
-/// or what densify() rejects.
+/// or what densify() rejects; InputError for what densify() refuses as too long, and before the
+/// collision check when its bisection could take more than 5·10⁶ poses in the worst case (each
+/// interval's largest unproven L halved down to collision_resolution: a joint thousands of
+/// degrees away between two samples).
 ValidationReport validateTrajectory(const collision::Scene& scene,
                                     const kinematics::Trajectory& trajectory,
                                     const ValidationSettings& settings = {});

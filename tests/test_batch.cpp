@@ -906,6 +906,38 @@ TEST_F(Batch, ReportSurvivesDegenerateValues) {
   ASSERT_EQ(none.exit_code, 0) << describe(none);
 }
 
+// Robustness catalogue (issue 17): `batch report` and `batch merge` skipped lines that are not
+// rows, and rows of the wrong types, without a word (exit 0): the report left cases out.
+TEST_F(Batch, ResultLinesThatAreNotRowsAreRefusedNamingTheLine) {
+  const fs::path jsonl = dir_ / "results.jsonl";
+  const std::string good = jsonRow(0, "ray", "10", {"25.5"});
+  const auto fails = [&](const std::string& text, std::initializer_list<std::string> parts) {
+    writeFile(jsonl, text);
+    return throwsInputError([&] { cli::readBatchRows(jsonl); }, parts);
+  };
+  EXPECT_TRUE(
+      fails(good + "\x01garbage\n" + good, {"results.jsonl:2: not JSON", "each line is a row"}));
+  EXPECT_TRUE(fails("{\"case_id\": 5, \"J_s\": \"x\"}\n",
+                    {"results.jsonl:1: \"case_id\": 5: expected a string"}));
+  EXPECT_TRUE(fails("{}\n", {"results.jsonl:1: no \"case_id\""}));
+  std::string huge_index = good;
+  huge_index.replace(huge_index.find("\"index\": 0"), 10, "\"index\": 1e300");
+  EXPECT_TRUE(fails(huge_index, {"\"index\": 1e+300: expected an integer"}));
+  std::string bad_metric = good;
+  bad_metric.replace(bad_metric.find("25.5"), 4, "\"x\"");
+  EXPECT_TRUE(fails(bad_metric, {"\"J_s\": \"x\": expected a number or null"}));
+
+  // A torn last line (a kill while a row is appended) is skipped, the rows before it kept.
+  writeFile(jsonl, good + "{\"case_id\": \"01");
+  EXPECT_EQ(cli::readBatchRows(jsonl).size(), 1u);
+  writeFile(jsonl, good + "garbage");
+  EXPECT_TRUE(throwsInputError([&] { cli::readBatchRows(jsonl); }, {"results.jsonl:2:"}));
+
+  const Result report = scanplan({"batch", "report", dir_.string()});
+  EXPECT_EQ(report.exit_code, 4) << describe(report);
+  EXPECT_TRUE(contains(report.err, "results.jsonl:2:")) << report.err;
+}
+
 // Robustness catalogue (issue 17): repeats: 1000000000 ran out of memory making the cases
 // (an internal error), and a range with a tiny step overflowed its count and ran one case.
 TEST_F(Batch, HugeSweepsAreRefusedBeforeTheCasesAreMade) {

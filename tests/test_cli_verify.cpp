@@ -129,6 +129,23 @@ TEST_F(CliVerify, MalformedTrajectoryRowIsAnInputErrorNamingTheLine) {
   EXPECT_TRUE(tmpFiles(dir_).empty());
 }
 
+// Robustness catalogue (issue 17): a trajectory too long to densify at the frame rate was
+// refused without naming the trajectory file.
+TEST_F(CliVerify, TrajectoryTooLongToCheckIsAnInputErrorNamingItsFile) {
+  std::string text = readFile(plannedTrajectory());
+  while (text.back() == '\n') text.pop_back();
+  const std::size_t last = text.rfind('\n') + 1;
+  text.replace(last, text.find(',', last) - last, "100000");
+  const fs::path file = dir_ / "long.csv";
+  writeFile(file, text + "\n");
+  for (const char* cmd : {"validate", "simulate"}) {
+    SCOPED_TRACE(cmd);
+    const Result run = scanplan({cmd, kDemoJob, "-t", file.string(), "-o", (dir_ / "o").string()});
+    EXPECT_EQ(run.exit_code, 4) << describe(run);
+    EXPECT_TRUE(contains(run.err, file.string() + ": the trajectory's 100000 s")) << run.err;
+  }
+}
+
 TEST_F(CliVerify, SimulatedCloudLiesOnThePartAndCoverageIsReported) {
   const fs::path out = dir_ / "sim";
   const Result run = scanplan(withLightDemo(

@@ -800,11 +800,13 @@ TEST_F(MapJob, MapCommandWritesLayersJsonAndImages) {
   }
 }
 
+// The error names the job file too (issue 17: `map` left it out, `plan` named it).
 TEST_F(MapJob, MapCommandOverTheMemoryLimitIsAnInputError) {
   const fs::path job = write("job.yaml", demoJobText() + kShortScan +
                                              "map: {angle_step_deg: 10, memory_limit_mb: 0.001}\n");
   const CliRun run = scanplan({"map", job.string(), "-o", (dir_ / "out").string()}, dir_);
   EXPECT_EQ(run.exit_code, 4) << run.err;
+  EXPECT_NE(run.err.find(job.string() + ": map: "), std::string::npos) << run.err;
   EXPECT_NE(run.err.find("memory_limit_mb"), std::string::npos) << run.err;
   EXPECT_FALSE(fs::exists(dir_ / "out" / "configmap.npy"));
 }

@@ -634,6 +634,27 @@ TEST(JobLimits, AliasBombsAndDeepNestingAreRefused) {
   fs::remove(deep);
 }
 
+// Robustness catalogue (issue 17): part.scale = 1e7 was accepted and refused only later, by a
+// ring that never saw the part, without naming the scale. The part's size is checked at load.
+TEST_F(JobFile, APartLargerThanTheLengthLimitIsRefusedNamingTheScale) {
+  write("tri.off", "OFF\n3 1 0\n0 0 0\n100 0 0\n0 100 0\n3 0 1 2\n");  // 100 mm across
+  for (const char* place : {"table", "none"}) {
+    SCOPED_TRACE(place);
+    const fs::path file =
+        write("big.yaml", std::string("robot: robot.yaml\npart: {mesh: tri.off, scale: 1e7, ") +
+                              "place: " + place + "}\n");
+    write("robot.yaml", kRobot);
+    const JobSpec job = loadJob(file);
+    EXPECT_TRUE(
+        throwsInputError([&] { loadPartMesh(job, buildCell(job).part); },
+                         {file.string() + ": part.scale: 1e+07: the part is 1e+09 mm across",
+                          "expected a part at most 1000000 mm across"}));
+  }
+  write("fine.yaml", "robot: robot.yaml\npart: {mesh: tri.off, scale: 1e4}\n");  // 1 km: within
+  const JobSpec fine = loadJob(dir_ / "fine.yaml");
+  EXPECT_NO_THROW(loadPartMesh(fine, buildCell(fine).part));
+}
+
 // Robustness catalogue (issue 17): a FIFO as the job file was read until a writer came, forever.
 TEST_F(JobFile, FifoAsJobOrRobotFileIsRefusedNotReadForever) {
   const fs::path fifo = dir_ / "job.yaml";

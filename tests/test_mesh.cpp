@@ -595,4 +595,85 @@ TEST_F(MeshLoadTest, PlyEndHeaderWithMoreOnItsLineIsAnInputErrorNotAHang) {
   EXPECT_EQ(loadError(write("blank.ply", header + "end_header \t\r\n" + body)), "<no exception>");
 }
 
+// Robustness catalogue (issue 17): assimp's OFF reader clamps a face index past the last vertex
+// to the last vertex (and reads a negative one as 0), without a word. The pre-check reads the
+// faces itself and refuses them naming the face, the index and the vertex count.
+TEST_F(MeshLoadTest, OffFaceIndicesOutOfRangeOrNotNumbersAreRefusedNamingTheFace) {
+  const std::string head = "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  const auto error = [&](const std::string& name, const std::string& face) {
+    return loadError(write(name, head + face));
+  };
+  EXPECT_TRUE(containsAll(error("past.off", "3 0 1 7\n"),
+                          {"past.off", "face 2 (line 7) vertex index 7 out of range",
+                           "the file has 3 vertices (indices from 0 to 2)"}));
+  EXPECT_TRUE(containsAll(
+      error("negative.off", "3 0 -1 2\n"),
+      {"negative.off", "face 2 (line 7) vertex index '-1'", "expected an index from 0 to 2"}));
+  EXPECT_TRUE(containsAll(error("short.off", "3 0 1\n"),
+                          {"short.off", "face 2 (line 7) with 2 of its 3 vertex indices"}));
+  // assimp drops a face of more than 9 corners without a word.
+  EXPECT_TRUE(containsAll(error("ten.off", "10 0 1 2 0 1 2 0 1 2 0\n"),
+                          {"ten.off", "face 2 (line 7) '10 0 1 2", "1 to 9"}));
+  EXPECT_TRUE(containsAll(loadError(write("few.off", head)),
+                          {"few.off",
+                           "ends after 1 faces; its OFF header gives 3 vertices and 2 "
+                           "faces: a truncated file"}));
+  // assimp reads a comment line among the faces as a face of no corners and drops it.
+  EXPECT_TRUE(containsAll(error("comment.off", "# a comment\n3 0 1 2\n"),
+                          {"comment.off", "face 2 (line 7) '# a comment'", "vertex count"}));
+}
+
+// Robustness catalogue (issue 17): an ASCII PLY with fewer elements than its header gives, or
+// an element cut short, was read with the rest made up (0) by assimp.
+TEST_F(MeshLoadTest, AsciiPlyBodyMustHoldWhatItsHeaderGives) {
+  const Soup soup = tetrahedron();
+  const std::string whole = asciiPly(soup);
+  const auto cut = [&](const std::string& name, std::size_t drop) {
+    return loadError(write(name, whole.substr(0, whole.size() - drop)));
+  };
+  EXPECT_TRUE(containsAll(
+      cut("lines.ply", 16),
+      {"lines.ply", "has 2 'face' elements where its PLY header gives 4", "a truncated file"}));
+  EXPECT_TRUE(containsAll(cut("mid.ply", 20), {"mid.ply", "'face' 2 of 4 (line 15) with 2 numbers",
+                                               "declares at least 4"}));
+  std::string text = whole;
+  text.replace(text.find("\n1 0 0\n") + 1, 1, "x");
+  EXPECT_TRUE(
+      containsAll(loadError(write("word.ply", text)),
+                  {"word.ply", "'vertex' 2 of 4 (line 11) value 'x'", "expected a number"}));
+  EXPECT_EQ(loadError(write("whole.ply", whole + "\n\n")), "<no exception>");
+}
+
+// Loader work is bounded by the triangles, counted or estimated before assimp reads the file
+// (here a binary PLY header's face count) and counted exactly after reading, before its
+// polygons are triangulated.
+TEST_F(MeshLoadTest, MeshesOverTheTriangleLimitAreRefusedBeforeTheExpensiveSteps) {
+  const std::string faces =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+      "property float y\nproperty float z\nelement face 4000001\n"
+      "property list uchar int vertex_indices\nend_header\n";
+  const auto many = write("many.ply", faces + std::string(4000001 * 13 + 36, '\0'));
+  EXPECT_TRUE(containsAll(loadError(many), {"many.ply",
+                                            "has 4000001 triangles (counted before "
+                                            "reading it); expected at most 4000000"}));
+
+  // assimp takes at most 32 767 corners a face: 123 such faces make 4 030 095 triangles.
+  const std::uint32_t corners = 32767, polygons = 123;
+  std::string polygon =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+      "property float y\nproperty float z\nelement face " +
+      std::to_string(polygons) + "\nproperty list uint int vertex_indices\nend_header\n";
+  const float xyz[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  polygon.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
+  for (std::uint32_t f = 0; f < polygons; ++f) {
+    polygon.append(reinterpret_cast<const char*>(&corners), sizeof corners);
+    for (std::uint32_t k = 0; k < corners; ++k) {
+      const std::int32_t index = static_cast<std::int32_t>(k % 3);
+      polygon.append(reinterpret_cast<const char*>(&index), sizeof index);
+    }
+  }
+  EXPECT_TRUE(containsAll(loadError(write("polygon.ply", polygon)),
+                          {"polygon.ply", "has 4030095 triangles; expected at most 4000000"}));
+}
+
 }  // namespace scanplan::kinematics

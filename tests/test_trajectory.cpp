@@ -113,6 +113,13 @@ TEST(TrajectoryCsv, MalformedInputNamesFileLineAndColumn) {
       {header + good + "0.1,0,0,0,0,0,0,0,1,2,0,0,0,1,0,0,0\n", "expected 0 or 1"},
       {header + good + "0.1,0,0,0,0,0,0,0,1,1,0,0,0,1,1,0,0\n", "unit quaternion"},
       {header + good + "0.1,0,0,0,0,0,0,0,1e999,1,0,0,0,1,0,0,0\n", "column f"},
+      // Finite but absurd (issue 17: a joint at 1e300° made validation split its interval
+      // without end, until the memory ran out).
+      {header + good + "0.1,0,0,1e300,0,0,0,0,1,1,0,0,0,1,0,0,0\n",
+       "t.csv:3: column j2_deg: 1e+300: expected an angle within ±1000000 deg"},
+      {header + good + "0.1,-2e6,0,0,0,0,0,0,1,1,0,0,0,1,0,0,0\n", "column table_deg: -2000000"},
+      {header + good + "0.1,0,0,0,0,0,0,0,1,1,0,3e6,0,1,0,0,0\n",
+       "column py_mm: 3000000: expected a position within ±1000000 mm"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.text);

@@ -242,6 +242,28 @@ TEST(Validate, JointSpeedViolationIsOneRunWithJointValueAndLimit) {
       << planner::describe(v);
 }
 
+// Robustness catalogue (issue 17): a joint thousands of degrees away between two samples gave
+// the continuous collision check an interval it splits without end (bad_alloc after minutes).
+// Its worst case is estimated first, from the motion bounds, and refused over the limit.
+TEST(Validate, ARefinementWithoutEndIsRefusedBeforeItRuns) {
+  const DemoCell d = demoCell();
+  const collision::Scene scene(d.cell, cli::clearanceConfig(d.job));
+  // J2 through 100 000° in 0.1 s: bounds of about 100 m per 10 ms step, 2^20 halvings of
+  // 0.1 mm each on every step whose ends do not prove the pairs apart.
+  Trajectory tr;
+  tr.samples.push_back(sample(0.0, 0.0, home(-90.0)));
+  JointVector far = home(-90.0);
+  far(1) += deg(100000.0);
+  tr.samples.push_back(sample(0.1, 0.0, far));
+  EXPECT_TRUE(
+      test::throwsInputError([&] { planner::validateTrajectory(scene, tr, {.sample_dt = 0.01}); },
+                             {"the continuous collision check could need up to ", " poses",
+                              "more than 5000000", "validation.collision_resolution_mm"}));
+  // A step a joint can take is judged as before.
+  tr.samples.back().q(1) = home(-90.0)(1) + deg(10.0);
+  EXPECT_NO_THROW(planner::validateTrajectory(scene, tr, {.sample_dt = 0.01}));
+}
+
 // Table: ω_max = 30°/s ≈ 0.524 rad/s, α_max = 60°/s² ≈ 1.047 rad/s² (the demo job). Speeds per
 // 0.1 s step 0, 0.5, 0.5, 0.5, 1.0, 1.0, 0.5 rad/s: α = ±5 rad/s² at the knots 0.1, 0.4 and
 // 0.6 s; ω > ω_max on [0.4, 0.6].

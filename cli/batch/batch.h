@@ -130,7 +130,8 @@ ExitCode runBatchReport(const std::filesystem::path& out_dir);
 ExitCode runBatchMerge(const std::vector<std::filesystem::path>& inputs,
                        const std::filesystem::path& out_dir);
 
-/// The rows of a results.jsonl (a torn last line from an interrupted run is skipped).
+/// The rows of a results.jsonl (a torn last line from an interrupted run is skipped). Throws
+/// InputError naming the file and the line when any other line is not a row a batch writes.
 std::vector<BatchRow> readBatchRows(const std::filesystem::path& jsonl);
 
 /// A planner's colour in the batch plots (its crosses and the line through its means).

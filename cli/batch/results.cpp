@@ -3,9 +3,12 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <exception>
 #include <fstream>
+#include <limits>
 #include <mutex>
+#include <stdexcept>
 #include <string>
 #include <tuple>
 
@@ -44,26 +47,74 @@ Json rowJson(const BatchRow& row) {
   return json;
 }
 
-// A row of results.jsonl; throws Json::exception when a field is missing or of another type.
-BatchRow rowOf(const Json& json) {
-  BatchRow r;
-  r.case_id = json.at("case_id").get<std::string>();
-  r.index = json.at("index").get<std::size_t>();
-  r.job = json.at("job").get<std::string>();
-  for (const auto& [k, v] : json.at("params").items())
-    r.params.emplace_back(k, v.get<std::string>());
-  if (const auto seed = json.find("seed"); seed != json.end() && !seed->is_null()) {
-    r.seed = seed->get<int>();
+// What is wrong with a results.jsonl row that is not one a batch writes.
+struct BadRow : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+[[noreturn]] void badMember(const char* key, const Json& value, const char* expected) {
+  throw BadRow(fmt::format("\"{}\": {}: expected {}", key, clipForMessage(value.dump()), expected));
+}
+
+const Json& member(const Json& row, const char* key) {
+  const auto it = row.find(key);
+  if (it == row.end()) throw BadRow(fmt::format("no \"{}\"", key));
+  return *it;
+}
+
+std::string stringOf(const Json& row, const char* key) {
+  const Json& v = member(row, key);
+  if (!v.is_string()) badMember(key, v, "a string");
+  return v.get<std::string>();
+}
+
+// Checked before any cast: a fraction or 1e300 in an integer field would be cut or overflow.
+std::int64_t integerOf(const Json& v, const char* key, std::int64_t lo, std::int64_t hi) {
+  const char* expected = "an integer in range";
+  if (!v.is_number_integer()) badMember(key, v, expected);
+  if (v.is_number_unsigned()) {
+    if (v.get<std::uint64_t>() > static_cast<std::uint64_t>(hi)) badMember(key, v, expected);
+    return static_cast<std::int64_t>(v.get<std::uint64_t>());
   }
-  r.repeat = json.at("repeat").get<int>();
-  r.method = json.at("method").get<std::string>();
-  r.status = json.at("status").get<std::string>();
-  r.reason = json.at("reason").get<std::string>();
+  const auto i = v.get<std::int64_t>();
+  if (i < lo || i > hi) badMember(key, v, expected);
+  return i;
+}
+
+// A row of results.jsonl, every field of the type a batch writes; throws BadRow otherwise.
+BatchRow rowOf(const Json& json) {
+  if (!json.is_object()) throw BadRow("not a JSON object");
+  constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
+  BatchRow r;
+  r.case_id = stringOf(json, "case_id");
+  r.index = static_cast<std::size_t>(
+      integerOf(member(json, "index"), "index", 0, std::numeric_limits<std::int64_t>::max()));
+  r.job = stringOf(json, "job");
+  const Json& params = member(json, "params");
+  if (!params.is_object()) badMember("params", params, "an object of strings");
+  for (const auto& [k, v] : params.items()) {
+    if (!v.is_string()) badMember("params", params, "an object of strings");
+    r.params.emplace_back(k, v.get<std::string>());
+  }
+  if (const auto seed = json.find("seed"); seed != json.end() && !seed->is_null()) {
+    r.seed = static_cast<int>(integerOf(*seed, "seed", -kIntMax, kIntMax));
+  }
+  r.repeat = static_cast<int>(integerOf(member(json, "repeat"), "repeat", 0, kIntMax));
+  r.method = stringOf(json, "method");
+  r.status = stringOf(json, "status");
+  if (std::find(kBatchStatuses.begin(), kBatchStatuses.end(), r.status) == kBatchStatuses.end()) {
+    badMember("status", member(json, "status"), "a batch status (planned, no_path, …, error)");
+  }
+  r.reason = stringOf(json, "reason");
   for (std::size_t m = 0; m < kBatchMetrics.size(); ++m) {
     const auto v = json.find(kBatchMetrics[m]);
-    if (v != json.end() && !v->is_null()) r.metrics[m] = v->get<double>();
+    if (v == json.end() || v->is_null()) continue;
+    if (!v->is_number()) badMember(kBatchMetrics[m], *v, "a number or null");
+    r.metrics[m] = v->get<double>();
   }
-  r.map_reused = json.at("map_reused").get<bool>();
+  const Json& reused = member(json, "map_reused");
+  if (!reused.is_boolean()) badMember("map_reused", reused, "true or false");
+  r.map_reused = reused.get<bool>();
   return r;
 }
 
@@ -174,16 +225,30 @@ void RowSink::append(const BatchRow& row) {
 }  // namespace detail
 
 std::vector<BatchRow> readBatchRows(const fs::path& jsonl) {
-  std::vector<BatchRow> rows;
   std::ifstream in(jsonl, std::ios::binary);
+  if (!in) throw InputError(fmt::format("{}: cannot be read", jsonl.string()));
+  std::vector<BatchRow> rows;
   std::string line;
-  while (std::getline(in, line)) {
-    if (line.empty() || line.back() != '}') continue;  // torn by an interruption
+  for (std::size_t number = 1; std::getline(in, line); ++number) {
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    // A kill while a row is appended leaves it without its '\n' (and its end): skipped. Any
+    // other line that is not a row means the file is not a batch's, and a report of it would
+    // silently leave cases out.
+    const bool torn = in.eof() && line.front() == '{';
+    std::string what;
     try {
       rows.push_back(detail::rowOf(Json::parse(line)));
-    } catch (const Json::exception&) {
       continue;
+    } catch (const Json::parse_error& e) {
+      if (torn) break;
+      what = fmt::format("not JSON (a syntax error at byte {}): expected a JSON object", e.byte);
+    } catch (const detail::BadRow& e) {
+      what = e.what();
     }
+    throw InputError(fmt::format(
+        "{}:{}: {}; each line is a row as `scanplan batch` writes it (an object with case_id, "
+        "index, job, params, seed, repeat, method, status, reason, the metrics, map_reused)",
+        jsonl.string(), number, what));
   }
   return rows;
 }

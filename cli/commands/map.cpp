@@ -98,8 +98,13 @@ MapRun computeMap(const JobSpec& job,
   Progress progress("map");
   const auto start = std::chrono::steady_clock::now();
   MapRun run;
-  run.map = planner::buildConfigMap(scene, constraintSettings(job), path, request,
-                                    [&progress](std::size_t d, std::size_t t) { progress(d, t); });
+  try {
+    run.map =
+        planner::buildConfigMap(scene, constraintSettings(job), path, request,
+                                [&progress](std::size_t d, std::size_t t) { progress(d, t); });
+  } catch (const InputError& e) {  // the map's size, over map.memory_limit_mb
+    throw InputError(job.source.string() + ": " + e.what());
+  }
   run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return run;
 }

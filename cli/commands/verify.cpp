@@ -36,6 +36,17 @@ kinematics::Trajectory loadTrajectory(const std::filesystem::path& file) {
   return t;
 }
 
+// `run` (a stage on the trajectory) with its input errors naming the trajectory file: what
+// those stages refuse is the trajectory's size (its duration at the frame rate, its motion).
+template <class Run>
+auto onTrajectory(const std::filesystem::path& file, const Run& run) {
+  try {
+    return run();
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("{}: {}", file.string(), e.what()));
+  }
+}
+
 }  // namespace
 
 ExitCode runValidate(const VerifyOptions& options) {
@@ -43,8 +54,9 @@ ExitCode runValidate(const VerifyOptions& options) {
   const kinematics::CellModel cell = buildCell(job);
   const kinematics::Trajectory trajectory = loadTrajectory(options.trajectory_file);
   const collision::Scene scene(cell, clearanceConfig(job));
-  const planner::ValidationReport report =
-      planner::validateTrajectory(scene, trajectory, validationSettings(job));
+  const planner::ValidationReport report = onTrajectory(options.trajectory_file, [&] {
+    return planner::validateTrajectory(scene, trajectory, validationSettings(job));
+  });
   const std::string json = jsonDocument({{"format", "scanplan validation report 1"},
                                          {"job", job.name},
                                          {"job_hash", jobHash(job)},
@@ -70,8 +82,10 @@ ExitCode runSimulate(const VerifyOptions& options) {
   const kinematics::LoadedMesh part = loadPart(job, cell);
   const kinematics::Trajectory trajectory = loadTrajectory(options.trajectory_file);
   OutputStage stage(options.out_dir, {"cloud.ply", "coverage.ply", "cloud.png", "simulation.json"});
-  const pipeline::SimulationRun run = pipeline::simulateTrajectory(
-      cell, part.mesh, laserOptics(job), simulationSettings(job, cell), trajectory);
+  const pipeline::SimulationRun run = onTrajectory(options.trajectory_file, [&] {
+    return pipeline::simulateTrajectory(cell, part.mesh, laserOptics(job),
+                                        simulationSettings(job, cell), trajectory);
+  });
   writeSimulationOutputs(stage.dir(), job, part.mesh, run);
   const Json json = {{"format", "scanplan simulation report 1"},
                      {"job", job.name},

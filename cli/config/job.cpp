@@ -666,16 +666,35 @@ namespace {
 
 // The job's part placed on the table (kinematics::placedOnTable); errors name the job file.
 Eigen::Isometry3d placedPart(const JobSpec& job, const kinematics::PartModel& part) {
+  return kinematics::placedOnTable(loadPartMesh(job, part).mesh, toIsometry(job.part.pose));
+}
+
+// A part larger than any length a job may hold (lengths within ±1e6 mm, the reader's bound)
+// cannot be scanned in any cell; refused here, at load, its probes and maps would otherwise
+// grow with it before anything said why.
+constexpr double kMaxPartSizeMm = 1e6;
+
+void checkPartSize(const JobSpec& job, const kinematics::TriangleMesh& mesh) {
+  const double size_mm = toMm(mesh.bounds().sizes().maxCoeff());
+  if (size_mm <= kMaxPartSizeMm) return;
+  throw InputError(fmt::format(
+      "{}: part.scale: {}: the part is {:.6g} mm across (part.units {} × part.scale): expected "
+      "a part at most {:.0f} mm across; check part.units and part.scale",
+      job.source.string(), formatNumber(job.part.scale), size_mm, job.part.units, kMaxPartSizeMm));
+}
+
+}  // namespace
+
+kinematics::LoadedMesh loadPartMesh(const JobSpec& job, const kinematics::PartModel& part) {
   kinematics::LoadedMesh mesh;
   try {
     mesh = kinematics::loadMesh(part.mesh.path, part.mesh.options);
   } catch (const InputError& e) {
     throw InputError(fmt::format("{}: part.mesh: {}", job.source.string(), e.what()));
   }
-  return kinematics::placedOnTable(mesh.mesh, toIsometry(job.part.pose));
+  checkPartSize(job, mesh.mesh);
+  return mesh;
 }
-
-}  // namespace
 
 kinematics::CellModel buildCell(const JobSpec& job) {
   const std::string robot_source =

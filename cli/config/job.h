@@ -10,6 +10,7 @@
 #include "cli/config/spec.h"
 #include "collision/scene.h"
 #include "kinematics/cell.h"
+#include "kinematics/mesh.h"
 #include "planner/constraints.h"
 #include "planner/objective.h"
 #include "scanner/laser_model.h"
@@ -279,6 +280,10 @@ std::string jobToYaml(const JobSpec& job);
 /// A stable identity of the job's content: a hash of the resolved job with file paths as
 /// written (so it does not depend on where the files live), hex.
 std::string jobHash(const JobSpec& job);
+/// The part's mesh as the job loads it (units, scale, up axis): errors name the job file and
+/// `part.mesh`; a part more than 1 000 000 mm across (lengths' bound) is refused naming
+/// `part.scale`, the size and the limit.
+kinematics::LoadedMesh loadPartMesh(const JobSpec& job, const kinematics::PartModel& part);
 /// Builds the cell model: robot kinematics (OPW checked against DH), table, part, scanner,
 /// obstacles.
 kinematics::CellModel buildCell(const JobSpec& job);

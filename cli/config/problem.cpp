@@ -48,12 +48,7 @@ void checkOnTable(const JobSpec& job,
 }  // namespace
 
 kinematics::LoadedMesh loadPart(const JobSpec& job, const kinematics::CellModel& cell) {
-  kinematics::LoadedMesh part;
-  try {
-    part = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
-  } catch (const InputError& e) {
-    throw InputError(fmt::format("{}: part.mesh: {}", job.source.string(), e.what()));
-  }
+  kinematics::LoadedMesh part = loadPartMesh(job, cell.part);
   for (const std::string& w : part.report.warnings) {
     spdlog::warn("{}: part.mesh: {}", job.source.filename().string(), w);
   }

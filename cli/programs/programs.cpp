@@ -490,6 +490,10 @@ class VplusReader {
     s.scanning = m[3].str() == "1";
     s.f = std::numeric_limits<double>::quiet_NaN();
     if (!std::isfinite(s.t) || !std::isfinite(s.theta)) fail("step comment: non-finite value");
+    if (std::abs(s.theta) > kinematics::kMaxTrajectoryAngleDeg * kDegToRad) {
+      fail(fmt::format("step comment: table={} deg: expected an angle within ±{} deg",
+                       clipForMessage(m[2].str()), kinematics::kMaxTrajectoryAngleDeg));
+    }
     if (!trajectory_.samples.empty() && !(s.t > trajectory_.samples.back().t)) {
       fail("t=" + m[1].str() + " s is not after the previous step's " +
            fixed(trajectory_.samples.back().t, kDecimals) +
@@ -561,6 +565,10 @@ class VplusReader {
       if (!parseNumber(values[static_cast<std::size_t>(j)], v)) {
         fail("'" + clipForMessage(line) + "': joint " + std::to_string(j + 1) + " '" +
              trim(values[static_cast<std::size_t>(j)]) + "' is not a finite number");
+      }
+      if (std::abs(v) > kinematics::kMaxTrajectoryAngleDeg) {
+        fail(fmt::format("joint {} {} deg: expected an angle within ±{} deg", j + 1, v,
+                         kinematics::kMaxTrajectoryAngleDeg));
       }
       pending_->q(j) = v * kDegToRad;
     }

@@ -101,9 +101,7 @@ std::vector<Case> issueJobCases() {
   set("raster_lead_huge", "path", "scan.paths=[{type: raster, view: [0, 0, -1], lead_mm: 900000}]",
       "scan.paths[0]");
   set("part_scale_1e7", "path", "part.scale=1e7", "part.scale");
-  cases.back().xfail = "TODO: a part beyond the length limit is refused only by the ring probe";
   set("part_scale_1e7_plan", "plan", "part.scale=1e7", "part.scale");
-  cases.back().xfail = cases[cases.size() - 2].xfail;
   // A mesh in mm declared m: 100 m across; accepted with a warning, then no path (exit 3).
   set("part_units_m", "path", "part.units=m", "part.units");
   cases.back().exits = {0, 3, 4};
@@ -126,7 +124,6 @@ std::vector<Case> issueFileCases() {
       meshCase("off_2pow31_vertices", text("m.off", "OFF\n2147483648 1 0\n0 0 0\n3 0 1 2\n")));
   cases.push_back(meshCase("off_face_index_out_of_range",
                            text("m.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n")));
-  cases.back().xfail = "TODO: the bad face is dropped; the error names the ring, not m.off";
   cases.push_back(meshCase("off_negative_face_index",
                            text("m.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n")));
   cases.push_back(meshCase("ply_header_only", text("m.ply", kPlyHeader)));
@@ -175,11 +172,9 @@ std::vector<Case> issueTrajectoryCases() {
   cases.push_back(trajectoryCase(
       "trajectory_time_100000s",
       transformed("t.csv", kTrajectory, [](std::string s) { return lastTime(s, "100000"); })));
-  cases.back().xfail = "TODO: the pose-count estimate does not name the trajectory file";
   cases.push_back(trajectoryCase(
       "trajectory_time_1e300",
       transformed("t.csv", kTrajectory, [](std::string s) { return lastTime(s, "1e300"); })));
-  cases.back().xfail = "TODO: the pose-count estimate does not name the trajectory file";
   cases.push_back(trajectoryCase("trajectory_fifo", fifo("t.csv")));
   cases.push_back(trajectoryCase("trajectory_dev_zero", symlinkTo("t.csv", "/dev/zero")));
   cases.push_back(trajectoryCase("trajectory_folder", folder("t.csv")));

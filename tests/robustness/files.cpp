@@ -128,7 +128,6 @@ std::vector<Case> meshFileCases() {
   cases.push_back(meshFileCase("off_garbage", garbage("m.off", 5000)));
   cases.push_back(meshFileCase("ply_truncated_body",
                                text("m.ply", plyText().substr(0, plyText().size() - 20))));
-  cases.back().xfail = "TODO: an ASCII PLY with fewer faces than its header says is accepted";
   cases.push_back(meshFileCase(
       "ply_endless_header", text("m.ply", "ply\nformat ascii 1.0\n" + std::string(200000, 'c'))));
   cases.push_back(meshFileCase("ply_garbage", garbage("m.ply", 5000)));
@@ -150,7 +149,6 @@ std::vector<Case> trajectoryFileCases() {
   csv("csv_nan_joint", [](std::string s) { return trajectoryCell(s, 2, "nan"); });
   csv("csv_inf_table", [](std::string s) { return trajectoryCell(s, 1, "inf"); });
   csv("csv_huge_joint", [](std::string s) { return trajectoryCell(s, 3, "1e300"); });
-  cases.back().xfail = "TODO: validation's collision refinement runs out of memory (bad_alloc)";
   csv("csv_text_joint", [](std::string s) { return trajectoryCell(s, 4, "abc"); });
   csv("csv_time_backwards", [](std::string s) { return trajectoryCell(s, 0, "-5"); });
   csv("csv_missing_column", [](std::string s) { return trajectoryCell(s, 5, ""); });
@@ -204,11 +202,9 @@ std::vector<Case> sweepFileCases() {
                          .names = {"r"}});
   };
   report("batch_report_garbage", garbage("r/results.jsonl", 3000));
-  cases.back().xfail = "TODO: batch report drops unreadable rows silently (exit 0)";
   report("batch_report_empty", text("r/results.jsonl", ""));
   cases.back().exits = {0, 4};  // no rows yet: an empty report
   report("batch_report_bad_row", text("r/results.jsonl", "{\"case_id\": 5, \"J_s\": \"x\"}\n"));
-  cases.back().xfail = "TODO: batch report accepts a row of the wrong types (exit 0)";
   report("batch_report_fifo", fifo("r/results.jsonl"));
   report("batch_report_no_results", text("r/other.txt", ""));
   cases.push_back(Case{.name = "batch_merge_garbage",
@@ -217,8 +213,7 @@ std::vector<Case> sweepFileCases() {
                        .files = {folder("a"), folder("b"), garbage("a/results.jsonl", 3000),
                                  text("b/results.jsonl", "{}\n")},
                        .names = {"results.jsonl"},
-                       .out = OutState::kExisting,
-                       .xfail = "TODO: batch merge drops unreadable rows silently (exit 0)"});
+                       .out = OutState::kExisting});
   return cases;
 }
 
