@@ -23,29 +23,29 @@ inline double processCpuSeconds() {
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
-/// The smallest thread CPU time of `runs` calls of `f` (the run least disturbed by the rest of
-/// the machine: caches, frequency, interrupts), seconds.
-template <class F>
-double bestThreadCpuSeconds(int runs, F&& f) {
+/// The smallest time by `clock` (seconds) of `runs` calls of `f`: the run least disturbed by the
+/// rest of the machine (caches, frequency, interrupts).
+template <class Clock, class F>
+double bestOf(int runs, Clock clock, F&& f) {
   double best = std::numeric_limits<double>::infinity();
   for (int r = 0; r < runs; ++r) {
-    const double start = threadCpuSeconds();
+    const double start = clock();
     f();
-    best = std::min(best, threadCpuSeconds() - start);
+    best = std::min(best, clock() - start);
   }
   return best;
+}
+
+/// The smallest thread CPU time of `runs` calls of `f`, seconds.
+template <class F>
+double bestThreadCpuSeconds(int runs, F&& f) {
+  return bestOf(runs, threadCpuSeconds, f);
 }
 
 /// The same with the process's CPU time, for work spread over threads.
 template <class F>
 double bestProcessCpuSeconds(int runs, F&& f) {
-  double best = std::numeric_limits<double>::infinity();
-  for (int r = 0; r < runs; ++r) {
-    const double start = processCpuSeconds();
-    f();
-    best = std::min(best, processCpuSeconds() - start);
-  }
-  return best;
+  return bestOf(runs, processCpuSeconds, f);
 }
 
 }  // namespace scanplan::bench
