@@ -12,6 +12,13 @@
 
 namespace scanplan::robustness {
 
+// The fixtures the cases read ("@fix/…": built once by the fixture test; "@src/…": the tree).
+inline const std::string kLight = "@fix/light.yaml";
+inline const std::string kTrajectory = "@fix/plan/trajectory.csv";
+inline const std::string kProgram = "@fix/plan/programs/scan.v2";
+inline const std::string kStl = "@src/data/parts/demo_housing.stl";
+inline const std::string kRobot = "@src/data/robots/viper_s650.yaml";
+
 /// "@src/x" → the repository's x, "@fix/x" → fixtureDir()/x; anything else as it is.
 std::string expand(const std::string& text);
 

@@ -10,11 +10,6 @@
 namespace scanplan::robustness {
 namespace {
 
-const std::string kLight = "@fix/light.yaml";
-const std::string kTrajectory = "@fix/plan/trajectory.csv";
-const std::string kProgram = "@fix/plan/programs/scan.v2";
-const std::string kStl = "@src/data/parts/demo_housing.stl";
-const std::string kRobot = "@src/data/robots/viper_s650.yaml";
 
 // A YAML alias bomb ("billion laughs"): 9 levels of 9 aliases, 9^9 nodes when expanded.
 std::string aliasBomb() {

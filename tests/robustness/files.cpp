@@ -7,11 +7,6 @@
 namespace scanplan::robustness {
 namespace {
 
-const std::string kLight = "@fix/light.yaml";
-const std::string kTrajectory = "@fix/plan/trajectory.csv";
-const std::string kProgram = "@fix/plan/programs/scan.v2";
-const std::string kStl = "@src/data/parts/demo_housing.stl";
-const std::string kRobot = "@src/data/robots/viper_s650.yaml";
 
 // Every command that reads a job, the job being `job` (and OUT "out" where there is one).
 std::vector<std::pair<std::string, std::vector<std::string>>> jobCommands(const std::string& job) {

@@ -8,9 +8,6 @@
 namespace scanplan::robustness {
 namespace {
 
-const std::string kLight = "@fix/light.yaml";
-const std::string kTrajectory = "@fix/plan/trajectory.csv";
-const std::string kRobot = "@src/data/robots/viper_s650.yaml";
 const std::string kJoints = "--joints=0,-90,180,0,90,0";
 
 // Odd names that are fine: `job show` of the light demo copied there succeeds.
