@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <vector>
 
 namespace scanplan::kinematics {
@@ -25,6 +26,45 @@ PartExtent partExtent(const TriangleMesh& mesh, const Eigen::Isometry3d& X_RP) {
     e.widest = std::max(e.widest, p_R.head<2>().norm());
   }
   return e;
+}
+
+namespace {
+
+// Distance of p (robot base frame) from the circle the shoulder sweeps about J1.
+double fromShoulderCircle(const OpwParameters& opw, const Eigen::Vector3d& p) {
+  const double radial = p.head<2>().norm() - std::abs(opw.a1);
+  return std::hypot(radial, p.z() - opw.c1);
+}
+
+}  // namespace
+
+PartReach partReach(const CellModel& cell, const TriangleMesh& mesh, double lever) {
+  const OpwParameters& opw = cell.robot.definition().opw;
+  PartReach r;
+  r.arm_reach = opw.c2 + std::hypot(opw.a2, opw.c3) + std::abs(opw.b) + lever;
+  constexpr std::size_t kMaxVertices = 4096;
+  constexpr int kAngles = 180;  // every 2°
+  const std::size_t n = mesh.vertices.size();
+  const std::size_t stride = std::max<std::size_t>(1, (n + kMaxVertices - 1) / kMaxVertices);
+  std::vector<Eigen::Isometry3d> X_BR(kAngles);
+  for (int k = 0; k < kAngles; ++k) {
+    X_BR[static_cast<std::size_t>(k)] =
+        cell.X_WB.inverse() * cell.table.X_WR(2.0 * std::numbers::pi * k / kAngles) * cell.part.X_RP;
+  }
+  std::size_t sampled = 0, beyond = 0;
+  r.nearest_excess = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < n; i += stride, ++sampled) {
+    double best = std::numeric_limits<double>::infinity();
+    for (const Eigen::Isometry3d& X : X_BR) {
+      best = std::min(best, fromShoulderCircle(opw, X * mesh.vertices[i]));
+    }
+    const double excess = best - r.arm_reach;
+    r.nearest_excess = std::min(r.nearest_excess, excess);
+    if (excess > 0.0) ++beyond;
+  }
+  if (sampled == 0) r.nearest_excess = -r.arm_reach;
+  r.beyond_fraction = sampled ? static_cast<double>(beyond) / static_cast<double>(sampled) : 0.0;
+  return r;
 }
 
 Eigen::Vector3d solidCentroid(const TriangleMesh& mesh) {

@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 
+#include "kinematics/cell.h"
 #include "kinematics/mesh.h"
 
 namespace scanplan::kinematics {
@@ -19,6 +20,23 @@ struct PartExtent {
   double widest = 0.0;  ///< largest distance of a vertex from the table axis
 };
 PartExtent partExtent(const TriangleMesh& mesh, const Eigen::Isometry3d& X_RP);
+
+/// How much of the part placed in `cell` the arm could reach at some table angle.
+struct PartReach {
+  double beyond_fraction = 0.0;  ///< share of the (sampled) vertices beyond reach at every angle
+  /// The least, over the sampled vertices, of how far beyond reach they stay at their best
+  /// table angle, m: above 0, no vertex of the part is within reach.
+  double nearest_excess = 0.0;
+  double arm_reach = 0.0;  ///< the bound used: the arm's longest stretch plus `lever`, m
+};
+
+/// A necessary condition for reach. A scanned point lies within `lever` (m: wrist centre to
+/// flange, flange to laser, laser to the far end of its window) of the wrist centre, and the
+/// wrist centre within c2 + √(a2² + c3²) + |b| of the shoulder circle (radius |a1| at height c1
+/// about J1). A vertex beyond that sum at every table angle (every 2°) is beyond reach; one
+/// within it may still be out of reach (joint limits, orientation). At most 4 096 vertices are
+/// sampled, evenly by index.
+PartReach partReach(const CellModel& cell, const TriangleMesh& mesh, double lever);
 
 /// The centre of mass of the solid a closed, outward-wound mesh bounds (uniform density), in the
 /// mesh's frame, m: the volume-weighted centroids of the tetrahedra from the origin to each

@@ -127,6 +127,42 @@ TEST(PartPlacement, APartBelowTheTableTopIsAnErrorNamingThePose) {
       {"demo_rings.yaml", "part.pose", "5.00 mm below the table top", "part.place: table"}));
 }
 
+TEST(PartPlacement, APartBeyondTheArmsReachIsAnErrorNamingTheTable) {
+  const cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml",
+                                        {"table.axis.xyz_mm=[3000, 0, 0]"});
+  const kinematics::CellModel cell = cli::buildCell(job);
+  EXPECT_TRUE(test::throwsInputError([&] { cli::loadPart(job, cell); },
+                                     {"demo_rings.yaml", "beyond the arm's reach", "table.axis"}));
+}
+
+// partReach is a necessary condition: points the scanner can reach are never called beyond. Each
+// vertex here lies within `lever` of the wrist centre of an in-limit pose with the table at 0,
+// since the flange is c4 from the wrist centre; so none may be reported beyond reach.
+TEST(PartPlacement, PartReachNeverCallsAReachablePointBeyond) {
+  const cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml");
+  kinematics::CellModel cell = cli::buildCell(job);
+  cell.part.X_RP = Eigen::Isometry3d::Identity();
+  const double c4 = cell.robot.definition().opw.c4, lever = 0.2;
+  const Eigen::Isometry3d X_RB = cell.table.X_WR(0.0).inverse() * cell.X_WB;
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  kinematics::TriangleMesh mesh;
+  for (int k = 0; k < 3000; ++k) {
+    const Eigen::Vector3d flange = cell.robot.fk(test::randomJoints(cell.robot, rng)).translation();
+    Eigen::Vector3d dir(unit(rng), unit(rng), unit(rng));
+    dir.normalize();
+    mesh.vertices.push_back(X_RB * (flange + (lever - c4) * std::abs(unit(rng)) * dir));
+  }
+  const kinematics::PartReach reach = kinematics::partReach(cell, mesh, lever);
+  EXPECT_EQ(reach.beyond_fraction, 0.0);
+  EXPECT_LE(reach.nearest_excess, 0.0);
+  // The same cloud 3 m further along the world x axis: all of it beyond, by over a metre.
+  for (Eigen::Vector3d& v : mesh.vertices) v = X_RB * (X_RB.inverse() * v + Eigen::Vector3d(3, 0, 0));
+  const kinematics::PartReach far = kinematics::partReach(cell, mesh, lever);
+  EXPECT_EQ(far.beyond_fraction, 1.0);
+  EXPECT_GT(far.nearest_excess, 0.0);
+}
+
 // Placed, ring heights count from the table top: a part lifted 40 mm (a riser) with rings at
 // 75 and 145 mm scans exactly where the part on the table with rings at 35 and 105 mm does.
 TEST(PartPlacement, PlacedRingHeightsCountFromTheTableTop) {

@@ -1,6 +1,7 @@
 #include "cli/config/problem.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <variant>
@@ -23,6 +24,29 @@ scanner::CameraRule cameraRule(const std::string& name) {
   return scanner::CameraRule::kPositive;
 }
 
+// The arm can reach the part at some table angle: an error when none of it is within reach, a
+// warning when some of it is not (kinematics::partReach is a necessary condition only).
+void checkInReach(const JobSpec& job,
+                  const kinematics::CellModel& cell,
+                  const kinematics::TriangleMesh& mesh) {
+  const scanner::LaserWindow window = scanner::laserWindow(laserOptics(job));
+  const double lever = cell.robot.definition().opw.c4 + cell.scanner.X_FS.translation().norm() +
+                       std::hypot(window.z_max, window.y_far);
+  const kinematics::PartReach reach = kinematics::partReach(cell, mesh, lever);
+  if (reach.nearest_excess > 0.0) {
+    throw InputError(fmt::format(
+        "{}: part: the part is beyond the arm's reach at every table angle: its nearest point "
+        "stays {:.0f} mm beyond the {:.0f} mm the arm, the scanner and its depth window can "
+        "stretch from the shoulder; expected the table (table.axis) within reach of the robot",
+        job.source.string(), toMm(reach.nearest_excess), toMm(reach.arm_reach)));
+  }
+  if (reach.beyond_fraction > 0.0) {
+    spdlog::warn("{}: part: {:.1f} % of the part's vertices are beyond the arm's reach at every "
+                 "table angle; they cannot be scanned",
+                 job.source.filename().string(), 100.0 * reach.beyond_fraction);
+  }
+}
+
 // The part on the table top: none of it below (beyond a rounding hair), and a warning when it
 // overhangs the table.
 void checkOnTable(const JobSpec& job,
@@ -43,6 +67,7 @@ void checkOnTable(const JobSpec& job,
         "radius of {:.1f} mm",
         job.source.filename().string(), toMm(widest), toMm(cell.table.radius));
   }
+  checkInReach(job, cell, mesh);
 }
 
 }  // namespace
