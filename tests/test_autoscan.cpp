@@ -312,8 +312,13 @@ TEST(AutoScan, OversizedWorkIsRefusedBeforeItStarts) {
   EXPECT_NE(error("data/jobs/demo_rings.yaml", {"scan.paths[3].lead_mm=1e6"})
                 .find("scan.paths[3]: the raster would probe"),
             std::string::npos);
-  EXPECT_NE(error("data/jobs/demo.yaml", {"part.units=m"}).find("too large to scan"),
+  // 20× the housing: partly within reach, but 5 m across.
+  EXPECT_NE(error("data/jobs/demo.yaml", {"part.scale=20"}).find("too large to scan"),
             std::string::npos);
+  // A mesh in mm read as m: nowhere near the arm, and the message says what to check.
+  const std::string mm_as_m = error("data/jobs/demo.yaml", {"part.units=m"});
+  EXPECT_NE(mm_as_m.find("within the arm's reach"), std::string::npos) << mm_as_m;
+  EXPECT_NE(mm_as_m.find("part.units"), std::string::npos) << mm_as_m;
 }
 
 }  // namespace

@@ -35,10 +35,12 @@ void checkInReach(const JobSpec& job,
   const kinematics::PartReach reach = kinematics::partReach(cell, mesh, lever);
   if (reach.nearest_excess > 0.0) {
     throw InputError(fmt::format(
-        "{}: part: the part is beyond the arm's reach at every table angle: its nearest point "
-        "stays {:.0f} mm beyond the {:.0f} mm the arm, the scanner and its depth window can "
-        "stretch from the shoulder; expected the table (table.axis) within reach of the robot",
-        job.source.string(), toMm(reach.nearest_excess), toMm(reach.arm_reach)));
+        "{}: part: no point of the part ({:.0f} mm across) is within the arm's reach at any "
+        "table angle: the nearest stays {:.0f} mm beyond the {:.0f} mm the arm, the scanner "
+        "and its depth window can stretch from the shoulder; expected the table (table.axis) "
+        "within reach of the robot and the part's size as meant (part.units, part.scale)",
+        job.source.string(), toMm(mesh.bounds().diagonal().norm()), toMm(reach.nearest_excess),
+        toMm(reach.arm_reach)));
   }
   if (reach.beyond_fraction > 0.0) {
     spdlog::warn("{}: part: {:.1f} % of the part's vertices are beyond the arm's reach at every "
