@@ -10,40 +10,52 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+}  // namespace
+
+namespace detail {
+
 // Minimum over the shape pairs of two bodies. Bounded: each shape pair is asked only for
 // distances below the best found so far (initially d_high), and a bounding-sphere test skips
 // shape pairs that cannot come closer than that.
-detail::ShapeDistance bodyDistance(const detail::BodyGeometry& a,
+ShapeDistance bodyDistance(const BodyGeometry& a,
                                    const Eigen::Isometry3d& X_Wa,
-                                   const detail::BodyGeometry& b,
+                                   const BodyGeometry& b,
                                    const Eigen::Isometry3d& X_Wb,
                                    double bound,
                                    bool exact,
-                                   bool witness) {
-  detail::ShapeDistance best;
+                                   bool witness,
+                                   bool closed_forms) {
+  ShapeDistance best;
   best.distance = bound;
   best.beyond = true;
-  for (const detail::CollisionShape& sa : a.shapes) {
+  double lower = kInf;  // over the shape pairs found beyond
+  for (const CollisionShape& sa : a.shapes) {
     const Eigen::Isometry3d X_Wsa = X_Wa * sa.X_BG;
-    for (const detail::CollisionShape& sb : b.shapes) {
+    for (const CollisionShape& sb : b.shapes) {
       const Eigen::Isometry3d X_Wsb = X_Wb * sb.X_BG;
       if (exact) {
-        const detail::ShapeDistance d = detail::exactShapeDistance(sa, X_Wsa, sb, X_Wsb);
+        const ShapeDistance d = exactShapeDistance(sa, X_Wsa, sb, X_Wsb);
         if (best.beyond || d.distance < best.distance) best = d;
         continue;
       }
       const double centres = (X_Wsa * sa.centre_G - X_Wsb * sb.centre_G).norm();
-      if (centres - sa.radius - sb.radius >= best.distance) continue;  // broad phase
-      const detail::ShapeDistance d =
-          detail::shapeDistance(sa, X_Wsa, sb, X_Wsb, best.distance, witness);
+      const double spheres = centres - sa.radius - sb.radius;
+      if (spheres >= best.distance) {  // broad phase
+        lower = std::min(lower, spheres);
+        continue;
+      }
+      const ShapeDistance d =
+          shapeDistance(sa, X_Wsa, sb, X_Wsb, best.distance, witness, closed_forms);
+      if (d.beyond) lower = std::min(lower, d.lower);
       if (!d.beyond) best = d;
       if (best.penetrating) return best;
     }
   }
+  best.lower = best.beyond ? std::max(bound, lower) : best.distance;
   return best;
 }
 
-}  // namespace
+}  // namespace detail
 
 ClearanceResult ClearanceEvaluator::evaluate(double theta,
                                              const kinematics::JointVector& q,
@@ -57,9 +69,10 @@ ClearanceResult ClearanceEvaluator::evaluate(double theta,
   for (std::size_t i = 0; i < scene.pairs().size(); ++i) {
     const PairInfo& pair = scene.pairs()[i];
     const auto a = static_cast<std::size_t>(pair.a), b = static_cast<std::size_t>(pair.b);
-    const detail::ShapeDistance d = bodyDistance(bodies[a], X_W_[a], bodies[b], X_W_[b],
+    const detail::ShapeDistance d = detail::bodyDistance(bodies[a], X_W_[a], bodies[b], X_W_[b],
                                                  request.bounded ? pair.thresholds.d_high : kInf,
-                                                 !request.bounded, request.witness_points);
+                                                 !request.bounded, request.witness_points,
+                                                 closed_forms_);
     PairClearance& out = result.pairs[i];
     out.distance = d.distance;
     out.beyond_bound = d.beyond;
@@ -90,8 +103,8 @@ double ClearanceEvaluator::factor(double theta, const kinematics::JointVector& q
   double f = 1.0;
   for (const PairInfo& pair : scene.pairs()) {
     const auto a = static_cast<std::size_t>(pair.a), b = static_cast<std::size_t>(pair.b);
-    const detail::ShapeDistance d =
-        bodyDistance(bodies[a], X_W_[a], bodies[b], X_W_[b], pair.thresholds.d_high, false, false);
+    const detail::ShapeDistance d = detail::bodyDistance(
+        bodies[a], X_W_[a], bodies[b], X_W_[b], pair.thresholds.d_high, false, false, closed_forms_);
     if (d.beyond) continue;
     f *= rampFactor(d.distance, pair.thresholds.d_low, pair.thresholds.d_high,
                     pair.thresholds.gamma);

@@ -36,7 +36,10 @@ struct ClearanceResult {
 /// per thread; the Scene is shared.
 class ClearanceEvaluator {
  public:
-  explicit ClearanceEvaluator(const Scene& scene) : scene_(&scene) {}
+  /// `closed_forms` false: FCL alone, as before collision/primitive_distance (the map
+  /// benchmark's old path).
+  explicit ClearanceEvaluator(const Scene& scene, bool closed_forms = true)
+      : scene_(&scene), closed_forms_(closed_forms) {}
 
   ClearanceResult evaluate(double theta,
                            const kinematics::JointVector& q,
@@ -48,6 +51,7 @@ class ClearanceEvaluator {
 
  private:
   const Scene* scene_;
+  bool closed_forms_ = true;
   std::vector<Eigen::Isometry3d> X_W_;
 };
 

@@ -54,6 +54,7 @@ ShapeDistance finish(
   } else {
     out.distance = d;
   }
+  out.lower = out.distance;
   if (witness) {  // FCL leaves nearest points uninitialised unless they were asked for
     out.p_a = pa;
     out.p_b = pb;
@@ -376,6 +377,53 @@ kinematics::TriangleMesh boxSurface(const Eigen::Vector3d& size) {
   return mesh;
 }
 
+Primitive capsuleLike(Primitive::Kind kind, double radius, double length) {
+  return Primitive{kind, Eigen::Isometry3d::Identity(),
+                   Eigen::Vector3d(radius, radius, 0.5 * length)};
+}
+
+// The closed forms first (collision/primitive_distance): a pair they put at or beyond `bound`
+// is answered without FCL. Nearer pairs still go to FCL's GJK, so every distance below the
+// bound is FCL's number, as the exact reference computes it.
+// The shape as a primitive at its world pose: itself, or a mesh's bounding box.
+Primitive placed(const CollisionShape& shape, const Eigen::Isometry3d& X_W) {
+  Primitive p = shape.primitive ? *shape.primitive : *shape.bounding_box;
+  p.X_W = X_W * p.X_W;
+  return p;
+}
+
+// The closed forms first (collision/primitive_distance), on the primitives themselves or a
+// mesh's bounding box. A pair they put at or beyond `bound` is answered without FCL; so is a
+// nearer pair of primitives with an exact closed form. Otherwise FCL measures. (FCL 0.7's
+// libccd GJK is not only inexact, 1e-6 m, but on some capsule–cylinder poses wrong by
+// centimetres: test_primitive_distance keeps one such pose.)
+std::optional<ShapeDistance> closedForm(const CollisionShape& a,
+                                        const Eigen::Isometry3d& X_Wa,
+                                        const CollisionShape& b,
+                                        const Eigen::Isometry3d& X_Wb,
+                                        double bound,
+                                        bool witness) {
+  if (!(a.primitive || a.bounding_box) || !(b.primitive || b.bounding_box)) return std::nullopt;
+  const Primitive pa = placed(a, X_Wa), pb = placed(b, X_Wb);
+  double lower = quickLowerBound(pa, pb);
+  // Two boxes (a mesh's included) stop at the gap: the exact form costs ten times as much.
+  const bool boxes = pa.kind == Primitive::Kind::kBox && pb.kind == Primitive::Kind::kBox;
+  const bool primitives = a.primitive && b.primitive;
+  if (lower < bound && (!boxes || primitives)) {
+    const PrimitiveDistance d = primitiveDistance(pa, pb);
+    if (d.exact && primitives && d.distance < bound) {
+      return finish(d.distance, bound, witness, d.p_a, d.p_b);
+    }
+    lower = std::max(lower, d.distance);
+  }
+  if (lower < bound) return std::nullopt;
+  ShapeDistance beyond;
+  beyond.distance = bound;
+  beyond.beyond = true;
+  beyond.lower = lower;
+  return beyond;
+}
+
 }  // namespace
 
 std::shared_ptr<MeshModel> makeMeshModel(const kinematics::TriangleMesh& mesh) {
@@ -400,6 +448,7 @@ CollisionShape makeCollisionShape(const kinematics::Shape& shape) {
   struct Builder {
     CollisionShape& out;
     void operator()(const kinematics::Box& b) const {
+      out.primitive = Primitive{Primitive::Kind::kBox, Eigen::Isometry3d::Identity(), 0.5 * b.size};
       out.geometry = std::make_shared<fcl::Boxd>(b.size);
       out.radius = 0.5 * b.size.norm();
       out.polyhedron = makeMeshModel(boxSurface(b.size));
@@ -409,14 +458,17 @@ CollisionShape makeCollisionShape(const kinematics::Shape& shape) {
       // nearest points (the path every mesh–sphere query takes) leaves the distance unset when
       // the sphere overlaps the triangle, so a penetrating sphere reads as an arbitrary number.
       // Capsule–triangle goes through GJK, which reports overlap correctly.
+      out.primitive = capsuleLike(Primitive::Kind::kCapsule, s.radius, 0.0);
       out.geometry = std::make_shared<fcl::Capsuled>(s.radius, 0.0);
       out.radius = s.radius;
     }
     void operator()(const kinematics::Cylinder& c) const {
+      out.primitive = capsuleLike(Primitive::Kind::kCylinder, c.radius, c.length);
       out.geometry = std::make_shared<fcl::Cylinderd>(c.radius, c.length);
       out.radius = std::hypot(c.radius, 0.5 * c.length);
     }
     void operator()(const kinematics::Capsule& c) const {
+      out.primitive = capsuleLike(Primitive::Kind::kCapsule, c.radius, c.length);
       out.geometry = std::make_shared<fcl::Capsuled>(c.radius, c.length);
       out.radius = c.radius + 0.5 * c.length;
     }
@@ -428,6 +480,9 @@ CollisionShape makeCollisionShape(const kinematics::Shape& shape) {
       for (const Eigen::Vector3d& v : loaded.mesh.vertices)
         r = std::max(r, (v - out.centre_G).norm());
       out.radius = r;
+      out.bounding_box = Primitive{Primitive::Kind::kBox, Eigen::Isometry3d::Identity(),
+                                   0.5 * box.sizes()};
+      out.bounding_box->X_W.translation() = box.center();
       out.triangles = loaded.mesh.triangles.size();
       out.geometry = makeMeshModel(loaded.mesh);
     }
@@ -441,7 +496,11 @@ ShapeDistance shapeDistance(const CollisionShape& a,
                             const CollisionShape& b,
                             const Eigen::Isometry3d& X_Wb,
                             double bound,
-                            bool witness_points) {
+                            bool witness_points,
+                            bool closed_forms) {
+  if (closed_forms) {
+    if (auto d = closedForm(a, X_Wa, b, X_Wb, bound, witness_points)) return *d;
+  }
   const fcl::Transform3d X_a(X_Wa.matrix()), X_b(X_Wb.matrix());
   const bool mesh_a = isMesh(*a.geometry), mesh_b = isMesh(*b.geometry);
   if (mesh_b && a.geometry->getNodeType() == fcl::GEOM_BOX) {
@@ -479,6 +538,17 @@ ShapeDistance exactShapeDistance(const CollisionShape& a,
                                  const Eigen::Isometry3d& X_Wa,
                                  const CollisionShape& b,
                                  const Eigen::Isometry3d& X_Wb) {
+  // Primitive pairs with an exact closed form are measured by it here too: it is exact where
+  // FCL's GJK is not (see closedForm).
+  if (a.primitive && b.primitive) {
+    Primitive pa = *a.primitive, pb = *b.primitive;
+    pa.X_W = X_Wa * pa.X_W;
+    pb.X_W = X_Wb * pb.X_W;
+    const PrimitiveDistance d = primitiveDistance(pa, pb);
+    if (d.exact) {
+      return finish(d.distance, std::numeric_limits<double>::infinity(), true, d.p_a, d.p_b);
+    }
+  }
   // Against a mesh, a box is its polyhedron in both queries, so they compare like for like.
   const bool meshes = isMesh(*a.geometry) || isMesh(*b.geometry);
   const auto geometry = [meshes](const CollisionShape& s) -> const fcl::CollisionGeometryd* {

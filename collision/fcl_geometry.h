@@ -2,6 +2,7 @@
 // Internal to collision/: the FCL side of the scene. Nothing outside collision/ includes this.
 
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include <fcl/geometry/bvh/BVH_model.h>
@@ -12,6 +13,7 @@
 #include <fcl/math/bv/OBBRSS.h>
 #include <Eigen/Geometry>
 
+#include "collision/primitive_distance.h"
 #include "collision/scene.h"
 #include "kinematics/mesh.h"
 #include "kinematics/shape.h"
@@ -31,6 +33,12 @@ struct CollisionShape {
   Eigen::Vector3d centre_G = Eigen::Vector3d::Zero();      ///< bounding-sphere centre, shape frame
   double radius = 0.0;                                     ///< bounding-sphere radius, m
   std::size_t triangles = 0;
+  /// For the closed forms (collision/primitive_distance): the primitive's kind and half sizes,
+  /// its pose left at identity; absent for meshes.
+  std::optional<Primitive> primitive;
+  /// For meshes: their axis-aligned bounding box in the shape frame, as a box primitive whose
+  /// pose is the box centre: the closed forms against it bound the mesh's distance from below.
+  std::optional<Primitive> bounding_box;
 };
 
 struct BodyGeometry {
@@ -51,13 +59,20 @@ std::shared_ptr<MeshModel> makeMeshModel(const kinematics::TriangleMesh& mesh);
 /// Distance between two shapes at world poses, by FCL's traversal seeded with `bound` (a box
 /// against a mesh: scanplan's traversal of FCL's BVH in the box frame): anything at or beyond
 /// `bound` is reported as `bound` with `beyond` set; distances below it match plain
-/// fcl::distance within 1e-9 m. Returns 0 with `penetrating` set when the shapes touch (closer
+/// fcl::distance within 1e-9 m. The closed forms (collision/primitive_distance) come first: they
+/// settle pairs beyond the bound, and measure primitive pairs they have an exact form for
+/// (spheres, capsules, boxes, a capsule with a cylinder) when no witness points are asked
+/// for; those numbers are exact, where FCL's GJK stops within its 1e-6 m tolerance. Returns 0 with `penetrating` set when the shapes touch (closer
 /// than 1 pm) or overlap (for meshes: when surfaces cross; a solid wholly inside a mesh is not
 /// seen, and the witness points of penetrating pairs are arbitrary). Witness points (world) only
 /// when asked for, zero otherwise.
 struct ShapeDistance {
   double distance = 0.0;
   bool beyond = false;
+  /// A lower bound on the true distance: `distance` itself unless beyond; beyond, at least
+  /// `bound` (more when a closed form or the bounding box showed more). The configuration maps
+  /// carry it forward to skip later queries (motion-bound skipping).
+  double lower = 0.0;
   bool penetrating = false;
   Eigen::Vector3d p_a = Eigen::Vector3d::Zero();
   Eigen::Vector3d p_b = Eigen::Vector3d::Zero();
@@ -67,7 +82,20 @@ ShapeDistance shapeDistance(const CollisionShape& a,
                             const CollisionShape& b,
                             const Eigen::Isometry3d& X_Wb,
                             double bound,
-                            bool witness_points);
+                            bool witness_points,
+                            bool closed_forms = true);
+
+/// The least distance over the shape pairs of two bodies at their world poses, as
+/// shapeDistance reports it, below `bound`; a bounding-sphere broad phase skips shape pairs that
+/// cannot come closer. `exact`: plain fcl::distance on every shape pair instead (no bound).
+ShapeDistance bodyDistance(const BodyGeometry& a,
+                           const Eigen::Isometry3d& X_Wa,
+                           const BodyGeometry& b,
+                           const Eigen::Isometry3d& X_Wb,
+                           double bound,
+                           bool exact,
+                           bool witness,
+                           bool closed_forms = true);
 
 /// Plain fcl::distance between two shapes (no bound, FCL's own dispatch): the reference the
 /// bounded query must agree with.

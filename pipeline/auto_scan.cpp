@@ -96,8 +96,8 @@ class ReachCheck {
       : problem_(problem),
         scene_(scene),
         sphere_(sphere),
-        evaluator_(scene),
         branches_(mapBranches(problem.map)),
+        evaluator_(scene, branches_.size()),
         angles_(planner::mapAngles(problem.cell.table, deg(10.0))) {}
 
   bool operator()(const scanner::ScanPass& pass) {
@@ -109,12 +109,14 @@ class ReachCheck {
       bool any = true;
       for (std::size_t k = 0; k < poses.size() && any; ++k) {
         const double theta = theta0 - poses[k].turn;
-        const auto solutions = cell.robot.ik(cell.flangeTarget(theta, X_PR * poses[k].X_RS));
+        const Eigen::Isometry3d X_BF = cell.flangeTarget(theta, X_PR * poses[k].X_RS);
+        const auto solutions = cell.robot.ik(X_BF);
+        evaluator_.beginCell(theta, X_BF);
         any = false;
         for (std::size_t b = 0; b < branches_.size(); ++b) {
           if (!alive[b]) continue;
-          alive[b] = planner::scoreCell(scene_, problem_.constraints, evaluator_, solutions,
-                                        branches_[b], theta, false)
+          alive[b] = planner::scoreCell(scene_, problem_.constraints, evaluator_, b, solutions,
+                                        branches_[b])
                          .f > 0.0f;
           any = any || alive[b];
         }
@@ -168,8 +170,8 @@ class ReachCheck {
   const ScanProblem& problem_;
   const collision::Scene& scene_;
   const scanner::TransferSphere& sphere_;
-  collision::ClearanceEvaluator evaluator_;
   std::vector<kinematics::IkBranch> branches_;
+  collision::MapClearance evaluator_;
   std::vector<double> angles_;
 };
 

@@ -50,50 +50,76 @@ std::vector<double> mapAngles(const kinematics::RotaryTableModel& table, double 
   return angles;
 }
 
-CellScore scoreCell(const collision::Scene& scene,
-                    const ConstraintSettings& settings,
-                    collision::ClearanceEvaluator& clearance,
-                    const std::vector<kinematics::IkSolution>& solutions,
-                    const kinematics::IkBranch& branch,
-                    double theta,
-                    bool exact_distances) {
-  const kinematics::RobotModel& robot = scene.cell().robot;
-  CellScore best;
-  bool any = false;
-  // Among this branch's solutions (they differ only by whole turns of joints like J6), the one
-  // farthest from the limits.
-  for (const kinematics::IkSolution& s : solutions) {
+namespace {
+
+// Eq. 7's joint-limit factor of q.
+double jointFactor(const kinematics::RobotModel& robot,
+                   const ConstraintSettings& settings,
+                   const kinematics::JointVector& q) {
+  double joint = 1.0;
+  for (int j = 0; j < kinematics::kNumJoints; ++j) {
+    const auto& limits = robot.joint(j);
+    joint *= jointLimitFactor(q(j), limits.min, limits.max,
+                              settings.joint_gamma[static_cast<std::size_t>(j)]);
+  }
+  return joint;
+}
+
+// The product of Eq. 7's sines without the exponent: with one γ for all joints the factor is
+// this to the γ, so the larger product is the larger factor, found without a pow per joint.
+double jointSines(const kinematics::RobotModel& robot, const kinematics::JointVector& q) {
+  double product = 1.0;
+  for (int j = 0; j < kinematics::kNumJoints; ++j) {
+    const auto& limits = robot.joint(j);
+    product *= jointLimitFactor(q(j), limits.min, limits.max, 1.0);
+  }
+  return product;
+}
+
+// Among the branch's solutions (they differ only by whole turns of joints like J6), the one
+// farthest from the limits (the first of equals); null when the branch has none.
+const kinematics::IkSolution* farthestFromLimits(const kinematics::RobotModel& robot,
+                                                 const ConstraintSettings& settings,
+                                                 const std::vector<kinematics::IkSolution>& all,
+                                                 const kinematics::IkBranch& branch) {
+  const auto& g = settings.joint_gamma;
+  const bool one_gamma = std::all_of(g.begin(), g.end(), [&](double v) { return v == g[0]; });
+  const kinematics::IkSolution* best = nullptr;
+  double best_score = 0.0;
+  for (const kinematics::IkSolution& s : all) {
     if (!(s.branch == branch)) continue;
-    double joint = 1.0;
-    for (int j = 0; j < kinematics::kNumJoints; ++j) {
-      const auto& limits = robot.joint(j);
-      joint *= jointLimitFactor(s.q(j), limits.min, limits.max,
-                                settings.joint_gamma[static_cast<std::size_t>(j)]);
-    }
-    if (!any || joint > best.joint) {
-      best.joint = static_cast<float>(joint);
-      best.q = s.q;
-      any = true;
+    const double score = one_gamma ? jointSines(robot, s.q) : jointFactor(robot, settings, s.q);
+    if (!best || score > best_score) {
+      best = &s;
+      best_score = score;
     }
   }
-  if (!any) return best;  // unreachable on this branch
+  return best;
+}
+
+// The rest of the cell's score once the branch's joints q (joint factor `joint`) are chosen.
+template <class Clearance>
+CellScore scoreJoints(const kinematics::RobotModel& robot,
+                      const ConstraintSettings& settings,
+                      const kinematics::JointVector& q,
+                      double joint,
+                      Clearance&& clearance) {
+  CellScore best;
+  best.q = q;
+  best.joint = static_cast<float>(joint);
   if (best.joint <= 0.0f) {
     best.limit = Limit::kJointLimit;
     best.singularity = 0.0f;
     return best;
   }
-  const kinematics::SingularityMeasures m = robot.singularity(best.q, false);
+  const kinematics::SingularityMeasures m = robot.singularity(q, false);
   const double sing =
       rampFactor(m.wrist, settings.wrist.low, settings.wrist.high, settings.wrist.gamma) *
       rampFactor(m.elbow, settings.elbow.low, settings.elbow.high, settings.elbow.gamma) *
       rampFactor(m.shoulder, settings.shoulder.low, settings.shoulder.high,
                  settings.shoulder.gamma);
   best.singularity = static_cast<float>(sing);
-  double c = 1.0;
-  if (sing > 0.0) {
-    c = exact_distances ? clearance.evaluate(theta, best.q, {.bounded = false}).factor
-                        : clearance.factor(theta, best.q);
-  }
+  const double c = sing > 0.0 ? clearance(q) : 1.0;
   best.clearance = static_cast<float>(c);
   best.f = static_cast<float>(static_cast<double>(best.joint) * sing * c);
   const float lowest = std::min({best.joint, best.singularity, best.clearance});
@@ -104,11 +130,9 @@ CellScore scoreCell(const collision::Scene& scene,
   return best;
 }
 
-ConfigMap buildConfigMap(const collision::Scene& scene,
-                         const ConstraintSettings& settings,
-                         const kinematics::ScanPath& path,
-                         const MapRequest& request,
-                         const ProgressFn& progress) {
+ConfigMap emptyMap(const collision::Scene& scene,
+                   const kinematics::ScanPath& path,
+                   const MapRequest& request) {
   ConfigMap map;
   map.angles = mapAngles(scene.cell().table, request.angle_step);
   for (const auto& s : path.samples) map.times.push_back(s.t);
@@ -125,39 +149,127 @@ ConfigMap buildConfigMap(const collision::Scene& scene,
         "coarser map.angle_step_deg, a larger scan.dt_s, a fixed map.branch or a higher limit",
         nb, na, nt, mb(bytes), mb(request.memory_limit_bytes)));
   }
-  const std::size_t cells = na * nt;
-  map.f.assign(nb * cells, 0.0f);
-  map.joint.assign(nb * cells, 0.0f);
-  map.singularity.assign(nb * cells, 0.0f);
-  map.clearance.assign(nb * cells, 1.0f);
-  map.limit.assign(nb * cells, static_cast<std::uint8_t>(Limit::kUnreachable));
+  const std::size_t cells = nb * na * nt;
+  map.f.assign(cells, 0.0f);
+  map.joint.assign(cells, 0.0f);
+  map.singularity.assign(cells, 0.0f);
+  map.clearance.assign(cells, 1.0f);
+  map.limit.assign(cells, static_cast<std::uint8_t>(Limit::kUnreachable));
+  return map;
+}
 
+void store(ConfigMap& map, std::size_t i, const CellScore& s) {
+  map.f[i] = s.f;
+  map.joint[i] = s.joint;
+  map.singularity[i] = s.singularity;
+  map.clearance[i] = s.clearance;
+  map.limit[i] = static_cast<std::uint8_t>(s.limit);
+}
+
+// Every (angle, time) cell in parallel: score(cell's θ, flange target, solutions, a, t), then
+// the progress report.
+template <class ScoreCell>
+void forEachCell(const collision::Scene& scene,
+                 const kinematics::ScanPath& path,
+                 const ConfigMap& map,
+                 const ProgressFn& progress,
+                 ScoreCell&& score) {
   const kinematics::CellModel& cell = scene.cell();
-  tbb::enumerable_thread_specific<collision::ClearanceEvaluator> evaluators(std::cref(scene));
+  const std::size_t nt = map.times.size(), cells = map.angles.size() * nt;
   std::atomic<std::size_t> done{0};
   const std::size_t report_every = std::max<std::size_t>(1, cells / 200);
   tbb::parallel_for(
       tbb::blocked_range<std::size_t>(0, cells, 64), [&](const tbb::blocked_range<std::size_t>& r) {
-        collision::ClearanceEvaluator& evaluator = evaluators.local();
         for (std::size_t c = r.begin(); c != r.end(); ++c) {
           const std::size_t a = c / nt, t = c % nt;
-          const double theta = map.angles[a];
-          const auto solutions = cell.robot.ik(cell.flangeTarget(theta, path.samples[t].X_PS));
-          for (std::size_t b = 0; b < nb; ++b) {
-            const CellScore s = scoreCell(scene, settings, evaluator, solutions, map.branches[b],
-                                          theta, request.exact_distances);
-            const std::size_t i = map.index(b, a, t);
-            map.f[i] = s.f;
-            map.joint[i] = s.joint;
-            map.singularity[i] = s.singularity;
-            map.clearance[i] = s.clearance;
-            map.limit[i] = static_cast<std::uint8_t>(s.limit);
-          }
+          const Eigen::Isometry3d X_BF = cell.flangeTarget(map.angles[a], path.samples[t].X_PS);
+          score(map.angles[a], X_BF, cell.robot.ik(X_BF), a, t);
           const std::size_t n = done.fetch_add(1, std::memory_order_relaxed) + 1;
           if (progress && (n % report_every == 0 || n == cells)) progress(n, cells);
         }
       });
+}
+
+}  // namespace
+
+CellScore scoreCell(const collision::Scene& scene,
+                    const ConstraintSettings& settings,
+                    collision::MapClearance& clearance,
+                    std::size_t branch_index,
+                    const std::vector<kinematics::IkSolution>& solutions,
+                    const kinematics::IkBranch& branch) {
+  const kinematics::RobotModel& robot = scene.cell().robot;
+  const kinematics::IkSolution* s = farthestFromLimits(robot, settings, solutions, branch);
+  if (!s) return {};  // unreachable on this branch
+  return scoreJoints(robot, settings, s->q, jointFactor(robot, settings, s->q),
+                     [&](const kinematics::JointVector& q) {
+                       return clearance.factor(branch_index, q);
+                     });
+}
+
+ConfigMap buildConfigMap(const collision::Scene& scene,
+                         const ConstraintSettings& settings,
+                         const kinematics::ScanPath& path,
+                         const MapRequest& request,
+                         const ProgressFn& progress) {
+  ConfigMap map = emptyMap(scene, path, request);
+  const std::size_t nb = map.branches.size();
+  const collision::MapClearanceOptions options{.skip = request.motion_bounds,
+                                               .exact_distances = request.exact_distances};
+  tbb::enumerable_thread_specific<collision::MapClearance> clearances(std::cref(scene), nb,
+                                                                       options);
+  forEachCell(scene, path, map, progress,
+              [&](double theta, const Eigen::Isometry3d& X_BF,
+                  const std::vector<kinematics::IkSolution>& solutions, std::size_t a,
+                  std::size_t t) {
+                collision::MapClearance& clearance = clearances.local();
+                clearance.beginCell(theta, X_BF);
+                for (std::size_t b = 0; b < nb; ++b) {
+                  store(map, map.index(b, a, t),
+                        scoreCell(scene, settings, clearance, b, solutions, map.branches[b]));
+                }
+              });
   return map;
 }
+
+namespace detail {
+
+ConfigMap buildConfigMapReference(const collision::Scene& scene,
+                                  const ConstraintSettings& settings,
+                                  const kinematics::ScanPath& path,
+                                  const MapRequest& request) {
+  ConfigMap map = emptyMap(scene, path, request);
+  const kinematics::RobotModel& robot = scene.cell().robot;
+  tbb::enumerable_thread_specific<collision::ClearanceEvaluator> evaluators(std::cref(scene),
+                                                                            false);
+  forEachCell(scene, path, map, {},
+              [&](double theta, const Eigen::Isometry3d&,
+                  const std::vector<kinematics::IkSolution>& solutions, std::size_t a,
+                  std::size_t t) {
+                collision::ClearanceEvaluator& evaluator = evaluators.local();
+                for (std::size_t b = 0; b < map.branches.size(); ++b) {
+                  // Eq. 7 on every solution of the branch, the first strictly best kept.
+                  const kinematics::IkSolution* best = nullptr;
+                  float best_joint = 0.0f;
+                  for (const kinematics::IkSolution& s : solutions) {
+                    if (!(s.branch == map.branches[b])) continue;
+                    const double joint = jointFactor(robot, settings, s.q);
+                    if (!best || joint > best_joint) {
+                      best = &s;
+                      best_joint = static_cast<float>(joint);
+                    }
+                  }
+                  if (!best) continue;
+                  store(map, map.index(b, a, t),
+                        scoreJoints(robot, settings, best->q, jointFactor(robot, settings, best->q),
+                                    [&](const kinematics::JointVector& q) {
+                                      return evaluator.factor(theta, q);
+                                    }));
+                }
+              });
+  return map;
+}
+
+}  // namespace detail
 
 }  // namespace scanplan::planner

@@ -5,6 +5,7 @@
 #include <functional>
 #include <vector>
 
+#include "collision/map_clearance.h"
 #include "collision/scene.h"
 #include "kinematics/robot_model.h"
 #include "kinematics/scan_path.h"
@@ -30,6 +31,9 @@ struct MapRequest {
   /// Plain fcl::distance for every pair instead of the bounded query (the benchmark's
   /// reference); the maps must come out identical.
   bool exact_distances = false;
+  /// Motion-bound skipping and per-cell sharing (collision::MapClearance). False: every pair
+  /// queried at every branch-cell, the reference the maps must equal.
+  bool motion_bounds = true;
 };
 
 /// Configuration maps over table angle × time (seed §7.2, Fig. 6), one per IK branch. Each
@@ -75,12 +79,24 @@ struct CellScore {
   Limit limit = Limit::kUnreachable;
   kinematics::JointVector q = kinematics::JointVector::Zero();
 };
+/// `clearance` has begun the cell (MapClearance::beginCell); `branch_index` is the branch's
+/// index in it.
 CellScore scoreCell(const collision::Scene& scene,
                     const ConstraintSettings& settings,
-                    collision::ClearanceEvaluator& clearance,
+                    collision::MapClearance& clearance,
+                    std::size_t branch_index,
                     const std::vector<kinematics::IkSolution>& solutions,
-                    const kinematics::IkBranch& branch,
-                    double theta,
-                    bool exact_distances);
+                    const kinematics::IkBranch& branch);
+
+namespace detail {
+/// The map as scanplan built it before issue 20: FCL alone (no closed forms), every pair at
+/// every branch-cell, the scanner placed by FK per branch, Eq. 7 with a pow per joint on every
+/// solution. Kept for the benchmark's old-path comparison; values differ from buildConfigMap's
+/// only by FCL's GJK tolerance (1e-6 m) against the closed forms.
+ConfigMap buildConfigMapReference(const collision::Scene& scene,
+                                  const ConstraintSettings& settings,
+                                  const kinematics::ScanPath& path,
+                                  const MapRequest& request);
+}  // namespace detail
 
 }  // namespace scanplan::planner

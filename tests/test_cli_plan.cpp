@@ -185,8 +185,9 @@ TEST_F(CliPlan, SameJobSameBytes) {
 }
 
 TEST_F(CliPlan, UnreachableCellExitsThreeWithAReportThatSaysWhy) {
-  // The table 3 m from the robot: nothing is reachable.
-  const Result run = plan({"--set", "table.axis.xyz_mm=[3000, 0, 0]"});
+  // The table 1 m from the robot: the part is within the arm's stretch (the placement check
+  // passes) but no scan pose is reachable. (3 m away is refused at placement: test_pipeline.)
+  const Result run = plan({"--set", "table.axis.xyz_mm=[1000, 0, 0]"});
   EXPECT_EQ(run.exit_code, 3) << describe(run);
   EXPECT_TRUE(contains(run.out, "NO PATH")) << run.out;
   EXPECT_FALSE(fs::exists(out() / "trajectory.csv"));
@@ -221,7 +222,7 @@ TEST_F(CliPlan, ReplanningIntoTheSameFolderLeavesNothingOfTheEarlierPlan) {
   writeFile(out() / "mine" / "deeper" / "a.txt", "the user's own folder");
   // Same folder, nothing reachable: the earlier trajectory and programs must not survive beside
   // the new report (a robot-side tool would pick them up as the plan).
-  const Result run = plan({"--set", "table.axis.xyz_mm=[3000, 0, 0]"});
+  const Result run = plan({"--set", "table.axis.xyz_mm=[1000, 0, 0]"});
   EXPECT_EQ(run.exit_code, 3) << describe(run);
   EXPECT_EQ(report()["status"].as<std::string>(), "no_path");
   for (const char* stale : {"trajectory.csv", "programs", "cloud.ply", "coverage.ply", "cloud.png",

@@ -552,14 +552,15 @@ TEST(ConfigMap, RowZeroAndTheRowAfterTheLastAreTheSameTableAngle) {
     }
   }
   // And the cell at 360° scores like the cell at 0°.
-  collision::ClearanceEvaluator evaluator(*demo.scene);
+  collision::MapClearance evaluator(*demo.scene, map.branches.size());
   for (std::size_t t = 0; t < map.times.size(); ++t) {
-    const auto solutions = demo.cell.robot.ik(
-        demo.cell.flangeTarget(2.0 * std::numbers::pi, demo.path.samples[t].X_PS));
+    const Eigen::Isometry3d X_BF =
+        demo.cell.flangeTarget(2.0 * std::numbers::pi, demo.path.samples[t].X_PS);
+    const auto solutions = demo.cell.robot.ik(X_BF);
+    evaluator.beginCell(2.0 * std::numbers::pi, X_BF);
     for (std::size_t b = 0; b < map.branches.size(); ++b) {
-      const planner::CellScore s =
-          planner::scoreCell(*demo.scene, demo.settings, evaluator, solutions, map.branches[b],
-                             2.0 * std::numbers::pi, false);
+      const planner::CellScore s = planner::scoreCell(*demo.scene, demo.settings, evaluator, b,
+                                                      solutions, map.branches[b]);
       EXPECT_NEAR(s.f, map.f[map.index(b, 0, t)], kTol);
     }
   }
@@ -571,6 +572,48 @@ TEST(ConfigMap, RowZeroAndTheRowAfterTheLastAreTheSameTableAngle) {
 template <class T>
 bool sameBytes(const std::vector<T>& a, const std::vector<T>& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
+}
+
+// Issue 20: motion-bound skipping and the per-cell sharing leave every value as the plain
+// query gives it, byte for byte: on the demo and on random variants of it (other rings and
+// angle steps), one and two threads.
+bool sameMap(const ConfigMap& a, const ConfigMap& b) {
+  return sameBytes(a.f, b.f) && sameBytes(a.joint, b.joint) &&
+         sameBytes(a.singularity, b.singularity) && sameBytes(a.clearance, b.clearance) &&
+         sameBytes(a.limit, b.limit);
+}
+
+TEST(ConfigMap, MotionBoundSkippingChangesNoValue) {
+  const DemoMap& demo = demoMap();
+  planner::MapRequest plain = demo.request;
+  plain.motion_bounds = false;
+  EXPECT_TRUE(sameMap(demo.map, planner::buildConfigMap(*demo.scene, demo.settings, demo.path, plain)));
+  std::mt19937 rng(2026);
+  std::uniform_real_distribution<double> height(20.0, 110.0), tilt(-10.0, 70.0), step(3.0, 12.0);
+  int clearance_limited = 0;
+  for (int job_index = 0; job_index < 4; ++job_index) {
+    cli::JobSpec job = shortDemoJob();
+    job.scan.paths[0].height_mm = height(rng);
+    job.scan.paths[0].tilt_deg = tilt(rng);
+    job.scan.paths[0].extent_deg = 360.0;
+    job.scan.dt_s = 0.1;
+    const kinematics::CellModel cell = cli::buildCell(job);
+    const kinematics::ScanPath path = jobPath(job, cell);
+    const collision::Scene scene(cell, cli::clearanceConfig(job));
+    planner::MapRequest request = demo.request;
+    request.angle_step = deg(step(rng));
+    const ConfigMap skipped = planner::buildConfigMap(scene, demo.settings, path, request);
+    request.motion_bounds = false;
+    ConfigMap plain_map;
+    {
+      const tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+      plain_map = planner::buildConfigMap(scene, demo.settings, path, request);
+    }
+    EXPECT_TRUE(sameMap(skipped, plain_map)) << "job " << job_index;
+    clearance_limited += static_cast<int>(std::count(
+        skipped.limit.begin(), skipped.limit.end(), static_cast<std::uint8_t>(Limit::kClearance)));
+  }
+  EXPECT_GT(clearance_limited, 100);  // the clearance layer is exercised, not all 1
 }
 
 TEST(ConfigMap, LayersAreByteIdenticalForOneAndTwoThreads) {
