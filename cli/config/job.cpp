@@ -223,6 +223,8 @@ void describeRay(A& a, RaySpec& s) {
   a.field("horizon", s.horizon, Expect::range(1, 1000));
   a.field("starts", s.starts, Expect::range(1, 100000));
   a.field("blocked_penalty_s", s.blocked_penalty_s, Expect::nonNegative());
+  a.field("cost_to_go", s.cost_to_go);
+  a.field("dp_fallback", s.dp_fallback);
 }
 
 template <class A>

@@ -154,9 +154,11 @@ struct MapSpec {
 /// `planner.ray`: Ray Shooting (DESIGN.md §5.1).
 struct RaySpec {
   int rays = 21;
-  int horizon = 15;
+  int horizon = 5;
   int starts = 36;
   double blocked_penalty_s = 1000.0;
+  bool cost_to_go = true;   ///< rays scored with the rest of the scan (false: the seed's rays)
+  bool dp_fallback = true;  ///< DP's optimum when no ray run reaches the end
 };
 
 /// `planner.dp`: the exact baseline's angle grid.

@@ -111,6 +111,8 @@ pipeline::PlanSettings planSettings(const JobSpec& job) {
   s.planners.ray.horizon = job.planner.ray.horizon;
   s.planners.ray.starts = job.planner.ray.starts;
   s.planners.ray.blocked_penalty = job.planner.ray.blocked_penalty_s;
+  s.planners.ray.cost_to_go = job.planner.ray.cost_to_go;
+  s.planners.ray.dp_fallback = job.planner.ray.dp_fallback;
   s.planners.dp_subdivisions = job.planner.dp.angle_subdivisions;
   s.planners.ompl.seed = static_cast<std::uint32_t>(job.planner.ompl.seed);
   s.termination.time_limit_s = job.planner.ompl.time_limit_s;

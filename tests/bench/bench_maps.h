@@ -10,8 +10,10 @@
 
 #include "cli/commands/commands.h"
 #include "cli/config/job.h"
+#include "cli/config/problem.h"
 #include "collision/scene.h"
 #include "planner/config_map.h"
+#include "planner/objective.h"
 
 namespace scanplan::bench {
 
@@ -63,6 +65,32 @@ inline planner::ConfigMap demoMap(const std::string& job_file, std::size_t sampl
   const kinematics::ScanPath path = cli::generateScanPath(job, cell).path;
   const collision::Scene scene(cell, cli::clearanceConfig(job));
   return cli::computeMap(job, scene, path).map;
+}
+
+// A job's map on the one branch its overrides name (e.g. "map.branch=RIGHTY ABOVE FLIP"), with
+// the job's planner weights and table bounds and whether its table is continuous.
+struct JobMap {
+  planner::ConfigMap map;
+  planner::PlannerSettings settings;
+  bool continuous = true;
+};
+
+// `job_file` with `overrides`; its scan path resampled to `samples` samples, or on the job's own
+// scan.dt_s when samples = 0 (an automatic scan is planned once then, not twice).
+inline JobMap jobMap(const std::string& job_file,
+                     std::vector<std::string> overrides,
+                     std::size_t samples) {
+  if (samples > 1) {
+    const cli::JobSpec job0 = cli::loadJob(job_file, overrides);
+    const double duration = cli::generateScanPath(job0, cli::buildCell(job0)).path.duration();
+    overrides.push_back("scan.dt_s=" + std::to_string(duration / static_cast<double>(samples - 1)));
+  }
+  const cli::JobSpec job = cli::loadJob(job_file, overrides);
+  const kinematics::CellModel cell = cli::buildCell(job);
+  const kinematics::ScanPath path = cli::generateScanPath(job, cell).path;
+  const collision::Scene scene(cell, cli::clearanceConfig(job));
+  const pipeline::PlanSettings plan = cli::planSettings(job);
+  return {cli::computeMap(job, scene, path).map, plan.objective, plan.continuous};
 }
 
 }  // namespace scanplan::bench
