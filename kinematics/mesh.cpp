@@ -61,8 +61,8 @@ void inspectFaces(const aiScene& scene, MeshLoadReport& report) {
 // assimp's triangulation aborts the process (an always-on assertion) when a mesh claims polygons
 // it does not have: a face with no vertex index (a PLY face list of length 0 passes assimp's
 // own validation) counts as a polygon. Such files are refused before triangulating, and so is
-// a mesh whose polygons make more triangles than the limit (the pre-check counts a binary PLY's
-// faces, not their corners): triangulating and welding take the time and memory.
+// a mesh whose polygons make more triangles than the limit (the pre-check counts an OBJ face
+// continued over lines short): triangulating and welding take the time and memory.
 void checkTriangulable(const std::filesystem::path& path, const aiScene& scene) {
   std::size_t triangles = 0;
   for (unsigned m = 0; m < scene.mNumMeshes; ++m) {

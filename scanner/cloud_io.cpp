@@ -5,6 +5,7 @@
 #include <bit>
 #include <cstdint>
 #include <cstring>
+#include <sstream>
 
 #include "kinematics/error.h"
 #include "kinematics/units.h"
@@ -29,21 +30,35 @@ class LittleEndianWriter {
   std::ostream& out_;
 };
 
+// Writes a PLY header given with '\n' line ends with "\r\n" ones. assimp 5.2 (what loadMesh
+// reads with) takes a 0x0A right after the bare '\n' ending 'end_header' for part of the line
+// end and reads every value one byte off; about 1 file in 256 starts its data with that byte.
+// After "\r\n" it reads the data where it starts, whatever its first byte, and so do rply
+// (Open3D, CloudCompare: it takes the line end of the 'ply' line for all) and line readers.
+void writeHeader(std::ostream& out, const std::string& header) {
+  for (const char c : header) {
+    if (c == '\n') out.put('\r');
+    out.put(c);
+  }
+}
+
 }  // namespace
 
 void writeCloudPly(std::ostream& out, const std::vector<CloudPoint>& points) {
-  out << "ply\n"
-      << "format binary_little_endian 1.0\n"
-      << "comment scanplan simulated cloud: part frame, mm; time s; range mm; incidence deg\n"
-      << "element vertex " << points.size() << "\n"
-      << "property float x\n"
-      << "property float y\n"
-      << "property float z\n"
-      << "property float time\n"
-      << "property uint profile\n"
-      << "property float range_mm\n"
-      << "property float incidence_deg\n"
-      << "end_header\n";
+  std::ostringstream header;
+  header << "ply\n"
+         << "format binary_little_endian 1.0\n"
+         << "comment scanplan simulated cloud: part frame, mm; time s; range mm; incidence deg\n"
+         << "element vertex " << points.size() << "\n"
+         << "property float x\n"
+         << "property float y\n"
+         << "property float z\n"
+         << "property float time\n"
+         << "property uint profile\n"
+         << "property float range_mm\n"
+         << "property float incidence_deg\n"
+         << "end_header\n";
+  writeHeader(out, header.str());
   LittleEndianWriter w(out);
   for (const CloudPoint& p : points) {
     w.f32(toMm(p.p_P.x()));
@@ -63,22 +78,24 @@ void writeCoveragePly(std::ostream& out,
                       double max_per_mm2) {
   const std::size_t n = part.triangles.size();
   const double top = max_per_mm2 > 0.0 ? max_per_mm2 : coverage.density_p95_per_mm2;
-  out << "ply\n"
-      << "format binary_little_endian 1.0\n"
-      << "comment scanplan coverage: part frame, mm; colour = points/mm2, viridis 0 .. " << top
-      << ", grey = not covered\n"
-      << "element vertex " << 3 * n << "\n"
-      << "property float x\n"
-      << "property float y\n"
-      << "property float z\n"
-      << "property uchar red\n"
-      << "property uchar green\n"
-      << "property uchar blue\n"
-      << "property float density_per_mm2\n"
-      << "property uint points\n"
-      << "element face " << n << "\n"
-      << "property list uchar int vertex_indices\n"
-      << "end_header\n";
+  std::ostringstream header;
+  header << "ply\n"
+         << "format binary_little_endian 1.0\n"
+         << "comment scanplan coverage: part frame, mm; colour = points/mm2, viridis 0 .. " << top
+         << ", grey = not covered\n"
+         << "element vertex " << 3 * n << "\n"
+         << "property float x\n"
+         << "property float y\n"
+         << "property float z\n"
+         << "property uchar red\n"
+         << "property uchar green\n"
+         << "property uchar blue\n"
+         << "property float density_per_mm2\n"
+         << "property uint points\n"
+         << "element face " << n << "\n"
+         << "property list uchar int vertex_indices\n"
+         << "end_header\n";
+  writeHeader(out, header.str());
   LittleEndianWriter w(out);
   const std::uint32_t min_points = std::max<std::uint32_t>(settings.min_points, 1);
   std::vector<std::array<std::uint8_t, 3>> colours(n);
@@ -110,15 +127,17 @@ void writeLabelledSamplesPly(std::ostream& out,
                              const std::vector<Eigen::Vector3d>& normals,
                              const std::vector<std::uint8_t>& labels,
                              const std::vector<std::string>& reasons) {
-  out << "ply\n"
-      << "format binary_little_endian 1.0\n"
-      << "comment scanplan surface samples: part frame, mm; unit normals; reason:";
-  for (std::size_t i = 0; i < reasons.size(); ++i) out << ' ' << i << " = " << reasons[i];
-  out << "\nelement vertex " << points.size() << "\n"
-      << "property float x\nproperty float y\nproperty float z\n"
-      << "property float nx\nproperty float ny\nproperty float nz\n"
-      << "property uchar reason\n"
-      << "end_header\n";
+  std::ostringstream header;
+  header << "ply\n"
+         << "format binary_little_endian 1.0\n"
+         << "comment scanplan surface samples: part frame, mm; unit normals; reason:";
+  for (std::size_t i = 0; i < reasons.size(); ++i) header << ' ' << i << " = " << reasons[i];
+  header << "\nelement vertex " << points.size() << "\n"
+         << "property float x\nproperty float y\nproperty float z\n"
+         << "property float nx\nproperty float ny\nproperty float nz\n"
+         << "property uchar reason\n"
+         << "end_header\n";
+  writeHeader(out, header.str());
   LittleEndianWriter w(out);
   for (std::size_t i = 0; i < points.size(); ++i) {
     for (int k = 0; k < 3; ++k) w.f32(toMm(points[i][k]));

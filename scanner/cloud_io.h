@@ -12,6 +12,9 @@
 
 namespace scanplan::scanner {
 
+/// The PLY writers below end every header line with "\r\n", which assimp, rply and line readers
+/// all read right whatever the first data byte (after a bare '\n', assimp drops a first 0x0A).
+///
 /// Writes cloud.ply: PLY 1.0, binary little-endian, one `vertex` element per point with
 ///   float x, y, z        part frame, mm
 ///   float time           acquisition time, s

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -860,18 +861,18 @@ TEST(CloudPly, HeaderIsStandardAndValuesRoundTrip) {
   scanner::writeCloudPly(out, points);
   const std::string bytes = out.str();
   const std::string header =
-      "ply\n"
-      "format binary_little_endian 1.0\n"
-      "comment scanplan simulated cloud: part frame, mm; time s; range mm; incidence deg\n"
-      "element vertex 3\n"
-      "property float x\n"
-      "property float y\n"
-      "property float z\n"
-      "property float time\n"
-      "property uint profile\n"
-      "property float range_mm\n"
-      "property float incidence_deg\n"
-      "end_header\n";
+      "ply\r\n"
+      "format binary_little_endian 1.0\r\n"
+      "comment scanplan simulated cloud: part frame, mm; time s; range mm; incidence deg\r\n"
+      "element vertex 3\r\n"
+      "property float x\r\n"
+      "property float y\r\n"
+      "property float z\r\n"
+      "property float time\r\n"
+      "property uint profile\r\n"
+      "property float range_mm\r\n"
+      "property float incidence_deg\r\n"
+      "end_header\r\n";
   ASSERT_EQ(bytes.substr(0, header.size()), header);
   EXPECT_EQ(bytes.size(), header.size() + 3 * 7 * 4);
   // The first float after the header: x = 1 mm, little-endian IEEE 754 (0x3F800000).
@@ -896,6 +897,35 @@ TEST(CloudPly, HeaderIsStandardAndValuesRoundTrip) {
                     static_cast<float>(toMm(points[i].range)));
     EXPECT_FLOAT_EQ(static_cast<float>(v.column("incidence_deg")[i]),
                     static_cast<float>(toDeg(points[i].incidence)));
+  }
+}
+
+// x = 1.0000012 mm is the float 0x3F80000A, written little-endian: its first byte is 0x0A, the
+// byte assimp drops after a header ending in a bare '\n' (and loadMesh refuses there). The
+// writers end header lines with "\r\n", after which it is read as data.
+const double kLineFeedFirstMm = static_cast<double>(std::bit_cast<float>(0x3F80000Au));
+
+// The byte after a written PLY header.
+char firstDataByte(const std::string& bytes) {
+  const std::size_t end = bytes.find("end_header\r\n");
+  return end == std::string::npos ? '?' : bytes[end + 12];
+}
+
+TEST(CloudPly, DataStartingWithALineFeedByteRoundTrips) {
+  std::vector<CloudPoint> points(2);
+  points[0].p_P = Eigen::Vector3d(mm(kLineFeedFirstMm), mm(-2.5), mm(30.5));
+  points[1].p_P = Eigen::Vector3d(mm(-100), mm(200), mm(kLineFeedFirstMm));
+  std::ostringstream out(std::ios::binary);
+  scanner::writeCloudPly(out, points);
+  ASSERT_EQ(firstDataByte(out.str()), '\x0A');
+  std::istringstream in(out.str(), std::ios::binary);
+  const test::PlyVertices v = test::readPlyVertices(in, "memory");
+  ASSERT_EQ(v.count, 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    for (const auto& [axis, k] : {std::pair{"x", 0}, std::pair{"y", 1}, std::pair{"z", 2}}) {
+      EXPECT_EQ(static_cast<float>(v.column(axis)[i]), static_cast<float>(toMm(points[i].p_P[k])))
+          << "point " << i << " " << axis;
+    }
   }
 }
 
@@ -946,6 +976,34 @@ TEST(CoveragePly, LoadsAsThePartMeshWithDensityColours) {
   EXPECT_EQ(v.column("green")[2], 231);
   EXPECT_EQ(v.column("red")[3], 190);
   EXPECT_EQ(v.column("blue")[5], 190);
+  fs::remove_all(dir);
+}
+
+// coverage.ply (a mesh: loadMesh reads it) whose data starts with 0x0A loads through loadMesh's
+// checks and assimp with its coordinates, and through the test reader.
+TEST(CoveragePly, DataStartingWithALineFeedByteLoadsThroughLoadMesh) {
+  TriangleMesh mesh;
+  mesh.vertices = {{mm(kLineFeedFirstMm), 0, 0}, {0.003, 0, 0}, {0, 0.002, 0.001}};
+  mesh.triangles = {{0, 1, 2}};
+  const scanner::PartCoverage c = scanner::computeCoverage(mesh, {});
+  std::ostringstream bytes(std::ios::binary);
+  scanner::writeCoveragePly(bytes, mesh, c);
+  ASSERT_EQ(firstDataByte(bytes.str()), '\x0A');
+  const fs::path dir = fs::temp_directory_path() / ("scanplan_lf_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const fs::path file = dir / "coverage.ply";
+  std::ofstream(file, std::ios::binary) << bytes.str();
+  const TriangleMesh loaded = kinematics::loadMesh(file).mesh;  // mm
+  ASSERT_EQ(loaded.triangles.size(), 1u);
+  ASSERT_EQ(loaded.vertices.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    // float32 in the file: the loaded vertex is the written one rounded to a float.
+    EXPECT_LT((loaded.vertices[i] - mesh.vertices[i]).norm(), 1e-9) << "vertex " << i;
+  }
+  std::ifstream in(file, std::ios::binary);
+  const test::PlyVertices v = test::readPlyVertices(in, file.string());
+  ASSERT_EQ(v.count, 3u);
+  EXPECT_EQ(static_cast<float>(v.column("x")[0]), static_cast<float>(kLineFeedFirstMm));
   fs::remove_all(dir);
 }
 
