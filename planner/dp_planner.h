@@ -27,7 +27,9 @@ namespace scanplan::planner {
 /// than one grid turn (|d| ≤ N_θ − 1). `start_theta` (rad), when given, fixes the first sample
 /// to the nearest grid angle (for a continuous table on the same turn as start_theta). The
 /// returned terms are the DP's own and equal evaluate() of the path up to summation order.
-/// Deterministic (TBB over angles, each cell computed independently).
+/// Deterministic (TBB over angles, each cell computed independently). The layers are held
+/// step-major and relaxed over angles in vector lanes (issue 20); path and J are those of
+/// detail::planDpReference bit for bit.
 PlanResult planDp(const ConfigMap& map,
                   std::size_t branch,
                   const PlannerSettings& settings,
@@ -57,6 +59,22 @@ PlanResult planDpRefined(const ConfigMap& map,
                          std::optional<double> start_theta = {});
 
 namespace detail {
+/// The relaxation kernel of planDp, chosen at run time (the build assumes no more than
+/// x86-64): kBest is the widest this CPU runs — AVX-512, AVX2, else the portable one (SSE2 on
+/// x86-64). All give the same results bit for bit; tests and bench_dp run each.
+enum class DpKernel { kBest, kPortable, kAvx2, kAvx512 };
+
+/// Whether this CPU runs `kernel` (kBest and kPortable always).
+bool dpKernelAvailable(DpKernel kernel);
+
+/// planDp with the given kernel (planDp is kBest); std::logic_error if !dpKernelAvailable.
+PlanResult planDpWithKernel(const ConfigMap& map,
+                            std::size_t branch,
+                            const PlannerSettings& settings,
+                            bool continuous,
+                            DpKernel kernel,
+                            std::optional<double> start_theta = {});
+
 /// planDp with each layer relaxed the straightforward way (DESIGN.md §5.2, one (angle, step)
 /// cell at a time): the reference planDp must equal bit for bit (tests, bench_dp).
 PlanResult planDpReference(const ConfigMap& map,

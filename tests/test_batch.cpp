@@ -372,10 +372,12 @@ TEST_F(Batch, SmallSweepGivesOneRowPerCaseSeedAndRepeatWithTheDpGap) {
 // 0.2 s against ray's 0.03 s on an idle machine), so that a plan_s that still held it would be
 // larger than dp_s.
 TEST_F(Batch, PlanTimeIsThePlannersOwnAndDpTimeTheYardsticks) {
+  // DP on a grid fine enough to take several times Ray's time (~8× here; at 8 subdivisions the
+  // DP of issue 20 can finish before Ray), so that plan_s < dp_s tells the two apart.
   const fs::path sweep = writeSweep(
       "cases:\n  - {planner.method: ray}\n  - {planner.method: ray, planner.dp_gap: false}\n"
       "  - {planner.method: dp}\n",
-      {"planner.dp.angle_subdivisions=8"});
+      {"planner.dp.angle_subdivisions=16"});
   const fs::path out = dir_ / "out";
   const Result run = batch(sweep, out, {"--jobs", "1"});
   ASSERT_EQ(run.exit_code, 0) << describe(run);

@@ -7,7 +7,9 @@
 #include <cmath>
 #include <functional>
 #include <numbers>
+#include <optional>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <tbb/global_control.h>
@@ -325,10 +327,47 @@ TEST(DpPlanner, RespectsBoundsAndIsDeterministic) {
   }
 }
 
-// planDp relaxes each layer per cell with branch-free selects and without the reference's
-// modulo (issue 20); it must find the reference's path, values and terms bit for bit, on
-// continuous and limited tables, with and without a fixed start, with wide and narrow
-// acceleration windows (A from 0 to several steps), on maps with closed regions.
+// The kernels this CPU runs: planDp's choice and each one by name.
+std::vector<detail::DpKernel> availableKernels() {
+  std::vector<detail::DpKernel> kernels;
+  for (const auto k : {detail::DpKernel::kBest, detail::DpKernel::kPortable,
+                       detail::DpKernel::kAvx2, detail::DpKernel::kAvx512}) {
+    if (detail::dpKernelAvailable(k)) kernels.push_back(k);
+  }
+  return kernels;
+}
+
+const char* kernelName(detail::DpKernel k) {
+  switch (k) {
+    case detail::DpKernel::kBest:
+      return "best";
+    case detail::DpKernel::kPortable:
+      return "portable";
+    case detail::DpKernel::kAvx2:
+      return "AVX2";
+    case detail::DpKernel::kAvx512:
+      return "AVX-512";
+  }
+  return "?";
+}
+
+// Same status, reason, path and terms, bit for bit.
+void expectSamePlan(const PlanResult& fast, const PlanResult& ref) {
+  ASSERT_EQ(fast.status, ref.status) << fast.reason << " / " << ref.reason;
+  EXPECT_EQ(fast.reason, ref.reason);
+  EXPECT_EQ(fast.theta, ref.theta);
+  EXPECT_EQ(fast.terms.total, ref.terms.total);
+  EXPECT_EQ(fast.terms.cost_f, ref.terms.cost_f);
+  EXPECT_EQ(fast.terms.cost_omega, ref.terms.cost_omega);
+  EXPECT_EQ(fast.terms.cost_alpha, ref.terms.cost_alpha);
+  EXPECT_EQ(fast.terms.min_f_sample, ref.terms.min_f_sample);
+}
+
+// planDp holds its layers step-major and relaxes them over angles in vector lanes (issue 20);
+// every kernel (portable, AVX2, AVX-512, as far as this CPU runs them) must find the
+// reference's path, values and terms bit for bit, on continuous and limited tables, with and
+// without a fixed start, with wide and narrow acceleration windows (A from 0 to several
+// steps), on maps with closed regions.
 TEST(DpPlanner, EqualsTheStraightforwardRelaxationBitForBit) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -349,16 +388,73 @@ TEST(DpPlanner, EqualsTheStraightforwardRelaxationBitForBit) {
     s.alpha_max = (0.5 + 8.0 * unit(rng)) * h / 0.01;
     const std::optional<double> start =
         trial % 3 == 0 ? std::optional<double>(map.angles[90]) : std::nullopt;
-    const PlanResult fast = planDp(map, 0, s, continuous, start);
     const PlanResult ref = detail::planDpReference(map, 0, s, continuous, start);
-    ASSERT_EQ(fast.status, ref.status) << fast.reason << " / " << ref.reason;
-    EXPECT_EQ(fast.reason, ref.reason);
-    EXPECT_EQ(fast.theta, ref.theta);
-    EXPECT_EQ(fast.terms.total, ref.terms.total);
-    EXPECT_EQ(fast.terms.cost_alpha, ref.terms.cost_alpha);
-    solved += fast.status == Status::kExact ? 1 : 0;
+    for (const detail::DpKernel kernel : availableKernels()) {
+      SCOPED_TRACE(kernelName(kernel));
+      expectSamePlan(detail::planDpWithKernel(map, 0, s, continuous, kernel, start), ref);
+    }
+    expectSamePlan(planDp(map, 0, s, continuous, start), ref);
+    solved += ref.status == Status::kExact ? 1 : 0;
   }
   EXPECT_GE(solved, 8);  // most trials have a path to compare, not just the same "no path"
+}
+
+// The step-major layers at the edges of their layout, against the reference bit for bit with
+// every kernel: fewer angles than a vector block and a block and one; the largest step a grid
+// allows (D = N − 1, so the ghost cells span nearly a whole row and the path may jump past the
+// seam); standing still only (D = 0); constant speed only (A = 0); and an acceleration window
+// too wide for one-byte back pointers (2A + 1 > 255). Random f with zeros, a fixed start on a
+// third of the cases, both table kinds; equal ties are likely on the flat maps (f = 1 in
+// places), so the first-minimum rule is exercised too.
+TEST(DpPlanner, StepMajorLayoutEdgesEqualTheReference) {
+  struct Case {
+    std::size_t na, nt;
+    double d_steps, a_steps;  // ω_max·Δt/Δθ and α_max·Δt²/Δθ, off the grid multiples
+  };
+  const Case cases[] = {
+      {5, 30, 1.5, 1.5},   {5, 30, 4.5, 8.5},    {17, 40, 2.5, 1.5},
+      {17, 40, 16.5, 3.5}, {16, 40, 0.5, 2.5},   {33, 40, 3.5, 0.5},
+      {40, 25, 9.5, 19.5}, {70, 8, 66.5, 130.5}, {70, 8, 69.5, 200.5},
+  };
+  constexpr double kDt = 0.1;
+  std::mt19937 rng(2026);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int solved = 0, compared = 0;
+  for (const Case& c : cases) {
+    for (int variant = 0; variant < 4; ++variant) {
+      const bool continuous = variant % 2 == 0;
+      SCOPED_TRACE("na " + std::to_string(c.na) + " D~" + std::to_string(c.d_steps) + " A~" +
+                   std::to_string(c.a_steps) + (continuous ? " continuous" : " limited"));
+      std::vector<float> values(c.na * c.nt);
+      for (float& v : values) {
+        const double u = unit(rng);
+        v = u < 0.12 ? 0.0f : u < 0.3 ? 1.0f : static_cast<float>(0.2 + 0.8 * unit(rng));
+      }
+      const ConfigMap map = makeMap(c.na, c.nt, kDt, continuous, [&](std::size_t a, std::size_t k) {
+        return values[a * c.nt + k];
+      });
+      const double h = continuous ? 2 * kPi / static_cast<double>(c.na) : angleStep(map);
+      PlannerSettings s;
+      s.k_omega = 0.5 * unit(rng);
+      s.k_alpha = 0.05 * unit(rng);
+      s.omega_max = c.d_steps * h / kDt;
+      s.alpha_max = c.a_steps * h / (kDt * kDt);
+      const std::optional<double> start =
+          variant >= 2 ? std::optional<double>(map.angles[c.na / 2]) : std::nullopt;
+      const PlanResult ref = detail::planDpReference(map, 0, s, continuous, start);
+      for (const detail::DpKernel kernel : availableKernels()) {
+        SCOPED_TRACE(kernelName(kernel));
+        expectSamePlan(detail::planDpWithKernel(map, 0, s, continuous, kernel, start), ref);
+        ++compared;
+      }
+      if (ref.status == Status::kExact) {
+        ++solved;
+        expectConsistent(map, ref, s, continuous);
+      }
+    }
+  }
+  EXPECT_GE(solved, 20);
+  EXPECT_GE(compared, 2 * 36);
 }
 
 // The finer grid holds every path of the map grid (a coarse step is r fine steps, and the bounds
