@@ -17,6 +17,14 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kMargin = 1e-6;  // m
 
 bool moves(BodyMotion motion) { return motion == BodyMotion::kRobotLink; }
+
+// The most any point within r of c (a body's frame) moves from pose `from` to pose `to`.
+double motionBound(const Eigen::Vector3d& c,
+                   double r,
+                   const Eigen::Isometry3d& from,
+                   const Eigen::Isometry3d& to) {
+  return (from * c - to * c).norm() + r * (from.linear() - to.linear()).norm();
+}
 bool carried(BodyMotion motion) {
   return motion == BodyMotion::kRobotLink || motion == BodyMotion::kScanner;
 }
@@ -60,9 +68,7 @@ void MapClearance::place(std::size_t chain, std::size_t i, const Eigen::Isometry
   X_W_[i] = X_W;
   const std::size_t k = chain * X_W_.size() + i;
   if (placed_[k]) {
-    const Eigen::Isometry3d& from = last_[k];
-    const Eigen::Vector3d& c = centre_[i];
-    travel_[k] += (from * c - X_W * c).norm() + radius_[i] * (from.linear() - X_W.linear()).norm();
+    travel_[k] += motionBound(centre_[i], radius_[i], last_[k], X_W);
   }
   last_[k] = X_W;
   placed_[k] = true;
@@ -142,7 +148,8 @@ double MapClearance::pairFactor(std::size_t p, std::size_t branch, Memory& memor
     if (memory.lower - moved - kMargin >= t.d_high) return 1.0;
     if (memory.upper + moved + kMargin < t.d_low) return 0.0;
     if (together_[p]) {
-      const double relative = relativeMotion(b, memory.Y, X_W[a].inverse() * X_W[b]) + kMargin;
+      const double relative =
+          motionBound(centre_[b], radius_[b], memory.Y, X_W[a].inverse() * X_W[b]) + kMargin;
       if (memory.lower - relative >= t.d_high) return 1.0;
       if (memory.upper + relative < t.d_low) return 0.0;
     }
@@ -159,13 +166,6 @@ double MapClearance::pairFactor(std::size_t p, std::size_t branch, Memory& memor
   memory.factor = d.beyond ? 1.0 : rampFactor(d.distance, t.d_low, t.d_high, t.gamma);
   memory.known = true;
   return memory.factor;
-}
-
-double MapClearance::relativeMotion(std::size_t b,
-                                    const Eigen::Isometry3d& Y_ref,
-                                    const Eigen::Isometry3d& Y) const {
-  const Eigen::Vector3d& c = centre_[b];
-  return (Y_ref * c - Y * c).norm() + radius_[b] * (Y_ref.linear() - Y.linear()).norm();
 }
 
 }  // namespace scanplan::collision

@@ -46,9 +46,9 @@ class MapClearance {
  private:
   struct Memory {
     Eigen::Isometry3d X_a = Eigen::Isometry3d::Identity(), X_b = Eigen::Isometry3d::Identity();
-    double travel_a = 0.0, travel_b = 0.0;  ///< the bodies' travel then
+    double travel_a = 0.0, travel_b = 0.0;                ///< the bodies' travel then
     Eigen::Isometry3d Y = Eigen::Isometry3d::Identity();  ///< b in a's frame then (X_a⁻¹ X_b)
-    double lower = 0.0;  ///< m, a lower bound on the distance then
+    double lower = 0.0;                                   ///< m, a lower bound on the distance then
     double upper = 0.0;  ///< m, the distance then when below d_high, else +∞
     double factor = 1.0;
     bool known = false;
@@ -58,20 +58,16 @@ class MapClearance {
   /// branch b's arm links), adding the most any of its points moved to its travel.
   void place(std::size_t chain, std::size_t i, const Eigen::Isometry3d& X_W);
   std::size_t chainOf(std::size_t body, std::size_t branch) const;
-  /// The most any point of body b moved in body a's frame from Y_ref to Y (both X_a⁻¹ X_b).
-  double relativeMotion(std::size_t b,
-                        const Eigen::Isometry3d& Y_ref,
-                        const Eigen::Isometry3d& Y) const;
 
   const Scene* scene_;
   MapClearanceOptions options_;
-  std::vector<bool> shared_;              ///< per pair: no arm link in it
-  std::vector<bool> together_;            ///< per pair: both bodies carried by the arm
-  std::vector<Eigen::Vector3d> centre_;   ///< per body: bounding-sphere centre, body frame
-  std::vector<double> radius_;            ///< per body: bounding-sphere radius, m
-  std::vector<Memory> memory_;            ///< shared pairs, then [branch][pair] for the others
-  std::vector<double> shared_factor_;     ///< this cell's factor of each shared pair, or < 0
-  std::vector<Eigen::Isometry3d> X_W_;    ///< body poses at this cell (arm links per branch)
+  std::vector<bool> shared_;             ///< per pair: no arm link in it
+  std::vector<bool> together_;           ///< per pair: both bodies carried by the arm
+  std::vector<Eigen::Vector3d> centre_;  ///< per body: bounding-sphere centre, body frame
+  std::vector<double> radius_;           ///< per body: bounding-sphere radius, m
+  std::vector<Memory> memory_;           ///< shared pairs, then [branch][pair] for the others
+  std::vector<double> shared_factor_;    ///< this cell's factor of each shared pair, or < 0
+  std::vector<Eigen::Isometry3d> X_W_;   ///< body poses at this cell (arm links per branch)
   /// Per chain and body: its last pose, whether it has one, and the sum of the most any of its
   /// points moved at each step (|Δc| + r·‖ΔR‖_F), m: a bound on how far it moved since any
   /// earlier time by the difference of two sums.
