@@ -25,20 +25,16 @@ double motionBound(const Eigen::Vector3d& c,
                    const Eigen::Isometry3d& to) {
   return (from * c - to * c).norm() + r * (from.linear() - to.linear()).norm();
 }
-bool carried(BodyMotion motion) {
-  return motion == BodyMotion::kRobotLink || motion == BodyMotion::kScanner;
-}
 
 }  // namespace
 
 MapClearance::MapClearance(const Scene& scene, std::size_t branches, MapClearanceOptions options)
-    : scene_(&scene), options_(options) {
+    : scene_(&scene), options_(options), levers_(scene) {
   const std::size_t np = scene.pairs().size();
   for (const PairInfo& pair : scene.pairs()) {
     const BodyMotion a = scene.bodies()[static_cast<std::size_t>(pair.a)].motion;
     const BodyMotion b = scene.bodies()[static_cast<std::size_t>(pair.b)].motion;
     shared_.push_back(!moves(a) && !moves(b));
-    together_.push_back(carried(a) && carried(b));
   }
   for (const detail::BodyGeometry& body : scene.geometry().bodies) {
     Eigen::Vector3d c = Eigen::Vector3d::Zero();
@@ -52,6 +48,7 @@ MapClearance::MapClearance(const Scene& scene, std::size_t branches, MapClearanc
     radius_.push_back(r);
   }
   memory_.resize(np * (1 + branches));
+  poses_.resize(memory_.size());
   shared_factor_.assign(np, -1.0);
   const std::size_t nb = scene.bodies().size();
   X_W_.assign(nb, Eigen::Isometry3d::Identity());
@@ -114,10 +111,10 @@ double MapClearance::factor(std::size_t branch, const kinematics::JointVector& q
   for (std::size_t p = 0; p < np; ++p) {
     double fp = 1.0;
     if (shared_[p]) {
-      if (shared_factor_[p] < 0.0) shared_factor_[p] = pairFactor(p, branch, memory_[p]);
+      if (shared_factor_[p] < 0.0) shared_factor_[p] = pairFactor(p, branch, p, q);
       fp = shared_factor_[p];
     } else {
-      fp = pairFactor(p, branch, memory_[np * (1 + branch) + p]);
+      fp = pairFactor(p, branch, np * (1 + branch) + p, q);
     }
     if (fp == 1.0) continue;  // as ClearanceEvaluator::factor: no product with a pair beyond
     f *= fp;
@@ -126,41 +123,44 @@ double MapClearance::factor(std::size_t branch, const kinematics::JointVector& q
   return f;
 }
 
-double MapClearance::pairFactor(std::size_t p, std::size_t branch, Memory& memory) {
+double MapClearance::pairFactor(std::size_t p,
+                                std::size_t branch,
+                                std::size_t slot,
+                                const kinematics::JointVector& q) {
   const PairInfo& pair = scene_->pairs()[p];
   const PairThresholds& t = pair.thresholds;
   const auto a = static_cast<std::size_t>(pair.a), b = static_cast<std::size_t>(pair.b);
   const auto& bodies = scene_->geometry().bodies;
   const std::vector<Eigen::Isometry3d>& X_W = X_W_;
-  const double travel_a = travel_[chainOf(a, branch) * X_W.size() + a];
-  const double travel_b = travel_[chainOf(b, branch) * X_W.size() + b];
   if (options_.exact_distances) {
     const detail::ShapeDistance d =
         detail::bodyDistance(bodies[a], X_W[a], bodies[b], X_W[b], kInf, true, false);
     return d.beyond ? 1.0 : rampFactor(d.distance, t.d_low, t.d_high, t.gamma);
   }
+  Memory& memory = memory_[slot];
+  Poses& poses = poses_[slot];
+  const double travel =
+      travel_[chainOf(a, branch) * X_W.size() + a] + travel_[chainOf(b, branch) * X_W.size() + b];
   if (options_.skip && memory.known) {
-    const double moved = (travel_a - memory.travel_a) + (travel_b - memory.travel_b);
-    if (moved == 0.0 && memory.X_a.matrix() == X_W[a].matrix() &&
-        memory.X_b.matrix() == X_W[b].matrix()) {
+    const double moved = travel - memory.travel;
+    if (moved == 0.0 && poses.X_a.matrix() == X_W[a].matrix() &&
+        poses.X_b.matrix() == X_W[b].matrix()) {
       return memory.factor;  // the same query again
     }
     if (memory.lower - moved - kMargin >= t.d_high) return 1.0;
     if (memory.upper + moved + kMargin < t.d_low) return 0.0;
-    if (together_[p]) {
-      const double relative =
-          motionBound(centre_[b], radius_[b], memory.Y, X_W[a].inverse() * X_W[b]) + kMargin;
+    if (levers_.together(p)) {
+      const double relative = levers_.relativeMotion(p, poses.q, q) + kMargin;
       if (memory.lower - relative >= t.d_high) return 1.0;
       if (memory.upper + relative < t.d_low) return 0.0;
     }
   }
   const detail::ShapeDistance d =
       detail::bodyDistance(bodies[a], X_W[a], bodies[b], X_W[b], t.d_high, false, false);
-  memory.X_a = X_W[a];
-  memory.X_b = X_W[b];
-  memory.travel_a = travel_a;
-  memory.travel_b = travel_b;
-  if (together_[p]) memory.Y = X_W[a].inverse() * X_W[b];
+  poses.X_a = X_W[a];
+  poses.X_b = X_W[b];
+  poses.q = q;
+  memory.travel = travel;
   memory.lower = d.lower;
   memory.upper = d.beyond ? kInf : d.distance;
   memory.factor = d.beyond ? 1.0 : rampFactor(d.distance, t.d_low, t.d_high, t.gamma);

@@ -5,6 +5,7 @@
 
 #include <Eigen/Geometry>
 
+#include "collision/chain_levers.h"
 #include "collision/scene.h"
 
 namespace scanplan::collision {
@@ -30,8 +31,8 @@ struct MapClearanceOptions {
 ///   at or above d_high the pair's factor is 1 without a query; while the distance plus both
 ///   motions stays below d_low it is 0; with neither body moved, the last factor holds. For two
 ///   bodies that both move with the arm, the motion of one in the other's frame is bounded the
-///   same way (the distance does not change when both move together): the wrist's links move
-///   little relative to each other while the arm swings.
+///   by the joints between them (ChainLevers: the distance does not change when both move
+///   together): the wrist's links move little relative to each other while the arm swings.
 /// Every factor equals the plain query's (a 1e-6 m margin covers GJK's tolerance), so the
 /// maps do not depend on the skipping, nor on which cells a thread saw before. One per thread.
 class MapClearance {
@@ -44,16 +45,24 @@ class MapClearance {
   double factor(std::size_t branch, const kinematics::JointVector& q);
 
  private:
+  /// A pair's last query: what the bound checks read on every call.
   struct Memory {
-    Eigen::Isometry3d X_a = Eigen::Isometry3d::Identity(), X_b = Eigen::Isometry3d::Identity();
-    double travel_a = 0.0, travel_b = 0.0;                ///< the bodies' travel then
-    Eigen::Isometry3d Y = Eigen::Isometry3d::Identity();  ///< b in a's frame then (X_a⁻¹ X_b)
-    double lower = 0.0;                                   ///< m, a lower bound on the distance then
-    double upper = 0.0;  ///< m, the distance then when below d_high, else +∞
+    double travel = 0.0;  ///< the two bodies' travel then, summed
+    double lower = 0.0;   ///< m, a lower bound on the distance then
+    double upper = 0.0;   ///< m, the distance then when below d_high, else +∞
     double factor = 1.0;
     bool known = false;
   };
-  double pairFactor(std::size_t pair, std::size_t branch, Memory& memory);
+  /// The rest of it, read when a bound does not decide.
+  struct Poses {
+    Eigen::Isometry3d X_a = Eigen::Isometry3d::Identity(), X_b = Eigen::Isometry3d::Identity();
+    kinematics::JointVector q = kinematics::JointVector::Zero();  ///< the branch's joints then
+  };
+  /// The factor of `pair` at branch `branch` with joints q, its memory at `slot`.
+  double pairFactor(std::size_t pair,
+                    std::size_t branch,
+                    std::size_t slot,
+                    const kinematics::JointVector& q);
   /// Moves body i to X_W in chain `chain` (0: the bodies without an arm link, per cell; 1 + b:
   /// branch b's arm links), adding the most any of its points moved to its travel.
   void place(std::size_t chain, std::size_t i, const Eigen::Isometry3d& X_W);
@@ -62,10 +71,11 @@ class MapClearance {
   const Scene* scene_;
   MapClearanceOptions options_;
   std::vector<bool> shared_;             ///< per pair: no arm link in it
-  std::vector<bool> together_;           ///< per pair: both bodies carried by the arm
+  ChainLevers levers_;                   ///< joint-difference bounds for pairs on the arm
   std::vector<Eigen::Vector3d> centre_;  ///< per body: bounding-sphere centre, body frame
   std::vector<double> radius_;           ///< per body: bounding-sphere radius, m
   std::vector<Memory> memory_;           ///< shared pairs, then [branch][pair] for the others
+  std::vector<Poses> poses_;             ///< the same slots
   std::vector<double> shared_factor_;    ///< this cell's factor of each shared pair, or < 0
   std::vector<Eigen::Isometry3d> X_W_;   ///< body poses at this cell (arm links per branch)
   /// Per chain and body: its last pose, whether it has one, and the sum of the most any of its

@@ -118,8 +118,7 @@ Closest inflate(Closest c, double radius_a, double radius_b) {
 }
 
 Closest capsuleCapsule(const Primitive& a, const Primitive& b) {
-  return inflate(segmentSegment(a.end(-1), a.end(1), b.end(-1), b.end(1)), a.radius(),
-                 b.radius());
+  return inflate(segmentSegment(a.end(-1), a.end(1), b.end(-1), b.end(1)), a.radius(), b.radius());
 }
 
 Closest swapped(Closest c) {
@@ -128,6 +127,30 @@ Closest swapped(Closest c) {
 }
 
 // Ordered so that a.kind ≤ b.kind (capsule < cylinder < box).
+// A cylinder lies in the slab between its caps' planes and in the infinite tube of its radius
+// around its axis; the other shape's distance from either (the larger) bounds its distance from
+// the cylinder from below. What the enclosing capsule misses on a flat cylinder, as a table
+// top: a box above it is as far as the gap to the cap's plane. The other shape is taken whole
+// when a box, else as its capsule.
+double slabOrTubeGap(const Primitive& cylinder, const Primitive& other) {
+  const Eigen::Vector3d u = cylinder.axis(), c = cylinder.X_W.translation();
+  const double centre = (other.X_W.translation() - c).dot(u);
+  double extent = 0.0;  // the other's half extent along u
+  if (other.kind == Primitive::Kind::kBox) {
+    extent = (other.X_W.linear().transpose() * u).cwiseAbs().dot(other.half);
+  } else {
+    extent = std::abs(other.axis().dot(u)) * other.halfLength() + other.radius();
+  }
+  const double slab = std::abs(centre) - extent - cylinder.halfLength();
+  // The axis line's nearest points to the other shape lie within its extent along u.
+  const Eigen::Vector3d lo = c + (centre - extent) * u, hi = c + (centre + extent) * u;
+  const double line =
+      other.kind == Primitive::Kind::kBox
+          ? segmentBox(lo, hi, other)
+          : std::sqrt(segmentSegmentSq(lo, hi, other.end(-1), other.end(1))) - other.radius();
+  return std::max(slab, line - cylinder.radius());
+}
+
 PrimitiveDistance ordered(const Primitive& a, const Primitive& b) {
   using Kind = Primitive::Kind;
   if (a.kind == Kind::kCapsule) {
@@ -140,13 +163,14 @@ PrimitiveDistance ordered(const Primitive& a, const Primitive& b) {
         return {inflate(segmentBoxClosest(a.end(-1), a.end(1), b), a.radius(), 0.0), true};
     }
   }
-  if (a.kind == Kind::kCylinder) {  // the cylinders' enclosing capsules: a lower bound
+  if (a.kind == Kind::kCylinder) {  // lower bounds: the enclosing capsules, slabs and tubes
     if (b.kind == Kind::kCylinder) {
       const double one = segmentCylinder(a.end(-1), a.end(1), b) - a.radius();
       const double other = segmentCylinder(b.end(-1), b.end(1), a) - b.radius();
-      return {{std::max(one, other), {}, {}}, false};
+      return {{std::max({one, other, slabOrTubeGap(a, b), slabOrTubeGap(b, a)}), {}, {}}, false};
     }
-    return {{segmentBox(a.end(-1), a.end(1), b) - a.radius(), {}, {}}, false};
+    const double capsule = segmentBox(a.end(-1), a.end(1), b) - a.radius();
+    return {{std::max(capsule, slabOrTubeGap(a, b)), {}, {}}, false};
   }
   return {boxBoxClosest(a, b), true};
 }

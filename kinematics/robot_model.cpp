@@ -74,6 +74,8 @@ RobotModel::RobotModel(RobotDefinition definition) : definition_(std::move(defin
   if (!(p.c2 > 0.0) || !(std::hypot(p.a2, p.c3) > 0.0)) {
     throw InputError("opw: c2 and the forearm (a2, c3) must have positive length");
   }
+  forearm_ = std::hypot(p.a2, p.c3);
+  forearm_angle_ = std::atan2(p.a2, p.c3);
 
   // The OPW tool frame and DH frame 6 may differ by a constant rotation about the approach
   // axis (a naming convention); anything else means the two descriptions disagree.
@@ -250,9 +252,11 @@ SingularityMeasures RobotModel::singularity(const JointVector& q, bool with_mani
   SingularityMeasures m;
   m.wrist = std::abs(std::sin(qo(4)));
   // Stretched or folded elbow: the forearm (a2, c3) is parallel to the upper arm.
-  m.elbow = std::abs(std::sin(qo(2) + std::atan2(p.a2, p.c3)));
-  const Eigen::Vector3d c = wristCentre(q);
-  m.shoulder = std::hypot(c.x(), c.y());
+  m.elbow = std::abs(std::sin(qo(2) + forearm_angle_));
+  // The wrist centre's distance from the J1 axis: in the arm plane (J1 turns it about that
+  // axis) a1 + c2·sin q2 + |forearm|·sin(q2 + q3 + ψ3) out and b across (opwForward's c).
+  const double out = p.c2 * std::sin(qo(1)) + forearm_ * std::sin(qo(1) + qo(2) + forearm_angle_);
+  m.shoulder = std::hypot(out + p.a1, p.b);
   if (!with_manipulability) return m;
   const Jacobian J = jacobian(q);
   m.manipulability =

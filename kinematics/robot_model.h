@@ -131,6 +131,8 @@ class RobotModel {
   RobotDefinition definition_;
   Eigen::Isometry3d X_opwF_ = Eigen::Isometry3d::Identity();  ///< DH flange in the OPW tool frame
   double manipulability_scale_ = 1.0;
+  double forearm_ = 0.0;        ///< √(a2² + c3²), m
+  double forearm_angle_ = 0.0;  ///< atan2(a2, c3)
 };
 
 }  // namespace scanplan::kinematics

@@ -65,32 +65,76 @@ double jointFactor(const kinematics::RobotModel& robot,
   return joint;
 }
 
-// The product of Eq. 7's sines without the exponent: with one γ for all joints the factor is
-// this to the γ, so the larger product is the larger factor, found without a pow per joint.
-double jointSines(const kinematics::RobotModel& robot, const kinematics::JointVector& q) {
-  double product = 1.0;
-  for (int j = 0; j < kinematics::kNumJoints; ++j) {
-    const auto& limits = robot.joint(j);
-    product *= jointLimitFactor(q(j), limits.min, limits.max, 1.0);
+// Eq. 7's sine of each joint (0 outside its limits), for the solutions of one branch: they
+// differ only by whole turns of the joints that turn more than once, so each joint's few
+// values are computed once.
+class JointSines {
+ public:
+  explicit JointSines(const kinematics::RobotModel& robot) : robot_(robot) {}
+  double operator()(int j, double q) {
+    Seen& seen = seen_[static_cast<std::size_t>(j)];
+    for (std::size_t i = 0; i < seen.count; ++i) {
+      if (seen.q[i] == q) return seen.sine[i];
+    }
+    const auto& limits = robot_.joint(j);
+    const double sine = jointLimitFactor(q, limits.min, limits.max, 1.0);
+    if (seen.count < seen.q.size()) {
+      seen.q[seen.count] = q;
+      seen.sine[seen.count++] = sine;
+    }
+    return sine;
   }
-  return product;
+
+ private:
+  struct Seen {
+    std::array<double, 3> q{}, sine{};
+    std::size_t count = 0;
+  };
+  const kinematics::RobotModel& robot_;
+  std::array<Seen, kinematics::kNumJoints> seen_{};
+};
+
+// The branch's solution farthest from the limits and its sines.
+struct Farthest {
+  const kinematics::IkSolution* solution = nullptr;  ///< null when the branch has none
+  std::array<double, kinematics::kNumJoints> sines{};
+};
+
+// Eq. 7's joint factor from the sines: with one γ for all joints, the product's power (one pow
+// instead of six; equal to the product of the powers up to rounding).
+double jointFactor(const ConstraintSettings& settings,
+                   const std::array<double, kinematics::kNumJoints>& sines) {
+  const auto& g = settings.joint_gamma;
+  const bool one_gamma = std::all_of(g.begin(), g.end(), [&](double v) { return v == g[0]; });
+  double product = 1.0;
+  for (std::size_t j = 0; j < sines.size(); ++j) {
+    product *= one_gamma || g[j] == 1.0 ? sines[j] : std::pow(sines[j], g[j]);
+  }
+  return one_gamma && g[0] != 1.0 ? std::pow(product, g[0]) : product;
 }
 
 // Among the branch's solutions (they differ only by whole turns of joints like J6), the one
-// farthest from the limits (the first of equals); null when the branch has none.
-const kinematics::IkSolution* farthestFromLimits(const kinematics::RobotModel& robot,
-                                                 const ConstraintSettings& settings,
-                                                 const std::vector<kinematics::IkSolution>& all,
-                                                 const kinematics::IkBranch& branch) {
+// farthest from the limits (the first of equals).
+Farthest farthestFromLimits(const kinematics::RobotModel& robot,
+                            const ConstraintSettings& settings,
+                            const std::vector<kinematics::IkSolution>& all,
+                            const kinematics::IkBranch& branch) {
   const auto& g = settings.joint_gamma;
   const bool one_gamma = std::all_of(g.begin(), g.end(), [&](double v) { return v == g[0]; });
-  const kinematics::IkSolution* best = nullptr;
+  JointSines sine(robot);
+  Farthest best;
   double best_score = 0.0;
   for (const kinematics::IkSolution& s : all) {
     if (!(s.branch == branch)) continue;
-    const double score = one_gamma ? jointSines(robot, s.q) : jointFactor(robot, settings, s.q);
-    if (!best || score > best_score) {
-      best = &s;
+    std::array<double, kinematics::kNumJoints> sines{};
+    for (int j = 0; j < kinematics::kNumJoints; ++j)
+      sines[static_cast<std::size_t>(j)] = sine(j, s.q(j));
+    // With one γ the product of the sines orders the solutions as the factor does.
+    double score = 1.0;
+    for (double v : sines) score *= v;
+    if (!one_gamma) score = jointFactor(settings, sines);
+    if (!best.solution || score > best_score) {
+      best = {&s, sines};
       best_score = score;
     }
   }
@@ -167,7 +211,9 @@ void store(ConfigMap& map, std::size_t i, const CellScore& s) {
 }
 
 // Every (angle, time) cell in parallel: score(cell's θ, flange target, solutions, a, t), then
-// the progress report.
+// the progress report. Each task takes whole pieces of θ rows, in a serpentine (even rows
+// forward in time, odd rows backward), so the next cell a thread scores is usually a
+// neighbour of its last one: what MapClearance's motion bounds need to skip queries.
 template <class ScoreCell>
 void forEachCell(const collision::Scene& scene,
                  const kinematics::ScanPath& path,
@@ -175,19 +221,28 @@ void forEachCell(const collision::Scene& scene,
                  const ProgressFn& progress,
                  ScoreCell&& score) {
   const kinematics::CellModel& cell = scene.cell();
-  const std::size_t nt = map.times.size(), cells = map.angles.size() * nt;
+  const std::size_t na = map.angles.size(), nt = map.times.size(), cells = na * nt;
+  // Pieces per row: enough work items for the threads to share even when rows are few.
+  const std::size_t pieces = std::clamp<std::size_t>(64 / std::max<std::size_t>(na, 1), 1,
+                                                     std::max<std::size_t>(nt / 64, 1));
+  const std::size_t piece = (nt + pieces - 1) / pieces;
   std::atomic<std::size_t> done{0};
   const std::size_t report_every = std::max<std::size_t>(1, cells / 200);
-  tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(0, cells, 64), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t c = r.begin(); c != r.end(); ++c) {
-          const std::size_t a = c / nt, t = c % nt;
-          const Eigen::Isometry3d X_BF = cell.flangeTarget(map.angles[a], path.samples[t].X_PS);
-          score(map.angles[a], X_BF, cell.robot.ik(X_BF), a, t);
-          const std::size_t n = done.fetch_add(1, std::memory_order_relaxed) + 1;
-          if (progress && (n % report_every == 0 || n == cells)) progress(n, cells);
-        }
-      });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, na * pieces, 1),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t w = r.begin(); w != r.end(); ++w) {
+                        const std::size_t a = w / pieces, first = (w % pieces) * piece;
+                        const std::size_t n = std::min(nt, first + piece) - std::min(nt, first);
+                        for (std::size_t i = 0; i < n; ++i) {
+                          const std::size_t t = a % 2 == 0 ? first + i : nt - 1 - (first + i);
+                          const Eigen::Isometry3d X_BF =
+                              cell.flangeTarget(map.angles[a], path.samples[t].X_PS);
+                          score(map.angles[a], X_BF, cell.robot.ik(X_BF), a, t);
+                          const std::size_t k = done.fetch_add(1, std::memory_order_relaxed) + 1;
+                          if (progress && (k % report_every == 0 || k == cells)) progress(k, cells);
+                        }
+                      }
+                    });
 }
 
 }  // namespace
@@ -199,12 +254,11 @@ CellScore scoreCell(const collision::Scene& scene,
                     const std::vector<kinematics::IkSolution>& solutions,
                     const kinematics::IkBranch& branch) {
   const kinematics::RobotModel& robot = scene.cell().robot;
-  const kinematics::IkSolution* s = farthestFromLimits(robot, settings, solutions, branch);
-  if (!s) return {};  // unreachable on this branch
-  return scoreJoints(robot, settings, s->q, jointFactor(robot, settings, s->q),
-                     [&](const kinematics::JointVector& q) {
-                       return clearance.factor(branch_index, q);
-                     });
+  const Farthest best = farthestFromLimits(robot, settings, solutions, branch);
+  if (!best.solution) return {};  // unreachable on this branch
+  return scoreJoints(
+      robot, settings, best.solution->q, jointFactor(settings, best.sines),
+      [&](const kinematics::JointVector& q) { return clearance.factor(branch_index, q); });
 }
 
 ConfigMap buildConfigMap(const collision::Scene& scene,
@@ -217,18 +271,18 @@ ConfigMap buildConfigMap(const collision::Scene& scene,
   const collision::MapClearanceOptions options{.skip = request.motion_bounds,
                                                .exact_distances = request.exact_distances};
   tbb::enumerable_thread_specific<collision::MapClearance> clearances(std::cref(scene), nb,
-                                                                       options);
-  forEachCell(scene, path, map, progress,
-              [&](double theta, const Eigen::Isometry3d& X_BF,
-                  const std::vector<kinematics::IkSolution>& solutions, std::size_t a,
-                  std::size_t t) {
-                collision::MapClearance& clearance = clearances.local();
-                clearance.beginCell(theta, X_BF);
-                for (std::size_t b = 0; b < nb; ++b) {
-                  store(map, map.index(b, a, t),
-                        scoreCell(scene, settings, clearance, b, solutions, map.branches[b]));
-                }
-              });
+                                                                      options);
+  forEachCell(
+      scene, path, map, progress,
+      [&](double theta, const Eigen::Isometry3d& X_BF,
+          const std::vector<kinematics::IkSolution>& solutions, std::size_t a, std::size_t t) {
+        collision::MapClearance& clearance = clearances.local();
+        clearance.beginCell(theta, X_BF);
+        for (std::size_t b = 0; b < nb; ++b) {
+          store(map, map.index(b, a, t),
+                scoreCell(scene, settings, clearance, b, solutions, map.branches[b]));
+        }
+      });
   return map;
 }
 
@@ -242,31 +296,30 @@ ConfigMap buildConfigMapReference(const collision::Scene& scene,
   const kinematics::RobotModel& robot = scene.cell().robot;
   tbb::enumerable_thread_specific<collision::ClearanceEvaluator> evaluators(std::cref(scene),
                                                                             false);
-  forEachCell(scene, path, map, {},
-              [&](double theta, const Eigen::Isometry3d&,
-                  const std::vector<kinematics::IkSolution>& solutions, std::size_t a,
-                  std::size_t t) {
-                collision::ClearanceEvaluator& evaluator = evaluators.local();
-                for (std::size_t b = 0; b < map.branches.size(); ++b) {
-                  // Eq. 7 on every solution of the branch, the first strictly best kept.
-                  const kinematics::IkSolution* best = nullptr;
-                  float best_joint = 0.0f;
-                  for (const kinematics::IkSolution& s : solutions) {
-                    if (!(s.branch == map.branches[b])) continue;
-                    const double joint = jointFactor(robot, settings, s.q);
-                    if (!best || joint > best_joint) {
-                      best = &s;
-                      best_joint = static_cast<float>(joint);
-                    }
-                  }
-                  if (!best) continue;
-                  store(map, map.index(b, a, t),
-                        scoreJoints(robot, settings, best->q, jointFactor(robot, settings, best->q),
-                                    [&](const kinematics::JointVector& q) {
-                                      return evaluator.factor(theta, q);
-                                    }));
-                }
-              });
+  forEachCell(
+      scene, path, map, {},
+      [&](double theta, const Eigen::Isometry3d&,
+          const std::vector<kinematics::IkSolution>& solutions, std::size_t a, std::size_t t) {
+        collision::ClearanceEvaluator& evaluator = evaluators.local();
+        for (std::size_t b = 0; b < map.branches.size(); ++b) {
+          // Eq. 7 on every solution of the branch, the first strictly best kept.
+          const kinematics::IkSolution* best = nullptr;
+          float best_joint = 0.0f;
+          for (const kinematics::IkSolution& s : solutions) {
+            if (!(s.branch == map.branches[b])) continue;
+            const double joint = jointFactor(robot, settings, s.q);
+            if (!best || joint > best_joint) {
+              best = &s;
+              best_joint = static_cast<float>(joint);
+            }
+          }
+          if (!best) continue;
+          store(map, map.index(b, a, t),
+                scoreJoints(
+                    robot, settings, best->q, jointFactor(robot, settings, best->q),
+                    [&](const kinematics::JointVector& q) { return evaluator.factor(theta, q); }));
+        }
+      });
   return map;
 }
 

@@ -2,6 +2,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <numbers>
 #include <random>
 #include <stdexcept>
 #include <thread>
@@ -10,6 +11,7 @@
 #include <unistd.h>
 
 #include "cli/config/job.h"
+#include "collision/chain_levers.h"
 #include "collision/clearance.h"
 #include "collision/fcl_geometry.h"
 #include "collision/scene.h"
@@ -668,6 +670,64 @@ TEST(Scene, SharedViperLinkMeshesAndTheBunnyKeepBoundedEqualToExact) {
   }
   for (auto& t : threads) t.join();
   for (const auto& out : per_thread) EXPECT_EQ(out, factors);
+}
+
+// ChainLevers bounds how far the distance between two bodies the arm carries can change when
+// the joints between them turn: checked against the exact distances of every such pair of the
+// demo cell before and after random joint moves, small and large, some by whole turns.
+TEST(ChainLevers, BoundHowFarTheDistanceBetweenTwoArmBodiesCanChange) {
+  DemoCell demo;
+  const Scene& scene = demo.scene;
+  const ChainLevers levers(scene);
+  const auto& bodies = scene.geometry().bodies;
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::vector<Eigen::Isometry3d> X0, X1;
+  int together = 0, tight = 0;
+  for (int k = 0; k < 400; ++k) {
+    const JointVector q0 = test::randomJoints(scene.cell().robot, rng);
+    JointVector q1 = q0;
+    const double size = k % 2 == 0 ? 0.05 : 1.0;
+    for (int j = 0; j < 6; ++j)
+      q1(j) += size * unit(rng) + (k % 5 == 0 ? 2.0 * std::numbers::pi : 0.0);
+    scene.bodyPoses(0.3, q0, X0);
+    scene.bodyPoses(0.3, q1, X1);
+    for (std::size_t p = 0; p < scene.pairs().size(); ++p) {
+      if (!levers.together(p)) continue;
+      const auto a = static_cast<std::size_t>(scene.pairs()[p].a),
+                 b = static_cast<std::size_t>(scene.pairs()[p].b);
+      const double d0 =
+          detail::bodyDistance(bodies[a], X0[a], bodies[b], X0[b], 1e9, true, false).distance;
+      const double d1 =
+          detail::bodyDistance(bodies[a], X1[a], bodies[b], X1[b], 1e9, true, false).distance;
+      const double bound = levers.relativeMotion(p, q0, q1);
+      ASSERT_LE(std::abs(d1 - d0), bound + 1e-9)
+          << scene.bodies()[a].name << " - " << scene.bodies()[b].name << ", move " << k;
+      ++together;
+      tight += std::abs(d1 - d0) > 0.2 * bound ? 1 : 0;
+    }
+  }
+  EXPECT_GE(together, 400 * 20);    // 20 such pairs in the demo cell
+  EXPECT_GT(tight, together / 20);  // not a bound so loose that it says nothing
+}
+
+// A cylinder turning about its own axis does not move: link 6's flange cylinder lies on the J6
+// axis, so J6 does not change its distance from link 4, and its weight is 0.
+TEST(ChainLevers, ABodyTurningAboutItsOwnAxisDoesNotMove) {
+  DemoCell demo;
+  const Scene& scene = demo.scene;
+  const ChainLevers levers(scene);
+  bool found = false;
+  for (std::size_t p = 0; p < scene.pairs().size(); ++p) {
+    const std::string a = scene.bodies()[static_cast<std::size_t>(scene.pairs()[p].a)].name;
+    const std::string b = scene.bodies()[static_cast<std::size_t>(scene.pairs()[p].b)].name;
+    if (a != "link4" || b != "link6") continue;
+    found = true;
+    EXPECT_EQ(levers.weights(p)[5], 0.0);
+    EXPECT_GT(levers.weights(p)[4], 0.0);
+    EXPECT_EQ(levers.weights(p)[0], 0.0);  // joints before link 4 do not move them apart
+  }
+  EXPECT_TRUE(found);
 }
 
 }  // namespace

@@ -113,12 +113,50 @@ void checkPairs(Kind ka, Kind kb) {
   EXPECT_GT(touching, 100);
 }
 
-TEST(PrimitiveDistance, CapsulesAndSpheresAgreeWithFcl) { checkPairs(Kind::kCapsule, Kind::kCapsule); }
+TEST(PrimitiveDistance, CapsulesAndSpheresAgreeWithFcl) {
+  checkPairs(Kind::kCapsule, Kind::kCapsule);
+}
 TEST(PrimitiveDistance, CapsuleAndBoxAgreeWithFcl) { checkPairs(Kind::kCapsule, Kind::kBox); }
-TEST(PrimitiveDistance, CapsuleAndCylinderAgreeWithFcl) { checkPairs(Kind::kCapsule, Kind::kCylinder); }
+TEST(PrimitiveDistance, CapsuleAndCylinderAgreeWithFcl) {
+  checkPairs(Kind::kCapsule, Kind::kCylinder);
+}
 TEST(PrimitiveDistance, BoxesAgreeWithFcl) { checkPairs(Kind::kBox, Kind::kBox); }
-TEST(PrimitiveDistance, CylinderAndBoxBoundFclFromBelow) { checkPairs(Kind::kCylinder, Kind::kBox); }
-TEST(PrimitiveDistance, CylindersBoundFclFromBelow) { checkPairs(Kind::kCylinder, Kind::kCylinder); }
+TEST(PrimitiveDistance, CylinderAndBoxBoundFclFromBelow) {
+  checkPairs(Kind::kCylinder, Kind::kBox);
+}
+TEST(PrimitiveDistance, CylindersBoundFclFromBelow) {
+  checkPairs(Kind::kCylinder, Kind::kCylinder);
+}
+
+// A flat cylinder, as a rotary table's top, under boxes and tilted cylinders: its enclosing
+// capsule would bulge its radius above the cap, so the bound would be 0; the cap's plane gives
+// the exact gap (the lowest corner's height above the cap, the shapes being within the rim),
+// and the bound never exceeds FCL's distance.
+TEST(PrimitiveDistance, AFlatCylinderIsBoundedByItsCapNotItsCapsule) {
+  Primitive table;
+  table.kind = Kind::kCylinder;
+  table.half = {0.25, 0.25, 0.01};
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> xy(-0.08, 0.08), z(0.08, 0.2);
+  for (int k = 0; k < 500; ++k) {
+    Primitive box = randomPrimitive(Kind::kBox, rng, 0.0);
+    box.half = box.half.cwiseMin(0.05);
+    box.X_W.translation() = Eigen::Vector3d(xy(rng), xy(rng), z(rng));
+    double lowest = 1e9;
+    for (int i = 0; i < 8; ++i) {
+      const Eigen::Vector3d s((i & 1) ? 1.0 : -1.0, (i & 2) ? 1.0 : -1.0, (i & 4) ? 1.0 : -1.0);
+      lowest = std::min(lowest, (box.X_W * s.cwiseProduct(box.half)).z());
+    }
+    const PrimitiveDistance d = primitiveDistance(table, box);
+    ASSERT_FALSE(d.exact);
+    ASSERT_NEAR(d.distance, std::max(lowest - 0.01, 0.0), 1e-12) << "box " << k;
+    ASSERT_LE(d.distance, fclDistance(table, box) + kAgree);
+    Primitive tilted = randomPrimitive(Kind::kCylinder, rng, 0.0);
+    tilted.half = tilted.half.cwiseMin(0.04);
+    tilted.X_W.translation() = box.X_W.translation();
+    ASSERT_LE(primitiveDistance(table, tilted).distance, fclDistance(table, tilted) + kAgree);
+  }
+}
 
 // Known answers, independent of FCL: a sphere beside a cylinder's side, over its cap and off
 // its rim; a segment parallel to a box face; two boxes corner to corner.
@@ -148,8 +186,8 @@ TEST(PrimitiveDistance, APoseWhereLibccdIsWrongByCentimetres) {
   Eigen::Matrix4d A, B;
   A << 0.4097345014060102, -0.89637734380254896, 0.16919011754548496, 0.50263166920203717,
       -0.070337047182894769, 0.15387655984147247, 0.98558343336571208, -0.086284233597523144,
-      -0.90948905334322716, -0.41572786994480015, 6.123233995736766e-17, 0.36273644630419494, 0,
-      0, 0, 1;
+      -0.90948905334322716, -0.41572786994480015, 6.123233995736766e-17, 0.36273644630419494, 0, 0,
+      0, 1;
   B << -0.74314482547739424, -0.66913060635885813, -2.1168469813005917e-16, 0.50263166920203717,
       -0.66913060635885813, 0.74314482547739424, 1.4361630669508566e-16, -0.08628423359752313,
       6.9596780082808331e-18, 2.0659756026588462e-16, -1, 0.28273644630419492, 0, 0, 0, 1;
@@ -173,7 +211,9 @@ TEST(PrimitiveDistance, APoseWhereLibccdIsWrongByCentimetres) {
   EXPECT_NEAR(closed, 0.002904, 1e-6);
   EXPECT_NEAR(fclDistance(capsule, cylinder, fcl::GST_INDEP), closed, 1e-7);
   // The bug, as of FCL 0.7, at the default tolerance scanplan's clearance query used (1e-6 m):
-  EXPECT_GT(fclDistance(capsule, cylinder, fcl::GST_LIBCCD, fcl::DistanceRequestd().distance_tolerance), 0.03);
+  EXPECT_GT(
+      fclDistance(capsule, cylinder, fcl::GST_LIBCCD, fcl::DistanceRequestd().distance_tolerance),
+      0.03);
 }
 
 }  // namespace
