@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "collision/fcl_geometry.h"
@@ -12,18 +15,52 @@ namespace {
 
 using detail::Primitive;
 
-// A body's shapes as primitives in its link's DH frame (a mesh as its bounding box).
-std::vector<Primitive> linkPrimitives(const Scene& scene, std::size_t body) {
-  const Eigen::Isometry3d X_link_body = scene.bodies()[body].motion == BodyMotion::kScanner
-                                            ? scene.cell().scanner.X_FS
-                                            : Eigen::Isometry3d::Identity();
-  std::vector<Primitive> out;
+struct Line {
+  Eigen::Vector3d o = Eigen::Vector3d::Zero(), u = Eigen::Vector3d::UnitZ();
+  double distance(const Eigen::Vector3d& x) const {
+    const Eigen::Vector3d v = x - o;
+    return (v - v.dot(u) * u).norm();
+  }
+};
+
+// One body of a pair as the levers see it: its link (world and table bodies count as link 0)
+// and its shapes as primitives (a mesh as its bounding box) in that link's DH frame; a table
+// body's at θ = 0, with the table axis to sweep them about.
+struct Side {
+  int link = 0;
+  std::vector<Primitive> shapes;
+  std::optional<Line> table_axis;
+};
+
+Side sideOf(const Scene& scene, std::size_t body) {
+  const kinematics::CellModel& cell = scene.cell();
+  const Eigen::Isometry3d X_BW = cell.X_WB.inverse();
+  Side side;
+  Eigen::Isometry3d X_link_body = Eigen::Isometry3d::Identity();
+  switch (scene.bodies()[body].motion) {
+    case BodyMotion::kRobotLink:
+      side.link = scene.bodies()[body].link;
+      break;
+    case BodyMotion::kScanner:
+      side.link = kinematics::kNumJoints;
+      X_link_body = cell.scanner.X_FS;
+      break;
+    case BodyMotion::kWorld:
+      X_link_body = X_BW;
+      break;
+    case BodyMotion::kTable: {
+      X_link_body = X_BW * cell.table.X_WR(0.0);
+      const Eigen::Isometry3d X_BA = X_BW * cell.table.X_WA;
+      side.table_axis = Line{X_BA.translation(), X_BA.linear().col(2)};
+      break;
+    }
+  }
   for (const detail::CollisionShape& s : scene.geometry().bodies[body].shapes) {
     Primitive p = s.primitive ? *s.primitive : *s.bounding_box;
     p.X_W = X_link_body * s.X_BG * p.X_W;
-    out.push_back(p);
+    side.shapes.push_back(p);
   }
-  return out;
+  return side;
 }
 
 // The points that span a primitive when padded by the returned radius: a capsule's or
@@ -42,105 +79,145 @@ std::vector<Eigen::Vector3d> spanPoints(const Primitive& p, double& pad) {
   return corners;
 }
 
-// The farthest any point of the shapes is from the line (point o, unit direction u); a capsule
-// or cylinder on the line turns into itself about it and counts 0.
-double reachFromLine(const std::vector<Primitive>& shapes,
-                     const Eigen::Vector3d& o,
-                     const Eigen::Vector3d& u) {
-  double reach = 0.0;
-  for (const Primitive& p : shapes) {
-    double pad = 0.0;
-    double far = 0.0;
+// The farthest the side's points get by `measure` (of a point); a table body's over every
+// table angle: each point sweeps a circle about the axis, within its radius of the centre.
+// `on_axis`: a capsule or cylinder whose ends all measure 0 turns into itself and counts 0.
+template <class Measure>
+double reach(const Side& side, Measure&& measure, bool on_axis_is_still) {
+  double out = 0.0;
+  for (const Primitive& p : side.shapes) {
+    double pad = 0.0, far = 0.0;
     for (const Eigen::Vector3d& x : spanPoints(p, pad)) {
-      const Eigen::Vector3d v = x - o;
-      far = std::max(far, (v - v.dot(u) * u).norm());
+      if (!side.table_axis) {
+        far = std::max(far, measure(x));
+        continue;
+      }
+      const Line& axis = *side.table_axis;
+      const Eigen::Vector3d centre = axis.o + (x - axis.o).dot(axis.u) * axis.u;
+      far = std::max(far, measure(centre) + (x - centre).norm());
     }
-    const bool on_axis = p.kind != Primitive::Kind::kBox && far < 1e-12;
-    if (!on_axis) reach = std::max(reach, far + pad);
+    const bool still =
+        on_axis_is_still && !side.table_axis && p.kind != Primitive::Kind::kBox && far < 1e-12;
+    if (!still) out = std::max(out, far + pad);
   }
-  return reach;
+  return out;
 }
 
-// The farthest any point of the shapes is from the point o.
-double reachFromPoint(const std::vector<Primitive>& shapes, const Eigen::Vector3d& o) {
-  double reach = 0.0;
-  for (const Primitive& p : shapes) {
-    double pad = 0.0;
-    double far = 0.0;
-    for (const Eigen::Vector3d& x : spanPoints(p, pad)) far = std::max(far, (x - o).norm());
-    reach = std::max(reach, far + pad);
-  }
-  return reach;
+double reachFromLine(const Side& side, const Line& line) {
+  return reach(
+      side, [&](const Eigen::Vector3d& x) { return line.distance(x); }, true);
+}
+
+double reachFromOrigin(const Side& side) {
+  return reach(
+      side, [](const Eigen::Vector3d& x) { return x.norm(); }, false);
 }
 
 // Distance between the origins of DH frames `from` < `to`, bounded over every configuration.
 double chainLength(const kinematics::RobotModel& robot, int from, int to) {
   double length = 0.0;
-  for (int m = from + 1; m <= to; ++m)
+  for (int m = from + 1; m <= to; ++m) {
     length += std::hypot(robot.joint(m - 1).a, robot.joint(m - 1).d);
+  }
   return length;
 }
 
-// ρ of a body on link j about joint k's axis (z_{k−1}), bounded over every configuration.
-double lever(const kinematics::RobotModel& robot,
-             const std::vector<Primitive>& shapes,
-             int j,
-             int k) {
-  const Eigen::Vector3d origin = Eigen::Vector3d::Zero(), z = Eigen::Vector3d::UnitZ();
-  if (j == k - 1) return reachFromLine(shapes, origin, z);  // the axis is the frame's own z
-  if (j < k) return reachFromPoint(shapes, origin) + chainLength(robot, j, k - 1);
+// ρ of a side about joint k's axis (z_{k−1}), bounded over every configuration.
+double lever(const kinematics::RobotModel& robot, const Side& side, int k) {
+  const int j = side.link;
+  if (j == k - 1) return reachFromLine(side, Line{});  // the axis is the frame's own z
+  if (j < k) return reachFromOrigin(side) + chainLength(robot, j, k - 1);
   const kinematics::DhJoint& dh = robot.joint(k - 1);
   if (j == k) {  // z_{k−1} seen from frame k
     const Eigen::Isometry3d M = Eigen::Translation3d(dh.a, 0.0, dh.d) *
                                 Eigen::AngleAxisd(dh.alpha, Eigen::Vector3d::UnitX());
     const Eigen::Isometry3d M_inv = M.inverse();
-    return reachFromLine(shapes, M_inv.translation(), M_inv.linear().col(2));
+    return reachFromLine(side, Line{M_inv.translation(), M_inv.linear().col(2)});
   }
-  return std::abs(dh.a) + chainLength(robot, k, j) + reachFromPoint(shapes, origin);
+  return std::abs(dh.a) + chainLength(robot, k, j) + reachFromOrigin(side);
 }
 
-bool carried(BodyMotion motion) {
-  return motion == BodyMotion::kRobotLink || motion == BodyMotion::kScanner;
+// |a − b| modulo a whole turn.
+double turn(double a, double b) {
+  constexpr double kTurn = 2.0 * std::numbers::pi;
+  const double t = std::fmod(std::abs(a - b), kTurn);
+  return std::min(t, kTurn - t);
 }
 
 }  // namespace
 
-ChainLevers::ChainLevers(const Scene& scene) {
+// A body's bounding sphere in its frame: the shapes' spheres' mean centre, and the radius
+// reaching around them all.
+std::pair<Eigen::Vector3d, double> detail::boundingSphere(const detail::BodyGeometry& body) {
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (const detail::CollisionShape& s : body.shapes) c += s.X_BG * s.centre_G;
+  if (!body.shapes.empty()) c /= static_cast<double>(body.shapes.size());
+  double r = 0.0;
+  for (const detail::CollisionShape& s : body.shapes) {
+    r = std::max(r, (s.X_BG * s.centre_G - c).norm() + s.radius);
+  }
+  return {c, r};
+}
+
+ChainLevers::ChainLevers(const Scene& scene) : X_WB_(scene.cell().X_WB) {
   const kinematics::RobotModel& robot = scene.cell().robot;
   for (const PairInfo& pair : scene.pairs()) {
-    auto a = static_cast<std::size_t>(pair.a), b = static_cast<std::size_t>(pair.b);
-    const BodyInfo *ia = &scene.bodies()[a], *ib = &scene.bodies()[b];
-    Weights w{};
-    const bool both = carried(ia->motion) && carried(ib->motion);
-    if (both) {
-      if (ia->link > ib->link) {
-        std::swap(a, b);
-        std::swap(ia, ib);
+    const auto a = static_cast<std::size_t>(pair.a), b = static_cast<std::size_t>(pair.b);
+    const bool link = scene.bodies()[a].motion == BodyMotion::kRobotLink ||
+                      scene.bodies()[b].motion == BodyMotion::kRobotLink;
+    PairWeights weights;
+    if (link) {
+      Side before = sideOf(scene, a), after = sideOf(scene, b);
+      weights.distal = b;
+      if (before.link > after.link) {
+        std::swap(before, after);
+        weights.distal = a;
       }
-      const std::vector<Primitive> before = linkPrimitives(scene, a),
-                                   after = linkPrimitives(scene, b);
-      for (int k = ia->link + 1; k <= ib->link; ++k) {
-        w[static_cast<std::size_t>(k - 1)] =
-            std::min(lever(robot, before, ia->link, k), lever(robot, after, ib->link, k));
+      for (int k = before.link + 1; k <= after.link; ++k) {
+        weights.w[static_cast<std::size_t>(k - 1)] =
+            std::min(lever(robot, before, k), lever(robot, after, k));
+      }
+      for (Side* side : {&before, &after}) {
+        if (!side->table_axis) continue;
+        const Line axis = *side->table_axis;
+        side->table_axis.reset();  // turning about the axis itself: no sweep
+        weights.table = reachFromLine(*side, axis);
       }
     }
-    together_.push_back(both);
-    weights_.push_back(w);
+    std::tie(weights.centre, weights.radius) =
+        detail::boundingSphere(scene.geometry().bodies[weights.distal]);
+    covers_.push_back(link);
+    weights_.push_back(weights);
   }
 }
 
-double ChainLevers::relativeMotion(std::size_t pair,
-                                   const kinematics::JointVector& q0,
-                                   const kinematics::JointVector& q1) const {
-  constexpr double kTurn = 2.0 * std::numbers::pi;
-  const Weights& w = weights_[pair];
-  double motion = 0.0;
+ChainLevers::Weights ChainLevers::weightsAt(
+    std::size_t pair,
+    const Eigen::Isometry3d& X_W,
+    const std::array<Eigen::Isometry3d, kinematics::kNumJoints + 1>& frames) const {
+  const PairWeights& p = weights_[pair];
+  Weights w = p.w;
+  const Eigen::Vector3d c = X_W * p.centre;
+  for (std::size_t k = 0; k < w.size(); ++k) {
+    if (w[k] == 0.0) continue;
+    const Eigen::Isometry3d X_W_axis = X_WB_ * frames[k];  // joint k + 1 turns about its z
+    const Line axis{X_W_axis.translation(), X_W_axis.linear().col(2)};
+    w[k] = std::min(w[k], axis.distance(c) + p.radius);
+  }
+  return w;
+}
+
+double ChainLevers::motion(std::size_t pair,
+                           const Weights& weights,
+                           double theta0,
+                           const kinematics::JointVector& q0,
+                           double theta1,
+                           const kinematics::JointVector& q1) const {
+  const PairWeights& p = weights_[pair];
+  double motion = p.table == 0.0 ? 0.0 : p.table * turn(theta1, theta0);
   for (int k = 0; k < kinematics::kNumJoints; ++k) {
-    const double weight = w[static_cast<std::size_t>(k)];
-    if (weight == 0.0) continue;
-    double turn = std::fmod(std::abs(q1(k) - q0(k)), kTurn);
-    turn = std::min(turn, kTurn - turn);
-    motion += weight * turn;
+    const double w = weights[static_cast<std::size_t>(k)];
+    if (w != 0.0) motion += w * turn(q1(k), q0(k));
   }
   return motion;
 }

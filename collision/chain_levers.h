@@ -2,44 +2,78 @@
 
 #include <array>
 #include <cstddef>
+#include <utility>
 
 #include "collision/scene.h"
 
 namespace scanplan::collision {
 
-/// Joint-difference motion bounds for two bodies the arm carries (the base as link 0, links
-/// 1–6, the scanner on link 6; issue 20 item 2).
+namespace detail {
+struct BodyGeometry;
+/// A body's bounding sphere in its frame: the mean of its shapes' sphere centres, and the radius
+/// reaching around them all.
+std::pair<Eigen::Vector3d, double> boundingSphere(const BodyGeometry& body);
+}  // namespace detail
+
+/// Joint-difference motion bounds for the pairs with a robot link (issue 20 item 2): how much
+/// their distance can change between two (table angle, joints) states, without placing them.
 ///
 /// When joint k turns by Δ, a point at distance ρ from its axis moves by 2ρ·sin(|Δ|/2) ≤ ρ·|Δ|.
 /// Relative to a body before joint k, a body after it turns about that axis; relative to the
 /// body after it, the body before turns the other way: either way the distance between the two
-/// changes by at most min(ρ_before, ρ_after)·|Δ|. Turning the joints between two bodies one
-/// after another, the distance changes by at most Σ_k w_k·|Δq_k|, where w_k bounds that
-/// minimum over every configuration:
+/// changes by at most min(ρ_before, ρ_after)·|Δ|. Turning the table first (a body on it moves
+/// by at most its reach from the table axis times |Δθ|), then the joints between the two bodies
+/// one after another, the distance changes by at most L_θ·|Δθ| + Σ_k w_k·|Δq_k|, where w_k
+/// bounds that minimum over every configuration:
 /// - a body on link j after joint k (j ≥ k): exact about its own joint's axis (j = k: the
 ///   farthest shape point, 0 for shapes turning about their own axis, as a cylinder on it);
 ///   else |a_k| + Σ_{m=k+1..j} √(a_m² + d_m²) + the body's reach from its frame origin;
-/// - a body on link j before joint k (j < k): exact about the next joint's axis (j = k − 1),
-///   else its reach from its origin + Σ_{m=j+1..k−1} √(a_m² + d_m²).
-/// Δq is taken modulo a whole turn (the same pose).
+/// - a body on link j before joint k (j < k; the world and table bodies count as link 0):
+///   exact about the next joint's axis (j = k − 1; a table body over every table angle), else
+///   its reach from its frame origin + Σ_{m=j+1..k−1} √(a_m² + d_m²).
+/// The base is link 0, the scanner is on link 6. Angle differences are taken modulo a turn.
 class ChainLevers {
  public:
   using Weights = std::array<double, 6>;  ///< m per rad, joints 1..6
 
   explicit ChainLevers(const Scene& scene);
 
-  /// True when both bodies of the pair are carried by the arm.
-  bool together(std::size_t pair) const { return together_[pair]; }
+  /// True when the pair has a robot link: its motion is bounded here.
+  bool covers(std::size_t pair) const { return covers_[pair]; }
   /// The pair's weights (zero outside the joints between its bodies).
-  const Weights& weights(std::size_t pair) const { return weights_[pair]; }
-  /// How much the distance between the pair's bodies can change from joints q0 to q1, m.
-  double relativeMotion(std::size_t pair,
-                        const kinematics::JointVector& q0,
-                        const kinematics::JointVector& q1) const;
+  const Weights& weights(std::size_t pair) const { return weights_[pair].w; }
+  /// L_θ: the reach from the table axis of the pair's body on the table (0 without one), m.
+  double tableLever(std::size_t pair) const { return weights_[pair].table; }
+  /// The pair's body after the joints between them (the one on the later link).
+  std::size_t distal(std::size_t pair) const { return weights_[pair].distal; }
+  /// Tighter weights for moves from joints q0 with the DH frames `frames` (X_B0 … X_B6 at q0)
+  /// and the distal body at X_W (world): motion() turns the joints in ascending order, so joint
+  /// k turns while the later ones are still at q0, and the distal body's reach from axis k is
+  /// what it is at q0 (its bounding sphere's); each weight is the lesser of that and the
+  /// configuration-free one.
+  Weights weightsAt(std::size_t pair,
+                    const Eigen::Isometry3d& X_W,
+                    const std::array<Eigen::Isometry3d, kinematics::kNumJoints + 1>& frames) const;
+  /// How much the distance between the pair's bodies can change from (θ0, q0) to (θ1, q1), m,
+  /// with `weights` (these, or tighter ones for q0: see MapClearance).
+  double motion(std::size_t pair,
+                const Weights& weights,
+                double theta0,
+                const kinematics::JointVector& q0,
+                double theta1,
+                const kinematics::JointVector& q1) const;
 
  private:
-  std::vector<bool> together_;
-  std::vector<Weights> weights_;
+  struct PairWeights {
+    Weights w{};
+    double table = 0.0;
+    std::size_t distal = 0;
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();  ///< the distal body's bounding sphere
+    double radius = 0.0;
+  };
+  Eigen::Isometry3d X_WB_ = Eigen::Isometry3d::Identity();
+  std::vector<bool> covers_;
+  std::vector<PairWeights> weights_;
 };
 
 }  // namespace scanplan::collision

@@ -16,8 +16,6 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // carried from one of its numbers keeps this much in hand.
 constexpr double kMargin = 1e-6;  // m
 
-bool moves(BodyMotion motion) { return motion == BodyMotion::kRobotLink; }
-
 // The most any point within r of c (a body's frame) moves from pose `from` to pose `to`.
 double motionBound(const Eigen::Vector3d& c,
                    double r,
@@ -30,45 +28,27 @@ double motionBound(const Eigen::Vector3d& c,
 
 MapClearance::MapClearance(const Scene& scene, std::size_t branches, MapClearanceOptions options)
     : scene_(&scene), options_(options), levers_(scene) {
-  const std::size_t np = scene.pairs().size();
-  for (const PairInfo& pair : scene.pairs()) {
-    const BodyMotion a = scene.bodies()[static_cast<std::size_t>(pair.a)].motion;
-    const BodyMotion b = scene.bodies()[static_cast<std::size_t>(pair.b)].motion;
-    shared_.push_back(!moves(a) && !moves(b));
-  }
   for (const detail::BodyGeometry& body : scene.geometry().bodies) {
-    Eigen::Vector3d c = Eigen::Vector3d::Zero();
-    for (const detail::CollisionShape& s : body.shapes) c += s.X_BG * s.centre_G;
-    if (!body.shapes.empty()) c /= static_cast<double>(body.shapes.size());
-    double r = 0.0;
-    for (const detail::CollisionShape& s : body.shapes) {
-      r = std::max(r, (s.X_BG * s.centre_G - c).norm() + s.radius);
-    }
+    const auto [c, r] = detail::boundingSphere(body);
     centre_.push_back(c);
     radius_.push_back(r);
   }
+  const std::size_t np = scene.pairs().size(), nb = scene.bodies().size();
   memory_.resize(np * (1 + branches));
-  poses_.resize(memory_.size());
+  state_.resize(memory_.size());
   shared_factor_.assign(np, -1.0);
-  const std::size_t nb = scene.bodies().size();
   X_W_.assign(nb, Eigen::Isometry3d::Identity());
-  last_.assign(nb * (1 + branches), Eigen::Isometry3d::Identity());
-  placed_.assign(nb * (1 + branches), false);
-  travel_.assign(nb * (1 + branches), 0.0);
+  placed_.assign(nb, false);
+  last_.assign(nb, Eigen::Isometry3d::Identity());
+  seen_.assign(nb, false);
+  travel_.assign(nb, 0.0);
 }
 
-std::size_t MapClearance::chainOf(std::size_t body, std::size_t branch) const {
-  return moves(scene_->bodies()[body].motion) ? 1 + branch : 0;
-}
-
-void MapClearance::place(std::size_t chain, std::size_t i, const Eigen::Isometry3d& X_W) {
+void MapClearance::place(std::size_t i, const Eigen::Isometry3d& X_W) {
   X_W_[i] = X_W;
-  const std::size_t k = chain * X_W_.size() + i;
-  if (placed_[k]) {
-    travel_[k] += motionBound(centre_[i], radius_[i], last_[k], X_W);
-  }
-  last_[k] = X_W;
-  placed_[k] = true;
+  if (seen_[i]) travel_[i] += motionBound(centre_[i], radius_[i], last_[i], X_W);
+  last_[i] = X_W;
+  seen_[i] = true;
 }
 
 void MapClearance::beginCell(double theta, const Eigen::Isometry3d& X_BF) {
@@ -76,45 +56,58 @@ void MapClearance::beginCell(double theta, const Eigen::Isometry3d& X_BF) {
     throw std::invalid_argument("collision::MapClearance: non-finite table angle or target");
   }
   const kinematics::CellModel& cell = scene_->cell();
+  theta_ = theta;
+  X_BF_ = X_BF;
   const Eigen::Isometry3d X_WR = cell.table.X_WR(theta);
   const Eigen::Isometry3d X_WS = cell.X_WB * X_BF * cell.scanner.X_FS;
   for (std::size_t i = 0; i < X_W_.size(); ++i) {
     switch (scene_->bodies()[i].motion) {
       case BodyMotion::kWorld:
-        place(0, i, Eigen::Isometry3d::Identity());
+        place(i, Eigen::Isometry3d::Identity());
         break;
       case BodyMotion::kTable:
-        place(0, i, X_WR);
+        place(i, X_WR);
         break;
       case BodyMotion::kScanner:
-        place(0, i, X_WS);
+        place(i, X_WS);
         break;
       case BodyMotion::kRobotLink:
-        break;  // per branch
+        break;  // per branch, on first use
     }
   }
   std::fill(shared_factor_.begin(), shared_factor_.end(), -1.0);
 }
 
+const std::array<Eigen::Isometry3d, kinematics::kNumJoints + 1>& MapClearance::frames() {
+  if (!frames_ready_) {
+    frames_ = scene_->cell().robot.linkFrames(*q_);
+    frames_ready_ = true;
+  }
+  return frames_;
+}
+
+const Eigen::Isometry3d& MapClearance::pose(std::size_t i) {
+  const BodyInfo& body = scene_->bodies()[i];
+  if (body.motion != BodyMotion::kRobotLink || placed_[i]) return X_W_[i];
+  X_W_[i] = scene_->cell().X_WB * frames()[static_cast<std::size_t>(body.link)];
+  placed_[i] = true;
+  return X_W_[i];
+}
+
 double MapClearance::factor(std::size_t branch, const kinematics::JointVector& q) {
   if (!q.allFinite()) throw std::invalid_argument("collision::MapClearance: non-finite joints");
-  const kinematics::CellModel& cell = scene_->cell();
-  const auto frames = cell.robot.linkFrames(q);
-  for (std::size_t i = 0; i < X_W_.size(); ++i) {
-    const BodyInfo& body = scene_->bodies()[i];
-    if (moves(body.motion)) {
-      place(1 + branch, i, cell.X_WB * frames[static_cast<std::size_t>(body.link)]);
-    }
-  }
-  const std::size_t np = shared_.size();
+  q_ = &q;
+  frames_ready_ = false;
+  std::fill(placed_.begin(), placed_.end(), false);
+  const std::size_t np = shared_factor_.size();
   double f = 1.0;
   for (std::size_t p = 0; p < np; ++p) {
     double fp = 1.0;
-    if (shared_[p]) {
-      if (shared_factor_[p] < 0.0) shared_factor_[p] = pairFactor(p, branch, p, q);
+    if (!levers_.covers(p)) {
+      if (shared_factor_[p] < 0.0) shared_factor_[p] = sharedFactor(p);
       fp = shared_factor_[p];
     } else {
-      fp = pairFactor(p, branch, np * (1 + branch) + p, q);
+      fp = linkFactor(p, np * (1 + branch) + p, q);
     }
     if (fp == 1.0) continue;  // as ClearanceEvaluator::factor: no product with a pair beyond
     f *= fp;
@@ -123,44 +116,67 @@ double MapClearance::factor(std::size_t branch, const kinematics::JointVector& q
   return f;
 }
 
-double MapClearance::pairFactor(std::size_t p,
-                                std::size_t branch,
-                                std::size_t slot,
-                                const kinematics::JointVector& q) {
+double MapClearance::sharedFactor(std::size_t p) {
   const PairInfo& pair = scene_->pairs()[p];
   const PairThresholds& t = pair.thresholds;
   const auto a = static_cast<std::size_t>(pair.a), b = static_cast<std::size_t>(pair.b);
-  const auto& bodies = scene_->geometry().bodies;
-  const std::vector<Eigen::Isometry3d>& X_W = X_W_;
-  if (options_.exact_distances) {
-    const detail::ShapeDistance d =
-        detail::bodyDistance(bodies[a], X_W[a], bodies[b], X_W[b], kInf, true, false);
-    return d.beyond ? 1.0 : rampFactor(d.distance, t.d_low, t.d_high, t.gamma);
-  }
-  Memory& memory = memory_[slot];
-  Poses& poses = poses_[slot];
-  const double travel =
-      travel_[chainOf(a, branch) * X_W.size() + a] + travel_[chainOf(b, branch) * X_W.size() + b];
-  if (options_.skip && memory.known) {
+  Memory& memory = memory_[p];
+  State& state = state_[p];
+  const double travel = travel_[a] + travel_[b];
+  if (options_.skip && memory.known && !options_.exact_distances) {
     const double moved = travel - memory.travel;
-    if (moved == 0.0 && poses.X_a.matrix() == X_W[a].matrix() &&
-        poses.X_b.matrix() == X_W[b].matrix()) {
+    if (moved == 0.0 && state.X_a.matrix() == X_W_[a].matrix() &&
+        state.X_b.matrix() == X_W_[b].matrix()) {
       return memory.factor;  // the same query again
     }
     if (memory.lower - moved - kMargin >= t.d_high) return 1.0;
     if (memory.upper + moved + kMargin < t.d_low) return 0.0;
-    if (levers_.together(p)) {
-      const double relative = levers_.relativeMotion(p, poses.q, q) + kMargin;
-      if (memory.lower - relative >= t.d_high) return 1.0;
-      if (memory.upper + relative < t.d_low) return 0.0;
+  }
+  memory.travel = travel;
+  state.X_a = X_W_[a];
+  state.X_b = X_W_[b];
+  return query(p, memory);
+}
+
+double MapClearance::linkFactor(std::size_t p, std::size_t slot, const kinematics::JointVector& q) {
+  const PairThresholds& t = scene_->pairs()[p].thresholds;
+  Memory& memory = memory_[slot];
+  State& state = state_[slot];
+  if (options_.skip && memory.known && !options_.exact_distances) {
+    if (q == state.q && theta_ == state.theta && X_BF_.matrix() == state.X_BF.matrix()) {
+      return memory.factor;  // the same poses: the same query again
     }
+    const double moved =
+        levers_.motion(p, state.weights, state.theta, state.q, theta_, q) + kMargin;
+    if (memory.lower - moved >= t.d_high) return 1.0;
+    if (memory.upper + moved < t.d_low) return 0.0;
+  }
+  state.theta = theta_;
+  state.q = q;
+  state.X_BF = X_BF_;
+  const double f = query(p, memory);
+  if (options_.skip) state.weights = leversNow(p);
+  return f;
+}
+
+ChainLevers::Weights MapClearance::leversNow(std::size_t p) {
+  const std::size_t body = levers_.distal(p);
+  return levers_.weightsAt(p, pose(body), frames());
+}
+
+double MapClearance::query(std::size_t p, Memory& memory) {
+  const PairInfo& pair = scene_->pairs()[p];
+  const PairThresholds& t = pair.thresholds;
+  const auto a = static_cast<std::size_t>(pair.a), b = static_cast<std::size_t>(pair.b);
+  const auto& bodies = scene_->geometry().bodies;
+  const Eigen::Isometry3d &X_a = pose(a), &X_b = pose(b);
+  if (options_.exact_distances) {
+    const detail::ShapeDistance d =
+        detail::bodyDistance(bodies[a], X_a, bodies[b], X_b, kInf, true, false);
+    return d.beyond ? 1.0 : rampFactor(d.distance, t.d_low, t.d_high, t.gamma);
   }
   const detail::ShapeDistance d =
-      detail::bodyDistance(bodies[a], X_W[a], bodies[b], X_W[b], t.d_high, false, false);
-  poses.X_a = X_W[a];
-  poses.X_b = X_W[b];
-  poses.q = q;
-  memory.travel = travel;
+      detail::bodyDistance(bodies[a], X_a, bodies[b], X_b, t.d_high, false, false);
   memory.lower = d.lower;
   memory.upper = d.beyond ? kInf : d.distance;
   memory.factor = d.beyond ? 1.0 : rampFactor(d.distance, t.d_low, t.d_high, t.gamma);

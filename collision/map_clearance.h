@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <vector>
 
@@ -22,17 +23,16 @@ struct MapClearanceOptions {
 /// The configuration maps' clearance factor (ClearanceEvaluator::factor), cell after cell and
 /// branch after branch, with the work that repeats between them left out:
 /// - The scanner is placed at the cell's flange target, the pose every branch reaches, so the
-///   pairs without an arm link (scanner, table, part, world) are measured once per cell for all
-///   branches.
-/// - Motion-bound skipping: each pair remembers its last query (per branch for pairs with an
-///   arm link): the bodies' poses then, a lower bound on the distance and, when it was below
-///   d_high, the distance. A body's points have moved at most the sum of |Δc| + r·‖ΔR‖_F over
-///   the steps since (c, r: its bounding sphere). While the lower bound minus both motions stays
-///   at or above d_high the pair's factor is 1 without a query; while the distance plus both
-///   motions stays below d_low it is 0; with neither body moved, the last factor holds. For two
-///   bodies that both move with the arm, the motion of one in the other's frame is bounded the
-///   by the joints between them (ChainLevers: the distance does not change when both move
-///   together): the wrist's links move little relative to each other while the arm swings.
+///   pairs without a robot link (scanner, table, part, world) are measured once per cell for
+///   all branches.
+/// - Motion-bound skipping: each pair remembers its last query (per branch for pairs with a
+///   robot link): a lower bound on the distance then and, when it was below d_high, the
+///   distance. For a pair with a robot link, ChainLevers bounds how much the distance can have
+///   changed since from the differences of the table angle and the joints; for the others, a
+///   body's points have moved at most the sum of |Δc| + r·‖ΔR‖_F over the steps since (c, r:
+///   its bounding sphere). While the lower bound minus that stays at or above d_high the pair's
+///   factor is 1 without a query; while the distance plus that stays below d_low it is 0; with
+///   nothing moved, the last factor holds. Links are placed (FK) only for the pairs that query.
 /// Every factor equals the plain query's (a 1e-6 m margin covers GJK's tolerance), so the
 /// maps do not depend on the skipping, nor on which cells a thread saw before. One per thread.
 class MapClearance {
@@ -47,42 +47,56 @@ class MapClearance {
  private:
   /// A pair's last query: what the bound checks read on every call.
   struct Memory {
-    double travel = 0.0;  ///< the two bodies' travel then, summed
+    double travel = 0.0;  ///< pairs without a link: the two bodies' travel then, summed
     double lower = 0.0;   ///< m, a lower bound on the distance then
     double upper = 0.0;   ///< m, the distance then when below d_high, else +∞
     double factor = 1.0;
     bool known = false;
   };
-  /// The rest of it, read when a bound does not decide.
-  struct Poses {
+  /// The rest of it, read when a bound does not decide: what the bodies' poses follow from.
+  struct State {
+    ChainLevers::Weights weights{};  ///< pairs with a link: the levers at q (tighter than static)
+    double theta = 0.0;
+    kinematics::JointVector q = kinematics::JointVector::Zero();
+    Eigen::Isometry3d X_BF = Eigen::Isometry3d::Identity();
     Eigen::Isometry3d X_a = Eigen::Isometry3d::Identity(), X_b = Eigen::Isometry3d::Identity();
-    kinematics::JointVector q = kinematics::JointVector::Zero();  ///< the branch's joints then
   };
-  /// The factor of `pair` at branch `branch` with joints q, its memory at `slot`.
-  double pairFactor(std::size_t pair,
-                    std::size_t branch,
-                    std::size_t slot,
-                    const kinematics::JointVector& q);
-  /// Moves body i to X_W in chain `chain` (0: the bodies without an arm link, per cell; 1 + b:
-  /// branch b's arm links), adding the most any of its points moved to its travel.
-  void place(std::size_t chain, std::size_t i, const Eigen::Isometry3d& X_W);
-  std::size_t chainOf(std::size_t body, std::size_t branch) const;
+  double sharedFactor(std::size_t pair);
+  double linkFactor(std::size_t pair, std::size_t slot, const kinematics::JointVector& q);
+  double query(std::size_t pair, Memory& memory);
+  /// The pair's weights at this branch's joints (ChainLevers::motion turns the joints in
+  /// ascending order, so joint k turns with the later ones still where they were: the distal
+  /// body's reach from axis k is what it is now).
+  ChainLevers::Weights leversNow(std::size_t pair);
+  /// The DH frames at this branch's joints, by FK on first use.
+  const std::array<Eigen::Isometry3d, kinematics::kNumJoints + 1>& frames();
+  /// Body i's pose at this cell and branch: robot links by FK on first use.
+  const Eigen::Isometry3d& pose(std::size_t i);
+  /// Moves a body without a robot link to X_W, adding the most any of its points moved to its
+  /// travel.
+  void place(std::size_t i, const Eigen::Isometry3d& X_W);
 
   const Scene* scene_;
   MapClearanceOptions options_;
-  std::vector<bool> shared_;             ///< per pair: no arm link in it
-  ChainLevers levers_;                   ///< joint-difference bounds for pairs on the arm
+  ChainLevers levers_;                   ///< bounds for the pairs with a robot link
   std::vector<Eigen::Vector3d> centre_;  ///< per body: bounding-sphere centre, body frame
   std::vector<double> radius_;           ///< per body: bounding-sphere radius, m
-  std::vector<Memory> memory_;           ///< shared pairs, then [branch][pair] for the others
-  std::vector<Poses> poses_;             ///< the same slots
-  std::vector<double> shared_factor_;    ///< this cell's factor of each shared pair, or < 0
-  std::vector<Eigen::Isometry3d> X_W_;   ///< body poses at this cell (arm links per branch)
-  /// Per chain and body: its last pose, whether it has one, and the sum of the most any of its
-  /// points moved at each step (|Δc| + r·‖ΔR‖_F), m: a bound on how far it moved since any
+  std::vector<Memory> memory_;           ///< pairs without a link, then [branch][pair]
+  std::vector<State> state_;             ///< the same slots
+  std::vector<double> shared_factor_;    ///< this cell's factor of each pair without a link, or < 0
+  // This cell: θ, the flange target, the branch's joints and link frames (when computed).
+  double theta_ = 0.0;
+  Eigen::Isometry3d X_BF_ = Eigen::Isometry3d::Identity();
+  const kinematics::JointVector* q_ = nullptr;
+  std::array<Eigen::Isometry3d, kinematics::kNumJoints + 1> frames_;
+  bool frames_ready_ = false;
+  std::vector<Eigen::Isometry3d> X_W_;  ///< body poses at this cell and branch
+  std::vector<bool> placed_;            ///< robot links placed at this branch
+  /// Per body without a link: its last pose, whether it has one, and the sum of the most any of
+  /// its points moved at each step (|Δc| + r·‖ΔR‖_F), m: a bound on how far it moved since any
   /// earlier time by the difference of two sums.
   std::vector<Eigen::Isometry3d> last_;
-  std::vector<bool> placed_;
+  std::vector<bool> seen_;
   std::vector<double> travel_;
 };
 
