@@ -1,6 +1,7 @@
 #include "cli/config/robot_file.h"
 
 #include <cctype>
+#include <sstream>
 
 #include <fmt/format.h>
 
@@ -130,6 +131,20 @@ RobotSpec readRobot(YamlIn& in) {
 RobotSpec loadRobotFile(const std::filesystem::path& file) {
   YamlIn in(loadYamlFile(file), "", file);
   return readRobot(in);
+}
+
+std::string robotToYaml(const RobotSpec& spec, const std::string& header) {
+  RobotSpec copy = spec;
+  YAML::Emitter out;
+  out.SetIndent(2);
+  out << YAML::BeginMap;
+  YamlOut writer(out, true);
+  describe(writer, copy);
+  out << YAML::EndMap;
+  std::string text;
+  std::istringstream lines(header);
+  for (std::string line; std::getline(lines, line);) text += "# " + line + "\n";
+  return text + out.c_str() + "\n";
 }
 
 kinematics::RobotModel buildRobotModel(const RobotSpec& spec, const std::string& source) {

@@ -65,5 +65,7 @@ void describe(YamlOut& a, RobotSpec& s);
 
 /// Reads and validates a robot mapping (a robot file's top level or a job's inline `robot`).
 RobotSpec readRobot(YamlIn& in);
+/// Reads a robot given as a URDF (a mapping with `urdf:`, robot_urdf.h) and imports it.
+RobotSpec readUrdfRobot(YamlIn& in);
 
 }  // namespace scanplan::cli
