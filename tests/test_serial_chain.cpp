@@ -65,14 +65,10 @@ RobotModel modelFromChain(const SerialChain& chain) {
   return RobotModel(def);
 }
 
-::testing::AssertionResult sameFrame(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
-  const double dp = (a.translation() - b.translation()).norm();
-  const double dr = rotationDistance(a.linear(), b.linear());
-  if (dp <= kFkTol && dr <= kFkTol) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure()
-         << "positions " << dp << " m apart, rotations " << dr << " rad\n"
-         << a.matrix() << "\nvs\n"
-         << b.matrix();
+::testing::AssertionResult sameFrame(const Eigen::Isometry3d& a,
+                                     const Eigen::Isometry3d& b,
+                                     double* max_error = nullptr) {
+  return test::samePose(a, b, kFkTol, max_error);
 }
 
 class ChainOfBundledRobot : public ::testing::TestWithParam<std::string> {};

@@ -87,12 +87,7 @@ class UrdfTree {
 ::testing::AssertionResult sameFrame(const Eigen::Isometry3d& a,
                                      const Eigen::Isometry3d& b,
                                      double* max_error = nullptr) {
-  const double dp = (a.translation() - b.translation()).norm();
-  const double dr = kinematics::rotationDistance(a.linear(), b.linear());
-  if (max_error) *max_error = std::max({*max_error, dp, dr});
-  if (dp <= kFkTol && dr <= kFkTol) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure()
-         << "positions " << dp << " m apart, rotations " << dr << " rad";
+  return test::samePose(a, b, kFkTol, max_error);
 }
 
 struct Shipped {
