@@ -304,6 +304,39 @@ TEST_F(UrdfPackages, EveryCollisionElementSitsWhereTheUrdfPutsItAtAnyPose) {
   EXPECT_EQ(spec.links[3].shapes[0].units, "m");
 }
 
+TEST_F(UrdfPackages, HostileUrdfsAreInputErrorsNamingWhatIsWrong) {
+  const std::string good = test::readFile(urdfDir() / "kuka_kr6_r700_sixx.urdf");
+  const std::pair<std::string, std::string> cases[][2] = {
+      {{"origin xyz=\"0.315 0 0\"", "origin xyz=\"nan 0 0\""}, {"not a valid URDF", "nan"}},
+      {{"origin xyz=\"0.315 0 0\"", "origin xyz=\"1e200 0 0\""},
+       {"not a valid robot file", "expected a number within"}},
+      {{"<cylinder radius=\"0.06\"", "<cylinder radius=\"-1\""},
+       {"link 'link_3' <collision>: cylinder radius -1", "expected a finite number > 0"}},
+      {{"axis xyz=\"0 1 0\"", "axis xyz=\"0 0 0\""}, {"J2 (joint_a2): axis (0, 0, 0)", ""}},
+      {{"velocity=\"5.235987755982989\"", "velocity=\"0\""},
+       {"joint 'joint_a2': <limit velocity=\"0\">", ""}},
+      {{"<robot name", "<robt name"}, {"not a valid URDF", ""}},
+      {{"type=\"revolute\">\n    <parent link=\"link_3\"/>",
+        "type=\"prismatic\">\n    <parent link=\"link_3\"/>"},
+       {"joint 'joint_a4' is prismatic", ""}},
+  };
+  for (const auto& [edit, expected] : cases) {
+    std::string text = good;
+    const auto k = text.find(edit.first);
+    ASSERT_NE(k, std::string::npos) << edit.first;
+    text.replace(k, edit.first.size(), edit.second);
+    test::writeFile(dir_ / "hostile.urdf", text);
+    cli::UrdfRobotSource src;
+    src.urdf = dir_ / "hostile.urdf";
+    EXPECT_TRUE(
+        test::throwsInputError([&] { cli::importUrdf(src); }, {"hostile.urdf", expected.first}))
+        << edit.second;
+    if (!expected.second.empty()) {
+      EXPECT_TRUE(test::throwsInputError([&] { cli::importUrdf(src); }, {expected.second}));
+    }
+  }
+}
+
 TEST_F(UrdfPackages, RobotImportWritesARobotFileWithTheSameModel) {
   for (const std::string name : {"viper_s650", "abb_irb2400", "fanuc_lrmate200id", "robot"}) {
     const fs::path urdf = name == "robot" ? dir_ / "robot.urdf" : urdfDir() / (name + ".urdf");

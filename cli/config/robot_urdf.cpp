@@ -88,6 +88,23 @@ Eigen::Isometry3d toIsometry(const urdf::Pose& pose) {
   return X;
 }
 
+// A pose of the file: finite (urdfdom reads "nan" as a number), else InputError naming `what`.
+Eigen::Isometry3d toIsometry(const urdf::Pose& pose,
+                             const fs::path& file,
+                             const std::string& what) {
+  const urdf::Vector3& p = pose.position;
+  const urdf::Rotation& r = pose.rotation;
+  for (double v : {p.x, p.y, p.z, r.x, r.y, r.z, r.w}) {
+    if (!std::isfinite(v)) {
+      throw InputError(
+          fmt::format("{}: {} <origin>: xyz ({} {} {}), quaternion ({} {} {} {}): "
+                      "expected finite numbers",
+                      file.string(), what, p.x, p.y, p.z, r.x, r.y, r.z, r.w));
+    }
+  }
+  return toIsometry(pose);
+}
+
 std::string linkList(const urdf::ModelInterface& model) {
   std::vector<std::string> names;
   for (const auto& [name, link] : model.links_) names.push_back(name);
@@ -168,7 +185,8 @@ kinematics::SerialChain serialChain(const std::vector<urdf::JointConstSharedPtr>
   std::vector<std::string> revolute;
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
   for (const auto& j : path) {
-    X = X * toIsometry(j->parent_to_joint_origin_transform);
+    X = X * toIsometry(j->parent_to_joint_origin_transform, source.urdf,
+                       fmt::format("joint '{}'", j->name));
     if (j->type == urdf::Joint::FIXED) continue;
     if (j->type != urdf::Joint::REVOLUTE && j->type != urdf::Joint::CONTINUOUS) {
       throw InputError(
@@ -252,7 +270,8 @@ ShapeSpec meshShape(const GeometryContext& c, const urdf::Mesh& mesh) {
         fmt::format("{}: link '{}' <collision>: {}", c.source.urdf.string(), c.link, e.what()));
   }
   const urdf::Vector3& k = mesh.scale;
-  if (!(k.x > 0.0) || std::abs(k.y - k.x) > 1e-12 * k.x || std::abs(k.z - k.x) > 1e-12 * k.x) {
+  if (!(k.x > 0.0) || !std::isfinite(k.x) || std::abs(k.y - k.x) > 1e-12 * k.x ||
+      std::abs(k.z - k.x) > 1e-12 * k.x) {
     throw InputError(
         fmt::format("{}: link '{}' <collision> mesh '{}': scale \"{} {} {}\": "
                     "expected the same scale > 0 on every axis",
@@ -269,25 +288,27 @@ ShapeSpec shapeSpec(const GeometryContext& c,
   ShapeSpec s;
   const urdf::Geometry& g = *collision.geometry;
   if (g.type == urdf::Geometry::SPHERE) {
+    const double radius = dynamic_cast<const urdf::Sphere&>(g).radius;
+    requirePositive(c, "sphere radius", radius);
     s.type = "sphere";
-    s.radius_mm = toMm(dynamic_cast<const urdf::Sphere&>(g).radius);
-    requirePositive(c, "sphere radius", s.radius_mm);
+    s.radius_mm = toMm(radius);
   } else if (g.type == urdf::Geometry::BOX) {
     const urdf::Vector3& d = dynamic_cast<const urdf::Box&>(g).dim;
+    for (double v : {d.x, d.y, d.z}) requirePositive(c, "box size", v);
     s.type = "box";
     s.size_mm = {toMm(d.x), toMm(d.y), toMm(d.z)};
-    for (double v : s.size_mm) requirePositive(c, "box size", v);
   } else if (g.type == urdf::Geometry::CYLINDER) {
     const auto& cylinder = dynamic_cast<const urdf::Cylinder&>(g);
+    requirePositive(c, "cylinder radius", cylinder.radius);
+    requirePositive(c, "cylinder length", cylinder.length);
     s.type = "cylinder";
     s.radius_mm = toMm(cylinder.radius);
     s.length_mm = toMm(cylinder.length);
-    requirePositive(c, "cylinder radius", s.radius_mm);
-    requirePositive(c, "cylinder length", s.length_mm);
   } else {
     s = meshShape(c, dynamic_cast<const urdf::Mesh&>(g));
   }
-  s.pose = cleanPose(X_DL * toIsometry(collision.origin));
+  s.pose = cleanPose(X_DL * toIsometry(collision.origin, c.source.urdf,
+                                       fmt::format("link '{}' <collision>", c.link)));
   return s;
 }
 
@@ -333,7 +354,9 @@ void collectBodies(const urdf::ModelInterface& model,
         continue;
       }
       stack.push_back({model.getLink(j->child_link_name),
-                       item.X_BL * toIsometry(j->parent_to_joint_origin_transform), body});
+                       item.X_BL * toIsometry(j->parent_to_joint_origin_transform, source.urdf,
+                                              fmt::format("joint '{}'", j->name)),
+                       body});
     }
   }
 }
@@ -492,6 +515,7 @@ UrdfRobot importUrdf(const UrdfRobotSource& source) {
     out.spec.links[i].name = i == 0 ? "base" : fmt::format("link{}", i);
   }
   collectBodies(*model, source, path, X_BD, out);
+  checkAsRobotFile(out.spec, source.urdf.string());  // ranges a robot file would be held to
   return out;
 }
 
