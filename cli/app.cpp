@@ -26,7 +26,8 @@ namespace scanplan::cli {
 namespace {
 
 void addRobotSource(CLI::App& cmd, RobotSource& source) {
-  auto* robot = cmd.add_option("--robot", source.robot_file, "Robot file (YAML)");
+  auto* robot = cmd.add_option("--robot", source.robot_file,
+                               "Robot file (YAML), or a URDF (.urdf: base_link to tool0)");
   auto* job = cmd.add_option("--job", source.job_file, "Job file: use its robot (and scanner)");
   robot->excludes(job);
   cmd.callback([robot, job] {

@@ -144,16 +144,9 @@ std::vector<urdf::JointConstSharedPtr> chainPath(const urdf::ModelInterface& mod
 }
 
 const char* jointTypeName(int type) {
-  switch (type) {
-    case urdf::Joint::PRISMATIC:
-      return "prismatic";
-    case urdf::Joint::FLOATING:
-      return "floating";
-    case urdf::Joint::PLANAR:
-      return "planar";
-    default:
-      return "of unknown type";
-  }
+  if (type == urdf::Joint::PRISMATIC) return "prismatic";
+  if (type == urdf::Joint::FLOATING) return "floating";
+  return type == urdf::Joint::PLANAR ? "planar" : "of unknown type";
 }
 
 void setLimits(kinematics::ChainJoint& c, const urdf::Joint& j, const fs::path& file) {
