@@ -26,7 +26,8 @@ namespace scanplan::cli {
 namespace {
 
 void addRobotSource(CLI::App& cmd, RobotSource& source) {
-  auto* robot = cmd.add_option("--robot", source.robot_file, "Robot file (YAML)");
+  auto* robot = cmd.add_option("--robot", source.robot_file,
+                               "Robot file (YAML), or a URDF (.urdf: base_link to tool0)");
   auto* job = cmd.add_option("--job", source.job_file, "Job file: use its robot (and scanner)");
   robot->excludes(job);
   cmd.callback([robot, job] {
@@ -145,6 +146,8 @@ struct Commands {
   CLI::App* ik_cmd = nullptr;
   CLI::Option* ik_trans = nullptr;
   CLI::Option* ik_matrix = nullptr;
+  RobotImportOptions robot_import;
+  CLI::App* robot_import_cmd = nullptr;
 
   Commands() = default;
   Commands(const Commands&) = delete;
@@ -333,6 +336,38 @@ void addIkCommand(CLI::App& app, Commands& c) {
   cmd->add_flag("--json", ik.json, "Print JSON instead of text");
 }
 
+void addRobotCommand(CLI::App& app, Commands& c) {
+  auto* robot_cmd = app.add_subcommand("robot", "Robot files: import a URDF");
+  robot_cmd->require_subcommand(1);
+  UrdfRobotSource& s = c.robot_import.source;
+  auto* cmd = c.robot_import_cmd = robot_cmd->add_subcommand(
+      "import",
+      "Write the robot file (YAML) of a URDF's 6-axis ortho-parallel arm: DH rows from the "
+      "joints between --base-link and --tip-link (fixed joints folded in), OPW parameters derived "
+      "from them and checked, limits and speeds from <limit>, collision geometry from <collision>");
+  cmd->add_option("urdf", s.urdf, "URDF file")->required();
+  cmd->add_option("-o,--out", c.robot_import.out_file, "Robot file to write (YAML)")->required();
+  cmd->add_option("--base-link", s.base_link,
+                  "The link at DH frame 0: origin on the J1 axis, z along it")
+      ->capture_default_str();
+  cmd->add_option("--tip-link", s.tip_link,
+                  "The flange link (DH frame 6): origin on the J6 axis, z along it")
+      ->capture_default_str();
+  cmd->add_option("--package-path", s.package_path,
+                  "A folder holding ROS packages (PKG/…) for package://PKG/… mesh URIs "
+                  "(repeatable; searched before SCANPLAN_PACKAGE_PATH)")
+      ->allow_extra_args(false);
+  cmd->add_option("--opw-parameters", s.opw_parameters,
+                  "A ROS-Industrial opw_kinematics parameter YAML (m, rad) for the IK, checked "
+                  "against the chain (default: derived from it)");
+  cmd->add_option("--name", s.name, "Robot name (default: the URDF's <robot name>)");
+  cmd->add_option("--controller", s.controller,
+                  "The controller, for the programs plan writes: adept_vplus, kuka_krl, "
+                  "abb_rapid, ur_script or none")
+      ->check(CLI::IsMember(kControllers))
+      ->capture_default_str();
+}
+
 // An example per command, run from the repository root on the bundled data (the
 // tests run each one's file names against the repository).
 void addExamples(const Commands& c) {
@@ -372,6 +407,11 @@ void addExamples(const Commands& c) {
       {c.ik_cmd,
        {"scanplan ik --robot data/robots/viper_s650.yaml --trans "
         "450,0,695,0,90,0"}},
+      {c.robot_import_cmd,
+       {"scanplan robot import data/robots/urdf/kuka_kr6_r700_sixx.urdf -o kr6_r700.yaml "
+        "--controller kuka_krl",
+        "scanplan robot import data/robots/urdf/abb_irb2400.urdf -o irb2400.yaml "
+        "--opw-parameters data/robots/urdf/abb_irb2400_opw.yaml"}},
   };
   for (const auto& [cmd, lines] : examples) {
     std::string footer = lines.size() > 1 ? "Examples:" : "Example:";
@@ -399,6 +439,7 @@ void addCommands(CLI::App& app, Commands& c) {
   addCheckCommand(app, c);
   addFkCommand(app, c);
   addIkCommand(app, c);
+  addRobotCommand(app, c);
   addExamples(c);
 }
 
@@ -416,7 +457,7 @@ std::optional<int> parseArguments(CLI::App& app, int argc, char** argv) {
       message = std::string("unknown command '") + argv[1] +
                 "'; expected one of: plan, batch, validate, simulate, export, "
                 "path, map, check, job, fk, "
-                "ik";
+                "ik, robot";
     }
     std::fprintf(stderr,
                  "scanplan: error: %s\nRun 'scanplan --help' (or 'scanplan "
@@ -464,6 +505,12 @@ void requireInputs(const Commands& c) {
     requireInput(source->robot_file, "robot file");
     requireInput(source->job_file, "job file");
   }
+  if (c.robot_import_cmd->parsed()) {
+    const UrdfRobotSource& s = c.robot_import.source;
+    requireInput(s.urdf, "URDF file");
+    requireInput(s.opw_parameters, "opw_parameters file");
+    for (const auto& dir : s.package_path) requireInput(dir, "package folder", true);
+  }
   if (c.batch_report_cmd->parsed()) {
     requireInput(c.batch_report_dir, "batch output folder", true);
   } else if (c.batch_merge_cmd->parsed()) {
@@ -479,7 +526,7 @@ void requireInputs(const Commands& c) {
 bool printsSummaryOnly(const Commands& c) {
   return c.plan_cmd->parsed() || c.path_cmd->parsed() || c.map_cmd->parsed() ||
          c.simulate_cmd->parsed() || c.export_cmd->parsed() || c.batch_cmd->parsed() ||
-         (c.validate_cmd->parsed() && !c.validate.json);
+         c.robot_import_cmd->parsed() || (c.validate_cmd->parsed() && !c.validate.json);
 }
 
 ExitCode dispatch(const Commands& c) {
@@ -494,6 +541,7 @@ ExitCode dispatch(const Commands& c) {
   if (c.map_cmd->parsed()) code = runMap(c.map);
   if (c.fk_cmd->parsed()) code = runFk(c.fk);
   if (c.ik_cmd->parsed()) code = runIk(c.ik);
+  if (c.robot_import_cmd->parsed()) code = runRobotImport(c.robot_import);
   if (c.batch_report_cmd->parsed()) {
     code = runBatchReport(c.batch_report_dir);
   } else if (c.batch_merge_cmd->parsed()) {

@@ -19,16 +19,6 @@ constexpr double kConsistencyPosTol = 1e-9;  // m
 constexpr double kConsistencyRotTol = 1e-9;  // rad
 constexpr int kConsistencySamples = 200;
 
-Eigen::Isometry3d dhTransform(const DhJoint& j, double q) {
-  const double theta = j.direction * q + j.theta_offset;
-  const double ct = std::cos(theta), st = std::sin(theta);
-  const double ca = std::cos(j.alpha), sa = std::sin(j.alpha);
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() << ct, -st * ca, st * sa, st, ct * ca, -ct * sa, 0.0, sa, ca;
-  T.translation() << j.a * ct, j.a * st, j.d;
-  return T;
-}
-
 JointVector sampleInLimits(const RobotDefinition& def, std::mt19937& rng) {
   JointVector q;
   for (int i = 0; i < kNumJoints; ++i) {
@@ -47,6 +37,16 @@ std::string formatJoints(const JointVector& q) {
 }
 
 }  // namespace
+
+Eigen::Isometry3d dhTransform(const DhJoint& j, double q) {
+  const double theta = j.direction * q + j.theta_offset;
+  const double ct = std::cos(theta), st = std::sin(theta);
+  const double ca = std::cos(j.alpha), sa = std::sin(j.alpha);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() << ct, -st * ca, st * sa, st, ct * ca, -ct * sa, 0.0, sa, ca;
+  T.translation() << j.a * ct, j.a * st, j.d;
+  return T;
+}
 
 std::string IkBranch::words() const {
   return std::string(lefty ? "LEFTY" : "RIGHTY") + (below ? " BELOW" : " ABOVE") +

@@ -28,6 +28,9 @@ struct DhJoint {
   double max_speed = 0.0;
 };
 
+/// The transform of one DH row at joint value q (Eq. 1): DH frame i in frame i − 1, m.
+Eigen::Isometry3d dhTransform(const DhJoint& joint, double q);
+
 /// Ortho-parallel-wrist parameters (Brandstötter et al. 2014), m and rad:
 /// q_opw = sign · q − offset.
 struct OpwParameters {

@@ -29,6 +29,8 @@ third_party_rules=(
   "nlopt           planner/"
   "yaml-cpp/       cli/"
   "yaml-cpp/       cli/config/  headers"
+  "urdf_           cli/config/"
+  "console_bridge/ cli/config/"
   "CLI/            cli/"
   "png\.h          cli/"
 )

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <exception>
 #include <filesystem>
 #include <initializer_list>
@@ -11,6 +12,7 @@
 
 #include "cli/config/robot_file.h"
 #include "kinematics/error.h"
+#include "kinematics/pose.h"
 #include "kinematics/robot_model.h"
 
 namespace scanplan::test {
@@ -33,6 +35,22 @@ template <class F>
     return ::testing::AssertionFailure() << "threw a non-InputError: " << e.what();
   }
   return ::testing::AssertionFailure() << "no exception";
+}
+
+/// Passes when two poses agree within `tol` (m between positions, rad between rotations); with
+/// `max_error`, also keeps the largest difference seen.
+inline ::testing::AssertionResult samePose(const Eigen::Isometry3d& a,
+                                           const Eigen::Isometry3d& b,
+                                           double tol,
+                                           double* max_error = nullptr) {
+  const double dp = (a.translation() - b.translation()).norm();
+  const double dr = kinematics::rotationDistance(a.linear(), b.linear());
+  if (max_error) *max_error = std::max({*max_error, dp, dr});
+  if (dp <= tol && dr <= tol) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure()
+         << "positions " << dp << " m apart, rotations " << dr << " rad\n"
+         << a.matrix() << "\nvs\n"
+         << b.matrix();
 }
 
 inline std::filesystem::path sourceDir() { return SCANPLAN_SOURCE_DIR; }

@@ -10,6 +10,7 @@
 #include "cli/app.h"
 #include "cli/config/job.h"
 #include "cli/config/problem.h"
+#include "cli/config/robot_urdf.h"
 #include "cli/plot/figure.h"
 #include "cli/plot/map_figures.h"
 #include "kinematics/mesh.h"
@@ -119,6 +120,12 @@ std::string buildAndWriteMaps(const JobSpec& job,
 void writeMapOutputs(const std::filesystem::path& dir,
                      const JobSpec& job,
                      const planner::ConfigMap& map);
+/// `robot import`: a URDF in, the equivalent robot file out.
+struct RobotImportOptions {
+  UrdfRobotSource source;
+  std::filesystem::path out_file;
+};
+ExitCode runRobotImport(const RobotImportOptions& options);
 ExitCode runFk(const FkOptions& options);
 ExitCode runIk(const IkOptions& options);
 ExitCode runJobShow(const std::filesystem::path& job_file,

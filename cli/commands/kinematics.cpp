@@ -6,6 +6,7 @@
 
 #include "cli/commands/commands.h"
 #include "cli/config/robot_file.h"
+#include "cli/config/robot_urdf.h"
 #include "cli/io/json.h"
 #include "cli/io/output.h"
 #include "kinematics/error.h"
@@ -28,7 +29,7 @@ LoadedRobot loadRobot(const RobotSource& source) {
     const kinematics::CellModel cell = buildCell(job);
     return {cell.robot, cell.scanner.X_FS};
   }
-  return {buildRobotModel(loadRobotFile(source.robot_file), source.robot_file.string()),
+  return {buildRobotModel(loadRobotOrUrdf(source.robot_file), source.robot_file.string()),
           std::nullopt};
 }
 

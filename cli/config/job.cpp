@@ -12,6 +12,7 @@
 #include <spdlog/spdlog.h>
 
 #include "cli/config/detail/describe.h"
+#include "cli/config/robot_urdf.h"
 #include "cli/programs/programs.h"
 #include "kinematics/error.h"
 #include "kinematics/placement.h"
@@ -389,7 +390,10 @@ void describeJob(A& a, JobSpec& s) {
       // Missing next to a near miss (robto:): finish() says which.
     } else if (robot.IsScalar()) {
       a.field("robot", s.robot_file);
-      s.robot = loadRobotFile(s.robot_file.resolved);
+      s.robot = loadRobotOrUrdf(s.robot_file.resolved);
+    } else if (robot.IsMap() && robot["urdf"].IsDefined()) {
+      YamlIn urdf_robot(robot, "robot", a.file(), a.overrides());
+      s.robot = readUrdfRobot(urdf_robot);
     } else if (robot.IsMap()) {
       YamlIn inline_robot(robot, "robot", a.file(), a.overrides());
       s.robot = readRobot(inline_robot);

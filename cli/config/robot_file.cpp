@@ -1,6 +1,7 @@
 #include "cli/config/robot_file.h"
 
 #include <cctype>
+#include <sstream>
 
 #include <fmt/format.h>
 
@@ -130,6 +131,38 @@ RobotSpec readRobot(YamlIn& in) {
 RobotSpec loadRobotFile(const std::filesystem::path& file) {
   YamlIn in(loadYamlFile(file), "", file);
   return readRobot(in);
+}
+
+namespace {
+
+std::string robotYamlText(const RobotSpec& spec, bool paths_as_written) {
+  RobotSpec copy = spec;
+  YAML::Emitter out;
+  out.SetIndent(2);
+  out << YAML::BeginMap;
+  YamlOut writer(out, paths_as_written);
+  describe(writer, copy);
+  out << YAML::EndMap;
+  return out.c_str();
+}
+
+}  // namespace
+
+std::string robotToYaml(const RobotSpec& spec, const std::string& header) {
+  std::string text;
+  std::istringstream lines(header);
+  for (std::string line; std::getline(lines, line);) text += "# " + line + "\n";
+  return text + robotYamlText(spec, true) + "\n";
+}
+
+void checkAsRobotFile(const RobotSpec& spec, const std::string& source) {
+  try {
+    YamlIn in(YAML::Load(robotYamlText(spec, false)), "", "imported robot file");
+    readRobot(in);
+  } catch (const InputError& e) {
+    throw InputError(
+        fmt::format("{}: the robot it describes is not a valid robot file: {}", source, e.what()));
+  }
 }
 
 kinematics::RobotModel buildRobotModel(const RobotSpec& spec, const std::string& source) {

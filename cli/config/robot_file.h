@@ -61,6 +61,9 @@ std::vector<std::string> foreignPrograms(const RobotSpec& robot,
 
 /// Loads a robot file; errors name the file.
 RobotSpec loadRobotFile(const std::filesystem::path& file);
+/// The robot file text (YAML) of `spec`, read back by loadRobotFile to the same spec: `header`
+/// first as comment lines, then every key; mesh paths as written (`FilePath::as_written`).
+std::string robotToYaml(const RobotSpec& spec, const std::string& header);
 /// Builds the kinematic model, checking OPW against DH; errors name `source` (the file).
 kinematics::RobotModel buildRobotModel(const RobotSpec& spec, const std::string& source);
 

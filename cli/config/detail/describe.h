@@ -65,5 +65,10 @@ void describe(YamlOut& a, RobotSpec& s);
 
 /// Reads and validates a robot mapping (a robot file's top level or a job's inline `robot`).
 RobotSpec readRobot(YamlIn& in);
+/// Throws InputError (naming `source`) unless `spec` is what a robot file may say: the robot
+/// file reader's checks (ranges, limits, files) on a spec that did not come from YAML.
+void checkAsRobotFile(const RobotSpec& spec, const std::string& source);
+/// Reads a robot given as a URDF (a mapping with `urdf:`, robot_urdf.h) and imports it.
+RobotSpec readUrdfRobot(YamlIn& in);
 
 }  // namespace scanplan::cli
