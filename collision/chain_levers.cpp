@@ -140,7 +140,9 @@ double lever(const kinematics::RobotModel& robot, const Side& side, int k) {
 // |a − b| modulo a whole turn.
 double turn(double a, double b) {
   constexpr double kTurn = 2.0 * std::numbers::pi;
-  const double t = std::fmod(std::abs(a - b), kTurn);
+  const double d = std::abs(a - b);
+  if (d <= std::numbers::pi) return d;  // the usual step: no remainder to take
+  const double t = std::fmod(d, kTurn);
   return std::min(t, kTurn - t);
 }
 
@@ -159,7 +161,7 @@ std::pair<Eigen::Vector3d, double> detail::boundingSphere(const detail::BodyGeom
   return {c, r};
 }
 
-ChainLevers::ChainLevers(const Scene& scene) : X_WB_(scene.cell().X_WB) {
+ChainLevers::ChainLevers(const Scene& scene) {
   const kinematics::RobotModel& robot = scene.cell().robot;
   for (const PairInfo& pair : scene.pairs()) {
     const auto a = static_cast<std::size_t>(pair.a), b = static_cast<std::size_t>(pair.b);
@@ -200,8 +202,7 @@ ChainLevers::Weights ChainLevers::weightsAt(
   const Eigen::Vector3d c = X_W * p.centre;
   for (std::size_t k = 0; k < w.size(); ++k) {
     if (w[k] == 0.0) continue;
-    const Eigen::Isometry3d X_W_axis = X_WB_ * frames[k];  // joint k + 1 turns about its z
-    const Line axis{X_W_axis.translation(), X_W_axis.linear().col(2)};
+    const Line axis{frames[k].translation(), frames[k].linear().col(2)};  // joint k + 1's
     w[k] = std::min(w[k], axis.distance(c) + p.radius);
   }
   return w;

@@ -46,11 +46,11 @@ class ChainLevers {
   double tableLever(std::size_t pair) const { return weights_[pair].table; }
   /// The pair's body after the joints between them (the one on the later link).
   std::size_t distal(std::size_t pair) const { return weights_[pair].distal; }
-  /// Tighter weights for moves from joints q0 with the DH frames `frames` (X_B0 … X_B6 at q0)
-  /// and the distal body at X_W (world): motion() turns the joints in ascending order, so joint
-  /// k turns while the later ones are still at q0, and the distal body's reach from axis k is
-  /// what it is at q0 (its bounding sphere's); each weight is the lesser of that and the
-  /// configuration-free one.
+  /// Tighter weights for moves from joints q0 with the DH frames `frames` in the world
+  /// (X_WB · X_B0 … X_WB · X_B6 at q0) and the distal body at X_W: motion() turns the joints in
+  /// ascending order, so joint k turns while the later ones are still at q0, and the distal body's
+  /// reach from axis k is what it is at q0 (its bounding sphere's); each weight is the lesser of
+  /// that and the configuration-free one.
   Weights weightsAt(std::size_t pair,
                     const Eigen::Isometry3d& X_W,
                     const std::array<Eigen::Isometry3d, kinematics::kNumJoints + 1>& frames) const;
@@ -71,7 +71,6 @@ class ChainLevers {
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();  ///< the distal body's bounding sphere
     double radius = 0.0;
   };
-  Eigen::Isometry3d X_WB_ = Eigen::Isometry3d::Identity();
   std::vector<bool> covers_;
   std::vector<PairWeights> weights_;
 };

@@ -18,13 +18,13 @@ namespace detail {
 // distances below the best found so far (initially d_high), and a bounding-sphere test skips
 // shape pairs that cannot come closer than that.
 ShapeDistance bodyDistance(const BodyGeometry& a,
-                                   const Eigen::Isometry3d& X_Wa,
-                                   const BodyGeometry& b,
-                                   const Eigen::Isometry3d& X_Wb,
-                                   double bound,
-                                   bool exact,
-                                   bool witness,
-                                   bool closed_forms) {
+                           const Eigen::Isometry3d& X_Wa,
+                           const BodyGeometry& b,
+                           const Eigen::Isometry3d& X_Wb,
+                           double bound,
+                           bool exact,
+                           bool witness,
+                           bool closed_forms) {
   ShapeDistance best;
   best.distance = bound;
   best.beyond = true;
@@ -69,10 +69,9 @@ ClearanceResult ClearanceEvaluator::evaluate(double theta,
   for (std::size_t i = 0; i < scene.pairs().size(); ++i) {
     const PairInfo& pair = scene.pairs()[i];
     const auto a = static_cast<std::size_t>(pair.a), b = static_cast<std::size_t>(pair.b);
-    const detail::ShapeDistance d = detail::bodyDistance(bodies[a], X_W_[a], bodies[b], X_W_[b],
-                                                 request.bounded ? pair.thresholds.d_high : kInf,
-                                                 !request.bounded, request.witness_points,
-                                                 closed_forms_);
+    const detail::ShapeDistance d = detail::bodyDistance(
+        bodies[a], X_W_[a], bodies[b], X_W_[b], request.bounded ? pair.thresholds.d_high : kInf,
+        !request.bounded, request.witness_points, closed_forms_);
     PairClearance& out = result.pairs[i];
     out.distance = d.distance;
     out.beyond_bound = d.beyond;
@@ -103,8 +102,9 @@ double ClearanceEvaluator::factor(double theta, const kinematics::JointVector& q
   double f = 1.0;
   for (const PairInfo& pair : scene.pairs()) {
     const auto a = static_cast<std::size_t>(pair.a), b = static_cast<std::size_t>(pair.b);
-    const detail::ShapeDistance d = detail::bodyDistance(
-        bodies[a], X_W_[a], bodies[b], X_W_[b], pair.thresholds.d_high, false, false, closed_forms_);
+    const detail::ShapeDistance d =
+        detail::bodyDistance(bodies[a], X_W_[a], bodies[b], X_W_[b], pair.thresholds.d_high, false,
+                             false, closed_forms_);
     if (d.beyond) continue;
     f *= rampFactor(d.distance, pair.thresholds.d_low, pair.thresholds.d_high,
                     pair.thresholds.gamma);

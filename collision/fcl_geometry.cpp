@@ -480,8 +480,8 @@ CollisionShape makeCollisionShape(const kinematics::Shape& shape) {
       for (const Eigen::Vector3d& v : loaded.mesh.vertices)
         r = std::max(r, (v - out.centre_G).norm());
       out.radius = r;
-      out.bounding_box = Primitive{Primitive::Kind::kBox, Eigen::Isometry3d::Identity(),
-                                   0.5 * box.sizes()};
+      out.bounding_box =
+          Primitive{Primitive::Kind::kBox, Eigen::Isometry3d::Identity(), 0.5 * box.sizes()};
       out.bounding_box->X_W.translation() = box.center();
       out.triangles = loaded.mesh.triangles.size();
       out.geometry = makeMeshModel(loaded.mesh);

@@ -62,10 +62,10 @@ std::shared_ptr<MeshModel> makeMeshModel(const kinematics::TriangleMesh& mesh);
 /// fcl::distance within 1e-9 m. The closed forms (collision/primitive_distance) come first: they
 /// settle pairs beyond the bound, and measure primitive pairs they have an exact form for
 /// (spheres, capsules, boxes, a capsule with a cylinder) when no witness points are asked
-/// for; those numbers are exact, where FCL's GJK stops within its 1e-6 m tolerance. Returns 0 with `penetrating` set when the shapes touch (closer
-/// than 1 pm) or overlap (for meshes: when surfaces cross; a solid wholly inside a mesh is not
-/// seen, and the witness points of penetrating pairs are arbitrary). Witness points (world) only
-/// when asked for, zero otherwise.
+/// for; those numbers are exact, where FCL's GJK stops within its 1e-6 m tolerance. Returns 0 with
+/// `penetrating` set when the shapes touch (closer than 1 pm) or overlap (for meshes: when surfaces
+/// cross; a solid wholly inside a mesh is not seen, and the witness points of penetrating pairs are
+/// arbitrary). Witness points (world) only when asked for, zero otherwise.
 struct ShapeDistance {
   double distance = 0.0;
   bool beyond = false;

@@ -81,6 +81,7 @@ void MapClearance::beginCell(double theta, const Eigen::Isometry3d& X_BF) {
 const std::array<Eigen::Isometry3d, kinematics::kNumJoints + 1>& MapClearance::frames() {
   if (!frames_ready_) {
     frames_ = scene_->cell().robot.linkFrames(*q_);
+    for (Eigen::Isometry3d& X : frames_) X = scene_->cell().X_WB * X;
     frames_ready_ = true;
   }
   return frames_;
@@ -89,7 +90,7 @@ const std::array<Eigen::Isometry3d, kinematics::kNumJoints + 1>& MapClearance::f
 const Eigen::Isometry3d& MapClearance::pose(std::size_t i) {
   const BodyInfo& body = scene_->bodies()[i];
   if (body.motion != BodyMotion::kRobotLink || placed_[i]) return X_W_[i];
-  X_W_[i] = scene_->cell().X_WB * frames()[static_cast<std::size_t>(body.link)];
+  X_W_[i] = frames()[static_cast<std::size_t>(body.link)];
   placed_[i] = true;
   return X_W_[i];
 }

@@ -53,12 +53,14 @@ class MapClearance {
     double factor = 1.0;
     bool known = false;
   };
-  /// The rest of it, read when a bound does not decide: what the bodies' poses follow from.
+  /// The rest of it: what the bodies' poses follow from. Pairs with a link read the first
+  /// three on every call, the rest only when nothing moved.
   struct State {
     ChainLevers::Weights weights{};  ///< pairs with a link: the levers at q (tighter than static)
     double theta = 0.0;
     kinematics::JointVector q = kinematics::JointVector::Zero();
     Eigen::Isometry3d X_BF = Eigen::Isometry3d::Identity();
+    /// Pairs without a link: the bodies' poses.
     Eigen::Isometry3d X_a = Eigen::Isometry3d::Identity(), X_b = Eigen::Isometry3d::Identity();
   };
   double sharedFactor(std::size_t pair);
@@ -68,7 +70,7 @@ class MapClearance {
   /// ascending order, so joint k turns with the later ones still where they were: the distal
   /// body's reach from axis k is what it is now).
   ChainLevers::Weights leversNow(std::size_t pair);
-  /// The DH frames at this branch's joints, by FK on first use.
+  /// The DH frames in the world (X_WB · X_Bk) at this branch's joints, by FK on first use.
   const std::array<Eigen::Isometry3d, kinematics::kNumJoints + 1>& frames();
   /// Body i's pose at this cell and branch: robot links by FK on first use.
   const Eigen::Isometry3d& pose(std::size_t i);

@@ -725,8 +725,9 @@ TEST(ChainLevers, BoundHowFarTheDistanceOfAPairWithALinkCanChange) {
       const double d1 = boxedDistance(bodies[a], X1[a], bodies[b], X1[b]);
       // The configuration-free weights, and those at q0 (MapClearance's).
       const double bound = levers.motion(p, levers.weights(p), theta0, q0, theta1, q1);
-      const ChainLevers::Weights at =
-          levers.weightsAt(p, X0[levers.distal(p)], scene.cell().robot.linkFrames(q0));
+      auto frames = scene.cell().robot.linkFrames(q0);
+      for (Eigen::Isometry3d& X : frames) X = scene.cell().X_WB * X;
+      const ChainLevers::Weights at = levers.weightsAt(p, X0[levers.distal(p)], frames);
       const double bound_at = levers.motion(p, at, theta0, q0, theta1, q1);
       ASSERT_LE(bound_at, bound);
       ASSERT_LE(std::abs(d1 - d0), bound_at + 1e-9)
