@@ -148,6 +148,8 @@ struct Commands {
   CLI::Option* ik_matrix = nullptr;
   RobotImportOptions robot_import;
   CLI::App* robot_import_cmd = nullptr;
+  RobotCheckOptions robot_check;
+  CLI::App* robot_check_cmd = nullptr;
 
   Commands() = default;
   Commands(const Commands&) = delete;
@@ -336,8 +338,24 @@ void addIkCommand(CLI::App& app, Commands& c) {
   cmd->add_flag("--json", ik.json, "Print JSON instead of text");
 }
 
+void addRobotCheckCommand(CLI::App& robot_cmd, Commands& c) {
+  RobotCheckOptions& o = c.robot_check;
+  auto* cmd = c.robot_check_cmd = robot_cmd.add_subcommand(
+      "check",
+      "Sample random configurations within the joint limits and list the link pairs that collide "
+      "in all, in >= 95% or in none of them; suggest allowed_collisions for the robot file (pairs "
+      "that overlap by design, as MoveIt's setup assistant does)");
+  cmd->add_option("robot", o.robot_file, "Robot file (YAML) or URDF")->required();
+  cmd->add_option("--samples", o.samples, "Random configurations")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{10000000}))
+      ->capture_default_str();
+  cmd->add_option("--seed", o.seed, "Seed of the random configurations")->capture_default_str();
+  cmd->add_flag("--json", o.json, "Print JSON instead of text");
+}
+
 void addRobotCommand(CLI::App& app, Commands& c) {
-  auto* robot_cmd = app.add_subcommand("robot", "Robot files: import a URDF");
+  auto* robot_cmd =
+      app.add_subcommand("robot", "Robot files: import a URDF, survey the links' self-collisions");
   robot_cmd->require_subcommand(1);
   UrdfRobotSource& s = c.robot_import.source;
   auto* cmd = c.robot_import_cmd = robot_cmd->add_subcommand(
@@ -366,6 +384,7 @@ void addRobotCommand(CLI::App& app, Commands& c) {
                   "abb_rapid, ur_script or none")
       ->check(CLI::IsMember(kControllers))
       ->capture_default_str();
+  addRobotCheckCommand(*robot_cmd, c);
 }
 
 // An example per command, run from the repository root on the bundled data (the
@@ -412,6 +431,9 @@ void addExamples(const Commands& c) {
         "--controller kuka_krl",
         "scanplan robot import data/robots/urdf/abb_irb2400.urdf -o irb2400.yaml "
         "--opw-parameters data/robots/urdf/abb_irb2400_opw.yaml"}},
+      {c.robot_check_cmd,
+       {"scanplan robot check data/robots/viper_s650.yaml",
+        "scanplan robot check data/robots/urdf/abb_irb2400.urdf --samples 20000 --json"}},
   };
   for (const auto& [cmd, lines] : examples) {
     std::string footer = lines.size() > 1 ? "Examples:" : "Example:";
@@ -505,6 +527,7 @@ void requireInputs(const Commands& c) {
     requireInput(source->robot_file, "robot file");
     requireInput(source->job_file, "job file");
   }
+  if (c.robot_check_cmd->parsed()) requireInput(c.robot_check.robot_file, "robot file");
   if (c.robot_import_cmd->parsed()) {
     const UrdfRobotSource& s = c.robot_import.source;
     requireInput(s.urdf, "URDF file");
@@ -542,6 +565,7 @@ ExitCode dispatch(const Commands& c) {
   if (c.fk_cmd->parsed()) code = runFk(c.fk);
   if (c.ik_cmd->parsed()) code = runIk(c.ik);
   if (c.robot_import_cmd->parsed()) code = runRobotImport(c.robot_import);
+  if (c.robot_check_cmd->parsed()) code = runRobotCheck(c.robot_check);
   if (c.batch_report_cmd->parsed()) {
     code = runBatchReport(c.batch_report_dir);
   } else if (c.batch_merge_cmd->parsed()) {

@@ -62,6 +62,15 @@ struct Candidate {
   PairThresholds t;
 };
 
+int bodyNamed(const std::vector<BodyInfo>& bodies, const std::string& name) {
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    if (bodies[i].name == name && bodies[i].motion == BodyMotion::kRobotLink) {
+      return static_cast<int>(i);
+    }
+  }
+  return -1;
+}
+
 // Applies one rule to every pair of bodies it matches (candidates in the order of the pairs
 // a < b); a rule that matches no pair is an input error.
 void applyRule(const PairRule& rule,
@@ -94,9 +103,11 @@ void applyRule(const PairRule& rule,
   }
 }
 
-// The pairs to check: default pairs, then the job's rules in order.
+// The pairs to check: default pairs less the robot's allowed collisions, then the job's rules
+// in order (a rule may include an allowed pair again).
 std::vector<PairInfo> selectPairs(const std::vector<BodyInfo>& bodies,
-                                  const ClearanceConfig& config) {
+                                  const ClearanceConfig& config,
+                                  const std::vector<std::array<std::string, 2>>& allowed) {
   const int n = static_cast<int>(bodies.size());
   std::vector<Candidate> candidates;
   for (int a = 0; a < n; ++a) {
@@ -105,6 +116,17 @@ std::vector<PairInfo> selectPairs(const std::vector<BodyInfo>& bodies,
           {pairByDefault(bodies[static_cast<std::size_t>(a)], bodies[static_cast<std::size_t>(b)]),
            config.defaults});
     }
+  }
+  for (const auto& [a, b] : allowed) {
+    if (bodyNamed(bodies, a) < 0 || bodyNamed(bodies, b) < 0) {
+      throw InputError("robot allowed_collisions: [" + a + ", " + b +
+                       "] names a link the robot does not have: expected its link names");
+    }
+    PairRule rule;
+    rule.a = a;
+    rule.b = b;
+    rule.action = PairRule::Action::kExclude;
+    applyRule(rule, bodies, candidates);
   }
   for (const PairRule& rule : config.rules) applyRule(rule, bodies, candidates);
   std::vector<PairInfo> pairs;
@@ -169,7 +191,7 @@ Scene::Scene(const kinematics::CellModel& cell, const ClearanceConfig& config)
         -1, o.shapes);
   }
 
-  pairs_ = selectPairs(bodies_, config);
+  pairs_ = selectPairs(bodies_, config, cell.robot.definition().allowed_collisions);
 }
 
 Scene::~Scene() = default;

@@ -52,6 +52,9 @@ struct RobotDefinition {
   std::array<DhJoint, kNumJoints> joints{};
   OpwParameters opw;
   std::array<Link, kNumJoints + 1> links{};
+  /// Link pairs never checked for clearance (they touch or overlap by design), by link name
+  /// (the names the collision scene gives them: the link's name, else base, link1 … link6).
+  std::vector<std::array<std::string, 2>> allowed_collisions;
 };
 
 /// The V+ configuration words of an IK branch (DESIGN.md §3.2).

@@ -15,6 +15,7 @@
 #include "collision/clearance.h"
 #include "collision/fcl_geometry.h"
 #include "collision/scene.h"
+#include "collision/self_collision.h"
 #include "kinematics/error.h"
 #include "kinematics/pose.h"
 #include "kinematics/ramp.h"
@@ -757,6 +758,84 @@ TEST(ChainLevers, ABodyTurningAboutItsOwnAxisDoesNotMove) {
     EXPECT_EQ(levers.weights(p)[0], 0.0);  // joints before link 4 do not move them apart
   }
   EXPECT_TRUE(found);
+}
+
+// The robot file's allowed_collisions: the pair is not checked; a job's include rule checks it
+// again; a name the robot does not have is an input error naming the key.
+TEST(AllowedCollisions, ARobotsAllowedPairIsNotCheckedUnlessAJobIncludesIt) {
+  const auto hasPair = [](const Scene& scene, const std::string& a, const std::string& b) {
+    for (const PairInfo& p : scene.pairs()) {
+      const std::string& na = scene.bodies()[static_cast<std::size_t>(p.a)].name;
+      const std::string& nb = scene.bodies()[static_cast<std::size_t>(p.b)].name;
+      if ((na == a && nb == b) || (na == b && nb == a)) return true;
+    }
+    return false;
+  };
+  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml");
+  ASSERT_TRUE(hasPair(Scene(cli::buildCell(job), cli::clearanceConfig(job)), "link4", "link6"));
+  job.robot.allowed_collisions = {{"link6", "link4"}};
+  const Scene allowed(cli::buildCell(job), cli::clearanceConfig(job));
+  EXPECT_FALSE(hasPair(allowed, "link4", "link6"));
+  EXPECT_TRUE(hasPair(allowed, "link3", "link6"));
+  cli::PairRuleSpec include;
+  include.a = "link4";
+  include.b = "link6";
+  include.include = true;
+  job.constraints.clearance.pairs.push_back(include);
+  EXPECT_TRUE(hasPair(Scene(cli::buildCell(job), cli::clearanceConfig(job)), "link4", "link6"));
+
+  const fs::path dir = fs::temp_directory_path() / ("scanplan_allowed_" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  {
+    std::ifstream in(test::sourceDir() / "data/robots/viper_s650.yaml");
+    std::ofstream out(dir / "robot.yaml");
+    out << in.rdbuf() << "allowed_collisions: [[link4, link9]]\n";
+  }
+  try {
+    cli::loadRobotFile(dir / "robot.yaml");
+    FAIL() << "an unknown link was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("allowed_collisions"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("link9"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("robot.yaml"), std::string::npos) << e.what();
+  }
+  fs::remove_all(dir);
+}
+
+// `robot check`'s survey: the bundled Viper has no pair that overlaps by design; give its flange
+// a 150 mm sphere around the wrist centre and link 4, which ends there, meets it in every
+// configuration; allowed in the robot, the pair is reported as allowed.
+TEST(SelfCollisionSurvey, APairThatOverlapsByDesignCollidesInEverySample) {
+  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml");
+  const auto survey = [&] {
+    return surveySelfCollisions(cli::buildRobotModel(job.robot, "test"), 2000, 5);
+  };
+  const auto find = [](const SelfSurvey& s, const std::string& a, const std::string& b) {
+    for (const SelfPairSurvey& p : s.pairs) {
+      if (p.a == a && p.b == b) return p;
+    }
+    ADD_FAILURE() << a << " - " << b << " not surveyed";
+    return SelfPairSurvey{};
+  };
+  const SelfSurvey plain = survey();
+  EXPECT_EQ(plain.samples, 2000u);
+  for (const SelfPairSurvey& p : plain.pairs) {
+    EXPECT_EQ(p.adjacent, p.link_b - p.link_a == 1);
+    if (!p.adjacent) {
+      EXPECT_LT(p.colliding, 2000u * 19 / 20) << p.a << " - " << p.b;
+    }
+    EXPECT_EQ(p.colliding > 0, p.min_distance == 0.0) << p.a << " - " << p.b;
+  }
+  cli::ShapeSpec sphere;
+  sphere.type = "sphere";
+  sphere.radius_mm = 150;
+  sphere.pose.xyz_mm = {0, 0, -80};  // the wrist centre, 80 mm behind the flange
+  job.robot.links[6].shapes.push_back(sphere);
+  const SelfPairSurvey overlapping = find(survey(), "link4", "link6");
+  EXPECT_EQ(overlapping.colliding, 2000u);
+  EXPECT_FALSE(overlapping.allowed);
+  job.robot.allowed_collisions = {{"link4", "link6"}};
+  EXPECT_TRUE(find(survey(), "link4", "link6").allowed);
 }
 
 }  // namespace

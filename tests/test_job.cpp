@@ -262,7 +262,7 @@ TEST_F(JobFile, UnknownKeysAreNamedWithLineAndSuggestion) {
   EXPECT_TRUE(loadFails(write("job.yaml", "robot:\n" + indented(kRobot + "payload_kg: 5\n") +
                                               "\npart: {mesh: part.stl}\n"),
                         {at("job.yaml", "13:3: robot.payload_kg: unknown key"),
-                         "expected one of: controller, dh, links"}));
+                         "expected one of: allowed_collisions, controller, dh, links"}));
 }
 
 TEST_F(JobFile, WrongTypesSayWhatWasExpected) {

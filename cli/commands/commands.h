@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -126,6 +127,13 @@ struct RobotImportOptions {
   std::filesystem::path out_file;
 };
 ExitCode runRobotImport(const RobotImportOptions& options);
+struct RobotCheckOptions {
+  std::filesystem::path robot_file;  ///< robot YAML or URDF
+  std::size_t samples = 10000;
+  std::uint32_t seed = 1;
+  bool json = false;
+};
+ExitCode runRobotCheck(const RobotCheckOptions& options);
 ExitCode runFk(const FkOptions& options);
 ExitCode runIk(const IkOptions& options);
 ExitCode runJobShow(const std::filesystem::path& job_file,

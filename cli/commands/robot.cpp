@@ -4,7 +4,10 @@
 
 #include "cli/commands/commands.h"
 #include "cli/config/robot_urdf.h"
+#include "cli/io/json.h"
 #include "cli/io/output.h"
+#include "collision/self_collision.h"
+#include "kinematics/units.h"
 
 namespace scanplan::cli {
 namespace {
@@ -39,7 +42,84 @@ std::string importHeader(const RobotImportOptions& options, const UrdfRobot& rob
   return text;
 }
 
+// What to do with a pair, from how often it collided (MoveIt setup assistant's classes).
+std::string verdict(const collision::SelfPairSurvey& p, std::size_t samples) {
+  if (p.adjacent) return "adjacent: not checked";
+  if (p.allowed) return "allowed by the robot file";
+  if (p.colliding == samples) return "always: they overlap by design, allow";
+  if (20 * p.colliding >= 19 * samples) return "nearly always (>= 95%): allow";
+  if (p.colliding == 0) return "never";
+  return "sometimes: keep checking";
+}
+
+bool suggested(const collision::SelfPairSurvey& p, std::size_t samples) {
+  return !p.adjacent && !p.allowed && samples > 0 && 20 * p.colliding >= 19 * samples;
+}
+
+Json surveyJson(const std::string& name,
+                const RobotCheckOptions& o,
+                const collision::SelfSurvey& s) {
+  Json json;
+  json["robot"] = name;
+  json["samples"] = s.samples;
+  json["seed"] = o.seed;
+  Json pairs = Json::array(), allow = Json::array();
+  for (const collision::SelfPairSurvey& p : s.pairs) {
+    Json pair;
+    pair["a"] = p.a;
+    pair["b"] = p.b;
+    pair["adjacent"] = p.adjacent;
+    pair["allowed"] = p.allowed;
+    pair["colliding"] = p.colliding;
+    pair["share"] = static_cast<double>(p.colliding) / static_cast<double>(s.samples);
+    pair["min_distance_mm"] = toMm(p.min_distance);
+    pair["verdict"] = verdict(p, s.samples);
+    pairs.push_back(std::move(pair));
+    if (suggested(p, s.samples)) allow.push_back(Json::array({p.a, p.b}));
+  }
+  json["pairs"] = std::move(pairs);
+  json["suggested_allowed_collisions"] = std::move(allow);
+  return json;
+}
+
+std::string surveyText(const std::string& name,
+                       const RobotCheckOptions& o,
+                       const collision::SelfSurvey& s) {
+  std::string text = fmt::format(
+      "robot      {}: {} random configurations within the joint limits (seed {})\n\n"
+      "  {:<22} {:>9} {:>7} {:>12}   {}\n",
+      name, s.samples, o.seed, "pair", "colliding", "share", "min dist mm", "verdict");
+  std::string allow;
+  for (const collision::SelfPairSurvey& p : s.pairs) {
+    const double share = 100.0 * static_cast<double>(p.colliding) / static_cast<double>(s.samples);
+    text += fmt::format(
+        "  {:<22} {:>9} {:>6.1f}% {:>12}   {}\n", p.a + " - " + p.b, p.colliding, share,
+        p.min_distance >= 0.1 ? std::string(">= 100") : fmt::format("{:.1f}", toMm(p.min_distance)),
+        verdict(p, s.samples));
+    if (suggested(p, s.samples)) {
+      allow += fmt::format("  - [{}, {}]   # collide in {:.1f}% of the samples\n", p.a, p.b, share);
+    }
+  }
+  if (allow.empty())
+    return text + "\nno pair to allow: every checked pair is apart in some configurations\n";
+  return text +
+         "\nsuggested, for the robot file (a job can check a pair again with "
+         "constraints.clearance.pairs: [{a, b, include: true}]):\nallowed_collisions:\n" +
+         allow;
+}
+
 }  // namespace
+
+ExitCode runRobotCheck(const RobotCheckOptions& options) {
+  const RobotSpec spec = loadRobotOrUrdf(options.robot_file);
+  const kinematics::RobotModel robot = buildRobotModel(spec, options.robot_file.string());
+  const collision::SelfSurvey survey =
+      collision::surveySelfCollisions(robot, options.samples, options.seed);
+  const std::string out = options.json ? jsonDocument(surveyJson(spec.name, options, survey))
+                                       : surveyText(spec.name, options, survey);
+  std::fputs(out.c_str(), stdout);
+  return ExitCode::kOk;
+}
 
 ExitCode runRobotImport(const RobotImportOptions& options) {
   UrdfRobot robot = importUrdf(options.source);

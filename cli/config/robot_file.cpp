@@ -1,5 +1,6 @@
 #include "cli/config/robot_file.h"
 
+#include <algorithm>
 #include <cctype>
 #include <sstream>
 
@@ -65,6 +66,25 @@ void describeLink(A& a, LinkSpec& s) {
   a.list("shapes", s.shapes, 0, 64);
 }
 
+// Every name in allowed_collisions is one of the robot's links (base, link1 … link6, or the
+// names its links: give).
+template <class A>
+void checkAllowedCollisions(A& a, const RobotSpec& s) {
+  std::vector<std::string> names;
+  for (std::size_t k = 0; k < 7; ++k) {
+    const std::string fallback = k == 0 ? "base" : "link" + std::to_string(k);
+    names.push_back(k < s.links.size() && !s.links[k].name.empty() ? s.links[k].name : fallback);
+  }
+  for (const auto& pair : s.allowed_collisions) {
+    for (const std::string& name : pair) {
+      if (std::find(names.begin(), names.end(), name) == names.end()) {
+        a.fail("allowed_collisions", fmt::format("'{}'", name),
+               fmt::format("a link of this robot: {}", fmt::join(names, ", ")));
+      }
+    }
+  }
+}
+
 template <class A>
 void describeRobot(A& a, RobotSpec& s) {
   a.require("name");
@@ -81,6 +101,10 @@ void describeRobot(A& a, RobotSpec& s) {
              "7 links (base, then link 1 … link 6) or none");
     }
   }
+  if (A::kReading || !s.allowed_collisions.empty()) {
+    a.field("allowed_collisions", s.allowed_collisions);
+  }
+  if constexpr (A::kReading) checkAllowedCollisions(a, s);
 }
 
 }  // namespace
@@ -182,6 +206,7 @@ kinematics::RobotModel buildRobotModel(const RobotSpec& spec, const std::string&
     for (const ShapeSpec& shape : spec.links[i].shapes)
       def.links[i].shapes.push_back(toShape(shape));
   }
+  def.allowed_collisions = spec.allowed_collisions;
   try {
     return kinematics::RobotModel(std::move(def));
   } catch (const InputError& e) {

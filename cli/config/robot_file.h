@@ -46,6 +46,9 @@ struct RobotSpec {
   std::vector<JointSpec> dh;
   OpwSpec opw;
   std::vector<LinkSpec> links;
+  /// Link pairs never checked against each other (they touch or overlap by design), by name:
+  /// `allowed_collisions: [[link4, link6]]`.
+  std::vector<std::array<std::string, 2>> allowed_collisions;
 };
 
 /// The program format (a name of programFormatNames()) the controller runs: vplus, krl, rapid,

@@ -409,6 +409,31 @@ void YamlIn::field(const char* key, std::vector<std::string>& value, const Expec
   value = std::move(items);
 }
 
+void YamlIn::field(const char* key, std::vector<std::array<std::string, 2>>& value, const Expect&) {
+  if (!has(key)) return;
+  const YAML::Node seq = node_[key];
+  checkSequence(key, seq, 0, 1000);
+  std::vector<std::array<std::string, 2>> pairs;
+  for (std::size_t i = 0; i < seq.size(); ++i) {
+    const YAML::Node item = seq[i];
+    const std::string at = fmt::format("{}[{}]", key, i);
+    if (!item.IsSequence() || item.size() != 2 || !item[0].IsScalar() || !item[1].IsScalar() ||
+        item[0].Scalar() == item[1].Scalar()) {
+      throw InputError(fmt::format("{}: {}: {}: expected a pair of two different names, [a, b]",
+                                   where(item), fieldPath(at), nodeText(item)));
+    }
+    const std::array<std::string, 2> pair{item[0].Scalar(), item[1].Scalar()};
+    for (const auto& p : pairs) {
+      if ((p[0] == pair[0] && p[1] == pair[1]) || (p[0] == pair[1] && p[1] == pair[0])) {
+        throw InputError(fmt::format("{}: {}: [{}, {}] is listed twice: expected each pair once",
+                                     where(item), fieldPath(at), pair[0], pair[1]));
+      }
+    }
+    pairs.push_back(pair);
+  }
+  value = std::move(pairs);
+}
+
 void YamlIn::field(const char* key, FilePath& value, const Expect&) {
   if (!has(key)) return;
   const YAML::Node n = node_[key];
@@ -515,6 +540,14 @@ void YamlOut::field(const char* key, const std::string& value, const Expect&) {
 void YamlOut::field(const char* key, const std::vector<std::string>& value, const Expect&) {
   out_ << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
   for (const std::string& v : value) out_ << v;
+  out_ << YAML::EndSeq;
+}
+void YamlOut::field(const char* key,
+                    const std::vector<std::array<std::string, 2>>& value,
+                    const Expect&) {
+  out_ << YAML::Key << key << YAML::Value << YAML::BeginSeq;
+  for (const auto& pair : value)
+    out_ << YAML::Flow << YAML::BeginSeq << pair[0] << pair[1] << YAML::EndSeq;
   out_ << YAML::EndSeq;
 }
 void YamlOut::field(const char* key, const FilePath& value, const Expect&) {

@@ -80,6 +80,8 @@ class YamlIn {
   void field(const char* key, FilePath& value, const Expect& expect = {});
   /// A list of texts, each checked against `expect` (e.g. oneOf); duplicates are errors.
   void field(const char* key, std::vector<std::string>& value, const Expect& expect = {});
+  /// A list of name pairs, `[[a, b], …]`: each two different texts, no pair twice (either order).
+  void field(const char* key, std::vector<std::array<std::string, 2>>& value, const Expect& = {});
   template <std::size_t N>
   void field(const char* key, std::array<double, N>& value, const Expect& expect = {}) {
     std::vector<double> v(value.begin(), value.end());
@@ -183,6 +185,9 @@ class YamlOut {
   void field(const char* key, const std::string& value, const Expect& = {});
   void field(const char* key, const FilePath& value, const Expect& = {});
   void field(const char* key, const std::vector<std::string>& value, const Expect& = {});
+  void field(const char* key,
+             const std::vector<std::array<std::string, 2>>& value,
+             const Expect& = {});
   template <class T, std::size_t N>
   void field(const char* key, const std::array<T, N>& value, const Expect& = {}) {
     out_ << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
