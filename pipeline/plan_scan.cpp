@@ -8,6 +8,7 @@
 #include "kinematics/error.h"
 #include "kinematics/units.h"
 #include "pipeline/auto_scan.h"
+#include "pipeline/no_path.h"
 #include "scanner/raycaster.h"
 
 namespace scanplan::pipeline {
@@ -172,6 +173,26 @@ std::shared_ptr<const PreparedScan> prepareScan(const ScanProblem& problem,
   return prepared;
 }
 
+namespace {
+
+// No path on any branch: per branch, why — a closed map explained (the time span, the constraint,
+// the body pair or joint, what to change), else the planner's own reason.
+std::string noPathReason(const ScanProblem& problem,
+                         const PreparedScan& p,
+                         const PlannerOutcome& outcome) {
+  std::string text = outcome.method + " found no path on any branch:";
+  for (std::size_t b = 0; b < p.map.branches.size(); ++b) {
+    if (b >= outcome.branches.size()) break;
+    std::string why = explainBlockedBranch(*p.scene, problem.constraints, p.path, p.map, b);
+    if (why.empty()) why = outcome.branches[b].reason;
+    if (why.empty()) continue;  // not planned (a fixed map.branch)
+    text += fmt::format("\n  {}: {}", p.map.branches[b].words(), why);
+  }
+  return text;
+}
+
+}  // namespace
+
 ScanPlan planPrepared(const ScanProblem& problem,
                       std::shared_ptr<const PreparedScan> prepared,
                       const PlanOptions& options) {
@@ -194,7 +215,8 @@ ScanPlan planPrepared(const ScanProblem& problem,
   if (!plan.choice.solved()) {
     plan.status =
         plan.choice.rejected.empty() ? ScanStatus::kNoPath : ScanStatus::kNoExecutablePath;
-    plan.reason = plan.choice.chosen.result.reason;
+    plan.reason = plan.status == ScanStatus::kNoPath ? noPathReason(problem, p, plan.choice.chosen)
+                                                     : plan.choice.chosen.result.reason;
     plan.trajectory.reset();
     return plan;
   }

@@ -253,4 +253,39 @@ TEST(PlannerInterface, OmplTerminationIsPassedInAndAnIterationCapRepeats) {
   EXPECT_NE(c.detail.find("500 iterations"), std::string::npos) << c.detail;
 }
 
+
+// A plan with no path says, per branch, when (the time span and the pass), what (the
+// constraint) and which (the body pair, or the joint and the value it would need), and what to
+// change. Three ways to close the light demo's map: the scanner kept 150 mm off the table, the
+// table 1 m from the robot, J5 held within ±10°.
+TEST(NoPath, TheReasonNamesTheTimeTheConstraintAndTheBodiesOrJoint) {
+  const auto reason = [](std::vector<std::string> set, double j5_limit_deg = 120.0) {
+    set.insert(set.end(), test::kLightDemo.begin(), test::kLightDemo.end());
+    set.push_back("simulation.enabled=false");
+    cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", set);
+    job.robot.dh[4].min_deg = -j5_limit_deg;
+    job.robot.dh[4].max_deg = j5_limit_deg;
+    const pipeline::ScanPlan plan = pipeline::planScan(cli::toProblem(job));
+    EXPECT_EQ(plan.status, pipeline::ScanStatus::kNoPath);
+    return plan.reason;
+  };
+  const std::string clearance = reason(
+      {"constraints.clearance.pairs=[{a: scanner, b: table, d_low_mm: 150, d_high_mm: 200}]"});
+  EXPECT_NE(clearance.find("RIGHTY ABOVE NOFLIP: t = 0.0–"), std::string::npos) << clearance;
+  EXPECT_NE(clearance.find("(scan.paths[0], ring): clearance scanner – table below d_low"),
+            std::string::npos)
+      << clearance;
+  EXPECT_NE(clearance.find("d_low 150.0 mm): raise the pass"), std::string::npos) << clearance;
+
+  const std::string reach = reason({"table.axis.xyz_mm=[1000, 0, 0]"});
+  EXPECT_NE(reach.find("t = 0.0–"), std::string::npos) << reach;
+  EXPECT_NE(reach.find("out of the arm's reach at every table angle: move table.axis"),
+            std::string::npos)
+      << reach;
+
+  const std::string joint = reason({}, 10.0);
+  EXPECT_NE(joint.find("joint limits: J5 would need"), std::string::npos) << joint;
+  EXPECT_NE(joint.find("(limits -10.0 … 10.0°)"), std::string::npos) << joint;
+}
+
 }  // namespace
