@@ -235,22 +235,49 @@ PoseCheck checkPose(collision::ClearanceEvaluator& evaluator, const Pose& pose) 
   return out;
 }
 
+// Each pair's least distance (below its d_high) and when it first came that close.
 struct Closest {
-  double distance = kInf;
-  int pair = -1;
-  double t = 0.0;
+  std::vector<double> distance;  // per pair, kInf when never below d_high
+  std::vector<double> t;
 
   void update(const PoseCheck& check, double t_pose) {
+    grow(check.size());
     for (std::size_t i = 0; i < check.size(); ++i) {
-      if (!check[i].beyond && check[i].distance < distance) {
-        distance = check[i].distance;
-        pair = static_cast<int>(i);
-        t = t_pose;
+      if (!check[i].beyond && check[i].distance < distance[i]) {
+        distance[i] = check[i].distance;
+        t[i] = t_pose;
       }
     }
   }
   void update(const Closest& other) {
-    if (other.distance < distance) *this = other;
+    grow(other.distance.size());
+    for (std::size_t i = 0; i < other.distance.size(); ++i) {
+      if (other.distance[i] < distance[i]) {
+        distance[i] = other.distance[i];
+        t[i] = other.t[i];
+      }
+    }
+  }
+  // The closest of the pairs `take` accepts: the least distance, then the earliest time, then
+  // the first pair; -1 when none came below its d_high.
+  template <class Take>
+  int least(Take&& take) const {
+    int best = -1;
+    for (std::size_t i = 0; i < distance.size(); ++i) {
+      if (!take(i) || !(distance[i] < kInf)) continue;
+      const auto b = static_cast<std::size_t>(best);
+      if (best < 0 || std::tie(distance[i], t[i]) < std::tie(distance[b], t[b])) {
+        best = static_cast<int>(i);
+      }
+    }
+    return best;
+  }
+
+ private:
+  void grow(std::size_t n) {
+    if (distance.size() >= n) return;
+    distance.resize(n, kInf);
+    t.resize(n, 0.0);
   }
 };
 
@@ -758,6 +785,15 @@ bool emitCollisions(const collision::Scene& scene,
   return collided;
 }
 
+// A pair of the robot's own bodies (its links and the scanner it carries).
+bool selfPair(const collision::Scene& scene, std::size_t p) {
+  const auto carried = [&](int body) {
+    const collision::BodyMotion m = scene.bodies()[static_cast<std::size_t>(body)].motion;
+    return m == collision::BodyMotion::kRobotLink || m == collision::BodyMotion::kScanner;
+  };
+  return carried(scene.pairs()[p].a) && carried(scene.pairs()[p].b);
+}
+
 // Orders the violations, and fills in the verdict and the distances.
 void concludeReport(const collision::Scene& scene,
                     const Gathered& gathered,
@@ -776,13 +812,20 @@ void concludeReport(const collision::Scene& scene,
   }
   report.valid = report.violations.empty();
   const Closest& closest = gathered.closest;
-  if (closest.pair >= 0) {
-    report.min_distance = closest.distance;
-    report.min_distance_pair = pairName(scene, closest.pair);
-    report.min_distance_t = closest.t;
-  } else {
-    report.min_distance = kInf;
-  }
+  const auto fill = [&](int pair, double& distance, std::string& name, double& t) {
+    distance = kInf;
+    if (pair < 0) return;
+    distance = closest.distance[static_cast<std::size_t>(pair)];
+    name = pairName(scene, pair);
+    t = closest.t[static_cast<std::size_t>(pair)];
+  };
+  const auto self = [&](std::size_t p) { return selfPair(scene, p); };
+  fill(closest.least([](std::size_t) { return true; }), report.min_distance,
+       report.min_distance_pair, report.min_distance_t);
+  fill(closest.least([&](std::size_t p) { return !self(p); }), report.min_cell_distance,
+       report.min_cell_distance_pair, report.min_cell_distance_t);
+  fill(closest.least(self), report.min_self_distance, report.min_self_distance_pair,
+       report.min_self_distance_t);
   if (scene.pairs().empty()) {
     report.proven_clearance = kInf;
   } else {

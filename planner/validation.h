@@ -76,6 +76,15 @@ struct ValidationReport {
   double min_distance = 0.0;
   std::string min_distance_pair;  ///< "a - b"; empty when min_distance is infinite
   double min_distance_t = 0.0;    ///< s
+  /// The same over the pairs with a body of the cell (part, table, obstacles, the robot's base
+  /// against them): what limits the scan.
+  double min_cell_distance = 0.0;
+  std::string min_cell_distance_pair;
+  double min_cell_distance_t = 0.0;
+  /// The same over the robot's own pairs (links, and the scanner it carries).
+  double min_self_distance = 0.0;
+  std::string min_self_distance_pair;
+  double min_self_distance_t = 0.0;
   /// m, a certified lower bound on every checked pair's distance over the whole continuous
   /// motion (the conservative-advancement certificate); 0 when a collision was found, infinite
   /// when the scene has no pairs.

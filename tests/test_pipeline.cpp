@@ -157,7 +157,8 @@ TEST(PartPlacement, PartReachNeverCallsAReachablePointBeyond) {
   EXPECT_EQ(reach.beyond_fraction, 0.0);
   EXPECT_LE(reach.nearest_excess, 0.0);
   // The same cloud 3 m further along the world x axis: all of it beyond, by over a metre.
-  for (Eigen::Vector3d& v : mesh.vertices) v = X_RB * (X_RB.inverse() * v + Eigen::Vector3d(3, 0, 0));
+  for (Eigen::Vector3d& v : mesh.vertices)
+    v = X_RB * (X_RB.inverse() * v + Eigen::Vector3d(3, 0, 0));
   const kinematics::PartReach far = kinematics::partReach(cell, mesh, lever);
   EXPECT_EQ(far.beyond_fraction, 1.0);
   EXPECT_GT(far.nearest_excess, 0.0);
@@ -252,7 +253,6 @@ TEST(PlannerInterface, OmplTerminationIsPassedInAndAnIterationCapRepeats) {
   const planner::PlanResult c = ompl->solve(problem, {500, 30.0});
   EXPECT_NE(c.detail.find("500 iterations"), std::string::npos) << c.detail;
 }
-
 
 // A plan with no path says, per branch, when (the time span and the pass), what (the
 // constraint) and which (the body pair, or the joint and the value it would need), and what to

@@ -637,6 +637,30 @@ TEST(Validate, PlannedDemoTrajectoryPasses) {
   EXPECT_LE(r.min_distance, plan.built.min_clearance + 1e-12);
   EXPECT_GE(r.samples, static_cast<std::size_t>(tr.duration() / 0.01));
   EXPECT_GE(r.poses_checked, r.samples);
+  // The closest pair split: the robot's own bodies apart from the cell's; the overall minimum is
+  // the smaller of the two, and each names a pair of its kind.
+  EXPECT_EQ(r.min_distance, std::min(r.min_cell_distance, r.min_self_distance));
+  const auto carried = [&](const std::string& name) {
+    for (const collision::BodyInfo& b : plan.scene.bodies()) {
+      if (b.name == name) {
+        return b.motion == collision::BodyMotion::kRobotLink ||
+               b.motion == collision::BodyMotion::kScanner;
+      }
+    }
+    ADD_FAILURE() << "no body " << name;
+    return false;
+  };
+  const auto bodiesOf = [](const std::string& pair) {
+    const std::size_t dash = pair.find(" - ");
+    return std::pair{pair.substr(0, dash), pair.substr(dash + 3)};
+  };
+  ASSERT_FALSE(r.min_self_distance_pair.empty());
+  const auto [s0, s1] = bodiesOf(r.min_self_distance_pair);
+  EXPECT_TRUE(carried(s0) && carried(s1)) << r.min_self_distance_pair;
+  if (!r.min_cell_distance_pair.empty()) {
+    const auto [c0, c1] = bodiesOf(r.min_cell_distance_pair);
+    EXPECT_FALSE(carried(c0) && carried(c1)) << r.min_cell_distance_pair;
+  }
   std::printf(
       "demo: %zu samples over %.1f s -> %zu poses (%zu checked) in %.2f s; min distance "
       "%.2f mm (%s at %.2f s), proven %.2f mm\n",

@@ -11,10 +11,16 @@ std::string validationSummary(const planner::ValidationReport& r, std::size_t ma
       fmt::format("validation {}: {} poses, {} clearance evaluations in {:.2f} s; ",
                   r.valid ? "valid" : fmt::format("INVALID, {} violation(s)", r.violations.size()),
                   r.samples, r.poses_checked, r.seconds);
-  s += std::isfinite(r.min_distance)
-           ? fmt::format("min distance {:.1f} mm ({} at t = {:.2f} s); ", toMm(r.min_distance),
-                         r.min_distance_pair, r.min_distance_t)
-           : std::string("every pair beyond its d_high; ");
+  // What limits the scan (the cell's bodies) first, the robot's own pairs apart.
+  const auto closest = [](const char* what, double d, const std::string& pair, double t) {
+    return std::isfinite(d)
+               ? fmt::format("{} {:.1f} mm ({} at t = {:.2f} s); ", what, toMm(d), pair, t)
+               : fmt::format("{}: every pair beyond its d_high; ", what);
+  };
+  s += closest("min distance to the cell", r.min_cell_distance, r.min_cell_distance_pair,
+               r.min_cell_distance_t);
+  s += closest("within the robot", r.min_self_distance, r.min_self_distance_pair,
+               r.min_self_distance_t);
   s += std::isfinite(r.proven_clearance)
            ? fmt::format("proven clearance over the whole motion {:.1f} mm\n",
                          toMm(r.proven_clearance))
@@ -74,6 +80,12 @@ Json validationJson(const planner::ValidationReport& r) {
           {"min_distance_mm", toMm(r.min_distance)},
           {"min_distance_pair", r.min_distance_pair},
           {"min_distance_time_s", r.min_distance_t},
+          {"min_cell_distance_mm", toMm(r.min_cell_distance)},
+          {"min_cell_distance_pair", r.min_cell_distance_pair},
+          {"min_cell_distance_time_s", r.min_cell_distance_t},
+          {"min_self_distance_mm", toMm(r.min_self_distance)},
+          {"min_self_distance_pair", r.min_self_distance_pair},
+          {"min_self_distance_time_s", r.min_self_distance_t},
           {"proven_clearance_mm", toMm(r.proven_clearance)},
           {"violations", std::move(violations)}};
 }
