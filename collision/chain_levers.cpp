@@ -217,8 +217,7 @@ double ChainLevers::motion(std::size_t pair,
   const PairWeights& p = weights_[pair];
   double motion = p.table == 0.0 ? 0.0 : p.table * turn(theta1, theta0);
   for (int k = 0; k < kinematics::kNumJoints; ++k) {
-    const double w = weights[static_cast<std::size_t>(k)];
-    if (w != 0.0) motion += w * turn(q1(k), q0(k));
+    motion += weights[static_cast<std::size_t>(k)] * turn(q1(k), q0(k));
   }
   return motion;
 }

@@ -144,13 +144,13 @@ double MapClearance::linkFactor(std::size_t p, std::size_t slot, const kinematic
   Memory& memory = memory_[slot];
   State& state = state_[slot];
   if (options_.skip && memory.known && !options_.exact_distances) {
-    if (q == state.q && theta_ == state.theta && X_BF_.matrix() == state.X_BF.matrix()) {
-      return memory.factor;  // the same poses: the same query again
-    }
     const double moved =
         levers_.motion(p, state.weights, state.theta, state.q, theta_, q) + kMargin;
     if (memory.lower - moved >= t.d_high) return 1.0;
     if (memory.upper + moved < t.d_low) return 0.0;
+    if (q == state.q && theta_ == state.theta && X_BF_.matrix() == state.X_BF.matrix()) {
+      return memory.factor;  // the same poses: the same query again
+    }
   }
   state.theta = theta_;
   state.q = q;
