@@ -1,5 +1,6 @@
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -52,6 +53,8 @@ struct PlanOptions {
 
 /// A progress line on stderr, only on a terminal (scripts and CI logs stay clean). Callable
 /// from worker threads.
+/// A progress line on stderr (a terminal only): the share done and, once the work has run a
+/// few seconds, the time left at the rate so far.
 class Progress {
  public:
   explicit Progress(std::string label);
@@ -62,6 +65,7 @@ class Progress {
   bool enabled_;
   std::mutex mutex_;
   int last_ = -1;
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
 };
 
 /// The part, the laser window and the generated scan path of a job.

@@ -36,8 +36,16 @@ void Progress::operator()(std::size_t done, std::size_t total) {
   const int percent = static_cast<int>(100 * done / std::max<std::size_t>(total, 1));
   if (percent == last_ && done != total) return;
   last_ = percent;
-  std::fprintf(stderr, "\r%s %3d%% (%zu / %zu)%s", label_.c_str(), percent, done, total,
-               done == total ? "\n" : "");
+  const double elapsed =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  std::string eta;
+  if (elapsed > 3.0 && done > 0 && done < total) {
+    const double left = elapsed * static_cast<double>(total - done) / static_cast<double>(done);
+    eta = left < 90.0 ? fmt::format(", {:.0f} s left  ", left)
+                      : fmt::format(", {:.0f} min left  ", left / 60.0);
+  }
+  std::fprintf(stderr, "\r%s %3d%% (%zu / %zu)%s%s", label_.c_str(), percent, done, total,
+               eta.c_str(), done == total ? "\n" : "");
   std::fflush(stderr);
 }
 
