@@ -86,10 +86,12 @@ bool acceptBest(const planner::ConfigMap& map,
   for (const std::size_t b : order)
     pending.push_back({out.chosen.branches[b].terms.total, b, nullptr, 0, out.chosen.branches[b]});
   const auto later = [](const Candidate& x, const Candidate& y) {
-    return std::tie(x.cost, x.branch, x.sheets, x.sheet) >
-           std::tie(y.cost, y.branch, y.sheets, y.sheet);
+    // Ties: branch order, the map before its sheets, sheets in order (never pointer values).
+    return std::make_tuple(x.cost, x.branch, x.sheets != nullptr, x.sheet) >
+           std::make_tuple(y.cost, y.branch, y.sheets != nullptr, y.sheet);
   };
   std::size_t tried = 0;
+  bool sheets_planned = false;
   while (!pending.empty()) {
     std::stable_sort(pending.begin(), pending.end(), later);
     const Candidate c = std::move(pending.back());
@@ -121,9 +123,15 @@ bool acceptBest(const planner::ConfigMap& map,
           out.rejected.empty()
               ? fmt::format("lowest J of {} solved branch(es), and the arm can follow it",
                             order.size())
-              : fmt::format(
-                    "lowest J the arm can follow: {} of {} solved path(s) had a lower "
+          : !sheets_planned
+              ? fmt::format(
+                    "lowest J the arm can follow: {} of {} solved branch(es) had a lower "
                     "J but cannot be executed (see rejected)",
+                    out.rejected.size(), order.size())
+              : fmt::format(
+                    "lowest J the arm can follow: {} of {} solved path(s) (branches and "
+                    "joint-wrap sheets) had a lower J but cannot be executed (see "
+                    "rejected)",
                     out.rejected.size(), tried);
       if (c.sheets) out.why_chosen += "; " + on_sheet;
       return true;
@@ -132,6 +140,7 @@ bool acceptBest(const planner::ConfigMap& map,
     if (!c.sheets && wrap_sheets) {
       if (auto sheets = wrap_sheets(c.branch)) {
         planSheets(std::move(sheets), c.branch, out.chosen.method, settings, pending);
+        sheets_planned = true;
       }
     }
   }
