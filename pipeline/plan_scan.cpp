@@ -208,8 +208,14 @@ ScanPlan planPrepared(const ScanProblem& problem,
     plan.times.trajectory += since(t);
     return executable(*plan.trajectory);
   };
+  // Joint wrap: the sheets of a branch whose path a joint could not follow within its limits.
+  const auto wrap_sheets = [&](std::size_t b) -> std::shared_ptr<const planner::WrapSheets> {
+    if (!plan.trajectory || plan.trajectory->wrap_joint < 0) return nullptr;
+    return std::make_shared<const planner::WrapSheets>(
+        p.scene->cell(), problem.constraints, p.path.path, p.map, b, plan.trajectory->wrap_joint);
+  };
   const auto t = Clock::now();
-  plan.choice = choosePath(p.map, problem.planning, options, accept);
+  plan.choice = choosePath(p.map, problem.planning, options, accept, wrap_sheets);
   plan.times.plan = since(t) - plan.times.trajectory;
   if (plan.choice.dp && plan.choice.chosen.method != "dp") plan.times.dp = plan.choice.dp->seconds;
   if (!plan.choice.solved()) {

@@ -20,6 +20,7 @@
 #include "pipeline/problem.h"
 #include "pipeline/simulation.h"
 #include "planner/config_map.h"
+#include "planner/joint_wrap.h"
 #include "planner/plan_result.h"
 #include "planner/refine.h"
 #include "planner/trajectory_builder.h"
@@ -62,6 +63,12 @@ struct PathChoice {
   std::vector<std::pair<std::size_t, std::string>> rejected;
   /// Why the chosen branch won (e.g. "lowest J of 6 solved branches").
   std::string why_chosen;
+  /// The chosen path's joint-wrap sheet (planner::WrapSheets::describe()); empty when it was
+  /// planned on the map itself.
+  std::string wrap_sheet;
+  /// That sheet as a one-branch map (the DP yardstick and the comparisons ran on it); null when
+  /// the path was planned on the map itself.
+  std::shared_ptr<const planner::ConfigMap> sheet_map;
   bool solved() const { return chosen.result.solved(); }
   /// (J − J_dp) / J_dp of the final path, when DP solved; negative when the continuous path
   /// beats DP's grid.
@@ -148,11 +155,20 @@ ScanPlan planScan(const ScanProblem& problem,
 /// takes the solved branches in order of J, refines each (when asked) and accepts the first whose
 /// path `accept` passes (empty string = accepted, else the reason); then the DP yardstick and the
 /// comparisons on the chosen branch.
+///
+/// Joint wrap: right after `accept` rejects a branch's path (on the map itself), `wrap_sheets`
+/// is asked for that branch's joint-wrap sheets (planner::WrapSheets); null or empty: none. The
+/// same planner then runs on each sheet and every solved sheet joins the candidates in order of J,
+/// so a branch whose best path would take a joint past its limit is planned again with the joint
+/// factor of the unwrapped joint values. planScan() asks only when the rejection was a joint that
+/// would pass its limit (TrajectoryBuild::wrap_joint).
 using PathCheck = std::function<std::string(std::size_t branch, const std::vector<double>& theta)>;
+using WrapSheetsFn = std::function<std::shared_ptr<const planner::WrapSheets>(std::size_t branch)>;
 PathChoice choosePath(const planner::ConfigMap& map,
                       const PlanSettings& settings,
                       const PlanOptions& options,
-                      const PathCheck& accept = {});
+                      const PathCheck& accept = {},
+                      const WrapSheetsFn& wrap_sheets = {});
 
 /// One planner over the map's branches (or only `branch`), keeping the lowest J.
 PlannerOutcome runPlanner(const std::string& method,

@@ -10,6 +10,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include "kinematics/joint_wrap.h"
 #include "kinematics/ramp.h"
 #include "kinematics/units.h"
 
@@ -22,7 +23,8 @@ constexpr double kMaxJointStep = std::numbers::pi / 2;  // rad between samples: 
 struct Track {
   std::vector<kinematics::JointVector> q;
   double worst_joint_factor = 1.0;
-  std::string broken;  // why the track cannot continue
+  std::string broken;   // why the track cannot continue
+  int wrap_joint = -1;  // broken because this joint's continuous value leaves its limits
 };
 
 // IK on the branch at every sample (independent: parallel).
@@ -52,28 +54,42 @@ double jointFactor(const kinematics::RobotModel& robot,
   return f;
 }
 
-// Why the nearest solution is too far to step to: a whole turn through a joint limit, or a jump.
-std::string jumpReason(const kinematics::RobotModel& robot,
-                       const kinematics::ScanPath& path,
+// Why the nearest continuation is too far to step to: the joints jump (a singularity).
+std::string jumpReason(const kinematics::ScanPath& path,
                        const kinematics::IkBranch& branch,
                        std::size_t k,
                        const kinematics::JointVector& from,
-                       const kinematics::JointVector& to,
-                       double step) {
+                       const kinematics::JointVector& to) {
   int joint = 0;
-  (to - from).cwiseAbs().maxCoeff(&joint);
-  const auto& limits = robot.joint(joint);
-  return step > 1.5 * std::numbers::pi
-             ? fmt::format(
-                   "time sample {} (t = {:.3f} s): joint {} would have to pass its limit "
-                   "({:.0f} … {:.0f} deg) to follow the path continuously (the map's cells "
-                   "there use the other whole-turn solution, {:.0f} deg away)",
-                   k, path.samples[k].t, joint + 1, toDeg(limits.min), toDeg(limits.max),
-                   toDeg(step))
-             : fmt::format(
-                   "time sample {} (t = {:.3f} s): joint {} would jump by {:.1f} deg between "
-                   "samples (the pose passes a singularity); no continuous motion on branch {}",
-                   k, path.samples[k].t, joint + 1, toDeg(step), branch.words());
+  const double step = (to - from).cwiseAbs().maxCoeff(&joint);
+  return fmt::format(
+      "time sample {} (t = {:.3f} s): joint {} would jump by {:.1f} deg between samples (the pose "
+      "passes a singularity); no continuous motion on branch {}",
+      k, path.samples[k].t, joint + 1, toDeg(step), branch.words());
+}
+
+// The first joint of the continuation `next` outside its limits (-1: none).
+int jointOutside(const kinematics::RobotModel& robot, const kinematics::JointVector& next) {
+  for (int j = 0; j < kinematics::kNumJoints; ++j) {
+    if (!(next(j) >= robot.joint(j).min && next(j) <= robot.joint(j).max)) return j;
+  }
+  return -1;
+}
+
+// Why the track cannot continue within the limits: joint j would need `next(j)`.
+std::string wrapReason(const kinematics::RobotModel& robot,
+                       const kinematics::ScanPath& path,
+                       std::size_t k,
+                       int j,
+                       const kinematics::JointVector& next,
+                       const kinematics::JointVector& inside) {
+  const auto& limits = robot.joint(j);
+  return fmt::format(
+      "time sample {} (t = {:.3f} s): joint {} would have to pass its limit ({:.0f} … {:.0f} deg) "
+      "to follow the path continuously: it would need {:.0f} deg (the map's cells there use the "
+      "other whole-turn solution, {:.0f} deg away)",
+      k, path.samples[k].t, j + 1, toDeg(limits.min), toDeg(limits.max), toDeg(next(j)),
+      toDeg(std::abs(inside(j) - next(j))));
 }
 
 // The joint that turns a whole turn from `prev` to `q` while every other joint steps less than
@@ -114,7 +130,12 @@ bool unwindBefore(const kinematics::RobotModel& robot,
   return true;
 }
 
-// Follows the start solution q0 continuously: at each sample the solution nearest the last.
+// Follows the start solution q0 continuously (joint wrap, kinematics/joint_wrap.h): at each
+// sample every solution is moved by whole turns to the equivalent nearest the last sample, and
+// the nearest of them continues the track; its limits are checked on those unwrapped values.
+// When the continuation leaves a joint's limits but an equivalent inside them exists, the joint
+// would have to re-wind a whole turn: allowed over a stretch that does not scan (unwindBefore()),
+// else the track breaks there (wrap_joint says which joint).
 Track followTrack(const kinematics::RobotModel& robot,
                   const ConstraintSettings& settings,
                   const kinematics::ScanPath& path,
@@ -127,23 +148,39 @@ Track followTrack(const kinematics::RobotModel& robot,
   track.q.push_back(q0);
   track.worst_joint_factor = jointFactor(robot, settings, q0);
   for (std::size_t k = 1; k < n && track.broken.empty(); ++k) {
-    const kinematics::JointVector& prev = track.q.back();
-    const kinematics::JointVector* nearest = nullptr;
+    const kinematics::JointVector prev = track.q.back();
+    kinematics::JointVector next = prev;
     double nearest_step = std::numeric_limits<double>::infinity();
+    const kinematics::JointVector* inside = nullptr;  // the nearest solution within the limits
+    double inside_step = std::numeric_limits<double>::infinity();
     for (const kinematics::JointVector& q : solutions[k]) {
-      const double step = (q - prev).cwiseAbs().maxCoeff();
+      const kinematics::JointVector u = kinematics::unwrapNear(q, prev);
+      const double step = (u - prev).cwiseAbs().maxCoeff();
       if (step < nearest_step) {
         nearest_step = step;
-        nearest = &q;
+        next = u;
+      }
+      const double raw_step = (q - prev).cwiseAbs().maxCoeff();
+      if (robot.withinLimits(q) && raw_step < inside_step) {
+        inside_step = raw_step;
+        inside = &q;
       }
     }
-    if (nearest_step > kMaxJointStep && !unwindBefore(robot, path, k, *nearest, track.q)) {
-      track.broken = jumpReason(robot, path, branch, k, prev, *nearest, nearest_step);
+    if (const int j = jointOutside(robot, next); j >= 0 && inside) {
+      // A whole-turn re-wind of joint j to the equivalent inside its limits.
+      if (!unwindBefore(robot, path, k, *inside, track.q)) {
+        track.broken = wrapReason(robot, path, k, j, next, *inside);
+        track.wrap_joint = j;
+        break;
+      }
+      next = *inside;
+    } else if (nearest_step > kMaxJointStep) {
+      track.broken = jumpReason(path, branch, k, prev, next);
       break;
     }
-    track.q.push_back(*nearest);
+    track.q.push_back(next);
     track.worst_joint_factor =
-        std::min(track.worst_joint_factor, jointFactor(robot, settings, *nearest));
+        std::min(track.worst_joint_factor, jointFactor(robot, settings, next));
   }
   return track;
 }
@@ -230,6 +267,7 @@ TrajectoryBuild buildTrajectory(const collision::Scene& scene,
   }
   if (!best.broken.empty()) {
     out.reason = best.broken;
+    out.wrap_joint = best.wrap_joint;
     return out;
   }
   scorePoses(scene, settings, path, theta, best.q, out);
