@@ -191,7 +191,10 @@ Rgb RgbImage::at(int x, int y) const {
   return {rgb[i], rgb[i + 1], rgb[i + 2]};
 }
 
-std::string encodePng(const RgbImage& image) {
+static_assert(PngSettings{}.filters == PNG_FILTER_UP);
+static_assert(WriteSettings::reference().png.filters == PNG_ALL_FILTERS);
+
+std::string encodePng(const RgbImage& image, const PngSettings& settings) {
   checkImage(image);
   std::string out;
   PngSink sink;
@@ -208,8 +211,8 @@ std::string encodePng(const RgbImage& image) {
   }
   png_set_write_fn(png, &sink, onPngWrite, onPngFlush);
   // Fixed settings and no tIME/tEXt chunks, so the bytes depend on the pixels only.
-  png_set_compression_level(png, 6);
-  png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_ALL_FILTERS);
+  png_set_compression_level(png, std::clamp(settings.level, 0, 9));
+  png_set_filter(png, PNG_FILTER_TYPE_BASE, settings.filters);
   png_set_IHDR(png, info, static_cast<png_uint_32>(image.width),
                static_cast<png_uint_32>(image.height), 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
                PNG_COMPRESSION_TYPE_BASE, PNG_FILTER_TYPE_BASE);
@@ -222,10 +225,12 @@ std::string encodePng(const RgbImage& image) {
   return out;
 }
 
-void writePng(const std::filesystem::path& file, const RgbImage& image) {
+void writePng(const std::filesystem::path& file,
+              const RgbImage& image,
+              const PngSettings& settings) {
   std::string bytes;
   try {
-    bytes = encodePng(image);
+    bytes = encodePng(image, settings);
   } catch (const InputError& e) {
     throw InputError(fmt::format("{}: {}", file.string(), e.what()));
   }
@@ -234,9 +239,17 @@ void writePng(const std::filesystem::path& file, const RgbImage& image) {
 
 void writeNpy(const std::filesystem::path& file,
               const std::vector<float>& data,
-              const std::vector<std::size_t>& shape) {
+              const std::vector<std::size_t>& shape,
+              bool stream) {
   checkShape(file, data.size(), shape);
-  std::string out = npyHeader("<f4", shape);
+  const std::string header = npyHeader("<f4", shape);
+  if (stream && std::endian::native == std::endian::little) {
+    // '<f4' is the machine's own float: the values go to the file as they lie in memory.
+    writeFileAtomically(file, {header, {reinterpret_cast<const char*>(data.data()),
+                                        sizeof(float) * data.size()}});
+    return;
+  }
+  std::string out = header;
   out.reserve(out.size() + 4 * data.size());
   for (const float v : data) {
     const auto bits = std::bit_cast<std::uint32_t>(v);
@@ -247,11 +260,15 @@ void writeNpy(const std::filesystem::path& file,
 
 void writeNpy(const std::filesystem::path& file,
               const std::vector<std::uint8_t>& data,
-              const std::vector<std::size_t>& shape) {
+              const std::vector<std::size_t>& shape,
+              bool stream) {
   checkShape(file, data.size(), shape);
-  std::string out = npyHeader("|u1", shape);
-  out.append(data.begin(), data.end());
-  writeFileAtomically(file, out);
+  const std::string header = npyHeader("|u1", shape);
+  if (stream) {
+    writeFileAtomically(file, {header, {reinterpret_cast<const char*>(data.data()), data.size()}});
+    return;
+  }
+  writeFileAtomically(file, header + std::string(data.begin(), data.end()));
 }
 
 Rgb grey(double f) {
