@@ -3,6 +3,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -42,10 +43,16 @@ RenderRequest cloudPoints(const kinematics::TriangleMesh& part,
   points.vertices = part.vertices;
   points.dots.reserve(cloud.size());
   points.dot_colours.reserve(cloud.size());
+  // The points of a profile share its time: one colour each (the same as computed per point).
+  double last_t = std::numeric_limits<double>::quiet_NaN();
+  Rgb colour;
   for (const auto& p : cloud) {
     points.dots.push_back(p.p_P);
-    const double u = t_end > 0.0 ? p.t / t_end : 0.0;
-    points.dot_colours.push_back(toRgb(scanner::densityColour(u, 1.0, true)));
+    if (!(p.t == last_t)) {
+      last_t = p.t;
+      colour = toRgb(scanner::densityColour(t_end > 0.0 ? p.t / t_end : 0.0, 1.0, true));
+    }
+    points.dot_colours.push_back(colour);
   }
   return points;
 }
@@ -93,21 +100,25 @@ void writeSimulationOutputs(const std::filesystem::path& dir,
   cloud.scale_to = fmt::format("{:.0f} s", t_end);
   density.scale_from = "0";
   density.scale_to = fmt::format("{:.1f} points/mm² (95%)", max_density);
-  // One request per row, turned for each view (the reference copies the points for each).
-  RenderRequest points;
-  if (settings.shared_views) points = cloudPoints(part, run.cloud.points, t_end);
   RenderRequest mesh;
+  mesh.width = mesh.height = kView;
   mesh.vertices = part.vertices;
   mesh.triangles = part.triangles;
   mesh.triangle_colours = std::move(triangle_colours);
-  for (RenderRequest* r : {&points, &mesh}) r->width = r->height = kView;
-  for (const NamedView& view : partViews()) {
-    grid.captions.push_back(view.name);
-    if (!settings.shared_views) points = cloudPoints(part, run.cloud.points, t_end);
-    points.R_view = view.R_view;
-    cloud.views.push_back(renderScene(points));
-    mesh.R_view = view.R_view;
-    density.views.push_back(renderScene(mesh));
+  density.views = renderScenes(mesh, partViewRotations());
+  for (const NamedView& view : partViews()) grid.captions.push_back(view.name);
+  if (settings.shared_views) {
+    // One request for the three views, its points read once for all of them.
+    RenderRequest points = cloudPoints(part, run.cloud.points, t_end);
+    points.width = points.height = kView;
+    cloud.views = renderScenes(points, partViewRotations());
+  } else {
+    for (const NamedView& view : partViews()) {
+      RenderRequest points = cloudPoints(part, run.cloud.points, t_end);
+      points.width = points.height = kView;
+      points.R_view = view.R_view;
+      cloud.views.push_back(renderScene(points));
+    }
   }
   grid.legend = {{toRgb(scanner::densityColour(0.0, 1.0, false)),
                   coverage_settings.min_points > 1
@@ -180,11 +191,8 @@ void writeCertificateOutputs(const std::filesystem::path& dir,
     r.dots.push_back(sampling.samples[i].p + lift * sampling.samples[i].n);
     r.dot_colours.push_back(kClassColours[static_cast<std::size_t>(certificate.classes[i])]);
   }
-  for (const NamedView& view : partViews()) {
-    grid.captions.push_back(view.name);
-    r.R_view = view.R_view;
-    row.views.push_back(renderScene(r));
-  }
+  for (const NamedView& view : partViews()) grid.captions.push_back(view.name);
+  row.views = renderScenes(r, partViewRotations());
   for (std::size_t c = 0; c < pipeline::kCoverageClasses; ++c)
     grid.legend.push_back({kClassColours[c], fmt::format("{} {:.1f}%", kClassLabels[c],
                                                          100.0 * certificate.fraction[c])});

@@ -23,12 +23,12 @@ struct WriteSettings {
   /// Large binary files (PLY, npy) go to the file in pieces as they are formatted, without a
   /// copy of the whole file in memory (otherwise formatted into a string stream first).
   bool stream_binary = true;
-  /// cloud.png's point views share one set of points and colours (otherwise each of the three
-  /// views gets its own copy).
+  /// cloud.png's three point views are drawn from one set of points and colours in one pass over
+  /// them (otherwise each view gets its own copy and its own pass).
   bool shared_views = true;
 
   /// The writers as they were: PNG level 6 with every filter, cairo's PNGs in the SVGs, PLY and
-  /// npy built in memory, a copy of the points per view.
+  /// npy built in memory, a copy of the points and a pass over them per view.
   static constexpr WriteSettings reference() {
     WriteSettings s;
     s.png = {6, 0xf8};  // PNG_ALL_FILTERS

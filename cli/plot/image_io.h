@@ -112,6 +112,10 @@ struct RenderRequest {
 /// the mesh Lambert-shaded in grey (light from the viewer) with a z-buffer. Deterministic.
 /// Throws InputError for a non-positive size or a triangle index out of range.
 RgbImage renderScene(const RenderRequest& request);
+/// renderScene for each of `R_views` in turn (request.R_view is not used): the same images, the
+/// dots read once for all views.
+std::vector<RgbImage> renderScenes(const RenderRequest& request,
+                                   const std::vector<Eigen::Matrix3d>& R_views);
 
 /// A named view direction for renderScene (R_view) of a z-up frame.
 struct NamedView {
@@ -121,5 +125,7 @@ struct NamedView {
 /// The three views of the path and cloud pictures: iso (from +x −y +z), top (looking down z),
 /// front (looking along +y).
 std::array<NamedView, 3> partViews();
+/// The rotations of partViews(), for renderScenes.
+std::vector<Eigen::Matrix3d> partViewRotations();
 
 }  // namespace scanplan::cli

@@ -218,11 +218,8 @@ RgbImage pathPicture(const kinematics::TriangleMesh& part, const kinematics::Sca
     r.markers.push_back({r.polyline.front(), start});
     r.markers.push_back({r.polyline.back(), end});
   }
-  for (const NamedView& view : partViews()) {
-    r.R_view = view.R_view;
-    grid.captions.push_back(view.name);
-    row.views.push_back(renderScene(r));
-  }
+  for (const NamedView& view : partViews()) grid.captions.push_back(view.name);
+  row.views = renderScenes(r, partViewRotations());
   grid.legend = {
       {r.polyline_colour, "path (lighter where the part hides it)", LegendEntry::Mark::kLine},
       {start, "start"},
