@@ -3,8 +3,8 @@
 // streamed and pieced atomic writes, and the views drawn together as each is drawn alone.
 #include <unistd.h>
 
-#include <filesystem>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <limits>
@@ -35,8 +35,8 @@ class Outputs : public ::testing::Test {
  protected:
   void SetUp() override {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("scanplan_test_outputs_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
+    dir_ = fs::temp_directory_path() / ("scanplan_test_outputs_" + std::string(info->name()) + "_" +
+                                        std::to_string(::getpid()));
     fs::create_directories(dir_);
   }
   void TearDown() override {
@@ -104,8 +104,8 @@ SplitSvg splitSvg(const std::string& svg) {
   if (a.width == b.width && a.height == b.height && a.rgb == b.rgb) {
     return ::testing::AssertionSuccess();
   }
-  return ::testing::AssertionFailure() << a.width << " x " << a.height << " vs " << b.width
-                                       << " x " << b.height << ", pixels differ";
+  return ::testing::AssertionFailure() << a.width << " x " << a.height << " vs " << b.width << " x "
+                                       << b.height << ", pixels differ";
 }
 
 TEST_F(Outputs, TodaysWritersGiveTheReferencesFilesByteForByteOrPixelForPixel) {
@@ -113,8 +113,7 @@ TEST_F(Outputs, TodaysWritersGiveTheReferencesFilesByteForByteOrPixelForPixel) {
   std::vector<std::string> overrides = test::kLightDemo;
   overrides.push_back("map.branch=RIGHTY ABOVE NOFLIP");
   overrides.push_back("map.angle_step_deg=2");
-  const cli::JobSpec job =
-      cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", overrides);
+  const cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", overrides);
   const pipeline::ScanProblem problem = cli::toProblem(job);
   const pipeline::ScanPlan plan = pipeline::planScan(problem);
   ASSERT_TRUE(plan.planned() && plan.simulation) << plan.reason;
@@ -164,7 +163,8 @@ TEST_F(Outputs, ViewsDrawnTogetherAreEachAsDrawnAlone) {
     r.dot_colours.push_back({static_cast<std::uint8_t>(i % 256), 10, 200});
   }
   r.dots.emplace_back(std::numeric_limits<double>::quiet_NaN(), 0, 0);
-  for (int i = 0; i <= 40; ++i) r.polyline.emplace_back(1.2 * std::cos(i * 0.2), 1.2 * std::sin(i * 0.2), 0.5);
+  for (int i = 0; i <= 40; ++i)
+    r.polyline.emplace_back(1.2 * std::cos(i * 0.2), 1.2 * std::sin(i * 0.2), 0.5);
   r.markers = {{r.polyline.front(), {0, 158, 115}}, {r.polyline.back(), {213, 94, 0}}};
   const std::vector<Eigen::Matrix3d> views = cli::partViewRotations();
   const std::vector<cli::RgbImage> together = cli::renderScenes(r, views);
@@ -189,9 +189,8 @@ TEST_F(Outputs, EveryPngSettingDecodesToTheSamePixels) {
       }
     }
   }
-  for (const cli::PngSettings s :
-       {cli::PngSettings{}, cli::WriteSettings::reference().png, cli::PngSettings{0, 0x08},
-        cli::PngSettings{9, 0x80}}) {
+  for (const cli::PngSettings s : {cli::PngSettings{}, cli::WriteSettings::reference().png,
+                                   cli::PngSettings{0, 0x08}, cli::PngSettings{9, 0x80}}) {
     const std::string png = cli::encodePng(image, s);
     EXPECT_TRUE(samePixels(test::decodePng(png), image)) << s.level << " " << s.filters;
     EXPECT_EQ(cli::encodePng(image, s), png) << "the same bytes every time";
@@ -203,7 +202,7 @@ TEST_F(Outputs, StreamedAndPiecedFilesHoldWhatWasWrittenAndNoTemporary) {
   for (int i = 0; i < 300'000; ++i) big += static_cast<char>(i * 31 % 251);
   cli::writeFileAtomically(dir_ / "streamed.bin", [&](std::ostream& out) {
     out << "head ";
-    out.write(big.data(), static_cast<std::streamsize>(big.size()));  // straight through
+    out.write(big.data(), static_cast<std::streamsize>(big.size()));        // straight through
     for (int i = 0; i < 100'000; ++i) out.put(static_cast<char>(i % 256));  // buffered
   });
   std::string want = "head " + big;

@@ -231,11 +231,11 @@ void Canvas::image(const RgbImage& raster, double x, double y) {
     auto png = std::make_unique<std::string>(encodePng(raster, *raster_png_));
     const auto* bytes = reinterpret_cast<const unsigned char*>(png->data());
     const unsigned long size = png->size();
-    check(cairo_surface_set_mime_data(
-              surface.get(), CAIRO_MIME_TYPE_PNG, bytes, size,
-              [](void* p) { std::unique_ptr<std::string>(static_cast<std::string*>(p)); },
-              png.get()),
-          "raster");
+    check(
+        cairo_surface_set_mime_data(
+            surface.get(), CAIRO_MIME_TYPE_PNG, bytes, size,
+            [](void* p) { std::unique_ptr<std::string>(static_cast<std::string*>(p)); }, png.get()),
+        "raster");
     png.release();  // owned by the surface now
   }
   cairo_save(cr_);

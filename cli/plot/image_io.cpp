@@ -246,8 +246,8 @@ void writeNpy(const std::filesystem::path& file,
   const std::string header = npyHeader("<f4", shape);
   if (stream && std::endian::native == std::endian::little) {
     // '<f4' is the machine's own float: the values go to the file as they lie in memory.
-    writeFileAtomically(file, {header, {reinterpret_cast<const char*>(data.data()),
-                                        sizeof(float) * data.size()}});
+    writeFileAtomically(
+        file, {header, {reinterpret_cast<const char*>(data.data()), sizeof(float) * data.size()}});
     return;
   }
   std::string out = header;

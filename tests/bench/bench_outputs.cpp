@@ -7,11 +7,11 @@
 // cloud.png's points copied per view), side by side in the same run. Both must give the same
 // files apart from the PNG and SVG bytes, whose pixels are compared elsewhere (the tests).
 // Usage (from the repository root): build/tests/bench/bench_outputs [runs] [JOB]
+#include <unistd.h>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
-#include <unistd.h>
 
 #include "cli/commands/commands.h"
 #include "cli/config/job.h"
@@ -112,8 +112,7 @@ int main(int argc, char** argv) {
   };
   const Row& all = rows[3];
 
-  std::printf("job %s, best of %d, process CPU time (user + system)\n", job.string().c_str(),
-              runs);
+  std::printf("job %s, best of %d, process CPU time (user + system)\n", job.string().c_str(), runs);
   std::printf("planning (load, path, maps, plan, trajectory, validation, simulation): %.3f s\n",
               planning);
   std::printf("%-36s %10s %10s %8s\n", "writing", "today s", "ref. s", "ratio");
