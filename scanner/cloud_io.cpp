@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstring>
 #include <sstream>
+#include <vector>
 
 #include "kinematics/error.h"
 #include "kinematics/units.h"
@@ -13,21 +14,42 @@
 namespace scanplan::scanner {
 namespace {
 
-// Little-endian bytes whatever the host's order.
+// Little-endian records formatted into a buffer and handed to the stream 64 KiB at a time: one
+// stream call per chunk rather than one per value (which cost 10× the formatting itself).
 class LittleEndianWriter {
  public:
-  explicit LittleEndianWriter(std::ostream& out) : out_(out) {}
-  void u8(std::uint8_t v) { out_.put(static_cast<char>(v)); }
+  explicit LittleEndianWriter(std::ostream& out) : out_(out), buffer_(kChunk + kRecordMax) {}
+  LittleEndianWriter(const LittleEndianWriter&) = delete;
+  LittleEndianWriter& operator=(const LittleEndianWriter&) = delete;
+  ~LittleEndianWriter() { flush(); }
+
+  void u8(std::uint8_t v) { buffer_[size_++] = static_cast<char>(v); }
   void u32(std::uint32_t v) {
-    std::array<char, 4> b{};
-    for (std::size_t i = 0; i < 4; ++i) b[i] = static_cast<char>((v >> (8 * i)) & 0xFFu);
-    out_.write(b.data(), 4);
+    // Shifts, not the host's layout: the compiler makes one store of them on a little-endian
+    // machine.
+    const std::array<char, 4> b{static_cast<char>(v & 0xFFu), static_cast<char>((v >> 8) & 0xFFu),
+                                static_cast<char>((v >> 16) & 0xFFu),
+                                static_cast<char>((v >> 24) & 0xFFu)};
+    std::memcpy(buffer_.data() + size_, b.data(), b.size());
+    size_ += b.size();
   }
   void i32(std::int32_t v) { u32(static_cast<std::uint32_t>(v)); }
   void f32(double v) { u32(std::bit_cast<std::uint32_t>(static_cast<float>(v))); }
+  /// Call after each record (at most kRecordMax bytes): passes the buffer on once it holds a
+  /// chunk.
+  void endRecord() {
+    if (size_ >= kChunk) flush();
+  }
+  void flush() {
+    out_.write(buffer_.data(), static_cast<std::streamsize>(size_));
+    size_ = 0;
+  }
 
  private:
+  static constexpr std::size_t kChunk = 64 * 1024, kRecordMax = 256;
   std::ostream& out_;
+  std::vector<char> buffer_;
+  std::size_t size_ = 0;
 };
 
 // Writes a PLY header given with '\n' line ends with "\r\n" ones. assimp 5.2 (what loadMesh
@@ -36,10 +58,12 @@ class LittleEndianWriter {
 // After "\r\n" it reads the data where it starts, whatever its first byte, and so do rply
 // (Open3D, CloudCompare: it takes the line end of the 'ply' line for all) and line readers.
 void writeHeader(std::ostream& out, const std::string& header) {
+  std::string text;
   for (const char c : header) {
-    if (c == '\n') out.put('\r');
-    out.put(c);
+    if (c == '\n') text += '\r';
+    text += c;
   }
+  out.write(text.data(), static_cast<std::streamsize>(text.size()));
 }
 
 }  // namespace
@@ -68,6 +92,7 @@ void writeCloudPly(std::ostream& out, const std::vector<CloudPoint>& points) {
     w.u32(p.profile);
     w.f32(toMm(p.range));
     w.f32(toDeg(p.incidence));
+    w.endRecord();
   }
 }
 
@@ -115,10 +140,12 @@ void writeCoveragePly(std::ostream& out,
       w.f32(densities[i]);
       w.u32(i < coverage.hits.size() ? coverage.hits[i] : 0);
     }
+    w.endRecord();
   }
   for (std::size_t i = 0; i < n; ++i) {
     w.u8(3);
     for (std::size_t k = 0; k < 3; ++k) w.i32(static_cast<std::int32_t>(3 * i + k));
+    w.endRecord();
   }
 }
 
@@ -143,6 +170,7 @@ void writeLabelledSamplesPly(std::ostream& out,
     for (int k = 0; k < 3; ++k) w.f32(toMm(points[i][k]));
     for (int k = 0; k < 3; ++k) w.f32(normals[i][k]);
     w.u8(labels[i]);
+    w.endRecord();
   }
 }
 

@@ -114,7 +114,10 @@ MapRun computeMap(const JobSpec& job,
                   const collision::Scene& scene,
                   const kinematics::ScanPath& path);
 /// path.csv and path.png into `dir`.
-void writePathOutputs(const std::filesystem::path& dir, const PathContext& context);
+void writePathOutputs(const std::filesystem::path& dir,
+                      const kinematics::TriangleMesh& part,
+                      const kinematics::ScanPath& path,
+                      const WriteSettings& settings = {});
 /// The file list of writePathOutputs() + writeMapOutputs(), for summaries.
 extern const char* const kMapFilesNote;
 /// Path, maps and their files into `out`; returns the summary lines.
@@ -124,7 +127,8 @@ std::string buildAndWriteMaps(const JobSpec& job,
 /// The map files of `scanplan map` (npy layers, json, images) into `dir`.
 void writeMapOutputs(const std::filesystem::path& dir,
                      const JobSpec& job,
-                     const planner::ConfigMap& map);
+                     const planner::ConfigMap& map,
+                     const WriteSettings& settings = {});
 /// `robot import`: a URDF in, the equivalent robot file out.
 struct RobotImportOptions {
   UrdfRobotSource source;
@@ -147,6 +151,15 @@ std::string reachCheck(const JobSpec& job,
                        const kinematics::CellModel& cell,
                        const kinematics::LoadedMesh& part);
 ExitCode runPlan(const PlanOptions& options);
+/// Every file `plan` writes for `plan` into `dir` but job.yaml and report.json: the path and map
+/// files; with a trajectory configmap_path.png/.svg; a valid one's trajectory.csv, programs,
+/// simulation and certificate files (an invalid one's trajectory_invalid.csv). Returns the
+/// summary lines of a valid plan's files (choice, validation, programs, simulation, certificate).
+std::string writePlanOutputs(const std::filesystem::path& dir,
+                             const JobSpec& job,
+                             const pipeline::ScanProblem& problem,
+                             const pipeline::ScanPlan& plan,
+                             const WriteSettings& settings = {});
 
 /// Parses "a,b,c" into exactly `count` finite numbers; errors name the option.
 std::vector<double> parseNumberList(const std::string& text,

@@ -88,7 +88,7 @@ ExitCode runPath(const PlanOptions& options) {
   const kinematics::CellModel cell = buildCell(job);
   OutputStage stage(options.out_dir, {"path.csv", "path.png"});
   const PathContext context = buildPath(job, cell);
-  writePathOutputs(stage.dir(), context);
+  writePathOutputs(stage.dir(), context.part.mesh, context.generated.path);
   stage.commit();
   std::string text = pathSummary(context.window, context.generated);
   if (context.auto_scan) text += autoScanSummary(*context.auto_scan);
@@ -117,9 +117,12 @@ MapRun computeMap(const JobSpec& job,
   return run;
 }
 
-void writePathOutputs(const std::filesystem::path& dir, const PathContext& context) {
-  writeFileAtomically(dir / "path.csv", scanner::pathToCsv(context.generated.path));
-  writePng(dir / "path.png", pathPicture(context.part.mesh, context.generated.path));
+void writePathOutputs(const std::filesystem::path& dir,
+                      const kinematics::TriangleMesh& part,
+                      const kinematics::ScanPath& path,
+                      const WriteSettings& settings) {
+  writeFileAtomically(dir / "path.csv", scanner::pathToCsv(path));
+  writePng(dir / "path.png", pathPicture(part, path), settings.png);
 }
 
 const char* const kMapFilesNote =
@@ -133,7 +136,7 @@ std::string buildAndWriteMaps(const JobSpec& job,
   const PathContext context = buildPath(job, cell);
   const collision::Scene scene(cell, clearanceConfig(job));
   const MapRun run = computeMap(job, scene, context.generated.path);
-  writePathOutputs(stage.dir(), context);
+  writePathOutputs(stage.dir(), context.part.mesh, context.generated.path);
   writeMapOutputs(stage.dir(), job, run.map);
   stage.commit();
   return pathSummary(context.window, context.generated) +
@@ -202,18 +205,20 @@ Json mapJson(const JobSpec& job,
 
 void writeMapOutputs(const std::filesystem::path& dir,
                      const JobSpec& job,
-                     const planner::ConfigMap& map) {
+                     const planner::ConfigMap& map,
+                     const WriteSettings& settings) {
   const std::vector<std::size_t> shape{map.branches.size(), map.angles.size(), map.times.size()};
-  writeNpy(dir / "configmap.npy", map.f, shape);
-  writeNpy(dir / "configmap_joint.npy", map.joint, shape);
-  writeNpy(dir / "configmap_singularity.npy", map.singularity, shape);
-  writeNpy(dir / "configmap_clearance.npy", map.clearance, shape);
-  writeNpy(dir / "configmap_limit.npy", map.limit, shape);
+  const bool stream = settings.stream_binary;
+  writeNpy(dir / "configmap.npy", map.f, shape, stream);
+  writeNpy(dir / "configmap_joint.npy", map.joint, shape, stream);
+  writeNpy(dir / "configmap_singularity.npy", map.singularity, shape, stream);
+  writeNpy(dir / "configmap_clearance.npy", map.clearance, shape, stream);
+  writeNpy(dir / "configmap_limit.npy", map.limit, shape, stream);
 
   const std::size_t shown = bestBranch(map);
   writeFileAtomically(dir / "configmap.json", jsonDocument(mapJson(job, map, shape, shown)));
 
-  writeMapFigures(dir, map, shown);
+  writeMapFigures(dir, map, shown, settings);
 }
 
 }  // namespace scanplan::cli

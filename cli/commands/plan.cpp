@@ -46,7 +46,8 @@ void writePathFigure(const std::filesystem::path& dir,
                      const planner::ConfigMap& map,
                      std::size_t branch,
                      const std::vector<std::pair<std::string, std::vector<double>>>& paths,
-                     const std::vector<std::string>& labels) {
+                     const std::vector<std::string>& labels,
+                     const WriteSettings& settings) {
   const double angle0 = map.angles.front();
   const double span = map.angles.size() > 1
                           ? (map.angles[1] - map.angles[0]) * static_cast<double>(map.angles.size())
@@ -77,7 +78,7 @@ void writePathFigure(const std::filesystem::path& dir,
   }
   writeFigure(dir, "configmap_path", mapGreyImage(map, branch), map,
               "Table-angle path over the map f, " + map.branches[branch].words(), legend,
-              std::move(lines));
+              std::move(lines), settings);
 }
 
 // planScan() with a progress line on a terminal; its input errors name the job file.
@@ -100,7 +101,9 @@ pipeline::ScanPlan runPipeline(const JobSpec& job,
 }
 
 // configmap_path.png/.svg: the chosen path and, with --compare, every other planner's.
-void writeChoiceFigure(const std::filesystem::path& out, const pipeline::ScanPlan& plan) {
+void writeChoiceFigure(const std::filesystem::path& out,
+                       const pipeline::ScanPlan& plan,
+                       const WriteSettings& settings = {}) {
   const pipeline::PathChoice& c = plan.choice;
   std::vector<std::pair<std::string, std::vector<double>>> drawn{{c.chosen.method, c.theta}};
   std::vector<std::string> labels{
@@ -110,7 +113,7 @@ void writeChoiceFigure(const std::filesystem::path& out, const pipeline::ScanPla
     drawn.emplace_back(o.method, o.result.theta);
     labels.push_back(fmt::format("{} J {:.2f} s", o.method, o.result.terms.total));
   }
-  writePathFigure(out, plan.prepared->map, c.chosen.result.branch, drawn, labels);
+  writePathFigure(out, plan.prepared->map, c.chosen.result.branch, drawn, labels, settings);
 }
 
 // The outputs of a valid plan: trajectory.csv, the programs, the simulation's and the
@@ -118,17 +121,19 @@ void writeChoiceFigure(const std::filesystem::path& out, const pipeline::ScanPla
 // not suggest another).
 std::string writePlannedOutputs(const std::filesystem::path& out,
                                 const JobSpec& job,
-                                const kinematics::CellModel& cell,
                                 const pipeline::ScanProblem& problem,
                                 const pipeline::ScanPlan& plan,
-                                bool second = false) {
+                                bool second = false,
+                                const WriteSettings& settings = {}) {
   const kinematics::Trajectory& trajectory = plan.trajectory->trajectory;
   writeFileAtomically(out / "trajectory.csv", kinematics::trajectoryToCsv(trajectory));
-  const std::string programs =
-      writePrograms(out / "programs", "programs/", job, cell, trajectory, job.outputs.programs);
-  if (plan.simulation) writeSimulationOutputs(out, job, problem.part, *plan.simulation);
-  if (plan.certificate)
-    writeCertificateOutputs(out, problem.part, plan.simulation->sampling, *plan.certificate);
+  const std::string programs = writePrograms(out / "programs", "programs/", job, problem.cell,
+                                             trajectory, job.outputs.programs);
+  if (plan.simulation) writeSimulationOutputs(out, job, problem.part, *plan.simulation, settings);
+  if (plan.certificate) {
+    writeCertificateOutputs(out, problem.part, plan.simulation->sampling, *plan.certificate,
+                            settings);
+  }
   std::string summary = choiceSummary(plan);
   if (plan.validation) summary += validationSummary(*plan.validation);
   summary += programs;
@@ -173,7 +178,7 @@ SecondSetupRun planSecondSetup(const std::filesystem::path& out,
   if (plan.prepared->auto_scan) r.summary += autoScanSummary(*plan.prepared->auto_scan);
   if (plan.planned()) {
     writeChoiceFigure(dir, plan);
-    r.summary += writePlannedOutputs(dir, job, second.cell, second, plan, true);
+    r.summary += writePlannedOutputs(dir, job, second, plan, true);
     const pipeline::CombinedCoverage c = pipeline::combineSetups(first, plan);
     r.summary += fmt::format(
         "setups     both: {:.1f}% of the part's area covered; {:.1f}% scannable in one setup or "
@@ -194,6 +199,25 @@ SecondSetupRun planSecondSetup(const std::filesystem::path& out,
 }
 
 }  // namespace
+
+std::string writePlanOutputs(const std::filesystem::path& dir,
+                             const JobSpec& job,
+                             const pipeline::ScanProblem& problem,
+                             const pipeline::ScanPlan& plan,
+                             const WriteSettings& settings) {
+  const pipeline::PreparedScan& prepared = *plan.prepared;
+  writePathOutputs(dir, problem.part, prepared.path.path, settings);
+  writeMapOutputs(dir, job, prepared.map, settings);
+  if (!plan.trajectory) return {};
+  writeChoiceFigure(dir, plan, settings);
+  if (plan.status == pipeline::ScanStatus::kInvalidTrajectory) {
+    // Kept for inspection under a name no robot-side tool picks up as the plan.
+    writeFileAtomically(dir / "trajectory_invalid.csv",
+                        kinematics::trajectoryToCsv(plan.trajectory->trajectory));
+    return {};
+  }
+  return writePlannedOutputs(dir, job, problem, plan, false, settings);
+}
 
 // Everything `plan` may write into its output folder: on each run, what it does not write again
 // is removed (no trajectory.csv or program of an earlier run beside a new report).
@@ -223,9 +247,7 @@ ExitCode runPlan(const PlanOptions& options) {
   const pipeline::ScanProblem problem = toProblem(job, cell, part.mesh);
   const pipeline::ScanPlan plan = runPipeline(job, problem, options);
   const pipeline::PreparedScan& prepared = *plan.prepared;
-  const PathContext context{part, prepared.window, prepared.path, std::nullopt};
-  writePathOutputs(out, context);
-  writeMapOutputs(out, job, prepared.map);
+  const std::string planned = writePlanOutputs(out, job, problem, plan);
   summary += pathSummary(prepared.window, prepared.path);
   if (prepared.auto_scan) summary += autoScanSummary(*prepared.auto_scan);
   summary += mapSummary(prepared.map, prepared.map_seconds);
@@ -245,11 +267,7 @@ ExitCode runPlan(const PlanOptions& options) {
     std::fputs(summary.c_str(), stdout);
     return ExitCode::kNoPlan;
   }
-  const kinematics::Trajectory& trajectory = plan.trajectory->trajectory;
-  writeChoiceFigure(out, plan);
   if (plan.status == pipeline::ScanStatus::kInvalidTrajectory) {
-    // Kept for inspection under a name no robot-side tool picks up as the plan.
-    writeFileAtomically(out / "trajectory_invalid.csv", kinematics::trajectoryToCsv(trajectory));
     finish();
     summary += validationSummary(*plan.validation);
     summary += fmt::format(
@@ -260,7 +278,7 @@ ExitCode runPlan(const PlanOptions& options) {
     std::fputs(summary.c_str(), stdout);
     return ExitCode::kNoPlan;
   }
-  summary += writePlannedOutputs(out, job, cell, problem, plan);
+  summary += planned;
   bool all_planned = true;
   if (options.setups == 2) {
     SecondSetupRun second = planSecondSetup(out, job, problem, plan, options);

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <functional>
 #include <mutex>
+#include <streambuf>
 #include <string_view>
 #include <system_error>
 #include <thread>
@@ -42,31 +43,90 @@ Shown& shown() {
   return s;
 }
 
-// Writes all of `content` to the new file `path`; the OS's reason on failure, or nothing.
-std::string writeAll(const std::filesystem::path& path, const std::string& content) {
-  int fd = -1;
-  {
-    // Folders and files come into being under this lock, which an interrupt takes and keeps:
-    // nothing appears in a staging folder while, or after, it is removed.
-    const std::lock_guard<std::mutex> guard(creationMutex());
-    std::error_code ec;
-    if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path(), ec);
-    fd = ::open(path.c_str(), O_CREAT | O_TRUNC | O_WRONLY | O_CLOEXEC, 0644);
-  }
-  if (fd < 0) return std::strerror(errno);
+// Creates (or truncates) the file `path` for writing: its descriptor, or -1 with errno set.
+int createFile(const std::filesystem::path& path) {
+  // Folders and files come into being under this lock, which an interrupt takes and keeps:
+  // nothing appears in a staging folder while, or after, it is removed.
+  const std::lock_guard<std::mutex> guard(creationMutex());
+  std::error_code ec;
+  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path(), ec);
+  return ::open(path.c_str(), O_CREAT | O_TRUNC | O_WRONLY | O_CLOEXEC, 0644);
+}
+
+// Writes all `size` bytes at `data` to `fd`; the OS's reason on failure, or nothing.
+std::string writeBytes(int fd, const char* data, std::size_t size) {
   std::size_t done = 0;
-  while (done < content.size()) {
-    const ssize_t n = ::write(fd, content.data() + done, content.size() - done);
+  while (done < size) {
+    const ssize_t n = ::write(fd, data + done, size - done);
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      const std::string why = n < 0 ? std::strerror(errno) : "the disk took nothing";
-      ::close(fd);
-      return why;
-    }
+    if (n <= 0) return n < 0 ? std::strerror(errno) : "the disk took nothing";
     done += static_cast<std::size_t>(n);
   }
-  // close() reports deferred write errors (e.g. a full disk on a network file system).
-  return ::close(fd) == 0 ? std::string() : std::string(std::strerror(errno));
+  return {};
+}
+
+// Closes `fd` after a write that failed for `why` (kept) or succeeded: close() reports deferred
+// write errors (e.g. a full disk on a network file system).
+std::string closeFile(int fd, std::string why) {
+  const int closed = ::close(fd);
+  if (why.empty() && closed != 0) why = std::strerror(errno);
+  return why;
+}
+
+// A stream buffer onto a file descriptor: 1 MiB buffered, larger writes passed straight
+// through; the first error is kept and ends all writing.
+class FileBuffer : public std::streambuf {
+ public:
+  explicit FileBuffer(int fd) : fd_(fd), buffer_(kSize) { reset(); }
+  const std::string& error() const { return error_; }
+
+ protected:
+  int_type overflow(int_type c) override {
+    if (!drain()) return traits_type::eof();
+    if (traits_type::eq_int_type(c, traits_type::eof())) return traits_type::not_eof(c);
+    *pptr() = traits_type::to_char_type(c);
+    pbump(1);
+    return c;
+  }
+  std::streamsize xsputn(const char* s, std::streamsize n) override {
+    if (n < static_cast<std::streamsize>(kSize) / 4) return std::streambuf::xsputn(s, n);
+    if (!drain() || !put(s, static_cast<std::size_t>(n))) return 0;
+    return n;
+  }
+  int sync() override { return drain() ? 0 : -1; }
+
+ private:
+  static constexpr std::size_t kSize = std::size_t{1} << 20;
+  void reset() { setp(buffer_.data(), buffer_.data() + buffer_.size()); }
+  bool put(const char* data, std::size_t size) {
+    if (error_.empty()) error_ = writeBytes(fd_, data, size);
+    return error_.empty();
+  }
+  bool drain() {
+    const bool ok = put(pbase(), static_cast<std::size_t>(pptr() - pbase()));
+    reset();
+    return ok;
+  }
+
+  int fd_;
+  std::vector<char> buffer_;
+  std::string error_;
+};
+
+// Writes the new file `path` with `write`, which puts bytes into the descriptor it is given and
+// returns the OS's reason when that failed; the reason, or nothing.
+std::string writeAll(const std::filesystem::path& path,
+                     const std::function<std::string(int)>& write) {
+  const int fd = createFile(path);
+  if (fd < 0) return std::strerror(errno);
+  std::string why;
+  try {
+    why = write(fd);
+  } catch (...) {
+    ::close(fd);
+    throw;
+  }
+  return closeFile(fd, why);
 }
 
 }  // namespace
@@ -84,10 +144,19 @@ std::string shownName(const std::filesystem::path& file) {
   return file.string();
 }
 
-void writeFileAtomically(const std::filesystem::path& file, const std::string& content) {
+namespace {
+
+// Writes `file` through `file`.tmp (see writeAll) and renames it into place.
+void publishFile(const std::filesystem::path& file, const std::function<std::string(int)>& write) {
   std::error_code ec;
   const std::filesystem::path tmp = file.string() + ".tmp";
-  const std::string why = writeAll(tmp, content);
+  std::string why;
+  try {
+    why = writeAll(tmp, write);
+  } catch (...) {
+    std::filesystem::remove(tmp, ec);
+    throw;
+  }
   if (!why.empty()) {
     std::filesystem::remove(tmp, ec);
     throw InputError(fmt::format("{}: cannot write the file: {}", shownName(file), why));
@@ -98,6 +167,38 @@ void writeFileAtomically(const std::filesystem::path& file, const std::string& c
     throw InputError(fmt::format("{}: cannot move the finished file into place: {}", file.string(),
                                  ec.message()));
   }
+}
+
+}  // namespace
+
+// No fsync: a file is complete once the process has written it, and the output folder is
+// published as a whole (OutputStage), so a killed run leaves the old outputs or the new ones.
+// What survives a power cut is left to the file system, as for every other program's output.
+void writeFileAtomically(const std::filesystem::path& file, const std::string& content) {
+  writeFileAtomically(file, {std::string_view(content)});
+}
+
+void writeFileAtomically(const std::filesystem::path& file,
+                         std::initializer_list<std::string_view> pieces) {
+  publishFile(file, [&](int fd) {
+    for (const std::string_view piece : pieces) {
+      std::string why = writeBytes(fd, piece.data(), piece.size());
+      if (!why.empty()) return why;
+    }
+    return std::string();
+  });
+}
+
+void writeFileAtomically(const std::filesystem::path& file,
+                         const std::function<void(std::ostream&)>& fill) {
+  publishFile(file, [&](int fd) {
+    FileBuffer buffer(fd);
+    std::ostream out(&buffer);
+    fill(out);
+    out.flush();
+    if (!buffer.error().empty()) return buffer.error();
+    return out ? std::string() : std::string("the stream failed");
+  });
 }
 
 bool isRegularFile(const std::filesystem::path& file) noexcept {

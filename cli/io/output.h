@@ -1,8 +1,12 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
+#include <initializer_list>
 #include <memory>
+#include <ostream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -13,6 +17,14 @@ namespace scanplan::cli {
 /// into place, so an interrupted run never leaves a half-written file. A failure is an
 /// InputError naming the file and the OS's reason (e.g. "No space left on device").
 void writeFileAtomically(const std::filesystem::path& file, const std::string& content);
+/// The same for the concatenation of `pieces`, written one after the other (no joined copy).
+void writeFileAtomically(const std::filesystem::path& file,
+                         std::initializer_list<std::string_view> pieces);
+/// The same for what `fill` writes to the stream it is given: a binary stream buffered straight
+/// onto the temporary file, so a large file is never held whole in memory. An exception from
+/// `fill` removes the temporary file and passes on.
+void writeFileAtomically(const std::filesystem::path& file,
+                         const std::function<void(std::ostream&)>& fill);
 
 /// Whether `file` is a regular file (following links). Never throws: a path the OS cannot
 /// look at (too long, a component not a folder, no permission) is not one.

@@ -2,6 +2,8 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
+#include <limits>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -18,24 +20,57 @@ namespace {
 
 Rgb toRgb(const std::array<std::uint8_t, 3>& c) { return {c[0], c[1], c[2]}; }
 
+// A binary file written by `write` (a PLY writer): streamed onto the file, or (the reference)
+// formatted into memory first.
+void writeBinary(const std::filesystem::path& file,
+                 const WriteSettings& settings,
+                 const std::function<void(std::ostream&)>& write) {
+  if (settings.stream_binary) {
+    writeFileAtomically(file, write);
+    return;
+  }
+  std::ostringstream out(std::ios::binary);
+  write(out);
+  writeFileAtomically(file, out.str());
+}
+
+// The points of cloud.png's top row, coloured by acquisition time, in one view (R_view unset).
+RenderRequest cloudPoints(const kinematics::TriangleMesh& part,
+                          const std::vector<scanner::CloudPoint>& cloud,
+                          double t_end) {
+  RenderRequest points;
+  // Fit both rows to the part's box: invisible corner markers would show, so use the part.
+  points.vertices = part.vertices;
+  points.dots.reserve(cloud.size());
+  points.dot_colours.reserve(cloud.size());
+  // The points of a profile share its time: one colour each (the same as computed per point).
+  double last_t = std::numeric_limits<double>::quiet_NaN();
+  Rgb colour;
+  for (const auto& p : cloud) {
+    points.dots.push_back(p.p_P);
+    if (!(p.t == last_t)) {
+      last_t = p.t;
+      colour = toRgb(scanner::densityColour(t_end > 0.0 ? p.t / t_end : 0.0, 1.0, true));
+    }
+    points.dot_colours.push_back(colour);
+  }
+  return points;
+}
+
 }  // namespace
 
 void writeSimulationOutputs(const std::filesystem::path& dir,
                             const JobSpec& job,
                             const kinematics::TriangleMesh& part,
-                            const pipeline::SimulationRun& run) {
-  {
-    std::ostringstream cloud(std::ios::binary);
-    scanner::writeCloudPly(cloud, run.cloud.points);
-    writeFileAtomically(dir / "cloud.ply", cloud.str());
-  }
+                            const pipeline::SimulationRun& run,
+                            const WriteSettings& settings) {
+  writeBinary(dir / "cloud.ply", settings,
+              [&](std::ostream& out) { scanner::writeCloudPly(out, run.cloud.points); });
   scanner::CoverageSettings coverage_settings;
   coverage_settings.min_points = static_cast<std::uint32_t>(job.simulation.coverage_min_points);
-  {
-    std::ostringstream coverage(std::ios::binary);
-    scanner::writeCoveragePly(coverage, part, run.coverage, coverage_settings);
-    writeFileAtomically(dir / "coverage.ply", coverage.str());
-  }
+  writeBinary(dir / "coverage.ply", settings, [&](std::ostream& out) {
+    scanner::writeCoveragePly(out, part, run.coverage, coverage_settings);
+  });
 
   // cloud.png: top row the points (coloured by acquisition time), bottom row the part coloured
   // by density; iso, top and front views, captioned, each row with its colour scale.
@@ -65,35 +100,32 @@ void writeSimulationOutputs(const std::filesystem::path& dir,
   cloud.scale_to = fmt::format("{:.0f} s", t_end);
   density.scale_from = "0";
   density.scale_to = fmt::format("{:.1f} points/mm² (95%)", max_density);
-  for (const NamedView& view : partViews()) {
-    grid.captions.push_back(view.name);
-    RenderRequest points;
+  RenderRequest mesh;
+  mesh.width = mesh.height = kView;
+  mesh.vertices = part.vertices;
+  mesh.triangles = part.triangles;
+  mesh.triangle_colours = std::move(triangle_colours);
+  density.views = renderScenes(mesh, partViewRotations());
+  for (const NamedView& view : partViews()) grid.captions.push_back(view.name);
+  if (settings.shared_views) {
+    // One request for the three views, its points read once for all of them.
+    RenderRequest points = cloudPoints(part, run.cloud.points, t_end);
     points.width = points.height = kView;
-    points.R_view = view.R_view;
-    // Fit both rows to the part's box: invisible corner markers would show, so use the part.
-    points.vertices = part.vertices;
-    points.triangles = {};
-    for (const auto& p : run.cloud.points) {
-      points.dots.push_back(p.p_P);
-      const double u = t_end > 0.0 ? p.t / t_end : 0.0;
-      points.dot_colours.push_back(toRgb(scanner::densityColour(u, 1.0, true)));
+    cloud.views = renderScenes(points, partViewRotations());
+  } else {
+    for (const NamedView& view : partViews()) {
+      RenderRequest points = cloudPoints(part, run.cloud.points, t_end);
+      points.width = points.height = kView;
+      points.R_view = view.R_view;
+      cloud.views.push_back(renderScene(points));
     }
-    cloud.views.push_back(renderScene(points));
-    RenderRequest mesh;
-    mesh.width = mesh.height = kView;
-    mesh.R_view = view.R_view;
-    mesh.vertices = part.vertices;
-    mesh.triangles = part.triangles;
-    mesh.triangle_colours = triangle_colours;
-    density.views.push_back(renderScene(mesh));
   }
   grid.legend = {{toRgb(scanner::densityColour(0.0, 1.0, false)),
                   coverage_settings.min_points > 1
                       ? fmt::format("not covered (fewer than {} points on the triangle)",
                                     coverage_settings.min_points)
                       : std::string("not covered (no point on the triangle)")}};
-  const RgbImage out = drawViewGrid(grid);
-  writePng(dir / "cloud.png", out);
+  writePng(dir / "cloud.png", drawViewGrid(grid), settings.png);
 }
 
 namespace {
@@ -114,7 +146,8 @@ constexpr std::array<const char*, pipeline::kCoverageClasses> kClassLabels{
 
 void writeUncoveredPly(const std::filesystem::path& file,
                        const scanner::AreaSampling& sampling,
-                       const pipeline::Certificate& certificate) {
+                       const pipeline::Certificate& certificate,
+                       const WriteSettings& settings) {
   std::vector<Eigen::Vector3d> points, normals;
   std::vector<std::uint8_t> labels;
   for (std::size_t i = 0; i < sampling.samples.size(); ++i) {
@@ -127,9 +160,9 @@ void writeUncoveredPly(const std::filesystem::path& file,
   std::vector<std::string> reasons;
   for (std::size_t c = 0; c < pipeline::kCoverageClasses; ++c)
     reasons.emplace_back(pipeline::coverageClassName(static_cast<pipeline::CoverageClass>(c)));
-  std::ostringstream out(std::ios::binary);
-  scanner::writeLabelledSamplesPly(out, points, normals, labels, reasons);
-  writeFileAtomically(file, out.str());
+  writeBinary(file, settings, [&](std::ostream& out) {
+    scanner::writeLabelledSamplesPly(out, points, normals, labels, reasons);
+  });
 }
 
 }  // namespace
@@ -137,8 +170,9 @@ void writeUncoveredPly(const std::filesystem::path& file,
 void writeCertificateOutputs(const std::filesystem::path& dir,
                              const kinematics::TriangleMesh& part,
                              const scanner::AreaSampling& sampling,
-                             const pipeline::Certificate& certificate) {
-  writeUncoveredPly(dir / "uncovered.ply", sampling, certificate);
+                             const pipeline::Certificate& certificate,
+                             const WriteSettings& settings) {
+  writeUncoveredPly(dir / "uncovered.ply", sampling, certificate, settings);
   constexpr int kView = 480;
   // The samples lifted 0.3 mm off the surface, so the grey part hides those on its far side
   // but not the ones on the side facing the viewer.
@@ -149,23 +183,20 @@ void writeCertificateOutputs(const std::filesystem::path& dir,
   row.title = fmt::format(
       "Scannability certificate: {:.1f}% of the area scannable, {:.1f}% of that covered",
       100.0 * certificate.scannable_fraction, 100.0 * certificate.covered_of_scannable);
-  for (const NamedView& view : partViews()) {
-    grid.captions.push_back(view.name);
-    RenderRequest r;
-    r.width = r.height = kView;
-    r.R_view = view.R_view;
-    r.vertices = part.vertices;
-    r.triangles = part.triangles;
-    for (std::size_t i = 0; i < sampling.samples.size(); ++i) {
-      r.dots.push_back(sampling.samples[i].p + lift * sampling.samples[i].n);
-      r.dot_colours.push_back(kClassColours[static_cast<std::size_t>(certificate.classes[i])]);
-    }
-    row.views.push_back(renderScene(r));
+  RenderRequest r;
+  r.width = r.height = kView;
+  r.vertices = part.vertices;
+  r.triangles = part.triangles;
+  for (std::size_t i = 0; i < sampling.samples.size(); ++i) {
+    r.dots.push_back(sampling.samples[i].p + lift * sampling.samples[i].n);
+    r.dot_colours.push_back(kClassColours[static_cast<std::size_t>(certificate.classes[i])]);
   }
+  for (const NamedView& view : partViews()) grid.captions.push_back(view.name);
+  row.views = renderScenes(r, partViewRotations());
   for (std::size_t c = 0; c < pipeline::kCoverageClasses; ++c)
     grid.legend.push_back({kClassColours[c], fmt::format("{} {:.1f}%", kClassLabels[c],
                                                          100.0 * certificate.fraction[c])});
-  writePng(dir / "certificate.png", drawViewGrid(grid));
+  writePng(dir / "certificate.png", drawViewGrid(grid), settings.png);
 }
 
 }  // namespace scanplan::cli

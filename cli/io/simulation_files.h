@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "cli/config/job.h"
+#include "cli/io/write_settings.h"
 #include "kinematics/mesh.h"
 #include "pipeline/certificate.h"
 #include "pipeline/simulation.h"
@@ -13,13 +14,15 @@ namespace scanplan::cli {
 void writeSimulationOutputs(const std::filesystem::path& dir,
                             const JobSpec& job,
                             const kinematics::TriangleMesh& part,
-                            const pipeline::SimulationRun& run);
+                            const pipeline::SimulationRun& run,
+                            const WriteSettings& settings = {});
 
 /// The scannability certificate (scan.auto): uncovered.ply (the area samples not covered, each
 /// with its reason) and certificate.png (the part's samples coloured by class, three sides).
 void writeCertificateOutputs(const std::filesystem::path& dir,
                              const kinematics::TriangleMesh& part,
                              const scanner::AreaSampling& sampling,
-                             const pipeline::Certificate& certificate);
+                             const pipeline::Certificate& certificate,
+                             const WriteSettings& settings = {});
 
 }  // namespace scanplan::cli

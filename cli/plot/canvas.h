@@ -4,6 +4,7 @@
 // include this header; nothing outside the folder sees cairo.
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -61,11 +62,15 @@ class Canvas {
   void frame(double x, double y, double w, double h, Rgb colour);
   /// The raster's pixels at (x, y), one figure pixel each, never smoothed.
   void image(const RgbImage& raster, double x, double y);
+  /// Rasters drawn from now on carry their PNG encoded with `settings`, which a vector surface
+  /// (SVG) embeds as it is instead of encoding the pixels itself.
+  void attachPng(const PngSettings& settings) { raster_png_ = settings; }
   cairo_t* context() { return cr_; }
 
  private:
   cairo_surface_t* surface_;
   cairo_t* cr_;
+  std::optional<PngSettings> raster_png_;
 };
 
 using Drawing = std::function<void(Canvas&)>;
@@ -75,11 +80,14 @@ RgbImage renderPixels(int width, int height, const Drawing& draw);
 /// The drawing as SVG 1.1: text as glyph outlines, lines as paths, rasters as embedded PNG
 /// images; the size in px equals the raster's. `title` and `description` go into <title> and
 /// <desc> (the figure's words, for search and screen readers). Same drawing → same bytes.
+/// `raster_png`: rasters embedded as PNGs encoded with these settings (else cairo encodes them,
+/// level 6 with every filter).
 std::string renderSvg(int width,
                       int height,
                       const Drawing& draw,
                       const std::string& title,
-                      const std::string& description);
+                      const std::string& description,
+                      const std::optional<PngSettings>& raster_png = PngSettings{});
 /// The drawing as a one-page PDF (vector, fonts embedded), without a creation date: same
 /// drawing → same bytes.
 std::string renderPdf(int width, int height, const Drawing& draw);

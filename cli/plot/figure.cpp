@@ -295,11 +295,12 @@ RgbImage renderFigure(const Figure& figure) {
                               [&](Canvas& c) { drawFigure(c, plan, figure); });
 }
 
-std::string figureSvg(const Figure& figure) {
+std::string figureSvg(const Figure& figure, const WriteSettings& settings) {
   const Plan plan = planFigure(figure);
   return detail::renderSvg(
       plan.box.width, plan.box.height, [&](Canvas& c) { drawFigure(c, plan, figure); },
-      figure.labels.title, describe(plan, figure.labels));
+      figure.labels.title, describe(plan, figure.labels),
+      settings.svg_raster_png ? std::optional(settings.png) : std::nullopt);
 }
 
 std::string figurePdf(const Figure& figure) {
@@ -310,9 +311,10 @@ std::string figurePdf(const Figure& figure) {
 
 void writeFigureFiles(const std::filesystem::path& dir,
                       const std::string& stem,
-                      const Figure& figure) {
-  writePng(dir / (stem + ".png"), renderFigure(figure));
-  writeFileAtomically(dir / (stem + ".svg"), figureSvg(figure));
+                      const Figure& figure,
+                      const WriteSettings& settings) {
+  writePng(dir / (stem + ".png"), renderFigure(figure), settings.png);
+  writeFileAtomically(dir / (stem + ".svg"), figureSvg(figure, settings));
 }
 
 }  // namespace scanplan::cli

@@ -86,13 +86,14 @@ FigureLayout layoutFigure(const Figure& figure);
 RgbImage renderFigure(const Figure& figure);
 /// The figure as SVG: text and lines as vector paths, the raster an embedded PNG at its pixel
 /// size; the title in <title> and every other word in <desc>. Same figure → same bytes.
-std::string figureSvg(const Figure& figure);
+std::string figureSvg(const Figure& figure, const WriteSettings& settings = {});
 /// The figure as a one-page vector PDF. Same figure → same bytes.
 std::string figurePdf(const Figure& figure);
 /// `stem`.png and `stem`.svg in `dir`, each written atomically.
 void writeFigureFiles(const std::filesystem::path& dir,
                       const std::string& stem,
-                      const Figure& figure);
+                      const Figure& figure,
+                      const WriteSettings& settings = {});
 
 /// A row of views of one scene (e.g. iso, top, front) under a title line, for the three-view
 /// pictures (path.png, cloud.png).

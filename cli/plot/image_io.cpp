@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <optional>
 
 #include <fmt/format.h>
 #include <png.h>
@@ -191,7 +192,10 @@ Rgb RgbImage::at(int x, int y) const {
   return {rgb[i], rgb[i + 1], rgb[i + 2]};
 }
 
-std::string encodePng(const RgbImage& image) {
+static_assert(PngSettings{}.filters == PNG_FILTER_UP);
+static_assert(WriteSettings::reference().png.filters == PNG_ALL_FILTERS);
+
+std::string encodePng(const RgbImage& image, const PngSettings& settings) {
   checkImage(image);
   std::string out;
   PngSink sink;
@@ -208,8 +212,8 @@ std::string encodePng(const RgbImage& image) {
   }
   png_set_write_fn(png, &sink, onPngWrite, onPngFlush);
   // Fixed settings and no tIME/tEXt chunks, so the bytes depend on the pixels only.
-  png_set_compression_level(png, 6);
-  png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_ALL_FILTERS);
+  png_set_compression_level(png, std::clamp(settings.level, 0, 9));
+  png_set_filter(png, PNG_FILTER_TYPE_BASE, settings.filters);
   png_set_IHDR(png, info, static_cast<png_uint_32>(image.width),
                static_cast<png_uint_32>(image.height), 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
                PNG_COMPRESSION_TYPE_BASE, PNG_FILTER_TYPE_BASE);
@@ -222,10 +226,12 @@ std::string encodePng(const RgbImage& image) {
   return out;
 }
 
-void writePng(const std::filesystem::path& file, const RgbImage& image) {
+void writePng(const std::filesystem::path& file,
+              const RgbImage& image,
+              const PngSettings& settings) {
   std::string bytes;
   try {
-    bytes = encodePng(image);
+    bytes = encodePng(image, settings);
   } catch (const InputError& e) {
     throw InputError(fmt::format("{}: {}", file.string(), e.what()));
   }
@@ -234,9 +240,17 @@ void writePng(const std::filesystem::path& file, const RgbImage& image) {
 
 void writeNpy(const std::filesystem::path& file,
               const std::vector<float>& data,
-              const std::vector<std::size_t>& shape) {
+              const std::vector<std::size_t>& shape,
+              bool stream) {
   checkShape(file, data.size(), shape);
-  std::string out = npyHeader("<f4", shape);
+  const std::string header = npyHeader("<f4", shape);
+  if (stream && std::endian::native == std::endian::little) {
+    // '<f4' is the machine's own float: the values go to the file as they lie in memory.
+    writeFileAtomically(
+        file, {header, {reinterpret_cast<const char*>(data.data()), sizeof(float) * data.size()}});
+    return;
+  }
+  std::string out = header;
   out.reserve(out.size() + 4 * data.size());
   for (const float v : data) {
     const auto bits = std::bit_cast<std::uint32_t>(v);
@@ -247,11 +261,15 @@ void writeNpy(const std::filesystem::path& file,
 
 void writeNpy(const std::filesystem::path& file,
               const std::vector<std::uint8_t>& data,
-              const std::vector<std::size_t>& shape) {
+              const std::vector<std::size_t>& shape,
+              bool stream) {
   checkShape(file, data.size(), shape);
-  std::string out = npyHeader("|u1", shape);
-  out.append(data.begin(), data.end());
-  writeFileAtomically(file, out);
+  const std::string header = npyHeader("|u1", shape);
+  if (stream) {
+    writeFileAtomically(file, {header, {reinterpret_cast<const char*>(data.data()), data.size()}});
+    return;
+  }
+  writeFileAtomically(file, header + std::string(data.begin(), data.end()));
 }
 
 Rgb grey(double f) {
@@ -306,26 +324,27 @@ void checkRenderRequest(const RenderRequest& request) {
   }
 }
 
-// The scene in view coordinates, and the bounding box of everything in view (markers too).
+// The scene in view coordinates, and the bounding box of everything in view (markers and dots
+// too; the dots, often millions, are turned again where they are drawn rather than kept).
 struct ViewScene {
-  std::vector<Eigen::Vector3d> mesh, path, dots;
+  std::vector<Eigen::Vector3d> mesh, path;
   Eigen::AlignedBox3d box;
 };
 
-ViewScene viewScene(const RenderRequest& request) {
+// The scene turned by R_view; the dots only in its box (see extendByDots).
+ViewScene viewScene(const RenderRequest& request, const Eigen::Matrix3d& R_view) {
   ViewScene scene;
   const auto project = [&](const std::vector<Eigen::Vector3d>& in,
                            std::vector<Eigen::Vector3d>& out) {
     for (const Eigen::Vector3d& p : in) {
-      out.push_back(request.R_view * p);
+      out.push_back(R_view * p);
       if (out.back().allFinite()) scene.box.extend(out.back());
     }
   };
   project(request.vertices, scene.mesh);
   project(request.polyline, scene.path);
-  project(request.dots, scene.dots);
   for (const auto& marker : request.markers) {
-    const Eigen::Vector3d p = request.R_view * marker.first;
+    const Eigen::Vector3d p = R_view * marker.first;
     if (p.allFinite()) scene.box.extend(p);
   }
   return scene;
@@ -405,22 +424,45 @@ void drawMesh(const RenderRequest& request,
   }
 }
 
-// Dots: 1 px, the nearest wins; a mesh surface in front (closer than `tolerance`) hides them.
-void drawDots(const RenderRequest& request,
-              const std::vector<Eigen::Vector3d>& dots,
-              double tolerance,
-              std::vector<double>& depth,
-              RgbImage& image) {
-  const int w = image.width, h = image.height;
+// One view being drawn.
+struct View {
+  Eigen::Matrix3d R_view;
+  ViewScene scene;
+  std::optional<ScreenFit> fit;  // none: nothing in view
+  double tolerance = 0;          // depth within which a dot or the path counts as on the mesh
+  std::vector<double> depth;     // z-buffer: the largest depth (nearest) so far
+  RgbImage image;
+};
+
+// The dots in every view's box: one pass over them for all views (they are read from memory
+// once, not once a view).
+void extendByDots(const std::vector<Eigen::Vector3d>& dots, std::vector<View>& views) {
+  for (const Eigen::Vector3d& p : dots) {
+    for (View& v : views) {
+      const Eigen::Vector3d q = v.R_view * p;
+      if (q.allFinite()) v.scene.box.extend(q);
+    }
+  }
+}
+
+// Dots: 1 px, the nearest wins; a mesh surface in front (closer than the view's tolerance) hides
+// them. All views in one pass over the dots.
+void drawDots(const RenderRequest& request, std::vector<View>& views) {
+  const std::vector<Eigen::Vector3d>& dots = request.dots;
   for (std::size_t i = 0; i < dots.size(); ++i) {
-    const Eigen::Vector3d& p = dots[i];
-    if (!p.allFinite()) continue;
-    const int x = static_cast<int>(std::floor(p.x())), y = static_cast<int>(std::floor(p.y()));
-    if (x < 0 || y < 0 || x >= w || y >= h) continue;
-    double& zbuf = depth[pixelIndex(w, x, y)];
-    if (p.z() + tolerance < zbuf) continue;
-    zbuf = std::max(zbuf, p.z());
-    image.set(x, y, i < request.dot_colours.size() ? request.dot_colours[i] : Rgb{});
+    const Rgb colour = i < request.dot_colours.size() ? request.dot_colours[i] : Rgb{};
+    for (View& v : views) {
+      if (!v.fit) continue;
+      const Eigen::Vector3d p = v.fit->toScreen(v.R_view * dots[i]);
+      if (!p.allFinite()) continue;
+      const int w = v.image.width, h = v.image.height;
+      const int x = static_cast<int>(std::floor(p.x())), y = static_cast<int>(std::floor(p.y()));
+      if (x < 0 || y < 0 || x >= w || y >= h) continue;
+      double& zbuf = v.depth[pixelIndex(w, x, y)];
+      if (p.z() + v.tolerance < zbuf) continue;
+      zbuf = std::max(zbuf, p.z());
+      v.image.set(x, y, colour);
+    }
   }
 }
 
@@ -461,10 +503,13 @@ void drawPath(const std::vector<Eigen::Vector3d>& path,
 }
 
 // Markers: 7 px squares with a black outline, on top.
-void drawMarkers(const RenderRequest& request, const ScreenFit& fit, RgbImage& image) {
+void drawMarkers(const RenderRequest& request,
+                 const Eigen::Matrix3d& R_view,
+                 const ScreenFit& fit,
+                 RgbImage& image) {
   const int w = image.width, h = image.height;
   for (const auto& [point, marker_colour] : request.markers) {
-    const Eigen::Vector3d p = fit.toScreen(request.R_view * point);
+    const Eigen::Vector3d p = fit.toScreen(R_view * point);
     if (!p.allFinite()) continue;
     const int cx = static_cast<int>(std::floor(p.x())), cy = static_cast<int>(std::floor(p.y()));
     for (int y = std::max(0, cy - 4); y <= std::min(h - 1, cy + 4); ++y) {
@@ -479,25 +524,40 @@ void drawMarkers(const RenderRequest& request, const ScreenFit& fit, RgbImage& i
 }  // namespace
 
 RgbImage renderScene(const RenderRequest& request) {
+  return std::move(renderScenes(request, {request.R_view}).front());
+}
+
+std::vector<RgbImage> renderScenes(const RenderRequest& request,
+                                   const std::vector<Eigen::Matrix3d>& R_views) {
   checkRenderRequest(request);
   const int w = request.width, h = request.height;
-  RgbImage image = RgbImage::filled(w, h, request.background);
-
-  // Fit the view: bounding box of everything in view coordinates.
-  ViewScene scene = viewScene(request);
-  if (scene.box.isEmpty()) return image;
-  const ScreenFit fit = fitToScreen(scene.box, w, h);
-  for (auto& p : scene.mesh) p = fit.toScreen(p);
-  for (auto& p : scene.path) p = fit.toScreen(p);
-  for (auto& p : scene.dots) p = fit.toScreen(p);
-
-  std::vector<double> depth(pixelCount(w, h), -std::numeric_limits<double>::infinity());
-  drawMesh(request, scene.mesh, fit.scale, depth, image);
-  const double depth_tolerance = 1e-3 * fit.size.norm();
-  drawDots(request, scene.dots, depth_tolerance, depth, image);
-  drawPath(scene.path, request.polyline_colour, depth_tolerance, depth, image);
-  drawMarkers(request, fit, image);
-  return image;
+  std::vector<View> views(R_views.size());
+  for (std::size_t k = 0; k < views.size(); ++k) {
+    views[k].R_view = R_views[k];
+    views[k].scene = viewScene(request, R_views[k]);
+    views[k].image = RgbImage::filled(w, h, request.background);
+  }
+  extendByDots(request.dots, views);
+  for (View& v : views) {
+    // Fit the view: bounding box of everything in view coordinates.
+    if (v.scene.box.isEmpty()) continue;
+    v.fit = fitToScreen(v.scene.box, w, h);
+    for (auto& p : v.scene.mesh) p = v.fit->toScreen(p);
+    for (auto& p : v.scene.path) p = v.fit->toScreen(p);
+    v.depth.assign(pixelCount(w, h), -std::numeric_limits<double>::infinity());
+    drawMesh(request, v.scene.mesh, v.fit->scale, v.depth, v.image);
+    v.tolerance = 1e-3 * v.fit->size.norm();
+  }
+  drawDots(request, views);
+  std::vector<RgbImage> images;
+  for (View& v : views) {
+    if (v.fit) {
+      drawPath(v.scene.path, request.polyline_colour, v.tolerance, v.depth, v.image);
+      drawMarkers(request, v.R_view, *v.fit, v.image);
+    }
+    images.push_back(std::move(v.image));
+  }
+  return images;
 }
 
 std::array<NamedView, 3> partViews() {
@@ -506,6 +566,12 @@ std::array<NamedView, 3> partViews() {
                        .finished()},
            {"top", Eigen::Matrix3d::Identity()},
            {"front", (Eigen::Matrix3d() << 1, 0, 0, 0, 0, 1, 0, -1, 0).finished()}}};
+}
+
+std::vector<Eigen::Matrix3d> partViewRotations() {
+  std::vector<Eigen::Matrix3d> R;
+  for (const NamedView& view : partViews()) R.push_back(view.R_view);
+  return R;
 }
 
 }  // namespace scanplan::cli

@@ -10,6 +10,8 @@
 
 #include <Eigen/Core>
 
+#include "cli/io/write_settings.h"
+
 namespace scanplan::cli {
 
 /// An 8-bit sRGB colour.
@@ -33,20 +35,27 @@ struct RgbImage {
 /// Nearest-neighbour enlargement by integer factors ≥ 1 (x and y). Throws InputError when the
 /// result would exceed 2^28 pixels.
 RgbImage upscale(const RgbImage& image, int factor_x, int factor_y);
-/// PNG bytes (8-bit RGB, no text or time chunks, fixed compression): the same image always
-/// gives the same bytes. Throws InputError for an empty or inconsistent image.
-std::string encodePng(const RgbImage& image);
+/// PNG bytes (8-bit RGB, no text or time chunks, the compression of `settings`): the same image
+/// and settings always give the same bytes. Throws InputError for an empty or inconsistent
+/// image.
+std::string encodePng(const RgbImage& image, const PngSettings& settings = {});
 /// encodePng written atomically to `file`; errors name the file.
-void writePng(const std::filesystem::path& file, const RgbImage& image);
+void writePng(const std::filesystem::path& file,
+              const RgbImage& image,
+              const PngSettings& settings = {});
 
 /// Writes a NumPy .npy file, format 1.0, C order, byte for byte as numpy.save writes it
 /// (dtype '<f4' or '|u1'). Throws InputError when data.size() ≠ the product of `shape`.
+/// `stream`: the values go to the file straight from `data` on a little-endian machine
+/// (WriteSettings::stream_binary), else through a copy of the whole file.
 void writeNpy(const std::filesystem::path& file,
               const std::vector<float>& data,
-              const std::vector<std::size_t>& shape);
+              const std::vector<std::size_t>& shape,
+              bool stream = true);
 void writeNpy(const std::filesystem::path& file,
               const std::vector<std::uint8_t>& data,
-              const std::vector<std::size_t>& shape);
+              const std::vector<std::size_t>& shape,
+              bool stream = true);
 
 /// Grey level for a fraction: 0 → black, 1 → white, clamped; NaN → dark red (kNanColour).
 Rgb grey(double f);
@@ -103,6 +112,10 @@ struct RenderRequest {
 /// the mesh Lambert-shaded in grey (light from the viewer) with a z-buffer. Deterministic.
 /// Throws InputError for a non-positive size or a triangle index out of range.
 RgbImage renderScene(const RenderRequest& request);
+/// renderScene for each of `R_views` in turn (request.R_view is not used): the same images, the
+/// dots read once for all views.
+std::vector<RgbImage> renderScenes(const RenderRequest& request,
+                                   const std::vector<Eigen::Matrix3d>& R_views);
 
 /// A named view direction for renderScene (R_view) of a z-up frame.
 struct NamedView {
@@ -112,5 +125,7 @@ struct NamedView {
 /// The three views of the path and cloud pictures: iso (from +x −y +z), top (looking down z),
 /// front (looking along +y).
 std::array<NamedView, 3> partViews();
+/// The rotations of partViews(), for renderScenes.
+std::vector<Eigen::Matrix3d> partViewRotations();
 
 }  // namespace scanplan::cli

@@ -78,7 +78,8 @@ RgbImage cylinderImage(const planner::ConfigMap& map, std::size_t branch) {
 // rows are the cylinder seen from the side), title, colour bar and which half is which.
 void writeCylinderFigure(const std::filesystem::path& dir,
                          const planner::ConfigMap& map,
-                         std::size_t branch) {
+                         std::size_t branch,
+                         const PngSettings& png) {
   const RgbImage raster = cylinderImage(map, branch);
   Figure figure;
   figure.raster = upscale(raster, std::max(1, 1000 / std::max(raster.width, 1)), 1);
@@ -104,7 +105,7 @@ void writeCylinderFigure(const std::filesystem::path& dir,
                    {{0, 0, 0}, "around 0 deg", LegendEntry::Mark::kNone},
                    {{0, 0, 0}, "below: back half,", LegendEntry::Mark::kNone, {0, 0, 0}, 6},
                    {{0, 0, 0}, "around 180 deg", LegendEntry::Mark::kNone}};
-  writePng(dir / "configmap_cylinder.png", renderFigure(figure));
+  writePng(dir / "configmap_cylinder.png", renderFigure(figure), png);
 }
 
 }  // namespace
@@ -118,7 +119,8 @@ void writeMapFigure(const std::filesystem::path& dir,
                     const RgbImage& raster,
                     const planner::ConfigMap& map,
                     FigureLabels labels,
-                    std::vector<Overlay> overlays = {}) {
+                    std::vector<Overlay> overlays,
+                    const WriteSettings& settings) {
   // At least ~1000 px wide and 40 % as tall as wide: a 1095 × 180 map is not a thin strip;
   // nearest-neighbour blocks keep every cell's colour.
   const int fx = std::max(1, 1000 / std::max(raster.width, 1));
@@ -135,7 +137,7 @@ void writeMapFigure(const std::filesystem::path& dir,
   labels.y0 = map.angles.empty() ? 0.0 : toDeg(map.angles.front());
   labels.y1 = map.angles.empty() ? 360.0 : toDeg(map.angles.back() + step);
   figure.labels = std::move(labels);
-  writeFigureFiles(dir, stem, figure);
+  writeFigureFiles(dir, stem, figure, settings);
 }
 
 }  // namespace
@@ -148,14 +150,15 @@ void writeFigure(const std::filesystem::path& dir,
                  const planner::ConfigMap& map,
                  const std::string& title,
                  std::vector<std::pair<Rgb, std::string>> legend,
-                 std::vector<Overlay> paths) {
+                 std::vector<Overlay> paths,
+                 const WriteSettings& settings) {
   FigureLabels labels;
   labels.title = title;
   for (auto& [colour, text] : legend) {
     labels.legend.push_back({colour, std::move(text), LegendEntry::Mark::kLine});
   }
   labels.colour_bar = "map f";
-  writeMapFigure(dir, stem, image, map, std::move(labels), std::move(paths));
+  writeMapFigure(dir, stem, image, map, std::move(labels), std::move(paths), settings);
 }
 
 RgbImage mapGreyImage(const planner::ConfigMap& map, std::size_t branch) {
@@ -164,13 +167,14 @@ RgbImage mapGreyImage(const planner::ConfigMap& map, std::size_t branch) {
 
 void writeMapFigures(const std::filesystem::path& dir,
                      const planner::ConfigMap& map,
-                     std::size_t shown) {
+                     std::size_t shown,
+                     const WriteSettings& settings) {
   const std::string branch = map.branches[shown].words();
   FigureLabels grey_labels;
   grey_labels.title =
       "Configuration map f (Eq. 6), " + branch + ": white = free, black = forbidden";
   grey_labels.colour_bar = "f";
-  writeMapFigure(dir, "configmap", mapGreyImage(map, shown), map, grey_labels);
+  writeMapFigure(dir, "configmap", mapGreyImage(map, shown), map, grey_labels, {}, settings);
   // Colour by the limiting constraint, brighter where f is higher.
   FigureLabels why_labels;
   why_labels.title = "Limiting constraint per cell, " + branch + " (darker = lower f)";
@@ -191,8 +195,8 @@ void writeMapFigures(const std::filesystem::path& dir,
                  return Rgb{static_cast<std::uint8_t>(c.r * s), static_cast<std::uint8_t>(c.g * s),
                             static_cast<std::uint8_t>(c.b * s)};
                }),
-      map, why_labels);
-  writeCylinderFigure(dir, map, shown);
+      map, why_labels, {}, settings);
+  writeCylinderFigure(dir, map, shown, settings.png);
 }
 
 // Three views of the path around the part (iso, top, front), side by side, captioned, with a
@@ -214,11 +218,8 @@ RgbImage pathPicture(const kinematics::TriangleMesh& part, const kinematics::Sca
     r.markers.push_back({r.polyline.front(), start});
     r.markers.push_back({r.polyline.back(), end});
   }
-  for (const NamedView& view : partViews()) {
-    r.R_view = view.R_view;
-    grid.captions.push_back(view.name);
-    row.views.push_back(renderScene(r));
-  }
+  for (const NamedView& view : partViews()) grid.captions.push_back(view.name);
+  row.views = renderScenes(r, partViewRotations());
   grid.legend = {
       {r.polyline_colour, "path (lighter where the part hides it)", LegendEntry::Mark::kLine},
       {start, "start"},

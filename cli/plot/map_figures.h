@@ -26,13 +26,15 @@ void writeFigure(const std::filesystem::path& dir,
                  const planner::ConfigMap& map,
                  const std::string& title,
                  std::vector<std::pair<Rgb, std::string>> legend,
-                 std::vector<Overlay> paths = {});
+                 std::vector<Overlay> paths = {},
+                 const WriteSettings& settings = {});
 
 /// configmap.png/.svg (f), configmap_why.png/.svg (the limiting constraint, darker where f is
 /// lower) and configmap_cylinder.png of branch `shown`, into `dir`.
 void writeMapFigures(const std::filesystem::path& dir,
                      const planner::ConfigMap& map,
-                     std::size_t shown);
+                     std::size_t shown,
+                     const WriteSettings& settings = {});
 
 /// Three views of the path (the laser origin, part frame) around the part, captioned, with start
 /// and end marked.

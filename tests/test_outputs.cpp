@@ -1,0 +1,237 @@
+// The output writers of issue 20 item 6 against the ones they replaced (WriteSettings::reference):
+// the same files — byte for byte, or pixel for pixel where only PNG compression differs —, the
+// streamed and pieced atomic writes, and the views drawn together as each is drawn alone.
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "cli/commands/commands.h"
+#include "cli/config/job.h"
+#include "cli/config/problem.h"
+#include "cli/io/output.h"
+#include "cli/plot/image_io.h"
+#include "io_support.h"
+#include "kinematics/error.h"
+#include "pipeline/plan_scan.h"
+#include "test_support.h"
+
+namespace {
+
+using namespace scanplan;
+namespace fs = std::filesystem;
+
+class Outputs : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() / ("scanplan_test_outputs_" + std::string(info->name()) + "_" +
+                                        std::to_string(::getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  fs::path dir_;
+};
+
+std::string readBytes(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+// The files under `dir`, by their path relative to it.
+std::map<std::string, std::string> filesUnder(const fs::path& dir) {
+  std::map<std::string, std::string> files;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) {
+    if (e.is_regular_file()) files[fs::relative(e.path(), dir).string()] = readBytes(e.path());
+  }
+  return files;
+}
+
+std::string base64Decode(const std::string& text) {
+  static const std::string kDigits =
+      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  unsigned value = 0;
+  int bits = -8;
+  for (const char c : text) {
+    const std::size_t digit = kDigits.find(c);
+    if (digit == std::string::npos) continue;  // padding, line breaks
+    value = (value << 6) + static_cast<unsigned>(digit);
+    bits += 6;
+    if (bits >= 0) {
+      out += static_cast<char>((value >> bits) & 0xffU);
+      bits -= 8;
+    }
+  }
+  return out;
+}
+
+// An SVG's text with its embedded PNGs taken out, and those PNGs decoded.
+struct SplitSvg {
+  std::string text;
+  std::vector<cli::RgbImage> images;
+};
+
+SplitSvg splitSvg(const std::string& svg) {
+  const std::string kData = "data:image/png;base64,";
+  SplitSvg split;
+  std::size_t at = 0;
+  for (std::size_t start; (start = svg.find(kData, at)) != std::string::npos;) {
+    split.text += svg.substr(at, start - at);
+    const std::size_t end = svg.find('"', start);
+    const std::size_t first = start + kData.size();
+    split.images.push_back(test::decodePng(base64Decode(svg.substr(first, end - first))));
+    at = end;
+  }
+  split.text += svg.substr(at);
+  return split;
+}
+
+::testing::AssertionResult samePixels(const cli::RgbImage& a, const cli::RgbImage& b) {
+  if (a.width == b.width && a.height == b.height && a.rgb == b.rgb) {
+    return ::testing::AssertionSuccess();
+  }
+  return ::testing::AssertionFailure() << a.width << " x " << a.height << " vs " << b.width << " x "
+                                       << b.height << ", pixels differ";
+}
+
+TEST_F(Outputs, TodaysWritersGiveTheReferencesFilesByteForByteOrPixelForPixel) {
+  // The light demo with the simulation: every kind of file `plan` writes but the certificate's.
+  std::vector<std::string> overrides = test::kLightDemo;
+  overrides.push_back("map.branch=RIGHTY ABOVE NOFLIP");
+  overrides.push_back("map.angle_step_deg=2");
+  const cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", overrides);
+  const pipeline::ScanProblem problem = cli::toProblem(job);
+  const pipeline::ScanPlan plan = pipeline::planScan(problem);
+  ASSERT_TRUE(plan.planned() && plan.simulation) << plan.reason;
+  cli::writePlanOutputs(dir_ / "today", job, problem, plan);
+  cli::writePlanOutputs(dir_ / "reference", job, problem, plan, cli::WriteSettings::reference());
+
+  const auto today = filesUnder(dir_ / "today"), reference = filesUnder(dir_ / "reference");
+  ASSERT_EQ(today.size(), reference.size());
+  int pngs = 0, svgs = 0;
+  for (const auto& [name, bytes] : reference) {
+    ASSERT_TRUE(today.contains(name)) << name;
+    const std::string& ours = today.at(name);
+    const std::string ext = fs::path(name).extension().string();
+    if (ext == ".png") {
+      ++pngs;
+      EXPECT_TRUE(samePixels(test::decodePng(ours), test::decodePng(bytes))) << name;
+      // Level 2 with the Up filter: larger than level 6 with every filter, within reason.
+      EXPECT_LT(ours.size(), bytes.size() * 3 / 2) << name;
+    } else if (ext == ".svg") {
+      ++svgs;
+      const SplitSvg a = splitSvg(ours), b = splitSvg(bytes);
+      EXPECT_EQ(a.text, b.text) << name;
+      ASSERT_EQ(a.images.size(), 1u) << name;
+      ASSERT_EQ(b.images.size(), 1u) << name;
+      EXPECT_TRUE(samePixels(a.images[0], b.images[0])) << name;
+    } else {
+      EXPECT_TRUE(ours == bytes) << name << ": " << ours.size() << " vs " << bytes.size()
+                                 << " bytes";
+    }
+  }
+  EXPECT_EQ(pngs, 6) << "path, configmap, configmap_why, configmap_cylinder, configmap_path, cloud";
+  EXPECT_EQ(svgs, 3);
+  EXPECT_TRUE(today.contains("cloud.ply") && today.contains("configmap.npy"));
+}
+
+TEST_F(Outputs, ViewsDrawnTogetherAreEachAsDrawnAlone) {
+  // A tetrahedron, dots on and off it, a path around it and markers: every drawing step.
+  cli::RenderRequest r;
+  r.width = 160;
+  r.height = 120;
+  r.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  r.triangles = {{0, 1, 2}, {0, 1, 3}, {0, 2, 3}, {1, 2, 3}};
+  r.triangle_colours = {{200, 0, 0}, {0, 200, 0}};
+  for (int i = 0; i < 400; ++i) {
+    const double u = i / 400.0;
+    r.dots.emplace_back(u, 0.5 * (1 - u), 0.3 + 0.8 * u * (1 - u));
+    r.dot_colours.push_back({static_cast<std::uint8_t>(i % 256), 10, 200});
+  }
+  r.dots.emplace_back(std::numeric_limits<double>::quiet_NaN(), 0, 0);
+  for (int i = 0; i <= 40; ++i)
+    r.polyline.emplace_back(1.2 * std::cos(i * 0.2), 1.2 * std::sin(i * 0.2), 0.5);
+  r.markers = {{r.polyline.front(), {0, 158, 115}}, {r.polyline.back(), {213, 94, 0}}};
+  const std::vector<Eigen::Matrix3d> views = cli::partViewRotations();
+  const std::vector<cli::RgbImage> together = cli::renderScenes(r, views);
+  ASSERT_EQ(together.size(), views.size());
+  for (std::size_t k = 0; k < views.size(); ++k) {
+    r.R_view = views[k];
+    EXPECT_TRUE(samePixels(together[k], cli::renderScene(r))) << "view " << k;
+    int drawn = 0;
+    for (int y = 0; y < r.height; ++y)
+      for (int x = 0; x < r.width; ++x) drawn += together[k].at(x, y) == r.background ? 0 : 1;
+    EXPECT_GT(drawn, 1000) << "view " << k << ": the scene is in the picture";
+  }
+  EXPECT_TRUE(cli::renderScenes(r, {}).empty());
+}
+
+TEST_F(Outputs, EveryPngSettingDecodesToTheSamePixels) {
+  cli::RgbImage image = cli::RgbImage::filled(37, 23, {250, 250, 250});
+  for (int y = 0; y < image.height; ++y) {
+    for (int x = 0; x < image.width; ++x) {
+      if ((x * y) % 7 < 3) {
+        image.set(x, y, {static_cast<std::uint8_t>(7 * x), static_cast<std::uint8_t>(11 * y), 90});
+      }
+    }
+  }
+  for (const cli::PngSettings s : {cli::PngSettings{}, cli::WriteSettings::reference().png,
+                                   cli::PngSettings{0, 0x08}, cli::PngSettings{9, 0x80}}) {
+    const std::string png = cli::encodePng(image, s);
+    EXPECT_TRUE(samePixels(test::decodePng(png), image)) << s.level << " " << s.filters;
+    EXPECT_EQ(cli::encodePng(image, s), png) << "the same bytes every time";
+  }
+}
+
+TEST_F(Outputs, StreamedAndPiecedFilesHoldWhatWasWrittenAndNoTemporary) {
+  std::string big;
+  for (int i = 0; i < 300'000; ++i) big += static_cast<char>(i * 31 % 251);
+  cli::writeFileAtomically(dir_ / "streamed.bin", [&](std::ostream& out) {
+    out << "head ";
+    out.write(big.data(), static_cast<std::streamsize>(big.size()));        // straight through
+    for (int i = 0; i < 100'000; ++i) out.put(static_cast<char>(i % 256));  // buffered
+  });
+  std::string want = "head " + big;
+  for (int i = 0; i < 100'000; ++i) want += static_cast<char>(i % 256);
+  EXPECT_TRUE(readBytes(dir_ / "streamed.bin") == want);
+  cli::writeFileAtomically(dir_ / "pieces.bin", {"a", "", big, "z"});
+  EXPECT_TRUE(readBytes(dir_ / "pieces.bin") == "a" + big + "z");
+  for (const auto& e : fs::directory_iterator(dir_)) {
+    EXPECT_EQ(e.path().extension(), ".bin") << e.path();
+  }
+}
+
+TEST_F(Outputs, AFailingStreamLeavesNoFileAndANamedError) {
+  EXPECT_THROW(cli::writeFileAtomically(dir_ / "thrown.bin",
+                                        [](std::ostream& out) {
+                                          out << "partial";
+                                          throw std::runtime_error("stop");
+                                        }),
+               std::runtime_error);
+  EXPECT_TRUE(fs::is_empty(dir_));
+  std::ofstream(dir_ / "file") << "a file where a folder should be";
+  try {
+    cli::writeFileAtomically(dir_ / "file" / "x.ply", [](std::ostream& out) { out << "x"; });
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("x.ply: cannot write the file: Not a directory"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
