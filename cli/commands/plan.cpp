@@ -113,7 +113,13 @@ void writeChoiceFigure(const std::filesystem::path& out,
     drawn.emplace_back(o.method, o.result.theta);
     labels.push_back(fmt::format("{} J {:.2f} s", o.method, o.result.terms.total));
   }
-  writePathFigure(out, plan.prepared->map, c.chosen.result.branch, drawn, labels, settings);
+  // On a joint-wrap sheet the path was planned on the sheet's f (its joint's window scored,
+  // cells near the window's edges closed): that is the map to draw it over.
+  if (c.sheet_map) {
+    writePathFigure(out, *c.sheet_map, 0, drawn, labels, settings);
+  } else {
+    writePathFigure(out, plan.prepared->map, c.chosen.result.branch, drawn, labels, settings);
+  }
 }
 
 // The outputs of a valid plan: trajectory.csv, the programs, the simulation's and the
