@@ -85,6 +85,21 @@ std::vector<kinematics::IkSolution> branchSolutions(const collision::Scene& scen
   return out;
 }
 
+// Calls f(angle index, joints) at each cell of `columns` the branch reaches within the limits,
+// with its first solution there.
+template <class F>
+void forEachReached(const collision::Scene& scene,
+                    const scanner::GeneratedPath& path,
+                    const planner::ConfigMap& map,
+                    std::size_t b,
+                    const std::vector<std::size_t>& columns,
+                    F&& f) {
+  for (const auto& [a, k] : probeCells(map, columns)) {
+    const auto solutions = branchSolutions(scene, path, map, b, a, k, true);
+    if (!solutions.empty()) f(a, solutions.front().q);
+  }
+}
+
 bool isLink(const collision::BodyInfo& body) {
   return body.motion == collision::BodyMotion::kRobotLink;
 }
@@ -113,17 +128,16 @@ std::string explainClearance(const collision::Scene& scene,
                              const std::vector<std::size_t>& columns) {
   planner::PoseEvaluator evaluator(scene, settings);
   std::map<int, std::pair<std::size_t, double>> pairs;  // pair → cells limited, least distance
-  for (const auto& [a, k] : probeCells(map, columns)) {
-    const auto solutions = branchSolutions(scene, path, map, b, a, k, true);
-    if (solutions.empty()) continue;
-    const planner::PoseScore s = evaluator.score(map.angles[a], solutions.front().q);
-    const int p = s.clearance.limiting_pair;
-    if (p < 0) continue;
-    auto& [cells, least] =
-        pairs.try_emplace(p, 0, std::numeric_limits<double>::infinity()).first->second;
-    ++cells;
-    least = std::min(least, s.clearance.pairs[static_cast<std::size_t>(p)].distance);
-  }
+  forEachReached(
+      scene, path, map, b, columns, [&](std::size_t a, const kinematics::JointVector& q) {
+        const planner::PoseScore s = evaluator.score(map.angles[a], q);
+        const int p = s.clearance.limiting_pair;
+        if (p < 0) return;
+        auto& [cells, least] =
+            pairs.try_emplace(p, 0, std::numeric_limits<double>::infinity()).first->second;
+        ++cells;
+        least = std::min(least, s.clearance.pairs[static_cast<std::size_t>(p)].distance);
+      });
   if (pairs.empty()) return "clearance";
   const auto worst = std::max_element(pairs.begin(), pairs.end(), [](const auto& x, const auto& y) {
     return x.second.first < y.second.first;
@@ -173,15 +187,13 @@ std::string explainSingularity(const collision::Scene& scene,
                                std::size_t b,
                                const std::vector<std::size_t>& columns) {
   std::array<std::size_t, 3> at{};  // wrist, elbow, shoulder at or below their low
-  for (const auto& [a, k] : probeCells(map, columns)) {
-    const auto solutions = branchSolutions(scene, path, map, b, a, k, true);
-    if (solutions.empty()) continue;
-    const kinematics::SingularityMeasures m =
-        scene.cell().robot.singularity(solutions.front().q, false);
+  forEachReached(scene, path, map, b, columns, [&](std::size_t, const kinematics::JointVector& q) {
+    const kinematics::SingularityMeasures m = scene.cell().robot.singularity(q, false);
     at[0] += m.wrist <= settings.wrist.low ? 1 : 0;
     at[1] += m.elbow <= settings.elbow.low ? 1 : 0;
     at[2] += m.shoulder <= settings.shoulder.low ? 1 : 0;
-  }
+  });
+
   const auto most = std::max_element(at.begin(), at.end()) - at.begin();
   static const std::array<const char*, 3> text{
       "wrist singularity (J5 near 0°): tilt the scanner (tilt_deg) so that J5 leaves 0°",
