@@ -435,7 +435,7 @@ kinematics::OpwParameters chooseOpw(const UrdfRobotSource& source,
   if (source.opw_parameters.empty()) return derived;
   const kinematics::OpwParameters given = readOpwFile(source.opw_parameters);
   try {
-    kinematics::RobotModel({source.name, dh, given, {}});
+    kinematics::RobotModel({source.name, dh, given, {}, {}});
     return given;
   } catch (const InputError& e) {
     if (sameUpToRounding(given, derived)) {
