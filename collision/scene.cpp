@@ -6,6 +6,7 @@
 #include <cmath>
 #include <set>
 #include <stdexcept>
+#include <utility>
 
 #include "collision/fcl_geometry.h"
 #include "kinematics/error.h"
@@ -117,16 +118,15 @@ std::vector<PairInfo> selectPairs(const std::vector<BodyInfo>& bodies,
            config.defaults});
     }
   }
-  for (const auto& [a, b] : allowed) {
-    if (bodyNamed(bodies, a) < 0 || bodyNamed(bodies, b) < 0) {
-      throw InputError("robot allowed_collisions: [" + a + ", " + b +
-                       "] names a link the robot does not have: expected its link names");
-    }
-    PairRule rule;
-    rule.a = a;
-    rule.b = b;
-    rule.action = PairRule::Action::kExclude;
-    applyRule(rule, bodies, candidates);
+  // Allowed pairs by exact name (not as rule patterns: a link may be named `robot` or hold glob
+  // characters). A link without geometry is no body here: nothing to leave out.
+  for (const auto& [name_a, name_b] : allowed) {
+    int a = bodyNamed(bodies, name_a), b = bodyNamed(bodies, name_b);
+    if (a < 0 || b < 0 || a == b) continue;
+    if (a > b) std::swap(a, b);
+    // Candidates run over pairs (i < j) row by row: (a, b) is at a·n − a(a+1)/2 + (b − a − 1).
+    const auto index = static_cast<std::size_t>(a * n - a * (a + 1) / 2 + (b - a - 1));
+    candidates[index].enabled = false;
   }
   for (const PairRule& rule : config.rules) applyRule(rule, bodies, candidates);
   std::vector<PairInfo> pairs;

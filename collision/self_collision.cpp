@@ -4,14 +4,12 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <stdexcept>
 
 #include "collision/fcl_geometry.h"
 
 namespace scanplan::collision {
 namespace {
-
-// Pairs are measured exactly up to this distance; beyond it only "farther" is known.
-constexpr double kReach = 0.1;  // m
 
 std::string bodyName(const kinematics::RobotDefinition& def, std::size_t k) {
   if (!def.links[k].name.empty()) return def.links[k].name;
@@ -26,19 +24,26 @@ bool allowedPair(const kinematics::RobotDefinition& def,
       [&](const auto& p) { return (p[0] == a && p[1] == b) || (p[0] == b && p[1] == a); });
 }
 
+// Uniform within the limits from mt19937's own numbers (its sequence is fixed by the standard;
+// std::uniform_real_distribution's is not, so the survey reads the same on every library).
 kinematics::JointVector randomInLimits(const kinematics::RobotModel& robot, std::mt19937& rng) {
   kinematics::JointVector q;
   for (int j = 0; j < kinematics::kNumJoints; ++j) {
-    q(j) = std::uniform_real_distribution<double>(robot.joint(j).min, robot.joint(j).max)(rng);
+    const double u = static_cast<double>(rng()) / 4294967296.0;  // [0, 1)
+    q(j) = robot.joint(j).min + (robot.joint(j).max - robot.joint(j).min) * u;
   }
   return q;
 }
+
+// Touching pairs read within GJK's tolerance of 0 (1e-6 m) on FCL's shapes: count them.
+constexpr double kContact = 1e-6;  // m
 
 }  // namespace
 
 SelfSurvey surveySelfCollisions(const kinematics::RobotModel& robot,
                                 std::size_t samples,
                                 std::uint32_t seed) {
+  if (samples == 0) throw std::invalid_argument("surveySelfCollisions: no samples");
   const kinematics::RobotDefinition& def = robot.definition();
   std::vector<detail::BodyGeometry> bodies(def.links.size());
   for (std::size_t k = 0; k < def.links.size(); ++k) {
@@ -67,10 +72,10 @@ SelfSurvey surveySelfCollisions(const kinematics::RobotModel& robot,
     const auto frames = robot.linkFrames(randomInLimits(robot, rng));
     for (SelfPairSurvey& p : survey.pairs) {
       const auto a = static_cast<std::size_t>(p.link_a), b = static_cast<std::size_t>(p.link_b);
-      const detail::ShapeDistance d =
-          detail::bodyDistance(bodies[a], frames[a], bodies[b], frames[b], kReach, false, false);
-      const double distance = d.penetrating ? 0.0 : d.beyond ? kReach : d.distance;
-      if (d.penetrating || distance <= 0.0) ++p.colliding;
+      const detail::ShapeDistance d = detail::bodyDistance(bodies[a], frames[a], bodies[b],
+                                                           frames[b], kSurveyReach, false, false);
+      const double distance = d.penetrating ? 0.0 : d.beyond ? kSurveyReach : d.distance;
+      if (d.penetrating || distance <= kContact) ++p.colliding;
       p.min_distance = std::min(p.min_distance, distance);
     }
   }

@@ -27,8 +27,12 @@ struct SelfSurvey {
   std::vector<SelfPairSurvey> pairs;  ///< every pair of bodies with geometry
 };
 
-/// Samples `samples` joint vectors uniformly within the limits (std::mt19937 seeded with
-/// `seed`) and measures every pair of bodies with collision geometry.
+/// Pairs are measured exactly up to this distance; beyond it only "farther" is known.
+inline constexpr double kSurveyReach = 0.1;  // m
+
+/// Samples `samples` (> 0) joint vectors uniformly within the limits (std::mt19937 seeded with
+/// `seed`) and measures every pair of bodies with collision geometry; a pair within 1e-6 m
+/// counts as colliding.
 SelfSurvey surveySelfCollisions(const kinematics::RobotModel& robot,
                                 std::size_t samples,
                                 std::uint32_t seed);

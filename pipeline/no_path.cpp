@@ -158,18 +158,26 @@ std::string explainJointLimit(const collision::Scene& scene,
                               std::size_t b,
                               const std::vector<std::size_t>& columns) {
   const kinematics::RobotModel& robot = scene.cell().robot;
+  // The solution nearest to the limits: the least of each solution's largest overshoot, and
+  // the joint that overshoots most in it (widening another would not open the cell).
   int joint = -1;
   double excess = std::numeric_limits<double>::infinity(), needed = 0.0;
   for (const auto& [a, k] : probeCells(map, columns)) {
     for (const kinematics::IkSolution& s : branchSolutions(scene, path, map, b, a, k, false)) {
+      int worst = -1;
+      double worst_out = 0.0;
       for (int j = 0; j < kinematics::kNumJoints; ++j) {
         const double q = s.q(j), lo = robot.joint(j).min, hi = robot.joint(j).max;
         const double out = q < lo ? lo - q : q > hi ? q - hi : 0.0;
-        if (out > 0.0 && out < excess) {
-          excess = out;
-          joint = j;
-          needed = q;
+        if (out > worst_out) {
+          worst_out = out;
+          worst = j;
         }
+      }
+      if (worst >= 0 && worst_out < excess) {
+        excess = worst_out;
+        joint = worst;
+        needed = s.q(worst);
       }
     }
   }
@@ -194,6 +202,7 @@ std::string explainSingularity(const collision::Scene& scene,
     at[2] += m.shoulder <= settings.shoulder.low ? 1 : 0;
   });
 
+  if (at == std::array<std::size_t, 3>{}) return "singularities on every table angle";
   const auto most = std::max_element(at.begin(), at.end()) - at.begin();
   static const std::array<const char*, 3> text{
       "wrist singularity (J5 near 0°): tilt the scanner (tilt_deg) so that J5 leaves 0°",
@@ -223,6 +232,8 @@ std::string explainBlockedBranch(const collision::Scene& scene,
   switch (dominantLimit(map, branch, k0, k1)) {
     case planner::Limit::kClearance:
       why = explainClearance(scene, settings, path, map, branch, ends);
+      // The clearance-closed cells may lie between the probed columns: then all of them.
+      if (why == "clearance") why = explainClearance(scene, settings, path, map, branch, all);
       break;
     case planner::Limit::kJointLimit:
       why = explainJointLimit(scene, path, map, branch, all);

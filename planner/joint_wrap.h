@@ -31,7 +31,9 @@ namespace scanplan::planner {
 /// value would jump a whole turn. On a sheet the joint factor is therefore the one of the joint's
 /// continuous value along any path whose steps move j by less than the margin, and such a path
 /// keeps j within its limits. The windows start at min − margin and step by at most 90° until
-/// one ends at max + margin, so a path whose j spans up to 360° − 2·margin fits one. The other
+/// one ends at max + margin, so a path whose j spans up to 360° − 2·margin − 90° (230°) always
+/// fits one, a wider one (up to 360° − 2·margin, 320°) only where a window happens to hold it,
+/// and a wider still none. The other
 /// joints keep the map's choice; the planners run on a sheet unchanged (it is a one-branch
 /// ConfigMap, f' = f · J'/J, J the map's joint factor, J' the sheet's: singularity and clearance
 /// do not change with whole turns), and buildTrajectory() still checks the chosen path.

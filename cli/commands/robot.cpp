@@ -72,7 +72,8 @@ Json surveyJson(const std::string& name,
     pair["allowed"] = p.allowed;
     pair["colliding"] = p.colliding;
     pair["share"] = static_cast<double>(p.colliding) / static_cast<double>(s.samples);
-    pair["min_distance_mm"] = toMm(p.min_distance);
+    pair["min_distance_mm"] =  // null: never within the survey's reach
+        p.min_distance >= collision::kSurveyReach ? Json(nullptr) : Json(toMm(p.min_distance));
     pair["verdict"] = verdict(p, s.samples);
     pairs.push_back(std::move(pair));
     if (suggested(p, s.samples)) allow.push_back(Json::array({p.a, p.b}));
@@ -94,7 +95,8 @@ std::string surveyText(const std::string& name,
     const double share = 100.0 * static_cast<double>(p.colliding) / static_cast<double>(s.samples);
     text += fmt::format(
         "  {:<22} {:>9} {:>6.1f}% {:>12}   {}\n", p.a + " - " + p.b, p.colliding, share,
-        p.min_distance >= 0.1 ? std::string(">= 100") : fmt::format("{:.1f}", toMm(p.min_distance)),
+        p.min_distance >= collision::kSurveyReach ? std::string(">= 100")
+                                                  : fmt::format("{:.1f}", toMm(p.min_distance)),
         verdict(p, s.samples));
     if (suggested(p, s.samples)) {
       allow += fmt::format("  - [{}, {}]   # collide in {:.1f}% of the samples\n", p.a, p.b, share);
