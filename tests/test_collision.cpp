@@ -799,6 +799,22 @@ TEST(AllowedCollisions, ARobotsAllowedPairIsNotCheckedUnlessAJobIncludesIt) {
     EXPECT_NE(std::string(e.what()).find("link9"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("robot.yaml"), std::string::npos) << e.what();
   }
+  // Not a pair, a link with itself, a pair twice (either order): errors naming the key.
+  for (const char* bad :
+       {"[[link4]]", "[[link4, link4]]", "[[link4, link6], [link6, link4]]", "[link4, link6]"}) {
+    {
+      std::ifstream in(test::sourceDir() / "data/robots/viper_s650.yaml");
+      std::ofstream out(dir / "robot.yaml");
+      out << in.rdbuf() << "allowed_collisions: " << bad << "\n";
+    }
+    try {
+      cli::loadRobotFile(dir / "robot.yaml");
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("allowed_collisions"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("robot.yaml"), std::string::npos) << e.what();
+    }
+  }
   fs::remove_all(dir);
 }
 
