@@ -55,7 +55,7 @@ Side sideOf(const Scene& scene, std::size_t body) {
       break;
     }
   }
-  for (const detail::CollisionShape& s : scene.geometry().bodies[body].shapes) {
+  for (const detail::CollisionShape& s : scene.geometry().map_bodies[body].shapes) {
     Primitive p = s.primitive ? *s.primitive : *s.bounding_box;
     p.X_W = X_link_body * s.X_BG * p.X_W;
     side.shapes.push_back(p);
@@ -187,7 +187,7 @@ ChainLevers::ChainLevers(const Scene& scene) {
       }
     }
     std::tie(weights.centre, weights.radius) =
-        detail::boundingSphere(scene.geometry().bodies[weights.distal]);
+        detail::boundingSphere(scene.geometry().map_bodies[weights.distal]);
     covers_.push_back(link);
     weights_.push_back(weights);
   }

@@ -62,7 +62,7 @@ ClearanceResult ClearanceEvaluator::evaluate(double theta,
                                              const ClearanceRequest& request) {
   const Scene& scene = *scene_;
   scene.bodyPoses(theta, q, X_W_);
-  const auto& bodies = scene.geometry().bodies;
+  const auto& bodies = scene.geometry().of(geometry_);
   ClearanceResult result;
   result.pairs.resize(scene.pairs().size());
   double worst_factor = 2.0, worst_distance = kInf;
@@ -98,7 +98,7 @@ ClearanceResult ClearanceEvaluator::evaluate(double theta,
 double ClearanceEvaluator::factor(double theta, const kinematics::JointVector& q) {
   const Scene& scene = *scene_;
   scene.bodyPoses(theta, q, X_W_);
-  const auto& bodies = scene.geometry().bodies;
+  const auto& bodies = scene.geometry().of(geometry_);
   double f = 1.0;
   for (const PairInfo& pair : scene.pairs()) {
     const auto a = static_cast<std::size_t>(pair.a), b = static_cast<std::size_t>(pair.b);

@@ -37,9 +37,11 @@ struct ClearanceResult {
 class ClearanceEvaluator {
  public:
   /// `closed_forms` false: FCL alone, as before collision/primitive_distance (the map
-  /// benchmark's old path).
-  explicit ClearanceEvaluator(const Scene& scene, bool closed_forms = true)
-      : scene_(&scene), closed_forms_(closed_forms) {}
+  /// benchmark's old path). `geometry`: what is measured (kMap: as the maps do).
+  explicit ClearanceEvaluator(const Scene& scene,
+                              bool closed_forms = true,
+                              Geometry geometry = Geometry::kExact)
+      : scene_(&scene), closed_forms_(closed_forms), geometry_(geometry) {}
 
   ClearanceResult evaluate(double theta,
                            const kinematics::JointVector& q,
@@ -52,6 +54,7 @@ class ClearanceEvaluator {
  private:
   const Scene* scene_;
   bool closed_forms_ = true;
+  Geometry geometry_ = Geometry::kExact;
   std::vector<Eigen::Isometry3d> X_W_;
 };
 

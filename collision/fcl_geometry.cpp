@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 #include <vector>
 
+#include <fcl/narrowphase/detail/gjk_solver_indep.h>
 #include <fcl/narrowphase/detail/gjk_solver_libccd.h>
 #include <fcl/narrowphase/detail/primitive_shape_algorithm/triangle_distance.h>
 #include <fcl/narrowphase/detail/traversal/distance/mesh_distance_traversal_node.h>
@@ -36,9 +38,19 @@ void allowTolerance(Node& node, double bound) {
 // contact that was built exactly, e.g. a face laid on a plane.
 constexpr double kContactTolerance = 1e-12;  // m
 
-Solver makeSolver() {
-  Solver solver;
-  solver.distance_tolerance = kDefaultRequest.distance_tolerance;
+// Convex hulls go to FCL's own GJK: libccd's stops up to 25 µm long on hulls of a few hundred
+// vertices (the hull would then read farther than its mesh); FCL's meets 1e-6 m there
+// (test_convex_hull). Everything else keeps libccd, as fcl::distance does.
+template <class A, class B = A>
+using SolverFor =
+    std::conditional_t<std::is_same_v<A, fcl::Convexd> || std::is_same_v<B, fcl::Convexd>,
+                       fcl::detail::GJKSolver_indep<double>,
+                       Solver>;
+
+template <class S = Solver>
+S makeSolver() {
+  S solver;  // FCL's GJK keeps its own tolerance (2e-14 relative)
+  if constexpr (std::is_same_v<S, Solver>) solver.distance_tolerance = kDefaultRequest.distance_tolerance;
   return solver;
 }
 
@@ -93,7 +105,8 @@ ShapeDistance meshShape(const MeshModel& mesh,
                         const fcl::Transform3d& X_shape,
                         double bound,
                         bool witness) {
-  const Solver solver = makeSolver();
+  using ShapeSolver = SolverFor<Shape>;
+  const ShapeSolver solver = makeSolver<ShapeSolver>();
   fcl::DistanceRequestd request;
   request.enable_nearest_points = witness;
   fcl::DistanceResultd result;
@@ -101,7 +114,7 @@ ShapeDistance meshShape(const MeshModel& mesh,
   // bounding-volume pair at or beyond it (DESIGN.md §9); FCL's preprocess step, which seeds
   // with triangle 0, is skipped on purpose.
   result.min_distance = bound;
-  fcl::detail::MeshShapeDistanceTraversalNodeOBBRSS<Shape, Solver> node;
+  fcl::detail::MeshShapeDistanceTraversalNodeOBBRSS<Shape, ShapeSolver> node;
   fcl::detail::initialize(node, mesh, X_mesh, shape, X_shape, &solver, request, result);
   allowTolerance(node, bound);
   if (node.BVTesting(0, 0) < bound) fcl::detail::distanceRecurse(&node, 0, 0, nullptr);
@@ -326,11 +339,14 @@ ShapeDistance shapeShape(const A& a,
                          const fcl::Transform3d& X_b,
                          double bound,
                          bool witness) {
-  const Solver solver = makeSolver();
   double d = 0.0;
   Eigen::Vector3d pa = Eigen::Vector3d::Zero(), pb = Eigen::Vector3d::Zero();
+  const SolverFor<A, B> solver = makeSolver<SolverFor<A, B>>();
   if (!solver.shapeDistance(a, X_a, b, X_b, &d, &pa, &pb)) d = 0.0;  // false: in contact
   ShapeDistance out = finish(d, bound, witness, pa, pb);
+  // FCL's GJK measured the whole distance (to 2e-14 relative, libccd's only to 1e-6 m and
+  // wrong on some curved pairs): beyond the bound, it is the lower bound the maps carry on.
+  if (out.beyond && !std::is_same_v<SolverFor<A, B>, Solver>) out.lower = std::max(bound, d - 1e-9);
   if (witness) toWorldWitnesses(out, X_a, X_b);
   return out;
 }
@@ -346,6 +362,8 @@ auto withPrimitive(const fcl::CollisionGeometryd& g, F&& f) {
       return f(static_cast<const fcl::Cylinderd&>(g));
     case fcl::GEOM_CAPSULE:
       return f(static_cast<const fcl::Capsuled&>(g));
+    case fcl::GEOM_CONVEX:
+      return f(static_cast<const fcl::Convexd&>(g));
     default:
       break;
   }
@@ -442,6 +460,53 @@ std::shared_ptr<MeshModel> makeMeshModel(const kinematics::TriangleMesh& mesh) {
   return model;
 }
 
+namespace {
+
+// A body's bounding sphere (centre, radius) and box over vertices, in the shape frame.
+void boundVertices(const std::vector<Eigen::Vector3d>& vertices, CollisionShape& out) {
+  Eigen::AlignedBox3d box;
+  for (const Eigen::Vector3d& v : vertices) box.extend(v);
+  out.centre_G = box.center();
+  double r = 0.0;
+  for (const Eigen::Vector3d& v : vertices) r = std::max(r, (v - out.centre_G).norm());
+  out.radius = r;
+  out.bounding_box =
+      Primitive{Primitive::Kind::kBox, Eigen::Isometry3d::Identity(), 0.5 * box.sizes()};
+  out.bounding_box->X_W.translation() = box.center();
+}
+
+}  // namespace
+
+kinematics::TriangleMesh meshOf(const MeshModel& model) {
+  kinematics::TriangleMesh mesh;
+  mesh.vertices.assign(model.vertices, model.vertices + model.num_vertices);
+  mesh.triangles.reserve(static_cast<std::size_t>(model.num_tris));
+  for (int i = 0; i < model.num_tris; ++i) {
+    const fcl::Triangle& t = model.tri_indices[i];
+    mesh.triangles.emplace_back(static_cast<int>(t[0]), static_cast<int>(t[1]),
+                                static_cast<int>(t[2]));
+  }
+  return mesh;
+}
+
+CollisionShape makeHullShape(const CollisionShape& mesh_shape,
+                             const kinematics::TriangleMesh& hull) {
+  CollisionShape out;
+  out.X_BG = mesh_shape.X_BG;
+  boundVertices(hull.vertices, out);
+  auto vertices = std::make_shared<std::vector<Eigen::Vector3d>>(hull.vertices);
+  auto faces = std::make_shared<std::vector<int>>();
+  faces->reserve(4 * hull.triangles.size());
+  for (const Eigen::Vector3i& t : hull.triangles) faces->insert(faces->end(), {3, t[0], t[1], t[2]});
+  // Validated (edges shared by two faces): FCL then finds support points by walking edges.
+  out.geometry = std::make_shared<fcl::Convexd>(vertices, static_cast<int>(hull.triangles.size()),
+                                                faces, true);
+  out.geometry->computeLocalAABB();
+  out.polyhedron = makeMeshModel(hull);
+  out.triangles = hull.triangles.size();
+  return out;
+}
+
 CollisionShape makeCollisionShape(const kinematics::Shape& shape) {
   CollisionShape out;
   out.X_BG = shape.X_BG;
@@ -474,15 +539,7 @@ CollisionShape makeCollisionShape(const kinematics::Shape& shape) {
     }
     void operator()(const kinematics::MeshFile& m) const {
       const kinematics::LoadedMesh loaded = kinematics::loadMesh(m.path, m.options);
-      const Eigen::AlignedBox3d box = loaded.mesh.bounds();
-      out.centre_G = box.center();
-      double r = 0.0;
-      for (const Eigen::Vector3d& v : loaded.mesh.vertices)
-        r = std::max(r, (v - out.centre_G).norm());
-      out.radius = r;
-      out.bounding_box =
-          Primitive{Primitive::Kind::kBox, Eigen::Isometry3d::Identity(), 0.5 * box.sizes()};
-      out.bounding_box->X_W.translation() = box.center();
+      boundVertices(loaded.mesh.vertices, out);
       out.triangles = loaded.mesh.triangles.size();
       out.geometry = makeMeshModel(loaded.mesh);
     }

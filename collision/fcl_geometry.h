@@ -7,6 +7,7 @@
 
 #include <fcl/geometry/bvh/BVH_model.h>
 #include <fcl/geometry/shape/box.h>
+#include <fcl/geometry/shape/convex.h>
 #include <fcl/geometry/shape/capsule.h>
 #include <fcl/geometry/shape/cylinder.h>
 #include <fcl/geometry/shape/sphere.h>
@@ -47,6 +48,13 @@ struct BodyGeometry {
 
 struct SceneGeometry {
   std::vector<BodyGeometry> bodies;
+  /// The same bodies as the configuration maps measure them (Geometry::kMap): robot link meshes
+  /// replaced by their hulls when the scene's config says so.
+  std::vector<BodyGeometry> map_bodies;
+
+  const std::vector<BodyGeometry>& of(Geometry g) const {
+    return g == Geometry::kMap ? map_bodies : bodies;
+  }
 };
 
 /// FCL geometry for a kinematics shape; meshes are loaded (through `meshes`, a cache keyed by
@@ -55,6 +63,15 @@ CollisionShape makeCollisionShape(const kinematics::Shape& shape);
 
 /// Builds an OBBRSS BVH model from a triangle mesh (m).
 std::shared_ptr<MeshModel> makeMeshModel(const kinematics::TriangleMesh& mesh);
+
+/// A BVH model's triangles back as a mesh (its vertices and triangles, in the model's frame).
+kinematics::TriangleMesh meshOf(const MeshModel& model);
+
+/// A mesh shape's convex hull (collision/convex_hull) as an FCL convex polytope, measured by
+/// GJK against everything but meshes, which are walked with GJK at their triangles. Keeps the
+/// mesh's pose; its bounding box and sphere are the hull's; `polyhedron` is the hull's surface
+/// (the exact reference's geometry against meshes). `hull`: closed, outward triangles.
+CollisionShape makeHullShape(const CollisionShape& mesh_shape, const kinematics::TriangleMesh& hull);
 
 /// Distance between two shapes at world poses, by FCL's traversal seeded with `bound` (a box
 /// against a mesh: scanplan's traversal of FCL's BVH in the box frame): anything at or beyond

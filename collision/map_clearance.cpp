@@ -28,7 +28,7 @@ double motionBound(const Eigen::Vector3d& c,
 
 MapClearance::MapClearance(const Scene& scene, std::size_t branches, MapClearanceOptions options)
     : scene_(&scene), options_(options), levers_(scene) {
-  for (const detail::BodyGeometry& body : scene.geometry().bodies) {
+  for (const detail::BodyGeometry& body : scene.geometry().map_bodies) {
     const auto [c, r] = detail::boundingSphere(body);
     centre_.push_back(c);
     radius_.push_back(r);
@@ -169,7 +169,7 @@ double MapClearance::query(std::size_t p, Memory& memory) {
   const PairInfo& pair = scene_->pairs()[p];
   const PairThresholds& t = pair.thresholds;
   const auto a = static_cast<std::size_t>(pair.a), b = static_cast<std::size_t>(pair.b);
-  const auto& bodies = scene_->geometry().bodies;
+  const auto& bodies = scene_->geometry().map_bodies;
   const Eigen::Isometry3d &X_a = pose(a), &X_b = pose(b);
   if (options_.exact_distances) {
     const detail::ShapeDistance d =

@@ -3,11 +3,13 @@
 #include <fnmatch.h>
 
 #include <algorithm>
+#include <optional>
 #include <cmath>
 #include <set>
 #include <stdexcept>
 #include <utility>
 
+#include "collision/convex_hull.h"
 #include "collision/fcl_geometry.h"
 #include "kinematics/error.h"
 #include "kinematics/units.h"
@@ -147,6 +149,34 @@ std::vector<PairInfo> selectPairs(const std::vector<BodyInfo>& bodies,
   return pairs;
 }
 
+// A robot link as the maps measure it: each mesh shape replaced by its convex hull, simplified
+// to at most `max_vertices` (a flat mesh, which has none, stays). `info` sums the meshes' triangles and hull vertices and takes
+// the largest margin.
+detail::BodyGeometry hullBody(const detail::BodyGeometry& body,
+                             std::size_t max_vertices,
+                             MapHull& info) {
+  detail::BodyGeometry out;
+  for (const detail::CollisionShape& shape : body.shapes) {
+    const auto* model = dynamic_cast<const detail::MeshModel*>(shape.geometry.get());
+    std::optional<kinematics::TriangleMesh> hull;
+    kinematics::TriangleMesh mesh;
+    if (model) {
+      mesh = detail::meshOf(*model);
+      hull = convexHull(mesh);
+      if (hull) hull = simplifiedHull(*hull, max_vertices);
+    }
+    if (!hull) {
+      out.shapes.push_back(shape);
+      continue;
+    }
+    info.mesh_triangles += mesh.triangles.size();
+    info.hull_vertices += hull->vertices.size();
+    info.margin = std::max(info.margin, hullMargin(*hull, mesh).margin);
+    out.shapes.push_back(detail::makeHullShape(shape, *hull));
+  }
+  return out;
+}
+
 }  // namespace
 
 Scene::Scene(const kinematics::CellModel& cell, const ClearanceConfig& config)
@@ -192,6 +222,17 @@ Scene::Scene(const kinematics::CellModel& cell, const ClearanceConfig& config)
   }
 
   pairs_ = selectPairs(bodies_, config, cell.robot.definition().allowed_collisions);
+
+  geometry_->map_bodies = geometry_->bodies;
+  if (config.link_meshes == LinkMeshes::kHull) {
+    for (std::size_t i = 0; i < bodies_.size(); ++i) {
+      if (bodies_[i].motion != BodyMotion::kRobotLink) continue;
+      MapHull info;
+      info.body = static_cast<int>(i);
+      geometry_->map_bodies[i] = hullBody(geometry_->bodies[i], config.hull_vertices, info);
+      if (info.mesh_triangles > 0) map_hulls_.push_back(info);
+    }
+  }
 }
 
 Scene::~Scene() = default;

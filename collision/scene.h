@@ -31,9 +31,36 @@ struct PairRule {
   double gamma = -1.0;   ///< negative: keep
 };
 
+/// How the configuration maps see robot link meshes.
+enum class LinkMeshes {
+  kHull,   ///< as their convex hulls: fast, conservative by each hull's margin (MapHull)
+  kExact,  ///< as the meshes themselves: exact, slow for heavy meshes
+};
+
 struct ClearanceConfig {
   PairThresholds defaults;
   std::vector<PairRule> rules;
+  LinkMeshes link_meshes = LinkMeshes::kHull;
+  /// kHull: each hull simplified to at most this many vertices (collision/convex_hull.h
+  /// simplifiedHull): GJK's cost grows with them, the margin shrinks.
+  std::size_t hull_vertices = 32;
+};
+
+/// Which geometry a clearance query measures.
+enum class Geometry {
+  kExact,  ///< every body as given: validation, reports
+  kMap,    ///< what the configuration maps measure: robot link meshes as hulls when
+           ///< ClearanceConfig::link_meshes says so, everything else as given
+};
+
+/// A robot link mesh that the maps measure as its convex hull. For any body B outside the mesh,
+/// d(B, hull) ≤ d(B, mesh) ≤ d(B, hull) + margin: the maps may see a pair up to `margin` closer
+/// than it is, never farther.
+struct MapHull {
+  int body = 0;                   ///< index into Scene::bodies()
+  std::size_t mesh_triangles = 0;
+  std::size_t hull_vertices = 0;
+  double margin = 0.0;            ///< m, an upper bound (collision/convex_hull.h hullMargin)
 };
 
 /// What moves a body.
@@ -62,8 +89,8 @@ struct SceneGeometry;
 /// their thresholds (DESIGN.md §4, seed §4.1). Immutable and safe to share across threads.
 class Scene {
  public:
-  /// Loads meshes and builds the geometry. Throws InputError for a broken mesh or a rule that
-  /// names no body.
+  /// Loads meshes and builds the geometry (and the hulls of robot link meshes for the maps).
+  /// Throws InputError for a broken mesh or a rule that names no body.
   Scene(const kinematics::CellModel& cell, const ClearanceConfig& config);
   ~Scene();
   Scene(Scene&&) noexcept;
@@ -81,12 +108,16 @@ class Scene {
                  const kinematics::JointVector& q,
                  std::vector<Eigen::Isometry3d>& X_W) const;
 
+  /// Robot link meshes the maps measure as hulls, in body order.
+  const std::vector<MapHull>& mapHulls() const { return map_hulls_; }
+
   const detail::SceneGeometry& geometry() const { return *geometry_; }
 
  private:
   kinematics::CellModel cell_;
   std::vector<BodyInfo> bodies_;
   std::vector<PairInfo> pairs_;
+  std::vector<MapHull> map_hulls_;
   std::unique_ptr<detail::SceneGeometry> geometry_;
 };
 

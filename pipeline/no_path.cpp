@@ -126,7 +126,7 @@ std::string explainClearance(const collision::Scene& scene,
                              const planner::ConfigMap& map,
                              std::size_t b,
                              const std::vector<std::size_t>& columns) {
-  planner::PoseEvaluator evaluator(scene, settings);
+  planner::PoseEvaluator evaluator(scene, settings, collision::Geometry::kMap);
   std::map<int, std::pair<std::size_t, double>> pairs;  // pair → cells limited, least distance
   forEachReached(
       scene, path, map, b, columns, [&](std::size_t a, const kinematics::JointVector& q) {

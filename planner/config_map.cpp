@@ -294,8 +294,8 @@ ConfigMap buildConfigMapReference(const collision::Scene& scene,
                                   const MapRequest& request) {
   ConfigMap map = emptyMap(scene, path, request);
   const kinematics::RobotModel& robot = scene.cell().robot;
-  tbb::enumerable_thread_specific<collision::ClearanceEvaluator> evaluators(std::cref(scene),
-                                                                            false);
+  tbb::enumerable_thread_specific<collision::ClearanceEvaluator> evaluators(
+      std::cref(scene), false, collision::Geometry::kMap);
   forEachCell(
       scene, path, map, {},
       [&](double theta, const Eigen::Isometry3d&,

@@ -40,8 +40,11 @@ struct PoseScore {
 /// Scores poses of one cell. Holds a clearance evaluator: one per thread.
 class PoseEvaluator {
  public:
-  PoseEvaluator(const collision::Scene& scene, const ConstraintSettings& settings)
-      : scene_(&scene), settings_(settings), clearance_(scene) {}
+  /// `geometry`: what the clearance factor measures (kMap: as the configuration maps do).
+  PoseEvaluator(const collision::Scene& scene,
+                const ConstraintSettings& settings,
+                collision::Geometry geometry = collision::Geometry::kExact)
+      : scene_(&scene), settings_(settings), clearance_(scene, true, geometry) {}
 
   /// Every factor, with exact distances below each pair's d_high and witness points.
   PoseScore score(double theta, const kinematics::JointVector& q);

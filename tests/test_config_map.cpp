@@ -30,6 +30,7 @@
 #include "collision/scene.h"
 #include "kinematics/error.h"
 #include "kinematics/mesh.h"
+#include "kinematics/shape.h"
 #include "kinematics/units.h"
 #include "planner/config_map.h"
 #include "planner/constraints.h"
@@ -62,8 +63,8 @@ constexpr double kFloatRel = 1e-6;
 // The demo cell with a short path: one 90° ring at 40°/s sampled every 0.25 s (10 samples),
 // 10° angle steps (36 angles), every branch: 2 880 cells.
 
-cli::JobSpec shortDemoJob() {
-  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml");
+cli::JobSpec shortDemoJob(const std::vector<std::string>& overrides = {}) {
+  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", overrides);
   cli::PathElementSpec ring;
   ring.type = "ring";
   ring.height_mm = 50.0;
@@ -614,6 +615,70 @@ TEST(ConfigMap, MotionBoundSkippingChangesNoValue) {
         skipped.limit.begin(), skipped.limit.end(), static_cast<std::uint8_t>(Limit::kClearance)));
   }
   EXPECT_GT(clearance_limited, 100);  // the clearance layer is exercised, not all 1
+}
+
+// Issue 18 item 4: a robot whose links are meshes (each the union of the demo robot's shapes of
+// that link, tessellated: link1 and link2 are non-convex) maps with the hulls no higher than
+// with the exact meshes, cell by cell, and lower somewhere; motion-bound skipping still changes
+// no value.
+TEST_F(MapJob, MeshLinksMapAsHullsConservativelyAndSkippingStaysExact) {
+  const cli::JobSpec primitive = shortDemoJob();
+  std::ifstream viper(test::sourceDir() / "data/robots/viper_s650.yaml");
+  std::string robot((std::istreambuf_iterator<char>(viper)), std::istreambuf_iterator<char>());
+  robot = robot.substr(0, robot.find("\nlinks:") + 1);  // the kinematics, then mesh links
+  robot += "links:\n";
+  const kinematics::CellModel primitive_cell = cli::buildCell(primitive);
+  for (const kinematics::Link& link : primitive_cell.robot.definition().links) {
+    kinematics::TriangleMesh mesh;
+    for (const kinematics::Shape& shape : link.shapes) {
+      const kinematics::TriangleMesh part = kinematics::shapeSurface(shape);
+      const int n = static_cast<int>(mesh.vertices.size());
+      mesh.vertices.insert(mesh.vertices.end(), part.vertices.begin(), part.vertices.end());
+      for (const Eigen::Vector3i& t : part.triangles) {
+        mesh.triangles.push_back(t + Eigen::Vector3i::Constant(n));
+      }
+    }
+    std::string off = fmt::format("OFF\n{} {} 0\n", mesh.vertices.size(), mesh.triangles.size());
+    for (const Eigen::Vector3d& v : mesh.vertices) off += fmt::format("{:.17g} {:.17g} {:.17g}\n", v.x(), v.y(), v.z());
+    for (const Eigen::Vector3i& t : mesh.triangles) off += fmt::format("3 {} {} {}\n", t[0], t[1], t[2]);
+    const fs::path file = write(link.name + ".off", off);
+    robot += fmt::format("  - {{name: {}, shapes: [{{type: mesh, file: {}, units: m}}]}}\n",
+                         link.name, file.string());
+  }
+  const fs::path robot_file = write("mesh_robot.yaml", robot);
+  const cli::JobSpec job = shortDemoJob({"robot=" + robot_file.string()});
+  const kinematics::CellModel cell = cli::buildCell(job);
+  const kinematics::ScanPath path = jobPath(job, cell);
+  collision::ClearanceConfig config = cli::clearanceConfig(job);
+  const collision::Scene hulls(cell, config);
+  config.link_meshes = collision::LinkMeshes::kExact;
+  const collision::Scene exact(cell, config);
+  ASSERT_EQ(hulls.mapHulls().size(), 7u);
+  EXPECT_TRUE(exact.mapHulls().empty());
+  double widest = 0.0;
+  for (const collision::MapHull& h : hulls.mapHulls()) {
+    EXPECT_LE(h.hull_vertices, 32u);
+    EXPECT_GE(h.margin, 0.0);
+    widest = std::max(widest, h.margin);
+  }
+  EXPECT_GT(widest, 0.01) << "premise: a link with two shapes has a hull well outside them";
+
+  const planner::ConstraintSettings settings = cli::constraintSettings(job);
+  planner::MapRequest request;
+  request.angle_step = deg(10.0);
+  request.branches = allBranches();
+  const ConfigMap hull_map = planner::buildConfigMap(hulls, settings, path, request);
+  const ConfigMap exact_map = planner::buildConfigMap(exact, settings, path, request);
+  std::size_t lower = 0;
+  for (std::size_t i = 0; i < hull_map.f.size(); ++i) {
+    ASSERT_LE(hull_map.clearance[i], exact_map.clearance[i] + 1e-6) << "cell " << i;
+    ASSERT_LE(hull_map.f[i], exact_map.f[i] + 1e-6) << "cell " << i;
+    lower += hull_map.clearance[i] < exact_map.clearance[i] - 1e-3f ? 1u : 0u;
+  }
+  EXPECT_GT(lower, 0u) << "premise: the hulls are conservative somewhere";
+  EXPECT_LT(lower, hull_map.f.size());
+  request.motion_bounds = false;
+  EXPECT_TRUE(sameMap(hull_map, planner::buildConfigMap(hulls, settings, path, request)));
 }
 
 TEST(ConfigMap, LayersAreByteIdenticalForOneAndTwoThreads) {

@@ -77,6 +77,12 @@ struct PathContext {
 };
 /// Loads the part and generates the scan path; errors name the job.
 PathContext buildPath(const JobSpec& job, const kinematics::CellModel& cell);
+
+/// Link meshes over this many triangles in all make a map measured exactly slow.
+inline constexpr std::size_t kHeavyLinkTriangles = 1000;
+/// Warns (stderr) when the maps are to measure heavy link meshes exactly
+/// (constraints.clearance.link_meshes: exact), naming the job and each link's triangles.
+void warnSlowLinkMeshes(const JobSpec& job, const kinematics::CellModel& cell);
 /// `validate` / `simulate`: a job and a trajectory file.
 struct VerifyOptions {
   std::filesystem::path job_file;

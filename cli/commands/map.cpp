@@ -49,6 +49,29 @@ void Progress::operator()(std::size_t done, std::size_t total) {
   std::fflush(stderr);
 }
 
+void warnSlowLinkMeshes(const JobSpec& job, const kinematics::CellModel& cell) {
+  if (job.constraints.clearance.link_meshes != "exact") return;
+  std::size_t total = 0;
+  std::string each;
+  for (const kinematics::Link& link : cell.robot.definition().links) {
+    std::size_t triangles = 0;
+    for (const kinematics::Shape& shape : link.shapes) {
+      if (const auto* m = std::get_if<kinematics::MeshFile>(&shape.geometry)) {
+        triangles += kinematics::loadMesh(m->path, m->options).mesh.triangles.size();
+      }
+    }
+    if (triangles == 0) continue;
+    total += triangles;
+    each += fmt::format("{}{} {}", each.empty() ? "" : ", ", link.name, triangles);
+  }
+  if (total <= kHeavyLinkTriangles) return;
+  spdlog::warn(
+      "{}: the maps measure {} link mesh triangles exactly ({}; constraints.clearance."
+      "link_meshes: exact): a map may take minutes (the demo's with the Viper's 14 000-triangle "
+      "links: 110 s); link_meshes: hull measures simplified convex hulls in seconds",
+      job.source.string(), total, each);
+}
+
 PathContext buildPath(const JobSpec& job, const kinematics::CellModel& cell) {
   if (job.scan.paths.empty() && !job.scan.auto_scan.enabled) {
     throw InputError(job.source.string() +
@@ -134,6 +157,7 @@ std::string buildAndWriteMaps(const JobSpec& job,
                               const std::filesystem::path& out) {
   OutputStage stage(out, {"path.csv", "path.png", "configmap*"});
   const PathContext context = buildPath(job, cell);
+  warnSlowLinkMeshes(job, cell);
   const collision::Scene scene(cell, clearanceConfig(job));
   const MapRun run = computeMap(job, scene, context.generated.path);
   writePathOutputs(stage.dir(), context.part.mesh, context.generated.path);
@@ -141,7 +165,7 @@ std::string buildAndWriteMaps(const JobSpec& job,
   stage.commit();
   return pathSummary(context.window, context.generated) +
          (context.auto_scan ? autoScanSummary(*context.auto_scan) : std::string()) +
-         mapSummary(run.map, run.seconds) +
+         linkMeshSummary(scene) + mapSummary(run.map, run.seconds) +
          fmt::format("wrote      {}: {}\n", out.string(), kMapFilesNote);
 }
 

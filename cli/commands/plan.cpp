@@ -250,13 +250,14 @@ ExitCode runPlan(const PlanOptions& options) {
     std::fputs(summary.c_str(), stdout);
     return ExitCode::kOk;
   }
+  warnSlowLinkMeshes(job, cell);
   const pipeline::ScanProblem problem = toProblem(job, cell, part.mesh);
   const pipeline::ScanPlan plan = runPipeline(job, problem, options);
   const pipeline::PreparedScan& prepared = *plan.prepared;
   const std::string planned = writePlanOutputs(out, job, problem, plan);
   summary += pathSummary(prepared.window, prepared.path);
   if (prepared.auto_scan) summary += autoScanSummary(*prepared.auto_scan);
-  summary += mapSummary(prepared.map, prepared.map_seconds);
+  summary += linkMeshSummary(*prepared.scene) + mapSummary(prepared.map, prepared.map_seconds);
   pipeline::StageTimes times = plan.times;
   Json setups = Json::object();
   const auto finish = [&] {

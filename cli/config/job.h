@@ -234,6 +234,9 @@ struct ClearanceSpec {
   double d_high_mm = 30.0;
   double gamma = 1.0;
   std::vector<PairRuleSpec> pairs;
+  /// How the maps measure robot link meshes: "hull" (a simplified convex hull) or "exact".
+  std::string link_meshes = "hull";
+  int hull_vertices = 32;  ///< "hull": at most this many vertices per mesh
 };
 
 /// `constraints`: the static constraints of a pose (Eq. 6–8).

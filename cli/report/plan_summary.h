@@ -3,6 +3,7 @@
 #include <string>
 
 #include "cli/config/job.h"
+#include "collision/scene.h"
 #include "kinematics/cell.h"
 #include "kinematics/mesh.h"
 #include "pipeline/plan_scan.h"
@@ -22,6 +23,9 @@ std::string autoScanSummary(const pipeline::AutoScanReport& report);
 
 std::string pathSummary(const scanner::LaserWindow& window,
                         const scanner::GeneratedPath& generated);
+/// How the maps measured robot link meshes: one line per link meshed as a hull (triangles,
+/// hull vertices, margin), or one line for exact meshes; empty without link meshes.
+std::string linkMeshSummary(const collision::Scene& scene);
 /// One line for the map (`seconds` to build it), one per branch.
 std::string mapSummary(const planner::ConfigMap& map, double seconds);
 /// The plan's lines after the map: the chosen path, rejected branches, refinement, the DP gap,
