@@ -50,7 +50,8 @@ using SolverFor =
 template <class S = Solver>
 S makeSolver() {
   S solver;  // FCL's GJK keeps its own tolerance (2e-14 relative)
-  if constexpr (std::is_same_v<S, Solver>) solver.distance_tolerance = kDefaultRequest.distance_tolerance;
+  if constexpr (std::is_same_v<S, Solver>)
+    solver.distance_tolerance = kDefaultRequest.distance_tolerance;
   return solver;
 }
 
@@ -497,7 +498,8 @@ CollisionShape makeHullShape(const CollisionShape& mesh_shape,
   auto vertices = std::make_shared<std::vector<Eigen::Vector3d>>(hull.vertices);
   auto faces = std::make_shared<std::vector<int>>();
   faces->reserve(4 * hull.triangles.size());
-  for (const Eigen::Vector3i& t : hull.triangles) faces->insert(faces->end(), {3, t[0], t[1], t[2]});
+  for (const Eigen::Vector3i& t : hull.triangles)
+    faces->insert(faces->end(), {3, t[0], t[1], t[2]});
   // Validated (edges shared by two faces): FCL then finds support points by walking edges.
   out.geometry = std::make_shared<fcl::Convexd>(vertices, static_cast<int>(hull.triangles.size()),
                                                 faces, true);

@@ -3,8 +3,8 @@
 #include <fnmatch.h>
 
 #include <algorithm>
-#include <optional>
 #include <cmath>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <utility>
@@ -150,11 +150,11 @@ std::vector<PairInfo> selectPairs(const std::vector<BodyInfo>& bodies,
 }
 
 // A robot link as the maps measure it: each mesh shape replaced by its convex hull, simplified
-// to at most `max_vertices` (a flat mesh, which has none, stays). `info` sums the meshes' triangles and hull vertices and takes
-// the largest margin.
+// to at most `max_vertices` (a flat mesh, which has none, stays). `info` sums the meshes' triangles
+// and hull vertices and takes the largest margin.
 detail::BodyGeometry hullBody(const detail::BodyGeometry& body,
-                             std::size_t max_vertices,
-                             MapHull& info) {
+                              std::size_t max_vertices,
+                              MapHull& info) {
   detail::BodyGeometry out;
   for (const detail::CollisionShape& shape : body.shapes) {
     const auto* model = dynamic_cast<const detail::MeshModel*>(shape.geometry.get());
@@ -224,14 +224,16 @@ Scene::Scene(const kinematics::CellModel& cell, const ClearanceConfig& config)
   pairs_ = selectPairs(bodies_, config, cell.robot.definition().allowed_collisions);
 
   geometry_->map_bodies = geometry_->bodies;
-  if (config.link_meshes == LinkMeshes::kHull) {
-    for (std::size_t i = 0; i < bodies_.size(); ++i) {
-      if (bodies_[i].motion != BodyMotion::kRobotLink) continue;
-      MapHull info;
-      info.body = static_cast<int>(i);
-      geometry_->map_bodies[i] = hullBody(geometry_->bodies[i], config.hull_vertices, info);
-      if (info.mesh_triangles > 0) map_hulls_.push_back(info);
-    }
+  if (config.link_meshes == LinkMeshes::kExact) return;
+  for (std::size_t i = 0; i < bodies_.size(); ++i) {
+    if (bodies_[i].motion != BodyMotion::kRobotLink) continue;
+    MapHull info;
+    info.body = static_cast<int>(i);
+    detail::BodyGeometry hulls = hullBody(geometry_->bodies[i], config.hull_vertices, info);
+    if (info.mesh_triangles == 0) continue;
+    info.used = config.link_meshes == LinkMeshes::kHull || info.margin <= config.max_hull_margin;
+    if (info.used) geometry_->map_bodies[i] = std::move(hulls);
+    map_hulls_.push_back(info);
   }
 }
 

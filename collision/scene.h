@@ -33,6 +33,7 @@ struct PairRule {
 
 /// How the configuration maps see robot link meshes.
 enum class LinkMeshes {
+  kAuto,   ///< a link's hull where its margin is within max_hull_margin, else its mesh
   kHull,   ///< as their convex hulls: fast, conservative by each hull's margin (MapHull)
   kExact,  ///< as the meshes themselves: exact, slow for heavy meshes
 };
@@ -40,7 +41,9 @@ enum class LinkMeshes {
 struct ClearanceConfig {
   PairThresholds defaults;
   std::vector<PairRule> rules;
-  LinkMeshes link_meshes = LinkMeshes::kHull;
+  LinkMeshes link_meshes = LinkMeshes::kAuto;
+  /// kAuto: the largest margin (m) a link's hull may have to stand in for its mesh.
+  double max_hull_margin = 0.010;
   /// kHull: each hull simplified to at most this many vertices (collision/convex_hull.h
   /// simplifiedHull): GJK's cost grows with them, the margin shrinks.
   std::size_t hull_vertices = 32;
@@ -53,14 +56,15 @@ enum class Geometry {
            ///< ClearanceConfig::link_meshes says so, everything else as given
 };
 
-/// A robot link mesh that the maps measure as its convex hull. For any body B outside the mesh,
-/// d(B, hull) ≤ d(B, mesh) ≤ d(B, hull) + margin: the maps may see a pair up to `margin` closer
-/// than it is, never farther.
+/// A robot link with meshes and its (simplified) convex hull. For any body B outside the mesh,
+/// d(B, hull) ≤ d(B, mesh) ≤ d(B, hull) + margin: where the maps measure the hull (`used`) they
+/// may see a pair up to `margin` closer than it is, never farther.
 struct MapHull {
   int body = 0;                   ///< index into Scene::bodies()
   std::size_t mesh_triangles = 0;
   std::size_t hull_vertices = 0;
   double margin = 0.0;            ///< m, an upper bound (collision/convex_hull.h hullMargin)
+  bool used = false;              ///< the maps measure the hull (else the mesh)
 };
 
 /// What moves a body.
@@ -108,7 +112,7 @@ class Scene {
                  const kinematics::JointVector& q,
                  std::vector<Eigen::Isometry3d>& X_W) const;
 
-  /// Robot link meshes the maps measure as hulls, in body order.
+  /// Robot links with meshes and their hulls (none for LinkMeshes::kExact), in body order.
   const std::vector<MapHull>& mapHulls() const { return map_hulls_; }
 
   const detail::SceneGeometry& geometry() const { return *geometry_; }

@@ -650,18 +650,28 @@ TEST_F(MapJob, MeshLinksMapAsHullsConservativelyAndSkippingStaysExact) {
   const kinematics::CellModel cell = cli::buildCell(job);
   const kinematics::ScanPath path = jobPath(job, cell);
   collision::ClearanceConfig config = cli::clearanceConfig(job);
+  EXPECT_EQ(config.link_meshes, collision::LinkMeshes::kAuto);  // the default
+  const collision::Scene automatic(cell, config);
+  config.link_meshes = collision::LinkMeshes::kHull;
   const collision::Scene hulls(cell, config);
   config.link_meshes = collision::LinkMeshes::kExact;
   const collision::Scene exact(cell, config);
   ASSERT_EQ(hulls.mapHulls().size(), 7u);
+  ASSERT_EQ(automatic.mapHulls().size(), 7u);
   EXPECT_TRUE(exact.mapHulls().empty());
-  double widest = 0.0;
-  for (const collision::MapHull& h : hulls.mapHulls()) {
+  double widest = 0.0, narrowest = 1.0;
+  for (std::size_t k = 0; k < 7; ++k) {
+    const collision::MapHull& h = hulls.mapHulls()[k];
     EXPECT_LE(h.hull_vertices, 32u);
     EXPECT_GE(h.margin, 0.0);
+    EXPECT_TRUE(h.used);
+    // auto: the hull where its margin is within hull_margin_mm (10 mm), else the mesh
+    EXPECT_EQ(automatic.mapHulls()[k].used, h.margin <= 0.010) << "link " << k;
     widest = std::max(widest, h.margin);
+    narrowest = std::min(narrowest, h.margin);
   }
   EXPECT_GT(widest, 0.01) << "premise: a link with two shapes has a hull well outside them";
+  EXPECT_LT(narrowest, 0.01) << "premise: a one-shape link's hull is close to it";
 
   const planner::ConstraintSettings settings = cli::constraintSettings(job);
   planner::MapRequest request;

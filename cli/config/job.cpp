@@ -357,8 +357,9 @@ void describeClearance(A& a, ClearanceSpec& s) {
   a.field("d_high_mm", s.d_high_mm, Expect::positive());
   a.field("gamma", s.gamma, Expect::positive());
   a.list("pairs", s.pairs, 0, 1000);
-  a.field("link_meshes", s.link_meshes, Expect::oneOf({"hull", "exact"}));
+  a.field("link_meshes", s.link_meshes, Expect::oneOf({"auto", "hull", "exact"}));
   a.field("hull_vertices", s.hull_vertices, Expect::range(8, 1000));
+  a.field("hull_margin_mm", s.hull_margin_mm, Expect::nonNegative());
   if constexpr (A::kReading) {
     if (!(s.d_low_mm < s.d_high_mm)) {
       a.fail("d_high_mm", formatNumber(s.d_high_mm),
@@ -754,8 +755,10 @@ collision::ClearanceConfig clearanceConfig(const JobSpec& job) {
   const ClearanceSpec& c = job.constraints.clearance;
   collision::ClearanceConfig config;
   config.defaults = {mm(c.d_low_mm), mm(c.d_high_mm), c.gamma};
-  config.link_meshes =
-      c.link_meshes == "exact" ? collision::LinkMeshes::kExact : collision::LinkMeshes::kHull;
+  config.link_meshes = c.link_meshes == "exact"  ? collision::LinkMeshes::kExact
+                       : c.link_meshes == "hull" ? collision::LinkMeshes::kHull
+                                                 : collision::LinkMeshes::kAuto;
+  config.max_hull_margin = mm(c.hull_margin_mm);
   config.hull_vertices = static_cast<std::size_t>(c.hull_vertices);
   for (const PairRuleSpec& r : c.pairs) {
     collision::PairRule rule;

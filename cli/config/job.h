@@ -234,9 +234,11 @@ struct ClearanceSpec {
   double d_high_mm = 30.0;
   double gamma = 1.0;
   std::vector<PairRuleSpec> pairs;
-  /// How the maps measure robot link meshes: "hull" (a simplified convex hull) or "exact".
-  std::string link_meshes = "hull";
-  int hull_vertices = 32;  ///< "hull": at most this many vertices per mesh
+  /// How the maps measure robot link meshes: "auto" (a link's simplified convex hull where it
+  /// lies within hull_margin_mm of the mesh, else the mesh), "hull" or "exact".
+  std::string link_meshes = "auto";
+  int hull_vertices = 32;         ///< at most this many vertices per hull
+  double hull_margin_mm = 10.0;   ///< "auto": the largest margin a hull may have
 };
 
 /// `constraints`: the static constraints of a pose (Eq. 6–8).

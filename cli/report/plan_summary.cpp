@@ -82,22 +82,25 @@ std::string linkMeshSummary(const collision::Scene& scene) {
   std::string text;
   for (const collision::MapHull& h : scene.mapHulls()) {
     text += fmt::format(
-        "  {:<8} mesh {} triangles → hull of {} vertices, at most {:.1f} mm outside the mesh\n",
+        "  {:<8} mesh {} triangles, hull of {} vertices at most {:.1f} mm outside it: the maps "
+        "measure the {}\n",
         scene.bodies()[static_cast<std::size_t>(h.body)].name, h.mesh_triangles, h.hull_vertices,
-        toMm(h.margin));
+        toMm(h.margin), h.used ? "hull" : "mesh");
   }
   if (!text.empty()) {
-    return "link mesh  the maps measure link meshes as convex hulls (constraints.clearance."
-           "link_meshes: hull), a pair up to the margin closer than it is; validation measures "
-           "the meshes\n" + text;
+    return "link mesh  a link's convex hull stands in for its mesh in the maps where it is close "
+           "enough (constraints.clearance.link_meshes, hull_margin_mm); validation measures the "
+           "meshes\n" +
+           text;
   }
   std::size_t triangles = 0;
   for (const collision::BodyInfo& b : scene.bodies()) {
     if (b.motion == collision::BodyMotion::kRobotLink) triangles += b.triangles;
   }
   if (triangles == 0) return {};
-  return fmt::format("link mesh  the maps measure the link meshes exactly ({} triangles; "
-                     "link_meshes: exact)\n", triangles);
+  return fmt::format(
+      "link mesh  the maps measure the link meshes exactly ({} triangles; link_meshes: exact)\n",
+      triangles);
 }
 
 std::string mapSummary(const planner::ConfigMap& map, double seconds) {

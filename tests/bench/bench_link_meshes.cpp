@@ -1,0 +1,222 @@
+// Mesh links at speed (issue 18 item 4): the demo map with the Adept Viper s650's own link
+// meshes (../shared/data/robots/viper_s650, 2 000 triangles a link) against the same map with
+// the bundled robot file's primitive links. Target: mesh links at most 3x the primitive links'
+// map CPU time. Side by side from one run, process CPU time (2 threads) per cell, best of RUNS:
+// - primitive links (data/robots/viper_s650.yaml);
+// - mesh links as simplified convex hulls (link_meshes: hull; the default, auto, takes a link's
+//   hull only where its margin is within 10 mm, none of the Viper's: they measure exactly);
+// - both again with the self pairs the mesh robot never brings into contact left out (what
+//   MoveIt's setup assistant disables by default; `scanplan robot check` lists them), so that
+//   the two robots are compared on the same pairs;
+// - mesh links measured exactly (link_meshes: exact, the path before), on every SUBSAMPLE-th
+//   time sample: it is ~100x slower. On those cells the hull map must never exceed the exact
+//   map (the hulls are conservative); how much lower it is is printed.
+// Usage (from the repository root): build/tests/bench/bench_link_meshes [JOB] [RUNS] [SUBSAMPLE]
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <tbb/global_control.h>
+
+#include "cli/config/job.h"
+#include "collision/scene.h"
+#include "collision/self_collision.h"
+#include "kinematics/mesh.h"
+#include "kinematics/units.h"
+#include "planner/config_map.h"
+#include "scanner/path_generators.h"
+#include "scanner/raycaster.h"
+#include "tests/bench/bench_timing.h"
+
+using namespace scanplan;
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path kSharedData = SCANPLAN_SHARED_DATA_DIR;
+
+// The Viper robot file with its link meshes (mesh k in DH frame k; Rz(180°) for k = 3, 4, 5:
+// SOURCES.md) in place of the primitive links.
+fs::path writeMeshRobot(const fs::path& dir) {
+  std::ifstream in("data/robots/viper_s650.yaml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  text = text.substr(0, text.find("\nlinks:") + 1) + "links:\n";
+  const char* names[] = {"base", "link1", "link2", "link3", "link4", "link5", "link6"};
+  for (int k = 0; k <= 6; ++k) {
+    const fs::path mesh = kSharedData / fmt::format("robots/viper_s650/link{}.stl", k);
+    const bool turned = k >= 3 && k <= 5;
+    text += fmt::format("  - {{name: {}, shapes: [{{type: mesh, file: {}, units: m{}}}]}}\n",
+                        names[k], mesh.string(), turned ? ", pose: {rpy_deg: [0, 0, 180]}" : "");
+  }
+  const fs::path file = dir / "viper_s650_meshes.yaml";
+  std::ofstream(file) << text;
+  return file;
+}
+
+struct Cell {
+  cli::JobSpec job;
+  kinematics::CellModel cell;
+  kinematics::ScanPath path;
+};
+
+Cell loadCell(const std::string& job_file, const std::vector<std::string>& overrides) {
+  cli::JobSpec job = cli::loadJob(job_file, overrides);
+  kinematics::CellModel cell = cli::buildCell(job);
+  const kinematics::LoadedMesh part =
+      kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
+  const scanner::Raycaster raycaster(part.mesh);
+  kinematics::ScanPath path = scanner::generatePath(cli::pathRequest(job), part.mesh, raycaster,
+                                                    scanner::laserWindow(cli::laserOptics(job)))
+                                  .path;
+  return {std::move(job), std::move(cell), std::move(path)};
+}
+
+kinematics::ScanPath subsampled(const kinematics::ScanPath& path, std::size_t every) {
+  kinematics::ScanPath sub;
+  sub.dt = path.dt * static_cast<double>(every);
+  for (std::size_t i = 0; i < path.samples.size(); i += every)
+    sub.samples.push_back(path.samples[i]);
+  return sub;
+}
+
+// The self pairs that never touch in `samples` random configurations, as exclusion rules.
+std::vector<collision::PairRule> neverPairs(const kinematics::RobotModel& robot,
+                                            std::string& names) {
+  std::vector<collision::PairRule> rules;
+  for (const auto& p : collision::surveySelfCollisions(robot, 2000, 1).pairs) {
+    if (p.adjacent || p.allowed || p.colliding > 0) continue;
+    rules.push_back({p.a, p.b, collision::PairRule::Action::kExclude});
+    names += fmt::format("{}{}-{}", names.empty() ? "" : ", ", p.a, p.b);
+  }
+  return rules;
+}
+
+struct Timed {
+  planner::ConfigMap map;
+  double cpu = 0.0;  // s, best of the runs
+};
+
+Timed timeMap(const collision::Scene& scene,
+              const Cell& c,
+              const kinematics::ScanPath& path,
+              int runs) {
+  planner::MapRequest request;
+  request.angle_step = c.job.map.angle_step_deg * kDegToRad;
+  for (int i = 0; i < 8; ++i) request.branches.push_back(kinematics::IkBranch::fromIndex(i));
+  Timed t;
+  const planner::ConstraintSettings settings = cli::constraintSettings(c.job);
+  t.cpu = bench::bestProcessCpuSeconds(
+      runs, [&] { t.map = planner::buildConfigMap(scene, settings, path, request); });
+  return t;
+}
+
+std::string perCell(const Timed& t) {
+  const double cells = static_cast<double>(t.map.cellsPerBranch());
+  return fmt::format("{:6.2f} s = {:6.2f} us a cell", t.cpu, 1e6 * t.cpu / cells);
+}
+
+// Hull map against the exact map on the same cells: cells above (must be none), cells lower.
+std::string conservative(const planner::ConfigMap& hull,
+                         const planner::ConfigMap& exact,
+                         bool& ok) {
+  std::size_t above = 0, lower = 0, feasible_hull = 0, feasible_exact = 0;
+  for (std::size_t i = 0; i < hull.f.size(); ++i) {
+    above += hull.clearance[i] > exact.clearance[i] + 1e-6f ? 1u : 0u;
+    lower += hull.clearance[i] < exact.clearance[i] - 1e-6f ? 1u : 0u;
+    feasible_hull += hull.f[i] > 0.0f ? 1u : 0u;
+    feasible_exact += exact.f[i] > 0.0f ? 1u : 0u;
+  }
+  ok = above == 0;
+  const double n = static_cast<double>(hull.f.size());
+  return fmt::format(
+      "clearance above the exact map's in {} cells ({}), lower in {:.1f}%; feasible "
+      "branch-cells {:.1f}% (exact {:.1f}%)",
+      above, ok ? "conservative" : "NOT CONSERVATIVE", 100.0 * static_cast<double>(lower) / n,
+      100.0 * static_cast<double>(feasible_hull) / n,
+      100.0 * static_cast<double>(feasible_exact) / n);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string job_file = argc > 1 ? argv[1] : "data/jobs/demo_rings.yaml";
+  const int runs = argc > 2 ? std::max(1, std::atoi(argv[2])) : 2;
+  const auto every = static_cast<std::size_t>(argc > 3 ? std::max(1, std::atoi(argv[3])) : 25);
+  if (!fs::exists(kSharedData / "robots/viper_s650/link0.stl")) {
+    std::printf("bench_link_meshes: skipped: the Viper link meshes (%s) are absent\n",
+                (kSharedData / "robots/viper_s650").c_str());
+    return 0;
+  }
+  const tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 2);
+  const fs::path dir = fs::temp_directory_path() / fmt::format("bench_link_meshes_{}", getpid());
+  fs::create_directories(dir);
+  const Cell primitive = loadCell(job_file, {});
+  const Cell meshes = loadCell(job_file, {"robot=" + writeMeshRobot(dir).string()});
+  fs::remove_all(dir);
+
+  collision::ClearanceConfig config = cli::clearanceConfig(meshes.job);
+  config.link_meshes = collision::LinkMeshes::kHull;  // every link as its hull
+  double start = bench::processCpuSeconds();
+  const collision::Scene prim_scene(primitive.cell, cli::clearanceConfig(primitive.job));
+  const double prim_load = bench::processCpuSeconds() - start;
+  start = bench::processCpuSeconds();
+  const collision::Scene hull_scene(meshes.cell, config);
+  const double hull_load = bench::processCpuSeconds() - start;
+  std::printf(
+      "bench_link_meshes: %s, 2 threads, best of %d; scene build CPU: primitive %.3f s, "
+      "mesh links with hulls %.3f s (qhull, simplification, margins)\n",
+      job_file.c_str(), runs, prim_load, hull_load);
+  for (const collision::MapHull& h : hull_scene.mapHulls()) {
+    std::printf("  %-6s mesh %5zu triangles -> hull of %2zu vertices, margin %5.1f mm\n",
+                hull_scene.bodies()[static_cast<std::size_t>(h.body)].name.c_str(),
+                h.mesh_triangles, h.hull_vertices, toMm(h.margin));
+  }
+
+  const Timed prim = timeMap(prim_scene, primitive, primitive.path, runs);
+  const Timed hull = timeMap(hull_scene, meshes, meshes.path, runs);
+  const double ratio = hull.cpu / prim.cpu;
+  std::printf("full map, %zu cells x 8 branches, CPU time:\n", prim.map.cellsPerBranch());
+  std::printf("  primitive links              %s\n", perCell(prim).c_str());
+  std::printf("  mesh links (hulls)           %s   %.2fx primitive   target <= 3x: %s\n",
+              perCell(hull).c_str(), ratio, ratio <= 3.0 ? "met" : "MISSED");
+
+  std::string never;
+  const auto rules = neverPairs(meshes.cell.robot, never);
+  collision::ClearanceConfig prim_config = cli::clearanceConfig(primitive.job);
+  prim_config.rules.insert(prim_config.rules.end(), rules.begin(), rules.end());
+  collision::ClearanceConfig hull_config = config;
+  hull_config.rules.insert(hull_config.rules.end(), rules.begin(), rules.end());
+  const collision::Scene prim_same(primitive.cell, prim_config);
+  const collision::Scene hull_same(meshes.cell, hull_config);
+  const Timed prim2 = timeMap(prim_same, primitive, primitive.path, runs);
+  const Timed hull2 = timeMap(hull_same, meshes, meshes.path, runs);
+  const double ratio2 = hull2.cpu / prim2.cpu;
+  std::printf("the same without the self pairs the meshes never bring into contact (%s):\n",
+              never.c_str());
+  std::printf("  primitive links              %s\n", perCell(prim2).c_str());
+  std::printf("  mesh links (hulls)           %s   %.2fx primitive   target <= 3x: %s\n",
+              perCell(hull2).c_str(), ratio2, ratio2 <= 3.0 ? "met" : "MISSED");
+
+  config.link_meshes = collision::LinkMeshes::kExact;
+  const collision::Scene exact_scene(meshes.cell, config);
+  const kinematics::ScanPath sub = subsampled(meshes.path, every);
+  const Timed hull_sub = timeMap(hull_scene, meshes, sub, 1);
+  const Timed exact_sub = timeMap(exact_scene, meshes, sub, 1);
+  std::printf("every %zu-th sample, %zu cells x 8 branches, CPU time:\n", every,
+              hull_sub.map.cellsPerBranch());
+  std::printf("  mesh links (hulls)           %s\n", perCell(hull_sub).c_str());
+  std::printf("  mesh links exactly (before)  %s   %.1fx the hulls\n", perCell(exact_sub).c_str(),
+              exact_sub.cpu / hull_sub.cpu);
+  bool ok = false;
+  std::printf("  hull map vs exact map: %s\n",
+              conservative(hull_sub.map, exact_sub.map, ok).c_str());
+  return ok ? 0 : 1;
+}
