@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 #include <type_traits>
 #include <vector>
 
@@ -500,9 +501,14 @@ CollisionShape makeHullShape(const CollisionShape& mesh_shape,
   faces->reserve(4 * hull.triangles.size());
   for (const Eigen::Vector3i& t : hull.triangles)
     faces->insert(faces->end(), {3, t[0], t[1], t[2]});
-  // Validated (edges shared by two faces): FCL then finds support points by walking edges.
-  out.geometry = std::make_shared<fcl::Convexd>(vertices, static_cast<int>(hull.triangles.size()),
-                                                faces, true);
+  // Validated (edges shared by two faces): FCL then finds support points by walking edges. A
+  // hull FCL does not take as valid is still convex: its support points come from every vertex.
+  const int count = static_cast<int>(hull.triangles.size());
+  try {
+    out.geometry = std::make_shared<fcl::Convexd>(vertices, count, faces, true);
+  } catch (const std::exception&) {
+    out.geometry = std::make_shared<fcl::Convexd>(vertices, count, faces, false);
+  }
   out.geometry->computeLocalAABB();
   out.polyhedron = makeMeshModel(hull);
   out.triangles = hull.triangles.size();
