@@ -355,6 +355,15 @@ TEST_F(JobFile, OutOfRangeValuesAreRejected) {
                         {at("job.yaml", "3:"),
                          "scanner.body[0].type: 'cone': expected one of box, sphere, cylinder, "
                          "capsule, mesh"}));
+  // How the maps measure link meshes (issue 18 item 4).
+  EXPECT_TRUE(loadFails(writeJob("constraints: {clearance: {link_meshes: convex}}\n"),
+                        {at("job.yaml", "3:"),
+                         "constraints.clearance.link_meshes: 'convex': expected one of auto, "
+                         "hull, exact"}));
+  EXPECT_TRUE(loadFails(writeJob("constraints: {clearance: {hull_vertices: 4}}\n"),
+                        {at("job.yaml", "3:"), "constraints.clearance.hull_vertices: 4"}));
+  EXPECT_TRUE(loadFails(writeJob("constraints: {clearance: {hull_margin_mm: -1}}\n"),
+                        {at("job.yaml", "3:"), "constraints.clearance.hull_margin_mm: -1"}));
 }
 
 // Pair rules address bodies by name, glob and group: an obstacle named like a body, a group or
