@@ -106,7 +106,7 @@ void addOverrides(CLI::App& cmd, std::vector<std::string>& overrides) {
 constexpr const char* kTrajectoryHelp =
     "Trajectory: a trajectory CSV (trajectory.csv from plan, or written by "
     "hand with its "
-    "columns) or a V+ program (scan.v2 from plan or export)";
+    "columns) or a program from plan or export (scan.v2, .src, .mod, .script)";
 
 // Every command's options and CLI11 handle: the add*Command()s fill it in,
 // parse() sets it, the checks and dispatch() read it. Neither copied nor moved:

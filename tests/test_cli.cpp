@@ -20,6 +20,8 @@
 #include "cli/config/job.h"
 #include "cli/io/output.h"
 #include "cli_support.h"
+#include "cli/programs/programs.h"
+#include "kinematics/trajectory.h"
 #include "kinematics/error.h"
 #include "kinematics/units.h"
 #include "test_support.h"
@@ -429,6 +431,50 @@ TEST_F(Cli, PlanWritesTheResolvedJob) {
   EXPECT_EQ(again.exit_code, 0) << describe(again);
   const auto body = [](const std::string& yaml) { return yaml.substr(yaml.find('\n') + 1); };
   EXPECT_EQ(body(again.out), body(shown.out));
+}
+
+// Issue 19's acceptance: the demo's programs, in every language, switch the trigger at each
+// scan pass's first and last sample, set the tool (the mount, T(0, 0, 110 mm)) and the payload
+// (0.9 kg at the housing's centre: its box centre (50, 0, -25) mm in the laser frame, 110 mm up
+// the flange), and last the plan's time within 1 % in their own timing model (read back).
+TEST_F(Cli, PlanDemoWritesControllerReadyProgramsInEveryLanguage) {
+  const fs::path out = dir_ / "demo";
+  const Result run = scanplan({"plan", (kSourceDir / "data/jobs/demo.yaml").string(), "-o",
+                               out.string(), "--set",
+                               "outputs.programs=[vplus, krl, rapid, urscript, csv]", "--set",
+                               "simulation.enabled=false"});
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  const scanplan::kinematics::Trajectory plan =
+      scanplan::kinematics::parseTrajectoryCsv(readFile(out / "trajectory.csv"), "trajectory.csv");
+  std::size_t passes = 0;
+  for (std::size_t k = 0; k < plan.samples.size(); ++k) {
+    passes += plan.samples[k].scanning && (k == 0 || !plan.samples[k - 1].scanning);
+  }
+  ASSERT_GE(passes, 3u);
+  for (const char* file : {"scan.v2", "scan.src", "scan.mod", "scan.script"}) {
+    const auto format = scanplan::cli::programFormatOfFile(file);
+    ASSERT_TRUE(format) << file;
+    const scanplan::cli::ProgramReading back =
+        scanplan::cli::readProgram(readFile(out / "programs" / file), *format, file);
+    ASSERT_TRUE(back.tool) << file;
+    EXPECT_LT((back.tool->translation() - Eigen::Vector3d(0, 0, 0.110)).norm(), 1e-6) << file;
+    EXPECT_LT((back.tool->linear() - Eigen::Matrix3d::Identity()).norm(), 1e-7) << file;
+    if (*format != scanplan::cli::ProgramFormat::kVplus) {  // V+ states it in a comment only
+      EXPECT_NEAR(back.payload_kg, 0.9, 1e-9) << file;
+      EXPECT_LT((back.payload_cog - Eigen::Vector3d(0.050, 0.0, 0.085)).norm(), 1e-6) << file;
+    }
+    std::size_t on = 0, off = 0;
+    for (const scanplan::cli::TriggerSwitch& s : back.triggers) {
+      EXPECT_EQ(s.output, 1) << file;
+      (s.on ? on : off) += 1;
+    }
+    EXPECT_EQ(on, passes) << file;
+    EXPECT_EQ(off, passes + 2) << file;  // each pass's end, and idle before and after
+    const double planned = plan.duration() - plan.samples.front().t;
+    const double timed =
+        back.trajectory.duration() - back.trajectory.samples.front().t;
+    EXPECT_LT(std::abs(timed - planned) / planned, 0.01) << file << ": " << timed << " s";
+  }
 }
 
 // An existing file where the output folder should go is the user's mistake, not a crash.

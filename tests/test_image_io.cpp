@@ -483,7 +483,8 @@ bool hasPixel(const RgbImage& image, int x0, int y0, int x1, int y1, Rgb colour)
 
 TEST_F(ImageIoFiles, MapFiguresAreLabelledAndTheirRasterKeepsEveryCellsColour) {
   const planner::ConfigMap map = syntheticMap();
-  writeMapOutputs(dir_, JobSpec{}, map);
+  const JobSpec job;  // a named job: GCC 12 misreads a JobSpec{} temporary as uninitialised
+  writeMapOutputs(dir_, job, map);
 
   // configmap.png: the 10 × 36 map enlarged to 1000 × 432 (100 × 12 px per cell: ~1000 px wide,
   // 40 % as tall), framed with text; the SVG is the same figure in vectors around that raster.
@@ -584,7 +585,8 @@ TEST_F(ImageIoFiles, PathFigureHasALineLegendAndDegenerateMapsStillGiveFigures) 
   tiny.f = {std::numeric_limits<float>::quiet_NaN()};
   tiny.joint = tiny.singularity = tiny.clearance = tiny.f;
   tiny.limit = {0};
-  ASSERT_NO_THROW(writeMapOutputs(dir_, JobSpec{}, tiny));
+  const JobSpec job;
+  ASSERT_NO_THROW(writeMapOutputs(dir_, job, tiny));
   const RgbImage one = decodePng(readBytes(dir_ / "configmap.png"));
   const Crop c1 = plotArea(one);
   EXPECT_EQ(c1.w, 1000);

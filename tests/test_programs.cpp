@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <random>
 #include <regex>
 #include <sstream>
@@ -197,6 +198,13 @@ TEST_F(Programs, EveryFormatMatchesItsGoldenFiles) {
   options.name = "scan";
   options.job = "golden";
   options.table_max_speed = deg(30.0);
+  options.tool.translation() = Eigen::Vector3d(0.0, 0.02, 0.11);
+  options.tool.linear() = Eigen::AngleAxisd(deg(90.0), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  options.payload_kg = 0.9;
+  options.payload_cog = Eigen::Vector3d(0.05, 0.0, 0.085);
+  options.trigger.output = 3;
+  options.table_endless = true;
+  options.servo_period = 0.05;  // a short golden file
   const Trajectory tr = smallTrajectory();
   for (const std::string& name : cli::programFormatNames()) {
     const ProgramFiles files =
@@ -235,10 +243,13 @@ TEST_F(Programs, EachLanguageBeginsEndsAndMovesOncePerSample) {
   const ProgramFiles krl = cli::writeProgram(tr, viper_, ProgramFormat::kKrl, options);
   const std::string& src = content(krl, "p3D_part__1.src");
   EXPECT_EQ(src.rfind("DEF p3D_part__1( )\n", 0), 0u);
-  EXPECT_EQ(count(src, "\n  PTP {A1 "), n);
+  EXPECT_EQ(count(src, "\n  PTP {A1 "), 1u);  // the approach, then one SPTP per step
+  EXPECT_EQ(count(src, "\n    SPTP {A1 "), n - 1);
   EXPECT_EQ(count(src, ", E1 "), n);
-  EXPECT_EQ(count(src, "} C_PTP\n"), n - 2);  // the first and the last stop exactly
-  EXPECT_EQ(count(src, "\n  SCANPLAN_VEL("), n);
+  EXPECT_EQ(count(src, "\n  PTP_SPLINE\n    TIME_BLOCK START\n"), 1u);
+  EXPECT_EQ(count(src, "\n    TIME_BLOCK END="), 1u);
+  EXPECT_EQ(count(src, "\n  ENDSPLINE\n"), 1u);
+  EXPECT_EQ(count(src, "\n  $TOOL={X "), 1u);
   EXPECT_EQ(count(src, "\nEND\n"), 2u);  // the program and its velocity subroutine
   EXPECT_TRUE(src.ends_with("END\n"));
 
@@ -246,6 +257,7 @@ TEST_F(Programs, EachLanguageBeginsEndsAndMovesOncePerSample) {
   const std::string& mod = content(rapid, "p3D_part__1.mod");
   EXPECT_EQ(mod.rfind("MODULE MOD_p3D_part__1\n", 0), 0u);
   EXPECT_NE(mod.find("\n  PROC p3D_part__1()\n"), std::string::npos);
+  EXPECT_NE(mod.find("\n  PROC main()\n    p3D_part__1;\n  ENDPROC\n"), std::string::npos);
   EXPECT_TRUE(mod.ends_with("  ENDPROC\nENDMODULE\n"));
   EXPECT_EQ(count(mod, "MoveAbsJ [["), n);
   EXPECT_EQ(count(mod, ",9E9,9E9,9E9,9E9,9E9]]\\NoEOffs, "), n);
@@ -256,33 +268,18 @@ TEST_F(Programs, EachLanguageBeginsEndsAndMovesOncePerSample) {
   const std::string& script = content(ur, "p3D_part__1.script");
   EXPECT_EQ(script.rfind("def p3D_part__1():\n", 0), 0u);
   EXPECT_TRUE(script.ends_with("\nend\n"));
-  EXPECT_EQ(count(script, "\n  movej(["), n);
-  EXPECT_EQ(count(script, ", t=0.100000, r=0)\n"), n - 1);
+  EXPECT_EQ(count(script, "\n  movej(["), 1u);
+  EXPECT_EQ(count(script, "\n  servo(["),
+            static_cast<std::size_t>(std::round(tr.duration() / 0.008)));
   EXPECT_EQ(count(script, "\n  table_move("), n - 1);
   EXPECT_EQ(count(script, "\n  table_start("), 1u);
+  EXPECT_EQ(count(script, "\n  set_tcp(p["), 1u);
+  EXPECT_EQ(count(script, "\n  stopj("), 1u);
 
   const ProgramFiles csv = cli::writeProgram(tr, viper_, ProgramFormat::kCsv, options);
   ASSERT_EQ(csv.files.size(), 1u);
   EXPECT_EQ(csv.files[0].first, "p3D_part__1.csv");
   EXPECT_EQ(csv.files[0].second, kinematics::trajectoryToCsv(tr));
-}
-
-// URScript takes radians: the movej joints are the trajectory's q to 9 decimals.
-TEST_F(Programs, UrscriptJointsAreRadians) {
-  const Trajectory tr = smallTrajectory();
-  const ProgramFiles ur = cli::writeProgram(tr, viper_, ProgramFormat::kUrscript, {});
-  const std::string& script = content(ur, "scan.script");
-  std::size_t k = 0;
-  for (const std::string& line : lines(script)) {
-    if (line.rfind("  movej([", 0) != 0) continue;
-    const std::vector<double> v = numbers(line.substr(0, line.find(']')));
-    ASSERT_EQ(v.size(), 6u) << line;
-    for (int j = 0; j < kinematics::kNumJoints; ++j) {
-      EXPECT_NEAR(v[static_cast<std::size_t>(j)], tr.samples[k].q(j), 5e-10) << line;
-    }
-    ++k;
-  }
-  EXPECT_EQ(k, tr.samples.size());
 }
 
 TEST_F(Programs, CsvAndVplusReadBackEqualToThePrintedPrecision) {
@@ -316,7 +313,7 @@ TEST_F(Programs, CsvAndVplusReadBackEqualToThePrintedPrecision) {
 
 // At each step's percentage of its maximum speed, the limiting joint covers its Δq in the planned
 // Δt, and one rounding step less would not: the step takes its planned time as closely as the
-// language's resolution allows (V+ SPEED: 0.01; KRL $VEL_AXIS: whole percent), never more than
+// language's resolution allows (V+ SPEED: 0.01), never more than
 // 100 %. A step needing more is capped at 100 and flagged.
 ::testing::AssertionResult speedReproducesTiming(const RobotModel& robot,
                                                  const TrajectorySample& a,
@@ -371,61 +368,99 @@ TEST_F(Programs, VplusSpeedsReproduceThePlannedTiming) {
   EXPECT_EQ(at_100, files.over_speed_segments);
 }
 
-TEST_F(Programs, KrlVelocitiesReproduceThePlannedTiming) {
+// KRL: TIME_BLOCK END and PART put every SPTP segment at its planned time; the joints and E1
+// are the plan's (E1 as planned: the table is not endless here).
+TEST_F(Programs, KrlTimeBlocksReproduceThePlannedTiming) {
   std::mt19937 rng(4);
   const Trajectory tr = randomTrajectory(viper_, rng, 200);
   const ProgramFiles files = cli::writeProgram(tr, viper_, ProgramFormat::kKrl, {});
   EXPECT_EQ(files.over_speed_segments, 4u);
   const std::string& text = files.files[0].second;
   EXPECT_EQ(count(text, "\n; WARNING: step "), files.over_speed_segments);
-  std::vector<std::vector<double>> vel, ptp;
-  for (const std::string& line : lines(text)) {
-    if (line.rfind("  SCANPLAN_VEL(", 0) == 0) vel.push_back(numbers(line));
-    if (line.rfind("  PTP {", 0) == 0) ptp.push_back(numbers(line));
-  }
-  ASSERT_EQ(vel.size(), tr.samples.size());
-  ASSERT_EQ(ptp.size(), tr.samples.size());
-  for (std::size_t k = 0; k < tr.samples.size(); ++k) {
-    // "A1 x, A2 x, … A6 x, E1 x": axis numbers and values alternate.
-    ASSERT_EQ(ptp[k].size(), 14u);
-    for (int j = 0; j < kinematics::kNumJoints; ++j) {
-      EXPECT_NEAR(ptp[k][static_cast<std::size_t>(2 * j + 1)], toDeg(tr.samples[k].q(j)),
-                  kPrintedTol);
-    }
-    EXPECT_NEAR(ptp[k][13], toDeg(tr.samples[k].theta), kPrintedTol);  // E1, unwrapped
-    ASSERT_EQ(vel[k].size(), 2u);
-    if (k == 0) continue;
-    const double dt = tr.samples[k].t - tr.samples[k - 1].t;
-    EXPECT_EQ(vel[k][1], 100.0);  // the table's speed is unknown: E1 at 100 %
-    EXPECT_EQ(vel[k][0], std::round(vel[k][0]));
-    EXPECT_TRUE(speedReproducesTiming(viper_, tr.samples[k - 1], tr.samples[k], dt, vel[k][0], 1.0))
-        << "step " << k;
-  }
+  EXPECT_EQ(count(text, "\n  PTP {"), 1u);
+  EXPECT_EQ(count(text, "\n    SPTP {"), tr.samples.size() - 1);
+  EXPECT_EQ(count(text, "\n    TIME_BLOCK PART="), tr.samples.size() - 1);
+  const cli::ProgramReading back = cli::readProgram(text, ProgramFormat::kKrl, "scan.src");
+  EXPECT_TRUE(sameToPrintedPrecision(back.trajectory, tr));
 }
 
-// With the table's maximum speed known, KRL drives E1 with the arm's percentage and the table
-// can lead: 2°/step at 30°/s in 0.1 s needs 66.7 % → 67.
-TEST_F(Programs, KrlTableCanLeadWhenItsSpeedIsKnown) {
-  Trajectory tr;
-  for (int k = 0; k < 3; ++k) {
-    tr.samples.push_back(
-        sample(0.1 * k, 2.0 * k, jointsDeg(0.1 * k, -60.0, 150.0, 0.0, 45.0, 0.0), true));
+// Past kKrlMaxSegments steps the motion goes into several PTP_SPLINE blocks, each ending where
+// the scanner is not scanning (between passes), each timed on its own.
+TEST_F(Programs, KrlSplitsLongMotionsIntoBlocksBetweenPasses) {
+  std::mt19937 rng(5);
+  const Trajectory tr = randomTrajectory(viper_, rng, 2 * cli::kKrlMaxSegments + 300);
+  const std::string text = cli::writeProgram(tr, viper_, ProgramFormat::kKrl, {}).files[0].second;
+  const std::vector<std::string> all = lines(text);
+  std::size_t segments = 0, blocks = 0;
+  std::vector<std::size_t> ends;  // the sample each block ends at
+  for (const std::string& line : all) {
+    if (line == "  PTP_SPLINE") {
+      ++blocks;
+      segments = 0;
+    }
+    if (line.rfind("    SPTP {", 0) == 0) ++segments;
+    if (line == "  ENDSPLINE") {
+      EXPECT_LE(segments, cli::kKrlMaxSegments);
+      ends.push_back(ends.empty() ? segments : ends.back() + segments);
+    }
   }
-  ProgramOptions options;
-  options.table_max_speed = deg(30.0);
-  const ProgramFiles files = cli::writeProgram(tr, viper_, ProgramFormat::kKrl, options);
-  EXPECT_EQ(count(files.files[0].second, "\n  SCANPLAN_VEL(67, 67)\n"), 2u);
-  EXPECT_NEAR(files.max_speed_percent, 200.0 / 3.0, 1e-9);
-  EXPECT_EQ(files.over_speed_segments, 0u);
-  options.table_max_speed = deg(15.0);  // now 133 %: flagged, capped
-  const ProgramFiles fast = cli::writeProgram(tr, viper_, ProgramFormat::kKrl, options);
-  EXPECT_EQ(fast.over_speed_segments, 2u);
-  EXPECT_EQ(count(fast.files[0].second, "\n  SCANPLAN_VEL(100, 100)\n"), 2u);
-  EXPECT_EQ(count(fast.files[0].second, "of the table's maximum speed"), 2u);
+  EXPECT_EQ(blocks, 3u);
+  ASSERT_EQ(ends.size(), blocks);
+  EXPECT_EQ(ends.back(), tr.samples.size() - 1);
+  for (std::size_t b = 0; b + 1 < ends.size(); ++b) {
+    EXPECT_FALSE(tr.samples[ends[b]].scanning) << "block " << b << " ends at " << ends[b];
+  }
+  const cli::ProgramReading back = cli::readProgram(text, ProgramFormat::kKrl, "scan.src");
+  EXPECT_TRUE(sameToPrintedPrecision(back.trajectory, tr));
+}
+
+// The plan's joints linearly at time t (the programs' path between samples).
+JointVector plannedJoints(const Trajectory& tr, double t) {
+  const auto& s = tr.samples;
+  if (t <= s.front().t) return s.front().q;
+  for (std::size_t k = 1; k < s.size(); ++k) {
+    if (t <= s[k].t) {
+      const double w = (t - s[k - 1].t) / (s[k].t - s[k - 1].t);
+      return s[k - 1].q + w * (s[k].q - s[k - 1].q);
+    }
+  }
+  return s.back().q;
+}
+
+// URScript: movej to the first sample, then one servoj per controller period on the
+// joint-linear path between the samples, in radians, ending at the last sample within a period.
+TEST_F(Programs, UrscriptServoStepsFollowThePlannedPath) {
+  std::mt19937 rng(6);
+  const Trajectory tr = randomTrajectory(viper_, rng, 60);
+  for (const double period : {0.008, 0.002, 0.03}) {
+    ProgramOptions options;
+    options.servo_period = period;
+    const std::string text =
+        cli::writeProgram(tr, viper_, ProgramFormat::kUrscript, options).files[0].second;
+    const std::size_t steps =
+        static_cast<std::size_t>(std::ceil((tr.duration() - tr.samples[0].t) / period - 1e-9));
+    EXPECT_EQ(count(text, "\n  servo(["), steps) << period;
+    EXPECT_EQ(count(text, "\n  movej(["), 1u);
+    std::ostringstream t;
+    t << std::fixed << std::setprecision(4) << period;
+    EXPECT_EQ(count(text, "servoj(q, t=" + t.str() + ","), 1u);
+    const cli::ProgramReading back =
+        cli::readProgram(text, ProgramFormat::kUrscript, "scan.script");
+    ASSERT_EQ(back.trajectory.samples.size(), steps + 1);
+    for (std::size_t i = 0; i < back.trajectory.samples.size(); ++i) {
+      const TrajectorySample& b = back.trajectory.samples[i];
+      EXPECT_NEAR(b.t, tr.samples[0].t + static_cast<double>(i) * period, 1e-9) << i;
+      const JointVector want = plannedJoints(tr, std::min(b.t, tr.duration()));
+      EXPECT_LT((b.q - want).cwiseAbs().maxCoeff(), 1e-8) << "servo step " << i;
+    }
+    EXPECT_LT((back.trajectory.samples.back().q - tr.samples.back().q).cwiseAbs().maxCoeff(), 1e-8);
+    EXPECT_LT(back.trajectory.duration() - tr.duration(), period + 1e-9);
+    EXPECT_GE(back.trajectory.duration() - tr.duration(), -1e-9);
+  }
 }
 
 // The seed's point (§7.3): a program is checked before it is sent. A smooth motion in the demo
-// cell, written as CSV and V+ and read back, passes validation like the plan itself.
+// cell, written in every format and read back, passes validation like the plan itself.
 TEST(ProgramsValidate, ReadBackProgramsPassValidation) {
   const cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml",
                                         {"scan.dt_s=0.2", "map.angle_step_deg=2"});
@@ -444,19 +479,158 @@ TEST(ProgramsValidate, ReadBackProgramsPassValidation) {
 
   ProgramOptions options;
   options.table_max_speed = cell.table.max_speed;
-  for (const ProgramFormat format : {ProgramFormat::kCsv, ProgramFormat::kVplus}) {
+  for (const std::string& name : cli::programFormatNames()) {
+    const ProgramFormat format = *cli::parseProgramFormat(name);
     const ProgramFiles files = cli::writeProgram(tr, cell.robot, format, options);
     EXPECT_EQ(files.over_speed_segments, 0u);
-    const Trajectory back = format == ProgramFormat::kCsv
-                                ? kinematics::parseTrajectoryCsv(files.files[0].second, "scan.csv")
-                                : cli::readVplusProgram(files.files[0].second, "scan.v2");
-    EXPECT_TRUE(sameToPrintedPrecision(back, tr));
+    // URScript's servo steps lie between the samples: checked at the step comments' times, where
+    // the servo path cuts the table's corners by a fraction of its speed change times a period.
+    const Trajectory back = cli::atStepTimes(cli::readProgram(files.files[0].second, format, name));
+    if (format != ProgramFormat::kUrscript) {
+      EXPECT_TRUE(sameToPrintedPrecision(back, tr)) << name;
+    } else {
+      ASSERT_EQ(back.samples.size(), tr.samples.size());
+      for (std::size_t k = 0; k < tr.samples.size(); ++k) {
+        EXPECT_NEAR(back.samples[k].t, tr.samples[k].t, 1e-9);
+        EXPECT_NEAR(toDeg(back.samples[k].theta - tr.samples[k].theta), 0.0, 0.01) << k;
+        EXPECT_LT(toDeg((back.samples[k].q - tr.samples[k].q).cwiseAbs().maxCoeff()), 1e-5) << k;
+      }
+    }
     const planner::ValidationReport report = planner::validateTrajectory(scene, back, settings);
     EXPECT_TRUE(report.valid) << cli::programFormatName(format) << ": "
                               << (report.violations.empty()
                                       ? std::string()
                                       : planner::describe(report.violations.front()));
   }
+}
+
+// The switches a trigger must make: on at each pass's first sample, off at its last.
+std::vector<cli::TriggerSwitch> passSwitches(const Trajectory& tr, int output, bool on_at_start) {
+  std::vector<cli::TriggerSwitch> out;
+  const auto& s = tr.samples;
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    if (!s[k].scanning || (k > 0 && s[k - 1].scanning)) continue;
+    std::size_t last = k;
+    while (last + 1 < s.size() && s[last + 1].scanning) ++last;
+    if (last == k) continue;  // the random walks have no one-sample passes
+    out.push_back({s[k].t, output, on_at_start});
+    out.push_back({s[last].t, output, !on_at_start});
+  }
+  return out;
+}
+
+// Every language sets the tool, the payload and the trigger, and reads back to them: the tool
+// through each language's own angle convention (V+ Rz·Ry·Rz, KRL Rz·Ry·Rx, RAPID's quaternion,
+// URScript's rotation vector, including their singular poses), the switches at each pass's first
+// and last sample (URScript: at the servo step that reaches it), the output idle before and after.
+TEST_F(Programs, EveryLanguageSetsToolPayloadAndTriggerAtThePasses) {
+  std::mt19937 rng(8);
+  const Trajectory tr = randomTrajectory(viper_, rng, 120);
+  using Eigen::AngleAxisd;
+  using Eigen::Vector3d;
+  std::vector<Eigen::Matrix3d> rotations = {
+      Eigen::Matrix3d::Identity(),
+      AngleAxisd(M_PI, Vector3d::UnitX()).toRotationMatrix(),      // V+ pitch 180
+      AngleAxisd(M_PI / 2, Vector3d::UnitY()).toRotationMatrix(),  // KRL B = 90
+      AngleAxisd(-M_PI / 2, Vector3d::UnitY()).toRotationMatrix() *
+          AngleAxisd(0.3, Vector3d::UnitX()).toRotationMatrix(),
+      AngleAxisd(M_PI, Vector3d(1, 1, 0).normalized()).toRotationMatrix(),  // 180° about an axis
+  };
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int i = 0; i < 5; ++i) {
+    rotations.push_back(
+        AngleAxisd(3.0 * u(rng), Vector3d(u(rng), u(rng), u(rng)).normalized()).toRotationMatrix());
+  }
+  int case_number = 0;
+  for (const Eigen::Matrix3d& R : rotations) {
+    ProgramOptions options;
+    options.tool.linear() = R;
+    options.tool.translation() = Vector3d(0.0123, -0.0456, 0.1105);
+    options.payload_kg = 1.25;
+    options.payload_cog = Vector3d(0.01, -0.02, 0.075);
+    options.trigger.output = 7;
+    options.trigger.on_at_scan_start = case_number++ % 2 == 0;
+    const std::vector<cli::TriggerSwitch> want =
+        passSwitches(tr, 7, options.trigger.on_at_scan_start);
+    ASSERT_GE(want.size(), 30u);
+    for (const ProgramFormat format : {ProgramFormat::kVplus, ProgramFormat::kKrl,
+                                       ProgramFormat::kRapid, ProgramFormat::kUrscript}) {
+      const std::string name = cli::programFormatName(format);
+      const ProgramFiles files = cli::writeProgram(tr, viper_, format, options);
+      const cli::ProgramReading back = cli::readProgram(files.files[0].second, format, name);
+      ASSERT_TRUE(back.tool) << name;
+      EXPECT_LT((back.tool->linear() - R).cwiseAbs().maxCoeff(), 1e-7) << name << "\n" << R;
+      EXPECT_LT((back.tool->translation() - options.tool.translation()).norm(), 1e-6) << name;
+      if (format == ProgramFormat::kVplus) {
+        EXPECT_EQ(back.payload_kg, 0.0);  // V+ has no payload in kg: a comment
+        EXPECT_NE(files.files[0].second.find("1.250 kg, centre of gravity (10.0, -20.0, 75.0) mm"),
+                  std::string::npos);
+      } else {
+        EXPECT_NEAR(back.payload_kg, 1.25, 1e-9) << name;
+        EXPECT_LT((back.payload_cog - options.payload_cog).norm(), 1e-6) << name;
+      }
+      ASSERT_EQ(back.triggers.size(), want.size() + 2) << name;
+      const bool idle = !options.trigger.on_at_scan_start;
+      EXPECT_EQ(back.triggers.front().on, idle) << name;
+      EXPECT_EQ(back.triggers.back().on, idle) << name;
+      EXPECT_NEAR(back.triggers.back().t, tr.duration(),
+                  format == ProgramFormat::kUrscript ? options.servo_period : 1e-6);
+      const double tol = format == ProgramFormat::kUrscript ? options.servo_period : 1e-4;
+      for (std::size_t i = 0; i < want.size(); ++i) {
+        const cli::TriggerSwitch& got = back.triggers[i + 1];
+        EXPECT_EQ(got.output, 7) << name;
+        EXPECT_EQ(got.on, want[i].on) << name << " switch " << i;
+        EXPECT_LE(got.t, want[i].t + 1e-6) << name << " switch " << i;
+        EXPECT_GE(got.t, want[i].t - tol) << name << " switch " << i;
+      }
+    }
+  }
+}
+
+// An endless table is written within (-180, 180] in every language and reads back as the same
+// motion (the shorter way between steps), 360° multiples apart from the unwrapped plan.
+TEST_F(Programs, AnEndlessTableIsWrittenWrappedAndReadsBackTheSameMotion) {
+  std::mt19937 rng(9);
+  const Trajectory tr = randomTrajectory(viper_, rng, 400);
+  ASSERT_GT(toDeg(tr.samples.back().theta - tr.samples.front().theta), 360.0);
+  ProgramOptions options;
+  options.table_endless = true;
+  for (const ProgramFormat format : {ProgramFormat::kVplus, ProgramFormat::kKrl,
+                                     ProgramFormat::kRapid, ProgramFormat::kUrscript}) {
+    const std::string name = cli::programFormatName(format);
+    const ProgramFiles files = cli::writeProgram(tr, viper_, format, options);
+    if (format == ProgramFormat::kVplus) {  // the table list: every angle within (-180, 180]
+      std::size_t rows = 0;
+      for (const std::string& line : lines(files.files[1].second)) {
+        if (line.empty() || line[0] == '#' || line[0] == 't') continue;
+        const double table = numbers(line)[1];
+        EXPECT_GT(table, -180.0) << line;
+        EXPECT_LE(table, 180.0) << line;
+        ++rows;
+      }
+      EXPECT_EQ(rows, tr.samples.size());
+    }
+    const cli::ProgramReading back = cli::readProgram(files.files[0].second, format, name);
+    const double offset = back.trajectory.samples[0].theta - tr.samples[0].theta;
+    EXPECT_NEAR(std::remainder(offset, 2.0 * M_PI), 0.0, 1e-8) << name;
+    EXPECT_LT(std::abs(toDeg(back.trajectory.samples[0].theta)), 180.0 + 1e-9) << name;
+    for (const TrajectorySample& b : back.trajectory.samples) {
+      const double want = b.t <= tr.samples[0].t ? tr.samples[0].theta : [&] {
+        for (std::size_t k = 1; k < tr.samples.size(); ++k) {
+          if (b.t <= tr.samples[k].t + 1e-9) {
+            const double w = (b.t - tr.samples[k - 1].t) / (tr.samples[k].t - tr.samples[k - 1].t);
+            return tr.samples[k - 1].theta +
+                   std::min(w, 1.0) * (tr.samples[k].theta - tr.samples[k - 1].theta);
+          }
+        }
+        return tr.samples.back().theta;
+      }();
+      EXPECT_NEAR(toDeg(b.theta - offset - want), 0.0, 1e-5) << name << " t " << b.t;
+    }
+  }
+  Trajectory jump = smallTrajectory();
+  jump.samples[2].theta += deg(200.0);
+  EXPECT_THROW(cli::writeProgram(jump, viper_, ProgramFormat::kKrl, options), InputError);
 }
 
 TEST_F(Programs, EmptyOrBackwardsTrajectoryIsAnInputError) {
@@ -501,17 +675,19 @@ TEST_F(Programs, MalformedVplusNamesTheLine) {
       {"truncated move", lineOf("    MOVE", 3), "    MOVE #PPOINT(1.0, 2.0, 3.0",
        "expected 'MOVE #PPOINT(j1, j2, j3, j4, j5, j6)'"},
       {"five joints", lineOf("    MOVE", 2), "    MOVE #PPOINT(1, 2, 3, 4, 5)",
-       "5 joint values: expected 6"},
+       "5 values: expected 6"},
       {"not a number", lineOf("    MOVE", 4), "    MOVE #PPOINT(1, 2, x, 4, 5, 6)",
-       "joint 3 'x' is not a finite number"},
+       "'x' is not a finite number"},
       {"absurd joint", lineOf("    MOVE", 4), "    MOVE #PPOINT(1, 2, 1e300, 4, 5, 6)",
        "joint 3 1e+300 deg: expected an angle within ±1000000 deg"},
       {"absurd table angle", lineOf("; t=", 2), "; t=0.1 s table=5e6 deg scan=1",
        "table=5e6 deg: expected an angle within ±1000000 deg"},
       {"bad step comment", lineOf("; t=", 2), "; t=0.1 s table=abc deg scan=1",
-       "expected '; t=<s> s table=<deg> deg scan=<0|1>'"},
-      {"time backwards", lineOf("; t=", 3), "; t=0.050000 s table=360.0 deg scan=1",
-       "not after the previous step's 0.100000 s"},
+       "expected 't=<s> s table=<deg> deg scan=<0|1>'"},
+      {"comment and timing disagree", lineOf("; t=", 3), "; t=0.050000 s table=360.0 deg scan=1",
+       "its step comment (line " + std::to_string(lineOf("; t=", 3)) + ") at 0.050000 s"},
+      {"time backwards", lineOf("    DURATION", 2), "    DURATION 0",
+       "the program's timing puts this move at t = 0.100000 s"},
       {"unknown instruction", lineOf("    SPEED", 2), "    SPEEED 50",
        "not an instruction this reader knows"},
       {"bad speed", lineOf("    SPEED", 2), "    SPEED fast", "expected 'SPEED <value> [ALWAYS]'"},
@@ -534,9 +710,12 @@ TEST_F(Programs, MalformedVplusNamesTheLine) {
       ADD_FAILURE() << c.what << ": no error";
     } catch (const InputError& e) {
       const std::string message = e.what();
-      const std::size_t expected_line = c.what == "move without comment"
-                                            ? lineOf("    MOVE", 2)  // the MOVE it belonged to
-                                            : c.line;
+      // The MOVE the edited comment or DURATION belongs to.
+      const std::size_t expected_line =
+          c.what == "move without comment" ? lineOf("    MOVE", 2)
+          : c.what == "comment and timing disagree" || c.what == "time backwards"
+              ? lineOf("    MOVE", 3)
+              : c.line;
       EXPECT_EQ(message.rfind("scan.v2:" + std::to_string(expected_line) + ": ", 0), 0u)
           << c.what << ": " << message;
       EXPECT_NE(message.find(c.message), std::string::npos) << c.what << ": " << message;
@@ -556,7 +735,7 @@ TEST_F(Programs, MalformedVplusNamesTheLine) {
   EXPECT_NE(error("    MOVE #PPOINT(1,2,3,4,5,6)\n").find("x.v2:1: "), std::string::npos);
   const std::string no_end = good.substr(0, good.rfind(".END"));
   EXPECT_NE(error(no_end).find("has no .END"), std::string::npos) << error(no_end);
-  EXPECT_NE(error(".PROGRAM a()\n.END\n").find("x.v2:2: no MOVE"), std::string::npos);
+  EXPECT_NE(error(".PROGRAM a()\n.END\n").find("x.v2:2: no moves"), std::string::npos);
   EXPECT_NE(error(".PROGRAM a()\n; t=0 s table=0 deg scan=0\n.END\n")
                 .find("x.v2:2: step comment without its MOVE"),
             std::string::npos);

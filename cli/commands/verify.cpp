@@ -24,7 +24,7 @@ namespace scanplan::cli {
 
 namespace {
 
-// The trajectory file (CSV or V+ program), at least two samples.
+// The trajectory file (CSV or a program), at least two samples.
 kinematics::Trajectory loadTrajectory(const std::filesystem::path& file) {
   kinematics::Trajectory t = loadTrajectoryFile(file);
   if (t.samples.size() < 2) {

@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <numbers>
+#include <regex>
 #include <set>
 #include <sstream>
 
@@ -108,6 +109,9 @@ void describeScanner(A& a, ScannerSpec& s) {
   a.field("rays_per_profile", s.rays_per_profile, Expect::range(1, 100000));
   a.field("cameras", s.cameras, Expect::oneOf(kCameraRules));
   a.section("noise", s.noise);
+  a.field("mass_kg", s.mass_kg, Expect::range(0.0, 1000.0));
+  if constexpr (A::kReading) s.cog_given = a.has("cog_mm");
+  if (A::kReading || s.cog_given) a.field("cog_mm", s.cog_mm, Expect::range(-10000.0, 10000.0));
 }
 
 template <class A>
@@ -378,9 +382,24 @@ void describeConstraints(A& a, ConstraintsSpec& s) {
 }
 
 template <class A>
+void describeTrigger(A& a, TriggerSpec& s) {
+  a.field("output", s.output, Expect::range(0, 4096));
+  a.field("on_at_scan_start", s.on_at_scan_start);
+  a.field("rapid_signal", s.rapid_signal);
+  if constexpr (A::kReading) {
+    static const std::regex kName("[A-Za-z][A-Za-z0-9_]{0,31}");
+    if (!s.rapid_signal.empty() && !std::regex_match(s.rapid_signal, kName))
+      a.fail("rapid_signal", "'" + clipForMessage(s.rapid_signal) + "'",
+             "a RAPID identifier: a letter, then letters, digits or _, at most 32 characters");
+  }
+}
+
+template <class A>
 void describeOutputs(A& a, OutputsSpec& s) {
   a.field("programs", s.programs, Expect::oneOf(programFormatNames()));
   a.field("program_name", s.program_name);
+  a.section("trigger", s.trigger);
+  a.field("servo_period_s", s.servo_period_s, Expect::range(0.001, 0.1));
 }
 
 template <class A>
@@ -470,6 +489,8 @@ void describe(YamlOut& a, OmplSpec& s) { describeOmpl(a, s); }
 void describe(YamlIn& a, RefineSpec& s) { describeRefine(a, s); }
 void describe(YamlOut& a, RefineSpec& s) { describeRefine(a, s); }
 void describe(YamlIn& a, PlannerSpec& s) { describePlanner(a, s); }
+void describe(YamlIn& a, TriggerSpec& s) { describeTrigger(a, s); }
+void describe(YamlOut& a, TriggerSpec& s) { describeTrigger(a, s); }
 void describe(YamlIn& a, OutputsSpec& s) { describeOutputs(a, s); }
 void describe(YamlOut& a, OutputsSpec& s) { describeOutputs(a, s); }
 void describe(YamlIn& a, NoiseSpec& s) { describeNoise(a, s); }

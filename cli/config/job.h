@@ -71,6 +71,12 @@ struct ScannerSpec {
   int rays_per_profile = 200;        ///< laser fan rays per profile
   std::string cameras = "positive";  ///< positive | negative | both | either
   NoiseSpec noise;
+  /// kg, the scanner's mass: the programs' payload. 0: not known (no payload is set).
+  double mass_kg = 0.0;
+  /// mm, its centre of gravity in the flange frame; when not given, the centre of the
+  /// housing's (body's) bounding box, or the laser frame's origin without a body.
+  std::array<double, 3> cog_mm{};
+  bool cog_given = false;
 };
 
 /// `validation`: the check of the planned motion before it goes to the robot.
@@ -250,8 +256,17 @@ struct ConstraintsSpec {
   ClearanceSpec clearance;
 };
 
+/// `outputs.trigger`: the scanner's trigger, a digital output on during each scan pass.
+struct TriggerSpec {
+  std::string rapid_signal;      ///< RAPID's signal name; empty: "do<output>"
+  int output = 0;                ///< the output's number; 0: none
+  bool on_at_scan_start = true;  ///< false: off while scanning (an active-low input)
+};
+
 /// `outputs`: the robot programs `plan` writes.
 struct OutputsSpec {
+  TriggerSpec trigger;
+  double servo_period_s = 0.008;  ///< URScript's servoj period (CB3 0.008, e-Series 0.002)
   /// Formats (programFormatNames()). When the job does not say: defaultPrograms(robot), the
   /// robot controller's language and the CSV.
   std::vector<std::string> programs;

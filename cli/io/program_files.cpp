@@ -9,6 +9,7 @@
 #include "cli/io/output.h"
 #include "cli/programs/programs.h"
 #include "kinematics/error.h"
+#include "kinematics/shape.h"
 #include "kinematics/units.h"
 
 namespace scanplan::cli {
@@ -34,7 +35,39 @@ std::string controllerNote(const RobotSpec& robot, const std::vector<std::string
   return "";
 }
 
+// The scanner's centre of gravity when the job does not give it: the centre of its housing's
+// bounding box, or the laser frame's origin without a housing (flange frame, m).
+Eigen::Vector3d defaultCog(const kinematics::CellModel& cell) {
+  Eigen::AlignedBox3d box;
+  for (const kinematics::Shape& shape : cell.scanner.body) {
+    for (const Eigen::Vector3d& v : kinematics::shapeSurface(shape).vertices) box.extend(v);
+  }
+  const Eigen::Vector3d centre =
+      box.isEmpty() ? Eigen::Vector3d(Eigen::Vector3d::Zero()) : Eigen::Vector3d(box.center());
+  return cell.scanner.X_FS * centre;
+}
+
 }  // namespace
+
+ProgramOptions programOptions(const JobSpec& job, const kinematics::CellModel& cell) {
+  ProgramOptions options;
+  options.name = job.outputs.program_name;
+  options.job = job.name;
+  options.table_max_speed = deg(job.table.max_speed_deg_s);
+  options.tool = cell.scanner.X_FS;
+  options.payload_kg = job.scanner.mass_kg;
+  options.payload_cog =
+      job.scanner.cog_given
+          ? Eigen::Vector3d(job.scanner.cog_mm[0], job.scanner.cog_mm[1], job.scanner.cog_mm[2]) /
+                1000.0
+          : defaultCog(cell);
+  options.trigger.output = job.outputs.trigger.output;
+  options.trigger.on_at_scan_start = job.outputs.trigger.on_at_scan_start;
+  options.trigger.rapid_signal = job.outputs.trigger.rapid_signal;
+  options.table_endless = job.table.continuous;
+  options.servo_period = job.outputs.servo_period_s;
+  return options;
+}
 
 std::string writePrograms(const std::filesystem::path& dir,
                           const std::string& shown_as,
@@ -42,10 +75,7 @@ std::string writePrograms(const std::filesystem::path& dir,
                           const kinematics::CellModel& cell,
                           const kinematics::Trajectory& trajectory,
                           const std::vector<std::string>& formats) {
-  ProgramOptions options;
-  options.name = job.outputs.program_name;
-  options.job = job.name;
-  options.table_max_speed = deg(job.table.max_speed_deg_s);
+  const ProgramOptions options = programOptions(job, cell);
   std::vector<std::string> written;
   double max_percent = 0.0;
   std::size_t over = 0;

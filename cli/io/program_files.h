@@ -5,10 +5,16 @@
 #include <vector>
 
 #include "cli/config/job.h"
+#include "cli/programs/programs.h"
 #include "kinematics/cell.h"
 #include "kinematics/trajectory.h"
 
 namespace scanplan::cli {
+
+/// The job's program options: name, table speed and endlessness (table.continuous), the tool
+/// (the scanner's mount X_FS), the payload (scanner.mass_kg, cog_mm or the housing's centre),
+/// the trigger (outputs.trigger) and URScript's servo period (outputs.servo_period_s).
+ProgramOptions programOptions(const JobSpec& job, const kinematics::CellModel& cell);
 
 /// The robot programs of `formats` (names as in programFormatNames()) for the trajectory, into
 /// `dir`; returns one summary line (the folder as `shown_as`, the files, the fastest step as % of

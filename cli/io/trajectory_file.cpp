@@ -43,6 +43,10 @@ std::string readWhole(const std::filesystem::path& file) {
 
 kinematics::Trajectory loadTrajectoryFile(const std::filesystem::path& file) {
   const std::string text = readWhole(file);
+  const auto format = programFormatOfFile(file.filename().string());
+  if (format && *format != ProgramFormat::kCsv) {
+    return atStepTimes(readProgram(text, *format, file.string()));
+  }
   const bool vplus = text.rfind(".PROGRAM", 0) == 0 || text.find("\n.PROGRAM") != std::string::npos;
   return vplus ? readVplusProgram(text, file.string())
                : kinematics::parseTrajectoryCsv(text, file.string());

@@ -9,6 +9,8 @@
 #include <utility>
 #include <vector>
 
+#include <Eigen/Geometry>
+
 #include "kinematics/robot_model.h"
 #include "kinematics/trajectory.h"
 
@@ -21,6 +23,15 @@ const std::vector<std::string>& programFormatNames();
 std::string programFormatName(ProgramFormat format);
 /// One of programFormatNames(), case-insensitive; nullopt otherwise.
 std::optional<ProgramFormat> parseProgramFormat(const std::string& name);
+
+/// The scanner trigger: a digital output switched exactly at each scan pass's start and end.
+struct ProgramTrigger {
+  int output = 0;  ///< the digital output's number (V+ SIGNAL, KRL $OUT, URScript); 0: none
+  /// RAPID's signal name (RAPID names its signals); empty: "do<output>".
+  std::string rapid_signal;
+  /// true: on while scanning (on at a pass's start, off at its end); false: the reverse.
+  bool on_at_scan_start = true;
+};
 
 struct ProgramOptions {
   /// The program name, made a valid identifier of each language (and the file names): V+
@@ -40,6 +51,21 @@ struct ProgramOptions {
   /// table controller to start playing the table list; 0: none (the integrator adds the
   /// start trigger).
   int vplus_table_start_signal = 0;
+  /// The tool (TCP) on the flange: the scanner's laser frame X_FS, m. V+ TOOL, KRL $TOOL,
+  /// RAPID tooldata, URScript set_tcp.
+  Eigen::Isometry3d tool = Eigen::Isometry3d::Identity();
+  /// kg, the scanner's mass; ≤ 0: unknown (no payload is set, and the header says so).
+  double payload_kg = 0.0;
+  /// m, the scanner's centre of gravity in the flange frame. KRL $LOAD, RAPID tload, URScript
+  /// set_payload; a comment in V+ (its PAYLOAD instruction is a percentage, on some arms only).
+  Eigen::Vector3d payload_cog = Eigen::Vector3d::Zero();
+  ProgramTrigger trigger;
+  /// The table is an endless axis: its angles are written within (-180, 180] and the
+  /// controller turns it the shorter way between steps (each step turns less than 180°).
+  /// false: the planned angles as they are (a limited table stays within its limits).
+  bool table_endless = false;
+  /// s, URScript's servoj period: the controller's (0.008 on CB3, 0.002 on e-Series).
+  double servo_period = 0.008;
 };
 
 /// The written program: its files (the first is the program itself) and what the speed check
@@ -55,40 +81,86 @@ struct ProgramFiles {
   double max_speed_percent = 0.0;
 };
 
-/// Writes `trajectory` for `robot`'s controller: one joint move per sample, each timed as
-/// planned as closely as the language allows (the first is the untimed move to the start).
-/// Joints, table angles and times with 6 decimals (degrees, s; URScript's joints in radians with
-/// 9); t, the table angle and the scanning flag in every step's comment. Each program's header says
-/// how its timing and its table are done:
+/// Writes `trajectory` for `robot`'s controller, timed as planned in the language's own timing
+/// model (the first move, to the start, is not timed). Joints, table angles and times with 6
+/// decimals (degrees, s; URScript's joints in radians with 9); t, the table angle and the
+/// scanning flag in every step's comment. Every program sets the tool (options.tool) and,
+/// when known, the payload, switches the trigger output (when set) exactly at each pass's
+/// first and last sample, and says in its header how its timing, trigger and table are done:
 ///
 /// - kCsv: <name>.csv, kinematics::trajectoryToCsv() (12 significant digits).
-/// - kVplus: <name>.v2 (.PROGRAM/.END, MOVE #PPOINT(j1..j6) per step, SPEED in % rounded up to
-///   0.01 from the step's limiting joint, DURATION = the step's planned time, monitor speed 100
-///   assumed) and <name>_table.csv (t_s,table_deg,scanning) for the table controller: V+ has no
-///   rotary-table axis. The start configuration's words (RIGHTY ABOVE NOFLIP) come first.
-/// - kKrl: <name>.src, PTP {A1..A6, E1} C_PTP with the table as E1 (degrees, unwrapped) and
-///   $VEL_AXIS (whole %, rounded up) set per step from the limiting joint.
-/// - kRapid: <name>.mod, MoveAbsJ with the table in eax_a (degrees, unwrapped), the unused
-///   external axes 9E9, speeddata v1000 \T:= the step's planned time.
-/// - kUrscript: <name>.script, movej(q rad, t = the step's time, r = 0), the table through the
-///   table_start()/table_move() functions the integrator implements (UR has no external axis).
+/// - kVplus: <name>.v2 (.PROGRAM/.END, TOOL TRANS, MOVE #PPOINT(j1..j6) per step, SPEED in %
+///   rounded up to 0.01 from the step's limiting joint, DURATION = the step's planned time,
+///   monitor speed 100 assumed; SIGNAL n / -n after the MOVE that leaves the sample, which V+
+///   runs as that move starts) and <name>_table.csv (t_s,table_deg,scanning) for the table
+///   controller: V+ has no rotary-table axis. The start configuration's words come first.
+/// - kKrl: <name>.src: $TOOL, $LOAD, the approach PTP, then PTP_SPLINE blocks of SPTP
+///   {A1..A6, E1} segments (at most kKrlMaxSegments, split between scan passes) timed by
+///   TIME_BLOCK (PART = each step's share, END = the block's planned time); the trigger by
+///   TRIGGER WHEN PATH=0 before the segment that ends at the pass's sample.
+/// - kRapid: <name>.mod, PERS tooldata with the payload as tload, PROC main() calling the scan
+///   procedure, MoveAbsJ with the table in eax_a and \T:= the step's planned time, zone z0;
+///   SetDO after the MoveAbsJ that reaches the pass's sample, which RAPID runs as the arm
+///   enters that point's z0 zone.
+/// - kUrscript: <name>.script, set_tcp/set_payload, movej to the start, then servoj every
+///   options.servo_period along the joint-linear path between samples (continuous motion);
+///   set_digital_out between them at the servo step of the pass's sample; the table through
+///   table_start()/table_move(), which the integrator implements (UR has no external axis).
 ///
 /// Joint values are the robot file's q, which the bundled robots define as their controllers'
 /// own joint convention. Joint limits and collisions are not checked here: validate first.
-/// Throws InputError for an empty trajectory, non-finite values, times not strictly increasing
-/// or an approach speed outside (0, 100].
+/// Throws InputError for an empty trajectory, non-finite values, times not strictly increasing,
+/// an approach speed outside (0, 100], a trigger output outside 0..4096, a non-finite tool or
+/// payload, a servo period outside [0.001, 0.1] s, or (endless table) a step of 180° or more.
 ProgramFiles writeProgram(const kinematics::Trajectory& trajectory,
                           const kinematics::RobotModel& robot,
                           ProgramFormat format,
                           const ProgramOptions& options = {});
 
-/// Reads a V+ program written by writeProgram(kVplus) (or edited by hand in its form): every
-/// `MOVE #PPOINT(j1, …, j6)` (degrees) is one sample, its time, table angle and scanning flag
-/// from the `; t=<s> s table=<deg> deg scan=<0|1>` comment before it. f is NaN (unknown), X_PS
-/// the identity (unknown), limit empty: what validation needs is t, theta and q. Comments,
-/// SPEED, DURATION, BREAK, SIGNAL and the configuration words are accepted and ignored.
-/// Errors (InputError) name `source` and the line: no .PROGRAM or .END, an unknown or malformed
-/// instruction, a MOVE without its step comment, times not strictly increasing, no moves.
+/// KRL: the most SPTP segments one PTP_SPLINE block holds.
+inline constexpr std::size_t kKrlMaxSegments = 1000;
+
+/// A trigger switch read back from a program: at time t (s, the language's timing), on or off.
+struct TriggerSwitch {
+  double t = 0.0;
+  int output = 0;  ///< the output's number (RAPID: the number in the signal's name, or 0)
+  bool on = false;
+};
+
+/// A program read back: the motion as the controller would run it, timed by the language's own
+/// timing model (V+ DURATION, KRL TIME_BLOCK, RAPID \T, URScript servoj t), from the first
+/// sample's time in its step comment (0 without one). Table angles are unwrapped (each step the
+/// shorter way: what an endless axis does); the scanning flag comes from the step comments and
+/// holds until the next one (URScript's servo steps between samples). f is NaN and X_PS the
+/// identity (unknown).
+struct ProgramReading {
+  kinematics::Trajectory trajectory;
+  std::vector<TriggerSwitch> triggers;
+  std::optional<Eigen::Isometry3d> tool;  ///< the tool the program sets (flange frame, m)
+  double payload_kg = 0.0;                ///< 0: none set
+  Eigen::Vector3d payload_cog = Eigen::Vector3d::Zero();  ///< m, flange frame
+  /// The step comments' times: the planned samples (URScript's servo steps lie between them).
+  std::vector<double> step_times;
+};
+
+/// The reading at its step comments' times: the motion interpolated linearly between the read
+/// samples (URScript's servo steps), so that it is checked at the plan's own resolution (a
+/// piecewise-linear table read at the servo period shows its kinks as accelerations 12× those
+/// at the plan's step). Other languages' readings are returned as they are.
+kinematics::Trajectory atStepTimes(const ProgramReading& reading);
+
+/// Reads a program written by writeProgram(format) (or edited by hand in its form; not kCsv).
+/// Errors (InputError) name `source` and the line: an instruction the reader does not know,
+/// malformed values, a move without its step comment (V+: the table angle is only there),
+/// times not strictly increasing, no moves.
+ProgramReading readProgram(const std::string& text,
+                           ProgramFormat format,
+                           const std::string& source);
+
+/// The format of a program file from its extension (.v2, .src, .mod, .script, .csv).
+std::optional<ProgramFormat> programFormatOfFile(const std::string& file_name);
+
+/// readProgram(text, kVplus, source).trajectory.
 kinematics::Trajectory readVplusProgram(const std::string& text, const std::string& source);
 
 }  // namespace scanplan::cli

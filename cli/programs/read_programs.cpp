@@ -1,0 +1,754 @@
+// The program readers: each language's moves, timed by its own timing model, with the tool,
+// payload and trigger switches it sets (programs.h, readProgram).
+#include <cmath>
+#include <optional>
+#include <regex>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "cli/programs/detail/program_text.h"
+#include "kinematics/error.h"
+#include "kinematics/units.h"
+
+namespace scanplan::cli::detail {
+
+namespace {
+
+using kinematics::kNumJoints;
+
+const std::string kNum = R"([-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?)";
+
+// A step comment waiting for its move.
+struct PendingStep {
+  double t = 0.0, table_deg = 0.0;
+  bool scanning = false;
+  int line = 0;
+};
+
+// What every reader keeps: the reading, the pending step comment, the trigger switches.
+class ReaderState {
+ public:
+  ReaderState(const std::string& text, const std::string& source) : in(text, source) {}
+
+  LineReader in;
+  ProgramReading reading;
+  std::optional<PendingStep> pending;
+
+  // A comment: a step comment becomes the pending step.
+  void comment(const std::string& body) {
+    PendingStep p;
+    if (!readStepComment(in, body, p.t, p.table_deg, p.scanning)) return;
+    if (pending) {
+      in.fail("step comment after the one on line " + std::to_string(pending->line) +
+              ", which has no move: expected one move per step comment");
+    }
+    p.line = in.lineNumber();
+    pending = p;
+    reading.step_times.push_back(p.t);
+  }
+  PendingStep takeStep(const std::string& move) {
+    if (!pending) {
+      in.fail(move +
+              " without its step comment: expected 't=<s> s table=<deg> deg scan=<0|1>' "
+              "before it");
+    }
+    const PendingStep p = *pending;
+    pending.reset();
+    return p;
+  }
+  double lastTime() const {
+    const auto& s = reading.trajectory.samples;
+    return s.empty() ? (pending ? pending->t : 0.0) : s.back().t;
+  }
+  // Appends the move timed at t; its step comment's time must agree (to the printed precision,
+  // accumulated over the steps): an edited time or a comment moved to another step is refused.
+  void append(double t, const std::vector<double>& q_deg, double table_deg, const PendingStep& p) {
+    const double tol = 1e-6 * static_cast<double>(reading.trajectory.samples.size() + 1);
+    if (std::abs(t - p.t) > tol) {
+      in.fail(
+          fmt::format("the program's timing puts this move at t = {} s, its step comment (line "
+                      "{}) at {} s: expected the same time (re-export rather than edit)",
+                      fixed(t, kDecimals), p.line, fixed(p.t, kDecimals)));
+    }
+    appendSample(in, reading.trajectory, t, q_deg, table_deg, p.scanning);
+  }
+  void addSwitch(double t, int output, bool on) { reading.triggers.push_back({t, output, on}); }
+  ProgramReading finish() {
+    if (reading.trajectory.samples.empty()) in.fail("no moves in the program");
+    return std::move(reading);
+  }
+};
+
+bool isTrue(const std::string& word) {
+  const std::string w = upper(word);
+  return w == "TRUE" || w == "1";
+}
+
+// ---------------------------------------------------------------------------------------------
+// V+: MOVE #PPOINT per step, DURATION its time; SIGNAL runs as the move before it starts.
+class VplusReader {
+ public:
+  VplusReader(const std::string& text, const std::string& source) : r_(text, source) {}
+
+  ProgramReading read() {
+    std::string line;
+    while (!ended_ && r_.in.next(line)) {
+      if (line.empty()) continue;
+      if (line[0] == ';') {
+        if (!in_program_ && line.find("t=") != std::string::npos) {
+          r_.in.fail("step comment before .PROGRAM");
+        }
+        r_.comment(line.substr(1));
+      } else {
+        instruction(line);
+      }
+    }
+    if (!in_program_) r_.in.fail("no '.PROGRAM name()' line: expected a V+ program");
+    if (r_.pending) r_.in.failAt(r_.pending->line, "step comment without its MOVE #PPOINT(...)");
+    if (!ended_) r_.in.fail("the program has no .END");
+    return r_.finish();
+  }
+
+ private:
+  void instruction(const std::string& line) {
+    static const std::regex kProgram(R"(\.PROGRAM\s+[A-Za-z][A-Za-z0-9._]*\s*\([^)]*\)\s*(;.*)?)",
+                                     std::regex::icase);
+    const std::string statement = trim(line.substr(0, line.find(';')));
+    const std::string keyword = upper(statement.substr(0, statement.find_first_of(" \t(")));
+    const std::string args = trim(statement.substr(keyword.size()));
+    if (!in_program_) {
+      if (keyword != ".PROGRAM" || !std::regex_match(line, kProgram)) {
+        r_.in.fail("'" + clipForMessage(line) + "': expected '.PROGRAM name()' first");
+      }
+      in_program_ = true;
+    } else if (keyword == ".END") {
+      if (!args.empty()) r_.in.fail("'" + clipForMessage(line) + "': expected '.END'");
+      ended_ = true;
+    } else if (keyword == "MOVE") {
+      move(line, statement);
+    } else if (keyword == "SPEED" || keyword == "DURATION") {
+      speed(line, keyword, args);
+    } else if (keyword == "SIGNAL") {
+      signal(line, args);
+    } else if (keyword == "TOOL") {
+      tool(line, args);
+    } else if (keyword == "BREAK") {
+      if (!args.empty()) r_.in.fail("'" + clipForMessage(line) + "': expected 'BREAK' alone");
+      break_after_move_ = true;
+    } else if (keyword == "LEFTY" || keyword == "RIGHTY" || keyword == "ABOVE" ||
+               keyword == "BELOW" || keyword == "FLIP" || keyword == "NOFLIP") {
+      if (!args.empty())
+        r_.in.fail("'" + clipForMessage(line) + "': expected '" + keyword + "' alone");
+    } else {
+      r_.in.fail("'" + clipForMessage(line) +
+                 "': not an instruction this reader knows (MOVE #PPOINT(...), SPEED, DURATION, "
+                 "BREAK, SIGNAL, TOOL TRANS(...), LEFTY/RIGHTY, ABOVE/BELOW, FLIP/NOFLIP, .END)");
+    }
+  }
+
+  // MOVE #PPOINT(j1, ..., j6) in degrees: timed by the DURATION before it (the first, untimed
+  // move, and a move without DURATION: its step comment's time).
+  void move(const std::string& line, const std::string& statement) {
+    static const std::regex kMove(R"(MOVE\s+#PPOINT\s*\(([^)]*)\))", std::regex::icase);
+    std::smatch m;
+    if (!std::regex_match(statement, m, kMove)) {
+      r_.in.fail("'" + clipForMessage(line) +
+                 "': expected 'MOVE #PPOINT(j1, j2, j3, j4, j5, j6)' (degrees)");
+    }
+    const std::vector<double> q = numberList(r_.in, m[1].str(), kNumJoints, "MOVE #PPOINT joints");
+    const PendingStep p = r_.takeStep("MOVE");
+    const auto& samples = r_.reading.trajectory.samples;
+    const double t = samples.empty() || !duration_ ? p.t : samples.back().t + *duration_;
+    r_.append(t, q, p.table_deg, p);
+    duration_.reset();
+    break_after_move_ = false;
+  }
+
+  // SPEED or DURATION <value> [ALWAYS] (SPEED also in MMPS): DURATION times the next MOVE.
+  void speed(const std::string& line, const std::string& keyword, const std::string& args) {
+    std::istringstream words(args);
+    std::string value, rest;
+    words >> value;
+    std::getline(words, rest);
+    double v = 0.0;
+    const std::string tail = upper(trim(rest));
+    const bool units_ok = tail.empty() || tail == "ALWAYS" ||
+                          (keyword == "SPEED" && (tail == "MMPS" || tail == "MMPS ALWAYS"));
+    if (!parseNumber(value, v) || v < 0.0 || !units_ok) {
+      r_.in.fail("'" + clipForMessage(line) + "': expected '" + keyword + " <value> [ALWAYS]'");
+    }
+    if (keyword == "DURATION") duration_ = v;
+  }
+
+  // SIGNAL n[, -m ...]: at the start of the last MOVE, or at its end after a BREAK.
+  void signal(const std::string& line, const std::string& args) {
+    static const std::regex kList(R"([-+]?[0-9]{1,6}(\s*,\s*[-+]?[0-9]{1,6})*)");
+    if (!std::regex_match(args, kList)) {
+      r_.in.fail("'" + clipForMessage(line) + "': expected 'SIGNAL n[, m ...]'");
+    }
+    const auto& samples = r_.reading.trajectory.samples;
+    double t = r_.lastTime();
+    if (!break_after_move_ && samples.size() >= 2) t = samples[samples.size() - 2].t;
+    std::stringstream cells(args);
+    for (std::string cell; std::getline(cells, cell, ',');) {
+      const int n = std::stoi(trim(cell));
+      r_.addSwitch(t, std::abs(n), n > 0);
+    }
+  }
+
+  // TOOL TRANS(x, y, z, yaw, pitch, roll): mm and degrees.
+  void tool(const std::string& line, const std::string& args) {
+    static const std::regex kTrans(R"(TRANS\s*\(([^)]*)\))", std::regex::icase);
+    std::smatch m;
+    if (!std::regex_match(args, m, kTrans)) {
+      r_.in.fail("'" + clipForMessage(line) + "': expected 'TOOL TRANS(x, y, z, y, p, r)'");
+    }
+    const std::vector<double> v = numberList(r_.in, m[1].str(), 6, "TOOL TRANS");
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.translation() = Eigen::Vector3d(v[0], v[1], v[2]) / 1000.0;
+    X.linear() = fromVplusAngles(v[3], v[4], v[5]);
+    r_.reading.tool = X;
+  }
+
+  ReaderState r_;
+  bool in_program_ = false, ended_ = false, break_after_move_ = false;
+  std::optional<double> duration_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// KRL: the approach PTP, then PTP_SPLINE blocks of SPTP segments timed by TIME_BLOCK.
+class KrlReader {
+ public:
+  KrlReader(const std::string& text, const std::string& source) : r_(text, source) {}
+
+  ProgramReading read() {
+    std::string line;
+    while (!ended_ && r_.in.next(line)) {
+      if (line.empty()) continue;
+      if (line[0] == ';') {
+        r_.comment(line.substr(1));
+        continue;
+      }
+      const std::string statement = trim(line.substr(0, line.find(';')));
+      if (!in_program_) {
+        if (upper(statement).rfind("DEF ", 0) != 0) {
+          r_.in.fail("'" + clipForMessage(line) + "': expected 'DEF name( )' first");
+        }
+        in_program_ = true;
+        continue;
+      }
+      instruction(statement);
+    }
+    if (!in_program_) r_.in.fail("no 'DEF name( )' line: expected a KRL program");
+    if (!ended_) r_.in.fail("the program has no END");
+    if (block_) r_.in.fail("PTP_SPLINE without ENDSPLINE");
+    return r_.finish();
+  }
+
+ private:
+  void instruction(const std::string& s) {
+    const std::string u = upper(s);
+    if (u == "END") {
+      ended_ = true;
+    } else if (u.rfind("PTP {", 0) == 0 || u.rfind("PTP{", 0) == 0) {
+      approach(s);
+    } else if (u == "PTP_SPLINE") {
+      if (block_) r_.in.fail("PTP_SPLINE inside another: expected ENDSPLINE first");
+      block_.emplace();
+    } else if (u.rfind("SPTP", 0) == 0) {
+      segment(s);
+    } else if (u.rfind("TIME_BLOCK", 0) == 0) {
+      timeBlock(s);
+    } else if (u == "ENDSPLINE") {
+      if (!block_ || !block_->ended)
+        r_.in.fail("ENDSPLINE without a PTP_SPLINE and its TIME_BLOCK END");
+      block_.reset();
+    } else if (u.rfind("TRIGGER WHEN", 0) == 0) {
+      trigger(s);
+    } else if (u.rfind("$OUT[", 0) == 0) {
+      const auto [n, on] = output(s);
+      r_.addSwitch(r_.lastTime(), n, on);
+    } else if (u.rfind("$TOOL", 0) == 0) {
+      tool(s);
+    } else if (u.rfind("$LOAD", 0) == 0) {
+      load(s);
+    } else if (u.rfind("BAS(", 0) == 0 || u.rfind("$APO", 0) == 0 ||
+               u.rfind("SCANPLAN_VEL(", 0) == 0 || u == "WAIT SEC 0") {
+      // Settings that do not change the planned motion.
+    } else {
+      r_.in.fail(
+          "'" + clipForMessage(s) +
+          "': not an instruction this reader knows (PTP, PTP_SPLINE, SPTP, TIME_BLOCK, "
+          "ENDSPLINE, TRIGGER WHEN, $OUT, $TOOL, $LOAD, BAS, SCANPLAN_VEL, WAIT SEC 0, END)");
+    }
+  }
+
+  // {A1 v, ..., A6 v, E1 v} → joints (degrees) and E1.
+  std::pair<std::vector<double>, double> axes(const std::string& s) {
+    static const std::regex kAxis("([AE][1-6])\\s+(" + kNum + ")", std::regex::icase);
+    const auto open = s.find('{'), close = s.find('}');
+    if (open == std::string::npos || close == std::string::npos || close < open) {
+      r_.in.fail("'" + clipForMessage(s) + "': expected {A1 .., A6 .., E1 ..} (degrees)");
+    }
+    std::vector<double> q(kNumJoints, std::nan(""));
+    double e1 = std::nan("");
+    const std::string body = s.substr(open + 1, close - open - 1);
+    for (std::sregex_iterator it(body.begin(), body.end(), kAxis), end; it != end; ++it) {
+      const std::string name = upper((*it)[1].str());
+      const double v = std::strtod((*it)[2].str().c_str(), nullptr);
+      if (name[0] == 'A') q[static_cast<std::size_t>(name[1] - '1')] = v;
+      if (name == "E1") e1 = v;
+    }
+    for (const double v : q) {
+      if (!std::isfinite(v)) r_.in.fail("'" + clipForMessage(s) + "': expected A1 ... A6 and E1");
+    }
+    if (!std::isfinite(e1)) r_.in.fail("'" + clipForMessage(s) + "': expected E1 (the table)");
+    return {q, e1};
+  }
+
+  void approach(const std::string& s) {
+    if (block_) r_.in.fail("PTP inside a PTP_SPLINE block: expected SPTP");
+    const auto [q, e1] = axes(s);
+    const PendingStep p = r_.takeStep("PTP");
+    r_.append(p.t, q, e1, p);
+    fire(r_.reading.trajectory.samples.back().t);
+  }
+
+  void segment(const std::string& s) {
+    if (!block_ || !block_->started) r_.in.fail("SPTP outside a timed PTP_SPLINE block");
+    const auto [q, e1] = axes(s);
+    const PendingStep p = r_.takeStep("SPTP");
+    block_->segments.push_back({q, e1, p, std::nan(""), trigger_});
+    trigger_.clear();
+  }
+
+  void timeBlock(const std::string& s) {
+    static const std::regex kPart("TIME_BLOCK\\s+(PART|END)\\s*=\\s*(" + kNum + ")",
+                                  std::regex::icase);
+    if (!block_) r_.in.fail("TIME_BLOCK outside a PTP_SPLINE block");
+    if (upper(s) == "TIME_BLOCK START") {
+      block_->started = true;
+      return;
+    }
+    std::smatch m;
+    if (!std::regex_match(s, m, kPart) || !block_->started) {
+      r_.in.fail("'" + clipForMessage(s) + "': expected TIME_BLOCK START, PART=<%> or END=<s>");
+    }
+    const double v = std::strtod(m[2].str().c_str(), nullptr);
+    if (!(v > 0.0) || !std::isfinite(v))
+      r_.in.fail("'" + clipForMessage(s) + "': expected a positive value");
+    if (upper(m[1].str()) == "PART") {
+      if (block_->segments.empty() || !std::isnan(block_->segments.back().part)) {
+        r_.in.fail("TIME_BLOCK PART without its SPTP segment");
+      }
+      block_->segments.back().part = v;
+    } else {
+      endBlock(v);
+    }
+  }
+
+  // TIME_BLOCK END: each segment gets END · PART / ΣPART of the block's time.
+  void endBlock(double total) {
+    double sum = 0.0;
+    for (const Segment& g : block_->segments) {
+      if (std::isnan(g.part)) r_.in.fail("TIME_BLOCK END: a segment has no TIME_BLOCK PART");
+      sum += g.part;
+    }
+    if (block_->segments.empty()) r_.in.fail("TIME_BLOCK END: the block has no segments");
+    double t = r_.lastTime(), acc = 0.0;
+    for (const Segment& g : block_->segments) {
+      acc += g.part;
+      r_.append(t + total * acc / sum, g.q, g.e1, g.step);
+      for (const auto& [n, on] : g.triggers)
+        r_.addSwitch(r_.reading.trajectory.samples.back().t, n, on);
+    }
+    block_->ended = true;
+  }
+
+  // TRIGGER WHEN PATH=0 (next SPTP's end) or DISTANCE=1 (next PTP's end) DELAY=0 DO $OUT[n]=..
+  void trigger(const std::string& s) {
+    static const std::regex kTrigger(
+        R"(TRIGGER\s+WHEN\s+(PATH\s*=\s*0|DISTANCE\s*=\s*1)\s+DELAY\s*=\s*0\s+DO\s+(.*))",
+        std::regex::icase);
+    std::smatch m;
+    if (!std::regex_match(s, m, kTrigger)) {
+      r_.in.fail("'" + clipForMessage(s) +
+                 "': expected 'TRIGGER WHEN PATH=0 DELAY=0 DO $OUT[n]=TRUE|FALSE' (or DISTANCE=1)");
+    }
+    trigger_.push_back(output(m[2].str()));
+  }
+
+  std::pair<int, bool> output(const std::string& s) {
+    static const std::regex kOut(R"(\$OUT\[\s*([0-9]{1,6})\s*\]\s*=\s*(TRUE|FALSE))",
+                                 std::regex::icase);
+    std::smatch m;
+    if (!std::regex_match(s, m, kOut))
+      r_.in.fail("'" + clipForMessage(s) + "': expected $OUT[n]=TRUE|FALSE");
+    return {std::stoi(m[1].str()), isTrue(m[2].str())};
+  }
+
+  void fire(double t) {
+    for (const auto& [n, on] : trigger_) r_.addSwitch(t, n, on);
+    trigger_.clear();
+  }
+
+  std::vector<double> frame(const std::string& s, const std::string& what) {
+    static const std::regex kField("([XYZABC])\\s+(" + kNum + ")", std::regex::icase);
+    std::vector<double> v(6, 0.0);
+    std::vector<bool> seen(6, false);
+    const std::string fields = "XYZABC";
+    for (std::sregex_iterator it(s.begin(), s.end(), kField), end; it != end; ++it) {
+      const auto i = fields.find(static_cast<char>(std::toupper((*it)[1].str()[0])));
+      v[i] = std::strtod((*it)[2].str().c_str(), nullptr);
+      seen[i] = true;
+    }
+    for (std::size_t i = 0; i < 3; ++i) {
+      if (!seen[i]) r_.in.fail("'" + clipForMessage(s) + "': expected " + what + " with X, Y, Z");
+    }
+    return v;
+  }
+
+  void tool(const std::string& s) {
+    const std::vector<double> v = frame(s, "$TOOL={X .., Y .., Z .., A .., B .., C ..}");
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.translation() = Eigen::Vector3d(v[0], v[1], v[2]) / 1000.0;
+    X.linear() = fromKrlAngles(v[3], v[4], v[5]);
+    r_.reading.tool = X;
+  }
+
+  void load(const std::string& s) {
+    const std::string u = upper(s);
+    if (u.rfind("$LOAD.M", 0) == 0) {
+      double m = 0.0;
+      if (!parseNumber(s.substr(s.find('=') + 1), m) || m < 0.0) {
+        r_.in.fail("'" + clipForMessage(s) + "': expected $LOAD.M=<kg>");
+      }
+      r_.reading.payload_kg = m;
+    } else if (u.rfind("$LOAD.CM", 0) == 0) {
+      const std::vector<double> v = frame(s, "$LOAD.CM={X .., Y .., Z ..}");
+      r_.reading.payload_cog = Eigen::Vector3d(v[0], v[1], v[2]) / 1000.0;
+    } else if (u.rfind("$LOAD.J", 0) != 0) {
+      r_.in.fail("'" + clipForMessage(s) + "': expected $LOAD.M, $LOAD.CM or $LOAD.J");
+    }
+  }
+
+  struct Segment {
+    std::vector<double> q;
+    double e1 = 0.0;
+    PendingStep step;
+    double part = 0.0;
+    std::vector<std::pair<int, bool>> triggers;
+  };
+  struct Block {
+    bool started = false, ended = false;
+    std::vector<Segment> segments;
+  };
+
+  ReaderState r_;
+  bool in_program_ = false, ended_ = false;
+  std::optional<Block> block_;
+  std::vector<std::pair<int, bool>> trigger_;  // for the next motion's end
+};
+
+// ---------------------------------------------------------------------------------------------
+// RAPID: MoveAbsJ \T:= per step; SetDO after the move that reaches its sample.
+class RapidReader {
+ public:
+  RapidReader(const std::string& text, const std::string& source) : r_(text, source) {}
+
+  ProgramReading read() {
+    std::string line;
+    while (r_.in.next(line)) {
+      if (line.empty()) continue;
+      if (line[0] == '!') {
+        r_.comment(line.substr(1));
+        continue;
+      }
+      instruction(line);
+    }
+    if (!module_) r_.in.fail("no 'MODULE name' line: expected a RAPID module");
+    if (!ended_) r_.in.fail("the module has no ENDMODULE");
+    return r_.finish();
+  }
+
+ private:
+  void instruction(const std::string& s) {
+    static const std::regex kCall(R"([A-Za-z][A-Za-z0-9_]*\s*;)");
+    const std::string u = upper(s);
+    if (!module_) {
+      if (u.rfind("MODULE ", 0) != 0)
+        r_.in.fail("'" + clipForMessage(s) + "': expected 'MODULE name' first");
+      module_ = true;
+    } else if (ended_) {
+      r_.in.fail("'" + clipForMessage(s) + "': after ENDMODULE");
+    } else if (u == "ENDMODULE") {
+      ended_ = true;
+    } else if (u.rfind("PROC ", 0) == 0 || u == "ENDPROC" || std::regex_match(s, kCall)) {
+      // Procedures and the call of the scan procedure from main().
+    } else if (u.rfind("MOVEABSJ ", 0) == 0) {
+      move(s);
+    } else if (u.rfind("SETDO ", 0) == 0) {
+      setDo(s);
+    } else if (u.rfind("PERS TOOLDATA ", 0) == 0) {
+      toolData(s);
+    } else {
+      r_.in.fail("'" + clipForMessage(s) +
+                 "': not an instruction this reader knows (MODULE, PROC, MoveAbsJ, SetDO, PERS "
+                 "tooldata, ENDPROC, ENDMODULE)");
+    }
+  }
+
+  // MoveAbsJ [[j1..j6],[eax_a,9E9 x5]]\NoEOffs, v..[\T:=s], zone, tool;
+  void move(const std::string& s) {
+    static const std::regex kMove(
+        R"(MoveAbsJ\s*\[\[([^\]]*)\]\s*,\s*\[([^\]]*)\]\]\s*(\\NoEOffs)?\s*,\s*v[0-9]+(\\T\s*:=\s*([^,]+))?\s*,\s*(z[0-9]+|fine)\s*,\s*[A-Za-z][A-Za-z0-9_]*\s*;)",
+        std::regex::icase);
+    std::smatch m;
+    if (!std::regex_match(s, m, kMove)) {
+      r_.in.fail("'" + clipForMessage(s) +
+                 "': expected 'MoveAbsJ [[j1,...,j6],[eax_a,9E9,...]]\\NoEOffs, v..[\\T:=s], "
+                 "zone, tool;'");
+    }
+    const std::vector<double> q = numberList(r_.in, m[1].str(), kNumJoints, "MoveAbsJ robax");
+    const std::vector<double> eax = numberList(r_.in, m[2].str(), 6, "MoveAbsJ extax");
+    const PendingStep p = r_.takeStep("MoveAbsJ");
+    double t = p.t;
+    const auto& samples = r_.reading.trajectory.samples;
+    if (!samples.empty() && m[4].matched) {
+      double dt = 0.0;
+      if (!parseNumber(m[5].str(), dt) || !(dt > 0.0))
+        r_.in.fail("'" + clipForMessage(s) + "': \\T must be a positive time");
+      t = samples.back().t + dt;
+    }
+    r_.append(t, q, eax[0], p);
+  }
+
+  void setDo(const std::string& s) {
+    static const std::regex kSet(R"(SetDO\s+([A-Za-z][A-Za-z0-9_]*)\s*,\s*([01])\s*;)",
+                                 std::regex::icase);
+    std::smatch m;
+    if (!std::regex_match(s, m, kSet))
+      r_.in.fail("'" + clipForMessage(s) + "': expected 'SetDO signal, 0|1;'");
+    const std::string name = m[1].str();
+    const auto digits = name.find_last_not_of("0123456789");
+    const std::size_t count = name.size() - digits - 1;
+    const int n = count > 0 && count <= 6 ? std::stoi(name.substr(digits + 1)) : 0;
+    r_.addSwitch(r_.lastTime(), n, m[2].str() == "1");
+  }
+
+  // PERS tooldata name:=[TRUE,[[x,y,z],[q1,q2,q3,q4]],[mass,[cx,cy,cz],[1,0,0,0],ix,iy,iz]];
+  void toolData(const std::string& s) {
+    static const std::regex kTool(
+        R"(PERS\s+tooldata\s+[A-Za-z][A-Za-z0-9_]*\s*:=\s*\[\s*(TRUE|FALSE)\s*,\s*\[\[([^\]]*)\]\s*,\s*\[([^\]]*)\]\]\s*,\s*\[([^,\[]*),\s*\[([^\]]*)\].*\]\s*;)",
+        std::regex::icase);
+    std::smatch m;
+    if (!std::regex_match(s, m, kTool))
+      r_.in.fail("'" + clipForMessage(s) + "': expected a tooldata value");
+    const std::vector<double> p = numberList(r_.in, m[2].str(), 3, "tframe.trans");
+    const std::vector<double> q = numberList(r_.in, m[3].str(), 4, "tframe.rot");
+    const std::vector<double> c = numberList(r_.in, m[5].str(), 3, "tload.cog");
+    double mass = 0.0;
+    if (!parseNumber(m[4].str(), mass) || mass < 0.0)
+      r_.in.fail("tload.mass: expected a mass in kg");
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.translation() = Eigen::Vector3d(p[0], p[1], p[2]) / 1000.0;
+    X.linear() = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
+    r_.reading.tool = X;
+    r_.reading.payload_kg = mass;
+    r_.reading.payload_cog = Eigen::Vector3d(c[0], c[1], c[2]) / 1000.0;
+  }
+
+  ReaderState r_;
+  bool module_ = false, ended_ = false;
+};
+
+// ---------------------------------------------------------------------------------------------
+// URScript: movej to the start, then one servo step per servoj period; the table follows its
+// table_move() targets linearly.
+class UrscriptReader {
+ public:
+  UrscriptReader(const std::string& text, const std::string& source) : r_(text, source) {}
+
+  ProgramReading read() {
+    std::string line;
+    while (!ended_ && r_.in.next(line)) {
+      if (line.empty()) continue;
+      if (line[0] == '#') {
+        step(line.substr(1));
+      } else if (!in_program_) {
+        if (line.rfind("def ", 0) != 0)
+          r_.in.fail("'" + clipForMessage(line) + "': expected 'def name():' first");
+        in_program_ = true;
+      } else if (line.rfind("def ", 0) == 0) {
+        helper(line);
+      } else if (line == "end") {
+        ended_ = true;
+      } else {
+        instruction(line);
+      }
+    }
+    if (!in_program_) r_.in.fail("no 'def name():' line: expected a URScript program");
+    if (!ended_) r_.in.fail("the program has no end");
+    return r_.finish();
+  }
+
+ private:
+  // A step comment: the scanning flag from here on (and the start's time).
+  void step(const std::string& body) {
+    PendingStep p;
+    if (!readStepComment(r_.in, body, p.t, p.table_deg, p.scanning)) return;
+    scanning_ = p.scanning;
+    if (!start_t_) start_t_ = p.t;
+    r_.reading.step_times.push_back(p.t);
+  }
+
+  // A helper function: servo(q)'s servoj period is read; the others' bodies are the cell's.
+  void helper(const std::string& first) {
+    static const std::regex kServoj("servoj\\(q,\\s*t\\s*=\\s*(" + kNum + ").*\\)");
+    const bool servo = first.rfind("def servo(", 0) == 0;
+    std::string line;
+    for (int depth = 1; depth > 0;) {
+      if (!r_.in.next(line)) r_.in.fail("'" + clipForMessage(first) + "' has no end");
+      if (line.rfind("def ", 0) == 0) ++depth;
+      if (line == "end") --depth;
+      std::smatch m;
+      if (servo && std::regex_match(line, m, kServoj))
+        period_ = std::strtod(m[1].str().c_str(), nullptr);
+    }
+  }
+
+  void instruction(const std::string& s) {
+    static const std::regex kCall(R"(([a-z_]+)\((.*)\))");
+    std::smatch m;
+    if (!std::regex_match(s, m, kCall))
+      r_.in.fail("'" + clipForMessage(s) + "': expected a function call");
+    const std::string f = m[1].str(), args = m[2].str();
+    if (f == "servo") {
+      servo(args);
+    } else if (f == "movej") {
+      movej(args);
+    } else if (f == "table_start" || f == "table_move") {
+      table(f, args);
+    } else if (f == "set_digital_out") {
+      digitalOut(args);
+    } else if (f == "set_tcp") {
+      tcp(args);
+    } else if (f == "set_payload") {
+      payload(args);
+    } else if (f != "stopj") {
+      r_.in.fail("'" + clipForMessage(s) +
+                 "': not a call this reader knows (servo, movej, table_start, table_move, "
+                 "set_digital_out, set_tcp, set_payload, stopj)");
+    }
+  }
+
+  std::vector<double> bracketed(const std::string& args, std::size_t n, const std::string& what) {
+    const auto open = args.find('['), close = args.find(']');
+    if (open == std::string::npos || close == std::string::npos || close < open) {
+      r_.in.fail(what + ": expected [..]");
+    }
+    return numberList(r_.in, args.substr(open + 1, close - open - 1), n, what);
+  }
+
+  void add(double t, const std::vector<double>& q_rad) {
+    std::vector<double> q(q_rad.size());
+    for (std::size_t j = 0; j < q.size(); ++j) q[j] = q_rad[j] * kRadToDeg;
+    appendSample(r_.in, r_.reading.trajectory, t, q, tableAt(t), scanning_);
+    now_ = t;
+  }
+
+  void movej(const std::string& args) {
+    if (!r_.reading.trajectory.samples.empty())
+      r_.in.fail("movej after the start: expected servo steps");
+    now_ = start_t_.value_or(0.0);
+    add(now_, bracketed(args, kNumJoints, "movej joints"));
+  }
+
+  void servo(const std::string& args) {
+    if (r_.reading.trajectory.samples.empty()) r_.in.fail("servo before the movej to the start");
+    if (!period_) r_.in.fail("servo() before its definition (def servo(q): servoj(q, t=...))");
+    add(now_ + *period_, bracketed(args, kNumJoints, "servo joints"));
+  }
+
+  // table_start(deg): the table's angle at the start; table_move(deg, t): at deg t s after the
+  // servo motion starts (the start's time), linearly between these points, the shorter way.
+  void table(const std::string& f, const std::string& args) {
+    const bool start = f == "table_start";
+    const std::vector<double> v = numberList(r_.in, args, start ? 1 : 2, f);
+    if (start) {
+      timeline_ = {{start_t_.value_or(0.0), v[0]}};
+      cursor_ = 0;
+      return;
+    }
+    if (timeline_.empty()) r_.in.fail("table_move before table_start");
+    const auto& [t_prev, deg_prev] = timeline_.back();
+    const double t = start_t_.value_or(0.0) + v[1];
+    if (!(t > t_prev)) r_.in.fail("table_move: its time is not after the previous point's");
+    timeline_.emplace_back(t, deg_prev + std::remainder(v[0] - deg_prev, 360.0));
+  }
+
+  // The times asked only grow: a cursor walks the points.
+  double tableAt(double t) {
+    if (timeline_.empty()) return 0.0;
+    if (t <= timeline_.front().first) return timeline_.front().second;
+    while (cursor_ + 1 < timeline_.size() && timeline_[cursor_ + 1].first < t) ++cursor_;
+    if (cursor_ + 1 >= timeline_.size()) return timeline_.back().second;
+    const auto& [t0, d0] = timeline_[cursor_];
+    const auto& [t1, d1] = timeline_[cursor_ + 1];
+    return d0 + (t - t0) / (t1 - t0) * (d1 - d0);
+  }
+
+  void digitalOut(const std::string& args) {
+    static const std::regex kOut(R"(\s*([0-9]{1,6})\s*,\s*(True|False)\s*)");
+    std::smatch m;
+    if (!std::regex_match(args, m, kOut)) r_.in.fail("set_digital_out: expected (n, True|False)");
+    r_.addSwitch(now_, std::stoi(m[1].str()), m[2].str() == "True");
+  }
+
+  void tcp(const std::string& args) {
+    const auto open = args.find("p[");
+    if (open == std::string::npos) r_.in.fail("set_tcp: expected p[x, y, z, rx, ry, rz]");
+    const std::vector<double> v = bracketed(args.substr(open + 1), 6, "set_tcp");
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.translation() = Eigen::Vector3d(v[0], v[1], v[2]);
+    X.linear() = fromRotationVector(Eigen::Vector3d(v[3], v[4], v[5]));
+    r_.reading.tool = X;
+  }
+
+  void payload(const std::string& args) {
+    double m = 0.0;
+    if (!parseNumber(args.substr(0, args.find(',')), m) || m < 0.0)
+      r_.in.fail("set_payload: expected a mass in kg");
+    const std::vector<double> c = bracketed(args, 3, "set_payload centre of gravity");
+    r_.reading.payload_kg = m;
+    r_.reading.payload_cog = Eigen::Vector3d(c[0], c[1], c[2]);
+  }
+
+  ReaderState r_;
+  bool in_program_ = false, ended_ = false, scanning_ = false;
+  std::optional<double> start_t_, period_;
+  double now_ = 0.0;
+  std::vector<std::pair<double, double>> timeline_;  // the table's (t, deg) points so far
+  std::size_t cursor_ = 0;
+};
+
+}  // namespace
+
+ProgramReading readVplus(const std::string& text, const std::string& source) {
+  return VplusReader(text, source).read();
+}
+
+ProgramReading readKrl(const std::string& text, const std::string& source) {
+  return KrlReader(text, source).read();
+}
+
+ProgramReading readRapid(const std::string& text, const std::string& source) {
+  return RapidReader(text, source).read();
+}
+
+ProgramReading readUrscript(const std::string& text, const std::string& source) {
+  return UrscriptReader(text, source).read();
+}
+
+}  // namespace scanplan::cli::detail
