@@ -72,26 +72,40 @@ void writeCloudPly(std::ostream& out, const std::vector<CloudPoint>& points) {
   std::ostringstream header;
   header << "ply\n"
          << "format binary_little_endian 1.0\n"
-         << "comment scanplan simulated cloud: part frame, mm; time s; range mm; incidence deg\n"
+         << "comment scanplan simulated cloud: part frame, mm; normals unit, towards the laser; "
+            "time s; range mm; incidence deg; part_triangle -1 = on another body\n"
          << "element vertex " << points.size() << "\n"
          << "property float x\n"
          << "property float y\n"
          << "property float z\n"
+         << "property float nx\n"
+         << "property float ny\n"
+         << "property float nz\n"
          << "property float time\n"
-         << "property uint profile\n"
+         << "property int profile\n"
+         << "property int ray\n"
          << "property float range_mm\n"
          << "property float incidence_deg\n"
+         << "property int part_triangle\n"
          << "end_header\n";
   writeHeader(out, header.str());
   LittleEndianWriter w(out);
+  const auto index = [](std::uint32_t v) {  // int: what every viewer keeps (Open3D drops uint)
+    return static_cast<std::int32_t>(std::min<std::uint32_t>(v, 0x7FFFFFFFu));
+  };
   for (const CloudPoint& p : points) {
     w.f32(toMm(p.p_P.x()));
     w.f32(toMm(p.p_P.y()));
     w.f32(toMm(p.p_P.z()));
+    w.f32(p.n_P.x());
+    w.f32(p.n_P.y());
+    w.f32(p.n_P.z());
     w.f32(p.t);
-    w.u32(p.profile);
+    w.i32(index(p.profile));
+    w.i32(index(p.ray));
     w.f32(toMm(p.range));
     w.f32(toDeg(p.incidence));
+    w.i32(p.part_triangle);
     w.endRecord();
   }
 }

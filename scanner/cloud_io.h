@@ -16,12 +16,17 @@ namespace scanplan::scanner {
 /// all read right whatever the first data byte (after a bare '\n', assimp drops a first 0x0A).
 ///
 /// Writes cloud.ply: PLY 1.0, binary little-endian, one `vertex` element per point with
-///   float x, y, z        part frame, mm
-///   float time           acquisition time, s
-///   uint profile         profile (frame) index
-///   float range_mm       laser origin to the point along the ray, mm
-///   float incidence_deg  angle between the ray and the surface normal, degrees
-/// The stream must be binary; the caller owns the file (write to a temporary name and rename).
+///   float x, y, z         part frame, mm
+///   float nx, ny, nz      the hit surface's unit normal, part frame, towards the laser
+///   float time            acquisition time, s
+///   int profile           profile (frame) index
+///   int ray               fan ray index within the profile
+///   float range_mm        laser origin to the point along the ray, mm
+///   float incidence_deg   angle between the ray and the surface normal, degrees
+///   int part_triangle     the part mesh's hit triangle; −1: the point lies on another body
+/// Only float and int properties: Open3D drops uint ones, and CloudCompare, PCL and MeshLab keep
+/// these. The stream must be binary; the caller owns the file (write to a temporary name and
+/// rename).
 void writeCloudPly(std::ostream& out, const std::vector<CloudPoint>& points);
 
 /// Writes coverage.ply: the part mesh (part frame, mm), PLY 1.0 binary little-endian, coloured

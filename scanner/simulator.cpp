@@ -596,7 +596,8 @@ void ScanSimulator::Impl::emitPoints(const ScanFrame& frame,
       range += e_l;
     }
     out.push_back({X_PS * p_S, frame.t, index, c.ray, range,
-                   std::acos(std::min(1.0, c.cos_incidence)), c.part_triangle});
+                   std::acos(std::min(1.0, c.cos_incidence)), c.part_triangle,
+                   X_PS.linear() * c.n_S});
   }
   stats.points += out.size() - first;
 }

@@ -61,6 +61,8 @@ struct CloudPoint {
   double range = 0.0;      ///< laser origin to the point along the ray (with σ_l noise), m
   double incidence = 0.0;  ///< angle between the ray and the surface normal, rad, [0, π/2]
   std::int32_t part_triangle = -1;  ///< hit triangle of the part mesh; −1 on another body
+  /// the hit surface's unit normal, part frame, towards the laser (the side that was seen)
+  Eigen::Vector3d n_P = Eigen::Vector3d::UnitZ();
 };
 
 /// Counters of one run; rays are counted once however many rigid groups they visit.

@@ -615,15 +615,25 @@ void expectPointsOnPart(const TriangleMesh& part,
                         const SimulatedCloud& cloud,
                         std::size_t at_least) {
   std::size_t on_part = 0;
-  double worst = 0.0;
+  double worst = 0.0, worst_normal = 0.0;
   for (const CloudPoint& p : cloud.points) {
     if (p.part_triangle < 0) continue;
     ++on_part;
-    worst =
-        std::max(worst, triangleDistance(part, static_cast<std::size_t>(p.part_triangle), p.p_P));
+    const auto t = static_cast<std::size_t>(p.part_triangle);
+    worst = std::max(worst, triangleDistance(part, t, p.p_P));
+    // The point's normal is its triangle's face normal (either side), of unit length.
+    const Eigen::Vector3i& f = part.triangles[t];
+    const Eigen::Vector3d face =
+        (part.vertices[static_cast<std::size_t>(f[1])] - part.vertices[static_cast<std::size_t>(f[0])])
+            .cross(part.vertices[static_cast<std::size_t>(f[2])] -
+                   part.vertices[static_cast<std::size_t>(f[0])])
+            .normalized();
+    worst_normal = std::max({worst_normal, std::abs(std::abs(p.n_P.dot(face)) - 1.0),
+                             std::abs(p.n_P.norm() - 1.0)});
   }
   EXPECT_GE(on_part, at_least);
   EXPECT_LE(worst, kOnPartTol) << "worst distance to the hit triangle";
+  EXPECT_LE(worst_normal, 1e-9) << "normals against the hit triangles' face normals";
   const std::size_t step = std::max<std::size_t>(1, cloud.points.size() / 150);
   for (std::size_t i = 0; i < cloud.points.size(); i += step) {
     if (cloud.points[i].part_triangle < 0) continue;
@@ -850,12 +860,16 @@ TEST(Coverage, ParallelLinesOnAPlaneGiveTheExpectedDensity) {
 TEST(CloudPly, HeaderIsStandardAndValuesRoundTrip) {
   std::vector<CloudPoint> points(3);
   points[0].p_P = Eigen::Vector3d(0.001, -0.002, 0.0305);
+  points[0].n_P = Eigen::Vector3d(0.6, 0.0, 0.8);
   points[0].t = 1.25;
   points[0].profile = 7;
+  points[0].ray = 199;
   points[0].range = 0.16;
   points[0].incidence = deg(30.0);
+  points[0].part_triangle = 31243;
   points[1].p_P = Eigen::Vector3d(-0.1, 0.2, 0.3);
-  points[1].profile = 4000000000u;
+  points[1].profile = 2000000000u;
+  points[1].part_triangle = -1;  // on the table
   points[2].t = 1234.5;
   std::ostringstream out(std::ios::binary);
   scanner::writeCloudPly(out, points);
@@ -863,36 +877,47 @@ TEST(CloudPly, HeaderIsStandardAndValuesRoundTrip) {
   const std::string header =
       "ply\r\n"
       "format binary_little_endian 1.0\r\n"
-      "comment scanplan simulated cloud: part frame, mm; time s; range mm; incidence deg\r\n"
+      "comment scanplan simulated cloud: part frame, mm; normals unit, towards the laser; time "
+      "s; range mm; incidence deg; part_triangle -1 = on another body\r\n"
       "element vertex 3\r\n"
       "property float x\r\n"
       "property float y\r\n"
       "property float z\r\n"
+      "property float nx\r\n"
+      "property float ny\r\n"
+      "property float nz\r\n"
       "property float time\r\n"
-      "property uint profile\r\n"
+      "property int profile\r\n"
+      "property int ray\r\n"
       "property float range_mm\r\n"
       "property float incidence_deg\r\n"
+      "property int part_triangle\r\n"
       "end_header\r\n";
   ASSERT_EQ(bytes.substr(0, header.size()), header);
-  EXPECT_EQ(bytes.size(), header.size() + 3 * 7 * 4);
+  EXPECT_EQ(bytes.size(), header.size() + 3 * 12 * 4);
   // The first float after the header: x = 1 mm, little-endian IEEE 754 (0x3F800000).
   EXPECT_EQ(bytes.substr(header.size(), 4), std::string("\x00\x00\x80\x3F", 4));
+  // Only float and int properties: no uint, which Open3D drops.
+  EXPECT_EQ(header.find("uint"), std::string::npos);
 
   std::istringstream in(bytes, std::ios::binary);
   const test::PlyVertices v = test::readPlyVertices(in, "memory");
   EXPECT_EQ(v.format, "binary_little_endian");
   ASSERT_EQ(v.count, 3u);
-  EXPECT_EQ(v.names, (std::vector<std::string>{"x", "y", "z", "time", "profile", "range_mm",
-                                               "incidence_deg"}));
+  EXPECT_EQ(v.names, (std::vector<std::string>{"x", "y", "z", "nx", "ny", "nz", "time",
+                                               "profile", "ray", "range_mm", "incidence_deg",
+                                               "part_triangle"}));
   for (std::size_t i = 0; i < 3; ++i) {
-    EXPECT_FLOAT_EQ(static_cast<float>(v.column("x")[i]),
-                    static_cast<float>(toMm(points[i].p_P.x())));
-    EXPECT_FLOAT_EQ(static_cast<float>(v.column("y")[i]),
-                    static_cast<float>(toMm(points[i].p_P.y())));
-    EXPECT_FLOAT_EQ(static_cast<float>(v.column("z")[i]),
-                    static_cast<float>(toMm(points[i].p_P.z())));
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_FLOAT_EQ(static_cast<float>(v.column(std::string(1, "xyz"[k]))[i]),
+                      static_cast<float>(toMm(points[i].p_P[k])));
+      EXPECT_FLOAT_EQ(static_cast<float>(v.column("n" + std::string(1, "xyz"[k]))[i]),
+                      static_cast<float>(points[i].n_P[k]));
+    }
     EXPECT_FLOAT_EQ(static_cast<float>(v.column("time")[i]), static_cast<float>(points[i].t));
     EXPECT_EQ(v.column("profile")[i], points[i].profile);
+    EXPECT_EQ(v.column("ray")[i], points[i].ray);
+    EXPECT_EQ(v.column("part_triangle")[i], points[i].part_triangle);
     EXPECT_FLOAT_EQ(static_cast<float>(v.column("range_mm")[i]),
                     static_cast<float>(toMm(points[i].range)));
     EXPECT_FLOAT_EQ(static_cast<float>(v.column("incidence_deg")[i]),
