@@ -15,6 +15,9 @@ packages=(
   # for tests: OMPL's ompl_benchmark_statistics reads `batch`'s log, GNU parallel runs shards
   ompl-demos parallel
 )
+# Web assets and the schema test's validator come from the npm registry (web/package.json):
+# Debian's node and npm when the machine has no npm of its own.
+command -v npm >/dev/null || packages+=(nodejs npm)
 # CI also builds with the second compiler, and runs the fuzz tests with its libFuzzer (.ci/run).
 if [ "${CI:-}" = "true" ]; then packages+=(clang-14 libclang-rt-14-dev); fi
 
@@ -35,6 +38,15 @@ if ((${#missing[@]})); then
   export DEBIAN_FRONTEND=noninteractive
   "${sudo_cmd[@]}" apt-get update -qq >/dev/null
   "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+# three.js (vendored into replay.html by the build), ajv and yaml (the job schema test), as
+# web/package-lock.json pins them. Without the registry the build goes on: the schema test
+# skips and plan writes no replay.html (it says so).
+if [ ! -f web/node_modules/.package-lock.json ] || [ web/package-lock.json -nt web/node_modules/.package-lock.json ]; then
+  echo "bootstrap: installing web assets (npm ci in web/) …"
+  npm ci --prefix web --no-audit --no-fund --loglevel=error >/dev/null 2>&1 ||
+    echo "bootstrap: warning: npm ci in web/ failed: no replay.html, the schema test skips" >&2
 fi
 
 build_type=${SCANPLAN_BUILD_TYPE:-Release}

@@ -129,6 +129,7 @@ struct Commands {
   std::filesystem::path show_file;
   std::vector<std::string> show_overrides;
   CLI::App* show_cmd = nullptr;
+  CLI::App* schema_cmd = nullptr;
   BatchOptions batch;
   CLI::App* batch_cmd = nullptr;
   std::filesystem::path batch_report_dir;
@@ -266,6 +267,11 @@ void addJobCommand(CLI::App& app, Commands& c) {
                                                    "every default filled in, robot inline");
   cmd->add_option("job", c.show_file, "Job file (YAML)")->required();
   addOverrides(*cmd, c.show_overrides);
+  c.schema_cmd = job_cmd->add_subcommand(
+      "schema",
+      "Print a JSON Schema (draft-07) of the job file on stdout: every key, its type, range "
+      "and choices; unknown keys refused. For editors (VS Code's YAML extension: "
+      "# yaml-language-server: $schema=job.schema.json) and scripts");
 }
 
 void addBatchCommand(CLI::App& app, Commands& c) {
@@ -407,6 +413,7 @@ void addExamples(const Commands& c) {
        {"scanplan map data/jobs/demo.yaml -o out/map --set "
         "map.angle_step_deg=5"}},
       {c.show_cmd, {"scanplan job show data/jobs/demo.yaml --set scan.dt_s=0.2"}},
+      {c.schema_cmd, {"scanplan job schema > job.schema.json"}},
       {c.batch_cmd,
        {"scanplan batch data/sweeps/planners.yaml -o out/sweep",
         "scanplan batch data/sweeps/planners.yaml -o out/shard_2 --shard 2/4 "
@@ -559,6 +566,7 @@ ExitCode dispatch(const Commands& c) {
   if (c.simulate_cmd->parsed()) code = runSimulate(c.simulate);
   if (c.export_cmd->parsed()) code = runExport(c.export_options);
   if (c.show_cmd->parsed()) code = runJobShow(c.show_file, c.show_overrides);
+  if (c.schema_cmd->parsed()) code = runJobSchema();
   if (c.check_cmd->parsed()) code = runCheck(c.check);
   if (c.path_cmd->parsed()) code = runPath(c.path);
   if (c.map_cmd->parsed()) code = runMap(c.map);

@@ -150,6 +150,8 @@ struct RobotCheckOptions {
 ExitCode runRobotCheck(const RobotCheckOptions& options);
 ExitCode runFk(const FkOptions& options);
 ExitCode runIk(const IkOptions& options);
+/// `job schema`: the job file's JSON Schema on stdout.
+ExitCode runJobSchema();
 ExitCode runJobShow(const std::filesystem::path& job_file,
                     const std::vector<std::string>& overrides);
 /// Without a scan path: can the sensor reach a pose above the part as the table turns?

@@ -69,4 +69,9 @@ ExitCode runJobShow(const std::filesystem::path& job_file,
   return ExitCode::kOk;
 }
 
+ExitCode runJobSchema() {
+  std::fputs(jobSchema().c_str(), stdout);
+  return ExitCode::kOk;
+}
+
 }  // namespace scanplan::cli

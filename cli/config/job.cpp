@@ -13,6 +13,7 @@
 #include <spdlog/spdlog.h>
 
 #include "cli/config/detail/describe.h"
+#include "cli/config/detail/schema_out.h"
 #include "cli/config/robot_urdf.h"
 #include "cli/programs/programs.h"
 #include "kinematics/error.h"
@@ -501,6 +502,89 @@ void describe(YamlIn& a, SimulationSpec& s) { describeSimulation(a, s); }
 void describe(YamlOut& a, SimulationSpec& s) { describeSimulation(a, s); }
 void describe(YamlOut& a, PlannerSpec& s) { describePlanner(a, s); }
 void describe(YamlOut& a, MapSpec& s) { describeMap(a, s); }
+
+// The job's JSON Schema (jobSchema): the same describe() functions, written by SchemaOut.
+template <>
+std::vector<ShapeSpec> schemaVariants<ShapeSpec>() {
+  std::vector<ShapeSpec> out;
+  for (const std::string& type : kShapeTypes) {
+    ShapeSpec s;
+    s.type = type;
+    out.push_back(s);
+    if (type == "cylinder" || type == "capsule") {
+      s.by_end_points = true;
+      out.push_back(s);
+    }
+  }
+  return out;
+}
+
+template <>
+std::vector<PathElementSpec> schemaVariants<PathElementSpec>() {
+  std::vector<PathElementSpec> out;
+  for (const std::string& type : kPathTypes) {
+    PathElementSpec s;
+    s.type = type;
+    out.push_back(s);
+  }
+  return out;
+}
+
+template <>
+std::vector<ObstacleSpec> schemaVariants<ObstacleSpec>() {
+  std::vector<ObstacleSpec> out;
+  for (const ShapeSpec& shape : schemaVariants<ShapeSpec>()) {
+    ObstacleSpec s;
+    s.shape = shape;
+    out.push_back(s);
+  }
+  return out;
+}
+
+void describe(SchemaOut& a, TableSpec& s) { describeTable(a, s); }
+void describe(SchemaOut& a, PartSpec& s) { describePart(a, s); }
+void describe(SchemaOut& a, ScannerSpec& s) { describeScanner(a, s); }
+void describe(SchemaOut& a, ObstacleSpec& s) { describeObstacle(a, s); }
+void describe(SchemaOut& a, RampSpec& s) { describeRamp(a, s); }
+void describe(SchemaOut& a, LengthRampSpec& s) { describeLengthRamp(a, s); }
+void describe(SchemaOut& a, PairRuleSpec& s) { describePairRule(a, s); }
+void describe(SchemaOut& a, ClearanceSpec& s) { describeClearance(a, s); }
+void describe(SchemaOut& a, ConstraintsSpec& s) { describeConstraints(a, s); }
+void describe(SchemaOut& a, OpticsSpec& s) { describeOptics(a, s); }
+void describe(SchemaOut& a, WaypointSpec& s) { describeWaypoint(a, s); }
+void describe(SchemaOut& a, PathElementSpec& s) { describePathElement(a, s); }
+void describe(SchemaOut& a, AutoSpec& s) { describeAuto(a, s); }
+void describe(SchemaOut& a, ScanSpec& s) { describeScan(a, s); }
+void describe(SchemaOut& a, MapSpec& s) { describeMap(a, s); }
+void describe(SchemaOut& a, RaySpec& s) { describeRay(a, s); }
+void describe(SchemaOut& a, DpSpec& s) { describeDp(a, s); }
+void describe(SchemaOut& a, OmplSpec& s) { describeOmpl(a, s); }
+void describe(SchemaOut& a, RefineSpec& s) { describeRefine(a, s); }
+void describe(SchemaOut& a, PlannerSpec& s) { describePlanner(a, s); }
+void describe(SchemaOut& a, TriggerSpec& s) { describeTrigger(a, s); }
+void describe(SchemaOut& a, OutputsSpec& s) { describeOutputs(a, s); }
+void describe(SchemaOut& a, NoiseSpec& s) { describeNoise(a, s); }
+void describe(SchemaOut& a, ValidationSpec& s) { describeValidation(a, s); }
+void describe(SchemaOut& a, SimulationSpec& s) { describeSimulation(a, s); }
+void describe(SchemaOut& a, JobSpec& s) { describeJob(a, s); }
+
+std::string jobSchema() {
+  SchemaOut::Json schema = {
+      {"$schema", "http://json-schema.org/draft-07/schema#"},
+      {"$id", "https://scanplan.invalid/job.schema.json"},
+      {"title", "scanplan job file"},
+      {"description",
+       "A scanplan job: robot, table, part, scanner, constraints, scan, map, planner, "
+       "validation, simulation, outputs. Every key is documented in README.md (Job file); "
+       "scanplan job show prints the defaults."}};
+  const JobSpec defaults;
+  schema.update(SchemaOut::ofAll(defaults));
+  schema["properties"]["robot"] = {
+      {"description", "a robot file (.yaml, or .urdf with base_link and tip_link) relative to this "
+                      "file, or an inline robot mapping (README.md: Robot file)"},
+      {"type", {"string", "object"}}};
+  return schema.dump(2) + "\n";
+}
 
 namespace {
 

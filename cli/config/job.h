@@ -297,6 +297,10 @@ struct JobSpec {
 /// (e.g. "planner.ray.horizon=20", "scan.paths[0].height_mm=60") replaces or adds that value
 /// before validation, as if the file said so; errors in it name the override.
 JobSpec loadJob(const std::filesystem::path& file, const std::vector<std::string>& overrides = {});
+/// A JSON Schema (draft-07) of the job file: every key, its type, range and choices, and which
+/// keys are required; unknown keys are refused (additionalProperties: false). For editors (VS
+/// Code's YAML extension) and scripts; `scanplan job schema` prints it.
+std::string jobSchema();
 /// The fully resolved job as YAML (robot inline, paths absolute, every default present).
 std::string jobToYaml(const JobSpec& job);
 /// A stable identity of the job's content: a hash of the resolved job with file paths as
