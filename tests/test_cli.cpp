@@ -594,7 +594,7 @@ TEST_F(Cli, HelpTextsSayWhatTheCommandsAccept) {
   for (const std::string command : {"validate", "simulate", "export"}) {
     run = scanplan({command, "--help"});
     ASSERT_EQ(run.exit_code, 0) << describe(run);
-    EXPECT_TRUE(contains(run.out, "trajectory CSV") && contains(run.out, "V+ program"))
+    EXPECT_TRUE(contains(run.out, "trajectory CSV") && contains(run.out, "scan.v2, .src, .mod, .script"))
         << command << " --help\n"
         << run.out;
   }
