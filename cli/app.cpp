@@ -19,6 +19,7 @@
 
 #include "cli/batch/batch.h"
 #include "cli/commands/commands.h"
+#include "cli/config/text.h"
 #include "kinematics/error.h"
 #include "planner/planner.h"
 
@@ -201,6 +202,9 @@ void addPlanCommand(CLI::App& app, Commands& c) {
                   "another face it rests on, for the area that faces the table; its files go "
                   "to OUT/setup2, the combined coverage into the summary and report.json")
       ->check(CLI::Range(1, 2));
+  cmd->add_flag("--json", plan.json,
+                "Print the result as one JSON document on stdout instead of the text summary: "
+                "report.json's content with out_dir, exit_code and the summary's lines");
   addOverrides(*cmd, plan.overrides);
 }
 
@@ -474,24 +478,70 @@ void addCommands(CLI::App& app, Commands& c) {
 
 // Parses the command line; on a usage error (or --help, --version) prints it
 // and returns the exit code.
+// The subcommands of `app`, by name.
+std::vector<std::string> subcommandNames(CLI::App& app) {
+  std::vector<std::string> names;
+  for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+    names.push_back(sub->get_name());
+  }
+  return names;
+}
+
+// The long options ("--planner") of `app` and, for a subcommand, of the app above it.
+std::vector<std::string> optionNames(CLI::App& app) {
+  std::vector<std::string> names;
+  for (CLI::App* a = &app; a != nullptr; a = a->get_parent()) {
+    for (const CLI::Option* o : a->get_options()) {
+      for (const std::string& n : o->get_lnames()) names.push_back("--" + n);
+    }
+  }
+  return names;
+}
+
+// A usage error made helpful: an unknown command or option names what was meant ("did you
+// mean 'plan'?") and what there is. Empty when the error is of another kind.
+std::string usageHint(CLI::App& app, int argc, char** argv) {
+  CLI::App* at = &app;  // the deepest command the arguments name
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg.rfind("-", 0) == 0) {
+      const std::string name = arg.substr(0, arg.find('='));
+      const std::vector<std::string> options = optionNames(*at);
+      if (name.rfind("--", 0) != 0 ||
+          std::find(options.begin(), options.end(), name) != options.end()) {
+        continue;
+      }
+      const std::string near = suggestKey(name, options);
+      return fmt::format("unknown option '{}' for '{}'{}", name, at->get_name(),
+                         near.empty() ? "" : "; did you mean '" + near + "'?");
+    }
+    const auto named = at->get_subcommands([&](CLI::App* sub) { return sub->check_name(arg); });
+    if (!named.empty()) {
+      at = named.front();
+      continue;
+    }
+    const std::vector<std::string> commands = subcommandNames(*at);
+    if (commands.empty() || at->get_subcommands([](CLI::App* sub) { return sub->parsed(); }).size())
+      continue;  // a positional argument
+    const std::string near = suggestKey(arg, commands);
+    const std::string where = at == &app ? "command" : at->get_name() + " command";
+    return fmt::format("unknown {} '{}'{} (expected one of: {})", where, arg,
+                       near.empty() ? "" : "; did you mean '" + near + "'?",
+                       fmt::join(commands, ", "));
+  }
+  return "";
+}
+
 std::optional<int> parseArguments(CLI::App& app, int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
-    std::string message = e.what();
-    const auto known =
-        app.get_subcommands([&](CLI::App* sub) { return argc > 1 && sub->check_name(argv[1]); });
-    if (argc > 1 && argv[1][0] != '-' && known.empty()) {
-      message = std::string("unknown command '") + argv[1] +
-                "'; expected one of: plan, batch, validate, simulate, export, "
-                "path, map, check, job, fk, "
-                "ik, robot";
-    }
+    const std::string hint = usageHint(app, argc, argv);
     std::fprintf(stderr,
                  "scanplan: error: %s\nRun 'scanplan --help' (or 'scanplan "
                  "COMMAND --help') for usage.\n",
-                 message.c_str());
+                 (hint.empty() ? std::string(e.what()) : hint).c_str());
     return static_cast<int>(ExitCode::kUsage);
   }
   return std::nullopt;
@@ -554,7 +604,7 @@ void requireInputs(const Commands& c) {
 // for validate without --json, of the verdict the exit code gives): --quiet
 // drops it.
 bool printsSummaryOnly(const Commands& c) {
-  return c.plan_cmd->parsed() || c.path_cmd->parsed() || c.map_cmd->parsed() ||
+  return (c.plan_cmd->parsed() && !c.plan.json) || c.path_cmd->parsed() || c.map_cmd->parsed() ||
          c.simulate_cmd->parsed() || c.export_cmd->parsed() || c.batch_cmd->parsed() ||
          c.robot_import_cmd->parsed() || (c.validate_cmd->parsed() && !c.validate.json);
 }

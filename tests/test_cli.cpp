@@ -16,6 +16,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "cli/commands/commands.h"
 #include "cli/config/job.h"
 #include "cli/io/output.h"
@@ -201,6 +203,51 @@ TEST_F(Cli, HelpExamplesNameBundledFilesAndRun) {
     EXPECT_GE(examples, 1) << command.front();
   }
   EXPECT_EQ(ran, 6);
+}
+
+// A mistyped command or option names what was meant; one that is nothing like any names what
+// there is.
+TEST_F(Cli, MistypedCommandsAndOptionsSayWhatWasMeant) {
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"plna", kDemoJob}, "unknown command 'plna'; did you mean 'plan'?"},
+      {{"job", "shwo", kDemoJob}, "unknown job command 'shwo'; did you mean 'show'?"},
+      {{"robot", "chek", kViper}, "unknown robot command 'chek'; did you mean 'check'?"},
+      {{"plan", kDemoJob, "-o", "x", "--plannr", "dp"},
+       "unknown option '--plannr' for 'plan'; did you mean '--planner'?"},
+      {{"validate", kDemoJob, "-t", "x.csv", "--jsn"},
+       "unknown option '--jsn' for 'validate'; did you mean '--json'?"},
+      {{"frobnicate"}, "unknown command 'frobnicate' (expected one of: plan, validate"},
+  };
+  for (const auto& [args, message] : cases) {
+    const Result run = scanplan(args);
+    EXPECT_EQ(run.exit_code, 2) << describe(run);
+    EXPECT_TRUE(contains(run.err, message)) << run.err;
+    EXPECT_FALSE(contains(run.err, "did you mean") && contains(message, "frobnicate")) << run.err;
+  }
+}
+
+// plan --json: one JSON document on stdout, report.json's content with the output folder, the
+// exit code and the summary's lines; --quiet does not silence it.
+TEST_F(Cli, PlanJsonPrintsOneDocumentWithTheReport) {
+  const fs::path out = dir_ / "json";
+  std::vector<std::string> args{"plan", kDemoJob, "-o", out.string(), "--json", "--quiet"};
+  for (const std::string& o : scanplan::test::kLightDemo) {
+    args.push_back("--set");
+    args.push_back(o);
+  }
+  const Result run = scanplan(args);
+  ASSERT_EQ(run.exit_code, 0) << describe(run);
+  const auto doc = nlohmann::json::parse(run.out, nullptr, false);
+  ASSERT_FALSE(doc.is_discarded()) << run.out.substr(0, 400);
+  EXPECT_EQ(doc["exit_code"], 0);
+  EXPECT_EQ(doc["out_dir"], out.string());
+  ASSERT_TRUE(doc["summary"].is_array());
+  EXPECT_GT(doc["summary"].size(), 5u);
+  const auto report = nlohmann::json::parse(readFile(out / "report.json"));
+  for (const auto& [key, value] : report.items()) {
+    if (key == "times_s") continue;  // the report's own timing
+    EXPECT_EQ(doc[key], value) << key;
+  }
 }
 
 TEST_F(Cli, UsageErrorsExitTwo) {

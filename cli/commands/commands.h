@@ -49,6 +49,7 @@ struct PlanOptions {
   bool compare = false;                ///< --compare: run every planner, draw every path
   bool refine = false;                 ///< --refine: NLopt refinement whatever the job says
   int setups = 1;                      ///< --setups 2: a second program, the part turned over
+  bool json = false;                   ///< --json: the result as one JSON document on stdout
 };
 
 /// A progress line on stderr, only on a terminal (scripts and CI logs stay clean). Callable

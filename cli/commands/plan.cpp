@@ -8,6 +8,8 @@
 #include <numbers>
 #include <optional>
 
+#include <sstream>
+
 #include <fmt/format.h>
 
 #include "cli/commands/commands.h"
@@ -233,6 +235,27 @@ const std::vector<std::string> kPlanOutputs{
     "cloud.ply",       "coverage.ply", "cloud.png",      "uncovered.ply",
     "certificate.png", "setup2"};
 
+// The command's result on stdout: the text summary, or with --json one JSON document (the
+// report, the output folder and the summary's lines).
+ExitCode printPlanResult(const PlanOptions& options,
+                         const std::string& summary,
+                         Json report,
+                         ExitCode code) {
+  if (!options.json) {
+    std::fputs(summary.c_str(), stdout);
+    return code;
+  }
+  Json lines = Json::array();
+  std::istringstream in(summary);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  Json doc = {{"out_dir", options.out_dir.string()},
+              {"exit_code", static_cast<int>(code)},
+              {"summary", lines}};
+  if (report.is_object()) doc.update(report);
+  std::fputs(jsonDocument(doc).c_str(), stdout);
+  return code;
+}
+
 ExitCode runPlan(const PlanOptions& options) {
   const auto start = Clock::now();
   const JobSpec job = loadJob(options.job_file, options.overrides);
@@ -247,8 +270,7 @@ ExitCode runPlan(const PlanOptions& options) {
     summary += reachCheck(job, cell, part);
     summary += fmt::format("wrote      {}\n", (options.out_dir / "job.yaml").string());
     summary += "note       the job has no scan path (scan.paths): nothing to plan\n";
-    std::fputs(summary.c_str(), stdout);
-    return ExitCode::kOk;
+    return printPlanResult(options, summary, {{"status", "no_scan_path"}}, ExitCode::kOk);
   }
   warnSlowLinkMeshes(job, cell);
   const pipeline::ScanProblem problem = toProblem(job, cell, part.mesh);
@@ -260,9 +282,12 @@ ExitCode runPlan(const PlanOptions& options) {
   summary += linkMeshSummary(*prepared.scene) + mapSummary(prepared.map, prepared.map_seconds);
   pipeline::StageTimes times = plan.times;
   Json setups = Json::object();
+  Json report;
   const auto finish = [&] {
     times.total = since(start);
-    writeFileAtomically(out / "report.json", planReportJson(job, cell, plan, times, setups));
+    const std::string text = planReportJson(job, cell, plan, times, setups);
+    writeFileAtomically(out / "report.json", text);
+    if (options.json) report = Json::parse(text);
     stage.commit();
   };
   const std::string method = plan.choice.chosen.method;
@@ -271,8 +296,7 @@ ExitCode runPlan(const PlanOptions& options) {
     summary += fmt::format("plan       NO PATH ({}): {}\n", method, plan.reason);
     summary += fmt::format("wrote      {}: job.yaml, report.json, {}\n", options.out_dir.string(),
                            kMapFilesNote);
-    std::fputs(summary.c_str(), stdout);
-    return ExitCode::kNoPlan;
+    return printPlanResult(options, summary, report, ExitCode::kNoPlan);
   }
   if (plan.status == pipeline::ScanStatus::kInvalidTrajectory) {
     finish();
@@ -282,8 +306,7 @@ ExitCode runPlan(const PlanOptions& options) {
         "wrote      {}: job.yaml, trajectory_invalid.csv, report.json, configmap_path.png/.svg, "
         "{}\n",
         options.out_dir.string(), kMapFilesNote);
-    std::fputs(summary.c_str(), stdout);
-    return ExitCode::kNoPlan;
+    return printPlanResult(options, summary, report, ExitCode::kNoPlan);
   }
   summary += planned;
   bool all_planned = true;
@@ -307,8 +330,7 @@ ExitCode runPlan(const PlanOptions& options) {
       "{:.1f}, simulation {:.1f})\n",
       since(start), times.path, times.map, times.plan, times.trajectory, times.validation,
       times.simulation);
-  std::fputs(summary.c_str(), stdout);
-  return all_planned ? ExitCode::kOk : ExitCode::kNoPlan;
+  return printPlanResult(options, summary, report, all_planned ? ExitCode::kOk : ExitCode::kNoPlan);
 }
 
 }  // namespace scanplan::cli
