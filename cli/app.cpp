@@ -19,6 +19,7 @@
 
 #include "cli/batch/batch.h"
 #include "cli/commands/commands.h"
+#include "cli/completion.h"
 #include "cli/config/text.h"
 #include "kinematics/error.h"
 #include "planner/planner.h"
@@ -131,6 +132,8 @@ struct Commands {
   std::vector<std::string> show_overrides;
   CLI::App* show_cmd = nullptr;
   CLI::App* schema_cmd = nullptr;
+  std::string completion_shell;
+  CLI::App* completion_cmd = nullptr;
   BatchOptions batch;
   CLI::App* batch_cmd = nullptr;
   std::filesystem::path batch_report_dir;
@@ -418,6 +421,9 @@ void addExamples(const Commands& c) {
         "map.angle_step_deg=5"}},
       {c.show_cmd, {"scanplan job show data/jobs/demo.yaml --set scan.dt_s=0.2"}},
       {c.schema_cmd, {"scanplan job schema > job.schema.json"}},
+      {c.completion_cmd,
+       {"source <(scanplan completion bash)",
+        "scanplan completion bash > ~/.local/share/bash-completion/completions/scanplan"}},
       {c.batch_cmd,
        {"scanplan batch data/sweeps/planners.yaml -o out/sweep",
         "scanplan batch data/sweeps/planners.yaml -o out/shard_2 --shard 2/4 "
@@ -473,11 +479,15 @@ void addCommands(CLI::App& app, Commands& c) {
   addFkCommand(app, c);
   addIkCommand(app, c);
   addRobotCommand(app, c);
+  c.completion_cmd = app.add_subcommand(
+      "completion",
+      "Print a shell completion script for bash or zsh: source <(scanplan completion bash)");
+  c.completion_cmd->add_option("shell", c.completion_shell, "bash or zsh")
+      ->required()
+      ->check(CLI::IsMember({"bash", "zsh"}));
   addExamples(c);
 }
 
-// Parses the command line; on a usage error (or --help, --version) prints it
-// and returns the exit code.
 // The subcommands of `app`, by name.
 std::vector<std::string> subcommandNames(CLI::App& app) {
   std::vector<std::string> names;
@@ -532,6 +542,8 @@ std::string usageHint(CLI::App& app, int argc, char** argv) {
   return "";
 }
 
+// Parses the command line; on a usage error (or --help, --version) prints it
+// and returns the exit code.
 std::optional<int> parseArguments(CLI::App& app, int argc, char** argv) {
   try {
     app.parse(argc, argv);
@@ -645,6 +657,10 @@ int run(int argc, char** argv) {
   addCommands(app, commands);
   if (const auto code = parseArguments(app, argc, argv)) return *code;
   if (!checkChoices(commands)) return static_cast<int>(ExitCode::kUsage);
+  if (commands.completion_cmd->parsed()) {
+    std::fputs(completionScript(app, commands.completion_shell).c_str(), stdout);
+    return static_cast<int>(ExitCode::kOk);
+  }
 
   setUpLogging(commands.quiet ? -1 : commands.verbose);
   const auto start = std::chrono::steady_clock::now();

@@ -205,6 +205,52 @@ TEST_F(Cli, HelpExamplesNameBundledFilesAndRun) {
   EXPECT_EQ(ran, 6);
 }
 
+// `completion bash` completes commands, subcommands, options and file names, run in a real bash
+// through its completion function (zsh reuses it through bashcompinit; tested where zsh is).
+TEST_F(Cli, CompletionScriptCompletesCommandsOptionsAndFiles) {
+  const Result script = scanplan({"completion", "bash"});
+  ASSERT_EQ(script.exit_code, 0) << describe(script);
+  writeFile(dir_ / "scanplan.bash", script.out);
+  fs::create_directories(dir_ / "jobs");
+  writeFile(dir_ / "jobs/demo.yaml", "x");
+  const std::string harness = R"(cd ")" + dir_.string() + R"("
+source scanplan.bash
+t() { COMP_WORDS=("$@"); COMP_CWORD=$((${#COMP_WORDS[@]} - 1)); COMPREPLY=(); _scanplan;
+      echo "${COMPREPLY[*]}"; }
+t scanplan pl
+t scanplan job s
+t scanplan plan jobs/demo.yaml --pla
+t scanplan plan jobs/demo.yaml -o out --planner dp --js
+t scanplan robot ""
+t scanplan plan jobs/de
+t scanplan plan -o job
+complete -p scanplan
+)";
+  writeFile(dir_ / "harness.sh", harness);
+  std::string out;
+  {
+    const std::unique_ptr<FILE, int (*)(FILE*)> pipe(
+        popen(("bash '" + (dir_ / "harness.sh").string() + "' 2>&1").c_str(), "r"), pclose);
+    ASSERT_TRUE(pipe);
+    std::array<char, 4096> buffer{};
+    while (std::fgets(buffer.data(), buffer.size(), pipe.get()) != nullptr) out += buffer.data();
+  }
+  const std::vector<std::string> want = {
+      "plan", "show schema", "--planner", "--json", "import check", "jobs/demo.yaml", "jobs",
+      "complete -o filenames -F _scanplan scanplan"};
+  std::istringstream lines(out);
+  std::size_t i = 0;
+  for (std::string line; std::getline(lines, line); ++i) {
+    ASSERT_LT(i, want.size()) << out;
+    EXPECT_EQ(line, want[i]) << out;
+  }
+  EXPECT_EQ(i, want.size()) << out;
+  const Result zsh = scanplan({"completion", "zsh"});
+  EXPECT_EQ(zsh.exit_code, 0);
+  EXPECT_TRUE(contains(zsh.out, "bashcompinit") && contains(zsh.out, "_scanplan()"));
+  EXPECT_EQ(scanplan({"completion", "fish"}).exit_code, 2);
+}
+
 // A mistyped command or option names what was meant; one that is nothing like any names what
 // there is.
 TEST_F(Cli, MistypedCommandsAndOptionsSayWhatWasMeant) {

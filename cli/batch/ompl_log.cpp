@@ -44,7 +44,16 @@ std::string methodOf(const BatchRow& r) {
   return v.empty() ? std::string("none") : v;
 }
 
-// The rows grouped by planner: its method and the non-seed values it was given.
+// Whether a planner of `method` reads `key`: another planner's settings (planner.ray.* on an
+// OMPL run) do not label it.
+bool usedBy(const std::string& method, const std::string& key) {
+  for (const char* planner : {"ray", "dp", "ompl"}) {
+    if (key.rfind(std::string("planner.") + planner + ".", 0) == 0) return method == planner;
+  }
+  return true;
+}
+
+// The rows grouped by planner: its method and the non-seed values it was given (those it uses).
 struct PlannerGroups {
   std::vector<std::string> order;  // the planner names, in the order of their first row
   std::map<std::string, std::vector<const BatchRow*>> planners;
@@ -59,7 +68,7 @@ PlannerGroups groupByPlanner(const std::vector<const BatchRow*>& rows,
     std::vector<std::string> common{"planner.method = " + methodOf(*r)};
     for (const std::string& k : keys) {
       const std::string v = paramValue(*r, k);
-      if (isSeedKey(k) || k == "planner.method" || v.empty()) continue;
+      if (isSeedKey(k) || k == "planner.method" || v.empty() || !usedBy(methodOf(*r), k)) continue;
       name += " " + k + "=" + v;
       common.push_back(k + " = " + v);
     }
