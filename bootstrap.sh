@@ -19,7 +19,8 @@ packages=(
 # Debian's node and npm when the machine has no npm of its own.
 command -v npm >/dev/null || packages+=(nodejs npm)
 # CI also builds with the second compiler, and runs the fuzz tests with its libFuzzer (.ci/run).
-if [ "${CI:-}" = "true" ]; then packages+=(clang-14 libclang-rt-14-dev); fi
+# CI also runs the replay.html browser test in Debian's chromium (skipped where it is absent).
+if [ "${CI:-}" = "true" ]; then packages+=(clang-14 libclang-rt-14-dev chromium); fi
 
 missing=()
 for p in "${packages[@]}"; do

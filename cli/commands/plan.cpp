@@ -14,6 +14,7 @@
 
 #include "cli/commands/commands.h"
 #include "cli/io/output.h"
+#include "cli/io/replay_html.h"
 #include "cli/io/program_files.h"
 #include "cli/io/simulation_files.h"
 #include "cli/plot/image_io.h"
@@ -127,6 +128,24 @@ void writeChoiceFigure(const std::filesystem::path& out,
 // The outputs of a valid plan: trajectory.csv, the programs, the simulation's and the
 // certificate's files; returns their summary lines (`second`: of the second setup, which does
 // not suggest another).
+// OUT/replay.html, and its summary line.
+std::string writeReplay(const std::filesystem::path& out,
+                        const JobSpec& job,
+                        const pipeline::ScanProblem& problem,
+                        const pipeline::ScanPlan& plan) {
+  const pipeline::ReplayScene scene = pipeline::replayScene(problem.cell, problem.part, plan);
+  const std::optional<std::string> html = replayHtml(scene, job.name);
+  if (!html) {
+    return "replay     not written: three.js is not installed (./bootstrap.sh installs it from "
+           "npm)\n";
+  }
+  writeFileAtomically(out / "replay.html", *html);
+  return fmt::format(
+      "replay     replay.html: the cell over {} frames of the motion, {} of the cloud's {} "
+      "points; open it in a browser\n",
+      scene.frames.size(), scene.cloud.size(), scene.cloud_total);
+}
+
 std::string writePlannedOutputs(const std::filesystem::path& out,
                                 const JobSpec& job,
                                 const pipeline::ScanProblem& problem,
@@ -142,9 +161,11 @@ std::string writePlannedOutputs(const std::filesystem::path& out,
     writeCertificateOutputs(out, problem.part, plan.simulation->sampling, *plan.certificate,
                             settings);
   }
+  const std::string replay = writeReplay(out, job, problem, plan);
   std::string summary = choiceSummary(plan);
   if (plan.validation) summary += validationSummary(*plan.validation);
   summary += programs;
+  summary += replay;
   if (plan.simulation) summary += simulationSummary(*plan.simulation);
   if (plan.certificate) summary += certificateSummary(*plan.certificate, !second);
   return summary;
@@ -233,7 +254,7 @@ const std::vector<std::string> kPlanOutputs{
     "job.yaml",        "report.json",  "trajectory.csv", "trajectory_invalid.csv",
     "programs",        "path.csv",     "path.png",       "configmap*",
     "cloud.ply",       "coverage.ply", "cloud.png",      "uncovered.ply",
-    "certificate.png", "setup2"};
+    "certificate.png", "replay.html",  "setup2"};
 
 // The command's result on stdout: the text summary, or with --json one JSON document (the
 // report, the output folder and the summary's lines).
@@ -322,6 +343,7 @@ ExitCode runPlan(const PlanOptions& options) {
       "{}{}\n",
       options.out_dir.string(),
       std::string(plan.simulation ? "cloud.ply, coverage.ply, cloud.png, " : "") +
+          (std::filesystem::exists(options.out_dir / "replay.html") ? "replay.html, " : "") +
           (plan.certificate ? "uncovered.ply, certificate.png, " : "") +
           (setups.contains("setups") ? "setup2/, " : ""),
       kMapFilesNote);

@@ -1,0 +1,75 @@
+#pragma once
+// What a 3D replay of a plan shows (OUT/replay.html): the cell's bodies as triangle meshes in the
+// frames that carry them, the carriers' poses over time, the growing cloud, the part's coverage
+// and the certificate's uncovered areas, and the closest approach. Geometry and poses only: the
+// viewer draws them.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "kinematics/cell.h"
+#include "kinematics/mesh.h"
+#include "pipeline/plan_scan.h"
+
+namespace scanplan::pipeline {
+
+/// The frames that carry bodies: the robot's links 0 … 6 (X_WB · X_Bk), the scanner's laser
+/// frame S, the table top R; world bodies have none.
+inline constexpr int kReplayScannerFrame = 7;
+inline constexpr int kReplayTableFrame = 8;
+inline constexpr int kReplayFrames = 9;
+inline constexpr int kReplayWorld = -1;
+
+struct ReplayBody {
+  std::string name;  ///< as the collision scene names it (base, link1 …, scanner, table, part)
+  int frame = kReplayWorld;
+  kinematics::TriangleMesh mesh;                     ///< in its frame, m
+  std::vector<std::array<std::uint8_t, 3>> colours;  ///< per triangle; empty: the body's own
+};
+
+struct ReplayFrame {
+  double t = 0.0;  ///< s
+  bool scanning = false;
+  std::array<Eigen::Isometry3d, kReplayFrames> poses;  ///< world frame
+};
+
+struct ReplayScene {
+  std::vector<ReplayBody> bodies;
+  Eigen::Isometry3d X_RP = Eigen::Isometry3d::Identity();  ///< the part frame on the table top
+  std::vector<ReplayFrame> frames;
+  /// The laser fan in the scanner frame: origin and the window's near and far edges (Eq. 5).
+  std::array<Eigen::Vector3d, 5> fan{};
+  /// The cloud (part frame, m), a subsample in time order, with each point's time.
+  std::vector<Eigen::Vector3f> cloud;
+  std::vector<float> cloud_t;
+  std::size_t cloud_total = 0;  ///< points in the whole cloud
+  /// Area samples the certificate leaves uncovered (part frame, m) and their class.
+  std::vector<Eigen::Vector3f> uncovered;
+  std::vector<std::uint8_t> uncovered_class;
+  /// The closest approach of the scanner or a link to the cell, and within the robot.
+  struct Closest {
+    std::string a, b;
+    double t = 0.0, distance = 0.0;  ///< s, m
+  };
+  std::vector<Closest> closest;
+};
+
+struct ReplayOptions {
+  std::size_t max_frames = 2000;    ///< the trajectory subsampled evenly in time to this many
+  std::size_t max_points = 150000;  ///< the cloud's subsample
+  double chord_tolerance = 1e-3;    ///< m, round primitives' tessellation
+};
+
+/// The replay of a planned scan: `plan` must have a trajectory; the cloud, coverage and
+/// certificate when it has them. `part` is the part's mesh (part frame).
+ReplayScene replayScene(const kinematics::CellModel& cell,
+                        const kinematics::TriangleMesh& part,
+                        const ScanPlan& plan,
+                        const ReplayOptions& options = {});
+
+}  // namespace scanplan::pipeline
