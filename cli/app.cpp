@@ -531,8 +531,7 @@ std::string usageHint(CLI::App& app, int argc, char** argv) {
       continue;
     }
     const std::vector<std::string> commands = subcommandNames(*at);
-    if (commands.empty() || at->get_subcommands([](CLI::App* sub) { return sub->parsed(); }).size())
-      continue;  // a positional argument
+    if (commands.empty() || at->get_require_subcommand_min() == 0) continue;  // a positional
     const std::string near = suggestKey(arg, commands);
     const std::string where = at == &app ? "command" : at->get_name() + " command";
     return fmt::format("unknown {} '{}'{} (expected one of: {})", where, arg,
@@ -549,7 +548,10 @@ std::optional<int> parseArguments(CLI::App& app, int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
-    const std::string hint = usageHint(app, argc, argv);
+    // Unknown words (and a missing subcommand) get a hint; a bad value keeps CLI11's message.
+    const bool unknown = dynamic_cast<const CLI::ExtrasError*>(&e) != nullptr ||
+                         dynamic_cast<const CLI::RequiredError*>(&e) != nullptr;
+    const std::string hint = unknown ? usageHint(app, argc, argv) : std::string();
     std::fprintf(stderr,
                  "scanplan: error: %s\nRun 'scanplan --help' (or 'scanplan "
                  "COMMAND --help') for usage.\n",
