@@ -76,7 +76,7 @@ double triangleDensityPerMm2(const kinematics::TriangleMesh& part,
 std::array<std::uint8_t, 3> densityColour(double density_per_mm2,
                                           double max_per_mm2,
                                           bool covered) {
-  if (!covered) return {190, 190, 190};
+  if (!covered) return {220, 70, 40};
   // Viridis at five stops, linear in between.
   static constexpr double kStops[5][3] = {
       {68, 1, 84}, {59, 82, 139}, {33, 145, 140}, {94, 201, 98}, {253, 231, 37}};

@@ -48,8 +48,8 @@ double triangleDensityPerMm2(const kinematics::TriangleMesh& part,
                              const PartCoverage& coverage,
                              std::size_t triangle);
 
-/// The colour scale of coverage.ply: uncovered triangles (fewer than min_points) light grey
-/// (190, 190, 190); covered ones on a viridis ramp from dark violet (68, 1, 84) at density 0
+/// The colour scale of coverage.ply: uncovered triangles (fewer than min_points) red-orange
+/// (220, 70, 40), clear against the ramp and a grey part; covered ones on a viridis ramp from dark violet (68, 1, 84) at density 0
 /// through blue, teal and green to yellow (253, 231, 37) at `max_per_mm2` and above.
 std::array<std::uint8_t, 3> densityColour(double density_per_mm2, double max_per_mm2, bool covered);
 

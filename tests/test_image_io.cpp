@@ -600,3 +600,67 @@ TEST_F(ImageIoFiles, PathFigureHasALineLegendAndDegenerateMapsStillGiveFigures) 
 
 }  // namespace
 }  // namespace scanplan::cli
+
+namespace scanplan::cli {
+namespace {
+
+std::size_t countColour(const RgbImage& image, int y, const Rgb& colour) {
+  std::size_t n = 0;
+  for (int x = 0; x < image.width; ++x) {
+    const Rgb p = image.at(x, y);
+    n += p.r == colour.r && p.g == colour.g && p.b == colour.b ? 1 : 0;
+  }
+  return n;
+}
+
+// The scale bar is as long as the scene's own lengths: a 1 × 1 square seen from the top spans
+// twice the pixels of a bar of 0.5.
+TEST(ScaleBar, IsAsLongAsTheScenesLengthsAndNiceLengthsAreRound) {
+  RenderRequest r;
+  r.width = 400;
+  r.height = 300;
+  r.vertices = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  r.triangles = {{0, 1, 2}, {0, 2, 3}};
+  r.triangle_colours = {Rgb{10, 200, 10}, Rgb{10, 200, 10}};
+  r.scale_bar = 0.5;
+  const RgbImage image = renderScene(r);
+  std::size_t square = 0;
+  for (int x = 0; x < image.width; ++x) {
+    const Rgb p = image.at(x, image.height / 2);
+    square += p.g > 100 && p.r < 60 ? 1 : 0;
+  }
+  const std::size_t bar = countColour(image, image.height - 14, Rgb{0, 0, 0});
+  ASSERT_GT(square, 100u);
+  EXPECT_NEAR(static_cast<double>(bar), 0.5 * static_cast<double>(square), 3.0);
+  EXPECT_EQ(niceLength(0.37), 0.2);
+  EXPECT_EQ(niceLength(0.05), 0.05);
+  EXPECT_EQ(niceLength(0.099), 0.05);
+  EXPECT_NEAR(niceLength(0.0023), 0.002, 1e-15);
+}
+
+// A breakdown bar's segments take their fractions of the bar.
+TEST(BreakdownBarFigure, SegmentsTakeTheirShareOfTheBar) {
+  ViewGrid grid;
+  ViewRow& row = grid.rows.emplace_back();
+  row.title = "t";
+  row.views = {RgbImage::filled(600, 50, Rgb{255, 255, 255})};
+  const std::array<Rgb, 3> colours{Rgb{230, 159, 0}, Rgb{150, 150, 150}, Rgb{0, 114, 178}};
+  const std::array<double, 3> shares{0.1, 0.6, 0.3};
+  BreakdownBar& bar = grid.bars.emplace_back();
+  bar.title = "Why:";
+  for (std::size_t i = 0; i < 3; ++i) bar.segments.push_back({colours[i], shares[i], ""});
+  const RgbImage image = drawViewGrid(grid);
+  // The bar's middle row: the last rows of the image hold the bar (then the padding).
+  const int y = image.height - 10 - 12;
+  std::array<double, 3> px{};
+  double total = 0.0;
+  for (std::size_t i = 0; i < 3; ++i) {
+    px[i] = static_cast<double>(countColour(image, y, colours[i]));
+    total += px[i];
+  }
+  ASSERT_GT(total, 400.0);
+  for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(px[i] / total, shares[i], 0.01) << i;
+}
+
+}  // namespace
+}  // namespace scanplan::cli

@@ -144,7 +144,8 @@ TEST_F(Outputs, TodaysWritersGiveTheReferencesFilesByteForByteOrPixelForPixel) {
                                  << " bytes";
     }
   }
-  EXPECT_EQ(pngs, 6) << "path, configmap, configmap_why, configmap_cylinder, configmap_path, cloud";
+  EXPECT_EQ(pngs, 7)
+      << "path, configmap, configmap_why, configmap_cylinder, configmap_path, cloud, cell";
   EXPECT_EQ(svgs, 3);
   EXPECT_TRUE(today.contains("cloud.ply") && today.contains("configmap.npy"));
 }

@@ -816,7 +816,7 @@ TEST(Coverage, StatisticsOnAHandMadeMesh) {
 
 TEST(Coverage, DensityColourScale) {
   using C = std::array<std::uint8_t, 3>;
-  EXPECT_EQ(scanner::densityColour(3.0, 4.0, false), (C{190, 190, 190}));
+  EXPECT_EQ(scanner::densityColour(3.0, 4.0, false), (C{220, 70, 40}));
   EXPECT_EQ(scanner::densityColour(0.0, 4.0, true), (C{68, 1, 84}));
   EXPECT_EQ(scanner::densityColour(2.0, 4.0, true), (C{33, 145, 140}));
   EXPECT_EQ(scanner::densityColour(4.0, 4.0, true), (C{253, 231, 37}));
@@ -999,8 +999,8 @@ TEST(CoveragePly, LoadsAsThePartMeshWithDensityColours) {
   // Triangle 0 has 4 points on 2 mm² (the scale's top: p95 = 2 /mm²), triangle 1 none.
   EXPECT_EQ(v.column("red")[0], 253);
   EXPECT_EQ(v.column("green")[2], 231);
-  EXPECT_EQ(v.column("red")[3], 190);
-  EXPECT_EQ(v.column("blue")[5], 190);
+  EXPECT_EQ(v.column("red")[3], 220);  // not covered: red-orange (220, 70, 40)
+  EXPECT_EQ(v.column("blue")[5], 40);
   fs::remove_all(dir);
 }
 

@@ -122,6 +122,7 @@ MapRun computeMap(const JobSpec& job,
                   const kinematics::ScanPath& path);
 /// path.csv and path.png into `dir`.
 void writePathOutputs(const std::filesystem::path& dir,
+                      const kinematics::CellModel& cell,
                       const kinematics::TriangleMesh& part,
                       const kinematics::ScanPath& path,
                       const WriteSettings& settings = {});

@@ -124,7 +124,7 @@ ExitCode runPath(const PlanOptions& options) {
   const kinematics::CellModel cell = buildCell(job);
   OutputStage stage(options.out_dir, {"path.csv", "path.png"});
   const PathContext context = buildPath(job, cell);
-  writePathOutputs(stage.dir(), context.part.mesh, context.generated.path);
+  writePathOutputs(stage.dir(), cell, context.part.mesh, context.generated.path);
   stage.commit();
   std::string text = pathSummary(context.window, context.generated);
   if (context.auto_scan) text += autoScanSummary(*context.auto_scan);
@@ -154,11 +154,13 @@ MapRun computeMap(const JobSpec& job,
 }
 
 void writePathOutputs(const std::filesystem::path& dir,
+                      const kinematics::CellModel& cell,
                       const kinematics::TriangleMesh& part,
                       const kinematics::ScanPath& path,
                       const WriteSettings& settings) {
   writeFileAtomically(dir / "path.csv", scanner::pathToCsv(path));
-  writePng(dir / "path.png", pathPicture(part, path), settings.png);
+  writePng(dir / "path.png", pathPicture(part, path, TableTop{cell.table.radius, cell.part.X_RP}),
+           settings.png);
 }
 
 const char* const kMapFilesNote =
@@ -173,7 +175,7 @@ std::string buildAndWriteMaps(const JobSpec& job,
   warnSlowLinkMeshes(job, cell);
   const collision::Scene scene(cell, clearanceConfig(job));
   const MapRun run = computeMap(job, scene, context.generated.path);
-  writePathOutputs(stage.dir(), context.part.mesh, context.generated.path);
+  writePathOutputs(stage.dir(), cell, context.part.mesh, context.generated.path);
   writeMapOutputs(stage.dir(), job, run.map);
   stage.commit();
   return pathSummary(context.window, context.generated) +

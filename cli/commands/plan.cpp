@@ -14,9 +14,10 @@
 
 #include "cli/commands/commands.h"
 #include "cli/io/output.h"
-#include "cli/io/replay_html.h"
 #include "cli/io/program_files.h"
+#include "cli/io/replay_html.h"
 #include "cli/io/simulation_files.h"
+#include "cli/plot/cell_figure.h"
 #include "cli/plot/image_io.h"
 #include "cli/report/plan_report.h"
 #include "cli/report/plan_summary.h"
@@ -128,21 +129,38 @@ void writeChoiceFigure(const std::filesystem::path& out,
 // The outputs of a valid plan: trajectory.csv, the programs, the simulation's and the
 // certificate's files; returns their summary lines (`second`: of the second setup, which does
 // not suggest another).
-// OUT/replay.html, and its summary line.
+// cell.png: the cell at the closest approach to the cell (else half-way), as the replay shows it.
+RgbImage cellFigure(const pipeline::ReplayScene& scene, const std::string& job_name) {
+  std::size_t frame = scene.frames.size() / 2;
+  std::string what = "half-way";
+  if (!scene.closest.empty()) {
+    const double t = scene.closest.front().t;
+    for (std::size_t i = 0; i < scene.frames.size(); ++i) {
+      if (std::abs(scene.frames[i].t - t) < std::abs(scene.frames[frame].t - t)) frame = i;
+    }
+    what = fmt::format("closest approach, {} - {} {:.1f} mm", scene.closest.front().a,
+                       scene.closest.front().b, 1000.0 * scene.closest.front().distance);
+  }
+  return cellPicture(scene, frame, fmt::format("Cell of job {} ({})", job_name, what));
+}
+
+// OUT/replay.html and cell.png, and the summary line.
 std::string writeReplay(const std::filesystem::path& out,
                         const JobSpec& job,
                         const pipeline::ScanProblem& problem,
-                        const pipeline::ScanPlan& plan) {
+                        const pipeline::ScanPlan& plan,
+                        const WriteSettings& settings) {
   const pipeline::ReplayScene scene = pipeline::replayScene(problem.cell, problem.part, plan);
+  writePng(out / "cell.png", cellFigure(scene, job.name), settings.png);
   const std::optional<std::string> html = replayHtml(scene, job.name);
   if (!html) {
-    return "replay     not written: three.js is not installed (./bootstrap.sh installs it from "
-           "npm)\n";
+    return "replay     cell.png; replay.html not written: three.js is not installed "
+           "(./bootstrap.sh installs it from npm)\n";
   }
   writeFileAtomically(out / "replay.html", *html);
   return fmt::format(
       "replay     replay.html: the cell over {} frames of the motion, {} of the cloud's {} "
-      "points; open it in a browser\n",
+      "points, open it in a browser; cell.png: the cell at the closest approach\n",
       scene.frames.size(), scene.cloud.size(), scene.cloud_total);
 }
 
@@ -161,7 +179,7 @@ std::string writePlannedOutputs(const std::filesystem::path& out,
     writeCertificateOutputs(out, problem.part, plan.simulation->sampling, *plan.certificate,
                             settings);
   }
-  const std::string replay = writeReplay(out, job, problem, plan);
+  const std::string replay = writeReplay(out, job, problem, plan, settings);
   std::string summary = choiceSummary(plan);
   if (plan.validation) summary += validationSummary(*plan.validation);
   summary += programs;
@@ -235,7 +253,7 @@ std::string writePlanOutputs(const std::filesystem::path& dir,
                              const pipeline::ScanPlan& plan,
                              const WriteSettings& settings) {
   const pipeline::PreparedScan& prepared = *plan.prepared;
-  writePathOutputs(dir, problem.part, prepared.path.path, settings);
+  writePathOutputs(dir, problem.cell, problem.part, prepared.path.path, settings);
   writeMapOutputs(dir, job, prepared.map, settings);
   if (!plan.trajectory) return {};
   writeChoiceFigure(dir, plan, settings);
@@ -254,7 +272,7 @@ const std::vector<std::string> kPlanOutputs{
     "job.yaml",        "report.json",  "trajectory.csv", "trajectory_invalid.csv",
     "programs",        "path.csv",     "path.png",       "configmap*",
     "cloud.ply",       "coverage.ply", "cloud.png",      "uncovered.ply",
-    "certificate.png", "replay.html",  "setup2"};
+    "certificate.png", "replay.html",  "cell.png",       "setup2"};
 
 // The command's result on stdout: the text summary, or with --json one JSON document (the
 // report, the output folder and the summary's lines).
@@ -344,7 +362,7 @@ ExitCode runPlan(const PlanOptions& options) {
       options.out_dir.string(),
       std::string(plan.simulation ? "cloud.ply, coverage.ply, cloud.png, " : "") +
           (std::filesystem::exists(options.out_dir / "replay.html") ? "replay.html, " : "") +
-          (plan.certificate ? "uncovered.ply, certificate.png, " : "") +
+          "cell.png, " + (plan.certificate ? "uncovered.ply, certificate.png, " : "") +
           (setups.contains("setups") ? "setup2/, " : ""),
       kMapFilesNote);
   summary += fmt::format(

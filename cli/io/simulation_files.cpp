@@ -196,6 +196,18 @@ void writeCertificateOutputs(const std::filesystem::path& dir,
   for (std::size_t c = 0; c < pipeline::kCoverageClasses; ++c)
     grid.legend.push_back({kClassColours[c], fmt::format("{} {:.1f}%", kClassLabels[c],
                                                          100.0 * certificate.fraction[c])});
+  // Why the area is not covered: the classes other than covered, as shares of what is not.
+  double uncovered = 0.0;
+  for (std::size_t c = 1; c < pipeline::kCoverageClasses; ++c) uncovered += certificate.fraction[c];
+  if (uncovered > 0.0) {
+    BreakdownBar& bar = grid.bars.emplace_back();
+    bar.title = fmt::format("Why {:.1f}% of the area is not covered:", 100.0 * uncovered);
+    for (std::size_t c = 1; c < pipeline::kCoverageClasses; ++c) {
+      const double share = certificate.fraction[c] / uncovered;
+      bar.segments.push_back(
+          {kClassColours[c], share, fmt::format("{} {:.0f}%", kClassLabels[c], 100.0 * share)});
+    }
+  }
   writePng(dir / "certificate.png", drawViewGrid(grid), settings.png);
 }
 

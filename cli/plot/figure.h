@@ -107,15 +107,28 @@ struct ViewRow {
   std::string scale_from, scale_to;
 };
 
+/// A stacked bar of shares (e.g. why the area is not covered): each segment's width its
+/// fraction of the bar, its label inside when it fits.
+struct BreakdownBar {
+  std::string title;
+  struct Segment {
+    Rgb colour;
+    double fraction = 0.0;  ///< of the whole bar, [0, 1]
+    std::string label;
+  };
+  std::vector<Segment> segments;
+};
+
 /// Rows of views with a caption over each view and legend lines under the whole.
 struct ViewGrid {
   std::vector<std::string> captions;  ///< one per column
   std::vector<ViewRow> rows;
   std::vector<LegendEntry> legend;  ///< under the views, left to right
+  std::vector<BreakdownBar> bars;   ///< under the legend, one line each
 };
 
 /// The grid drawn into a white image: for each row its title (and colour scale), the view
-/// captions, the views pixel for pixel; the legend last. Deterministic.
+/// captions, the views pixel for pixel; the legend, then the bars. Deterministic.
 RgbImage drawViewGrid(const ViewGrid& grid);
 
 }  // namespace scanplan::cli

@@ -521,6 +521,21 @@ void drawMarkers(const RenderRequest& request,
   }
 }
 
+// The scale bar: `length` in the points' unit at the fit's scale, 12 px from the bottom-left.
+void drawScaleBar(double length, const ScreenFit& fit, RgbImage& image) {
+  const int px = static_cast<int>(std::lround(length * fit.scale));
+  if (length <= 0.0 || px < 4) return;
+  const int x0 = 12, y0 = image.height - 14;
+  for (int x = x0; x <= std::min(image.width - 1, x0 + px); ++x) {
+    for (int dy = -1; dy <= 1; ++dy) image.set(x, y0 + dy, Rgb{0, 0, 0});
+  }
+  for (const int x : {x0, std::min(image.width - 1, x0 + px)}) {
+    for (int y = y0 - 6; y <= y0 + 6; ++y) {
+      if (y >= 0 && y < image.height) image.set(x, y, Rgb{0, 0, 0});
+    }
+  }
+}
+
 }  // namespace
 
 RgbImage renderScene(const RenderRequest& request) {
@@ -554,6 +569,7 @@ std::vector<RgbImage> renderScenes(const RenderRequest& request,
     if (v.fit) {
       drawPath(v.scene.path, request.polyline_colour, v.tolerance, v.depth, v.image);
       drawMarkers(request, v.R_view, *v.fit, v.image);
+      drawScaleBar(request.scale_bar, *v.fit, v.image);
     }
     images.push_back(std::move(v.image));
   }

@@ -106,6 +106,9 @@ struct RenderRequest {
   Rgb polyline_colour{0, 114, 178};
   /// Small squares drawn on top of everything.
   std::vector<std::pair<Eigen::Vector3d, Rgb>> markers;
+  /// > 0: a black scale bar this long (the points' unit) in the bottom-left corner, with end
+  /// ticks; the caller says its length in a legend.
+  double scale_bar = 0.0;
   Rgb background{255, 255, 255};
 };
 /// Fits the view to the bounding box of mesh, polyline and markers with a margin, and draws

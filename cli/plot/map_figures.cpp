@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <string>
 #include <utility>
 
@@ -201,7 +202,17 @@ void writeMapFigures(const std::filesystem::path& dir,
 
 // Three views of the path around the part (iso, top, front), side by side, captioned, with a
 // legend.
-RgbImage pathPicture(const kinematics::TriangleMesh& part, const kinematics::ScanPath& path) {
+double niceLength(double at_most) {
+  const double decade = std::pow(10.0, std::floor(std::log10(at_most)));
+  for (const double m : {5.0, 2.0, 1.0}) {
+    if (m * decade <= at_most) return m * decade;
+  }
+  return decade;
+}
+
+RgbImage pathPicture(const kinematics::TriangleMesh& part,
+                     const kinematics::ScanPath& path,
+                     const std::optional<TableTop>& table) {
   constexpr int kView = 480;
   ViewGrid grid;
   ViewRow& row = grid.rows.emplace_back();
@@ -212,18 +223,42 @@ RgbImage pathPicture(const kinematics::TriangleMesh& part, const kinematics::Sca
   r.height = kView;
   r.vertices = part.vertices;
   r.triangles = part.triangles;
+  const Rgb part_colour{185, 185, 185}, table_colour{226, 214, 190};
+  r.triangle_colours.assign(part.triangles.size(), part_colour);
+  if (table) {  // the table top as a disc under the part, in the part frame
+    constexpr int kSegments = 96;
+    const Eigen::Isometry3d X_PR = table->X_RP.inverse();
+    const int centre = static_cast<int>(r.vertices.size());
+    r.vertices.push_back(X_PR * Eigen::Vector3d::Zero());
+    for (int i = 0; i < kSegments; ++i) {
+      const double a = 2.0 * std::numbers::pi * i / kSegments;
+      r.vertices.push_back(
+          X_PR * Eigen::Vector3d(table->radius * std::cos(a), table->radius * std::sin(a), 0.0));
+      r.triangles.emplace_back(centre, centre + 1 + i, centre + 1 + (i + 1) % kSegments);
+      r.triangle_colours.push_back(table_colour);
+    }
+  }
   for (const auto& s : path.samples) r.polyline.push_back(s.X_PS.translation());
   const Rgb start = categoryColour(2), end = categoryColour(5);
   if (!r.polyline.empty()) {
     r.markers.push_back({r.polyline.front(), start});
     r.markers.push_back({r.polyline.back(), end});
   }
+  const double extent = part.bounds().isEmpty() ? 0.0 : part.bounds().sizes().maxCoeff();
+  if (extent > 0.0) r.scale_bar = niceLength(0.5 * extent);
   for (const NamedView& view : partViews()) grid.captions.push_back(view.name);
   row.views = renderScenes(r, partViewRotations());
   grid.legend = {
       {r.polyline_colour, "path (lighter where the part hides it)", LegendEntry::Mark::kLine},
       {start, "start"},
-      {end, "end"}};
+      {end, "end"},
+      {part_colour, "part"}};
+  if (table) grid.legend.push_back({table_colour, "table top"});
+  if (r.scale_bar > 0.0) {
+    grid.legend.push_back({Rgb{0, 0, 0},
+                           fmt::format("{:g} mm (bar, bottom left)", 1000.0 * r.scale_bar),
+                           LegendEntry::Mark::kLine});
+  }
   return drawViewGrid(grid);
 }
 

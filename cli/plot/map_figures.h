@@ -1,5 +1,7 @@
 #pragma once
 
+#include <optional>
+
 #include <cstddef>
 #include <filesystem>
 #include <string>
@@ -38,6 +40,15 @@ void writeMapFigures(const std::filesystem::path& dir,
 
 /// Three views of the path (the laser origin, part frame) around the part, captioned, with start
 /// and end marked.
-RgbImage pathPicture(const kinematics::TriangleMesh& part, const kinematics::ScanPath& path);
+/// The table top under the part in path.png: its radius (m) and the part frame on it (X_RP).
+struct TableTop {
+  double radius = 0.0;
+  Eigen::Isometry3d X_RP = Eigen::Isometry3d::Identity();
+};
+RgbImage pathPicture(const kinematics::TriangleMesh& part,
+                     const kinematics::ScanPath& path,
+                     const std::optional<TableTop>& table = std::nullopt);
+/// A round length for a scale bar: 1, 2 or 5 × 10^k, at most `at_most` (> 0).
+double niceLength(double at_most);
 
 }  // namespace scanplan::cli

@@ -57,6 +57,27 @@ void drawLegendLine(Canvas& c, const std::vector<LegendEntry>& legend, int y) {
   }
 }
 
+// The bar's title, then the bar across the width: segments in order, their labels inside
+// where they fit (white on dark colours).
+void drawBar(Canvas& c, const BreakdownBar& bar, int width, int y) {
+  c.text(kPad, centredBaseline(y + kLine / 2.0), bar.title, kText, kBlack);
+  const double x0 = kPad + c.textWidth(bar.title, kText) + kPad;
+  const double w = std::max(0.0, width - kPad - x0);
+  double x = x0;
+  for (const BreakdownBar::Segment& s : bar.segments) {
+    const double sw = w * std::clamp(s.fraction, 0.0, 1.0);
+    if (sw <= 0.0) continue;
+    c.fillRect(x, y, sw, kLine + 4, s.colour);
+    const bool dark = 0.299 * s.colour.r + 0.587 * s.colour.g + 0.114 * s.colour.b < 140.0;
+    if (c.textWidth(s.label, kText - 2) + 6 <= sw) {
+      c.text(x + sw / 2.0, centredBaseline(y + (kLine + 4) / 2.0), s.label, kText - 2,
+             dark ? Rgb{255, 255, 255} : kBlack, Align::kCentre);
+    }
+    x += sw;
+  }
+  c.frame(x0, y, w, kLine + 4, Rgb{120, 120, 120});
+}
+
 }  // namespace
 
 RgbImage drawViewGrid(const ViewGrid& grid) {
@@ -71,6 +92,7 @@ RgbImage drawViewGrid(const ViewGrid& grid) {
     height += kLine + kPad + kLine + 4 + h + kPad;
   }
   if (!grid.legend.empty()) height += kLine + kPad;
+  height += static_cast<int>(grid.bars.size()) * (kLine + 4 + kPad);
   return detail::renderPixels(std::max(width, 1), height, [&](Canvas& c) {
     int y = kPad;
     for (const ViewRow& row : grid.rows) {
@@ -90,7 +112,14 @@ RgbImage drawViewGrid(const ViewGrid& grid) {
       }
       y += kLine + 4 + tallest + kPad;
     }
-    if (!grid.legend.empty()) drawLegendLine(c, grid.legend, y);
+    if (!grid.legend.empty()) {
+      drawLegendLine(c, grid.legend, y);
+      y += kLine + kPad;
+    }
+    for (const BreakdownBar& bar : grid.bars) {
+      drawBar(c, bar, width, y);
+      y += kLine + 4 + kPad;
+    }
   });
 }
 

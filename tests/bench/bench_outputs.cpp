@@ -98,7 +98,7 @@ int main(int argc, char** argv) {
   const Row rows[] = {
       both("path.csv, path.png",
            [&](const cli::WriteSettings& s) {
-             cli::writePathOutputs(dir, p.problem.part, p.plan.prepared->path.path, s);
+             cli::writePathOutputs(dir, p.problem.cell, p.problem.part, p.plan.prepared->path.path, s);
            }),
       both("configmap npy, json, figures",
            [&](const cli::WriteSettings& s) {
