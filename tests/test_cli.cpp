@@ -21,10 +21,10 @@
 #include "cli/commands/commands.h"
 #include "cli/config/job.h"
 #include "cli/io/output.h"
-#include "cli_support.h"
 #include "cli/programs/programs.h"
-#include "kinematics/trajectory.h"
+#include "cli_support.h"
 #include "kinematics/error.h"
+#include "kinematics/trajectory.h"
 #include "kinematics/units.h"
 #include "test_support.h"
 
@@ -236,8 +236,8 @@ complete -p scanplan
     while (std::fgets(buffer.data(), buffer.size(), pipe.get()) != nullptr) out += buffer.data();
   }
   const std::vector<std::string> want = {
-      "plan", "show schema", "--planner", "--json", "import check", "jobs/demo.yaml", "jobs",
-      "complete -o filenames -F _scanplan scanplan"};
+      "plan",         "show schema",    "--planner", "--json",
+      "import check", "jobs/demo.yaml", "jobs",      "complete -o filenames -F _scanplan scanplan"};
   std::istringstream lines(out);
   std::size_t i = 0;
   for (std::string line; std::getline(lines, line); ++i) {
@@ -532,10 +532,9 @@ TEST_F(Cli, PlanWritesTheResolvedJob) {
 // the flange), and last the plan's time within 1 % in their own timing model (read back).
 TEST_F(Cli, PlanDemoWritesControllerReadyProgramsInEveryLanguage) {
   const fs::path out = dir_ / "demo";
-  const Result run = scanplan({"plan", (kSourceDir / "data/jobs/demo.yaml").string(), "-o",
-                               out.string(), "--set",
-                               "outputs.programs=[vplus, krl, rapid, urscript, csv]", "--set",
-                               "simulation.enabled=false"});
+  const Result run = scanplan(
+      {"plan", (kSourceDir / "data/jobs/demo.yaml").string(), "-o", out.string(), "--set",
+       "outputs.programs=[vplus, krl, rapid, urscript, csv]", "--set", "simulation.enabled=false"});
   ASSERT_EQ(run.exit_code, 0) << describe(run);
   const scanplan::kinematics::Trajectory plan =
       scanplan::kinematics::parseTrajectoryCsv(readFile(out / "trajectory.csv"), "trajectory.csv");
@@ -564,8 +563,7 @@ TEST_F(Cli, PlanDemoWritesControllerReadyProgramsInEveryLanguage) {
     EXPECT_EQ(on, passes) << file;
     EXPECT_EQ(off, passes + 2) << file;  // each pass's end, and idle before and after
     const double planned = plan.duration() - plan.samples.front().t;
-    const double timed =
-        back.trajectory.duration() - back.trajectory.samples.front().t;
+    const double timed = back.trajectory.duration() - back.trajectory.samples.front().t;
     EXPECT_LT(std::abs(timed - planned) / planned, 0.01) << file << ": " << timed << " s";
   }
 }
@@ -687,7 +685,8 @@ TEST_F(Cli, HelpTextsSayWhatTheCommandsAccept) {
   for (const std::string command : {"validate", "simulate", "export"}) {
     run = scanplan({command, "--help"});
     ASSERT_EQ(run.exit_code, 0) << describe(run);
-    EXPECT_TRUE(contains(run.out, "trajectory CSV") && contains(run.out, "scan.v2, .src, .mod, .script"))
+    EXPECT_TRUE(contains(run.out, "trajectory CSV") &&
+                contains(run.out, "scan.v2, .src, .mod, .script"))
         << command << " --help\n"
         << run.out;
   }

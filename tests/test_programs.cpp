@@ -3,6 +3,7 @@
 // V+ and KRL speed settings against the planned timing, each language's structure, and bad
 // input.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -739,6 +740,42 @@ TEST_F(Programs, MalformedVplusNamesTheLine) {
   EXPECT_NE(error(".PROGRAM a()\n; t=0 s table=0 deg scan=0\n.END\n")
                 .find("x.v2:2: step comment without its MOVE"),
             std::string::npos);
+}
+
+}  // namespace
+
+namespace {
+
+// KRL and RAPID through a public grammar's parser where one is installed: no grammar is packaged
+// for Debian 12, so the parser is named by the environment — SCANPLAN_KRL_PARSER and
+// SCANPLAN_RAPID_PARSER, each a command that takes a file and exits 0 when it parses (e.g. an
+// ANTLR parser built from the grammars-v4 krl.g4). Skipped without them.
+TEST(ProgramsGrammar, KrlAndRapidParseWithAPublicGrammarWhereOneIsInstalled) {
+  const char* krl = std::getenv("SCANPLAN_KRL_PARSER");
+  const char* rapid = std::getenv("SCANPLAN_RAPID_PARSER");
+  if (krl == nullptr && rapid == nullptr) {
+    GTEST_SKIP() << "no KRL or RAPID grammar installed (set SCANPLAN_KRL_PARSER / "
+                    "SCANPLAN_RAPID_PARSER to a parser command)";
+  }
+  const RobotModel viper = test::bundledRobot("viper_s650");
+  std::mt19937 rng(12);
+  const Trajectory tr = randomTrajectory(viper, rng, 300);
+  ProgramOptions options;
+  options.trigger.output = 1;
+  options.payload_kg = 0.9;
+  options.table_endless = true;
+  const fs::path dir = fs::temp_directory_path() / ("scanplan_grammar_" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  for (const auto& [parser, format] :
+       {std::pair{krl, ProgramFormat::kKrl}, std::pair{rapid, ProgramFormat::kRapid}}) {
+    if (parser == nullptr) continue;
+    const ProgramFiles files = cli::writeProgram(tr, viper, format, options);
+    const fs::path file = dir / files.files[0].first;
+    std::ofstream(file, std::ios::binary) << files.files[0].second;
+    const std::string command = std::string(parser) + " '" + file.string() + "'";
+    EXPECT_EQ(std::system(command.c_str()), 0) << command;
+  }
+  fs::remove_all(dir);
 }
 
 }  // namespace
