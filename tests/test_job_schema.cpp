@@ -54,22 +54,13 @@ TEST(JobSchema, NamesEverySectionAndRefusesUnknownKeysEverywhere) {
   EXPECT_EQ(paths["required"], Json::parse(R"(["type"])"));  // height_mm only for rings
 }
 
-std::string run(const std::string& command) {
-  std::array<char, 4096> buffer{};
-  std::string out;
-  const std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), pclose);
-  if (!pipe) return out;
-  while (std::fgets(buffer.data(), buffer.size(), pipe.get()) != nullptr) out += buffer.data();
-  return out;
-}
-
 void writeFile(const fs::path& file, const std::string& text) {
   std::ofstream(file, std::ios::binary) << text;
 }
 
 TEST(JobSchema, AjvValidatesEveryBundledJobAndRejectsMisspeltKeys) {
   const fs::path modules = test::sourceDir() / "web/node_modules";
-  if (run("command -v node").empty() || !fs::exists(modules / "ajv") ||
+  if (test::runCommand("command -v node").empty() || !fs::exists(modules / "ajv") ||
       !fs::exists(modules / "yaml")) {
     GTEST_SKIP() << "node or web/node_modules (ajv, yaml) absent: run ./bootstrap.sh";
   }
@@ -105,7 +96,7 @@ TEST(JobSchema, AjvValidatesEveryBundledJobAndRejectsMisspeltKeys) {
                         (test::sourceDir() / "tests/js/validate_jobs.mjs").string() + "' '" +
                         (dir / "job.schema.json").string() + "'";
   for (const auto& [file, valid] : cases) command += " '" + file.string() + "'";
-  std::istringstream lines(run(command + " 2>&1"));
+  std::istringstream lines(test::runCommand(command + " 2>&1"));
   std::size_t checked = 0;
   for (std::string line; std::getline(lines, line);) {
     const Json result = Json::parse(line, nullptr, false);

@@ -139,26 +139,17 @@ TEST_F(Replay, ItsPosesAreTheTrajectorysThroughTheRobotsOwnKinematics) {
   EXPECT_FALSE(data["closest"].empty());
 }
 
-std::string run(const std::string& command) {
-  std::array<char, 4096> buffer{};
-  std::string out;
-  const std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), pclose);
-  if (!pipe) return out;
-  while (std::fgets(buffer.data(), buffer.size(), pipe.get()) != nullptr) out += buffer.data();
-  return out;
-}
-
 TEST_F(Replay, ChromiumDrawsTheCellMovesWithTheSliderAndPlays) {
   const fs::path modules = sourceDir() / "web/node_modules";
-  if (!fs::exists("/usr/bin/chromium") || run("command -v node").empty() ||
+  if (!fs::exists("/usr/bin/chromium") || test::runCommand("command -v node").empty() ||
       !fs::exists(modules / "playwright-core")) {
     GTEST_SKIP() << "chromium, node or web/node_modules/playwright-core absent";
   }
   ASSERT_TRUE(plan());
   const std::string out =
-      run("SCANPLAN_WEB_MODULES='" + modules.string() + "' timeout 300 node '" +
-          (sourceDir() / "tests/js/replay_test.mjs").string() + "' '" +
-          (dir_ / "out/replay.html").string() + "' '" + dir_.string() + "' 2>&1");
+      test::runCommand("SCANPLAN_WEB_MODULES='" + modules.string() + "' timeout 300 node '" +
+                       (sourceDir() / "tests/js/replay_test.mjs").string() + "' '" +
+                       (dir_ / "out/replay.html").string() + "' '" + dir_.string() + "' 2>&1");
   const Json result = Json::parse(
       out.substr(out.rfind("\n{") == std::string::npos ? 0 : out.rfind("\n{") + 1), nullptr, false);
   ASSERT_TRUE(result.is_object()) << out;

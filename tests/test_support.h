@@ -3,9 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <cstdio>
 #include <exception>
 #include <filesystem>
 #include <initializer_list>
+#include <memory>
 #include <random>
 #include <string>
 #include <vector>
@@ -62,6 +65,16 @@ inline const std::vector<std::string> kLightDemo = {
     "scan.paths=[{type: ring, height_mm: 35, tilt_deg: 25}, {type: ring, height_mm: 105, "
     "tilt_deg: 60}]"};
 inline std::filesystem::path sharedDataDir() { return SCANPLAN_SHARED_DATA_DIR; }
+
+/// A shell command's standard output (popen); empty when it cannot start.
+inline std::string runCommand(const std::string& command) {
+  std::array<char, 4096> buffer{};
+  std::string out;
+  const std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), pclose);
+  if (!pipe) return out;
+  while (std::fgets(buffer.data(), buffer.size(), pipe.get()) != nullptr) out += buffer.data();
+  return out;
+}
 
 /// A bundled robot file, e.g. "viper_s650".
 inline kinematics::RobotModel bundledRobot(const std::string& name) {
