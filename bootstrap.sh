@@ -19,8 +19,9 @@ packages=(
 # Debian's node and npm when the machine has no npm of its own.
 command -v npm >/dev/null || packages+=(nodejs npm)
 # CI also builds with the second compiler, and runs the fuzz tests with its libFuzzer (.ci/run).
-# CI also runs the replay.html browser test in Debian's chromium (skipped where it is absent).
-if [ "${CI:-}" = "true" ]; then packages+=(clang-14 libclang-rt-14-dev chromium); fi
+# CI also runs the replay.html browser test in Debian's chromium and reads cloud.ply with
+# Debian's Open3D (both tests skip where these are absent).
+if [ "${CI:-}" = "true" ]; then packages+=(clang-14 libclang-rt-14-dev chromium python3-open3d); fi
 
 missing=()
 for p in "${packages[@]}"; do

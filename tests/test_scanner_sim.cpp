@@ -25,6 +25,7 @@
 
 #include <Eigen/Geometry>
 
+#include <nlohmann/json.hpp>
 #include "cli/config/job.h"
 #include "kinematics/cell.h"
 #include "kinematics/error.h"
@@ -39,6 +40,7 @@
 #include "scanner/raycaster.h"
 #include "scanner/simulator.h"
 #include "tests/geometry_support.h"
+
 #include "tests/io_support.h"
 #include "tests/test_support.h"
 
@@ -623,13 +625,13 @@ void expectPointsOnPart(const TriangleMesh& part,
     worst = std::max(worst, triangleDistance(part, t, p.p_P));
     // The point's normal is its triangle's face normal (either side), of unit length.
     const Eigen::Vector3i& f = part.triangles[t];
-    const Eigen::Vector3d face =
-        (part.vertices[static_cast<std::size_t>(f[1])] - part.vertices[static_cast<std::size_t>(f[0])])
-            .cross(part.vertices[static_cast<std::size_t>(f[2])] -
-                   part.vertices[static_cast<std::size_t>(f[0])])
-            .normalized();
-    worst_normal = std::max({worst_normal, std::abs(std::abs(p.n_P.dot(face)) - 1.0),
-                             std::abs(p.n_P.norm() - 1.0)});
+    const Eigen::Vector3d face = (part.vertices[static_cast<std::size_t>(f[1])] -
+                                  part.vertices[static_cast<std::size_t>(f[0])])
+                                     .cross(part.vertices[static_cast<std::size_t>(f[2])] -
+                                            part.vertices[static_cast<std::size_t>(f[0])])
+                                     .normalized();
+    worst_normal = std::max(
+        {worst_normal, std::abs(std::abs(p.n_P.dot(face)) - 1.0), std::abs(p.n_P.norm() - 1.0)});
   }
   EXPECT_GE(on_part, at_least);
   EXPECT_LE(worst, kOnPartTol) << "worst distance to the hit triangle";
@@ -904,9 +906,9 @@ TEST(CloudPly, HeaderIsStandardAndValuesRoundTrip) {
   const test::PlyVertices v = test::readPlyVertices(in, "memory");
   EXPECT_EQ(v.format, "binary_little_endian");
   ASSERT_EQ(v.count, 3u);
-  EXPECT_EQ(v.names, (std::vector<std::string>{"x", "y", "z", "nx", "ny", "nz", "time",
-                                               "profile", "ray", "range_mm", "incidence_deg",
-                                               "part_triangle"}));
+  EXPECT_EQ(v.names,
+            (std::vector<std::string>{"x", "y", "z", "nx", "ny", "nz", "time", "profile", "ray",
+                                      "range_mm", "incidence_deg", "part_triangle"}));
   for (std::size_t i = 0; i < 3; ++i) {
     for (int k = 0; k < 3; ++k) {
       EXPECT_FLOAT_EQ(static_cast<float>(v.column(std::string(1, "xyz"[k]))[i]),
@@ -1091,6 +1093,68 @@ TEST(ShapeSurface, PrimitivesAreClosedAndWithinTheChordTolerance) {
                                            mesh.vertices[static_cast<std::size_t>(f(0))]);
       EXPECT_GT(n.dot(centroid - X.translation()), 0.0);
     }
+  }
+}
+
+}  // namespace
+
+namespace {
+
+// Open3D's tensor PLY reader (Debian's python3-open3d, where installed) keeps every field of
+// cloud.ply: positions, normals and each float and int property, with the written values.
+TEST(CloudPly, Open3dReadsEveryFieldWhereItIsInstalled) {
+  if (!test::runCommand("/usr/bin/python3 -c 'import open3d' 2>/dev/null && echo yes")
+           .starts_with("yes")) {
+    GTEST_SKIP() << "Open3D is not installed (Debian: python3-open3d)";
+  }
+  std::vector<CloudPoint> points(4);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const double k = static_cast<double>(i);
+    points[i].p_P = Eigen::Vector3d(0.001 * k, -0.002 * k, 0.003 + k * 1e-4);
+    points[i].n_P = Eigen::Vector3d(0.0, 0.6, 0.8);
+    points[i].t = 0.5 + k;
+    points[i].profile = static_cast<std::uint32_t>(10 + i);
+    points[i].ray = static_cast<std::uint32_t>(100 + i);
+    points[i].range = 0.15 + 0.001 * k;
+    points[i].incidence = deg(10.0 * k);
+    points[i].part_triangle = i == 3 ? -1 : static_cast<std::int32_t>(7 * i);
+  }
+  const fs::path file =
+      fs::temp_directory_path() / ("scanplan_o3d_" + std::to_string(getpid()) + ".ply");
+  {
+    std::ofstream out(file, std::ios::binary);
+    scanner::writeCloudPly(out, points);
+  }
+  const std::string script =
+      "import json, open3d as o3d\n"
+      "pc = o3d.t.io.read_point_cloud('" +
+      file.string() +
+      "')\n"
+      "print(json.dumps({k: pc.point[k].numpy().tolist() for k in pc.point}))\n";
+  const std::string out = test::runCommand("/usr/bin/python3 -c \"" + script + "\" 2>&1");
+  fs::remove(file);
+  const auto doc = nlohmann::json::parse(out, nullptr, false);
+  ASSERT_TRUE(doc.is_object()) << out;
+  for (const char* key : {"positions", "normals", "time", "profile", "ray", "range_mm",
+                          "incidence_deg", "part_triangle"}) {
+    ASSERT_TRUE(doc.contains(key)) << key << " dropped: " << out;
+    ASSERT_EQ(doc[key].size(), points.size()) << key;
+  }
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    for (std::size_t a = 0; a < 3; ++a) {
+      const auto ai = static_cast<Eigen::Index>(a);
+      EXPECT_FLOAT_EQ(doc["positions"][i][a].get<float>(),
+                      static_cast<float>(1000.0 * points[i].p_P[ai]));
+      EXPECT_FLOAT_EQ(doc["normals"][i][a].get<float>(), static_cast<float>(points[i].n_P[ai]));
+    }
+    EXPECT_FLOAT_EQ(doc["time"][i][0].get<float>(), static_cast<float>(points[i].t));
+    EXPECT_EQ(doc["profile"][i][0].get<long>(), static_cast<long>(points[i].profile));
+    EXPECT_EQ(doc["ray"][i][0].get<long>(), static_cast<long>(points[i].ray));
+    EXPECT_EQ(doc["part_triangle"][i][0].get<long>(), points[i].part_triangle);
+    EXPECT_FLOAT_EQ(doc["range_mm"][i][0].get<float>(),
+                    static_cast<float>(1000.0 * points[i].range));
+    EXPECT_FLOAT_EQ(doc["incidence_deg"][i][0].get<float>(),
+                    static_cast<float>(toDeg(points[i].incidence)));
   }
 }
 
