@@ -522,7 +522,8 @@ std::string usageHint(CLI::App& app, int argc, char** argv) {
         continue;
       }
       const std::string near = suggestKey(name, options);
-      return fmt::format("unknown option '{}' for '{}'{}", name, at->get_name(),
+      return fmt::format("unknown option '{}' for '{}'{}", name,
+                         at == &app ? std::string("scanplan") : at->get_name(),
                          near.empty() ? "" : "; did you mean '" + near + "'?");
     }
     const auto named = at->get_subcommands([&](CLI::App* sub) { return sub->check_name(arg); });

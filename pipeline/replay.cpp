@@ -82,8 +82,9 @@ std::vector<std::array<std::uint8_t, 3>> coverageColours(const TriangleMesh& par
 void addCloud(const SimulationRun& run, const ReplayOptions& options, ReplayScene& scene) {
   const auto& points = run.cloud.points;
   scene.cloud_total = points.size();
+  const std::size_t max_points = std::max<std::size_t>(1, options.max_points);
   const std::size_t stride =
-      std::max<std::size_t>(1, (points.size() + options.max_points - 1) / options.max_points);
+      std::max<std::size_t>(1, (points.size() + max_points - 1) / max_points);
   for (std::size_t i = 0; i < points.size(); i += stride) {
     scene.cloud.push_back(points[i].p_P.cast<float>());
     scene.cloud_t.push_back(static_cast<float>(points[i].t));

@@ -158,8 +158,13 @@ std::vector<double> numbers(const std::string& text) {
   return out;
 }
 
+// KRL's times come from TIME_BLOCK PARTs (percent, 6 decimals, REAL on the controller): over a
+// block of hundreds of steps they add up to a few 1e-7 s, beyond the printed times' 5e-7 s.
+constexpr double kKrlTimeTol = 1e-5;  // s
+
 ::testing::AssertionResult sameToPrintedPrecision(const Trajectory& read,
-                                                  const Trajectory& written) {
+                                                  const Trajectory& written,
+                                                  double time_tol = kPrintedTol) {
   if (read.samples.size() != written.samples.size()) {
     return ::testing::AssertionFailure()
            << read.samples.size() << " samples read, " << written.samples.size() << " written";
@@ -167,7 +172,7 @@ std::vector<double> numbers(const std::string& text) {
   for (std::size_t k = 0; k < read.samples.size(); ++k) {
     const TrajectorySample &a = read.samples[k], &b = written.samples[k];
     const double dq = toDeg((a.q - b.q).cwiseAbs().maxCoeff());
-    if (std::abs(a.t - b.t) > kPrintedTol || std::abs(toDeg(a.theta - b.theta)) > kPrintedTol ||
+    if (std::abs(a.t - b.t) > time_tol || std::abs(toDeg(a.theta - b.theta)) > kPrintedTol ||
         dq > kPrintedTol || a.scanning != b.scanning) {
       return ::testing::AssertionFailure()
              << "sample " << k << ": t " << a.t << " vs " << b.t << ", table " << toDeg(a.theta)
@@ -382,7 +387,7 @@ TEST_F(Programs, KrlTimeBlocksReproduceThePlannedTiming) {
   EXPECT_EQ(count(text, "\n    SPTP {"), tr.samples.size() - 1);
   EXPECT_EQ(count(text, "\n    TIME_BLOCK PART="), tr.samples.size() - 1);
   const cli::ProgramReading back = cli::readProgram(text, ProgramFormat::kKrl, "scan.src");
-  EXPECT_TRUE(sameToPrintedPrecision(back.trajectory, tr));
+  EXPECT_TRUE(sameToPrintedPrecision(back.trajectory, tr, kKrlTimeTol));
 }
 
 // Past kKrlMaxSegments steps the motion goes into several PTP_SPLINE blocks, each ending where
@@ -412,7 +417,7 @@ TEST_F(Programs, KrlSplitsLongMotionsIntoBlocksBetweenPasses) {
     EXPECT_FALSE(tr.samples[ends[b]].scanning) << "block " << b << " ends at " << ends[b];
   }
   const cli::ProgramReading back = cli::readProgram(text, ProgramFormat::kKrl, "scan.src");
-  EXPECT_TRUE(sameToPrintedPrecision(back.trajectory, tr));
+  EXPECT_TRUE(sameToPrintedPrecision(back.trajectory, tr, kKrlTimeTol));
 }
 
 // The plan's joints linearly at time t (the programs' path between samples).
@@ -626,7 +631,9 @@ TEST_F(Programs, AnEndlessTableIsWrittenWrappedAndReadsBackTheSameMotion) {
         }
         return tr.samples.back().theta;
       }();
-      EXPECT_NEAR(toDeg(b.theta - offset - want), 0.0, 1e-5) << name << " t " << b.t;
+      // (KRL: its times within kKrlTimeTol, at up to 40°/s of the table)
+      EXPECT_NEAR(toDeg(b.theta - offset - want), 0.0, 1e-5 + 40.0 * kKrlTimeTol) << name << " t "
+                                                                                   << b.t;
     }
   }
   Trajectory jump = smallTrajectory();

@@ -126,9 +126,6 @@ void writeChoiceFigure(const std::filesystem::path& out,
   }
 }
 
-// The outputs of a valid plan: trajectory.csv, the programs, the simulation's and the
-// certificate's files; returns their summary lines (`second`: of the second setup, which does
-// not suggest another).
 // cell.png: the cell at the closest approach to the cell (else half-way), as the replay shows it.
 RgbImage cellFigure(const pipeline::ReplayScene& scene, const std::string& job_name) {
   std::size_t frame = scene.frames.size() / 2;
@@ -164,6 +161,9 @@ std::string writeReplay(const std::filesystem::path& out,
       scene.frames.size(), scene.cloud.size(), scene.cloud_total);
 }
 
+// The outputs of a valid plan: trajectory.csv, the programs, the simulation's and the
+// certificate's files; returns their summary lines (`second`: of the second setup, which does
+// not suggest another).
 std::string writePlannedOutputs(const std::filesystem::path& out,
                                 const JobSpec& job,
                                 const pipeline::ScanProblem& problem,

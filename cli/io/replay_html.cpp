@@ -29,8 +29,8 @@ std::string base64(const void* data, std::size_t size) {
   std::string out;
   out.reserve((size + 2) / 3 * 4);
   for (std::size_t i = 0; i < size; i += 3) {
-    const unsigned v =
-        (p[i] << 16u) | (i + 1 < size ? p[i + 1] << 8u : 0u) | (i + 2 < size ? p[i + 2] : 0u);
+    const auto byte = [&](std::size_t k) { return k < size ? static_cast<unsigned>(p[k]) : 0u; };
+    const unsigned v = (byte(i) << 16u) | (byte(i + 1) << 8u) | byte(i + 2);
     out += kAlphabet[(v >> 18u) & 63u];
     out += kAlphabet[(v >> 12u) & 63u];
     out += i + 1 < size ? kAlphabet[(v >> 6u) & 63u] : '=';

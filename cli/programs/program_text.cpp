@@ -297,20 +297,21 @@ Eigen::Matrix3d fromRotationVector(const Eigen::Vector3d& r) {
   return Eigen::AngleAxisd(angle, r / angle).toRotationMatrix();
 }
 
-LineReader::LineReader(const std::string& text, const std::string& source) : source_(source) {
-  std::istringstream in(text);
-  for (std::string line; std::getline(in, line);) lines_.push_back(std::move(line));
-}
+LineReader::LineReader(const std::string& text, const std::string& source)
+    : text_(text), source_(source) {}
 
 bool LineReader::next(std::string& line) {
-  if (at_ >= lines_.size()) return false;
-  const std::string& raw = lines_[at_++];
+  if (at_ >= text_.size()) return false;
+  const std::size_t end = std::min(text_.find('\n', at_), text_.size());
+  const std::size_t length = end - at_;
   ++line_number_;
-  if (raw.size() > kMaxLine) {
-    fail("'" + clipForMessage(raw) + "': expected a line of at most " + std::to_string(kMaxLine) +
-         " characters");
+  if (length > kMaxLine) {
+    // Quoted as clipForMessage quotes, without copying the whole line.
+    fail("'" + text_.substr(at_, 80) + "… (" + std::to_string(length) +
+         " characters)': expected a line of at most " + std::to_string(kMaxLine) + " characters");
   }
-  line = trim(raw);
+  line = trim(text_.substr(at_, length));
+  at_ = end + 1;
   return true;
 }
 

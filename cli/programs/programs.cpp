@@ -41,6 +41,10 @@ void checkOptions(const ProgramOptions& o) {
     throw InputError(
         fmt::format("program: approach speed {} %: expected (0, 100]", o.approach_speed_percent));
   }
+  if (o.vplus_table_start_signal < 0 || o.vplus_table_start_signal > 4096) {
+    throw InputError(fmt::format("program: V+ table start signal {}: expected 0 (none) ... 4096",
+                                 o.vplus_table_start_signal));
+  }
   if (o.trigger.output < 0 || o.trigger.output > 4096) {
     throw InputError(
         fmt::format("program: trigger output {}: expected 0 (none) ... 4096", o.trigger.output));
@@ -166,7 +170,7 @@ ProgramReading readProgram(const std::string& text,
 
 Trajectory atStepTimes(const ProgramReading& reading) {
   const auto& read = reading.trajectory.samples;
-  if (read.size() < 2 || reading.step_times.empty() || reading.step_times.size() == read.size()) {
+  if (!reading.servo_steps || read.size() < 2 || reading.step_times.empty()) {
     return reading.trajectory;
   }
   Trajectory out;

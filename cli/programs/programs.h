@@ -1,6 +1,6 @@
 #pragma once
 // Robot programs (DESIGN.md §7): a planned trajectory written for the controller that runs it —
-// Adept V+, KUKA KRL, ABB RAPID, URScript — or as the CSV interchange file, and the V+ program
+// Adept V+, KUKA KRL, ABB RAPID, URScript — or as the CSV interchange file, and every program
 // read back into a trajectory so that it can be validated before it is sent (§7.3).
 
 #include <cstddef>
@@ -141,15 +141,19 @@ struct ProgramReading {
   Eigen::Vector3d payload_cog = Eigen::Vector3d::Zero();  ///< m, flange frame
   /// The step comments' times: the planned samples (URScript's servo steps lie between them).
   std::vector<double> step_times;
+  bool servo_steps = false;  ///< the samples are servo steps between the step times (URScript)
 };
 
-/// The reading at its step comments' times: the motion interpolated linearly between the read
-/// samples (URScript's servo steps), so that it is checked at the plan's own resolution (a
-/// piecewise-linear table read at the servo period shows its kinks as accelerations 12× those
-/// at the plan's step). Other languages' readings are returned as they are.
+/// The reading at its step comments' times when its samples are servo steps (URScript): the
+/// motion interpolated linearly between them, so that it is checked at the plan's own resolution
+/// (a piecewise-linear table read at the servo period shows its kinks as accelerations 12× those
+/// at the plan's step). Other readings are returned as they are.
 kinematics::Trajectory atStepTimes(const ProgramReading& reading);
 
-/// Reads a program written by writeProgram(format) (or edited by hand in its form; not kCsv).
+/// Reads a program written by writeProgram(format) (or edited by hand in its form; kCsv: the
+/// trajectory CSV). A reader refuses what it does not model (a V+ MOVE without DURATION or with
+/// DURATION ALWAYS, a RAPID MoveAbsJ without \\T, calls other than main()'s, anything in
+/// URScript's servo() but its servoj), so that what it returns is what the controller runs.
 /// Errors (InputError) name `source` and the line: an instruction the reader does not know,
 /// malformed values, a move without its step comment (V+: the table angle is only there),
 /// times not strictly increasing, no moves.

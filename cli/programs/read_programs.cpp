@@ -1,5 +1,6 @@
 // The program readers: each language's moves, timed by its own timing model, with the tool,
 // payload and trigger switches it sets (programs.h, readProgram).
+#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <regex>
@@ -96,7 +97,7 @@ class VplusReader {
     while (!ended_ && r_.in.next(line)) {
       if (line.empty()) continue;
       if (line[0] == ';') {
-        if (!in_program_ && line.find("t=") != std::string::npos) {
+        if (!in_program_ && trim(line.substr(1)).rfind("t=", 0) == 0) {
           r_.in.fail("step comment before .PROGRAM");
         }
         r_.comment(line.substr(1));
@@ -159,7 +160,12 @@ class VplusReader {
     const std::vector<double> q = numberList(r_.in, m[1].str(), kNumJoints, "MOVE #PPOINT joints");
     const PendingStep p = r_.takeStep("MOVE");
     const auto& samples = r_.reading.trajectory.samples;
-    const double t = samples.empty() || !duration_ ? p.t : samples.back().t + *duration_;
+    if (!samples.empty() && !duration_) {
+      r_.in.fail(
+          "MOVE without DURATION: expected 'DURATION <s>' (the step's time) before each "
+          "MOVE after the first");
+    }
+    const double t = samples.empty() ? p.t : samples.back().t + *duration_;
     r_.append(t, q, p.table_deg, p);
     duration_.reset();
     break_after_move_ = false;
@@ -178,7 +184,13 @@ class VplusReader {
     if (!parseNumber(value, v) || v < 0.0 || !units_ok) {
       r_.in.fail("'" + clipForMessage(line) + "': expected '" + keyword + " <value> [ALWAYS]'");
     }
-    if (keyword == "DURATION") duration_ = v;
+    if (keyword == "DURATION") {
+      if (!tail.empty()) {
+        r_.in.fail("'" + clipForMessage(line) +
+                   "': DURATION ... ALWAYS is not read: expected 'DURATION <s>' before each MOVE");
+      }
+      duration_ = v;
+    }
   }
 
   // SIGNAL n[, -m ...]: at the start of the last MOVE, or at its end after a BREAK.
@@ -214,6 +226,19 @@ class VplusReader {
   ReaderState r_;
   bool in_program_ = false, ended_ = false, break_after_move_ = false;
   std::optional<double> duration_;
+};
+
+// A KRL spline segment waiting for its block's TIME_BLOCK END.
+struct KrlSegment {
+  std::vector<double> q;
+  double e1 = 0.0;
+  PendingStep step;
+  double part = 0.0;
+  std::vector<std::pair<int, bool>> triggers;
+};
+struct KrlBlock {
+  bool started = false, ended = false;
+  std::vector<KrlSegment> segments;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -255,8 +280,8 @@ class KrlReader {
       approach(s);
     } else if (u == "PTP_SPLINE") {
       if (block_) r_.in.fail("PTP_SPLINE inside another: expected ENDSPLINE first");
-      block_.emplace();
-    } else if (u.rfind("SPTP", 0) == 0) {
+      block_ = KrlBlock{};
+    } else if (u.rfind("SPTP ", 0) == 0 || u.rfind("SPTP{", 0) == 0) {
       segment(s);
     } else if (u.rfind("TIME_BLOCK", 0) == 0) {
       timeBlock(s);
@@ -316,7 +341,9 @@ class KrlReader {
   }
 
   void segment(const std::string& s) {
-    if (!block_ || !block_->started) r_.in.fail("SPTP outside a timed PTP_SPLINE block");
+    if (!block_ || !block_->started || block_->ended) {
+      r_.in.fail("SPTP outside a timed PTP_SPLINE block (between TIME_BLOCK START and END)");
+    }
     const auto [q, e1] = axes(s);
     const PendingStep p = r_.takeStep("SPTP");
     block_->segments.push_back({q, e1, p, std::nan(""), trigger_});
@@ -326,7 +353,8 @@ class KrlReader {
   void timeBlock(const std::string& s) {
     static const std::regex kPart("TIME_BLOCK\\s+(PART|END)\\s*=\\s*(" + kNum + ")",
                                   std::regex::icase);
-    if (!block_) r_.in.fail("TIME_BLOCK outside a PTP_SPLINE block");
+    if (!block_ || block_->ended)
+      r_.in.fail("TIME_BLOCK outside a PTP_SPLINE block, or after its END");
     if (upper(s) == "TIME_BLOCK START") {
       block_->started = true;
       return;
@@ -351,13 +379,13 @@ class KrlReader {
   // TIME_BLOCK END: each segment gets END · PART / ΣPART of the block's time.
   void endBlock(double total) {
     double sum = 0.0;
-    for (const Segment& g : block_->segments) {
+    for (const KrlSegment& g : block_->segments) {
       if (std::isnan(g.part)) r_.in.fail("TIME_BLOCK END: a segment has no TIME_BLOCK PART");
       sum += g.part;
     }
     if (block_->segments.empty()) r_.in.fail("TIME_BLOCK END: the block has no segments");
     double t = r_.lastTime(), acc = 0.0;
-    for (const Segment& g : block_->segments) {
+    for (const KrlSegment& g : block_->segments) {
       acc += g.part;
       r_.append(t + total * acc / sum, g.q, g.e1, g.step);
       for (const auto& [n, on] : g.triggers)
@@ -433,21 +461,9 @@ class KrlReader {
     }
   }
 
-  struct Segment {
-    std::vector<double> q;
-    double e1 = 0.0;
-    PendingStep step;
-    double part = 0.0;
-    std::vector<std::pair<int, bool>> triggers;
-  };
-  struct Block {
-    bool started = false, ended = false;
-    std::vector<Segment> segments;
-  };
-
   ReaderState r_;
   bool in_program_ = false, ended_ = false;
-  std::optional<Block> block_;
+  std::optional<KrlBlock> block_;
   std::vector<std::pair<int, bool>> trigger_;  // for the next motion's end
 };
 
@@ -469,6 +485,11 @@ class RapidReader {
     }
     if (!module_) r_.in.fail("no 'MODULE name' line: expected a RAPID module");
     if (!ended_) r_.in.fail("the module has no ENDMODULE");
+    for (const auto& [name, at] : calls_) {
+      if (name == "MAIN" || std::find(procs_.begin(), procs_.end(), name) == procs_.end()) {
+        r_.in.failAt(at, "'" + name + ";': expected the call of a procedure of this module");
+      }
+    }
     return r_.finish();
   }
 
@@ -484,8 +505,15 @@ class RapidReader {
       r_.in.fail("'" + clipForMessage(s) + "': after ENDMODULE");
     } else if (u == "ENDMODULE") {
       ended_ = true;
-    } else if (u.rfind("PROC ", 0) == 0 || u == "ENDPROC" || std::regex_match(s, kCall)) {
-      // Procedures and the call of the scan procedure from main().
+    } else if (u.rfind("PROC ", 0) == 0) {
+      proc_ = upper(trim(s.substr(5, s.find('(') - 5)));
+      procs_.push_back(proc_);
+    } else if (u == "ENDPROC") {
+      proc_.clear();
+    } else if (std::regex_match(s, kCall)) {
+      // main() calls the scan procedure, and nothing else calls anything.
+      if (proc_ != "MAIN") r_.in.fail("'" + clipForMessage(s) + "': a call outside PROC main()");
+      calls_.emplace_back(upper(trim(s.substr(0, s.find(';')))), r_.in.lineNumber());
     } else if (u.rfind("MOVEABSJ ", 0) == 0) {
       move(s);
     } else if (u.rfind("SETDO ", 0) == 0) {
@@ -515,7 +543,11 @@ class RapidReader {
     const PendingStep p = r_.takeStep("MoveAbsJ");
     double t = p.t;
     const auto& samples = r_.reading.trajectory.samples;
-    if (!samples.empty() && m[4].matched) {
+    if (!samples.empty() && !m[4].matched) {
+      r_.in.fail("'" + clipForMessage(s) +
+                 "': a MoveAbsJ after the first without \\T: expected \\T:= the step's time");
+    }
+    if (!samples.empty()) {
       double dt = 0.0;
       if (!parseNumber(m[5].str(), dt) || !(dt > 0.0))
         r_.in.fail("'" + clipForMessage(s) + "': \\T must be a positive time");
@@ -561,6 +593,9 @@ class RapidReader {
 
   ReaderState r_;
   bool module_ = false, ended_ = false;
+  std::string proc_;                                // the procedure being read (upper case)
+  std::vector<std::string> procs_;                  // every procedure's name
+  std::vector<std::pair<std::string, int>> calls_;  // main()'s calls and their lines
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -590,6 +625,14 @@ class UrscriptReader {
     }
     if (!in_program_) r_.in.fail("no 'def name():' line: expected a URScript program");
     if (!ended_) r_.in.fail("the program has no end");
+    const auto& steps = r_.reading.step_times;
+    if (!steps.empty() && !r_.reading.trajectory.samples.empty() &&
+        r_.reading.trajectory.samples.back().t < steps.back() - 1e-6) {
+      r_.in.fail(fmt::format("the servo steps end at t = {} s, before the last step comment's {} s",
+                             fixed(r_.reading.trajectory.samples.back().t, kDecimals),
+                             fixed(steps.back(), kDecimals)));
+    }
+    r_.reading.servo_steps = true;
     return r_.finish();
   }
 
@@ -611,10 +654,20 @@ class UrscriptReader {
     for (int depth = 1; depth > 0;) {
       if (!r_.in.next(line)) r_.in.fail("'" + clipForMessage(first) + "' has no end");
       if (line.rfind("def ", 0) == 0) ++depth;
-      if (line == "end") --depth;
+      if (line == "end") {
+        --depth;
+        continue;
+      }
+      if (!servo) continue;  // the table functions are the cell's
       std::smatch m;
-      if (servo && std::regex_match(line, m, kServoj))
-        period_ = std::strtod(m[1].str().c_str(), nullptr);
+      if (period_ || !std::regex_match(line, m, kServoj)) {
+        r_.in.fail("'" + clipForMessage(line) +
+                   "': expected servo(q) to hold one 'servoj(q, t=<s>, ...)' and nothing else");
+      }
+      period_ = std::strtod(m[1].str().c_str(), nullptr);
+      if (!(*period_ > 0.0) || !std::isfinite(*period_)) {
+        r_.in.fail("servoj: t must be a positive time");
+      }
     }
   }
 

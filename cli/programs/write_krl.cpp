@@ -11,6 +11,9 @@ namespace {
 using kinematics::kNumJoints;
 
 const char* const kVel = "SCANPLAN_VEL";
+// TIME_BLOCK PART in percent with 9 decimals: hundreds of equal steps rounded alike would
+// otherwise shift the block's middle by ~1e-5 s (the last PART makes the sum 100).
+constexpr int kPartDecimals = 9;
 
 std::string target(const ProgramContext& c, std::size_t k) {
   std::string out = "{";
@@ -55,8 +58,9 @@ Header krlHeader(const ProgramContext& c) {
              fixed(roundedPercent(o.approach_speed_percent, 1.0), 0) +
              " % and stops there. The planned motion");
   header.add("  follows in PTP_SPLINE blocks (KSS 8.3 or later), one SPTP segment per step, at");
-  header.add(fmt::format("  most {} a block (split between scan passes, where the arm may slow).",
+  header.add(fmt::format("  most {} a block, split between scan passes (the arm stops briefly at",
                          kKrlMaxSegments));
+  header.add("  a block's end); $VEL_AXIS at 100 % under the TIME_BLOCKs.");
   header.add("  TIME_BLOCK times each block: END = its planned time, PART = each step's share");
   header.add("  of it in percent. A block the axes cannot keep runs slower (a KSS message).");
   header.add("Tool: $TOOL, the scanner's laser frame on the flange (A, B, C: Rz·Ry·Rx).");
@@ -98,6 +102,7 @@ std::string block(const ProgramContext& c, std::size_t first, std::size_t last) 
   const auto& samples = c.trajectory.samples;
   const double total = samples[last].t - samples[first - 1].t;
   std::string s = "  PTP_SPLINE\n    TIME_BLOCK START\n";
+  double parts = 0.0;  // the PARTs as printed: the last one makes them 100 exactly
   for (std::size_t k = first; k <= last; ++k) {
     if (c.step[k].over_speed) s += "; " + warningText(k, c.step[k]) + "\n";
     s += "; " + stepText(samples[k], c.table_deg[k]) + "\n";
@@ -106,7 +111,10 @@ std::string block(const ProgramContext& c, std::size_t first, std::size_t last) 
            out(c, levelAfter(c.switches[k], c.options.trigger)) + "\n";
     }
     s += "    SPTP " + target(c, k) + "\n";
-    s += "    TIME_BLOCK PART=" + fixed(100.0 * c.step[k].dt / total, kDecimals) + "\n";
+    std::string part = fixed(100.0 * c.step[k].dt / total, kPartDecimals);
+    if (k == last) part = fixed(std::max(0.0, 100.0 - parts), kPartDecimals);
+    parts += std::stod(part);
+    s += "    TIME_BLOCK PART=" + part + "\n";
   }
   s += "    TIME_BLOCK END=" + fixed(total, kDecimals) + "\n  ENDSPLINE\n";
   return s;
@@ -126,6 +134,8 @@ std::string krlProgram(const ProgramContext& c) {
          "\n";
   }
   s += "  PTP " + target(c, 0) + "\n";
+  // The spline blocks are timed by TIME_BLOCK: the axes' velocity limits at 100 % under it.
+  if (samples.size() > 1) s += "  " + std::string(kVel) + "(100, 100)\n";
   std::size_t first = 1;
   for (const std::size_t last : samples.size() > 1 ? blockEnds(c) : std::vector<std::size_t>{}) {
     s += block(c, first, last);

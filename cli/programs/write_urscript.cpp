@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "cli/programs/detail/program_text.h"
+#include "kinematics/error.h"
 #include "kinematics/units.h"
 
 namespace scanplan::cli::detail {
@@ -90,6 +91,12 @@ std::string urSetup(const ProgramContext& c) {
 std::string urscriptProgram(const ProgramContext& c) {
   const auto& samples = c.trajectory.samples;
   const ProgramOptions& o = c.options;
+  if (o.trigger.output > 7) {
+    throw InputError(
+        fmt::format("URScript program: trigger output {}: expected 1 ... 7 "
+                    "(set_digital_out's standard outputs; 0: none)",
+                    o.trigger.output));
+  }
   double slowest = std::numeric_limits<double>::infinity();
   for (int j = 0; j < kNumJoints; ++j) slowest = std::min(slowest, c.robot.joint(j).max_speed);
   const double approach_v = o.approach_speed_percent / 100.0 * slowest;

@@ -62,6 +62,9 @@ std::string vplusProgram(const ProgramContext& c, const std::string& table_file)
   for (std::string word; words >> word;) out += "    " + word + "\n";
   out += toolLine(o);
   if (trigger) out += signal(c, levelAfter(Switch::kOff, o.trigger));
+  if (o.vplus_table_start_signal > 0) {  // off first: the table controller sees a rising edge
+    out += "    SIGNAL -" + std::to_string(o.vplus_table_start_signal) + "\n";
+  }
   // The switch at sample k goes after the MOVE that leaves it (k + 1), or after a BREAK.
   const auto switchAt = [&](std::size_t k) {
     if (c.switches[k] != Switch::kNone) out += signal(c, levelAfter(c.switches[k], o.trigger));

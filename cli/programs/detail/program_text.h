@@ -113,6 +113,7 @@ class LineReader {
  public:
   static constexpr std::size_t kMaxLine = 1000;  // characters in a program line
 
+  /// `text` must outlive the reader: lines are taken from it as they are read.
   LineReader(const std::string& text, const std::string& source);
   /// The next line, trimmed (false at the end); refuses a line over kMaxLine characters
   /// before any pattern sees it (std::regex recurses per character).
@@ -123,7 +124,7 @@ class LineReader {
   const std::string& source() const { return source_; }
 
  private:
-  std::vector<std::string> lines_;
+  const std::string& text_;
   std::size_t at_ = 0;
   int line_number_ = 0;
   const std::string& source_;
