@@ -632,8 +632,8 @@ TEST_F(Programs, AnEndlessTableIsWrittenWrappedAndReadsBackTheSameMotion) {
         return tr.samples.back().theta;
       }();
       // (KRL: its times within kKrlTimeTol, at up to 40°/s of the table)
-      EXPECT_NEAR(toDeg(b.theta - offset - want), 0.0, 1e-5 + 40.0 * kKrlTimeTol) << name << " t "
-                                                                                   << b.t;
+      EXPECT_NEAR(toDeg(b.theta - offset - want), 0.0, 1e-5 + 40.0 * kKrlTimeTol)
+          << name << " t " << b.t;
     }
   }
   Trajectory jump = smallTrajectory();
@@ -783,6 +783,74 @@ TEST(ProgramsGrammar, KrlAndRapidParseWithAPublicGrammarWhereOneIsInstalled) {
     EXPECT_EQ(std::system(command.c_str()), 0) << command;
   }
   fs::remove_all(dir);
+}
+
+}  // namespace
+
+namespace {
+
+std::string replaceFirst(std::string text, const std::string& from, const std::string& to) {
+  const auto at = text.find(from);
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  return text;
+}
+
+// What a reader does not model it refuses, naming the line: an edited program must not read
+// back as the plan while the controller would run something else.
+TEST(ProgramReaders, RefuseWhatTheyDoNotModel) {
+  const RobotModel viper = test::bundledRobot("viper_s650");
+  std::mt19937 rng(13);
+  const Trajectory tr = randomTrajectory(viper, rng, 30);
+  ProgramOptions options;
+  options.servo_period = 0.05;
+  const auto text = [&](ProgramFormat f) {
+    return cli::writeProgram(tr, viper, f, options).files[0].second;
+  };
+  struct Case {
+    ProgramFormat format;
+    std::string edited;
+    std::string message;
+  };
+  const std::string v2 = text(ProgramFormat::kVplus), src = text(ProgramFormat::kKrl),
+                    mod = text(ProgramFormat::kRapid), script = text(ProgramFormat::kUrscript);
+  const std::vector<Case> cases = {
+      {ProgramFormat::kVplus, replaceFirst(v2, "    DURATION 0.100000\n", ""),
+       "MOVE without DURATION"},
+      {ProgramFormat::kVplus,
+       replaceFirst(v2, "    DURATION 0.100000\n", "    DURATION 0.1 ALWAYS\n"),
+       "DURATION ... ALWAYS is not read"},
+      {ProgramFormat::kKrl,
+       replaceFirst(src, "  ENDSPLINE\n",
+                    "    SPTP {A1 1, A2 2, A3 3, A4 4, A5 5, A6 6, E1 7}\n  ENDSPLINE\n"),
+       "SPTP outside a timed PTP_SPLINE block"},
+      {ProgramFormat::kKrl, replaceFirst(src, "    SPTP {", "    SPTP_REL {"),
+       "not an instruction this reader knows"},
+      {ProgramFormat::kRapid, replaceFirst(mod, "v1000\\T:=0.100000, z0", "v1000, z0"),
+       "without \\T"},
+      {ProgramFormat::kRapid, replaceFirst(mod, "  PROC scan()\n", "  PROC scan()\n    Stop;\n"),
+       "a call outside PROC main()"},
+      {ProgramFormat::kRapid, replaceFirst(mod, "    scan;\n", "    other;\n"),
+       "expected the call of a procedure of this module"},
+      {ProgramFormat::kUrscript,
+       replaceFirst(script, "    servoj(q,", "    sleep(0.1)\n    servoj(q,"),
+       "expected servo(q) to hold one 'servoj"},
+  };
+  for (const Case& c : cases) {
+    const std::string name = cli::programFormatName(c.format);
+    ASSERT_NE(c.edited, text(c.format)) << name << ": the edit did not apply: " << c.message;
+    try {
+      cli::readProgram(c.edited, c.format, "p");
+      ADD_FAILURE() << name << ": no error for " << c.message;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(c.message), std::string::npos) << e.what();
+      EXPECT_EQ(std::string(e.what()).rfind("p:", 0), 0u) << e.what();
+    }
+  }
+  // A servo path cut short: the last servo step before the last step comment's time.
+  std::string cut = script;
+  const auto last = cut.rfind("\n  servo([");
+  cut.erase(last, cut.find('\n', last + 1) - last);
+  EXPECT_THROW(cli::readProgram(cut, ProgramFormat::kUrscript, "p"), InputError);
 }
 
 }  // namespace
