@@ -60,7 +60,8 @@ struct ReplayScene {
 };
 
 struct ReplayOptions {
-  std::size_t max_frames = 2000;    ///< the trajectory subsampled evenly in time to this many
+  std::size_t max_frames =
+      2000;  ///< the trajectory's samples (evenly spaced in time) thinned evenly to this many
   std::size_t max_points = 150000;  ///< the cloud's subsample
   double chord_tolerance = 1e-3;    ///< m, round primitives' tessellation
 };
