@@ -539,6 +539,10 @@ std::string usageHint(CLI::App& app, int argc, char** argv) {
                        near.empty() ? "" : "; did you mean '" + near + "'?",
                        fmt::join(commands, ", "));
   }
+  if (at != &app && at->get_require_subcommand_min() > 0) {
+    return fmt::format("'{}' needs a command: {}", at->get_name(),
+                       fmt::join(subcommandNames(*at), ", "));
+  }
   return "";
 }
 

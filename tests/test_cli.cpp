@@ -263,6 +263,7 @@ TEST_F(Cli, MistypedCommandsAndOptionsSayWhatWasMeant) {
       {{"validate", kDemoJob, "-t", "x.csv", "--jsn"},
        "unknown option '--jsn' for 'validate'; did you mean '--json'?"},
       {{"frobnicate"}, "unknown command 'frobnicate' (expected one of: plan, validate"},
+      {{"job"}, "'job' needs a command: show, schema"},
   };
   for (const auto& [args, message] : cases) {
     const Result run = scanplan(args);
