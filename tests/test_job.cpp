@@ -364,6 +364,18 @@ TEST_F(JobFile, OutOfRangeValuesAreRejected) {
                         {at("job.yaml", "3:"), "constraints.clearance.hull_vertices: 4"}));
   EXPECT_TRUE(loadFails(writeJob("constraints: {clearance: {hull_margin_mm: -1}}\n"),
                         {at("job.yaml", "3:"), "constraints.clearance.hull_margin_mm: -1"}));
+  // The programs' payload and trigger (issue 19).
+  EXPECT_TRUE(loadFails(writeJob("scanner: {mass_kg: -1}\n"),
+                        {at("job.yaml", "3:"), "scanner.mass_kg: -1"}));
+  EXPECT_TRUE(loadFails(writeJob("scanner: {cog_mm: [0, 0]}\n"),
+                        {at("job.yaml", "3:"), "scanner.cog_mm"}));
+  EXPECT_TRUE(loadFails(writeJob("outputs: {trigger: {output: 5000}}\n"),
+                        {at("job.yaml", "3:"), "outputs.trigger.output: 5000"}));
+  EXPECT_TRUE(loadFails(writeJob("outputs: {trigger: {output: 1, rapid_signal: 9bad}}\n"),
+                        {at("job.yaml", "3:"), "outputs.trigger.rapid_signal: '9bad'",
+                         "a RAPID identifier"}));
+  EXPECT_TRUE(loadFails(writeJob("outputs: {servo_period_s: 5}\n"),
+                        {at("job.yaml", "3:"), "outputs.servo_period_s: 5"}));
 }
 
 // Pair rules address bodies by name, glob and group: an obstacle named like a body, a group or
