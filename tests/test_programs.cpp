@@ -654,6 +654,17 @@ TEST_F(Programs, EmptyOrBackwardsTrajectoryIsAnInputError) {
       EXPECT_NE(std::string(e.what()).find("sample 2"), std::string::npos) << e.what();
     }
   }
+  // URScript writes a line per servo step: a day-long trajectory at 1 ms is refused, not written.
+  Trajectory long_run = smallTrajectory();
+  long_run.samples.back().t = 86400.0;
+  ProgramOptions fine;
+  fine.servo_period = 0.001;
+  try {
+    cli::writeProgram(long_run, viper_, ProgramFormat::kUrscript, fine);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("servo steps"), std::string::npos) << e.what();
+  }
   ProgramOptions bad;
   bad.approach_speed_percent = 0.0;
   EXPECT_THROW(cli::writeProgram(smallTrajectory(), viper_, ProgramFormat::kVplus, bad),

@@ -21,6 +21,8 @@ using kinematics::TrajectorySample;
 // is URScript's default.
 constexpr double kLookahead = 0.03;  // s
 constexpr int kGain = 300;
+// One program line per step (about 90 bytes): 2 M steps, 4.4 h at 8 ms, are 180 MB of script.
+constexpr std::size_t kMaxServoSteps = 2'000'000;
 
 std::string radians(const JointVector& q) {
   std::string s;
@@ -107,8 +109,14 @@ std::string urscriptProgram(const ProgramContext& c) {
   if (c.switches[0] != Switch::kNone) s += setOut(c, levelAfter(c.switches[0], o.trigger));
   // Servo step i reaches t0 + i·period (the last one: the last sample).
   const double t0 = samples.front().t, period = o.servo_period;
-  const auto steps =
-      static_cast<std::size_t>(std::max(0.0, std::ceil((samples.back().t - t0) / period - 1e-9)));
+  const double count = std::max(0.0, std::ceil((samples.back().t - t0) / period - 1e-9));
+  if (count > static_cast<double>(kMaxServoSteps)) {
+    throw InputError(fmt::format(
+        "URScript program: {:.0f} servo steps of {} s over {} s: expected at most {} (a longer "
+        "outputs.servo_period_s, or the scan in parts)",
+        count, fixed(period, 4), fixed(samples.back().t - t0, 1), kMaxServoSteps));
+  }
+  const auto steps = static_cast<std::size_t>(count);
   std::size_t i = 0;  // servo steps written
   for (std::size_t k = 1; k < samples.size(); ++k) {
     if (c.step[k].over_speed) s += "  # " + warningText(k, c.step[k]) + "\n";
