@@ -32,8 +32,7 @@ CollisionWatch::CollisionWatch(const collision::Scene& scene,
     : scene_(&scene),
       options_(options),
       model_(scene.cell().robot, X_FT, options.model),
-      evaluator_(scene),
-      levers_(scene) {
+      evaluator_(scene) {
   if (options.window < 3) throw std::invalid_argument("CollisionWatch: window below 3 samples");
   if (!(options.horizon > 0.0) || !(options.step > 0.0) || !std::isfinite(options.horizon)) {
     throw std::invalid_argument("CollisionWatch: horizon and step must be positive");
@@ -59,22 +58,6 @@ std::optional<double> CollisionWatch::contactTime(const kinematics::MotionFit& f
   return before;  // the last time seen free: contact comes after it
 }
 
-// True when every pair is proven at least `bound` apart at `pose` from its distance at the last
-// measured pose and how far the joints and table turned since (ChainLevers); pairs without a
-// robot link only while the table has not turned.
-bool CollisionWatch::provenFar(const kinematics::AxisSample& pose, double bound) const {
-  for (std::size_t k = 0; k < measured_distance_.size(); ++k) {
-    if (!levers_.covers(k)) {
-      if (pose.theta != measured_.theta || measured_distance_[k] < bound) return false;
-      continue;
-    }
-    const double moved =
-        levers_.motion(k, levers_.weights(k), measured_.theta, measured_.q, pose.theta, pose.q);
-    if (measured_distance_[k] - moved < bound) return false;
-  }
-  return true;
-}
-
 CollisionWatch::Prediction CollisionWatch::predictAhead(const kinematics::MotionFit& fit) {
   const std::size_t pairs = scene_->pairs().size();
   Prediction p{std::vector<double>(pairs, kInf),
@@ -84,6 +67,7 @@ CollisionWatch::Prediction CollisionWatch::predictAhead(const kinematics::Motion
                std::nullopt,
                0.0};
   collision::ClearanceRequest request;
+  request.bounded = options_.bounded;
   request.bound = std::max(options_.warn_distance, options_.stop_distance);
   const auto steps = static_cast<int>(std::ceil(options_.horizon / options_.step - 1e-9));
   double before = 0.0;
@@ -92,18 +76,10 @@ CollisionWatch::Prediction CollisionWatch::predictAhead(const kinematics::Motion
     const auto pose = model_.predict(fit, window_.back(), tau);
     if (!pose) break;  // out of reach or limits: the controller stops the motion there
     p.predicted = tau;
-    if (options_.motion_bounds && provenFar(*pose, request.bound)) {
-      before = tau;
-      continue;
-    }
     const collision::ClearanceResult r = evaluator_.evaluate(pose->theta, pose->q, request);
-    measured_ = *pose;
-    for (std::size_t k = 0; k < pairs; ++k) {
-      measured_distance_[k] = r.pairs[k].beyond_bound ? request.bound : r.pairs[k].distance;
-    }
     for (std::size_t k = 0; k < pairs; ++k) {
       const collision::PairClearance& c = r.pairs[k];
-      if (c.beyond_bound) continue;
+      if (c.beyond_bound || c.distance >= request.bound) continue;
       if (c.distance < p.closest[k]) {
         p.closest[k] = c.distance;
         p.at[k] = tau;
@@ -142,24 +118,21 @@ WatchStep CollisionWatch::push(const kinematics::AxisSample& sample) {
   if (step.fit.kind == kinematics::MotionKind::kStill) return step;
 
   collision::ClearanceRequest request;
+  request.bounded = options_.bounded;
   request.bound = std::max(options_.warn_distance, options_.stop_distance);
   const collision::ClearanceResult now = evaluator_.evaluate(sample.theta, sample.q, request);
-  measured_ = sample;
-  measured_distance_.resize(now.pairs.size());
-  for (std::size_t k = 0; k < now.pairs.size(); ++k) {
-    measured_distance_[k] = now.pairs[k].beyond_bound ? request.bound : now.pairs[k].distance;
-  }
   const Prediction p = predictAhead(step.fit);
   step.predicted = p.predicted;
   for (std::size_t k = 0; k < p.closest.size(); ++k) {
     const collision::PairClearance& c = now.pairs[k];
-    const double d_now = c.beyond_bound ? request.bound : c.distance;
+    const bool far = c.beyond_bound || c.distance >= request.bound;
+    const double d_now = far ? request.bound : c.distance;
     const bool within = p.closest[k] < options_.warn_distance || p.stop[k];
     if (!within || !(p.closest[k] < d_now - kCloser)) continue;  // not getting closer
     WatchWarning w;
     w.pair = static_cast<int>(k);
     w.distance_now = d_now;
-    w.far_now = c.beyond_bound;
+    w.far_now = far;
     w.closest = p.touching[k] ? 0.0 : p.closest[k];
     w.time_to_closest = p.at[k];
     if (p.touching[k]) w.time_to_contact = p.contact;

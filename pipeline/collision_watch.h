@@ -10,7 +10,6 @@
 
 #include <Eigen/Geometry>
 
-#include "collision/chain_levers.h"
 #include "collision/clearance.h"
 #include "collision/scene.h"
 #include "kinematics/motion_model.h"
@@ -26,10 +25,10 @@ struct WatchOptions {
   double stop_distance = -1.0;
   double stop_time = 0.2;  ///< s: how far ahead a stop distance breach calls for a stop
   kinematics::MotionModelOptions model;
-  /// Skip a predicted pose's clearance queries when the joint-difference motion bounds
-  /// (collision::ChainLevers) prove every pair still beyond the distances that matter; the
-  /// warnings are the same either way (false: the reference path for the benchmark).
-  bool motion_bounds = true;
+  /// Measure each pair only below the distance that matters (the larger of the warning and
+  /// stop distances); false: every pair's exact distance at every predicted pose, the
+  /// straightforward reference of the benchmark. The warnings are the same either way.
+  bool bounded = true;
 };
 
 /// One body pair that is getting closer and is predicted within the warning distance.
@@ -71,18 +70,12 @@ class CollisionWatch {
   struct Prediction;
   Prediction predictAhead(const kinematics::MotionFit& fit);
   std::optional<double> contactTime(const kinematics::MotionFit& fit, double before, double at);
-  bool provenFar(const kinematics::AxisSample& pose, double bound) const;
 
   const collision::Scene* scene_;
   WatchOptions options_;
   kinematics::MotionModel model_;
   collision::ClearanceEvaluator evaluator_;
-  collision::ChainLevers levers_;
   std::vector<kinematics::AxisSample> window_;
-  // The last pose measured along the current prediction, and each pair's distance there (the
-  // bound where it was beyond): the base of the motion-bound skipping.
-  kinematics::AxisSample measured_;
-  std::vector<double> measured_distance_;
 };
 
 }  // namespace scanplan::pipeline
