@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <numbers>
 #include <random>
 
 namespace scanplan::scanner {
@@ -40,7 +41,7 @@ std::optional<Eigen::Vector2d> CameraModel::project(const Eigen::Vector3d& p_S) 
   const double psi = std::atan2(-side * r.x(), r.z());
   const double off_axis = optics.phi - psi;
   const double xz = std::hypot(r.x(), r.z());
-  if (!(std::abs(off_axis) < 0.5 * 3.14159265358979323846) || !(xz > 0.0)) return std::nullopt;
+  if (!(std::abs(off_axis) < 0.5 * std::numbers::pi) || !(xz > 0.0)) return std::nullopt;
   const double f = focal();
   return Eigen::Vector2d(f * r.y() / xz, f * std::tan(off_axis));
 }

@@ -84,8 +84,9 @@ struct CloudPoint {
 struct SimulationStats {
   std::size_t profiles = 0;
   std::size_t laser_rays = 0;      ///< fan rays cast
-  std::size_t occlusion_rays = 0;  ///< hit → camera rays cast
-  std::size_t hits = 0;            ///< fan rays with a hit before the far edge z_max
+  std::size_t occlusion_rays = 0;  ///< hit → camera rays cast (image mode: laser-reach rays)
+  /// fan rays with a hit before the far edge z_max (image mode: columns with a stripe)
+  std::size_t hits = 0;
   std::size_t outside_window = 0;  ///< nearest hits outside the trapezoid (Eq. 5)
   std::size_t occluded = 0;        ///< in the trapezoid but not seen by the camera rule
   std::size_t points = 0;
