@@ -627,6 +627,11 @@ TEST(JobImageMode, BadKeysAreRefusedNamingTheKey) {
                     {"scanner.cameras", "both", "simulation.mode: image"}));
   EXPECT_TRUE(fails({"simulation.mode=image", "scanner.noise.longitudinal_mm=0.02"},
                     {"scanner.noise.longitudinal_mm", "0.02", "noise_grey"}));
+  // Bounded work: an image of more than 2048 × 2048 pixels, named by the key that made it.
+  EXPECT_TRUE(fails({"simulation.mode=image", "scanner.camera={rows: 4096, columns: 2048}"},
+                    {"scanner.camera.columns", "8388608 pixels", "4194304"}));
+  EXPECT_TRUE(fails({"simulation.mode=image", "scanner.rays_per_profile=20000"},
+                    {"scanner.rays_per_profile", "5120000 pixels"}));
   // The same keys with good values load.
   const JobSpec job = loadJob(
       demo, {"simulation.mode=image", "scanner.camera={rows: 300, columns: 150, noise_grey: 2, "

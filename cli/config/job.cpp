@@ -170,7 +170,29 @@ void describeReflectance(A& a, SimulationSpec::Reflectance& s) {
 // errors name the scanner key at its place in the file).
 void checkImageMode(const YamlIn& a, const JobSpec& s) {
   if (s.simulation.mode != "image") return;
-  const YAML::Node scanner = a.node()["scanner"];
+  const YAML::Node& root = a.node();
+  const YAML::Node scanner = std::as_const(root)["scanner"];
+  // Each thread holds one image with what every pixel saw: ~100 bytes a pixel.
+  constexpr long long kMaxImagePixels = 4'194'304;  // 2048 × 2048, ~400 MB per thread
+  const CameraSpec& camera = s.scanner.camera;
+  const long long columns = camera.columns > 0 ? camera.columns : s.scanner.rays_per_profile;
+  const long long pixels = static_cast<long long>(camera.rows) * columns;
+  if (pixels > kMaxImagePixels) {
+    const std::string value = fmt::format("{} rows x {} columns = {} pixels", camera.rows, columns,
+                                          pixels);
+    const std::string expected = fmt::format(
+        "at most {} pixels per image with simulation.mode: image (each thread holds one, ~100 "
+        "bytes a pixel)",
+        kMaxImagePixels);
+    const YAML::Node node = std::as_const(scanner)["camera"];
+    if (node.IsDefined() && node.IsMap() &&
+        (std::as_const(node)["columns"].IsDefined() || std::as_const(node)["rows"].IsDefined())) {
+      YamlIn in(node, "scanner.camera", a.file(), a.overrides());
+      in.fail(std::as_const(node)["columns"].IsDefined() ? "columns" : "rows", value, expected);
+    }
+    YamlIn in(scanner, "scanner", a.file(), a.overrides());
+    in.fail("rays_per_profile", value, expected + " (columns default to rays_per_profile)");
+  }
   if (s.scanner.cameras == "both" || s.scanner.cameras == "either") {
     YamlIn in(scanner, "scanner", a.file(), a.overrides());
     in.fail("cameras", "'" + s.scanner.cameras + "'",
@@ -179,7 +201,7 @@ void checkImageMode(const YamlIn& a, const JobSpec& s) {
   for (const auto& [key, value] : {std::pair{"longitudinal_mm", s.scanner.noise.longitudinal_mm},
                                    std::pair{"orthogonal_mm", s.scanner.noise.orthogonal_mm}}) {
     if (value == 0.0) continue;
-    YamlIn in(scanner["noise"], "scanner.noise", a.file(), a.overrides());
+    YamlIn in(std::as_const(scanner)["noise"], "scanner.noise", a.file(), a.overrides());
     in.fail(key, formatNumber(value),
             "0 with simulation.mode: image (its noise is scanner.camera.noise_grey, in the image)");
   }
