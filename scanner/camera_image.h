@@ -68,8 +68,10 @@ enum class StripeMethod {
 
 /// How a profile image is made and read.
 struct ImageSettings {
-  int rows = 256;     ///< H, pixels (≥ 2)
-  int columns = 200;  ///< W, pixels (≥ 1)
+  /// H × W, pixels (rows ≥ 2, columns ≥ 1): the simulator builds its CameraModel from them;
+  /// renderProfileImage() itself renders the camera's own rows and columns.
+  int rows = 256;
+  int columns = 200;
   /// Laser sheet thickness, m: its irradiance across the sheet is Gaussian,
   /// E(x) = exp(−2x²/w²) with w = thickness / 2 (the 1/e² half width); a point with |x| > w is
   /// not lit.

@@ -133,6 +133,11 @@ std::vector<Eigen::Vector3d> cameraCentres(const LaserOptics& optics, CameraRule
 /// hit to its centre. Noise is drawn after these decisions, so it never changes which rays
 /// yield points.
 ///
+/// In image mode (SimulationSettings::mode, seed §5.3) the same scene renders each profile's
+/// camera image instead (camera_image.h: a camera ray per pixel against every group the
+/// profile's rays can reach, a laser-reach ray per pixel in the sheet), the stripe is detected
+/// per column and triangulated with Eq. 4, and the point goes to the part frame as above.
+///
 /// Immutable once built; simulate() is const, runs profiles in parallel (TBB) and returns the
 /// same cloud for any thread count.
 class ScanSimulator {
