@@ -272,7 +272,8 @@ const std::vector<std::string> kPlanOutputs{
     "job.yaml",        "report.json",  "trajectory.csv", "trajectory_invalid.csv",
     "programs",        "path.csv",     "path.png",       "configmap*",
     "cloud.ply",       "coverage.ply", "cloud.png",      "uncovered.ply",
-    "certificate.png", "replay.html",  "cell.png",       "setup2"};
+    "certificate.png", "replay.html",  "cell.png",       "setup2",
+    "profiles"};
 
 // The command's result on stdout: the text summary, or with --json one JSON document (the
 // report, the output folder and the summary's lines).
@@ -361,6 +362,7 @@ ExitCode runPlan(const PlanOptions& options) {
       "{}{}\n",
       options.out_dir.string(),
       std::string(plan.simulation ? "cloud.ply, coverage.ply, cloud.png, " : "") +
+          (plan.simulation && !plan.simulation->profile_images.empty() ? "profiles/, " : "") +
           (std::filesystem::exists(options.out_dir / "replay.html") ? "replay.html, " : "") +
           "cell.png, " + (plan.certificate ? "uncovered.ply, certificate.png, " : "") +
           (setups.contains("setups") ? "setup2/, " : ""),

@@ -81,7 +81,8 @@ ExitCode runSimulate(const VerifyOptions& options) {
   const kinematics::CellModel cell = buildCell(job);
   const kinematics::LoadedMesh part = loadPart(job, cell);
   const kinematics::Trajectory trajectory = loadTrajectory(options.trajectory_file);
-  OutputStage stage(options.out_dir, {"cloud.ply", "coverage.ply", "cloud.png", "simulation.json"});
+  OutputStage stage(options.out_dir, {"cloud.ply", "coverage.ply", "cloud.png", "simulation.json",
+                                          "profiles"});
   const pipeline::SimulationRun run = onTrajectory(options.trajectory_file, [&] {
     return pipeline::simulateTrajectory(cell, part.mesh, laserOptics(job),
                                         simulationSettings(job, cell), trajectory);
@@ -95,8 +96,8 @@ ExitCode runSimulate(const VerifyOptions& options) {
   writeFileAtomically(stage.dir() / "simulation.json", jsonDocument(json));
   stage.commit();
   std::string text = simulationSummary(run);
-  text += fmt::format("wrote      {}: cloud.ply, coverage.ply, cloud.png, simulation.json\n",
-                      options.out_dir.string());
+  text += fmt::format("wrote      {}: cloud.ply, coverage.ply, cloud.png, simulation.json{}\n",
+                      options.out_dir.string(), run.profile_images.empty() ? "" : ", profiles/");
   std::fputs(text.c_str(), stdout);
   return ExitCode::kOk;
 }
