@@ -10,6 +10,9 @@
 
 #include <fcl/narrowphase/collision.h>
 #include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
 
 #include "collision/fcl_geometry.h"
 #include "collision/primitive_distance.h"
@@ -299,7 +302,7 @@ struct SensorEvaluator::Impl {
   const Scene* scene = nullptr;
   std::vector<int> carrier;                      // per sensor: body index, -1 world
   std::vector<detail::CollisionShape> volumes;   // per sensor: presence volume (else empty)
-  std::vector<std::vector<RayShape>> ray_bodies; // per body: its shapes for the beams
+  std::vector<std::vector<RayShape>> ray_bodies; // per body: its shapes (meshes' trees shared)
   std::vector<Eigen::Isometry3d> X_W;            // scratch: body poses
   std::vector<Eigen::Isometry3d> X_WS;           // sensor poses at the last evaluation
   bool any_distance = false;
@@ -329,6 +332,14 @@ struct SensorEvaluator::Impl {
       const double gap = ((X_WV * volume.centre_G) - (X_WG * shape.centre_G)).norm() -
                          volume.radius - shape.radius;
       if (gap > 1e-9) continue;
+      // Then the separating-axis gap to a mesh's bounding box (or the primitive itself).
+      if (volume.primitive && (shape.primitive || shape.bounding_box)) {
+        Primitive a = *volume.primitive;
+        Primitive b = shape.primitive ? *shape.primitive : *shape.bounding_box;
+        a.X_W = X_WV * a.X_W;
+        b.X_W = X_WG * b.X_W;
+        if (detail::quickLowerBound(a, b) > 1e-9) continue;
+      }
       if (volume.primitive && shape.primitive) {
         // Exact closed forms where they exist (FCL's GJK is good to 1e-6 m only).
         Primitive a = *volume.primitive, b = *shape.primitive;
@@ -419,6 +430,8 @@ SensorEvaluator::SensorEvaluator(const Scene& scene) : impl_(std::make_unique<Im
 }
 
 SensorEvaluator::~SensorEvaluator() = default;
+SensorEvaluator::SensorEvaluator(const SensorEvaluator& other)
+    : impl_(std::make_unique<Impl>(*other.impl_)) {}
 SensorEvaluator::SensorEvaluator(SensorEvaluator&&) noexcept = default;
 SensorEvaluator& SensorEvaluator::operator=(SensorEvaluator&&) noexcept = default;
 
@@ -463,14 +476,30 @@ SensorEvaluation evaluateSensors(const Scene& scene,
   const std::size_t n = scene.cell().sensors.size();
   out.readings.assign(n, {});
   if (n == 0) return out;
-  SensorEvaluator evaluator(scene);
-  out.t.reserve(samples.size());
-  for (auto& series : out.readings) series.reserve(samples.size());
-  for (const kinematics::TrajectorySample& sample : samples) {
-    out.t.push_back(sample.t);
-    std::vector<SensorReading> at = evaluator.evaluate(sample.theta, sample.q);
-    for (std::size_t s = 0; s < n; ++s) out.readings[s].push_back(std::move(at[s]));
+  if (samples.size() > kMaxSensorReadings / n) {
+    throw InputError(fmt::format(
+        "{} sensors at {} poses would be {} readings, more than {}: expected fewer sensors, a "
+        "shorter trajectory or a lower rate (scanner.frame_rate_hz)",
+        n, samples.size(), static_cast<double>(n) * static_cast<double>(samples.size()),
+        kMaxSensorReadings));
   }
+  SensorEvaluator first(scene);  // resolves the carriers (and throws) before any thread starts
+  out.t.reserve(samples.size());
+  for (const kinematics::TrajectorySample& sample : samples) out.t.push_back(sample.t);
+  for (auto& series : out.readings) series.resize(samples.size());
+  // Poses are independent: evaluated in parallel, one evaluator per thread, each reading put at
+  // its sample's place, so the result does not depend on the thread count.
+  tbb::enumerable_thread_specific<std::optional<SensorEvaluator>> evaluators;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples.size(), 64),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      std::optional<SensorEvaluator>& evaluator = evaluators.local();
+                      if (!evaluator) evaluator.emplace(first);
+                      for (std::size_t k = range.begin(); k < range.end(); ++k) {
+                        std::vector<SensorReading> at =
+                            evaluator->evaluate(samples[k].theta, samples[k].q);
+                        for (std::size_t s = 0; s < n; ++s) out.readings[s][k] = std::move(at[s]);
+                      }
+                    });
   return out;
 }
 

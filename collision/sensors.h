@@ -62,6 +62,9 @@ class SensorEvaluator {
   /// Throws InputError when a sensor's carrier names no body of the scene (listing them).
   explicit SensorEvaluator(const Scene& scene);
   ~SensorEvaluator();
+  /// A copy shares the immutable geometry (volumes, the meshes' ray-cast trees) and has scratch
+  /// of its own: one per thread.
+  SensorEvaluator(const SensorEvaluator& other);
   SensorEvaluator(SensorEvaluator&&) noexcept;
   SensorEvaluator& operator=(SensorEvaluator&&) noexcept;
 
@@ -82,7 +85,11 @@ class SensorEvaluator {
 /// the hit surface).
 inline constexpr double kReceiverClearance = 1e-6;
 
-/// Every sensor at every sample (in order). Deterministic.
+/// The most readings (sensors × samples) evaluateSensors() makes: about 0.5 GB.
+inline constexpr std::size_t kMaxSensorReadings = 10'000'000;
+
+/// Every sensor at every sample (in order). Deterministic. Throws InputError, before allocating,
+/// when that would be more than kMaxSensorReadings readings.
 SensorEvaluation evaluateSensors(const Scene& scene,
                                  const std::vector<kinematics::TrajectorySample>& samples);
 

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <tbb/global_control.h>
 
 #include <yaml-cpp/yaml.h>
 
@@ -428,12 +429,37 @@ TEST(Sensors, ABeamCarriedWithThePartReadsTheSameAtEveryTableAngle) {
   }
 }
 
-TEST(Sensors, EvaluationIsDeterministic) {
-  const Curtain c = curtain();
+TEST(Sensors, ReadingsAreBoundedBeforeAllocating) {
+  Demo d = demo();
+  for (std::size_t i = 0; i < cli::kMaxSensors; ++i) {
+    d.cell.sensors.push_back(presence("s" + std::to_string(i), "world",
+                                      Eigen::Isometry3d::Identity(), kinematics::Sphere{0.01}));
+  }
+  const collision::Scene scene = sceneOf(d);
+  const std::vector<TrajectorySample> samples(collision::kMaxSensorReadings / cli::kMaxSensors +
+                                              1);
+  EXPECT_TRUE(test::throwsInputError([&] { collision::evaluateSensors(scene, samples); },
+                                     {"64 sensors at 156251 poses", "more than 10000000",
+                                      "scanner.frame_rate_hz"}));
+}
+
+TEST(Sensors, EvaluationIsDeterministicWhateverTheThreadCount) {
+  Curtain c = curtain();
+  // With a triangulation sensor on the scanner too, looking down its laser axis.
+  Sensor probe = beam("probe", Eigen::Isometry3d::Identity(), 0.05, 1.0);
+  probe.carrier = "scanner";
+  probe.p_SR = Eigen::Vector3d(0.1, 0.0, 0.0);
+  c.d.cell.sensors.push_back(probe);
   const collision::Scene scene = sceneOf(c.d);
   const auto dense = planner::densify(c.trajectory, 0.05);
   const auto a = collision::evaluateSensors(scene, dense.samples);
   const auto b = collision::evaluateSensors(scene, dense.samples);
+  collision::SensorEvaluation one_thread;
+  {
+    tbb::global_control serial(tbb::global_control::max_allowed_parallelism, 1);
+    one_thread = collision::evaluateSensors(scene, dense.samples);
+  }
+  EXPECT_EQ(cli::sensorsCsv(scene, a), cli::sensorsCsv(scene, one_thread));
   EXPECT_EQ(cli::sensorsCsv(scene, a), cli::sensorsCsv(scene, b));
   EXPECT_EQ(cli::sensorsSummary(scene, a), cli::sensorsSummary(scene, b));
 }
@@ -500,6 +526,23 @@ TEST(SensorJob, KeysBecomeTheCellsSensors) {
   EXPECT_EQ(b.expect.t1, 5.0);
   // Written back and read again: the same job.
   EXPECT_NE(cli::jobToYaml(job).find("part_present"), std::string::npos);
+}
+
+TEST(SensorJob, TheDemosSensorsRoundTripThroughJobShow) {
+  const std::string first =
+      cli::jobToYaml(cli::loadJob(test::sourceDir() / "data/jobs/demo_sensors.yaml"));
+  for (const char* key : {"light_curtain", "expect: never", "receiver_mm", "max_range_mm: 300",
+                          "carrier: table", "shape: cylinder"}) {
+    EXPECT_NE(first.find(key), std::string::npos) << key;
+  }
+  const auto file = std::filesystem::temp_directory_path() /
+                    ("scanplan_test_sensors_shown_" + std::to_string(::getpid()) + ".yaml");
+  std::ofstream(file) << first;
+  const cli::JobSpec again = cli::loadJob(file);
+  std::filesystem::remove(file);
+  const std::string second = cli::jobToYaml(again);
+  EXPECT_EQ(second.substr(second.find('\n')), first.substr(first.find('\n')));
+  EXPECT_EQ(cli::buildCell(again).sensors.size(), 3u);
 }
 
 TEST(SensorJob, EveryBodyOfTheSceneMayCarryASensor) {
