@@ -55,8 +55,10 @@ struct SensorExpectation {
 
 /// A presence or distance sensor of the cell (seed §5.1–5.2). Its frame C is mounted on a
 /// carrier: the world (`carrier` empty or "world") or a body of the collision scene by name (a
-/// robot link, "scanner", "table", "part", an obstacle), whose frame it moves with. The carrier
-/// body itself is never seen by its own sensor.
+/// robot link, "scanner", "table", "part", an obstacle), whose frame it moves with: W for the
+/// world and world obstacles, link k's DH frame, S for the scanner, the table top R for the
+/// table, the part and table-carried obstacles. The carrier body itself is never seen by its
+/// own sensor.
 struct Sensor {
   enum class Kind {
     kPresence,  ///< a sensitive volume: which bodies overlap it (Boolean output)

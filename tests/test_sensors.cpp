@@ -284,6 +284,30 @@ TEST(Sensors, ASensorNeverSeesTheBodyCarryingIt) {
   EXPECT_EQ(evaluator.carrierBody(0), scene.bodyIndex("scanner"));
 }
 
+TEST(Sensors, CarrierFramesAreTheBodyFrames) {
+  // World: W; table and part: the table top R at θ; scanner: S; link 6: the flange F.
+  Demo d = demo();
+  Eigen::Isometry3d X_CS = Eigen::Isometry3d(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()));
+  X_CS.translation() << 0.01, 0.02, 0.03;
+  const kinematics::Sphere ball{0.001};
+  for (const char* carrier : {"world", "table", "part", "scanner", "link6"}) {
+    d.cell.sensors.push_back(presence(carrier, carrier, X_CS, ball));
+  }
+  const collision::Scene scene = sceneOf(d);
+  collision::SensorEvaluator evaluator(scene);
+  const double theta = 0.7;
+  const JointVector q = home(150.0);
+  evaluator.evaluate(theta, q);
+  const Eigen::Isometry3d X_WF = d.cell.X_WB * d.cell.robot.fk(q);
+  const Eigen::Isometry3d X_WR = d.cell.table.X_WR(theta);
+  constexpr double kTol = 1e-12;
+  EXPECT_TRUE(test::samePose(evaluator.sensorPose(0), X_CS, kTol));
+  EXPECT_TRUE(test::samePose(evaluator.sensorPose(1), X_WR * X_CS, kTol));
+  EXPECT_TRUE(test::samePose(evaluator.sensorPose(2), X_WR * X_CS, kTol));
+  EXPECT_TRUE(test::samePose(evaluator.sensorPose(3), X_WF * d.cell.scanner.X_FS * X_CS, kTol));
+  EXPECT_TRUE(test::samePose(evaluator.sensorPose(4), X_WF * X_CS, kTol));
+}
+
 // A world box far from the arm and the table: its top face at z = 0.2 m.
 Demo withSlab() {
   Demo d = demo();
