@@ -702,6 +702,16 @@ TEST_F(SensorCli, PlanValidateAndSimulateWriteTheSensorsOutputs) {
   EXPECT_EQ(v["validation"]["violations"][0]["kind"].as<std::string>(), "sensor");
   EXPECT_FALSE(v["sensors"][0]["rule_met"].as<bool>());
 
+  // check: the sensors at one pose.
+  const test::Result check =
+      scanplan({"check", kSensorJob, "--table", "30", "--time", "5", "--json"});
+  ASSERT_EQ(check.exit_code, 0) << test::describe(check);
+  const YAML::Node c = YAML::Load(check.out);
+  ASSERT_EQ(c["sensors"].size(), 3u);
+  EXPECT_FALSE(c["sensors"][0]["fires"].as<bool>());
+  EXPECT_EQ(c["sensors"][2]["status"].as<std::string>(), "reading");
+  EXPECT_EQ(c["sensors"][2]["body"].as<std::string>(), "part");
+
   // simulate writes the same file beside the cloud.
   const test::Result sim = scanplan(lightly({"simulate", kSensorJob, "-t", trajectory.string(),
                                              "-o", (dir_ / "s").string(), "--set",

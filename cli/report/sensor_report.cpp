@@ -159,4 +159,48 @@ Json sensorsJson(const collision::Scene& scene, const collision::SensorEvaluatio
   return out;
 }
 
+std::string sensorReadingsText(const collision::Scene& scene,
+                               const std::vector<collision::SensorReading>& readings) {
+  const auto& sensors = scene.cell().sensors;
+  std::string out;
+  for (std::size_t s = 0; s < sensors.size() && s < readings.size(); ++s) {
+    const collision::SensorReading& r = readings[s];
+    std::string what;
+    if (!isDistance(sensors[s])) {
+      what = r.fires ? fmt::format("fires ({})", fmt::join(bodyNames(scene, r.bodies), ", "))
+                     : std::string("clear");
+    } else if (r.fires) {
+      what = fmt::format("{:.3f} mm ({})", toMm(r.distance), bodyName(scene, r.body));
+    } else if (r.body < 0) {
+      what = fmt::format("no reading, {}", collision::beamStatusName(r.beam));
+    } else {
+      what = fmt::format("no reading, {} ({} at {:.3f} mm)", collision::beamStatusName(r.beam),
+                         bodyName(scene, r.body), toMm(r.distance));
+    }
+    out += fmt::format("sensor       {}: {}\n", sensors[s].name, what);
+  }
+  return out;
+}
+
+Json sensorReadingsJson(const collision::Scene& scene,
+                        const std::vector<collision::SensorReading>& readings) {
+  const auto& sensors = scene.cell().sensors;
+  Json out = Json::array();
+  for (std::size_t s = 0; s < sensors.size() && s < readings.size(); ++s) {
+    const collision::SensorReading& r = readings[s];
+    Json j = {{"name", sensors[s].name}, {"fires", r.fires}};
+    if (isDistance(sensors[s])) {
+      j["status"] = std::string(collision::beamStatusName(r.beam));
+      if (r.body >= 0) {
+        j["distance_mm"] = toMm(r.distance);
+        j["body"] = bodyName(scene, r.body);
+      }
+    } else {
+      j["bodies"] = bodyNames(scene, r.bodies);
+    }
+    out.push_back(std::move(j));
+  }
+  return out;
+}
+
 }  // namespace scanplan::cli

@@ -3,6 +3,7 @@
 // trajectory: sensors.csv, summary lines and report.json's `sensors` section.
 
 #include <string>
+#include <vector>
 
 #include "cli/io/json.h"
 #include "collision/scene.h"
@@ -25,5 +26,15 @@ std::string sensorsSummary(const collision::Scene& scene, const collision::Senso
 /// report.json's `sensors`: per sensor its name, kind, carrier, rule, whether the rule held,
 /// the spans where it fires (s, with the bodies) and, for distance sensors, the range read (mm).
 Json sensorsJson(const collision::Scene& scene, const collision::SensorEvaluation& e);
+
+/// `check`: each sensor at one pose, a line each: "sensor       light_curtain: fires (link6,
+/// scanner)", "… : clear", "… : 100.000 mm (part)", "… : no reading, receiver_occluded (part
+/// at 145.200 mm)". `readings` as SensorEvaluator::evaluate() returns them.
+std::string sensorReadingsText(const collision::Scene& scene,
+                               const std::vector<collision::SensorReading>& readings);
+/// The same as JSON: per sensor name, fires, and the bodies (presence) or status, distance_mm
+/// and body (distance).
+Json sensorReadingsJson(const collision::Scene& scene,
+                        const std::vector<collision::SensorReading>& readings);
 
 }  // namespace scanplan::cli
