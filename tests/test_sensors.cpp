@@ -141,14 +141,17 @@ struct Curtain {
   }
 };
 
-Curtain curtain() {
+// `X_WB`: the robot base in the world; the curtain keeps its place relative to the base.
+Curtain curtain(const Eigen::Isometry3d& X_WB = Eigen::Isometry3d::Identity()) {
   Curtain c{demo(), 0.03, Eigen::Isometry3d::Identity(), {0.15, 0.01, 0.02}, {}};
+  c.d.cell.X_WB = X_WB;
   kinematics::Shape sphere;
   sphere.geometry = kinematics::Sphere{c.radius};
   c.d.cell.scanner.body = {sphere};
   const Eigen::Vector3d at = c.sphereCentre(home(10.0));
-  c.X_WS = Eigen::Isometry3d(Eigen::AngleAxisd(deg(10.0), Eigen::Vector3d::UnitZ()));
-  c.X_WS.translation() = at - Eigen::Vector3d(0, 0, c.half.z());
+  c.X_WS = Eigen::Isometry3d(X_WB.linear() *
+                             Eigen::AngleAxisd(deg(10.0), Eigen::Vector3d::UnitZ()).matrix());
+  c.X_WS.translation() = at - X_WB.linear() * Eigen::Vector3d(0, 0, c.half.z());
   c.d.cell.sensors = {presence("light_curtain", "world", c.X_WS, kinematics::Box{2.0 * c.half})};
   c.d.cell.sensors[0].expect.kind = SensorExpectation::Kind::kNever;
   TrajectorySample a, b;
@@ -159,13 +162,16 @@ Curtain curtain() {
   return c;
 }
 
-TEST(Sensors, LightCurtainFiresExactlyWhileTheScannerOverlapsIt) {
-  const Curtain c = curtain();
-  const collision::Scene scene = sceneOf(c.d);
+// The curtain fires at exactly the samples where the sphere overlaps it by hand, in one span;
+// `first` and `last` get that span's ends.
+void expectCurtainFiresExactly(const Curtain& c,
+                               const collision::Scene& scene,
+                               double& first,
+                               double& last) {
   const auto dense = planner::densify(c.trajectory, 0.01);
   const collision::SensorEvaluation e = collision::evaluateSensors(scene, dense.samples);
   ASSERT_EQ(e.t.size(), dense.samples.size());
-  double first = -1.0, last = -1.0;
+  first = last = -1.0;
   std::size_t judged = 0;
   for (std::size_t k = 0; k < dense.samples.size(); ++k) {
     const double gap = c.gap(dense.samples[k].q);
@@ -188,6 +194,13 @@ TEST(Sensors, LightCurtainFiresExactlyWhileTheScannerOverlapsIt) {
   EXPECT_DOUBLE_EQ(spans[0].t_start, first);
   EXPECT_DOUBLE_EQ(spans[0].t_end, last);
   EXPECT_EQ(spans[0].bodies, std::vector<int>{scene.bodyIndex("scanner")});
+}
+
+TEST(Sensors, LightCurtainFiresExactlyWhileTheScannerOverlapsIt) {
+  const Curtain c = curtain();
+  const collision::Scene scene = sceneOf(c.d);
+  double first = 0.0, last = 0.0;
+  ASSERT_NO_FATAL_FAILURE(expectCurtainFiresExactly(c, scene, first, last));
 
   // The rule `never` makes it a validation error over exactly that span.
   planner::ValidationSettings settings;
@@ -207,6 +220,22 @@ TEST(Sensors, LightCurtainFiresExactlyWhileTheScannerOverlapsIt) {
   EXPECT_DOUBLE_EQ(v.t_end, last);
   EXPECT_NE(v.note.find("expect never: fires (scanner)"), std::string::npos) << v.note;
   EXPECT_NE(planner::describe(v).find("sensor: light_curtain"), std::string::npos);
+}
+
+TEST(Sensors, TheCurtainFiresTheSameWhereverTheCellStands) {
+  // Frame invariance: the robot base (and the curtain with it) moved and turned in the world.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int i = 0; i < 3; ++i) {
+    Eigen::Isometry3d X_WB(Eigen::AngleAxisd(std::numbers::pi * u(rng), Eigen::Vector3d::UnitZ()) *
+                           Eigen::AngleAxisd(deg(5.0) * u(rng), Eigen::Vector3d::UnitX()));
+    X_WB.translation() = Eigen::Vector3d(0.1 * u(rng), 0.1 * u(rng), 0.05 * u(rng));
+    const Curtain c = curtain(X_WB);
+    const collision::Scene scene = sceneOf(c.d);
+    double first = 0.0, last = 0.0;
+    SCOPED_TRACE(i);
+    ASSERT_NO_FATAL_FAILURE(expectCurtainFiresExactly(c, scene, first, last));
+  }
 }
 
 TEST(Sensors, RulesBreakOverTheRightSpans) {
