@@ -143,6 +143,8 @@ struct Commands {
   CLI::App* batch_merge_cmd = nullptr;
   CheckOptions check;
   CLI::App* check_cmd = nullptr;
+  WatchCommandOptions watch;
+  CLI::App* watch_cmd = nullptr;
   CLI::Option* check_joints = nullptr;
   CLI::Option* check_time = nullptr;
   FkOptions fk;
@@ -324,6 +326,36 @@ void addCheckCommand(CLI::App& app, Commands& c) {
   addOverrides(*cmd, check.overrides);
 }
 
+void addWatchCommand(CLI::App& app, Commands& c) {
+  WatchCommandOptions& w = c.watch;
+  auto* cmd = c.watch_cmd = app.add_subcommand(
+      "watch",
+      "Predictive collision watch: read measured joint positions (a log, or standard input "
+      "line by line), predict the motion (joint or Cartesian) and warn before bodies meet");
+  cmd->add_option("job", w.job_file, "Job file (YAML): the cell, robot and clearance pairs")
+      ->required();
+  cmd->add_option("--log", w.log_file,
+                  "CSV of t_s,table_deg,j1_deg,…,j6_deg (a header names the columns; "
+                  "trajectory.csv reads as it is); without it, standard input");
+  cmd->add_option("--horizon-s", w.horizon_s, "How far ahead to predict, s")->capture_default_str();
+  cmd->add_option("--step-s", w.step_s, "Time between predicted poses, s")->capture_default_str();
+  cmd->add_option("--warn-distance-mm", w.warn_distance_mm,
+                  "Warn when bodies getting closer are predicted within this distance, mm")
+      ->capture_default_str();
+  cmd->add_option("--stop-distance-mm", w.stop_distance_mm,
+                  "Exit with code 5 as soon as bodies getting closer are predicted within this "
+                  "distance within --stop-time-s, mm (0: contact)");
+  cmd->add_option("--stop-time-s", w.stop_time_s,
+                  "How far ahead a stop-distance breach calls for a stop: the time the robot "
+                  "needs to brake, s")
+      ->capture_default_str();
+  cmd->add_option("--window", w.window, "Samples the motion model is fitted on")
+      ->capture_default_str();
+  cmd->add_option("--repeat-s", w.repeat_s, "Print a lasting warning again after this long, s")
+      ->capture_default_str();
+  addOverrides(*cmd, w.overrides);
+}
+
 void addFkCommand(CLI::App& app, Commands& c) {
   FkOptions& fk = c.fk;
   auto* cmd = c.fk_cmd =
@@ -437,6 +469,9 @@ void addExamples(const Commands& c) {
         "scanplan check data/jobs/demo.yaml --table 30 "
         "--joints=-20,-40,120,0,40,0 --set "
         "constraints.clearance.d_high_mm=60"}},
+      {c.watch_cmd,
+       {"scanplan watch data/jobs/demo_rings.yaml --log out/rings/trajectory.csv --window 5",
+        "my_robot_reader | scanplan watch data/jobs/demo_rings.yaml --stop-distance-mm 5"}},
       {c.fk_cmd,
        {"scanplan fk --robot data/robots/viper_s650.yaml --joints "
         "0,-90,180,0,90,0"}},
@@ -476,6 +511,7 @@ void addCommands(CLI::App& app, Commands& c) {
   addJobCommand(app, c);
   addBatchCommand(app, c);
   addCheckCommand(app, c);
+  addWatchCommand(app, c);
   addFkCommand(app, c);
   addIkCommand(app, c);
   addRobotCommand(app, c);
@@ -589,6 +625,10 @@ void requireInputs(const Commands& c) {
   if (c.path_cmd->parsed()) requireInput(c.path.job_file, "job file");
   if (c.map_cmd->parsed()) requireInput(c.map.job_file, "job file");
   if (c.check_cmd->parsed()) requireInput(c.check.job_file, "job file");
+  if (c.watch_cmd->parsed()) {
+    requireInput(c.watch.job_file, "job file");
+    if (!c.watch.log_file.empty()) requireInput(c.watch.log_file, "log file");
+  }
   if (c.show_cmd->parsed()) requireInput(c.show_file, "job file");
   for (const auto& [cmd, options] :
        {std::pair{c.validate_cmd, &c.validate}, std::pair{c.simulate_cmd, &c.simulate},
@@ -637,6 +677,7 @@ ExitCode dispatch(const Commands& c) {
   if (c.show_cmd->parsed()) code = runJobShow(c.show_file, c.show_overrides);
   if (c.schema_cmd->parsed()) code = runJobSchema();
   if (c.check_cmd->parsed()) code = runCheck(c.check);
+  if (c.watch_cmd->parsed()) code = runWatch(c.watch);
   if (c.path_cmd->parsed()) code = runPath(c.path);
   if (c.map_cmd->parsed()) code = runMap(c.map);
   if (c.fk_cmd->parsed()) code = runFk(c.fk);

@@ -9,6 +9,7 @@ enum class ExitCode : int {
   kUsage = 2,     ///< bad command line
   kNoPlan = 3,    ///< the input is valid but no feasible plan / pose exists
   kInput = 4,     ///< bad job, robot or mesh file, or a bad value
+  kStop = 5,      ///< watch: the motion must stop now (--stop-distance-mm)
 };
 
 /// The whole command-line application; main() only forwards to it.

@@ -10,6 +10,10 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+double bound(const PairInfo& pair, const ClearanceRequest& request) {
+  return request.bound > 0.0 ? request.bound : pair.thresholds.d_high;
+}
+
 }  // namespace
 
 namespace detail {
@@ -70,7 +74,7 @@ ClearanceResult ClearanceEvaluator::evaluate(double theta,
     const PairInfo& pair = scene.pairs()[i];
     const auto a = static_cast<std::size_t>(pair.a), b = static_cast<std::size_t>(pair.b);
     const detail::ShapeDistance d = detail::bodyDistance(
-        bodies[a], X_W_[a], bodies[b], X_W_[b], request.bounded ? pair.thresholds.d_high : kInf,
+        bodies[a], X_W_[a], bodies[b], X_W_[b], !request.bounded ? kInf : bound(pair, request),
         !request.bounded, request.witness_points, closed_forms_);
     PairClearance& out = result.pairs[i];
     out.distance = d.distance;

@@ -12,6 +12,9 @@ struct ClearanceRequest {
   /// Only distances below each pair's d_high are computed exactly; farther pairs are reported
   /// as "at least d_high" (DESIGN.md §9). False: plain fcl::distance on every shape pair.
   bool bounded = true;
+  /// Bounded requests: when > 0, every pair is measured below this distance (m) instead of its
+  /// own d_high (the collision watch asks for its warning distance).
+  double bound = 0.0;
   /// Fill witness points (world frame) for pairs closer than their bound.
   bool witness_points = false;
 };

@@ -58,6 +58,10 @@ struct SimulationSettings {
   /// Area samples at most (one per (2 · point spacing)² of area, coarser when there would be
   /// more): bounds the time and memory of the area coverage.
   std::size_t max_area_samples = 200'000;
+  /// Camera images (scanner::ScanSimulator::renderImage) of this many profiles to keep in the
+  /// run, for a person to look at: those with the most points, at least a tenth of the run apart
+  /// where possible.
+  std::size_t profile_images = 0;
   /// rad, the largest angle between a surface normal and the laser ray for a point to count
   /// (the table-facing share of the area uses it).
   double max_incidence = 1.0471975511965976;  // 60°

@@ -17,6 +17,43 @@ double midDepthPitch(const scanner::LaserOptics& optics, int rays_per_profile) {
   return width / std::max(1, rays_per_profile - 1);
 }
 
+// The camera images of the settings' number of profiles: the profiles with the most points,
+// greedily, each at least a tenth of the run from those already chosen (closer ones only when
+// the run has too few far apart).
+std::vector<std::pair<std::uint32_t, scanner::ProfileImage>> profileImages(
+    const scanner::ScanSimulator& simulator,
+    const std::vector<scanner::ScanFrame>& frames,
+    const scanner::SimulatedCloud& cloud,
+    const scanner::LaserOptics& optics,
+    const SimulationSettings& settings) {
+  std::vector<std::pair<std::uint32_t, scanner::ProfileImage>> images;
+  const std::size_t wanted = std::min(settings.profile_images, frames.size());
+  if (wanted == 0) return images;
+  std::vector<std::size_t> points(frames.size(), 0);
+  for (const auto& p : cloud.points) ++points[p.profile];
+  std::vector<std::uint32_t> order(frames.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<std::uint32_t>(i);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::uint32_t a, std::uint32_t b) { return points[a] > points[b]; });
+  std::vector<std::uint32_t> chosen;
+  for (std::size_t gap = std::max<std::size_t>(1, frames.size() / 10); chosen.size() < wanted;
+       gap /= 2) {
+    for (const std::uint32_t i : order) {
+      if (chosen.size() == wanted) break;
+      const bool apart = std::all_of(chosen.begin(), chosen.end(), [&](std::uint32_t c) {
+        return (c > i ? c - i : i - c) >= std::max<std::size_t>(gap, 1);
+      });
+      if (apart) chosen.push_back(i);
+    }
+    if (gap <= 1) break;
+  }
+  std::sort(chosen.begin(), chosen.end());
+  for (const std::uint32_t i : chosen) {
+    images.emplace_back(i, simulator.renderImage(frames[i], i, optics, settings.scanner));
+  }
+  return images;
+}
+
 }  // namespace
 
 SimulationRun simulateTrajectory(const kinematics::CellModel& cell,
@@ -34,6 +71,7 @@ SimulationRun simulateTrajectory(const kinematics::CellModel& cell,
   SimulationRun run;
   run.frames = frames.size();
   run.cloud = simulator.simulate(frames, optics, settings.scanner);
+  run.profile_images = profileImages(simulator, frames, run.cloud, optics, settings);
   run.coverage = scanner::computeCoverage(part, run.cloud.points, settings.coverage);
   run.point_spacing = settings.point_spacing > 0.0
                           ? settings.point_spacing

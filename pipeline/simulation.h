@@ -1,6 +1,9 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <utility>
+#include <vector>
 
 #include "kinematics/cell.h"
 #include "kinematics/mesh.h"
@@ -25,6 +28,8 @@ struct SimulationRun {
   /// window's far end and the incidence limit): not scannable on this setup.
   double faces_table_fraction = 0.0;
   std::size_t frames = 0;  ///< profiles acquired (densified samples with scanning on)
+  /// SimulationSettings::profile_images camera images, by profile index (ascending).
+  std::vector<std::pair<std::uint32_t, scanner::ProfileImage>> profile_images;
   double seconds = 0.0;
 };
 

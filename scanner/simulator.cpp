@@ -1,6 +1,7 @@
 #include "scanner/simulator.h"
 
 #include "scanner/embree_mesh.h"
+#include "scanner/detail/random.h"
 
 #include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>
@@ -23,6 +24,9 @@
 
 namespace scanplan::scanner {
 namespace {
+
+using detail::gaussianPair;
+using detail::mix;
 
 // Occlusion rays start this far off the hit triangle, on the lit side, so that Embree's float
 // arithmetic cannot report the hit triangle itself (coordinates are O(1 m): 1e-5 m is ~170
@@ -144,6 +148,8 @@ struct Scratch {
   std::vector<char> seen;
   std::vector<char> seen_other;
   std::vector<ActiveGroup> active;
+  ProfileImage image;  // image mode
+  RenderScratch render;
 };
 
 // Settings shared by every profile of a run.
@@ -155,28 +161,8 @@ struct RunSetup {
   Eigen::AlignedBox3d reach;                // every ray of a profile lies in it, scanner frame
   kinematics::RotaryTableModel true_table;
   const SimulationSettings* settings = nullptr;
+  CameraModel camera;  // image mode
 };
-
-// SplitMix64 (Steele et al.): decorrelates the per-profile noise seeds.
-std::uint64_t mix(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
-
-// Uniform in (0, 1) from 53 random bits; std::normal_distribution is not specified across
-// standard libraries, this is, so a seed gives the same cloud everywhere.
-double uniformOpen(std::mt19937_64& rng) {
-  return (static_cast<double>(rng() >> 11) + 0.5) * 0x1.0p-53;
-}
-
-// Two independent standard normal deviates (Box–Muller).
-std::pair<double, double> gaussianPair(std::mt19937_64& rng) {
-  const double r = std::sqrt(-2.0 * std::log(uniformOpen(rng)));
-  const double a = 2.0 * std::numbers::pi * uniformOpen(rng);
-  return {r * std::cos(a), r * std::sin(a)};
-}
 
 // Möller–Trumbore in double, both faces; the hit distance in [t_near, t_far] or nothing.
 std::optional<double> intersect(const std::array<Eigen::Vector3d, 3>& tri,
@@ -229,6 +215,22 @@ struct ScanSimulator::Impl {
                Scratch& s,
                std::vector<CloudPoint>& out,
                SimulationStats& stats) const;
+  // Image mode (camera_image.h): the posed cell as an ImageScene, one profile's image, and
+  // its points.
+  struct GroupScene;
+  void renderImage(const ScanFrame& frame,
+                   std::uint32_t index,
+                   const RunSetup& setup,
+                   Scratch& s,
+                   Eigen::Isometry3d& X_WS,
+                   Eigen::Isometry3d& X_WR) const;
+  void imageProfile(const ScanFrame& frame,
+                    std::uint32_t index,
+                    const RunSetup& setup,
+                    Scratch& s,
+                    std::vector<CloudPoint>& out,
+                    SimulationStats& stats) const;
+
   // The steps of profile().
   void cullGroups(const std::array<Eigen::Isometry3d, kinematics::kNumJoints + 1>& link_frames,
                   const Eigen::Isometry3d& X_WS,
@@ -452,6 +454,10 @@ void ScanSimulator::Impl::profile(const ScanFrame& frame,
                                   Scratch& s,
                                   std::vector<CloudPoint>& out,
                                   SimulationStats& stats) const {
+  if (setup.settings->mode == SimulationMode::kImage) {
+    imageProfile(frame, index, setup, s, out, stats);
+    return;
+  }
   const auto link_frames = cell.robot.linkFrames(frame.q);
   const Eigen::Isometry3d X_WS = cell.X_WB * link_frames[6] * cell.scanner.X_FS;
   const Eigen::Isometry3d X_WR = setup.true_table.X_WR(frame.theta);
@@ -468,6 +474,141 @@ void ScanSimulator::Impl::profile(const ScanFrame& frame,
   collectCandidates(setup, s, stats);
   applyCameraRule(setup, s, stats);
   emitPoints(frame, index, setup, s, X_WS, X_WR, out, stats);
+}
+
+// The profile's active groups as one scene in the scanner frame: each batch of rays goes to
+// every group in packets (rays of neighbouring pixels side by side), as the fan does.
+struct ScanSimulator::Impl::GroupScene final : ImageScene {
+  const Impl& impl;
+  Scratch& s;
+  GroupScene(const Impl& i, Scratch& scratch) : impl(i), s(scratch) {}
+
+  void nearest(std::span<const SceneRay> rays, std::span<SceneHit> hits) const override {
+    const std::size_t n = rays.size();
+    for (std::size_t i = 0; i < n; ++i) {
+      hits[i].hit = false;
+      hits[i].t = rays[i].t_far;
+      hits[i].part_triangle = -1;
+    }
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    RTCRayHit16& rh = s.fan_packet;
+    alignas(64) std::array<int, kPacket> valid{};
+    for (const ActiveGroup& a : s.active) {
+      const Group& g = impl.groups[static_cast<std::size_t>(a.index)];
+      const Eigen::Matrix3d R_GS = a.X_GS.linear();
+      for (std::size_t base = 0; base < n; base += kPacket) {
+        const std::size_t count = std::min(kPacket, n - base);
+        for (std::size_t j = 0; j < kPacket; ++j) {
+          valid[j] = j < count ? -1 : 0;
+          if (j >= count) continue;
+          const SceneRay& r = rays[base + j];
+          fillLane(rh.ray, j, a.X_GS * r.origin, R_GS * r.direction, hits[base + j].t);
+          rh.hit.geomID[j] = RTC_INVALID_GEOMETRY_ID;
+        }
+        rtcIntersect16(valid.data(), g.scene, &context, &rh);
+        for (std::size_t j = 0; j < count; ++j) {
+          if (rh.hit.geomID[j] == RTC_INVALID_GEOMETRY_ID) continue;
+          SceneHit& h = hits[base + j];
+          const GroupMesh& m = g.meshes[rh.hit.geomID[j]];
+          h.hit = true;
+          h.t = static_cast<double>(rh.ray.tfar[j]);
+          h.n_S = R_GS.transpose() * m.planes[rh.hit.primID[j]].head<3>();
+          h.part_triangle = m.is_part ? static_cast<std::int32_t>(rh.hit.primID[j]) : -1;
+        }
+      }
+    }
+  }
+
+  void occluded(std::span<const SceneRay> rays, std::span<char> blocked) const override {
+    const std::size_t n = rays.size();
+    std::fill(blocked.begin(), blocked.end(), 0);
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    RTCRay16& ray = s.camera_packet;
+    alignas(64) std::array<int, kPacket> valid{};
+    for (const ActiveGroup& a : s.active) {
+      const Group& g = impl.groups[static_cast<std::size_t>(a.index)];
+      for (std::size_t base = 0; base < n; base += kPacket) {
+        const std::size_t count = std::min(kPacket, n - base);
+        bool any = false;
+        for (std::size_t j = 0; j < kPacket; ++j) {
+          valid[j] = j < count && !blocked[base + j] ? -1 : 0;
+          if (!valid[j]) continue;
+          any = true;
+          const SceneRay& r = rays[base + j];
+          fillLane(ray, j, a.X_GS * r.origin, a.X_GS.linear() * r.direction, r.t_far);
+        }
+        if (!any) continue;
+        rtcOccluded16(valid.data(), g.scene, &context, &ray);
+        for (std::size_t j = 0; j < count; ++j) {
+          if (valid[j] && ray.tfar[j] < 0.0f) blocked[base + j] = 1;
+        }
+      }
+    }
+  }
+};
+
+// The camera image of one profile into s.image; the scanner and real table poses of it.
+void ScanSimulator::Impl::renderImage(const ScanFrame& frame,
+                                      std::uint32_t index,
+                                      const RunSetup& setup,
+                                      Scratch& s,
+                                      Eigen::Isometry3d& X_WS,
+                                      Eigen::Isometry3d& X_WR) const {
+  const auto link_frames = cell.robot.linkFrames(frame.q);
+  X_WS = cell.X_WB * link_frames[6] * cell.scanner.X_FS;
+  X_WR = setup.true_table.X_WR(frame.theta);
+  cullGroups(link_frames, X_WS, X_WR, setup, s);
+  const GroupScene scene(*this, s);
+  renderProfileImage(setup.camera, setup.settings->image, scene,
+                     setup.settings->seed ^ detail::mix(index), s.image, s.render);
+}
+
+// Image mode (seed §5.3): render, detect the stripe per column, triangulate it (Eq. 4) and map
+// it to the part frame as the geometric points are.
+void ScanSimulator::Impl::imageProfile(const ScanFrame& frame,
+                                       std::uint32_t index,
+                                       const RunSetup& setup,
+                                       Scratch& s,
+                                       std::vector<CloudPoint>& out,
+                                       SimulationStats& stats) const {
+  Eigen::Isometry3d X_WS, X_WR;
+  renderImage(frame, index, setup, s, X_WS, X_WR);
+  const ImageSettings& settings = setup.settings->image;
+  const ProfileImage& image = s.image;
+  stats.pixel_rays += image.grey.size();
+  stats.occlusion_rays += image.laser_rays;
+  stats.lit_pixels += image.lit;
+  const Eigen::Isometry3d X_WR_model =
+      setup.settings->simulated_table ? cell.table.X_WR(frame.theta) : X_WR;
+  const Eigen::Isometry3d X_PS = (X_WR_model * cell.part.X_RP).inverse() * X_WS;
+  const CameraModel& camera = setup.camera;
+  const std::size_t first = out.size();
+  for (int k = 0; k < image.columns; ++k) {
+    const std::optional<double> row =
+        detectPeak(image.grey.data() + k, image.rows, static_cast<std::size_t>(image.columns),
+                   settings.threshold, settings.method);
+    if (!row) continue;
+    ++stats.hits;
+    const Eigen::Vector2d p = camera.imagePlane(static_cast<double>(k), *row);
+    const Eigen::Vector3d p_S = camera.triangulate(p.x(), p.y());
+    // The surface the stripe's peak pixel saw gives the normal and the triangle.
+    const int r = std::clamp(static_cast<int>(std::lround(*row)), 0, image.rows - 1);
+    const SceneHit& h = image.hit[static_cast<std::size_t>(r) *
+                                      static_cast<std::size_t>(image.columns) +
+                                  static_cast<std::size_t>(k)];
+    const double range = p_S.norm();
+    Eigen::Vector3d n_S = h.hit ? h.n_S : -p_S / range;
+    if (n_S.dot(p_S) > 0.0) n_S = -n_S;  // towards the laser
+    const double cos_incidence = std::abs(n_S.dot(p_S)) / range;
+    out.push_back({X_PS * p_S, frame.t, index, static_cast<std::uint32_t>(k), range,
+                   std::acos(std::min(1.0, cos_incidence)), h.hit ? h.part_triangle : -1,
+                   X_PS.linear() * n_S});
+  }
+  stats.points += out.size() - first;
 }
 
 // Groups whose bounding sphere reaches the profile's rays, with the rays' frame in theirs, X_GS,
@@ -718,12 +859,63 @@ RunSetup makeRunSetup(const kinematics::RotaryTableModel& cell_table,
   setup.reach.extend(Eigen::Vector3d(0.0, -y_reach, 0.0));
   setup.reach.extend(Eigen::Vector3d(0.0, y_reach, setup.window.z_max + kCullMargin));
   for (const Eigen::Vector3d& c : setup.cameras) setup.reach.extend(c);
+  if (settings.mode == SimulationMode::kImage) {
+    setup.camera.optics = optics;
+    setup.camera.rows = settings.image.rows;
+    setup.camera.columns = settings.image.columns;
+    setup.camera.side = settings.cameras == CameraRule::kNegative ? -1 : 1;
+    // Camera rays reach twice the distance to the laser plane (renderProfileImage): at most
+    // 2Q − C for Q a corner of the field in the plane. The box of those and C holds them all.
+    const CameraModel& camera = setup.camera;
+    const double h = 0.5 * camera.rows;
+    for (const double p_x : {-h, h}) {
+      for (const double p_y : {-h, h}) {
+        setup.reach.extend(2.0 * camera.triangulate(p_x, p_y) - camera.centre());
+      }
+    }
+    setup.reach.extend(camera.centre());
+  }
   setup.reach.min().array() -= kCullMargin;
   setup.reach.max().array() += kCullMargin;
   return setup;
 }
 
+// Image mode's preconditions (simulate() documents them).
+void checkImageSettings(const SimulationSettings& settings, RayBackend backend) {
+  if (settings.mode != SimulationMode::kImage) return;
+  const ImageSettings& im = settings.image;
+  const Reflectance& r = im.reflectance;
+  if (im.rows < 2 || im.columns < 1 || !(im.thickness > 0.0) || !(im.noise >= 0.0) ||
+      !(im.threshold >= 0.0) || !(im.ambient >= 0.0) || !(r.lambert >= 0.0) ||
+      !(r.specular >= 0.0) || !(r.shininess >= 0.0)) {
+    throw std::invalid_argument(
+        "scanner simulation: image mode expects rows >= 2, columns >= 1, thickness > 0 and "
+        "non-negative noise, threshold, ambient and reflectance");
+  }
+  if (settings.cameras != CameraRule::kPositive && settings.cameras != CameraRule::kNegative) {
+    throw std::invalid_argument(
+        "scanner simulation: image mode renders one camera (positive or negative)");
+  }
+  if (backend != RayBackend::kEmbree) {
+    throw std::invalid_argument("scanner simulation: image mode needs the Embree back end");
+  }
+}
+
 }  // namespace
+
+ProfileImage ScanSimulator::renderImage(const ScanFrame& frame,
+                                        std::uint32_t index,
+                                        const LaserOptics& optics,
+                                        const SimulationSettings& settings) const {
+  SimulationSettings image_settings = settings;
+  image_settings.mode = SimulationMode::kImage;
+  checkImageSettings(image_settings, impl_->backend);
+  const RunSetup setup = makeRunSetup(impl_->cell.table, optics, image_settings);
+  Scratch& s = impl_->scratch.local();
+  Eigen::Isometry3d X_WS, X_WR;
+  impl_->renderImage(frame, index, setup, s, X_WS, X_WR);
+  return s.image;
+}
 
 SimulatedCloud ScanSimulator::simulate(const std::vector<ScanFrame>& frames,
                                        const LaserOptics& optics,
@@ -734,6 +926,7 @@ SimulatedCloud ScanSimulator::simulate(const std::vector<ScanFrame>& frames,
     throw std::invalid_argument(
         "scanner simulation: expected rays_per_profile >= 1 and non-negative noise sigmas");
   }
+  checkImageSettings(settings, impl_->backend);
   const RunSetup setup = makeRunSetup(impl_->cell.table, optics, settings);
 
   // The points reach fresh memory once. On one thread they go straight into the cloud; on
@@ -751,7 +944,10 @@ SimulatedCloud ScanSimulator::simulate(const std::vector<ScanFrame>& frames,
     std::size_t end = 0;
   };
   const std::size_t n = frames.size();
-  const std::size_t rays = setup.directions.size();
+  // Points per profile at most: one per fan ray, or per image column.
+  const std::size_t rays = settings.mode == SimulationMode::kImage
+                               ? static_cast<std::size_t>(settings.image.columns)
+                               : setup.directions.size();
   const std::size_t batch = std::max<std::size_t>(1, kBatchRays / rays);
   const bool serial = tbb::this_task_arena::max_concurrency() == 1;
   tbb::enumerable_thread_specific<Output> outputs;
@@ -798,6 +994,8 @@ SimulatedCloud ScanSimulator::simulate(const std::vector<ScanFrame>& frames,
     cloud.stats.outside_window += st.outside_window;
     cloud.stats.occluded += st.occluded;
     cloud.stats.points += st.points;
+    cloud.stats.pixel_rays += st.pixel_rays;
+    cloud.stats.lit_pixels += st.lit_pixels;
   }
   cloud.stats.profiles = n;
   return cloud;

@@ -13,6 +13,7 @@
 #include "kinematics/robot_model.h"
 #include "kinematics/rotary_table.h"
 #include "kinematics/shape.h"
+#include "scanner/camera_image.h"
 #include "scanner/laser_model.h"
 
 namespace scanplan::scanner {
@@ -36,8 +37,22 @@ enum class CameraRule {
   kEither,    ///< two cameras; a point counts when at least one sees it
 };
 
+/// How the profiles are measured (seed §5.3).
+enum class SimulationMode {
+  /// The laser fan's hits are the points (Eq. 5 window, camera occlusion rays): fast.
+  kGeometric,
+  /// Each profile renders the camera image (camera_image.h), detects the stripe per column and
+  /// triangulates it with Eq. 4: the image processing in the loop, ~100× the cost.
+  kImage,
+};
+
 /// What one simulation run does (the job's scanner settings, SI).
 struct SimulationSettings {
+  SimulationMode mode = SimulationMode::kGeometric;
+  /// Image mode: the camera image and its stripe detection (rows × columns, sheet thickness,
+  /// reflectance, noise, threshold, method). The camera is the rule's: kPositive or kNegative
+  /// (kBoth and kEither are refused in image mode).
+  ImageSettings image;
   int rays_per_profile = 200;  ///< fan rays per profile, spread evenly in angle (≥ 1)
   CameraRule cameras = CameraRule::kPositive;
   /// Gaussian measurement noise (DESIGN.md §6): along the ray (σ_l) and across it in the laser
@@ -69,11 +84,14 @@ struct CloudPoint {
 struct SimulationStats {
   std::size_t profiles = 0;
   std::size_t laser_rays = 0;      ///< fan rays cast
-  std::size_t occlusion_rays = 0;  ///< hit → camera rays cast
-  std::size_t hits = 0;            ///< fan rays with a hit before the far edge z_max
+  std::size_t occlusion_rays = 0;  ///< hit → camera rays cast (image mode: laser-reach rays)
+  /// fan rays with a hit before the far edge z_max (image mode: columns with a stripe)
+  std::size_t hits = 0;
   std::size_t outside_window = 0;  ///< nearest hits outside the trapezoid (Eq. 5)
   std::size_t occluded = 0;        ///< in the trapezoid but not seen by the camera rule
   std::size_t points = 0;
+  std::size_t pixel_rays = 0;  ///< image mode: camera rays, one per pixel
+  std::size_t lit_pixels = 0;  ///< image mode: pixels the laser lit
 };
 
 struct SimulatedCloud {
@@ -115,6 +133,11 @@ std::vector<Eigen::Vector3d> cameraCentres(const LaserOptics& optics, CameraRule
 /// hit to its centre. Noise is drawn after these decisions, so it never changes which rays
 /// yield points.
 ///
+/// In image mode (SimulationSettings::mode, seed §5.3) the same scene renders each profile's
+/// camera image instead (camera_image.h: a camera ray per pixel against every group the
+/// profile's rays can reach, a laser-reach ray per pixel in the sheet), the stripe is detected
+/// per column and triangulated with Eq. 4, and the point goes to the part frame as above.
+///
 /// Immutable once built; simulate() is const, runs profiles in parallel (TBB) and returns the
 /// same cloud for any thread count.
 class ScanSimulator {
@@ -130,10 +153,22 @@ class ScanSimulator {
 
   /// One profile per frame; profile i is frames[i]. Precondition: the optics are valid
   /// (LaserOptics); throws std::invalid_argument unless settings.rays_per_profile ≥ 1 and the
-  /// sigmas are ≥ 0.
+  /// sigmas are ≥ 0, and in image mode unless the image settings are valid (rows ≥ 2,
+  /// columns ≥ 1, thickness > 0, noise, threshold and reflectance ≥ 0), the camera rule is
+  /// kPositive or kNegative and the back end is Embree. In image mode point i of a profile
+  /// comes from image column CloudPoint::ray; σ_l and σ_o are not applied (the image has its
+  /// own noise).
   SimulatedCloud simulate(const std::vector<ScanFrame>& frames,
                           const LaserOptics& optics,
                           const SimulationSettings& settings) const;
+
+  /// Image mode's camera image of one profile (`index` seeds its noise), as simulate() renders
+  /// it with these settings (whatever settings.mode says), for a person to look at. Same
+  /// preconditions as simulate().
+  ProfileImage renderImage(const ScanFrame& frame,
+                           std::uint32_t index,
+                           const LaserOptics& optics,
+                           const SimulationSettings& settings) const;
 
   /// Scene size: triangles over all groups.
   std::size_t triangleCount() const;

@@ -166,7 +166,7 @@ TEST_F(Cli, HelpExamplesNameBundledFilesAndRun) {
   const std::vector<std::vector<std::string>> commands = {
       {"plan"},  {"validate"},        {"simulate"},       {"export"},      {"path"},  {"map"},
       {"batch"}, {"batch", "report"}, {"batch", "merge"}, {"job", "show"}, {"check"}, {"fk"},
-      {"ik"}};
+      {"ik"},    {"watch"}};
   int ran = 0;
   for (const auto& command : commands) {
     std::vector<std::string> args = command;

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <random>
 #include <set>
@@ -180,6 +181,46 @@ TEST_F(CliVerify, SimulatedCloudLiesOnThePartAndCoverageIsReported) {
   EXPECT_GT(r["coverage"]["covered_fraction"].as<double>(), 0.05);
   EXPECT_LE(r["coverage"]["covered_fraction"].as<double>(), 1.0);
   EXPECT_EQ(r["points"].as<std::size_t>(), cloud.count);
+}
+
+// Image mode end to end: the cloud and its report as in geometric mode, plus the profile
+// images (camera image beside the same with the stripe marked, 2 × 2 per pixel); with sensor
+// noise, the same seed gives the same cloud.ply bytes.
+TEST_F(CliVerify, ImageModeWritesTheCloudAndProfileImagesDeterministically) {
+  const std::vector<std::string> image = {
+      "--set", "simulation.mode=image", "--set", "scanner.camera={rows: 64, columns: 50, "
+      "noise_grey: 3}", "--set", "simulation.profile_images=3", "--set",
+      "scanner.frame_rate_hz=20"};
+  std::vector<std::string> args[2];
+  for (int k = 0; k < 2; ++k) {
+    args[k] = withLightDemo({"simulate", kDemoJob, "-t", plannedTrajectory().string(), "-o",
+                             (dir_ / ("image" + std::to_string(k))).string()});
+    args[k].insert(args[k].end(), image.begin(), image.end());
+    const Result run = scanplan(args[k]);
+    ASSERT_EQ(run.exit_code, 0) << describe(run);
+    EXPECT_NE(run.out.find("camera images"), std::string::npos) << run.out;
+    EXPECT_NE(run.out.find("profiles/"), std::string::npos) << run.out;
+  }
+  const fs::path out = dir_ / "image0";
+  const YAML::Node r = YAML::LoadFile((out / "simulation.json").string())["simulation"];
+  EXPECT_EQ(r["pixel_rays"].as<std::size_t>(), r["profiles"].as<std::size_t>() * 64 * 50);
+  EXPECT_GT(r["points"].as<std::size_t>(), 1000u);
+  std::size_t pngs = 0;
+  for (const auto& entry : fs::directory_iterator(out / "profiles")) {
+    ++pngs;
+    EXPECT_EQ(entry.path().extension(), ".png");
+    std::ifstream in(entry.path(), std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), {});
+    const cli::RgbImage picture = test::decodePng(bytes);
+    EXPECT_EQ(picture.width, 2 * (2 * 50 + 4));
+    EXPECT_EQ(picture.height, 2 * 64);
+  }
+  EXPECT_EQ(pngs, 3u);
+  const auto bytes = [](const fs::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), {});
+  };
+  EXPECT_TRUE(bytes(out / "cloud.ply") == bytes(dir_ / "image1" / "cloud.ply"));
 }
 
 // Coverage on area, recomputed independently from what a user gets: cloud.ply's points on the

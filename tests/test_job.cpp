@@ -16,6 +16,7 @@
 #include <string>
 #include <system_error>
 #include <variant>
+#include <vector>
 
 namespace scanplan::cli {
 namespace {
@@ -601,6 +602,49 @@ TEST_F(JobFile, SourceIsThePathAsGiven) {
 
 // Numbers no cell can mean stop at the reader, before they reach Embree or FCL (a ring height of
 // 1e300 mm aborted inside Embree): lengths within a kilometre, everything within 1e9.
+// Image mode's keys (README "Job file"): each bad value is refused naming its key; image mode
+// with two cameras or with point noise names the scanner key it conflicts with.
+TEST(JobImageMode, BadKeysAreRefusedNamingTheKey) {
+  const fs::path demo = kSource / "data/jobs/demo_rings.yaml";
+  const auto fails = [&](std::vector<std::string> overrides,
+                         std::initializer_list<std::string> parts) {
+    return throwsInputError([&] { loadJob(demo, overrides); }, parts);
+  };
+  EXPECT_TRUE(fails({"simulation.mode=raytrace"}, {"simulation.mode", "raytrace", "image"}));
+  EXPECT_TRUE(fails({"scanner.camera.rows=1"}, {"scanner.camera.rows", "1"}));
+  EXPECT_TRUE(fails({"scanner.camera.columns=-3"}, {"scanner.camera.columns", "-3"}));
+  EXPECT_TRUE(fails({"scanner.camera.noise_grey=-1"}, {"scanner.camera.noise_grey"}));
+  EXPECT_TRUE(fails({"scanner.camera.threshold_grey=300"}, {"scanner.camera.threshold_grey"}));
+  EXPECT_TRUE(fails({"scanner.camera.detection=median"},
+                    {"scanner.camera.detection", "median", "cog", "gauss"}));
+  EXPECT_TRUE(fails({"scanner.camera.pixels=3"}, {"scanner.camera", "pixels"}));
+  EXPECT_TRUE(fails({"scanner.laser.thickness_mm=0"}, {"scanner.laser.thickness_mm", "0"}));
+  EXPECT_TRUE(fails({"simulation.reflectance.lambert=-0.5"}, {"simulation.reflectance.lambert"}));
+  EXPECT_TRUE(fails({"simulation.reflectance.shininess=-2"},
+                    {"simulation.reflectance.shininess"}));
+  EXPECT_TRUE(fails({"simulation.profile_images=-1"}, {"simulation.profile_images"}));
+  EXPECT_TRUE(fails({"simulation.mode=image", "scanner.cameras=both"},
+                    {"scanner.cameras", "both", "simulation.mode: image"}));
+  EXPECT_TRUE(fails({"simulation.mode=image", "scanner.noise.longitudinal_mm=0.02"},
+                    {"scanner.noise.longitudinal_mm", "0.02", "noise_grey"}));
+  // Bounded work: an image of more than 2048 × 2048 pixels, named by the key that made it.
+  EXPECT_TRUE(fails({"simulation.mode=image", "scanner.camera={rows: 4096, columns: 2048}"},
+                    {"scanner.camera.columns", "8388608 pixels", "4194304"}));
+  EXPECT_TRUE(fails({"simulation.mode=image", "scanner.rays_per_profile=20000"},
+                    {"scanner.rays_per_profile", "5120000 pixels"}));
+  // The same keys with good values load.
+  const JobSpec job = loadJob(
+      demo, {"simulation.mode=image", "scanner.camera={rows: 300, columns: 150, noise_grey: 2, "
+             "detection: gauss}", "scanner.laser.thickness_mm=0.8",
+             "simulation.reflectance={lambert: 0.5, specular: 0.3, shininess: 40}"});
+  EXPECT_EQ(job.simulation.mode, "image");
+  EXPECT_EQ(job.scanner.camera.rows, 300);
+  EXPECT_EQ(job.scanner.camera.columns, 150);
+  EXPECT_EQ(job.scanner.camera.detection, "gauss");
+  EXPECT_DOUBLE_EQ(job.scanner.laser.thickness_mm, 0.8);
+  EXPECT_DOUBLE_EQ(job.simulation.reflectance.specular, 0.3);
+}
+
 TEST(JobLimits, HugeNumbersAreRefusedNamingTheKey) {
   const auto error = [](const std::string& set) {
     try {

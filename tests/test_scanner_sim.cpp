@@ -681,6 +681,145 @@ TEST(ScannerSimulation, NoiselessPointsLandOnTheBunny) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Image mode (seed §5.3: render the camera image, detect the stripe, triangulate with Eq. 4).
+
+SimulationSettings imageSettings(int columns = 200) {
+  SimulationSettings settings;
+  settings.mode = scanner::SimulationMode::kImage;
+  settings.rays_per_profile = columns;
+  settings.image.rows = 256;
+  settings.image.columns = columns;
+  settings.image.thickness = 1e-3;
+  return settings;
+}
+
+// The plane cell at several depths and yaws: image-mode points lie on the plane (part frame
+// z = 0) within a quarter of a row's depth footprint at that depth (see test_camera_image),
+// and span the same line as the geometric mode's points, to a column and a ray pitch.
+TEST(ScannerSimulationImage, PlanePointsLieOnThePlaneAndAgreeWithTheGeometricMode) {
+  const CellModel cell = planeCell();
+  const TriangleMesh plane = planeMesh(0.4, 2);
+  const scanner::ScanSimulator sim(cell, plane);
+  const scanner::LaserOptics& optics = demoOptics();
+  std::vector<ScanFrame> frames;
+  const std::vector<double> depths = {0.145, 0.155, 0.165, 0.175};
+  for (std::size_t i = 0; i < depths.size(); ++i)
+    frames.push_back(planeFrame(cell, depths[i], 0.01 * static_cast<double>(i), 0.3 + 0.2 * static_cast<double>(i)));
+  const SimulationSettings image_settings = imageSettings();
+  const SimulatedCloud image = run(sim, frames, image_settings);
+  SimulationSettings geometric_settings;
+  geometric_settings.rays_per_profile = 200;
+  const SimulatedCloud geometric = run(sim, frames, geometric_settings);
+  scanner::CameraModel camera;
+  camera.optics = optics;
+  camera.rows = image_settings.image.rows;
+  camera.columns = image_settings.image.columns;
+  for (std::uint32_t f = 0; f < frames.size(); ++f) {
+    SCOPED_TRACE("depth " + std::to_string(depths[f]));
+    const double d = depths[f];
+    const Eigen::Vector2d at = *camera.project({0.0, 0.0, d});
+    const double footprint =
+        std::abs(camera.triangulate(0.0, at.y() + 0.5).z() - camera.triangulate(0.0, at.y() - 0.5).z());
+    const Eigen::Isometry3d X_SP = realisedX_PS(cell, frames[f]).inverse();
+    double lo_i = 1.0, hi_i = -1.0, lo_g = 1.0, hi_g = -1.0;
+    std::size_t count = 0;
+    for (const CloudPoint& p : image.points) {
+      if (p.profile != f) continue;
+      ++count;
+      EXPECT_LT(std::abs(p.p_P.z()), 0.25 * footprint);
+      EXPECT_EQ(p.part_triangle >= 0, true);
+      const Eigen::Vector3d p_S = X_SP * p.p_P;
+      EXPECT_LT(std::abs(p_S.x()), 1e-12);  // in the laser plane
+      lo_i = std::min(lo_i, p_S.y());
+      hi_i = std::max(hi_i, p_S.y());
+    }
+    EXPECT_EQ(count, 200u);
+    for (const CloudPoint& p : geometric.points) {
+      if (p.profile != f) continue;
+      const Eigen::Vector3d p_S = X_SP * p.p_P;
+      lo_g = std::min(lo_g, p_S.y());
+      hi_g = std::max(hi_g, p_S.y());
+    }
+    // The camera's field at depth d is |y| ≤ tan γ·|C − (0, 0, d)| (the Eq. 4 camera); the
+    // geometric window interpolates Eq. 5's corners linearly: at most slightly wider.
+    const double half = std::tan(optics.gamma) * std::hypot(optics.a, d - optics.b);
+    const double column_pitch = 2.0 * half / 200.0;
+    const double ray_pitch = 2.0 * d * std::tan(std::atan2(scanner::laserWindow(optics).y_near,
+                                                           scanner::laserWindow(optics).z_min)) /
+                             199.0;
+    EXPECT_NEAR(hi_i - lo_i, 2.0 * half - column_pitch, column_pitch);
+    EXPECT_LT(std::abs((hi_i - lo_i) - (hi_g - lo_g)),
+              2.0 * (column_pitch + ray_pitch) +
+                  2.0 * (scanner::laserWindow(optics).halfWidth(d) - half));
+  }
+  EXPECT_EQ(image.stats.pixel_rays, frames.size() * 256u * 200u);
+  EXPECT_GT(image.stats.lit_pixels, frames.size() * 200u);
+}
+
+// With sensor noise on, the same seed gives the same cloud.ply bytes, whatever the thread
+// count; another seed gives another cloud.
+TEST(ScannerSimulationImage, NoisyImagesAreDeterministicPerSeed) {
+  const CellModel cell = planeCell();
+  const TriangleMesh plane = planeMesh(0.4, 2);
+  const scanner::ScanSimulator sim(cell, plane);
+  std::vector<ScanFrame> frames;
+  for (int i = 0; i < 12; ++i)
+    frames.push_back(planeFrame(cell, 0.15 + 0.002 * i, 0.01 * i, 0.1 * i));
+  SimulationSettings settings = imageSettings(64);
+  settings.image.rows = 96;
+  settings.image.noise = 6.0;
+  settings.seed = 11;
+  const SimulatedCloud a = run(sim, frames, settings);
+  SimulatedCloud b;
+  {
+    tbb::task_arena one(1);
+    one.execute([&] { b = run(sim, frames, settings); });
+  }
+  ASSERT_EQ(a.points.size(), b.points.size());
+  ASSERT_GT(a.points.size(), 0u);
+  std::ostringstream ply_a(std::ios::binary), ply_b(std::ios::binary);
+  scanner::writeCloudPly(ply_a, a.points);
+  scanner::writeCloudPly(ply_b, b.points);
+  EXPECT_TRUE(ply_a.str() == ply_b.str());
+  settings.seed = 12;
+  const SimulatedCloud c = run(sim, frames, settings);
+  bool differ = c.points.size() != a.points.size();
+  for (std::size_t i = 0; !differ && i < a.points.size(); ++i)
+    differ = a.points[i].p_P != c.points[i].p_P;
+  EXPECT_TRUE(differ);
+}
+
+// renderImage() is the image simulate() measured: its stripe triangulates to the same points.
+TEST(ScannerSimulationImage, RenderImageIsTheImageTheProfileWasMeasuredFrom) {
+  const CellModel cell = planeCell();
+  const TriangleMesh plane = planeMesh(0.4, 2);
+  const scanner::ScanSimulator sim(cell, plane);
+  const std::vector<ScanFrame> frames = {planeFrame(cell, 0.16)};
+  const SimulationSettings settings = imageSettings(100);
+  const SimulatedCloud cloud = run(sim, frames, settings);
+  const scanner::ProfileImage image = sim.renderImage(frames[0], 0, demoOptics(), settings);
+  const auto rows = scanner::detectStripe(image, settings.image.threshold, settings.image.method);
+  std::size_t found = 0;
+  for (const auto& r : rows) found += r ? 1u : 0u;
+  EXPECT_EQ(found, cloud.points.size());
+}
+
+TEST(ScannerSimulationImage, UnsupportedSettingsAreRefused) {
+  const CellModel cell = planeCell();
+  const scanner::ScanSimulator sim(cell, planeMesh(0.4, 2));
+  const std::vector<ScanFrame> frames = {planeFrame(cell, 0.16)};
+  SimulationSettings settings = imageSettings();
+  settings.cameras = CameraRule::kBoth;
+  EXPECT_THROW(run(sim, frames, settings), std::invalid_argument);
+  settings = imageSettings();
+  settings.image.thickness = 0.0;
+  EXPECT_THROW(run(sim, frames, settings), std::invalid_argument);
+  settings = imageSettings();
+  settings.image.rows = 1;
+  EXPECT_THROW(run(sim, frames, settings), std::invalid_argument);
+}
+
+// ---------------------------------------------------------------------------------------------
 // Noise.
 
 TEST(ScannerSimulation, NoiseMatchesSigmasAndIsSeeded) {

@@ -30,12 +30,15 @@ std::unique_ptr<MapBundle> buildBundle(const JobSpec& job) {
 }
 
 // The settings that change the map: the job without its planner, validation, simulation and
-// output sections, the scanner's measurement noise (simulation only; `seeds:` sets its seed) and
-// the name. Cases with the same key share one map.
+// output sections, the scanner's measurement noise (simulation only; `seeds:` sets its seed), its
+// image-mode camera and laser sheet (simulation only) and the name. Cases with the same key share
+// one map.
 std::string mapKey(const JobSpec& job) {
   JobSpec copy = job;
   copy.name.clear();
   copy.scanner.noise = NoiseSpec{};
+  copy.scanner.camera = CameraSpec{};
+  copy.scanner.laser = LaserSpec{};
   copy.planner = PlannerSpec{};
   copy.validation = ValidationSpec{};
   copy.simulation = SimulationSpec{};

@@ -107,6 +107,21 @@ struct CheckOptions {
 };
 
 ExitCode runCheck(const CheckOptions& options);
+
+/// `scanplan watch`: the predictive collision watch over a stream of axis positions.
+struct WatchCommandOptions {
+  std::filesystem::path job_file;
+  std::vector<std::string> overrides;
+  std::filesystem::path log_file;  ///< empty: standard input, line by line
+  double horizon_s = 1.0;
+  double step_s = 0.02;
+  double warn_distance_mm = 20.0;
+  std::optional<double> stop_distance_mm;
+  double stop_time_s = 0.2;
+  std::size_t window = 25;
+  double repeat_s = 0.5;  ///< a lasting warning is printed again after this long
+};
+ExitCode runWatch(const WatchCommandOptions& options);
 ExitCode runPath(const PlanOptions& options);
 ExitCode runMap(const PlanOptions& options);
 /// The job's scan path (loads the part, casts rays for the standoff); errors name the job.

@@ -286,7 +286,7 @@ const std::vector<std::string> kPlanOutputs{
     "programs",        "path.csv",     "path.png",       "configmap*",
     "cloud.ply",       "coverage.ply", "cloud.png",      "uncovered.ply",
     "certificate.png", "replay.html",  "cell.png",       "setup2",
-    "sensors.csv"};
+    "profiles",        "sensors.csv"};
 
 // The command's result on stdout: the text summary, or with --json one JSON document (the
 // report, the output folder and the summary's lines).
@@ -378,6 +378,7 @@ ExitCode runPlan(const PlanOptions& options) {
       "{}{}\n",
       options.out_dir.string(),
       std::string(plan.simulation ? "cloud.ply, coverage.ply, cloud.png, " : "") +
+          (plan.simulation && !plan.simulation->profile_images.empty() ? "profiles/, " : "") +
           (std::filesystem::exists(options.out_dir / "replay.html") ? "replay.html, " : "") +
           "cell.png, " + (plan.certificate ? "uncovered.ply, certificate.png, " : "") +
           (plan.validation && plan.validation->sensors ? "sensors.csv, " : "") +

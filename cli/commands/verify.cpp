@@ -90,8 +90,8 @@ ExitCode runSimulate(const VerifyOptions& options) {
   const kinematics::CellModel cell = buildCell(job);
   const kinematics::LoadedMesh part = loadPart(job, cell);
   const kinematics::Trajectory trajectory = loadTrajectory(options.trajectory_file);
-  OutputStage stage(options.out_dir,
-                    {"cloud.ply", "coverage.ply", "cloud.png", "simulation.json", "sensors.csv"});
+  OutputStage stage(options.out_dir, {"cloud.ply", "coverage.ply", "cloud.png", "simulation.json",
+                                          "profiles", "sensors.csv"});
   const pipeline::SimulationRun run = onTrajectory(options.trajectory_file, [&] {
     return pipeline::simulateTrajectory(cell, part.mesh, laserOptics(job),
                                         simulationSettings(job, cell), trajectory);
@@ -118,8 +118,9 @@ ExitCode runSimulate(const VerifyOptions& options) {
   writeFileAtomically(stage.dir() / "simulation.json", jsonDocument(json));
   stage.commit();
   std::string text = simulationSummary(run) + sensor_lines;
-  text += fmt::format("wrote      {}: cloud.ply, coverage.ply, cloud.png, simulation.json{}\n",
-                      options.out_dir.string(), sensor_lines.empty() ? "" : ", sensors.csv");
+  text += fmt::format("wrote      {}: cloud.ply, coverage.ply, cloud.png, simulation.json{}{}\n",
+                      options.out_dir.string(), run.profile_images.empty() ? "" : ", profiles/",
+                      sensor_lines.empty() ? "" : ", sensors.csv");
   std::fputs(text.c_str(), stdout);
   return ExitCode::kOk;
 }

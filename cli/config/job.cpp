@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 #include <type_traits>
+#include <utility>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -101,6 +102,23 @@ void describeNoise(A& a, NoiseSpec& s) {
   a.field("seed", s.seed, Expect::range(0, 2147483647));
 }
 
+inline const std::vector<std::string> kDetections = {"cog", "gauss"};
+
+template <class A>
+void describeCamera(A& a, CameraSpec& s) {
+  a.field("rows", s.rows, Expect::range(2, 16384));
+  a.field("columns", s.columns, Expect::range(0, 16384));
+  a.field("noise_grey", s.noise_grey, Expect::range(0.0, 255.0));
+  a.field("ambient_grey", s.ambient_grey, Expect::range(0.0, 255.0));
+  a.field("threshold_grey", s.threshold_grey, Expect::range(0.0, 254.0));
+  a.field("detection", s.detection, Expect::oneOf(kDetections));
+}
+
+template <class A>
+void describeLaser(A& a, LaserSpec& s) {
+  a.field("thickness_mm", s.thickness_mm, Expect{0.0, 100.0, true, false, {}});
+}
+
 inline const std::vector<std::string> kCameraRules = {"positive", "negative", "both", "either"};
 
 template <class A>
@@ -112,6 +130,8 @@ void describeScanner(A& a, ScannerSpec& s) {
   a.field("rays_per_profile", s.rays_per_profile, Expect::range(1, 100000));
   a.field("cameras", s.cameras, Expect::oneOf(kCameraRules));
   a.section("noise", s.noise);
+  a.section("camera", s.camera);
+  a.section("laser", s.laser);
   a.field("mass_kg", s.mass_kg, Expect::range(0.0, 1000.0));
   if constexpr (A::kReading) s.cog_given = a.has("cog_mm");
   if (A::kReading || s.cog_given) a.field("cog_mm", s.cog_mm, Expect::range(-10000.0, 10000.0));
@@ -124,12 +144,68 @@ void describeValidation(A& a, ValidationSpec& s) {
           Expect{0.001, 100.0, false, false, {}});
 }
 
+inline const std::vector<std::string> kSimulationModes = {"geometric", "image"};
+
+template <class A>
+void describeReflectance(A& a, SimulationSpec::Reflectance& s);
+
 template <class A>
 void describeSimulation(A& a, SimulationSpec& s) {
   a.field("enabled", s.enabled);
   a.field("extra_eccentricity_mm", s.extra_eccentricity_mm, Expect::range(-1000.0, 1000.0));
   a.field("extra_tilt_deg", s.extra_tilt_deg, Expect::range(-10.0, 10.0));
   a.field("coverage_min_points", s.coverage_min_points, Expect::range(1, 1000000));
+  a.field("mode", s.mode, Expect::oneOf(kSimulationModes));
+  a.section("reflectance", s.reflectance);
+  a.field("profile_images", s.profile_images, Expect::range(0, 1000));
+}
+
+template <class A>
+void describeReflectance(A& a, SimulationSpec::Reflectance& s) {
+  a.field("lambert", s.lambert, Expect::range(0.0, 100.0));
+  a.field("specular", s.specular, Expect::range(0.0, 100.0));
+  a.field("shininess", s.shininess, Expect::range(0.0, 10000.0));
+}
+
+// simulation.mode image: one camera, and noise in the image rather than on the points (the
+// errors name the scanner key at its place in the file).
+void checkImageMode(const YamlIn& a, const JobSpec& s) {
+  if (s.simulation.mode != "image") return;
+  const YAML::Node& root = a.node();
+  const YAML::Node scanner = std::as_const(root)["scanner"];
+  // Each thread holds one image with what every pixel saw: ~100 bytes a pixel.
+  constexpr long long kMaxImagePixels = 4'194'304;  // 2048 × 2048, ~400 MB per thread
+  const CameraSpec& camera = s.scanner.camera;
+  const long long columns = camera.columns > 0 ? camera.columns : s.scanner.rays_per_profile;
+  const long long pixels = static_cast<long long>(camera.rows) * columns;
+  if (pixels > kMaxImagePixels) {
+    const std::string value = fmt::format("{} rows x {} columns = {} pixels", camera.rows, columns,
+                                          pixels);
+    const std::string expected = fmt::format(
+        "at most {} pixels per image with simulation.mode: image (each thread holds one, ~100 "
+        "bytes a pixel)",
+        kMaxImagePixels);
+    const YAML::Node node = std::as_const(scanner)["camera"];
+    if (node.IsDefined() && node.IsMap() &&
+        (std::as_const(node)["columns"].IsDefined() || std::as_const(node)["rows"].IsDefined())) {
+      YamlIn in(node, "scanner.camera", a.file(), a.overrides());
+      in.fail(std::as_const(node)["columns"].IsDefined() ? "columns" : "rows", value, expected);
+    }
+    YamlIn in(scanner, "scanner", a.file(), a.overrides());
+    in.fail("rays_per_profile", value, expected + " (columns default to rays_per_profile)");
+  }
+  if (s.scanner.cameras == "both" || s.scanner.cameras == "either") {
+    YamlIn in(scanner, "scanner", a.file(), a.overrides());
+    in.fail("cameras", "'" + s.scanner.cameras + "'",
+            "positive or negative with simulation.mode: image (it renders one camera)");
+  }
+  for (const auto& [key, value] : {std::pair{"longitudinal_mm", s.scanner.noise.longitudinal_mm},
+                                   std::pair{"orthogonal_mm", s.scanner.noise.orthogonal_mm}}) {
+    if (value == 0.0) continue;
+    YamlIn in(std::as_const(scanner)["noise"], "scanner.noise", a.file(), a.overrides());
+    in.fail(key, formatNumber(value),
+            "0 with simulation.mode: image (its noise is scanner.camera.noise_grey, in the image)");
+  }
 }
 
 inline const std::vector<std::string> kPathTypes = {"ring", "raster", "waypoints", "file"};
@@ -558,6 +634,7 @@ void describeJob(A& a, JobSpec& s) {
   a.section("planner", s.planner);
   a.section("validation", s.validation);
   a.section("simulation", s.simulation);
+  if constexpr (std::is_same_v<A, YamlIn>) checkImageMode(a, s);
   if constexpr (A::kReading) s.outputs.programs = defaultPrograms(s.robot);
   a.section("outputs", s.outputs);
 }
@@ -610,6 +687,12 @@ void describe(YamlIn& a, OutputsSpec& s) { describeOutputs(a, s); }
 void describe(YamlOut& a, OutputsSpec& s) { describeOutputs(a, s); }
 void describe(YamlIn& a, NoiseSpec& s) { describeNoise(a, s); }
 void describe(YamlOut& a, NoiseSpec& s) { describeNoise(a, s); }
+void describe(YamlIn& a, CameraSpec& s) { describeCamera(a, s); }
+void describe(YamlOut& a, CameraSpec& s) { describeCamera(a, s); }
+void describe(YamlIn& a, LaserSpec& s) { describeLaser(a, s); }
+void describe(YamlOut& a, LaserSpec& s) { describeLaser(a, s); }
+void describe(YamlIn& a, SimulationSpec::Reflectance& s) { describeReflectance(a, s); }
+void describe(YamlOut& a, SimulationSpec::Reflectance& s) { describeReflectance(a, s); }
 void describe(YamlIn& a, ValidationSpec& s) { describeValidation(a, s); }
 void describe(YamlOut& a, ValidationSpec& s) { describeValidation(a, s); }
 void describe(YamlIn& a, SimulationSpec& s) { describeSimulation(a, s); }
@@ -696,6 +779,9 @@ void describe(SchemaOut& a, PlannerSpec& s) { describePlanner(a, s); }
 void describe(SchemaOut& a, TriggerSpec& s) { describeTrigger(a, s); }
 void describe(SchemaOut& a, OutputsSpec& s) { describeOutputs(a, s); }
 void describe(SchemaOut& a, NoiseSpec& s) { describeNoise(a, s); }
+void describe(SchemaOut& a, CameraSpec& s) { describeCamera(a, s); }
+void describe(SchemaOut& a, LaserSpec& s) { describeLaser(a, s); }
+void describe(SchemaOut& a, SimulationSpec::Reflectance& s) { describeReflectance(a, s); }
 void describe(SchemaOut& a, ValidationSpec& s) { describeValidation(a, s); }
 void describe(SchemaOut& a, SimulationSpec& s) { describeSimulation(a, s); }
 void describe(SchemaOut& a, JobSpec& s) { describeJob(a, s); }

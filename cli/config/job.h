@@ -61,6 +61,21 @@ struct NoiseSpec {
   int seed = 1;
 };
 
+/// `scanner.camera`: the image of `simulation.mode: image` and how the stripe is read from it.
+struct CameraSpec {
+  int rows = 256;  ///< H, pixels across the depth window (f = H / (2 tan γ), Eq. 4)
+  int columns = 0;  ///< W, pixels along the line; 0: scanner.rays_per_profile
+  double noise_grey = 0.0;       ///< σ of the sensor noise, grey levels (0…255)
+  double ambient_grey = 12.0;    ///< ambient light on a surface facing the camera, grey levels
+  double threshold_grey = 40.0;  ///< a stripe peak must exceed it, grey levels
+  std::string detection = "cog";  ///< cog (centre of gravity) | gauss (3-point Gaussian fit)
+};
+
+/// `scanner.laser`: the laser sheet.
+struct LaserSpec {
+  double thickness_mm = 1.0;  ///< full 1/e² width of the sheet (Gaussian across it)
+};
+
 /// `scanner`: the laser frame on the flange (X_FS), the housing's shapes in that frame, optics,
 /// and how it acquires (frame rate, fan, cameras, noise).
 struct ScannerSpec {
@@ -71,6 +86,8 @@ struct ScannerSpec {
   int rays_per_profile = 200;        ///< laser fan rays per profile
   std::string cameras = "positive";  ///< positive | negative | both | either
   NoiseSpec noise;
+  CameraSpec camera;
+  LaserSpec laser;
   /// kg, the scanner's mass: the programs' payload. 0: not known (no payload is set).
   double mass_kg = 0.0;
   /// mm, its centre of gravity in the flange frame; when not given, the centre of the
@@ -94,6 +111,14 @@ struct SimulationSpec {
   std::array<double, 2> extra_eccentricity_mm{};
   std::array<double, 2> extra_tilt_deg{};
   int coverage_min_points = 1;  ///< points on a triangle for it to count as covered
+  std::string mode = "geometric";  ///< geometric (laser fan, Eq. 5) | image (camera image, Eq. 4)
+  /// Image mode: surface reflectance of the simulated cell (grey levels per unit irradiance).
+  struct Reflectance {
+    double lambert = 0.8;
+    double specular = 0.0;
+    double shininess = 20.0;
+  } reflectance;
+  int profile_images = 4;  ///< image mode: profile images `plan`/`simulate` write as PNG
 };
 
 /// `scan.paths[].points[]`.

@@ -141,6 +141,22 @@ pipeline::SimulationSettings simulationSettings(const JobSpec& job,
   s.scanner.sigma_longitudinal = job.scanner.noise.longitudinal_mm * kMmToM;
   s.scanner.sigma_orthogonal = job.scanner.noise.orthogonal_mm * kMmToM;
   s.scanner.seed = static_cast<std::uint64_t>(job.scanner.noise.seed);
+  s.scanner.mode = job.simulation.mode == "image" ? scanner::SimulationMode::kImage
+                                                  : scanner::SimulationMode::kGeometric;
+  const CameraSpec& camera = job.scanner.camera;
+  scanner::ImageSettings& image = s.scanner.image;
+  image.rows = camera.rows;
+  image.columns = camera.columns > 0 ? camera.columns : job.scanner.rays_per_profile;
+  image.thickness = job.scanner.laser.thickness_mm * kMmToM;
+  image.reflectance = {job.simulation.reflectance.lambert, job.simulation.reflectance.specular,
+                       job.simulation.reflectance.shininess};
+  image.ambient = camera.ambient_grey;
+  image.noise = camera.noise_grey;
+  image.threshold = camera.threshold_grey;
+  image.method = camera.detection == "gauss" ? scanner::StripeMethod::kGaussian
+                                             : scanner::StripeMethod::kCentreOfGravity;
+  if (s.scanner.mode == scanner::SimulationMode::kImage)
+    s.profile_images = static_cast<std::size_t>(job.simulation.profile_images);
   const auto& e = job.simulation.extra_eccentricity_mm;
   const auto& t = job.simulation.extra_tilt_deg;
   if (e[0] != 0.0 || e[1] != 0.0 || t[0] != 0.0 || t[1] != 0.0) {

@@ -1,6 +1,8 @@
 #include "cli/io/simulation_files.h"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -55,6 +57,31 @@ RenderRequest cloudPoints(const kinematics::TriangleMesh& part,
     points.dot_colours.push_back(colour);
   }
   return points;
+}
+
+// A profile image for a person: the camera image as it is (left) and with the detected stripe
+// marked in red (right), each pixel drawn 2 × 2.
+RgbImage profileImagePicture(const scanner::ProfileImage& image, const JobSpec& job) {
+  const int w = image.columns, h = image.rows;
+  RgbImage picture = RgbImage::filled(2 * w + 4, h, Rgb{0, 114, 178});
+  for (int r = 0; r < h; ++r) {
+    for (int k = 0; k < w; ++k) {
+      const auto g = static_cast<std::uint8_t>(std::lround(image.at(r, k)));
+      picture.set(k, r, {g, g, g});
+      picture.set(w + 4 + k, r, {g, g, g});
+    }
+  }
+  const auto method = job.scanner.camera.detection == "gauss"
+                          ? scanner::StripeMethod::kGaussian
+                          : scanner::StripeMethod::kCentreOfGravity;
+  const auto rows = scanner::detectStripe(image, job.scanner.camera.threshold_grey, method);
+  for (int k = 0; k < w; ++k) {
+    if (const auto& row = rows[static_cast<std::size_t>(k)]) {
+      const int r = std::clamp(static_cast<int>(std::lround(*row)), 0, h - 1);
+      picture.set(w + 4 + k, r, {230, 30, 30});
+    }
+  }
+  return upscale(picture, 2, 2);
 }
 
 }  // namespace
@@ -126,6 +153,13 @@ void writeSimulationOutputs(const std::filesystem::path& dir,
                                     coverage_settings.min_points)
                       : std::string("not covered (no point on the triangle)")}};
   writePng(dir / "cloud.png", drawViewGrid(grid), settings.png);
+
+  if (run.profile_images.empty()) return;
+  std::filesystem::create_directories(dir / "profiles");
+  for (const auto& [index, image] : run.profile_images) {
+    writePng(dir / "profiles" / fmt::format("profile_{:06d}.png", index),
+             profileImagePicture(image, job), settings.png);
+  }
 }
 
 namespace {

@@ -10,7 +10,9 @@
 
 namespace scanplan::cli {
 
-/// cloud.ply, coverage.ply and cloud.png (the cloud and the coverage from three sides) in `dir`.
+/// cloud.ply, coverage.ply and cloud.png (the cloud and the coverage from three sides) in `dir`;
+/// with the run's profile images (image mode), profiles/profile_NNNNNN.png (NNNNNN the profile
+/// index): the camera image, and beside it the same with the detected stripe in red.
 void writeSimulationOutputs(const std::filesystem::path& dir,
                             const JobSpec& job,
                             const kinematics::TriangleMesh& part,

@@ -1,5 +1,8 @@
 #include "cli/report/verify_report.h"
 
+#include <algorithm>
+#include <cstddef>
+
 #include <fmt/format.h>
 
 #include "kinematics/units.h"
@@ -94,11 +97,19 @@ Json validationJson(const planner::ValidationReport& r) {
 
 std::string simulationSummary(const pipeline::SimulationRun& run) {
   const scanner::SimulationStats& s = run.cloud.stats;
-  std::string text = fmt::format(
-      "simulation {} profiles, {} laser + {} occlusion rays in {:.1f} s: {} points ({} outside "
-      "the window, {} hidden from the camera)\n",
-      s.profiles, s.laser_rays, s.occlusion_rays, run.seconds, s.points, s.outside_window,
-      s.occluded);
+  std::string text =
+      s.pixel_rays > 0
+          ? fmt::format(
+                "simulation {} profiles (camera images), {} pixel + {} laser rays in {:.1f} s: "
+                "{} lit pixels, {} points ({:.1f} per profile)\n",
+                s.profiles, s.pixel_rays, s.occlusion_rays, run.seconds, s.lit_pixels, s.points,
+                static_cast<double>(s.points) /
+                    static_cast<double>(std::max<std::size_t>(1, s.profiles)))
+          : fmt::format(
+                "simulation {} profiles, {} laser + {} occlusion rays in {:.1f} s: {} points ({} "
+                "outside the window, {} hidden from the camera)\n",
+                s.profiles, s.laser_rays, s.occlusion_rays, run.seconds, s.points,
+                s.outside_window, s.occluded);
   text += fmt::format(
       "coverage   {:.1f}% of the part's area within {:.2f} mm of a point ({} area samples); "
       "{:.1f}% faces or lies on the table\n",
@@ -158,6 +169,8 @@ Json simulationJson(const pipeline::SimulationRun& run) {
           {"points", s.points},
           {"outside_window", s.outside_window},
           {"occluded", s.occluded},
+          {"pixel_rays", s.pixel_rays},
+          {"lit_pixels", s.lit_pixels},
           {"seconds", run.seconds},
           {"coverage",
            {{"area_fraction", run.area.covered_fraction},
