@@ -16,6 +16,7 @@
 #include <variant>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -510,6 +511,8 @@ std::string kindName(Violation::Kind kind) {
       return "table acceleration";
     case Violation::Kind::kCollision:
       return "collision";
+    case Violation::Kind::kSensor:
+      return "sensor";
   }
   return "unknown";
 }
@@ -531,6 +534,8 @@ std::string describe(const Violation& v) {
     case Violation::Kind::kCollision:
       return when + fmt::format("distance {:.3f} mm, contact at ({:.1f}, {:.1f}, {:.1f}) mm",
                                 toMm(v.value), toMm(v.p_W.x()), toMm(v.p_W.y()), toMm(v.p_W.z()));
+    case Violation::Kind::kSensor:
+      return fmt::format("sensor: {} {:.3f} … {:.3f} s: {}", v.what, v.t_start, v.t_end, v.note);
   }
   return when;
 }
@@ -794,6 +799,30 @@ bool selfPair(const collision::Scene& scene, std::size_t p) {
   return carried(scene.pairs()[p].a) && carried(scene.pairs()[p].b);
 }
 
+// The sensors' broken rules as violations: the sensor's name, the run, the rule and what the
+// sensor did there (with the bodies a presence volume saw).
+void appendSensorViolations(const collision::Scene& scene,
+                            const collision::SensorEvaluation& evaluation,
+                            std::vector<Violation>& out) {
+  const auto& sensors = scene.cell().sensors;
+  for (const collision::SensorRuleViolation& r : collision::checkSensorRules(sensors, evaluation)) {
+    const kinematics::Sensor& sensor = sensors[r.sensor];
+    Violation v;
+    v.kind = Violation::Kind::kSensor;
+    v.what = sensor.name;
+    v.t = v.t_start = r.span.t_start;
+    v.t_end = r.span.t_end;
+    v.note = "expect " + collision::describeExpectation(sensor.expect) + ": " +
+             (r.fired ? "fires" : "does not fire");
+    if (!r.span.bodies.empty()) {
+      std::vector<std::string> names;
+      for (int b : r.span.bodies) names.push_back(scene.bodies()[static_cast<std::size_t>(b)].name);
+      v.note += fmt::format(" ({})", fmt::join(names, ", "));
+    }
+    out.push_back(std::move(v));
+  }
+}
+
 // Orders the violations, and fills in the verdict and the distances.
 void concludeReport(const collision::Scene& scene,
                     const Gathered& gathered,
@@ -856,6 +885,10 @@ ValidationReport validateTrajectory(const collision::Scene& scene,
   report.poses_checked = gathered.poses_checked;
   const bool collided =
       emitCollisions(scene, gathered.spans, settings.collision_resolution, report.violations);
+  if (!cell.sensors.empty()) {
+    report.sensors = collision::evaluateSensors(scene, samples);
+    appendSensorViolations(scene, *report.sensors, report.violations);
+  }
   concludeReport(scene, gathered, collided, report);
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;

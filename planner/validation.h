@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 
 #include "collision/scene.h"
+#include "collision/sensors.h"
 #include "kinematics/trajectory.h"
 
 namespace scanplan::planner {
@@ -41,6 +42,7 @@ struct Violation {
     kTableSpeed,  ///< |Δθ/Δt| between consecutive densified poses vs the table bound
     kTableAccel,  ///< |α| at a knot of the original samples vs the table bound (rad/s²)
     kCollision,   ///< value: the smallest distance found in the run (0: contact), m
+    kSensor,      ///< a sensor's rule (job `sensors[].expect`) broken over the run; see `note`
   };
   Kind kind = Kind::kCollision;
   /// "joint 3" (1-based, as users count), "table", or the body pair "scanner - part".
@@ -57,10 +59,12 @@ struct Violation {
   /// kCollision: the contact point at the first contact, world frame, m (the midpoint of the
   /// pair's witness points at a pose within about collision_resolution of contact). Zero else.
   Eigen::Vector3d p_W = Eigen::Vector3d::Zero();
+  /// kSensor: the rule and what the sensor did, e.g. "expect never: fires (link6, scanner)".
+  std::string note;
 };
 
 /// "joint limit", "table limit", "joint speed", "table speed", "table acceleration",
-/// "collision".
+/// "collision", "sensor".
 std::string kindName(Violation::Kind kind);
 /// One line in user units (s, deg, deg/s, deg/s², mm), e.g.
 /// "joint speed: joint 6 at t = 0.200 s (0.200 … 0.600 s): 1145.92 deg/s > 600.00 deg/s".
@@ -89,6 +93,9 @@ struct ValidationReport {
   /// motion (the conservative-advancement certificate); 0 when a collision was found, infinite
   /// when the scene has no pairs.
   double proven_clearance = 0.0;
+  /// The cell's sensors (CellModel::sensors) at every densified pose; absent without sensors.
+  /// Their rules' violations are kSensor entries of `violations`.
+  std::optional<collision::SensorEvaluation> sensors;
   std::size_t samples = 0;        ///< densified poses
   std::size_t poses_checked = 0;  ///< clearance evaluations: densified + bisection poses
   double seconds = 0.0;           ///< wall time of the validation
@@ -131,6 +138,9 @@ kinematics::Trajectory densify(const kinematics::Trajectory& trajectory, double 
 ///   without this proof. Spans of one pair that touch form one kCollision run: its start is the
 ///   first contact (to within collision_resolution of motion) with the contact point there.
 ///   Limitation (FCL meshes are surfaces): a body that starts wholly inside a mesh is not seen.
+/// - Sensors (CellModel::sensors, seed §5.1–5.2): each evaluated at every densified pose
+///   (collision::evaluateSensors); each run of poses that breaks a sensor's rule is a kSensor
+///   violation from its first to its last pose.
 ///
 /// Violations of one kind and subject over consecutive poses / intervals are merged into one
 /// entry (the worst value and its time, plus the run's start and end). Poses and intervals are

@@ -11,7 +11,9 @@
 #include "cli/commands/commands.h"
 #include "cli/io/json.h"
 #include "cli/io/output.h"
+#include "cli/report/sensor_report.h"
 #include "collision/scene.h"
+#include "collision/sensors.h"
 #include "kinematics/error.h"
 #include "kinematics/units.h"
 #include "planner/constraints.h"
@@ -122,6 +124,10 @@ std::string checkJson(const JobSpec& job,
   json["collision"] = s.clearance.collision;
   json["f"] = s.total;
   json["limiting"] = s.limiting;
+  if (!scene.cell().sensors.empty()) {
+    json["sensors"] = sensorReadingsJson(
+        scene, collision::SensorEvaluator(scene).evaluate(deg(options.table_deg), q));
+  }
   return jsonDocument(json);
 }
 
@@ -170,6 +176,10 @@ std::string checkText(const collision::Scene& scene,
         "{:.1f}) mm (world)\n",
         pairName(scene, scene.pairs()[static_cast<std::size_t>(s.clearance.limiting_pair)]),
         toMm(c.distance), a[0], a[1], a[2], b[0], b[1], b[2]);
+  }
+  if (!scene.cell().sensors.empty()) {
+    t += sensorReadingsText(scene,
+                            collision::SensorEvaluator(scene).evaluate(deg(options.table_deg), q));
   }
   return t;
 }

@@ -21,6 +21,7 @@
 #include "cli/plot/image_io.h"
 #include "cli/report/plan_report.h"
 #include "cli/report/plan_summary.h"
+#include "cli/report/sensor_report.h"
 #include "cli/report/verify_report.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"
@@ -161,6 +162,15 @@ std::string writeReplay(const std::filesystem::path& out,
       scene.frames.size(), scene.cloud.size(), scene.cloud_total);
 }
 
+// sensors.csv when the cell has sensors (the validation evaluated them); returns their summary
+// lines.
+std::string writeSensorOutputs(const std::filesystem::path& out, const pipeline::ScanPlan& plan) {
+  if (!plan.validation || !plan.validation->sensors) return {};
+  const collision::Scene& scene = *plan.prepared->scene;
+  writeFileAtomically(out / "sensors.csv", sensorsCsv(scene, *plan.validation->sensors));
+  return sensorsSummary(scene, *plan.validation->sensors);
+}
+
 // The outputs of a valid plan: trajectory.csv, the programs, the simulation's and the
 // certificate's files; returns their summary lines (`second`: of the second setup, which does
 // not suggest another).
@@ -180,8 +190,10 @@ std::string writePlannedOutputs(const std::filesystem::path& out,
                             settings);
   }
   const std::string replay = writeReplay(out, job, problem, plan, settings);
+  const std::string sensors = writeSensorOutputs(out, plan);
   std::string summary = choiceSummary(plan);
   if (plan.validation) summary += validationSummary(*plan.validation);
+  summary += sensors;
   summary += programs;
   summary += replay;
   if (plan.simulation) summary += simulationSummary(*plan.simulation);
@@ -261,6 +273,7 @@ std::string writePlanOutputs(const std::filesystem::path& dir,
     // Kept for inspection under a name no robot-side tool picks up as the plan.
     writeFileAtomically(dir / "trajectory_invalid.csv",
                         kinematics::trajectoryToCsv(plan.trajectory->trajectory));
+    writeSensorOutputs(dir, plan);
     return {};
   }
   return writePlannedOutputs(dir, job, problem, plan, false, settings);
@@ -273,7 +286,7 @@ const std::vector<std::string> kPlanOutputs{
     "programs",        "path.csv",     "path.png",       "configmap*",
     "cloud.ply",       "coverage.ply", "cloud.png",      "uncovered.ply",
     "certificate.png", "replay.html",  "cell.png",       "setup2",
-    "profiles"};
+    "profiles",        "sensors.csv"};
 
 // The command's result on stdout: the text summary, or with --json one JSON document (the
 // report, the output folder and the summary's lines).
@@ -341,11 +354,14 @@ ExitCode runPlan(const PlanOptions& options) {
   if (plan.status == pipeline::ScanStatus::kInvalidTrajectory) {
     finish();
     summary += validationSummary(*plan.validation);
+    const bool sensors = plan.validation->sensors.has_value();
+    if (sensors) summary += sensorsSummary(*prepared.scene, *plan.validation->sensors);
     summary += fmt::format(
-        "plan       NOT VALID: the planned motion breaks the limits above\n"
-        "wrote      {}: job.yaml, trajectory_invalid.csv, report.json, configmap_path.png/.svg, "
-        "{}\n",
-        options.out_dir.string(), kMapFilesNote);
+        "plan       NOT VALID: the planned motion breaks the {} above\n"
+        "wrote      {}: job.yaml, trajectory_invalid.csv, {}report.json, "
+        "configmap_path.png/.svg, {}\n",
+        sensors ? "limits or sensor rules" : "limits", options.out_dir.string(),
+        sensors ? "sensors.csv, " : "", kMapFilesNote);
     return printPlanResult(options, summary, report, ExitCode::kNoPlan);
   }
   summary += planned;
@@ -365,6 +381,7 @@ ExitCode runPlan(const PlanOptions& options) {
           (plan.simulation && !plan.simulation->profile_images.empty() ? "profiles/, " : "") +
           (std::filesystem::exists(options.out_dir / "replay.html") ? "replay.html, " : "") +
           "cell.png, " + (plan.certificate ? "uncovered.ply, certificate.png, " : "") +
+          (plan.validation && plan.validation->sensors ? "sensors.csv, " : "") +
           (setups.contains("setups") ? "setup2/, " : ""),
       kMapFilesNote);
   summary += fmt::format(

@@ -14,11 +14,13 @@
 #include "cli/io/simulation_files.h"
 #include "cli/io/trajectory_file.h"
 #include "cli/programs/programs.h"
+#include "cli/report/sensor_report.h"
 #include "cli/report/verify_report.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"
 #include "kinematics/units.h"
 #include "pipeline/simulation.h"
+#include "planner/validation.h"
 
 namespace scanplan::cli {
 
@@ -57,20 +59,27 @@ ExitCode runValidate(const VerifyOptions& options) {
   const planner::ValidationReport report = onTrajectory(options.trajectory_file, [&] {
     return planner::validateTrajectory(scene, trajectory, validationSettings(job));
   });
-  const std::string json = jsonDocument({{"format", "scanplan validation report 1"},
-                                         {"job", job.name},
-                                         {"job_hash", jobHash(job)},
-                                         {"trajectory", options.trajectory_file.string()},
-                                         {"frame_rate_hz", job.scanner.frame_rate_hz},
-                                         {"validation", validationJson(report)}});
+  Json doc = {{"format", "scanplan validation report 1"},
+              {"job", job.name},
+              {"job_hash", jobHash(job)},
+              {"trajectory", options.trajectory_file.string()},
+              {"frame_rate_hz", job.scanner.frame_rate_hz},
+              {"validation", validationJson(report)}};
+  if (report.sensors) doc["sensors"] = sensorsJson(scene, *report.sensors);
+  const std::string json = jsonDocument(doc);
   if (options.json) {
     std::fputs(json.c_str(), stdout);
   } else {
-    std::fputs(validationSummary(report, 50).c_str(), stdout);
+    std::string text = validationSummary(report, 50);
+    if (report.sensors) text += sensorsSummary(scene, *report.sensors);
+    std::fputs(text.c_str(), stdout);
   }
   if (!options.out_dir.empty()) {
-    OutputStage stage(options.out_dir, {"validation.json"});
+    OutputStage stage(options.out_dir, {"validation.json", "sensors.csv"});
     writeFileAtomically(stage.dir() / "validation.json", json);
+    if (report.sensors) {
+      writeFileAtomically(stage.dir() / "sensors.csv", sensorsCsv(scene, *report.sensors));
+    }
     stage.commit();
   }
   return report.valid ? ExitCode::kOk : ExitCode::kNoPlan;
@@ -82,22 +91,36 @@ ExitCode runSimulate(const VerifyOptions& options) {
   const kinematics::LoadedMesh part = loadPart(job, cell);
   const kinematics::Trajectory trajectory = loadTrajectory(options.trajectory_file);
   OutputStage stage(options.out_dir, {"cloud.ply", "coverage.ply", "cloud.png", "simulation.json",
-                                          "profiles"});
+                                          "profiles", "sensors.csv"});
   const pipeline::SimulationRun run = onTrajectory(options.trajectory_file, [&] {
     return pipeline::simulateTrajectory(cell, part.mesh, laserOptics(job),
                                         simulationSettings(job, cell), trajectory);
   });
   writeSimulationOutputs(stage.dir(), job, part.mesh, run);
-  const Json json = {{"format", "scanplan simulation report 1"},
-                     {"job", job.name},
-                     {"job_hash", jobHash(job)},
-                     {"trajectory", options.trajectory_file.string()},
-                     {"simulation", simulationJson(run)}};
+  Json json = {{"format", "scanplan simulation report 1"},
+               {"job", job.name},
+               {"job_hash", jobHash(job)},
+               {"trajectory", options.trajectory_file.string()},
+               {"simulation", simulationJson(run)}};
+  std::string sensor_lines;
+  if (!cell.sensors.empty()) {
+    // The sensors at the validation's poses: the trajectory every frame period.
+    const collision::Scene scene(cell, clearanceConfig(job));
+    const collision::SensorEvaluation sensors = onTrajectory(options.trajectory_file, [&] {
+      const kinematics::Trajectory dense =
+          planner::densify(trajectory, validationSettings(job).sample_dt);
+      return collision::evaluateSensors(scene, dense.samples);
+    });
+    writeFileAtomically(stage.dir() / "sensors.csv", sensorsCsv(scene, sensors));
+    json["sensors"] = sensorsJson(scene, sensors);
+    sensor_lines = sensorsSummary(scene, sensors);
+  }
   writeFileAtomically(stage.dir() / "simulation.json", jsonDocument(json));
   stage.commit();
-  std::string text = simulationSummary(run);
-  text += fmt::format("wrote      {}: cloud.ply, coverage.ply, cloud.png, simulation.json{}\n",
-                      options.out_dir.string(), run.profile_images.empty() ? "" : ", profiles/");
+  std::string text = simulationSummary(run) + sensor_lines;
+  text += fmt::format("wrote      {}: cloud.ply, coverage.ply, cloud.png, simulation.json{}{}\n",
+                      options.out_dir.string(), run.profile_images.empty() ? "" : ", profiles/",
+                      sensor_lines.empty() ? "" : ", sensors.csv");
   std::fputs(text.c_str(), stdout);
   return ExitCode::kOk;
 }

@@ -12,6 +12,7 @@
 #include <utility>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
 #include "cli/config/detail/describe.h"
@@ -392,6 +393,73 @@ void describeObstacle(A& a, ObstacleSpec& s) {
   }
 }
 
+inline const std::vector<std::string> kSensorKinds = {"presence", "distance"};
+inline const std::vector<std::string> kSensorShapes = {"box", "sphere", "cylinder"};
+inline const std::vector<std::string> kSensorRules = {"any", "never", "always", "during",
+                                                      "not_during"};
+// A sensor's lengths: positive and at most a kilometre (as every length of a job).
+inline const Expect kSensorLength{0.0, 1e6, true, false, {}};
+
+template <class A>
+void describeSensor(A& a, SensorSpec& s) {
+  a.require("name");
+  a.field("name", s.name);
+  if constexpr (A::kReading) {
+    // The name heads sensors.csv's columns and the report's lines.
+    static const std::regex kName("[A-Za-z_][A-Za-z0-9_.-]{0,63}");
+    if (!std::regex_match(s.name, kName)) {
+      a.fail("name", "'" + clipForMessage(s.name) + "'",
+             "a letter or _, then letters, digits, _, . or -, at most 64 characters");
+    }
+  }
+  a.require("kind");
+  a.field("kind", s.kind, Expect::oneOf(kSensorKinds));
+  a.field("carrier", s.carrier);
+  if constexpr (A::kReading) {
+    if (s.carrier.empty()) a.fail("carrier", "''", "world or the name of a body of the cell");
+  }
+  a.section("pose", s.pose);
+  if (s.kind == "presence") {
+    a.require("shape");
+    a.field("shape", s.shape, Expect::oneOf(kSensorShapes));
+    if (s.shape == "box") {
+      a.require("size_mm");
+      a.field("size_mm", s.size_mm, kSensorLength);
+    } else {
+      a.require("radius_mm");
+      a.field("radius_mm", s.radius_mm, kSensorLength);
+      if (s.shape == "cylinder") {
+        a.require("length_mm");
+        a.field("length_mm", s.length_mm, kSensorLength);
+      }
+    }
+  } else {
+    a.require("max_range_mm");
+    a.field("min_range_mm", s.min_range_mm, Expect::range(0.0, 1e6));
+    a.field("max_range_mm", s.max_range_mm, kSensorLength);
+    if constexpr (A::kReading) {
+      s.has_receiver = a.has("receiver_mm");
+      if (!(s.min_range_mm < s.max_range_mm)) {
+        a.fail("max_range_mm", formatNumber(s.max_range_mm),
+               "a range above min_range_mm (" + formatNumber(s.min_range_mm) + ")");
+      }
+    }
+    if (s.has_receiver) a.field("receiver_mm", s.receiver_mm, Expect::range(-1e6, 1e6));
+  }
+  a.field("expect", s.expect, Expect::oneOf(kSensorRules));
+  if (s.expect == "during" || s.expect == "not_during") {
+    a.require("window_s");
+    a.field("window_s", s.window_s, Expect::range(0.0, 1e9));
+    if constexpr (A::kReading) {
+      if (!(s.window_s[0] <= s.window_s[1])) {
+        a.fail("window_s",
+               "[" + formatNumber(s.window_s[0]) + ", " + formatNumber(s.window_s[1]) + "]",
+               "[t0_s, t1_s] with t0_s <= t1_s");
+      }
+    }
+  }
+}
+
 template <class A>
 void describeRamp(A& a, RampSpec& s) {
   a.field("low", s.low, Expect::range(0.0, 1.0));
@@ -480,6 +548,39 @@ void describeOutputs(A& a, OutputsSpec& s) {
   a.field("servo_period_s", s.servo_period_s, Expect::range(0.001, 0.1));
 }
 
+// The bodies of the collision scene a job makes (collision::Scene's names: links with shapes by
+// name or base/linkN, the scanner when it has a housing, table, part, obstacles): a sensor's
+// carrier must be one of them.
+std::vector<std::string> sceneBodyNames(const JobSpec& s) {
+  std::vector<std::string> names;
+  for (std::size_t k = 0; k < s.robot.links.size() && k <= kinematics::kNumJoints; ++k) {
+    const LinkSpec& link = s.robot.links[k];
+    if (link.shapes.empty()) continue;
+    names.push_back(!link.name.empty() ? link.name
+                    : k == 0           ? std::string("base")
+                                       : "link" + std::to_string(k));
+  }
+  if (!s.scanner.body.empty()) names.emplace_back("scanner");
+  names.emplace_back("table");
+  names.emplace_back("part");
+  for (const ObstacleSpec& o : s.obstacles) names.push_back(o.name);
+  return names;
+}
+
+void checkSensorCarriers(const YamlIn& a, const JobSpec& s) {
+  const std::vector<std::string> bodies = sceneBodyNames(s);
+  for (std::size_t i = 0; i < s.sensors.size(); ++i) {
+    const std::string& carrier = s.sensors[i].carrier;
+    if (carrier == "world" || std::find(bodies.begin(), bodies.end(), carrier) != bodies.end()) {
+      continue;
+    }
+    const YamlIn sensor(a.node()["sensors"][i], "sensors[" + std::to_string(i) + "]", a.file(),
+                        a.overrides());
+    sensor.fail("carrier", "'" + clipForMessage(carrier) + "'",
+                fmt::format("world or a body of the cell: {}", fmt::join(bodies, ", ")));
+  }
+}
+
 template <class A>
 void describeJob(A& a, JobSpec& s) {
   a.field("name", s.name);
@@ -517,6 +618,16 @@ void describeJob(A& a, JobSpec& s) {
       }
     }
   }
+  a.list("sensors", s.sensors, 0, kMaxSensors);
+  if constexpr (A::kReading) {
+    std::set<std::string> names;
+    for (const SensorSpec& sensor : s.sensors) {
+      if (!names.insert(sensor.name).second) {
+        a.fail("sensors", "two sensors named '" + sensor.name + "'", "a unique name per sensor");
+      }
+    }
+    if constexpr (std::is_same_v<A, YamlIn>) checkSensorCarriers(a, s);
+  }
   a.section("constraints", s.constraints);
   a.section("scan", s.scan);
   a.section("map", s.map);
@@ -538,6 +649,8 @@ void describe(YamlIn& a, ScannerSpec& s) { describeScanner(a, s); }
 void describe(YamlOut& a, ScannerSpec& s) { describeScanner(a, s); }
 void describe(YamlIn& a, ObstacleSpec& s) { describeObstacle(a, s); }
 void describe(YamlOut& a, ObstacleSpec& s) { describeObstacle(a, s); }
+void describe(YamlIn& a, SensorSpec& s) { describeSensor(a, s); }
+void describe(YamlOut& a, SensorSpec& s) { describeSensor(a, s); }
 void describe(YamlIn& a, RampSpec& s) { describeRamp(a, s); }
 void describe(YamlOut& a, RampSpec& s) { describeRamp(a, s); }
 void describe(YamlIn& a, LengthRampSpec& s) { describeLengthRamp(a, s); }
@@ -625,10 +738,28 @@ std::vector<ObstacleSpec> schemaVariants<ObstacleSpec>() {
   return out;
 }
 
+template <>
+std::vector<SensorSpec> schemaVariants<SensorSpec>() {
+  std::vector<SensorSpec> out;
+  for (const char* rule : {"any", "during"}) {
+    SensorSpec s;
+    s.expect = rule;
+    for (const std::string& shape : kSensorShapes) {
+      s.kind = "presence";
+      s.shape = shape;
+      out.push_back(s);
+    }
+    s.kind = "distance";
+    out.push_back(s);
+  }
+  return out;
+}
+
 void describe(SchemaOut& a, TableSpec& s) { describeTable(a, s); }
 void describe(SchemaOut& a, PartSpec& s) { describePart(a, s); }
 void describe(SchemaOut& a, ScannerSpec& s) { describeScanner(a, s); }
 void describe(SchemaOut& a, ObstacleSpec& s) { describeObstacle(a, s); }
+void describe(SchemaOut& a, SensorSpec& s) { describeSensor(a, s); }
 void describe(SchemaOut& a, RampSpec& s) { describeRamp(a, s); }
 void describe(SchemaOut& a, LengthRampSpec& s) { describeLengthRamp(a, s); }
 void describe(SchemaOut& a, PairRuleSpec& s) { describePairRule(a, s); }
@@ -897,6 +1028,41 @@ kinematics::LoadedMesh loadPartMesh(const JobSpec& job, const kinematics::PartMo
   return mesh;
 }
 
+namespace {
+
+kinematics::Sensor toSensor(const SensorSpec& spec) {
+  using kinematics::Sensor;
+  using Rule = kinematics::SensorExpectation::Kind;
+  Sensor sensor;
+  sensor.name = spec.name;
+  sensor.kind = spec.kind == "distance" ? Sensor::Kind::kDistance : Sensor::Kind::kPresence;
+  sensor.carrier = spec.carrier;
+  sensor.X_CS = toIsometry(spec.pose);
+  if (spec.shape == "sphere") {
+    sensor.volume.geometry = kinematics::Sphere{mm(spec.radius_mm)};
+  } else if (spec.shape == "cylinder") {
+    sensor.volume.geometry = kinematics::Cylinder{mm(spec.radius_mm), mm(spec.length_mm)};
+  } else {
+    sensor.volume.geometry = kinematics::Box{Eigen::Vector3d(spec.size_mm.data()) * kMmToM};
+  }
+  sensor.min_range = mm(spec.min_range_mm);
+  sensor.max_range = mm(spec.max_range_mm);
+  if (spec.has_receiver) sensor.p_SR = Eigen::Vector3d(spec.receiver_mm.data()) * kMmToM;
+  const std::vector<std::pair<std::string, Rule>> rules = {{"any", Rule::kAny},
+                                                           {"never", Rule::kNever},
+                                                           {"always", Rule::kAlways},
+                                                           {"during", Rule::kDuring},
+                                                           {"not_during", Rule::kNotDuring}};
+  for (const auto& [name, rule] : rules) {
+    if (spec.expect == name) sensor.expect.kind = rule;
+  }
+  sensor.expect.t0 = spec.window_s[0];
+  sensor.expect.t1 = spec.window_s[1];
+  return sensor;
+}
+
+}  // namespace
+
 kinematics::CellModel buildCell(const JobSpec& job) {
   const std::string robot_source =
       job.robot_file.resolved.empty() ? job.source.string() : job.robot_file.resolved.string();
@@ -940,6 +1106,7 @@ kinematics::CellModel buildCell(const JobSpec& job) {
     }
     cell.obstacles.push_back(std::move(obstacle));
   }
+  for (const SensorSpec& spec : job.sensors) cell.sensors.push_back(toSensor(spec));
   return cell;
 }
 

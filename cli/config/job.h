@@ -235,6 +235,31 @@ struct ObstacleSpec {
   ShapeSpec shape;
 };
 
+/// The most sensors a job may have.
+inline constexpr std::size_t kMaxSensors = 64;
+
+/// `sensors[]`: a presence or distance sensor in the cell (seed §5.1–5.2), on the world or a
+/// body, with an optional rule on its output.
+struct SensorSpec {
+  std::string name;
+  std::string kind = "presence";  ///< presence | distance
+  std::string carrier = "world";  ///< world or a body: base, a link, scanner, table, part, obstacle
+  PoseSpec pose;                  ///< the sensor frame in the carrier's frame
+  // presence: the volume, centred on the sensor frame (a cylinder along its z)
+  std::string shape = "box";  ///< box | sphere | cylinder
+  std::array<double, 3> size_mm{100.0, 100.0, 100.0};
+  double radius_mm = 50.0;
+  double length_mm = 100.0;
+  // distance: a beam along +z of the sensor frame
+  double min_range_mm = 0.0;
+  double max_range_mm = 1000.0;
+  bool has_receiver = false;
+  std::array<double, 3> receiver_mm{};  ///< the receiver in the sensor frame (triangulation)
+  // the rule
+  std::string expect = "any";  ///< any | never | always | during | not_during
+  std::array<double, 2> window_s{};
+};
+
 /// A ramp on a unitless measure (Eq. 8 form).
 struct RampSpec {
   double low = 0.0;
@@ -308,6 +333,7 @@ struct JobSpec {
   PartSpec part;
   ScannerSpec scanner;
   std::vector<ObstacleSpec> obstacles;
+  std::vector<SensorSpec> sensors;
   ConstraintsSpec constraints;
   ScanSpec scan;
   MapSpec map;

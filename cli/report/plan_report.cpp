@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "cli/io/json.h"
+#include "cli/report/sensor_report.h"
 #include "cli/report/verify_report.h"
 #include "kinematics/units.h"
 
@@ -192,6 +193,9 @@ std::string planReportJson(const JobSpec& job,
   if (planning.dp) json["dp_baseline"] = dpJson(planning);
   addBranches(json, map, planning);
   if (plan.validation) json["validation"] = validationJson(*plan.validation);
+  if (plan.validation && plan.validation->sensors && plan.prepared) {
+    json["sensors"] = sensorsJson(*plan.prepared->scene, *plan.validation->sensors);
+  }
   if (plan.simulation) json["simulation"] = simulationJson(*plan.simulation);
   if (plan.certificate) json["coverage"] = certificateJson(*plan.simulation, *plan.certificate);
   if (plan.prepared && plan.prepared->auto_scan)

@@ -50,6 +50,7 @@ namespace {
 const char* violationUnit(planner::Violation::Kind kind) {
   using Kind = planner::Violation::Kind;
   if (kind == Kind::kCollision) return "mm";
+  if (kind == Kind::kSensor) return "";
   if (kind == Kind::kJointSpeed || kind == Kind::kTableSpeed) return "deg/s";
   if (kind == Kind::kTableAccel) return "deg/s^2";
   return "deg";
@@ -68,6 +69,7 @@ Json violationJson(const planner::Violation& v) {
                {"limit", user(v.limit)},
                {"unit", violationUnit(v.kind)}};
   if (collision) json["contact_mm"] = {toMm(v.p_W(0)), toMm(v.p_W(1)), toMm(v.p_W(2))};
+  if (v.kind == planner::Violation::Kind::kSensor) json["note"] = v.note;
   return json;
 }
 
