@@ -169,9 +169,9 @@ class TriangleTree {
         for (std::size_t i = n.first; i < n.first + n.count; ++i) {
           const Eigen::Vector3i& t = mesh_.triangles[order_[i]];
           const auto& v = mesh_.vertices;
-          const auto s = rayTriangle(o, d, v[static_cast<std::size_t>(t[0])],
-                                     v[static_cast<std::size_t>(t[1])],
-                                     v[static_cast<std::size_t>(t[2])]);
+          const auto s =
+              rayTriangle(o, d, v[static_cast<std::size_t>(t[0])],
+                          v[static_cast<std::size_t>(t[1])], v[static_cast<std::size_t>(t[2])]);
           if (s && *s >= near && *s <= far && (!best || *s < *best)) best = s;
         }
         continue;
@@ -213,8 +213,7 @@ class TriangleTree {
     const std::size_t half = count / 2;
     const auto begin = order_.begin() + static_cast<std::ptrdiff_t>(first);
     std::nth_element(begin, begin + static_cast<std::ptrdiff_t>(half),
-                     begin + static_cast<std::ptrdiff_t>(count),
-                     [&](std::size_t a, std::size_t b) {
+                     begin + static_cast<std::ptrdiff_t>(count), [&](std::size_t a, std::size_t b) {
                        return centroid(a)[axis] < centroid(b)[axis];
                      });
     const std::size_t left = nodes_.size();
@@ -300,19 +299,16 @@ std::string carrierChoices(const Scene& scene) {
 
 struct SensorEvaluator::Impl {
   const Scene* scene = nullptr;
-  std::vector<int> carrier;                      // per sensor: body index, -1 world
-  std::vector<detail::CollisionShape> volumes;   // per sensor: presence volume (else empty)
-  std::vector<std::vector<RayShape>> ray_bodies; // per body: its shapes (meshes' trees shared)
-  std::vector<Eigen::Isometry3d> X_W;            // scratch: body poses
-  std::vector<Eigen::Isometry3d> X_WS;           // sensor poses at the last evaluation
+  std::vector<int> carrier;                       // per sensor: body index, -1 world
+  std::vector<detail::CollisionShape> volumes;    // per sensor: presence volume (else empty)
+  std::vector<std::vector<RayShape>> ray_bodies;  // per body: its shapes (meshes' trees shared)
+  std::vector<Eigen::Isometry3d> X_W;             // scratch: body poses
+  std::vector<Eigen::Isometry3d> X_WS;            // sensor poses at the last evaluation
   bool any_distance = false;
 
   // The least s in [near, far] at which the ray meets a body other than `skip`, with the body.
-  std::pair<double, int> cast(const Eigen::Vector3d& o,
-                              const Eigen::Vector3d& d,
-                              double near,
-                              double far,
-                              int skip) const {
+  std::pair<double, int> cast(
+      const Eigen::Vector3d& o, const Eigen::Vector3d& d, double near, double far, int skip) const {
     std::pair<double, int> best{kInf, -1};
     for (std::size_t b = 0; b < ray_bodies.size(); ++b) {
       if (static_cast<int>(b) == skip) continue;
@@ -382,8 +378,8 @@ struct SensorEvaluator::Impl {
       const Eigen::Vector3d to = X_WE * *sensor.p_SR - p;
       const double length = to.norm();
       if (length > 2.0 * kReceiverClearance) {
-        const auto blocked = cast(p, to / length, kReceiverClearance,
-                                  length - kReceiverClearance, skip);
+        const auto blocked =
+            cast(p, to / length, kReceiverClearance, length - kReceiverClearance, skip);
         if (blocked.second >= 0) {
           r.beam = BeamStatus::kReceiverOccluded;
           return r;
@@ -482,6 +478,19 @@ SensorEvaluation evaluateSensors(const Scene& scene,
         "shorter trajectory or a lower rate (scanner.frame_rate_hz)",
         n, samples.size(), static_cast<double>(n) * static_cast<double>(samples.size()),
         kMaxSensorReadings));
+  }
+  // A presence reading lists the bodies it sees: at worst every body of the scene.
+  double entries = 0.0;
+  for (const kinematics::Sensor& sensor : scene.cell().sensors) {
+    const bool presence = sensor.kind == kinematics::Sensor::Kind::kPresence;
+    entries += static_cast<double>(samples.size()) *
+               (presence ? static_cast<double>(scene.bodies().size()) : 1.0);
+  }
+  if (entries > static_cast<double>(kMaxSensorBodyEntries)) {
+    throw InputError(fmt::format(
+        "{} sensors at {} poses with {} bodies in the cell could list {} bodies, more than {}: "
+        "expected fewer presence sensors, obstacles or poses (scanner.frame_rate_hz)",
+        n, samples.size(), scene.bodies().size(), entries, kMaxSensorBodyEntries));
   }
   SensorEvaluator first(scene);  // resolves the carriers (and throws) before any thread starts
   out.t.reserve(samples.size());
@@ -592,9 +601,8 @@ std::vector<SensorRuleViolation> checkSensorRules(const std::vector<kinematics::
         found.push_back({s, fired, std::move(span)});
       }
     }
-    std::stable_sort(found.begin(), found.end(), [](const auto& a, const auto& b) {
-      return a.span.t_start < b.span.t_start;
-    });
+    std::stable_sort(found.begin(), found.end(),
+                     [](const auto& a, const auto& b) { return a.span.t_start < b.span.t_start; });
     out.insert(out.end(), found.begin(), found.end());
   }
   return out;

@@ -87,9 +87,12 @@ inline constexpr double kReceiverClearance = 1e-6;
 
 /// The most readings (sensors × samples) evaluateSensors() makes: about 0.5 GB.
 inline constexpr std::size_t kMaxSensorReadings = 10'000'000;
+/// The most body entries the presence readings may list (samples × the scene's bodies for each
+/// presence sensor, the worst case): about 0.2 GB.
+inline constexpr std::size_t kMaxSensorBodyEntries = 50'000'000;
 
 /// Every sensor at every sample (in order). Deterministic. Throws InputError, before allocating,
-/// when that would be more than kMaxSensorReadings readings.
+/// when that would be more than kMaxSensorReadings readings or kMaxSensorBodyEntries bodies.
 SensorEvaluation evaluateSensors(const Scene& scene,
                                  const std::vector<kinematics::TrajectorySample>& samples);
 

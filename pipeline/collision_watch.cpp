@@ -5,6 +5,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "kinematics/joint_wrap.h"
+
 namespace scanplan::pipeline {
 namespace {
 
@@ -109,7 +111,14 @@ WatchStep CollisionWatch::push(const kinematics::AxisSample& sample) {
   if (!window_.empty() && !(sample.t > window_.back().t)) {
     throw std::invalid_argument("CollisionWatch: sample times must increase strictly");
   }
-  window_.push_back(sample);
+  // A controller may report an endless axis (or a joint) wrapped to ±180°: each axis is taken at
+  // the turn nearest the previous sample, which is the same pose, so the motion stays continuous.
+  kinematics::AxisSample s = sample;
+  if (!window_.empty()) {
+    s.theta = kinematics::nearestTurn(s.theta, window_.back().theta);
+    s.q = kinematics::unwrapNear(s.q, window_.back().q);
+  }
+  window_.push_back(s);
   if (window_.size() > options_.window) window_.erase(window_.begin());
 
   WatchStep step;
@@ -120,7 +129,7 @@ WatchStep CollisionWatch::push(const kinematics::AxisSample& sample) {
   collision::ClearanceRequest request;
   request.bounded = options_.bounded;
   request.bound = std::max(options_.warn_distance, options_.stop_distance);
-  const collision::ClearanceResult now = evaluator_.evaluate(sample.theta, sample.q, request);
+  const collision::ClearanceResult now = evaluator_.evaluate(s.theta, s.q, request);
   const Prediction p = predictAhead(step.fit);
   step.predicted = p.predicted;
   for (std::size_t k = 0; k < p.closest.size(); ++k) {
@@ -128,7 +137,9 @@ WatchStep CollisionWatch::push(const kinematics::AxisSample& sample) {
     const bool far = c.beyond_bound || c.distance >= request.bound;
     const double d_now = far ? request.bound : c.distance;
     const bool within = p.closest[k] < options_.warn_distance || p.stop[k];
-    if (!within || !(p.closest[k] < d_now - kCloser)) continue;  // not getting closer
+    // In contact now and still at the next predicted pose: not moving out of it.
+    const bool stuck = c.penetrating && p.touching[k];
+    if (!within || !(p.closest[k] < d_now - kCloser || stuck)) continue;  // not getting closer
     WatchWarning w;
     w.pair = static_cast<int>(k);
     w.distance_now = d_now;

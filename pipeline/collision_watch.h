@@ -31,7 +31,8 @@ struct WatchOptions {
   bool bounded = true;
 };
 
-/// One body pair that is getting closer and is predicted within the warning distance.
+/// One body pair that is getting closer and is predicted within the warning distance, or that is
+/// in contact now and still in contact at the next predicted pose.
 struct WatchWarning {
   int pair = -1;                          ///< index into Scene::pairs()
   double distance_now = 0.0;              ///< m; ≥ the warning distance when `far_now`
@@ -63,7 +64,9 @@ class CollisionWatch {
                  const WatchOptions& options = {});
 
   /// Takes the next measured sample (times strictly increasing, values finite; else
-  /// std::invalid_argument) and predicts from the window ending with it.
+  /// std::invalid_argument) and predicts from the window ending with it. Angles may come
+  /// wrapped (an endless table reported within ±180°): each axis is taken at the whole turn
+  /// nearest the previous sample.
   WatchStep push(const kinematics::AxisSample& sample);
 
  private:

@@ -49,7 +49,9 @@ std::vector<std::pair<std::uint32_t, scanner::ProfileImage>> profileImages(
   }
   std::sort(chosen.begin(), chosen.end());
   for (const std::uint32_t i : chosen) {
-    images.emplace_back(i, simulator.renderImage(frames[i], i, optics, settings.scanner));
+    scanner::ProfileImage image = simulator.renderImage(frames[i], i, optics, settings.scanner);
+    std::vector<scanner::SceneHit>().swap(image.hit);  // the PNGs need the grey levels only
+    images.emplace_back(i, std::move(image));
   }
   return images;
 }

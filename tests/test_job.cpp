@@ -368,13 +368,13 @@ TEST_F(JobFile, OutOfRangeValuesAreRejected) {
   // The programs' payload and trigger (issue 19).
   EXPECT_TRUE(loadFails(writeJob("scanner: {mass_kg: -1}\n"),
                         {at("job.yaml", "3:"), "scanner.mass_kg: -1"}));
-  EXPECT_TRUE(loadFails(writeJob("scanner: {cog_mm: [0, 0]}\n"),
-                        {at("job.yaml", "3:"), "scanner.cog_mm"}));
+  EXPECT_TRUE(
+      loadFails(writeJob("scanner: {cog_mm: [0, 0]}\n"), {at("job.yaml", "3:"), "scanner.cog_mm"}));
   EXPECT_TRUE(loadFails(writeJob("outputs: {trigger: {output: 5000}}\n"),
                         {at("job.yaml", "3:"), "outputs.trigger.output: 5000"}));
-  EXPECT_TRUE(loadFails(writeJob("outputs: {trigger: {output: 1, rapid_signal: 9bad}}\n"),
-                        {at("job.yaml", "3:"), "outputs.trigger.rapid_signal: '9bad'",
-                         "a RAPID identifier"}));
+  EXPECT_TRUE(loadFails(
+      writeJob("outputs: {trigger: {output: 1, rapid_signal: 9bad}}\n"),
+      {at("job.yaml", "3:"), "outputs.trigger.rapid_signal: '9bad'", "a RAPID identifier"}));
   EXPECT_TRUE(loadFails(writeJob("outputs: {servo_period_s: 5}\n"),
                         {at("job.yaml", "3:"), "outputs.servo_period_s: 5"}));
 }
@@ -620,8 +620,7 @@ TEST(JobImageMode, BadKeysAreRefusedNamingTheKey) {
   EXPECT_TRUE(fails({"scanner.camera.pixels=3"}, {"scanner.camera", "pixels"}));
   EXPECT_TRUE(fails({"scanner.laser.thickness_mm=0"}, {"scanner.laser.thickness_mm", "0"}));
   EXPECT_TRUE(fails({"simulation.reflectance.lambert=-0.5"}, {"simulation.reflectance.lambert"}));
-  EXPECT_TRUE(fails({"simulation.reflectance.shininess=-2"},
-                    {"simulation.reflectance.shininess"}));
+  EXPECT_TRUE(fails({"simulation.reflectance.shininess=-2"}, {"simulation.reflectance.shininess"}));
   EXPECT_TRUE(fails({"simulation.profile_images=-1"}, {"simulation.profile_images"}));
   EXPECT_TRUE(fails({"simulation.mode=image", "scanner.cameras=both"},
                     {"scanner.cameras", "both", "simulation.mode: image"}));
@@ -632,11 +631,19 @@ TEST(JobImageMode, BadKeysAreRefusedNamingTheKey) {
                     {"scanner.camera.columns", "8388608 pixels", "4194304"}));
   EXPECT_TRUE(fails({"simulation.mode=image", "scanner.rays_per_profile=20000"},
                     {"scanner.rays_per_profile", "5120000 pixels"}));
+  // The kept profile images together, and a threshold the ambient light already reaches.
+  EXPECT_TRUE(fails({"simulation.mode=image", "scanner.camera={rows: 2048, columns: 2048}",
+                     "simulation.profile_images=20"},
+                    {"simulation.profile_images", "20 images", "67108864"}));
+  EXPECT_TRUE(fails({"simulation.mode=image", "scanner.camera={ambient_grey: 50}"},
+                    {"scanner.camera.threshold_grey", "40", "ambient_grey (50)"}));
   // The same keys with good values load.
-  const JobSpec job = loadJob(
-      demo, {"simulation.mode=image", "scanner.camera={rows: 300, columns: 150, noise_grey: 2, "
-             "detection: gauss}", "scanner.laser.thickness_mm=0.8",
-             "simulation.reflectance={lambert: 0.5, specular: 0.3, shininess: 40}"});
+  const JobSpec job =
+      loadJob(demo, {"simulation.mode=image",
+                     "scanner.camera={rows: 300, columns: 150, noise_grey: 2, "
+                     "detection: gauss}",
+                     "scanner.laser.thickness_mm=0.8",
+                     "simulation.reflectance={lambert: 0.5, specular: 0.3, shininess: 40}"});
   EXPECT_EQ(job.simulation.mode, "image");
   EXPECT_EQ(job.scanner.camera.rows, 300);
   EXPECT_EQ(job.scanner.camera.columns, 150);

@@ -6,16 +6,16 @@
 // naming the key.
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <unistd.h>
+#include <algorithm>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
-#include <sstream>
 #include <numbers>
 #include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -27,12 +27,12 @@
 #include "cli/config/job.h"
 #include "cli/config/problem.h"
 #include "cli/report/sensor_report.h"
+#include "cli_support.h"
 #include "collision/scene.h"
 #include "collision/sensors.h"
 #include "kinematics/units.h"
 #include "planner/validation.h"
 #include "scanner/raycaster.h"
-#include "cli_support.h"
 #include "test_support.h"
 
 namespace {
@@ -54,12 +54,15 @@ struct Demo {
 };
 
 Demo demo() {
-  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", test::kLightDemo);
+  cli::JobSpec job =
+      cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", test::kLightDemo);
   kinematics::CellModel cell = cli::buildCell(job);
   return {std::move(job), std::move(cell)};
 }
 
-collision::Scene sceneOf(const Demo& d) { return collision::Scene(d.cell, cli::clearanceConfig(d.job)); }
+collision::Scene sceneOf(const Demo& d) {
+  return collision::Scene(d.cell, cli::clearanceConfig(d.job));
+}
 
 JointVector jointsDeg(double q1, double q2, double q3, double q4, double q5, double q6) {
   JointVector q;
@@ -360,7 +363,8 @@ TEST(Sensors, ABeamReadsAPlaneAtItsDistanceUnderAnyTilt) {
     const Eigen::Vector3d origin = target + Eigen::Vector3d(0, 0, h);
     const Eigen::Vector3d dir(std::sin(alpha) * std::cos(azimuth),
                               std::sin(alpha) * std::sin(azimuth), -std::cos(alpha));
-    d.cell.sensors.push_back(beam("probe" + std::to_string(i), lookingAlong(origin, dir), 0.0, 1.0));
+    d.cell.sensors.push_back(
+        beam("probe" + std::to_string(i), lookingAlong(origin, dir), 0.0, 1.0));
     expected.push_back(h / std::cos(alpha));
   }
   const collision::Scene scene = sceneOf(d);
@@ -393,7 +397,8 @@ TEST(Sensors, AReceiverBehindAnOccluderGetsNoReading) {
   // cube halfway along the return ray (x = 50 mm, 150 mm up) blocks it but not the beam (x = 0).
   Demo d = withSlab();
   const Eigen::Vector3d hit(-0.8, 0.8, 0.2);
-  const Eigen::Isometry3d X = lookingAlong(hit + Eigen::Vector3d(0, 0, 0.3), -Eigen::Vector3d::UnitZ());
+  const Eigen::Isometry3d X =
+      lookingAlong(hit + Eigen::Vector3d(0, 0, 0.3), -Eigen::Vector3d::UnitZ());
   const Eigen::Vector3d p_WR = hit + Eigen::Vector3d(0.1, 0, 0.3);
   d.cell.sensors = {beam("triangulation", X, 0.0, 1.0), beam("mirrored", X, 0.0, 1.0),
                     beam("time_of_flight", X, 0.0, 1.0)};
@@ -405,7 +410,7 @@ TEST(Sensors, AReceiverBehindAnOccluderGetsNoReading) {
   const auto r = collision::SensorEvaluator(scene).evaluate(0.0, home(180.0));
   EXPECT_EQ(r[0].beam, collision::BeamStatus::kReceiverOccluded);
   EXPECT_FALSE(r[0].fires);
-  EXPECT_NEAR(r[0].distance, 0.3, kRangeTol);  // the beam itself hit the slab
+  EXPECT_NEAR(r[0].distance, 0.3, kRangeTol);             // the beam itself hit the slab
   EXPECT_EQ(r[1].beam, collision::BeamStatus::kReading);  // the other side is free
   EXPECT_EQ(r[2].beam, collision::BeamStatus::kReading);  // no receiver: no second ray
   // A receiver below the slab's surface (inside it) cannot see the spot either.
@@ -489,11 +494,10 @@ TEST(Sensors, ReadingsAreBoundedBeforeAllocating) {
                                       Eigen::Isometry3d::Identity(), kinematics::Sphere{0.01}));
   }
   const collision::Scene scene = sceneOf(d);
-  const std::vector<TrajectorySample> samples(collision::kMaxSensorReadings / cli::kMaxSensors +
-                                              1);
-  EXPECT_TRUE(test::throwsInputError([&] { collision::evaluateSensors(scene, samples); },
-                                     {"64 sensors at 156251 poses", "more than 10000000",
-                                      "scanner.frame_rate_hz"}));
+  const std::vector<TrajectorySample> samples(collision::kMaxSensorReadings / cli::kMaxSensors + 1);
+  EXPECT_TRUE(test::throwsInputError(
+      [&] { collision::evaluateSensors(scene, samples); },
+      {"64 sensors at 156251 poses", "more than 10000000", "scanner.frame_rate_hz"}));
 }
 
 TEST(Sensors, EvaluationIsDeterministicWhateverTheThreadCount) {
@@ -623,10 +627,10 @@ TEST(SensorJob, AnUnknownCarrierNamesTheFileTheKeyAndTheBodies) {
   const auto file = std::filesystem::temp_directory_path() /
                     ("scanplan_test_sensors_" + std::to_string(::getpid()) + ".yaml");
   std::ofstream(file) << text;
-  EXPECT_TRUE(test::throwsInputError([&] { cli::loadJob(file); },
-                                     {file.string() + ":", "sensors[2].carrier", "'link9'",
-                                      "world or a body of the cell", "link6", "scanner", "table",
-                                      "part"}));
+  EXPECT_TRUE(
+      test::throwsInputError([&] { cli::loadJob(file); },
+                             {file.string() + ":", "sensors[2].carrier", "'link9'",
+                              "world or a body of the cell", "link6", "scanner", "table", "part"}));
   std::filesystem::remove(file);
 }
 
@@ -642,18 +646,28 @@ TEST(SensorJob, BadKeysAreRefusedNamingTheKey) {
   EXPECT_TRUE(refused("[{name: s, kind: distance, min_range_mm: 300, max_range_mm: 300}]",
                       {"sensors[0].max_range_mm", "300", "above min_range_mm"}));
   EXPECT_TRUE(refused("[{name: s, kind: distance}]", {"sensors[0]", "max_range_mm"}));
-  EXPECT_TRUE(refused("[{name: s, kind: presence, shape: sphere, radius_mm: 5, expect: during, "
-                      "window_s: [4, 2]}]",
-                      {"sensors[0].window_s", "t0_s <= t1_s"}));
+  EXPECT_TRUE(
+      refused("[{name: s, kind: presence, shape: sphere, radius_mm: 5, expect: during, "
+              "window_s: [4, 2]}]",
+              {"sensors[0].window_s", "t0_s <= t1_s"}));
   EXPECT_TRUE(refused("[{name: s, kind: presence, shape: sphere, radius_mm: 5, expect: during}]",
                       {"sensors[0]", "window_s"}));
   EXPECT_TRUE(refused("[{name: s, kind: presence, shape: sphere, radius_mm: 5, expect: sometimes}]",
                       {"sensors[0].expect", "sometimes"}));
-  EXPECT_TRUE(refused("[{name: 'a,b', kind: presence, shape: sphere, radius_mm: 5}]",
-                      {"sensors[0].name"}));
-  EXPECT_TRUE(refused("[{name: s, kind: presence, shape: sphere, radius_mm: 5}, "
-                      "{name: s, kind: presence, shape: sphere, radius_mm: 5}]",
-                      {"sensors", "two sensors named 's'"}));
+  EXPECT_TRUE(
+      refused("[{name: 'a,b', kind: presence, shape: sphere, radius_mm: 5}]", {"sensors[0].name"}));
+  EXPECT_TRUE(
+      refused("[{name: s, kind: presence, shape: sphere, radius_mm: 5}, "
+              "{name: s, kind: presence, shape: sphere, radius_mm: 5}]",
+              {"sensors", "two sensors named 's'"}));
+  // Names whose sensors.csv columns would clash: the time column, or a presence sensor x_mm
+  // beside a distance sensor x.
+  EXPECT_TRUE(refused("[{name: t_s, kind: presence, shape: sphere, radius_mm: 5}]",
+                      {"sensors", "second column 't_s'"}));
+  EXPECT_TRUE(
+      refused("[{name: x, kind: distance, max_range_mm: 300}, "
+              "{name: x_mm, kind: presence, shape: sphere, radius_mm: 5}]",
+              {"sensors", "second column 'x_mm'"}));
   std::string many = "[";
   for (std::size_t i = 0; i <= cli::kMaxSensors; ++i) {
     many += fmt::format("{}{{name: s{}, kind: presence, shape: sphere, radius_mm: 5}}",
@@ -683,8 +697,8 @@ class SensorCli : public test::Cli {};
 // them, and a broken rule fails validation (exit 3) naming the sensor, the rule and the span.
 TEST_F(SensorCli, PlanValidateAndSimulateWriteTheSensorsOutputs) {
   const fs::path out = dir_ / "plan";
-  const test::Result plan = scanplan(lightly({"plan", kSensorJob, "-o", out.string(), "--set",
-                                              "simulation.enabled=false"}));
+  const test::Result plan = scanplan(
+      lightly({"plan", kSensorJob, "-o", out.string(), "--set", "simulation.enabled=false"}));
   ASSERT_EQ(plan.exit_code, 0) << test::describe(plan);
   EXPECT_TRUE(test::contains(plan.out, "sensor     light_curtain: never fires; expect never: met"))
       << plan.out;
@@ -703,8 +717,8 @@ TEST_F(SensorCli, PlanValidateAndSimulateWriteTheSensorsOutputs) {
     ++rows;
     end = std::stod(row);
     EXPECT_EQ(std::count(row.begin(), row.end(), ','), 7) << row;
-    EXPECT_TRUE(test::contains(row, ",0,,")) << row;             // the curtain stays dark
-    EXPECT_TRUE(test::contains(row, ",reading,part")) << row;    // the part is always there
+    EXPECT_TRUE(test::contains(row, ",0,,")) << row;           // the curtain stays dark
+    EXPECT_TRUE(test::contains(row, ",reading,part")) << row;  // the part is always there
   }
   const YAML::Node report = YAML::LoadFile((out / "report.json").string());
   EXPECT_EQ(rows, report["validation"]["poses"].as<std::size_t>());
@@ -716,13 +730,13 @@ TEST_F(SensorCli, PlanValidateAndSimulateWriteTheSensorsOutputs) {
 
   // The curtain expected to fire all along: the validation of the same trajectory fails.
   const fs::path trajectory = out / "trajectory.csv";
-  const test::Result bad = scanplan(
-      lightly({"validate", kSensorJob, "-t", trajectory.string(), "-o", (dir_ / "v").string(),
-               "--set", "sensors[0].expect=always"}));
+  const test::Result bad =
+      scanplan(lightly({"validate", kSensorJob, "-t", trajectory.string(), "-o",
+                        (dir_ / "v").string(), "--set", "sensors[0].expect=always"}));
   EXPECT_EQ(bad.exit_code, 3) << test::describe(bad);
   EXPECT_TRUE(test::contains(
-      bad.out, fmt::format("sensor: light_curtain 0.000 … {:.3f} s: expect always: does not fire",
-                           end)))
+      bad.out,
+      fmt::format("sensor: light_curtain 0.000 … {:.3f} s: expect always: does not fire", end)))
       << bad.out;
   EXPECT_TRUE(test::contains(bad.out, "expect always: BROKEN"));
   EXPECT_EQ(test::readFile(dir_ / "v" / "sensors.csv"), csv);
@@ -742,9 +756,9 @@ TEST_F(SensorCli, PlanValidateAndSimulateWriteTheSensorsOutputs) {
   EXPECT_EQ(c["sensors"][2]["body"].as<std::string>(), "part");
 
   // simulate writes the same file beside the cloud.
-  const test::Result sim = scanplan(lightly({"simulate", kSensorJob, "-t", trajectory.string(),
-                                             "-o", (dir_ / "s").string(), "--set",
-                                             "scanner.rays_per_profile=10"}));
+  const test::Result sim =
+      scanplan(lightly({"simulate", kSensorJob, "-t", trajectory.string(), "-o",
+                        (dir_ / "s").string(), "--set", "scanner.rays_per_profile=10"}));
   ASSERT_EQ(sim.exit_code, 0) << test::describe(sim);
   EXPECT_TRUE(test::contains(sim.out, "sensor     light_curtain: never fires"));
   EXPECT_EQ(test::readFile(dir_ / "s" / "sensors.csv"), csv);

@@ -382,6 +382,54 @@ TEST(CollisionWatch, BoundedQueriesChangeNoWarning) {
   EXPECT_GT(warnings, 20u);
 }
 
+// In contact now: still going in (or standing in it) is a warning with contact now and a stop;
+// backing out of it is not warned.
+TEST(CollisionWatch, InContactGoingOnIsAStopBackingOutIsSilent) {
+  const collision::Scene scene(demoCell().cell, cli::clearanceConfig(demoCell().job));
+  const Approach a = jointApproach(scene);
+  ASSERT_TRUE(a.towards);
+  const auto inside = a.towards(a.contact.t + 0.01);
+  const JointVector rate = (a.towards(1.0)->q - a.towards(0.0)->q);
+  pipeline::WatchOptions options;
+  options.stop_distance = 0.0;
+  pipeline::CollisionWatch on(scene, toolFrame(), options);
+  const Streamed deeper = stream(on, jointMove(inside->q, rate), 0.1, a.contact.pair);
+  ASSERT_TRUE(deeper.first);
+  EXPECT_TRUE(deeper.warning->stop);
+  ASSERT_TRUE(deeper.contact_in);
+  EXPECT_LT(*deeper.contact_in, 1e-3);
+  pipeline::CollisionWatch off(scene, toolFrame(), options);
+  const Streamed out = stream(off, jointMove(inside->q, -rate), 0.3, a.contact.pair);
+  EXPECT_EQ(out.warnings, 0u);
+  EXPECT_FALSE(out.first_stop);
+}
+
+// An endless table reported within ±180° (and joints wrapped as some controllers report them) is
+// the same motion: the same warnings as the continuous stream.
+TEST(CollisionWatch, WrappedAnglesAreTheSameMotion) {
+  const collision::Scene scene(demoCell().cell, cli::clearanceConfig(demoCell().job));
+  const Approach a = jointApproach(scene);
+  ASSERT_TRUE(a.towards);
+  pipeline::CollisionWatch plain(scene, toolFrame()), wrapped(scene, toolFrame());
+  const auto wrap = [](double v) { return std::remainder(v, 2.0 * M_PI); };
+  std::size_t warnings = 0;
+  for (int i = 0; i * kDt <= a.contact.t; ++i) {
+    AxisSample s = *a.towards(i * kDt);
+    s.theta = 3.0 * i * kDt;  // the table spins through ±180° several times
+    const pipeline::WatchStep x = plain.push(s);
+    s.theta = wrap(s.theta);
+    for (int j = 0; j < 6; ++j) s.q(j) = wrap(s.q(j));
+    const pipeline::WatchStep y = wrapped.push(s);
+    ASSERT_EQ(x.warnings.size(), y.warnings.size()) << x.t;
+    for (std::size_t k = 0; k < x.warnings.size(); ++k) {
+      EXPECT_EQ(x.warnings[k].pair, y.warnings[k].pair);
+      EXPECT_NEAR(x.warnings[k].closest, y.warnings[k].closest, 1e-9);
+    }
+    warnings += x.warnings.size();
+  }
+  EXPECT_GT(warnings, 0u);
+}
+
 TEST(CollisionWatch, RefusesBadSamplesAndOptions) {
   const collision::Scene scene(demoCell().cell, cli::clearanceConfig(demoCell().job));
   pipeline::CollisionWatch watch(scene, toolFrame());

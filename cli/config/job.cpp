@@ -179,8 +179,8 @@ void checkImageMode(const YamlIn& a, const JobSpec& s) {
   const long long columns = camera.columns > 0 ? camera.columns : s.scanner.rays_per_profile;
   const long long pixels = static_cast<long long>(camera.rows) * columns;
   if (pixels > kMaxImagePixels) {
-    const std::string value = fmt::format("{} rows x {} columns = {} pixels", camera.rows, columns,
-                                          pixels);
+    const std::string value =
+        fmt::format("{} rows x {} columns = {} pixels", camera.rows, columns, pixels);
     const std::string expected = fmt::format(
         "at most {} pixels per image with simulation.mode: image (each thread holds one, ~100 "
         "bytes a pixel)",
@@ -193,6 +193,26 @@ void checkImageMode(const YamlIn& a, const JobSpec& s) {
     }
     YamlIn in(scanner, "scanner", a.file(), a.overrides());
     in.fail("rays_per_profile", value, expected + " (columns default to rays_per_profile)");
+  }
+  // The kept profile images hold their grey levels (4 bytes a pixel) until they are written.
+  constexpr long long kMaxKeptPixels = 67'108'864;  // 256 MB
+  const long long kept = static_cast<long long>(s.simulation.profile_images) * pixels;
+  if (kept > kMaxKeptPixels) {
+    YamlIn in(std::as_const(root)["simulation"], "simulation", a.file(), a.overrides());
+    in.fail("profile_images",
+            fmt::format("{} images of {} pixels = {} pixels", s.simulation.profile_images, pixels,
+                        kept),
+            fmt::format("at most {} pixels kept for the profile PNGs: fewer images or a smaller "
+                        "scanner.camera",
+                        kMaxKeptPixels));
+  }
+  if (camera.ambient_grey >= camera.threshold_grey) {
+    const YAML::Node node = std::as_const(scanner)["camera"];
+    YamlIn in(node, "scanner.camera", a.file(), a.overrides());
+    in.fail("threshold_grey", formatNumber(camera.threshold_grey),
+            fmt::format("above scanner.camera.ambient_grey ({}) with simulation.mode: image: "
+                        "else every lit surface reads as the stripe",
+                        formatNumber(camera.ambient_grey)));
   }
   if (s.scanner.cameras == "both" || s.scanner.cameras == "either") {
     YamlIn in(scanner, "scanner", a.file(), a.overrides());
@@ -626,6 +646,22 @@ void describeJob(A& a, JobSpec& s) {
         a.fail("sensors", "two sensors named '" + sensor.name + "'", "a unique name per sensor");
       }
     }
+    // sensors.csv heads its columns with the names: t_s, then per presence sensor NAME and
+    // NAME_bodies, per distance sensor NAME_mm, NAME_status and NAME_body.
+    std::set<std::string> columns{"t_s"};
+    for (const SensorSpec& sensor : s.sensors) {
+      const bool distance = sensor.kind == "distance";
+      for (const char* suffix : distance ? std::vector<const char*>{"_mm", "_status", "_body"}
+                                         : std::vector<const char*>{"", "_bodies"}) {
+        if (!columns.insert(sensor.name + suffix).second) {
+          a.fail("sensors",
+                 "sensor '" + sensor.name + "' gives sensors.csv a second column '" + sensor.name +
+                     suffix + "'",
+                 "names whose columns (t_s; NAME, NAME_bodies; NAME_mm, NAME_status, "
+                 "NAME_body) differ");
+        }
+      }
+    }
     if constexpr (std::is_same_v<A, YamlIn>) checkSensorCarriers(a, s);
   }
   a.section("constraints", s.constraints);
@@ -798,8 +834,9 @@ std::string jobSchema() {
   const JobSpec defaults;
   schema.update(SchemaOut::ofAll(defaults));
   schema["properties"]["robot"] = {
-      {"description", "a robot file (.yaml, or .urdf with base_link and tip_link) relative to this "
-                      "file, or an inline robot mapping (README.md: Robot file)"},
+      {"description",
+       "a robot file (.yaml, or .urdf with base_link and tip_link) relative to this "
+       "file, or an inline robot mapping (README.md: Robot file)"},
       {"type", {"string", "object"}}};
   return schema.dump(2) + "\n";
 }

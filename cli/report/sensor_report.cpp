@@ -48,13 +48,15 @@ std::vector<bool> rulesHeld(const collision::Scene& scene, const collision::Sens
   return held;
 }
 
-// The least and greatest range read during a span (m).
+// The least and greatest range read during a span (m). The times ascend: only the span's own
+// samples are read, so all spans together cost one pass, however many there are.
 std::pair<double, double> rangeIn(const collision::SensorEvaluation& e,
                                   std::size_t s,
                                   const collision::SensorSpan& span) {
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  for (std::size_t k = 0; k < e.t.size(); ++k) {
-    if (e.t[k] < span.t_start || e.t[k] > span.t_end) continue;
+  const auto first = std::lower_bound(e.t.begin(), e.t.end(), span.t_start);
+  for (auto k = static_cast<std::size_t>(first - e.t.begin());
+       k < e.t.size() && e.t[k] <= span.t_end; ++k) {
     const collision::SensorReading& r = e.readings[s][k];
     if (!r.fires) continue;
     lo = std::min(lo, r.distance);
