@@ -44,6 +44,9 @@ pipeline::WatchOptions watchOptions(const WatchCommandOptions& o) {
   positive(o.step_s, "--step-s", "s");
   positive(o.warn_distance_mm, "--warn-distance-mm", "mm");
   positive(o.stop_time_s, "--stop-time-s", "s");
+  if (!(o.repeat_s >= 0.0) || !std::isfinite(o.repeat_s)) {
+    throw InputError(fmt::format("--repeat-s: {} s: expected 0 or more", o.repeat_s));
+  }
   if (o.window < 3 || o.window > 10000) {
     throw InputError(fmt::format("--window: {} samples: expected 3 … 10000", o.window));
   }
