@@ -704,7 +704,8 @@ TEST(ScannerSimulationImage, PlanePointsLieOnThePlaneAndAgreeWithTheGeometricMod
   std::vector<ScanFrame> frames;
   const std::vector<double> depths = {0.145, 0.155, 0.165, 0.175};
   for (std::size_t i = 0; i < depths.size(); ++i)
-    frames.push_back(planeFrame(cell, depths[i], 0.01 * static_cast<double>(i), 0.3 + 0.2 * static_cast<double>(i)));
+    frames.push_back(planeFrame(cell, depths[i], 0.01 * static_cast<double>(i),
+                                0.3 + 0.2 * static_cast<double>(i)));
   const SimulationSettings image_settings = imageSettings();
   const SimulatedCloud image = run(sim, frames, image_settings);
   SimulationSettings geometric_settings;
@@ -718,8 +719,8 @@ TEST(ScannerSimulationImage, PlanePointsLieOnThePlaneAndAgreeWithTheGeometricMod
     SCOPED_TRACE("depth " + std::to_string(depths[f]));
     const double d = depths[f];
     const Eigen::Vector2d at = *camera.project({0.0, 0.0, d});
-    const double footprint =
-        std::abs(camera.triangulate(0.0, at.y() + 0.5).z() - camera.triangulate(0.0, at.y() - 0.5).z());
+    const double footprint = std::abs(camera.triangulate(0.0, at.y() + 0.5).z() -
+                                      camera.triangulate(0.0, at.y() - 0.5).z());
     const Eigen::Isometry3d X_SP = realisedX_PS(cell, frames[f]).inverse();
     double lo_i = 1.0, hi_i = -1.0, lo_g = 1.0, hi_g = -1.0;
     std::size_t count = 0;
@@ -744,8 +745,9 @@ TEST(ScannerSimulationImage, PlanePointsLieOnThePlaneAndAgreeWithTheGeometricMod
     // geometric window interpolates Eq. 5's corners linearly: at most slightly wider.
     const double half = std::tan(optics.gamma) * std::hypot(optics.a, d - optics.b);
     const double column_pitch = 2.0 * half / 200.0;
-    const double ray_pitch = 2.0 * d * std::tan(std::atan2(scanner::laserWindow(optics).y_near,
-                                                           scanner::laserWindow(optics).z_min)) /
+    const double ray_pitch = 2.0 * d *
+                             std::tan(std::atan2(scanner::laserWindow(optics).y_near,
+                                                 scanner::laserWindow(optics).z_min)) /
                              199.0;
     EXPECT_NEAR(hi_i - lo_i, 2.0 * half - column_pitch, column_pitch);
     EXPECT_LT(std::abs((hi_i - lo_i) - (hi_g - lo_g)),
@@ -795,13 +797,32 @@ TEST(ScannerSimulationImage, RenderImageIsTheImageTheProfileWasMeasuredFrom) {
   const TriangleMesh plane = planeMesh(0.4, 2);
   const scanner::ScanSimulator sim(cell, plane);
   const std::vector<ScanFrame> frames = {planeFrame(cell, 0.16)};
-  const SimulationSettings settings = imageSettings(100);
+  SimulationSettings settings = imageSettings(100);
+  // With noise, each column's sub-pixel peak depends on the noise drawn: the same columns and
+  // the same ranges (Eq. 4 of the detected rows) show the same image, seed and profile stream.
+  settings.image.noise = 10.0;
+  settings.seed = 7;
   const SimulatedCloud cloud = run(sim, frames, settings);
   const scanner::ProfileImage image = sim.renderImage(frames[0], 0, demoOptics(), settings);
   const auto rows = scanner::detectStripe(image, settings.image.threshold, settings.image.method);
-  std::size_t found = 0;
-  for (const auto& r : rows) found += r ? 1u : 0u;
-  EXPECT_EQ(found, cloud.points.size());
+  std::vector<std::uint32_t> detected, measured;
+  for (std::size_t c = 0; c < rows.size(); ++c) {
+    if (rows[c]) detected.push_back(static_cast<std::uint32_t>(c));
+  }
+  for (const auto& p : cloud.points) measured.push_back(p.ray);
+  ASSERT_EQ(detected, measured);
+  scanner::CameraModel camera;
+  camera.optics = demoOptics();
+  camera.rows = settings.image.rows;
+  camera.columns = settings.image.columns;
+  for (std::size_t i = 0; i < detected.size(); ++i) {
+    const Eigen::Vector2d p = camera.imagePlane(detected[i], *rows[detected[i]]);
+    EXPECT_NEAR(cloud.points[i].range, camera.triangulate(p.x(), p.y()).norm(), 1e-12) << i;
+  }
+  // Another seed draws other noise: other spurious columns.
+  settings.seed = 8;
+  const scanner::ProfileImage other = sim.renderImage(frames[0], 0, demoOptics(), settings);
+  EXPECT_NE(other.grey, image.grey);
 }
 
 TEST(ScannerSimulationImage, UnsupportedSettingsAreRefused) {
