@@ -927,6 +927,17 @@ SimulatedCloud ScanSimulator::simulate(const std::vector<ScanFrame>& frames,
         "scanner simulation: expected rays_per_profile >= 1 and non-negative noise sigmas");
   }
   checkImageSettings(settings, impl_->backend);
+  // Image mode: each thread holds one image with what every pixel saw (~100 bytes a pixel); on
+  // many cores the threads rendering at once are fewer, so that together they stay within
+  // kImageMemoryBudget. The cloud is the same on any number of threads.
+  if (settings.mode == SimulationMode::kImage) {
+    const double per_image = 100.0 * settings.image.rows * settings.image.columns;
+    const int fit = static_cast<int>(std::max(1.0, kImageMemoryBudget / per_image));
+    if (fit < tbb::this_task_arena::max_concurrency()) {
+      tbb::task_arena arena(fit);
+      return arena.execute([&] { return simulate(frames, optics, settings); });
+    }
+  }
   const RunSetup setup = makeRunSetup(impl_->cell.table, optics, settings);
 
   // The points reach fresh memory once. On one thread they go straight into the cloud; on

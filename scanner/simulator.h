@@ -37,6 +37,10 @@ enum class CameraRule {
   kEither,    ///< two cameras; a point counts when at least one sees it
 };
 
+/// Image mode: the most memory the threads' images may hold together (bytes); fewer threads
+/// render at once where the cores would hold more.
+inline constexpr double kImageMemoryBudget = 4e9;
+
 /// How the profiles are measured (seed §5.3).
 enum class SimulationMode {
   /// The laser fan's hits are the points (Eq. 5 window, camera occlusion rays): fast.
