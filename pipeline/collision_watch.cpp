@@ -45,9 +45,7 @@ CollisionWatch::CollisionWatch(const collision::Scene& scene,
   window_.reserve(options.window + 1);
 }
 
-std::optional<double> CollisionWatch::contactTime(const kinematics::MotionFit& fit,
-                                                  double before,
-                                                  double at) {
+double CollisionWatch::contactTime(const kinematics::MotionFit& fit, double before, double at) {
   collision::ClearanceRequest request;
   request.bound = options_.warn_distance;
   for (int round = 0; round < kContactRounds; ++round) {

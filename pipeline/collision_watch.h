@@ -72,7 +72,7 @@ class CollisionWatch {
  private:
   struct Prediction;
   Prediction predictAhead(const kinematics::MotionFit& fit);
-  std::optional<double> contactTime(const kinematics::MotionFit& fit, double before, double at);
+  double contactTime(const kinematics::MotionFit& fit, double before, double at);
 
   const collision::Scene* scene_;
   WatchOptions options_;

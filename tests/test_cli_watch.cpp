@@ -131,9 +131,17 @@ TEST_F(CliWatch, BadStreamsAreErrorsNamingLineColumnAndValue) {
   const Result window = scanplan({"watch", kJob, "--log", log.string(), "--window", "2"});
   EXPECT_EQ(window.exit_code, 4);
   EXPECT_TRUE(contains(window.err, "--window: 2 samples: expected 3")) << window.err;
-  const Result horizon = scanplan({"watch", kJob, "--log", log.string(), "--horizon-s", "-1"});
-  EXPECT_EQ(horizon.exit_code, 4);
-  EXPECT_TRUE(contains(horizon.err, "--horizon-s")) << horizon.err;
+  for (const auto& [option, value] :
+       std::vector<std::pair<std::string, std::string>>{{"--horizon-s", "-1"},
+                                                        {"--step-s", "0"},
+                                                        {"--warn-distance-mm", "-5"},
+                                                        {"--stop-distance-mm", "-1"},
+                                                        {"--stop-time-s", "0"},
+                                                        {"--repeat-s", "-1"}}) {
+    const Result run = scanplan({"watch", kJob, "--log", log.string(), option, value});
+    EXPECT_EQ(run.exit_code, 4) << option;
+    EXPECT_TRUE(contains(run.err, option + ": " + value)) << run.err;
+  }
 }
 
 }  // namespace
