@@ -7,7 +7,7 @@ cd "$(dirname "$0")"
 packages=(
   cmake g++ ninja-build pkg-config
   libeigen3-dev libfcl-dev
-  libompl-dev libboost-serialization-dev libboost-filesystem-dev libboost-system-dev
+  libompl-dev libboost-dev libboost-serialization-dev libboost-filesystem-dev libboost-system-dev
   libnlopt-dev libnlopt-cxx-dev libyaml-cpp-dev libembree-dev libnanoflann-dev libassimp-dev
   libcli11-dev libspdlog-dev libfmt-dev libtbb-dev libpng-dev nlohmann-json3-dev
   liburdfdom-dev libqhull-dev

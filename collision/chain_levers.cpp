@@ -137,15 +137,6 @@ double lever(const kinematics::RobotModel& robot, const Side& side, int k) {
   return std::abs(dh.a) + chainLength(robot, k, j) + reachFromOrigin(side);
 }
 
-// |a − b| modulo a whole turn.
-double turn(double a, double b) {
-  constexpr double kTurn = 2.0 * std::numbers::pi;
-  const double d = std::abs(a - b);
-  if (d <= std::numbers::pi) return d;  // the usual step: no remainder to take
-  const double t = std::fmod(d, kTurn);
-  return std::min(t, kTurn - t);
-}
-
 }  // namespace
 
 // A body's bounding sphere in its frame: the shapes' spheres' mean centre, and the radius
@@ -208,16 +199,16 @@ ChainLevers::Weights ChainLevers::weightsAt(
   return w;
 }
 
-double ChainLevers::motion(std::size_t pair,
-                           const Weights& weights,
-                           double theta0,
-                           const kinematics::JointVector& q0,
-                           double theta1,
-                           const kinematics::JointVector& q1) const {
-  const PairWeights& p = weights_[pair];
-  double motion = p.table == 0.0 ? 0.0 : p.table * turn(theta1, theta0);
+double ChainLevers::wideMotion(std::size_t pair,
+                               const Weights& weights,
+                               double theta0,
+                               const kinematics::JointVector& q0,
+                               double theta1,
+                               const kinematics::JointVector& q1) const {
+  const double table = weights_[pair].table;
+  double motion = table == 0.0 ? 0.0 : table * detail::turn(theta1, theta0);
   for (int k = 0; k < kinematics::kNumJoints; ++k) {
-    motion += weights[static_cast<std::size_t>(k)] * turn(q1(k), q0(k));
+    motion += weights[static_cast<std::size_t>(k)] * detail::turn(q1(k), q0(k));
   }
   return motion;
 }

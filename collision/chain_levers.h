@@ -1,7 +1,10 @@
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
+#include <numbers>
 #include <utility>
 
 #include "collision/scene.h"
@@ -10,6 +13,14 @@ namespace scanplan::collision {
 
 namespace detail {
 struct BodyGeometry;
+/// |a − b| modulo a whole turn.
+inline double turn(double a, double b) {
+  constexpr double kTurn = 2.0 * std::numbers::pi;
+  const double d = std::abs(a - b);
+  if (d <= std::numbers::pi) return d;  // the usual step: no remainder to take
+  const double t = std::fmod(d, kTurn);
+  return std::min(t, kTurn - t);
+}
 /// A body's bounding sphere in its frame: the mean of its shapes' sphere centres, and the radius
 /// reaching around them all.
 std::pair<Eigen::Vector3d, double> boundingSphere(const BodyGeometry& body);
@@ -56,14 +67,34 @@ class ChainLevers {
                     const std::array<Eigen::Isometry3d, kinematics::kNumJoints + 1>& frames) const;
   /// How much the distance between the pair's bodies can change from (θ0, q0) to (θ1, q1), m,
   /// with `weights` (these, or tighter ones for q0: see MapClearance).
+  /// Inline: the maps ask it for every pair at every branch-cell.
   double motion(std::size_t pair,
                 const Weights& weights,
                 double theta0,
                 const kinematics::JointVector& q0,
                 double theta1,
-                const kinematics::JointVector& q1) const;
+                const kinematics::JointVector& q1) const {
+    const double table = weights_[pair].table;
+    double motion = table == 0.0 ? 0.0 : table * detail::turn(theta1, theta0);
+    double widest = 0.0;
+    for (int k = 0; k < kinematics::kNumJoints; ++k) {
+      const double d = std::abs(q1(k) - q0(k));
+      widest = std::max(widest, d);
+      motion += weights[static_cast<std::size_t>(k)] * d;
+    }
+    // The usual steps (every joint within half a turn) need no remainder.
+    return widest <= std::numbers::pi ? motion : wideMotion(pair, weights, theta0, q0, theta1, q1);
+  }
 
  private:
+  /// motion() with a joint more than half a turn away: every difference modulo a turn.
+  double wideMotion(std::size_t pair,
+                    const Weights& weights,
+                    double theta0,
+                    const kinematics::JointVector& q0,
+                    double theta1,
+                    const kinematics::JointVector& q1) const;
+
   struct PairWeights {
     Weights w{};
     double table = 0.0;

@@ -1,6 +1,7 @@
 #include "collision/clearance.h"
 
 #include <limits>
+#include <optional>
 
 #include "collision/fcl_geometry.h"
 #include "kinematics/ramp.h"
@@ -34,22 +35,26 @@ ShapeDistance bodyDistance(const BodyGeometry& a,
   best.beyond = true;
   double lower = kInf;  // over the shape pairs found beyond
   for (const CollisionShape& sa : a.shapes) {
-    const Eigen::Isometry3d X_Wsa = X_Wa * sa.X_BG;
+    // The shapes' poses only for the pairs that pass the broad phase (bounding spheres).
+    std::optional<Eigen::Isometry3d> X_Wsa;
+    const auto shape_a = [&]() -> const Eigen::Isometry3d& {
+      if (!X_Wsa) X_Wsa = X_Wa * sa.X_BG;
+      return *X_Wsa;
+    };
+    const Eigen::Vector3d c_a = X_Wa * (sa.X_BG * sa.centre_G);
     for (const CollisionShape& sb : b.shapes) {
-      const Eigen::Isometry3d X_Wsb = X_Wb * sb.X_BG;
       if (exact) {
-        const ShapeDistance d = exactShapeDistance(sa, X_Wsa, sb, X_Wsb);
+        const ShapeDistance d = exactShapeDistance(sa, shape_a(), sb, X_Wb * sb.X_BG);
         if (best.beyond || d.distance < best.distance) best = d;
         continue;
       }
-      const double centres = (X_Wsa * sa.centre_G - X_Wsb * sb.centre_G).norm();
-      const double spheres = centres - sa.radius - sb.radius;
-      if (spheres >= best.distance) {  // broad phase
+      const double spheres = (c_a - X_Wb * (sb.X_BG * sb.centre_G)).norm() - sa.radius - sb.radius;
+      if (spheres >= best.distance) {
         lower = std::min(lower, spheres);
         continue;
       }
       const ShapeDistance d =
-          shapeDistance(sa, X_Wsa, sb, X_Wsb, best.distance, witness, closed_forms);
+          shapeDistance(sa, shape_a(), sb, X_Wb * sb.X_BG, best.distance, witness, closed_forms);
       if (d.beyond) lower = std::min(lower, d.lower);
       if (!d.beyond) best = d;
       if (best.penetrating) return best;

@@ -407,7 +407,12 @@ Primitive capsuleLike(Primitive::Kind kind, double radius, double length) {
 // bound is FCL's number, as the exact reference computes it.
 // The shape as a primitive at its world pose: itself, or a mesh's bounding box.
 Primitive placed(const CollisionShape& shape, const Eigen::Isometry3d& X_W) {
-  Primitive p = shape.primitive ? *shape.primitive : *shape.bounding_box;
+  if (shape.primitive) {  // its pose is the identity: the product would give X_W exactly
+    Primitive p = *shape.primitive;
+    p.X_W = X_W;
+    return p;
+  }
+  Primitive p = *shape.bounding_box;
   p.X_W = X_W * p.X_W;
   return p;
 }
@@ -425,16 +430,20 @@ std::optional<ShapeDistance> closedForm(const CollisionShape& a,
                                         bool witness) {
   if (!(a.primitive || a.bounding_box) || !(b.primitive || b.bounding_box)) return std::nullopt;
   const Primitive pa = placed(a, X_Wa), pb = placed(b, X_Wb);
-  double lower = quickLowerBound(pa, pb);
+  using Kind = Primitive::Kind;
   // Two boxes (a mesh's included) stop at the gap: the exact form costs ten times as much.
-  const bool boxes = pa.kind == Primitive::Kind::kBox && pb.kind == Primitive::Kind::kBox;
+  const bool boxes = pa.kind == Kind::kBox && pb.kind == Kind::kBox;
   const bool primitives = a.primitive && b.primitive;
+  // With one box the quick bound is the distance itself: measured once.
+  std::optional<PrimitiveDistance> d;
+  if ((pa.kind == Kind::kBox) != (pb.kind == Kind::kBox)) d = primitiveDistance(pa, pb);
+  double lower = d ? d->distance : quickLowerBound(pa, pb);
   if (lower < bound && (!boxes || primitives)) {
-    const PrimitiveDistance d = primitiveDistance(pa, pb);
-    if (d.exact && primitives && d.distance < bound) {
-      return finish(d.distance, bound, witness, d.p_a, d.p_b);
+    if (!d) d = primitiveDistance(pa, pb);
+    if (d->exact && primitives && d->distance < bound) {
+      return finish(d->distance, bound, witness, d->p_a, d->p_b);
     }
-    lower = std::max(lower, d.distance);
+    lower = std::max(lower, d->distance);
   }
   if (lower < bound) return std::nullopt;
   ShapeDistance beyond;

@@ -7,8 +7,8 @@
 
 #include <fcl/geometry/bvh/BVH_model.h>
 #include <fcl/geometry/shape/box.h>
-#include <fcl/geometry/shape/convex.h>
 #include <fcl/geometry/shape/capsule.h>
+#include <fcl/geometry/shape/convex.h>
 #include <fcl/geometry/shape/cylinder.h>
 #include <fcl/geometry/shape/sphere.h>
 #include <fcl/math/bv/OBBRSS.h>
@@ -71,7 +71,8 @@ kinematics::TriangleMesh meshOf(const MeshModel& model);
 /// GJK against everything but meshes, which are walked with GJK at their triangles. Keeps the
 /// mesh's pose; its bounding box and sphere are the hull's; `polyhedron` is the hull's surface
 /// (the exact reference's geometry against meshes). `hull`: closed, outward triangles.
-CollisionShape makeHullShape(const CollisionShape& mesh_shape, const kinematics::TriangleMesh& hull);
+CollisionShape makeHullShape(const CollisionShape& mesh_shape,
+                             const kinematics::TriangleMesh& hull);
 
 /// Distance between two shapes at world poses, by FCL's traversal seeded with `bound` (a box
 /// against a mesh: scanplan's traversal of FCL's BVH in the box frame): anything at or beyond

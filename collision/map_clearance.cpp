@@ -37,6 +37,14 @@ MapClearance::MapClearance(const Scene& scene, std::size_t branches, MapClearanc
   memory_.resize(np * (1 + branches));
   state_.resize(memory_.size());
   shared_factor_.assign(np, -1.0);
+  travel_of_branch_.resize(branches);
+  for (std::size_t p = 0; p < np; ++p) {
+    if (!levers_.covers(p)) continue;
+    table_lever_ = std::max(table_lever_, levers_.tableLever(p));
+    for (std::size_t k = 0; k < joint_levers_.size(); ++k) {
+      joint_levers_[k] = std::max(joint_levers_[k], levers_.weights(p)[k]);
+    }
+  }
   X_W_.assign(nb, Eigen::Isometry3d::Identity());
   placed_.assign(nb, false);
   last_.assign(nb, Eigen::Isometry3d::Identity());
@@ -80,8 +88,7 @@ void MapClearance::beginCell(double theta, const Eigen::Isometry3d& X_BF) {
 
 const std::array<Eigen::Isometry3d, kinematics::kNumJoints + 1>& MapClearance::frames() {
   if (!frames_ready_) {
-    frames_ = scene_->cell().robot.linkFrames(*q_);
-    for (Eigen::Isometry3d& X : frames_) X = scene_->cell().X_WB * X;
+    frames_ = scene_->cell().robot.linkFrames(*q_, scene_->cell().X_WB);
     frames_ready_ = true;
   }
   return frames_;
@@ -100,6 +107,17 @@ double MapClearance::factor(std::size_t branch, const kinematics::JointVector& q
   q_ = &q;
   frames_ready_ = false;
   std::fill(placed_.begin(), placed_.end(), false);
+  Travel& travel = travel_of_branch_.at(branch);
+  if (travel.seen) {
+    double step = table_lever_ * std::abs(theta_ - travel.theta);
+    for (int k = 0; k < kinematics::kNumJoints; ++k) {
+      step += joint_levers_[static_cast<std::size_t>(k)] * std::abs(q(k) - travel.q(k));
+    }
+    travel.sum += step;
+  }
+  travel.theta = theta_;
+  travel.q = q;
+  travel.seen = true;
   const std::size_t np = shared_factor_.size();
   double f = 1.0;
   for (std::size_t p = 0; p < np; ++p) {
@@ -108,7 +126,7 @@ double MapClearance::factor(std::size_t branch, const kinematics::JointVector& q
       if (shared_factor_[p] < 0.0) shared_factor_[p] = sharedFactor(p);
       fp = shared_factor_[p];
     } else {
-      fp = linkFactor(p, np * (1 + branch) + p, q);
+      fp = linkFactor(p, np * (1 + branch) + p, q, travel.sum);
     }
     if (fp == 1.0) continue;  // as ClearanceEvaluator::factor: no product with a pair beyond
     f *= fp;
@@ -139,25 +157,56 @@ double MapClearance::sharedFactor(std::size_t p) {
   return query(p, memory);
 }
 
-double MapClearance::linkFactor(std::size_t p, std::size_t slot, const kinematics::JointVector& q) {
-  const PairThresholds& t = scene_->pairs()[p].thresholds;
+double MapClearance::linkFactor(std::size_t p,
+                                std::size_t slot,
+                                const kinematics::JointVector& q,
+                                double travel) {
   Memory& memory = memory_[slot];
-  State& state = state_[slot];
   if (options_.skip && memory.known && !options_.exact_distances) {
+    if (travel <= memory.far_until) return 1.0;
+    if (travel < memory.zero_until) return 0.0;
+    const PairThresholds& t = scene_->pairs()[p].thresholds;
     const double moved =
-        levers_.motion(p, state.weights, state.theta, state.q, theta_, q) + kMargin;
-    if (memory.lower - moved >= t.d_high) return 1.0;
-    if (memory.upper + moved < t.d_low) return 0.0;
-    if (q == state.q && theta_ == state.theta && X_BF_.matrix() == state.X_BF.matrix()) {
+        levers_.motion(p, memory.weights, memory.theta, memory.q, theta_, q) + kMargin;
+    // Far or deep enough: so until the branch has travelled the slack over the lever more.
+    const auto until = [&](double slack) {
+      return memory.lever > 0.0 ? travel + slack / memory.lever : kInf;
+    };
+    if (memory.lower - moved >= t.d_high) {
+      memory.far_until = until(memory.lower - moved - t.d_high);
+      return 1.0;
+    }
+    if (memory.upper + moved < t.d_low) {
+      memory.zero_until = until(t.d_low - memory.upper - moved);
+      return 0.0;
+    }
+    if (q == memory.q && theta_ == memory.theta && X_BF_.matrix() == state_[slot].X_BF.matrix()) {
       return memory.factor;  // the same poses: the same query again
     }
   }
-  state.theta = theta_;
-  state.q = q;
-  state.X_BF = X_BF_;
+  return requery(p, slot, q);
+}
+
+double MapClearance::requery(std::size_t p, std::size_t slot, const kinematics::JointVector& q) {
+  Memory& memory = memory_[slot];
+  memory.theta = theta_;
+  memory.q = q;
+  state_[slot].X_BF = X_BF_;
   const double f = query(p, memory);
-  if (options_.skip) state.weights = leversNow(p);
+  memory.far_until = memory.zero_until = -kInf;
+  if (options_.skip) {
+    memory.weights = leversNow(p);
+    memory.lever = leverRatio(p, memory.weights);
+  }
   return f;
+}
+
+double MapClearance::leverRatio(std::size_t p, const ChainLevers::Weights& weights) const {
+  double ratio = table_lever_ > 0.0 ? levers_.tableLever(p) / table_lever_ : 0.0;
+  for (std::size_t k = 0; k < weights.size(); ++k) {
+    if (joint_levers_[k] > 0.0) ratio = std::max(ratio, weights[k] / joint_levers_[k]);
+  }
+  return ratio;
 }
 
 ChainLevers::Weights MapClearance::leversNow(std::size_t p) {

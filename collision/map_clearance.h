@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cstddef>
+#include <limits>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -45,31 +46,59 @@ class MapClearance {
   double factor(std::size_t branch, const kinematics::JointVector& q);
 
  private:
-  /// A pair's last query: what the bound checks read on every call.
+  /// A pair's last query: what the bound checks read on every call, together in one place.
   struct Memory {
     double travel = 0.0;  ///< pairs without a link: the two bodies' travel then, summed
     double lower = 0.0;   ///< m, a lower bound on the distance then
     double upper = 0.0;   ///< m, the distance then when below d_high, else +∞
     double factor = 1.0;
     bool known = false;
-  };
-  /// The rest of it: what the bodies' poses follow from. Pairs with a link read the first
-  /// three on every call, the rest only when nothing moved.
-  struct State {
-    ChainLevers::Weights weights{};  ///< pairs with a link: the levers at q (tighter than static)
+    // Pairs with a link: the table angle and joints then, and the levers at those joints
+    // (tighter than the static ones).
     double theta = 0.0;
     kinematics::JointVector q = kinematics::JointVector::Zero();
+    ChainLevers::Weights weights{};
+    /// The largest ratio of those weights (and the table lever) to the scene's (below): the
+    /// pair's distance changes by at most that times the branch's travel.
+    double lever = 0.0;
+    /// Pairs with a link: the factor is 1 while the branch's travel stays at or below
+    /// far_until, 0 while it stays below zero_until (−∞: not known).
+    double far_until = -std::numeric_limits<double>::infinity();
+    double zero_until = -std::numeric_limits<double>::infinity();
+  };
+  /// Per branch: the sum over the steps between its factor() calls of L_θ·|Δθ| + Σ_k L_k·|Δq_k|
+  /// (m; L: the largest lever of any pair, the table's and each joint's), and the last call's
+  /// table angle and joints. A pair's distance changes by at most its lever ratio times the
+  /// travel since, so a pair that the exact bound showed far (or deep) enough stays so without
+  /// a bound evaluated until the branch's travel reaches the pair's mark.
+  struct Travel {
+    double sum = 0.0;
+    double theta = 0.0;
+    kinematics::JointVector q = kinematics::JointVector::Zero();
+    bool seen = false;
+  };
+  /// The rest of it: read only when nothing moved.
+  struct State {
     Eigen::Isometry3d X_BF = Eigen::Isometry3d::Identity();
     /// Pairs without a link: the bodies' poses.
     Eigen::Isometry3d X_a = Eigen::Isometry3d::Identity(), X_b = Eigen::Isometry3d::Identity();
   };
   double sharedFactor(std::size_t pair);
-  double linkFactor(std::size_t pair, std::size_t slot, const kinematics::JointVector& q);
+  double linkFactor(std::size_t pair,
+                    std::size_t slot,
+                    const kinematics::JointVector& q,
+                    double travel);
+  /// linkFactor's query, out of line: the bound checks before it stay small.
+  [[gnu::noinline]] double requery(std::size_t pair,
+                                   std::size_t slot,
+                                   const kinematics::JointVector& q);
   double query(std::size_t pair, Memory& memory);
   /// The pair's weights at this branch's joints (ChainLevers::motion turns the joints in
   /// ascending order, so joint k turns with the later ones still where they were: the distal
   /// body's reach from axis k is what it is now).
   ChainLevers::Weights leversNow(std::size_t pair);
+  /// The largest ratio of the pair's weights (and its table lever) to the scene's.
+  double leverRatio(std::size_t pair, const ChainLevers::Weights& weights) const;
   /// The DH frames in the world (X_WB · X_Bk) at this branch's joints, by FK on first use.
   const std::array<Eigen::Isometry3d, kinematics::kNumJoints + 1>& frames();
   /// Body i's pose at this cell and branch: robot links by FK on first use.
@@ -86,6 +115,9 @@ class MapClearance {
   std::vector<Memory> memory_;           ///< pairs without a link, then [branch][pair]
   std::vector<State> state_;             ///< the same slots
   std::vector<double> shared_factor_;    ///< this cell's factor of each pair without a link, or < 0
+  std::vector<Travel> travel_of_branch_;
+  double table_lever_ = 0.0;             ///< L_θ: the largest table lever of any pair, m/rad
+  ChainLevers::Weights joint_levers_{};  ///< L_k: the largest weight of joint k of any pair
   // This cell: θ, the flange target, the branch's joints and link frames (when computed).
   double theta_ = 0.0;
   Eigen::Isometry3d X_BF_ = Eigen::Isometry3d::Identity();

@@ -6,6 +6,8 @@
 #include <limits>
 #include <utility>
 
+#include <boost/math/tools/toms748_solve.hpp>
+
 namespace scanplan::collision::detail {
 namespace {
 
@@ -65,41 +67,20 @@ std::array<std::pair<Eigen::Vector3d, Eigen::Vector3d>, 12> localEdges(const Eig
   return edges;
 }
 
-// Golden-section minimum of a convex function on [0, 1], to 1e-14 of the interval: where it is.
-template <class F>
-double convexArgMin(F&& f) {
-  constexpr double kInvPhi = 0.6180339887498949;
-  double lo = 0.0, hi = 1.0;
-  double x1 = hi - kInvPhi * (hi - lo), x2 = lo + kInvPhi * (hi - lo);
-  double f1 = f(x1), f2 = f(x2);
-  double best_x = 0.0, best = f(0.0);
-  const auto keep = [&](double x, double v) {
-    if (v < best) {
-      best = v;
-      best_x = x;
-    }
-  };
-  keep(1.0, f(1.0));
-  keep(x1, f1);
-  keep(x2, f2);
-  for (int it = 0; it < 68; ++it) {
-    if (f1 <= f2) {
-      hi = x2;
-      x2 = x1;
-      f2 = f1;
-      x1 = hi - kInvPhi * (hi - lo);
-      f1 = f(x1);
-      keep(x1, f1);
-    } else {
-      lo = x1;
-      x1 = x2;
-      f1 = f2;
-      x2 = lo + kInvPhi * (hi - lo);
-      f2 = f(x2);
-      keep(x2, f2);
-    }
-  }
-  return best_x;
+// Where along the segment a + x·d, x ∈ [0, 1], the distance to a convex solid is least, from
+// `slope(x)` = (p − π(p))·d (π: the solid's nearest point to p = a + x·d), the derivative of half
+// the squared distance, which is convex and continuously differentiable: an end where the slope
+// points outwards, else where the slope crosses zero (TOMS 748, Boost.Math).
+template <class Slope>
+double convexSegmentMin(const Eigen::Vector3d& d, Slope&& slope) {
+  if (d.squaredNorm() <= kTiny) return 0.0;
+  const double at_a = slope(0.0), at_b = slope(1.0);
+  if (at_b <= 0.0) return 1.0;
+  if (!(at_a < 0.0)) return 0.0;
+  std::uintmax_t iterations = 100;
+  const auto [lo, hi] = boost::math::tools::toms748_solve(
+      slope, 0.0, 1.0, at_a, at_b, boost::math::tools::eps_tolerance<double>(50), iterations);
+  return 0.5 * (lo + hi);
 }
 
 double localPointCylinderSq(const Eigen::Vector3d& p, double radius, double half_length) {
@@ -236,14 +217,12 @@ Closest segmentBoxClosest(const Eigen::Vector3d& a_W,
     const Eigen::Vector3d p = box.X_W * (a + enter * (b - a));
     return {0.0, p, p};
   }
-  Closest best = pointBoxClosest(a_W, box);
-  const Closest at_b = pointBoxClosest(b_W, box);
-  if (at_b.distance < best.distance) best = at_b;
-  for (const auto& [p, q] : localEdges(box.half)) {
-    const Closest c = segmentSegment(a, b, p, q);
-    if (c.distance < best.distance) best = {c.distance, box.X_W * c.p_a, box.X_W * c.p_b};
-  }
-  return best;
+  const Eigen::Vector3d d = b - a;
+  const double s = convexSegmentMin(d, [&](double x) {
+    const Eigen::Vector3d p = a + x * d;
+    return (p - p.cwiseMax(-box.half).cwiseMin(box.half)).dot(d);
+  });
+  return pointBoxClosest(a_W + s * (b_W - a_W), box);
 }
 
 double segmentBox(const Eigen::Vector3d& a_W, const Eigen::Vector3d& b_W, const Primitive& box) {
@@ -318,8 +297,13 @@ Closest segmentCylinderClosest(const Eigen::Vector3d& a_W,
                                const Primitive& cylinder) {
   const Eigen::Vector3d a = toLocal(cylinder, a_W), d = toLocal(cylinder, b_W) - a;
   const double r = cylinder.radius(), h = cylinder.halfLength();
-  const double s = d.squaredNorm() <= kTiny ? 0.0 : convexArgMin([&](double x) {
-    return localPointCylinderSq(a + x * d, r, h);
+  const double s = convexSegmentMin(d, [&](double x) {
+    const Eigen::Vector3d p = a + x * d;
+    Eigen::Vector3d on = p;
+    const double rho = std::sqrt(p.x() * p.x() + p.y() * p.y());
+    if (rho > r) on.head<2>() *= r / rho;
+    on.z() = std::clamp(p.z(), -h, h);
+    return (p - on).dot(d);
   });
   return pointCylinderClosest(a_W + s * (b_W - a_W), cylinder);
 }

@@ -63,8 +63,8 @@ double boxGap(const Primitive& a, const Primitive& b);
 double boxBox(const Primitive& a, const Primitive& b);
 /// Distance from a point to a solid cylinder (0 inside).
 double pointCylinder(const Eigen::Vector3d& p, const Primitive& cylinder);
-/// Distance from a segment to a solid cylinder: the point–cylinder distance is convex along the
-/// segment; minimised by golden-section search to 1e-14 of the segment's length.
+/// Distance from a segment to a solid cylinder: the squared point–cylinder distance is convex
+/// and smooth along the segment; its slope's zero found by TOMS 748 (Boost.Math).
 double segmentCylinder(const Eigen::Vector3d& a,
                        const Eigen::Vector3d& b,
                        const Primitive& cylinder);

@@ -60,11 +60,11 @@ enum class Geometry {
 /// d(B, hull) ≤ d(B, mesh) ≤ d(B, hull) + margin: where the maps measure the hull (`used`) they
 /// may see a pair up to `margin` closer than it is, never farther.
 struct MapHull {
-  int body = 0;                   ///< index into Scene::bodies()
+  int body = 0;  ///< index into Scene::bodies()
   std::size_t mesh_triangles = 0;
   std::size_t hull_vertices = 0;
-  double margin = 0.0;            ///< m, an upper bound (collision/convex_hull.h hullMargin)
-  bool used = false;              ///< the maps measure the hull (else the mesh)
+  double margin = 0.0;  ///< m, an upper bound (collision/convex_hull.h hullMargin)
+  bool used = false;    ///< the maps measure the hull (else the mesh)
 };
 
 /// What moves a body.

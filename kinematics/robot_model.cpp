@@ -38,14 +38,25 @@ std::string formatJoints(const JointVector& q) {
 
 }  // namespace
 
-Eigen::Isometry3d dhTransform(const DhJoint& j, double q) {
+namespace {
+
+Eigen::Isometry3d dhWith(const DhJoint& j, double q, double ca, double sa) {
   const double theta = j.direction * q + j.theta_offset;
   const double ct = std::cos(theta), st = std::sin(theta);
-  const double ca = std::cos(j.alpha), sa = std::sin(j.alpha);
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() << ct, -st * ca, st * sa, st, ct * ca, -ct * sa, 0.0, sa, ca;
   T.translation() << j.a * ct, j.a * st, j.d;
   return T;
+}
+
+}  // namespace
+
+Eigen::Isometry3d dhTransform(const DhJoint& j, double q) {
+  return dhWith(j, q, std::cos(j.alpha), std::sin(j.alpha));
+}
+
+Eigen::Isometry3d RobotModel::dh(std::size_t i, double q) const {
+  return dhWith(definition_.joints[i], q, cos_alpha_[i], sin_alpha_[i]);
 }
 
 std::string IkBranch::words() const {
@@ -54,6 +65,14 @@ std::string IkBranch::words() const {
 }
 
 RobotModel::RobotModel(RobotDefinition definition) : definition_(std::move(definition)) {
+  for (std::size_t i = 0; i < kNumJoints; ++i) {
+    const DhJoint& j = definition_.joints[i];
+    cos_alpha_[i] = std::cos(j.alpha);
+    sin_alpha_[i] = std::sin(j.alpha);
+    // IK gives joints in (−π, π] (fromOpw): a whole turn away can only be inside limits that
+    // reach to −π or π (with room for the rounding of q ± 2π).
+    turns_[i] = j.min < -std::numbers::pi + 1e-9 || j.max > std::numbers::pi - 1e-9;
+  }
   for (int i = 0; i < kNumJoints; ++i) {
     const DhJoint& j = joint(i);
     if (!(j.min < j.max)) {
@@ -115,19 +134,22 @@ RobotModel::RobotModel(RobotDefinition definition) : definition_(std::move(defin
 }
 
 std::array<Eigen::Isometry3d, kNumJoints + 1> RobotModel::linkFrames(const JointVector& q) const {
+  return linkFrames(q, Eigen::Isometry3d::Identity());
+}
+
+std::array<Eigen::Isometry3d, kNumJoints + 1> RobotModel::linkFrames(
+    const JointVector& q, const Eigen::Isometry3d& X_0) const {
   std::array<Eigen::Isometry3d, kNumJoints + 1> frames;
-  frames[0] = Eigen::Isometry3d::Identity();
+  frames[0] = X_0;
   for (std::size_t i = 0; i < kNumJoints; ++i) {
-    frames[i + 1] = frames[i] * dhTransform(definition_.joints[i], q(static_cast<int>(i)));
+    frames[i + 1] = frames[i] * dh(i, q(static_cast<int>(i)));
   }
   return frames;
 }
 
 Eigen::Isometry3d RobotModel::fk(const JointVector& q) const {
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-  for (std::size_t i = 0; i < kNumJoints; ++i) {
-    X = X * dhTransform(definition_.joints[i], q(static_cast<int>(i)));
-  }
+  for (std::size_t i = 0; i < kNumJoints; ++i) X = X * dh(i, q(static_cast<int>(i)));
   return X;
 }
 
@@ -200,9 +222,14 @@ void RobotModel::appendTurnVariants(const JointVector& q,
   for (int i = 0; i < kNumJoints; ++i) {
     const auto ui = static_cast<std::size_t>(i);
     const DhJoint& j = joint(i);
-    for (double shift : {0.0, -kTwoPi, kTwoPi}) {
-      const double v = q(i) + shift;
-      if (v >= j.min && v <= j.max) choices[ui][static_cast<std::size_t>(counts[ui]++)] = v;
+    if (!turns_[ui]) {  // within (−π, π]: q ± 2π is outside the limits
+      if (q(i) >= j.min && q(i) <= j.max)
+        choices[ui][static_cast<std::size_t>(counts[ui]++)] = q(i);
+    } else {
+      for (double shift : {0.0, -kTwoPi, kTwoPi}) {
+        const double v = q(i) + shift;
+        if (v >= j.min && v <= j.max) choices[ui][static_cast<std::size_t>(counts[ui]++)] = v;
+      }
     }
     if (counts[ui] == 0) {
       all_in = false;

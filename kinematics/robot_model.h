@@ -111,6 +111,10 @@ class RobotModel {
   Eigen::Isometry3d fk(const JointVector& q) const;
   /// All DH frames X_B0 (= identity) … X_B6.
   std::array<Eigen::Isometry3d, kNumJoints + 1> linkFrames(const JointVector& q) const;
+  /// The same in the frame where the base is at X_0 (X_0 · X_B0 … X_0 · X_B6), chained from
+  /// X_0: six products instead of thirteen.
+  std::array<Eigen::Isometry3d, kNumJoints + 1> linkFrames(const JointVector& q,
+                                                           const Eigen::Isometry3d& X_0) const;
   /// Geometric Jacobian at the flange origin, base frame: rows vx vy vz wx wy wz.
   Jacobian jacobian(const JointVector& q) const;
 
@@ -129,6 +133,8 @@ class RobotModel {
   JointVector toOpw(const JointVector& q) const;
   JointVector fromOpw(const JointVector& q_opw) const;
   Eigen::Vector3d wristCentre(const JointVector& q) const;
+  /// dhTransform of joint i with its α's cosine and sine computed once.
+  Eigen::Isometry3d dh(std::size_t i, double q) const;
   void appendTurnVariants(const JointVector& q,
                           const IkBranch& branch,
                           const IkRequest& request,
@@ -136,6 +142,8 @@ class RobotModel {
 
   RobotDefinition definition_;
   Eigen::Isometry3d X_opwF_ = Eigen::Isometry3d::Identity();  ///< DH flange in the OPW tool frame
+  std::array<double, kNumJoints> cos_alpha_{}, sin_alpha_{};
+  std::array<bool, kNumJoints> turns_{};  ///< joints whose limits may hold q ± 2π
   double manipulability_scale_ = 1.0;
   double forearm_ = 0.0;        ///< √(a2² + c3²), m
   double forearm_angle_ = 0.0;  ///< atan2(a2, c3)
