@@ -6,7 +6,8 @@
 // PNG level 6 trying every filter, cairo's PNGs in the SVGs, PLY and npy built in memory first,
 // cloud.png's points copied per view), side by side in the same run. Both must give the same
 // files apart from the PNG and SVG bytes, whose pixels are compared elsewhere (the tests).
-// Usage (from the repository root): build/tests/bench/bench_outputs [runs] [JOB]
+// Usage (from the repository root): build/tests/bench/bench_outputs [runs] [JOB] [today]
+// `today`: only today's writers, all of plan's files best of `runs` (for a profiler).
 #include <unistd.h>
 #include <cstdio>
 #include <cstdlib>
@@ -89,6 +90,11 @@ int main(int argc, char** argv) {
     return 1;
   }
   const cli::WriteSettings today, reference = cli::WriteSettings::reference();
+  if (argc > 3 && std::string(argv[3]) == "today") {
+    std::printf("all of plan's files, today's writers, best of %d: %.4f s\n", runs,
+                bestWrite(runs, dir, [&] { writeAll(dir, p, today); }));
+    return 0;
+  }
   const auto time = [&](const cli::WriteSettings& s, auto&& part) {
     return bestWrite(runs, dir, [&] { part(s); });
   };
