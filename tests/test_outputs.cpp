@@ -181,6 +181,34 @@ TEST_F(Outputs, ViewsDrawnTogetherAreEachAsDrawnAlone) {
   EXPECT_TRUE(cli::renderScenes(r, {}).empty());
 }
 
+TEST_F(Outputs, FilledAndUpscaledImagesHoldThePixelsSetOneByOne) {
+  for (const cli::Rgb fill : {cli::Rgb{255, 255, 255}, cli::Rgb{0, 114, 178}}) {
+    for (const auto& [w, h] : {std::pair{1, 1}, {7, 3}, {480, 2}, {0, 4}}) {
+      const cli::RgbImage image = cli::RgbImage::filled(w, h, fill);
+      ASSERT_EQ(image.rgb.size(), 3u * static_cast<std::size_t>(w * h));
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) ASSERT_EQ(image.at(x, y), fill) << x << " " << y;
+    }
+  }
+  cli::RgbImage image = cli::RgbImage::filled(5, 4);
+  for (int y = 0; y < image.height; ++y) {
+    for (int x = 0; x < image.width; ++x) {
+      image.set(x, y, {static_cast<std::uint8_t>(40 * x), static_cast<std::uint8_t>(60 * y), 7});
+    }
+  }
+  for (const auto& [fx, fy] : {std::pair{1, 1}, {3, 1}, {1, 2}, {4, 5}}) {
+    const cli::RgbImage big = cli::upscale(image, fx, fy);
+    ASSERT_EQ(big.width, image.width * fx);
+    ASSERT_EQ(big.height, image.height * fy);
+    for (int y = 0; y < big.height; ++y) {
+      for (int x = 0; x < big.width; ++x) {
+        ASSERT_EQ(big.at(x, y), image.at(x / fx, y / fy))
+            << fx << " " << fy << " " << x << " " << y;
+      }
+    }
+  }
+}
+
 TEST_F(Outputs, EveryPngSettingDecodesToTheSamePixels) {
   cli::RgbImage image = cli::RgbImage::filled(37, 23, {250, 250, 250});
   for (int y = 0; y < image.height; ++y) {

@@ -171,11 +171,20 @@ RgbImage RgbImage::filled(int w, int h, Rgb fill_colour) {
   RgbImage image;
   image.width = w;
   image.height = h;
-  image.rgb.resize(3 * pixelCount(std::max(w, 0), std::max(h, 0)));
-  for (std::size_t i = 0; i < image.rgb.size(); i += 3) {
-    image.rgb[i] = fill_colour.r;
-    image.rgb[i + 1] = fill_colour.g;
-    image.rgb[i + 2] = fill_colour.b;
+  const std::size_t size = 3 * pixelCount(std::max(w, 0), std::max(h, 0));
+  if (fill_colour.r == fill_colour.g && fill_colour.g == fill_colour.b) {
+    image.rgb.assign(size, fill_colour.r);  // a grey: one byte repeated (a memset)
+    return image;
+  }
+  image.rgb.resize(size);
+  // One pixel, then the filled part copied onto the rest, doubling each time.
+  std::size_t filled = std::min<std::size_t>(3, size);
+  const std::array<std::uint8_t, 3> pixel{fill_colour.r, fill_colour.g, fill_colour.b};
+  std::copy_n(pixel.begin(), filled, image.rgb.begin());
+  while (filled < size) {
+    const std::size_t n = std::min(filled, size - filled);
+    std::copy_n(image.rgb.begin(), n, image.rgb.begin() + static_cast<std::ptrdiff_t>(filled));
+    filled += n;
   }
   return image;
 }
@@ -287,9 +296,21 @@ RgbImage upscale(const RgbImage& image, int factor_x, int factor_y) {
     throw InputError(fmt::format("image {} × {} enlarged {} × {}: expected at most 2^28 pixels",
                                  image.width, image.height, factor_x, factor_y));
   }
-  RgbImage out = RgbImage::filled(image.width * factor_x, image.height * factor_y);
-  for (int y = 0; y < out.height; ++y)
-    for (int x = 0; x < out.width; ++x) out.set(x, y, image.at(x / factor_x, y / factor_y));
+  RgbImage out;
+  out.width = image.width * factor_x;
+  out.height = image.height * factor_y;
+  out.rgb.resize(3 * pixelCount(out.width, out.height));
+  const std::size_t row_bytes = 3 * static_cast<std::size_t>(out.width);
+  auto to = out.rgb.begin();
+  for (int y = 0; y < image.height; ++y) {
+    // The row widened once, then copied factor_y - 1 times below itself.
+    const auto row = to;
+    auto from = image.rgb.begin() + static_cast<std::ptrdiff_t>(3 * pixelIndex(image.width, 0, y));
+    for (int x = 0; x < image.width; ++x, from += 3) {
+      for (int k = 0; k < factor_x; ++k) to = std::copy_n(from, 3, to);
+    }
+    for (int k = 1; k < factor_y; ++k) to = std::copy_n(row, row_bytes, to);
+  }
   return out;
 }
 
