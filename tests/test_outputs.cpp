@@ -9,6 +9,7 @@
 #include <iterator>
 #include <limits>
 #include <map>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -179,6 +180,60 @@ TEST_F(Outputs, ViewsDrawnTogetherAreEachAsDrawnAlone) {
     EXPECT_GT(drawn, 1000) << "view " << k << ": the scene is in the picture";
   }
   EXPECT_TRUE(cli::renderScenes(r, {}).empty());
+}
+
+// Dots alone (no mesh) drawn the straightforward way: each dot turned by Eigen, fitted to the
+// screen as renderScene documents it (the box of the turned dots, a 5 % + 5 px margin), its pixel
+// the floor of its position, the nearest (within 1e-3 of the box diagonal) drawn last.
+cli::RgbImage drawDotsPlainly(const cli::RenderRequest& r) {
+  Eigen::AlignedBox3d box;
+  for (const Eigen::Vector3d& p : r.dots) {
+    if ((r.R_view * p).allFinite()) box.extend(r.R_view * p);
+  }
+  const double margin = 0.05 * std::min(r.width, r.height) + 5;
+  const Eigen::Vector3d size = box.sizes().cwiseMax(1e-12), centre = box.center();
+  const double scale = std::max(
+      1e-12, std::min((r.width - 2 * margin) / size.x(), (r.height - 2 * margin) / size.y()));
+  const double tolerance = 1e-3 * size.norm();
+  cli::RgbImage image = cli::RgbImage::filled(r.width, r.height, r.background);
+  std::vector<double> depth(static_cast<std::size_t>(r.width * r.height),
+                            -std::numeric_limits<double>::infinity());
+  for (std::size_t i = 0; i < r.dots.size(); ++i) {
+    const Eigen::Vector3d q = r.R_view * r.dots[i];
+    const Eigen::Vector3d s(0.5 * r.width + (q.x() - centre.x()) * scale,
+                            0.5 * r.height - (q.y() - centre.y()) * scale, q.z());
+    if (!s.allFinite()) continue;
+    const int x = static_cast<int>(std::floor(s.x())), y = static_cast<int>(std::floor(s.y()));
+    if (x < 0 || y < 0 || x >= r.width || y >= r.height) continue;
+    double& z = depth[static_cast<std::size_t>(y * r.width + x)];
+    if (s.z() + tolerance < z) continue;
+    z = std::max(z, s.z());
+    image.set(x, y, r.dot_colours[i]);
+  }
+  return image;
+}
+
+TEST_F(Outputs, DotsAreDrawnAsTheStraightforwardWayDrawsThem) {
+  // A noisy sphere of 60 000 dots on 200 × 150 pixels: many dots to a pixel, near and far ones.
+  cli::RenderRequest r;
+  r.width = 200;
+  r.height = 150;
+  std::mt19937 random(7);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (int i = 0; i < 60'000; ++i) {
+    const Eigen::Vector3d d(normal(random), normal(random), normal(random));
+    r.dots.push_back(d.normalized() * (1.0 + 0.01 * normal(random)) + Eigen::Vector3d(3, -2, 1));
+    r.dot_colours.push_back({static_cast<std::uint8_t>(i % 251), static_cast<std::uint8_t>(i / 251),
+                             static_cast<std::uint8_t>(i % 7)});
+  }
+  r.dots.emplace_back(std::numeric_limits<double>::quiet_NaN(), 0, 0);
+  r.dot_colours.push_back({255, 0, 0});
+  const std::vector<Eigen::Matrix3d> views = cli::partViewRotations();
+  const std::vector<cli::RgbImage> drawn = cli::renderScenes(r, views);
+  for (std::size_t k = 0; k < views.size(); ++k) {
+    r.R_view = views[k];
+    EXPECT_TRUE(samePixels(drawn[k], drawDotsPlainly(r))) << "view " << k;
+  }
 }
 
 TEST_F(Outputs, FilledAndUpscaledImagesHoldThePixelsSetOneByOne) {

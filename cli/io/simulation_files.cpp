@@ -43,18 +43,19 @@ RenderRequest cloudPoints(const kinematics::TriangleMesh& part,
   RenderRequest points;
   // Fit both rows to the part's box: invisible corner markers would show, so use the part.
   points.vertices = part.vertices;
-  points.dots.reserve(cloud.size());
-  points.dot_colours.reserve(cloud.size());
+  points.dots.resize(cloud.size());
+  points.dot_colours.resize(cloud.size());
   // The points of a profile share its time: one colour each (the same as computed per point).
   double last_t = std::numeric_limits<double>::quiet_NaN();
   Rgb colour;
-  for (const auto& p : cloud) {
-    points.dots.push_back(p.p_P);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const scanner::CloudPoint& p = cloud[i];
+    points.dots[i] = p.p_P;
     if (!(p.t == last_t)) {
       last_t = p.t;
       colour = toRgb(scanner::densityColour(t_end > 0.0 ? p.t / t_end : 0.0, 1.0, true));
     }
-    points.dot_colours.push_back(colour);
+    points.dot_colours[i] = colour;
   }
   return points;
 }

@@ -455,34 +455,79 @@ struct View {
   RgbImage image;
 };
 
+// A view's rotation as plain rows: q_i = (R_i0 p_0 + R_i1 p_1) + R_i2 p_2, the sums in the order
+// Eigen's 3 × 3 product makes them (the same bits), with nothing else loaded per dot.
+struct Rows {
+  double r[9];
+  explicit Rows(const Eigen::Matrix3d& R) {
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 3; ++k) r[3 * i + k] = R(i, k);
+  }
+  double row(int i, const Eigen::Vector3d& p) const {
+    return r[3 * i] * p.x() + r[3 * i + 1] * p.y() + r[3 * i + 2] * p.z();
+  }
+};
+
 // The dots in every view's box: one pass over them for all views (they are read from memory
 // once, not once a view).
 void extendByDots(const std::vector<Eigen::Vector3d>& dots, std::vector<View>& views) {
+  struct Extent {
+    Rows R;
+    Eigen::Vector3d lo, hi;
+  };
+  std::vector<Extent> extents;
+  for (const View& v : views)
+    extents.push_back({Rows(v.R_view), v.scene.box.min(), v.scene.box.max()});
   for (const Eigen::Vector3d& p : dots) {
-    for (View& v : views) {
-      const Eigen::Vector3d q = v.R_view * p;
-      if (q.allFinite()) v.scene.box.extend(q);
+    for (Extent& e : extents) {
+      const Eigen::Vector3d q(e.R.row(0, p), e.R.row(1, p), e.R.row(2, p));
+      if (!q.allFinite()) continue;
+      e.lo = e.lo.cwiseMin(q);
+      e.hi = e.hi.cwiseMax(q);
     }
+  }
+  for (std::size_t k = 0; k < views.size(); ++k) {
+    views[k].scene.box = Eigen::AlignedBox3d(extents[k].lo, extents[k].hi);
   }
 }
 
+// One view's dot drawing: its rotation, its fit to the screen, its buffers.
+struct DotView {
+  Rows R;
+  double cx, cy, scale, half_w, half_h, tolerance;
+  int w, h;
+  double* depth;
+  std::uint8_t* rgb;
+};
+
 // Dots: 1 px, the nearest wins; a mesh surface in front (closer than the view's tolerance) hides
-// them. All views in one pass over the dots.
+// them. All views in one pass over the dots. The pixel is the floor of the screen position
+// (ScreenFit::toScreen, the same arithmetic), taken as a truncation once it is known to be in
+// [0, w) × [0, h).
 void drawDots(const RenderRequest& request, std::vector<View>& views) {
+  std::vector<DotView> shown;
+  for (View& v : views) {
+    if (!v.fit) continue;
+    const ScreenFit& f = *v.fit;
+    shown.push_back({Rows(v.R_view), f.centre.x(), f.centre.y(), f.scale, 0.5 * f.w, 0.5 * f.h,
+                     v.tolerance, v.image.width, v.image.height, v.depth.data(),
+                     v.image.rgb.data()});
+  }
   const std::vector<Eigen::Vector3d>& dots = request.dots;
   for (std::size_t i = 0; i < dots.size(); ++i) {
     const Rgb colour = i < request.dot_colours.size() ? request.dot_colours[i] : Rgb{};
-    for (View& v : views) {
-      if (!v.fit) continue;
-      const Eigen::Vector3d p = v.fit->toScreen(v.R_view * dots[i]);
-      if (!p.allFinite()) continue;
-      const int w = v.image.width, h = v.image.height;
-      const int x = static_cast<int>(std::floor(p.x())), y = static_cast<int>(std::floor(p.y()));
-      if (x < 0 || y < 0 || x >= w || y >= h) continue;
-      double& zbuf = v.depth[pixelIndex(w, x, y)];
-      if (p.z() + v.tolerance < zbuf) continue;
-      zbuf = std::max(zbuf, p.z());
-      v.image.set(x, y, colour);
+    for (const DotView& v : shown) {
+      const double sx = v.half_w + (v.R.row(0, dots[i]) - v.cx) * v.scale;
+      const double sy = v.half_h - (v.R.row(1, dots[i]) - v.cy) * v.scale;
+      const double z = v.R.row(2, dots[i]);
+      if (!(sx >= 0 && sx < v.w && sy >= 0 && sy < v.h) || !std::isfinite(z)) continue;
+      const std::size_t at = pixelIndex(v.w, static_cast<int>(sx), static_cast<int>(sy));
+      double& zbuf = v.depth[at];
+      if (z + v.tolerance < zbuf) continue;
+      zbuf = std::max(zbuf, z);
+      v.rgb[3 * at] = colour.r;
+      v.rgb[3 * at + 1] = colour.g;
+      v.rgb[3 * at + 2] = colour.b;
     }
   }
 }
