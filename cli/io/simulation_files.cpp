@@ -153,7 +153,7 @@ void writeSimulationOutputs(const std::filesystem::path& dir,
                       ? fmt::format("not covered (fewer than {} points on the triangle)",
                                     coverage_settings.min_points)
                       : std::string("not covered (no point on the triangle)")}};
-  writePng(dir / "cloud.png", drawViewGrid(grid), settings.png);
+  writePng(dir / "cloud.png", drawViewGrid(grid), settings.views);
 
   if (run.profile_images.empty()) return;
   std::filesystem::create_directories(dir / "profiles");
@@ -243,7 +243,7 @@ void writeCertificateOutputs(const std::filesystem::path& dir,
           {kClassColours[c], share, fmt::format("{} {:.0f}%", kClassLabels[c], 100.0 * share)});
     }
   }
-  writePng(dir / "certificate.png", drawViewGrid(grid), settings.png);
+  writePng(dir / "certificate.png", drawViewGrid(grid), settings.views);
 }
 
 }  // namespace scanplan::cli

@@ -203,6 +203,7 @@ Rgb RgbImage::at(int x, int y) const {
 
 static_assert(PngSettings{}.filters == PNG_FILTER_UP);
 static_assert(WriteSettings::reference().png.filters == PNG_ALL_FILTERS);
+static_assert(WriteSettings{}.views.filters == PNG_FILTER_NONE);
 
 std::string encodePng(const RgbImage& image, const PngSettings& settings) {
   checkImage(image);
