@@ -3,6 +3,7 @@
 // streamed and pieced atomic writes, and the views drawn together as each is drawn alone.
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -235,6 +236,111 @@ TEST_F(Outputs, DotsAreDrawnAsTheStraightforwardWayDrawsThem) {
     r.R_view = views[k];
     EXPECT_TRUE(samePixels(drawn[k], drawDotsPlainly(r))) << "view " << k;
   }
+}
+
+// A mesh drawn the straightforward way, in view coordinates already fitted to the screen: every
+// pixel of each triangle's bounding box tested at its centre with the barycentric weights, the
+// nearest kept, the grey Lambert shade of renderScene's documentation.
+cli::RgbImage drawMeshPlainly(const std::vector<Eigen::Vector3d>& v,
+                              const std::vector<Eigen::Vector3i>& triangles,
+                              int w,
+                              int h) {
+  const auto edge = [](const Eigen::Vector3d& a, const Eigen::Vector3d& b, double x, double y) {
+    return (b.x() - a.x()) * (y - a.y()) - (b.y() - a.y()) * (x - a.x());
+  };
+  cli::RgbImage image = cli::RgbImage::filled(w, h, {255, 255, 255});
+  std::vector<double> depth(static_cast<std::size_t>(w * h),
+                            -std::numeric_limits<double>::infinity());
+  for (const Eigen::Vector3i& t : triangles) {
+    const Eigen::Vector3d &a = v[static_cast<std::size_t>(t.x())],
+                          &b = v[static_cast<std::size_t>(t.y())],
+                          &c = v[static_cast<std::size_t>(t.z())];
+    const double area = edge(a, b, c.x(), c.y());
+    if (!(std::abs(area) > 1e-12)) continue;
+    const Eigen::Vector3d n = (b - a)
+                                  .cwiseProduct(Eigen::Vector3d(1, -1, 1))
+                                  .cross((c - a).cwiseProduct(Eigen::Vector3d(1, -1, 1)));
+    const double shade = 0.2 + 0.8 * std::abs(n.z()) / n.norm();
+    const auto grey = static_cast<std::uint8_t>(std::lround(std::clamp(235.0 * shade, 0.0, 255.0)));
+    const int x0 = std::max(0, static_cast<int>(std::floor(std::min({a.x(), b.x(), c.x()}))));
+    const int x1 = std::min(w - 1, static_cast<int>(std::ceil(std::max({a.x(), b.x(), c.x()}))));
+    const int y0 = std::max(0, static_cast<int>(std::floor(std::min({a.y(), b.y(), c.y()}))));
+    const int y1 = std::min(h - 1, static_cast<int>(std::ceil(std::max({a.y(), b.y(), c.y()}))));
+    for (int y = y0; y <= y1; ++y) {
+      for (int x = x0; x <= x1; ++x) {
+        const double wa = edge(b, c, x + 0.5, y + 0.5) / area,
+                     wb = edge(c, a, x + 0.5, y + 0.5) / area, wc = 1.0 - wa - wb;
+        if (wa < 0 || wb < 0 || wc < 0) continue;
+        const double z = wa * a.z() + wb * b.z() + wc * c.z();
+        double& zbuf = depth[static_cast<std::size_t>(y * w + x)];
+        if (z > zbuf) {
+          zbuf = z;
+          image.set(x, y, {grey, grey, grey});
+        }
+      }
+    }
+  }
+  return image;
+}
+
+TEST_F(Outputs, MeshIsDrawnAsTheStraightforwardWayDrawsIt) {
+  // Random triangles of every shape — slivers along rows and columns, edges through pixel
+  // centres, tiny ones and ones across the picture, both windings — over one another, in the
+  // box [0, w] × [-h, 0] that two markers fix: with renderScene's margin (5 % of 110 + 5 px on
+  // a 140 × 110 picture), one view unit is one pixel.
+  const int w = 119, h = 89;
+  std::mt19937 random(3);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const auto inside = [&](Eigen::Vector3d p) {
+    p.x() = std::clamp(p.x(), 0.0, double{w});
+    p.y() = std::clamp(p.y(), 0.0, double{h});
+    return p;
+  };
+  std::vector<Eigen::Vector3d> points;  // x right, y down, as on the screen
+  std::vector<Eigen::Vector3i> triangles;
+  for (int i = 0; i < 3000; ++i) {
+    const Eigen::Vector3d a(u(random) * w, u(random) * h, u(random));
+    const double size = std::pow(10.0, 2.5 * u(random) - 1.0);  // 0.1 .. 30 px
+    const double long_side = i % 3 == 0 ? 20 * size : size;
+    Eigen::Vector3d b = inside(a + Eigen::Vector3d((u(random) - 0.5) * long_side,
+                                                   (u(random) - 0.5) * size, u(random) - 0.5));
+    Eigen::Vector3d c = inside(a + Eigen::Vector3d((u(random) - 0.5) * size,
+                                                   (u(random) - 0.5) * long_side, u(random) - 0.5));
+    if (i % 5 == 0) {  // edges through pixel centres and along a row
+      b.x() = std::min(std::floor(b.x()) + 0.5, w - 0.5);
+      c.y() = std::min(std::floor(c.y()) + 0.5, h - 0.5);
+      b.y() = a.y();
+    }
+    const int k = static_cast<int>(points.size());
+    points.insert(points.end(), {a, b, c});
+    triangles.emplace_back(k, i % 2 ? k + 1 : k + 2, i % 2 ? k + 2 : k + 1);
+  }
+  cli::RenderRequest r;
+  r.width = 140;
+  r.height = 110;
+  for (const Eigen::Vector3d& p : points) r.vertices.emplace_back(p.x(), -p.y(), p.z());
+  r.triangles = triangles;
+  r.markers = {{Eigen::Vector3d(0, 0, 0), {0, 0, 0}}, {Eigen::Vector3d(w, -h, 0), {0, 0, 0}}};
+  const cli::RgbImage drawn = cli::renderScene(r);
+  // The screen positions as renderScene computes them (scale 1, centre (w/2, -h/2)).
+  std::vector<Eigen::Vector3d> screen;
+  for (const Eigen::Vector3d& p : r.vertices) {
+    screen.emplace_back(0.5 * r.width + (p.x() - 0.5 * w), 0.5 * r.height - (p.y() + 0.5 * h),
+                        p.z());
+  }
+  const cli::RgbImage plain = drawMeshPlainly(screen, triangles, r.width, r.height);
+  int differ = 0, drawn_pixels = 0;
+  for (int y = 0; y < r.height; ++y) {
+    for (int x = 0; x < r.width; ++x) {
+      const bool marker = (std::abs(x - 10) <= 5 && std::abs(y - 10) <= 5) ||
+                          (std::abs(x - 10 - w) <= 5 && std::abs(y - 10 - h) <= 5);
+      if (marker) continue;
+      differ += drawn.at(x, y) == plain.at(x, y) ? 0 : 1;
+      drawn_pixels += drawn.at(x, y) == cli::Rgb{255, 255, 255} ? 0 : 1;
+    }
+  }
+  EXPECT_EQ(differ, 0);
+  EXPECT_GT(drawn_pixels, w * h / 2);
 }
 
 TEST_F(Outputs, FilledAndUpscaledImagesHoldThePixelsSetOneByOne) {
