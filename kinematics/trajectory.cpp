@@ -1,5 +1,6 @@
 #include "kinematics/trajectory.h"
 
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -18,11 +19,24 @@ constexpr const char* kColumns[] = {"t_s",    "table_deg", "j1_deg", "j2_deg",  
                                     "pz_mm",  "qw",        "qx",     "qy",       "qz",     "limit"};
 constexpr std::size_t kNumeric = 17;  // every column but `limit`
 
-std::string number(double v) {
-  if (std::isnan(v)) return "nan";
+// Appends v as printf's "%.12g" writes it (std::to_chars is specified to give those characters,
+// without printf's parsing of a format and its locale), "nan" for NaN, no "-0".
+void appendNumber(std::string& out, double v) {
+  if (std::isnan(v)) {
+    out += "nan";
+    return;
+  }
   char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.12g", v == 0.0 ? 0.0 : v);  // no "-0"
-  return buffer;
+  const auto end = std::to_chars(buffer, buffer + sizeof buffer, v == 0.0 ? 0.0 : v,
+                                 std::chars_format::general, 12)
+                       .ptr;
+  out.append(buffer, end);
+}
+
+std::string number(double v) {
+  std::string out;
+  appendNumber(out, v);
+  return out;
 }
 
 std::vector<std::string> splitCells(const std::string& line) {
@@ -62,19 +76,25 @@ std::string header(std::size_t columns) {
 
 std::string trajectoryToCsv(const Trajectory& trajectory) {
   std::string out = header(std::size(kColumns)) + "\n";
+  out.reserve(out.size() + 240 * trajectory.samples.size());
+  const auto field = [&out](double v) {
+    out += ',';
+    appendNumber(out, v);
+  };
   for (const TrajectorySample& s : trajectory.samples) {
     Eigen::Quaterniond q(s.X_PS.linear());
     q.normalize();
     if (q.w() < 0.0) q.coeffs() *= -1.0;
     const Eigen::Vector3d p = s.X_PS.translation() * kMToMm;
-    out += number(s.t) + ',' + number(s.theta * kRadToDeg);
-    for (int j = 0; j < kNumJoints; ++j) out += ',' + number(s.q(j) * kRadToDeg);
-    out += ',' + number(s.f) + ',' + (s.scanning ? "1" : "0");
-    out += ',' + number(p.x()) + ',' + number(p.y()) + ',' + number(p.z());
-    out += ',' + number(q.w()) + ',' + number(q.x()) + ',' + number(q.y()) + ',' + number(q.z());
-    std::string limit = s.limit;
-    for (char& c : limit) c = c == ',' ? ';' : c;  // keep the row's column count
-    out += ',' + limit + '\n';
+    appendNumber(out, s.t);
+    field(s.theta * kRadToDeg);
+    for (int j = 0; j < kNumJoints; ++j) field(s.q(j) * kRadToDeg);
+    field(s.f);
+    out += s.scanning ? ",1" : ",0";
+    for (const double v : {p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z()}) field(v);
+    out += ',';
+    for (const char c : s.limit) out += c == ',' ? ';' : c;  // keep the row's column count
+    out += '\n';
   }
   return out;
 }

@@ -3,12 +3,14 @@
 // streamed and pieced atomic writes, and the views drawn together as each is drawn alone.
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <limits>
 #include <map>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -130,7 +132,8 @@ TEST_F(Outputs, TodaysWritersGiveTheReferencesFilesByteForByteOrPixelForPixel) {
     if (ext == ".png") {
       ++pngs;
       EXPECT_TRUE(samePixels(test::decodePng(ours), test::decodePng(bytes))) << name;
-      // Level 2 with the Up filter: larger than level 6 with every filter, within reason.
+      // Level 2 with the Up filter (the 3D views without a filter): larger than level 6 with
+      // every filter, within reason.
       EXPECT_LT(ours.size(), bytes.size() * 3 / 2) << name;
     } else if (ext == ".svg") {
       ++svgs;
@@ -179,6 +182,193 @@ TEST_F(Outputs, ViewsDrawnTogetherAreEachAsDrawnAlone) {
     EXPECT_GT(drawn, 1000) << "view " << k << ": the scene is in the picture";
   }
   EXPECT_TRUE(cli::renderScenes(r, {}).empty());
+}
+
+// Dots alone (no mesh) drawn the straightforward way: each dot turned by Eigen, fitted to the
+// screen as renderScene documents it (the box of the turned dots, a 5 % + 5 px margin), its pixel
+// the floor of its position, the nearest (within 1e-3 of the box diagonal) drawn last.
+cli::RgbImage drawDotsPlainly(const cli::RenderRequest& r) {
+  Eigen::AlignedBox3d box;
+  for (const Eigen::Vector3d& p : r.dots) {
+    if ((r.R_view * p).allFinite()) box.extend(r.R_view * p);
+  }
+  const double margin = 0.05 * std::min(r.width, r.height) + 5;
+  const Eigen::Vector3d size = box.sizes().cwiseMax(1e-12), centre = box.center();
+  const double scale = std::max(
+      1e-12, std::min((r.width - 2 * margin) / size.x(), (r.height - 2 * margin) / size.y()));
+  const double tolerance = 1e-3 * size.norm();
+  cli::RgbImage image = cli::RgbImage::filled(r.width, r.height, r.background);
+  std::vector<double> depth(static_cast<std::size_t>(r.width * r.height),
+                            -std::numeric_limits<double>::infinity());
+  for (std::size_t i = 0; i < r.dots.size(); ++i) {
+    const Eigen::Vector3d q = r.R_view * r.dots[i];
+    const Eigen::Vector3d s(0.5 * r.width + (q.x() - centre.x()) * scale,
+                            0.5 * r.height - (q.y() - centre.y()) * scale, q.z());
+    if (!s.allFinite()) continue;
+    const int x = static_cast<int>(std::floor(s.x())), y = static_cast<int>(std::floor(s.y()));
+    if (x < 0 || y < 0 || x >= r.width || y >= r.height) continue;
+    double& z = depth[static_cast<std::size_t>(y * r.width + x)];
+    if (s.z() + tolerance < z) continue;
+    z = std::max(z, s.z());
+    image.set(x, y, r.dot_colours[i]);
+  }
+  return image;
+}
+
+TEST_F(Outputs, DotsAreDrawnAsTheStraightforwardWayDrawsThem) {
+  // A noisy sphere of 60 000 dots on 200 × 150 pixels: many dots to a pixel, near and far ones.
+  cli::RenderRequest r;
+  r.width = 200;
+  r.height = 150;
+  std::mt19937 random(7);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (int i = 0; i < 60'000; ++i) {
+    const Eigen::Vector3d d(normal(random), normal(random), normal(random));
+    r.dots.push_back(d.normalized() * (1.0 + 0.01 * normal(random)) + Eigen::Vector3d(3, -2, 1));
+    r.dot_colours.push_back({static_cast<std::uint8_t>(i % 251), static_cast<std::uint8_t>(i / 251),
+                             static_cast<std::uint8_t>(i % 7)});
+  }
+  r.dots.emplace_back(std::numeric_limits<double>::quiet_NaN(), 0, 0);
+  r.dot_colours.push_back({255, 0, 0});
+  const std::vector<Eigen::Matrix3d> views = cli::partViewRotations();
+  const std::vector<cli::RgbImage> drawn = cli::renderScenes(r, views);
+  for (std::size_t k = 0; k < views.size(); ++k) {
+    r.R_view = views[k];
+    EXPECT_TRUE(samePixels(drawn[k], drawDotsPlainly(r))) << "view " << k;
+  }
+}
+
+// A mesh drawn the straightforward way, in view coordinates already fitted to the screen: every
+// pixel of each triangle's bounding box tested at its centre with the barycentric weights, the
+// nearest kept, the grey Lambert shade of renderScene's documentation.
+cli::RgbImage drawMeshPlainly(const std::vector<Eigen::Vector3d>& v,
+                              const std::vector<Eigen::Vector3i>& triangles,
+                              int w,
+                              int h) {
+  const auto edge = [](const Eigen::Vector3d& a, const Eigen::Vector3d& b, double x, double y) {
+    return (b.x() - a.x()) * (y - a.y()) - (b.y() - a.y()) * (x - a.x());
+  };
+  cli::RgbImage image = cli::RgbImage::filled(w, h, {255, 255, 255});
+  std::vector<double> depth(static_cast<std::size_t>(w * h),
+                            -std::numeric_limits<double>::infinity());
+  for (const Eigen::Vector3i& t : triangles) {
+    const Eigen::Vector3d &a = v[static_cast<std::size_t>(t.x())],
+                          &b = v[static_cast<std::size_t>(t.y())],
+                          &c = v[static_cast<std::size_t>(t.z())];
+    const double area = edge(a, b, c.x(), c.y());
+    if (!(std::abs(area) > 1e-12)) continue;
+    const Eigen::Vector3d n = (b - a)
+                                  .cwiseProduct(Eigen::Vector3d(1, -1, 1))
+                                  .cross((c - a).cwiseProduct(Eigen::Vector3d(1, -1, 1)));
+    const double shade = 0.2 + 0.8 * std::abs(n.z()) / n.norm();
+    const auto grey = static_cast<std::uint8_t>(std::lround(std::clamp(235.0 * shade, 0.0, 255.0)));
+    const int x0 = std::max(0, static_cast<int>(std::floor(std::min({a.x(), b.x(), c.x()}))));
+    const int x1 = std::min(w - 1, static_cast<int>(std::ceil(std::max({a.x(), b.x(), c.x()}))));
+    const int y0 = std::max(0, static_cast<int>(std::floor(std::min({a.y(), b.y(), c.y()}))));
+    const int y1 = std::min(h - 1, static_cast<int>(std::ceil(std::max({a.y(), b.y(), c.y()}))));
+    for (int y = y0; y <= y1; ++y) {
+      for (int x = x0; x <= x1; ++x) {
+        const double wa = edge(b, c, x + 0.5, y + 0.5) / area,
+                     wb = edge(c, a, x + 0.5, y + 0.5) / area, wc = 1.0 - wa - wb;
+        if (wa < 0 || wb < 0 || wc < 0) continue;
+        const double z = wa * a.z() + wb * b.z() + wc * c.z();
+        double& zbuf = depth[static_cast<std::size_t>(y * w + x)];
+        if (z > zbuf) {
+          zbuf = z;
+          image.set(x, y, {grey, grey, grey});
+        }
+      }
+    }
+  }
+  return image;
+}
+
+TEST_F(Outputs, MeshIsDrawnAsTheStraightforwardWayDrawsIt) {
+  // Random triangles of every shape — slivers along rows and columns, edges through pixel
+  // centres, tiny ones and ones across the picture, both windings — over one another, in the
+  // box [0, w] × [-h, 0] that two markers fix: with renderScene's margin (5 % of 110 + 5 px on
+  // a 140 × 110 picture), one view unit is one pixel.
+  const int w = 119, h = 89;
+  std::mt19937 random(3);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const auto inside = [&](Eigen::Vector3d p) {
+    p.x() = std::clamp(p.x(), 0.0, double{w});
+    p.y() = std::clamp(p.y(), 0.0, double{h});
+    return p;
+  };
+  std::vector<Eigen::Vector3d> points;  // x right, y down, as on the screen
+  std::vector<Eigen::Vector3i> triangles;
+  for (int i = 0; i < 3000; ++i) {
+    const Eigen::Vector3d a(u(random) * w, u(random) * h, u(random));
+    const double size = std::pow(10.0, 2.5 * u(random) - 1.0);  // 0.1 .. 30 px
+    const double long_side = i % 3 == 0 ? 20 * size : size;
+    Eigen::Vector3d b = inside(a + Eigen::Vector3d((u(random) - 0.5) * long_side,
+                                                   (u(random) - 0.5) * size, u(random) - 0.5));
+    Eigen::Vector3d c = inside(a + Eigen::Vector3d((u(random) - 0.5) * size,
+                                                   (u(random) - 0.5) * long_side, u(random) - 0.5));
+    if (i % 5 == 0) {  // edges through pixel centres and along a row
+      b.x() = std::min(std::floor(b.x()) + 0.5, w - 0.5);
+      c.y() = std::min(std::floor(c.y()) + 0.5, h - 0.5);
+      b.y() = a.y();
+    }
+    const int k = static_cast<int>(points.size());
+    points.insert(points.end(), {a, b, c});
+    triangles.emplace_back(k, i % 2 ? k + 1 : k + 2, i % 2 ? k + 2 : k + 1);
+  }
+  cli::RenderRequest r;
+  r.width = 140;
+  r.height = 110;
+  for (const Eigen::Vector3d& p : points) r.vertices.emplace_back(p.x(), -p.y(), p.z());
+  r.triangles = triangles;
+  r.markers = {{Eigen::Vector3d(0, 0, 0), {0, 0, 0}}, {Eigen::Vector3d(w, -h, 0), {0, 0, 0}}};
+  const cli::RgbImage drawn = cli::renderScene(r);
+  // The screen positions as renderScene computes them (scale 1, centre (w/2, -h/2)).
+  std::vector<Eigen::Vector3d> screen;
+  for (const Eigen::Vector3d& p : r.vertices) {
+    screen.emplace_back(0.5 * r.width + (p.x() - 0.5 * w), 0.5 * r.height - (p.y() + 0.5 * h),
+                        p.z());
+  }
+  const cli::RgbImage plain = drawMeshPlainly(screen, triangles, r.width, r.height);
+  int differ = 0, drawn_pixels = 0;
+  for (int y = 0; y < r.height; ++y) {
+    for (int x = 0; x < r.width; ++x) {
+      const bool marker = (std::abs(x - 10) <= 5 && std::abs(y - 10) <= 5) ||
+                          (std::abs(x - 10 - w) <= 5 && std::abs(y - 10 - h) <= 5);
+      if (marker) continue;
+      differ += drawn.at(x, y) == plain.at(x, y) ? 0 : 1;
+      drawn_pixels += drawn.at(x, y) == cli::Rgb{255, 255, 255} ? 0 : 1;
+    }
+  }
+  EXPECT_EQ(differ, 0);
+  EXPECT_GT(drawn_pixels, w * h / 2);
+}
+
+TEST_F(Outputs, FilledAndUpscaledImagesHoldThePixelsSetOneByOne) {
+  for (const cli::Rgb fill : {cli::Rgb{255, 255, 255}, cli::Rgb{0, 114, 178}}) {
+    for (const auto& [w, h] : {std::pair{1, 1}, {7, 3}, {480, 2}, {0, 4}}) {
+      const cli::RgbImage image = cli::RgbImage::filled(w, h, fill);
+      ASSERT_EQ(image.rgb.size(), 3u * static_cast<std::size_t>(w * h));
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) ASSERT_EQ(image.at(x, y), fill) << x << " " << y;
+    }
+  }
+  cli::RgbImage image = cli::RgbImage::filled(5, 4);
+  for (int y = 0; y < image.height; ++y) {
+    for (int x = 0; x < image.width; ++x) {
+      image.set(x, y, {static_cast<std::uint8_t>(40 * x), static_cast<std::uint8_t>(60 * y), 7});
+    }
+  }
+  for (const auto& [fx, fy] : {std::pair{1, 1}, {3, 1}, {1, 2}, {4, 5}}) {
+    const cli::RgbImage big = cli::upscale(image, fx, fy);
+    ASSERT_EQ(big.width, image.width * fx);
+    ASSERT_EQ(big.height, image.height * fy);
+    for (int y = 0; y < big.height; ++y) {
+      for (int x = 0; x < big.width; ++x) {
+        ASSERT_EQ(big.at(x, y), image.at(x / fx, y / fy))
+            << fx << " " << fy << " " << x << " " << y;
+      }
+    }
+  }
 }
 
 TEST_F(Outputs, EveryPngSettingDecodesToTheSamePixels) {

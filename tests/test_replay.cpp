@@ -52,14 +52,18 @@ std::vector<float> floats(const std::string& b64) {
   return out;
 }
 
-// The scene data inside replay.html.
-Json replayData(const std::string& html) {
+// The text of the scene data inside replay.html.
+std::string replayDataText(const std::string& html) {
   const std::string open = "<script type=\"application/json\" id=\"scanplan-data\">";
   const auto from = html.find(open);
   const auto to = html.find("</script>", from);
   if (from == std::string::npos || to == std::string::npos) return {};
-  std::string text = html.substr(from + open.size(), to - from - open.size());
-  return Json::parse(text, nullptr, false);
+  return html.substr(from + open.size(), to - from - open.size());
+}
+
+// The scene data inside replay.html.
+Json replayData(const std::string& html) {
+  return Json::parse(replayDataText(html), nullptr, false);
 }
 
 class Replay : public Cli {
@@ -84,8 +88,12 @@ class Replay : public Cli {
 
 TEST_F(Replay, ItsPosesAreTheTrajectorysThroughTheRobotsOwnKinematics) {
   ASSERT_TRUE(plan());
-  const Json data = replayData(readFile(dir_ / "out/replay.html"));
+  const std::string html = readFile(dir_ / "out/replay.html");
+  const Json data = replayData(html);
   ASSERT_TRUE(data.is_object());
+  // Written member by member: the text is the one compact line nlohmann::json writes for it.
+  const std::string text = replayDataText(html);
+  EXPECT_TRUE(nlohmann::ordered_json::parse(text).dump() + "\n" == text);
   const cli::JobSpec job = cli::loadJob(sourceDir() / "data/jobs/demo_rings.yaml", kLightDemo);
   const kinematics::CellModel cell = cli::buildCell(job);
   const kinematics::Trajectory tr =

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <random>
 #include <string>
@@ -73,6 +74,37 @@ TEST(TrajectoryCsv, RoundTripsToThePrintedPrecision) {
   }
   // Written again, the text is identical (the format is a fixed point).
   EXPECT_EQ(kinematics::trajectoryToCsv(b), csv);
+}
+
+TEST(TrajectoryCsv, EveryNumberIsPrintfsTwelveSignificantDigits) {
+  // The file's numbers as they were written with snprintf("%.12g") (written faster now): values
+  // of every magnitude, ties, zeros of both signs, NaN.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> mantissa(-1.0, 1.0);
+  std::uniform_int_distribution<int> exponent(-30, 30);
+  std::vector<double> values = {0.0, -0.0, 0.5, 1e-5, 123456789012.5, 1e12, 0.1, 2.5e-300};
+  for (int i = 0; i < 20000; ++i) values.push_back(std::ldexp(mantissa(rng), exponent(rng)));
+  Trajectory tr;
+  for (std::size_t k = 0; k < values.size(); ++k) {
+    TrajectorySample s;
+    s.t = static_cast<double>(k);
+    s.f = values[k];
+    tr.samples.push_back(s);
+  }
+  tr.samples[1].f = std::nan("");
+  const std::string csv = kinematics::trajectoryToCsv(tr);
+  std::size_t at = csv.find('\n') + 1;
+  for (const TrajectorySample& s : tr.samples) {
+    const std::size_t end = csv.find('\n', at);
+    const std::string row = csv.substr(at, end - at);
+    at = end + 1;
+    std::size_t from = 0;
+    for (int column = 0; column < 8; ++column) from = row.find(',', from) + 1;  // to f
+    const std::string f = row.substr(from, row.find(',', from) - from);
+    char want[40];
+    std::snprintf(want, sizeof want, "%.12g", s.f == 0.0 ? 0.0 : s.f);
+    ASSERT_EQ(f, std::isnan(s.f) ? std::string("nan") : std::string(want)) << s.t;
+  }
 }
 
 TEST(TrajectoryCsv, HandWrittenFileWithoutLimitColumnAndUnknownF) {

@@ -160,7 +160,7 @@ void writePathOutputs(const std::filesystem::path& dir,
                       const WriteSettings& settings) {
   writeFileAtomically(dir / "path.csv", scanner::pathToCsv(path));
   writePng(dir / "path.png", pathPicture(part, path, TableTop{cell.table.radius, cell.part.X_RP}),
-           settings.png);
+           settings.views);
 }
 
 const char* const kMapFilesNote =

@@ -149,7 +149,7 @@ std::string writeReplay(const std::filesystem::path& out,
                         const pipeline::ScanPlan& plan,
                         const WriteSettings& settings) {
   const pipeline::ReplayScene scene = pipeline::replayScene(problem.cell, problem.part, plan);
-  writePng(out / "cell.png", cellFigure(scene, job.name), settings.png);
+  writePng(out / "cell.png", cellFigure(scene, job.name), settings.views);
   const std::optional<std::string> html = replayHtml(scene, job.name);
   if (!html) {
     return "replay     cell.png; replay.html not written: three.js is not installed "

@@ -1,9 +1,10 @@
 #include "cli/io/replay_html.h"
 
+#include <algorithm>
 #include <array>
 #include <cstdlib>
 #include <fstream>
-#include <sstream>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -16,56 +17,109 @@ namespace scanplan::cli {
 
 namespace {
 
+// The whole file as it is on disk (empty when it cannot be read).
 std::string readText(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
+  std::ifstream in(file, std::ios::binary | std::ios::ate);
+  if (!in) return {};
+  std::string text(static_cast<std::size_t>(std::max<std::streamoff>(in.tellg(), 0)), '\0');
+  in.seekg(0);
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<std::size_t>(std::max<std::streamsize>(in.gcount(), 0)));
+  return text;
 }
 
-std::string base64(const void* data, std::size_t size) {
-  static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+// Appends `size` bytes at `data` in base64 (RFC 4648, padded) to `out`, in one pass.
+void appendBase64(std::string& out, const void* data, std::size_t size) {
+  static constexpr char kAlphabet[] =
+      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
   const auto* p = static_cast<const unsigned char*>(data);
-  std::string out;
-  out.reserve((size + 2) / 3 * 4);
-  for (std::size_t i = 0; i < size; i += 3) {
-    const auto byte = [&](std::size_t k) { return k < size ? static_cast<unsigned>(p[k]) : 0u; };
-    const unsigned v = (byte(i) << 16u) | (byte(i + 1) << 8u) | byte(i + 2);
-    out += kAlphabet[(v >> 18u) & 63u];
-    out += kAlphabet[(v >> 12u) & 63u];
-    out += i + 1 < size ? kAlphabet[(v >> 6u) & 63u] : '=';
-    out += i + 2 < size ? kAlphabet[v & 63u] : '=';
+  std::size_t at = out.size();
+  out.resize(at + (size + 2) / 3 * 4);
+  char* o = out.data() + at;
+  std::size_t i = 0;
+  for (; i + 2 < size; i += 3, o += 4) {
+    const unsigned v = (unsigned{p[i]} << 16u) | (unsigned{p[i + 1]} << 8u) | p[i + 2];
+    o[0] = kAlphabet[(v >> 18u) & 63u];
+    o[1] = kAlphabet[(v >> 12u) & 63u];
+    o[2] = kAlphabet[(v >> 6u) & 63u];
+    o[3] = kAlphabet[v & 63u];
   }
-  return out;
+  if (i < size) {  // one or two bytes left
+    const unsigned v = (unsigned{p[i]} << 16u) | (i + 1 < size ? unsigned{p[i + 1]} << 8u : 0u);
+    o[0] = kAlphabet[(v >> 18u) & 63u];
+    o[1] = kAlphabet[(v >> 12u) & 63u];
+    o[2] = i + 1 < size ? kAlphabet[(v >> 6u) & 63u] : '=';
+    o[3] = '=';
+  }
 }
 
-template <class T>
-std::string base64(const std::vector<T>& v) {
-  return base64(v.data(), v.size() * sizeof(T));
+// Text inside <script>: no "</" (a "</script>" would end the element).
+std::string scriptSafe(std::string text) {
+  for (std::size_t at = text.find("</"); at != std::string::npos; at = text.find("</", at + 3)) {
+    text.replace(at, 2, "<\\/");
+  }
+  return text;
 }
 
-Json bodyJson(const pipeline::ReplayBody& b) {
+// A JSON object written member by member onto `out`, compact as jsonLine has it: small values
+// through nlohmann::json, binary arrays as base64 strings appended in place (the bulk of the
+// scene: no copy through a JSON value and its escaping). Safe inside <script>.
+class ObjectWriter {
+ public:
+  explicit ObjectWriter(std::string& out) : out_(out) { out_ += '{'; }
+  ~ObjectWriter() { out_ += '}'; }
+  ObjectWriter(const ObjectWriter&) = delete;
+  ObjectWriter& operator=(const ObjectWriter&) = delete;
+
+  void value(const char* key, const Json& value) {
+    this->key(key);
+    out_ += scriptSafe(value.dump(-1, ' ', false, Json::error_handler_t::replace));
+  }
+  template <class T>
+  void base64(const char* key, const std::vector<T>& v) {
+    this->key(key);
+    out_ += '"';
+    appendBase64(out_, v.data(), v.size() * sizeof(T));
+    out_ += '"';
+  }
+  // The key of a member whose value the caller writes next.
+  void key(const char* key) {
+    if (!first_) out_ += ',';
+    first_ = false;
+    out_ += Json(key).dump();
+    out_ += ':';
+  }
+
+ private:
+  std::string& out_;
+  bool first_ = true;
+};
+
+void appendBody(std::string& out, const pipeline::ReplayBody& b) {
   std::vector<float> vertices;
+  vertices.reserve(3 * b.mesh.vertices.size());
   for (const Eigen::Vector3d& v : b.mesh.vertices) {
     for (int a = 0; a < 3; ++a) vertices.push_back(static_cast<float>(v[a]));
   }
   std::vector<std::uint32_t> triangles;
+  triangles.reserve(3 * b.mesh.triangles.size());
   for (const Eigen::Vector3i& t : b.mesh.triangles) {
     for (int a = 0; a < 3; ++a) triangles.push_back(static_cast<std::uint32_t>(t[a]));
   }
-  Json j = {{"name", b.name},
-            {"frame", b.frame},
-            {"vertices", base64(vertices)},
-            {"triangles", base64(triangles)}};
+  ObjectWriter j(out);
+  j.value("name", b.name);
+  j.value("frame", b.frame);
+  j.base64("vertices", vertices);
+  j.base64("triangles", triangles);
   if (!b.colours.empty()) {
     std::vector<std::uint8_t> c;
+    c.reserve(3 * b.colours.size());
     for (const auto& rgb : b.colours) c.insert(c.end(), rgb.begin(), rgb.end());
-    j["colours"] = base64(c);
+    j.base64("colours", c);
   }
-  return j;
 }
 
-Json framesJson(const pipeline::ReplayScene& s) {
+void appendFrames(std::string& out, const pipeline::ReplayScene& s) {
   std::vector<float> t, poses;
   std::vector<std::uint8_t> scanning;
   for (const pipeline::ReplayFrame& f : s.frames) {
@@ -79,7 +133,10 @@ Json framesJson(const pipeline::ReplayScene& s) {
       }
     }
   }
-  return {{"t", base64(t)}, {"poses", base64(poses)}, {"scanning", base64(scanning)}};
+  ObjectWriter j(out);
+  j.base64("t", t);
+  j.base64("poses", poses);
+  j.base64("scanning", scanning);
 }
 
 // The bodies' bounds at the first frame (world frame).
@@ -94,19 +151,15 @@ Eigen::AlignedBox3d bounds(const pipeline::ReplayScene& s) {
   return box;
 }
 
-Json sceneJson(const pipeline::ReplayScene& s, const std::string& title) {
-  Json bodies = Json::array();
-  for (const pipeline::ReplayBody& b : s.bodies) bodies.push_back(bodyJson(b));
-  std::vector<float> fan, cloud, uncovered;
-  for (const Eigen::Vector3d& p : s.fan)
-    fan.insert(fan.end(), {float(p.x()), float(p.y()), float(p.z())});
-  for (const Eigen::Vector3f& p : s.cloud) cloud.insert(cloud.end(), {p.x(), p.y(), p.z()});
-  for (const Eigen::Vector3f& p : s.uncovered)
-    uncovered.insert(uncovered.end(), {p.x(), p.y(), p.z()});
-  Json closest = Json::array();
-  for (const auto& c : s.closest) {
-    closest.push_back({{"a", c.a}, {"b", c.b}, {"t", c.t}, {"distance", c.distance}});
-  }
+std::vector<float> flat(const std::vector<Eigen::Vector3f>& points) {
+  std::vector<float> out;
+  out.reserve(3 * points.size());
+  for (const Eigen::Vector3f& p : points) out.insert(out.end(), {p.x(), p.y(), p.z()});
+  return out;
+}
+
+// The certificate's classes: name and colour, in CoverageClass order.
+Json coverageClasses() {
   const std::array<const char*, pipeline::kCoverageClasses> colours = {
       "#1f5fbf", "#e6194b", "#911eb4", "#f58231", "#1cb5c9", "#222222"};
   Json classes = Json::array();
@@ -115,29 +168,51 @@ Json sceneJson(const pipeline::ReplayScene& s, const std::string& title) {
         {{"name", pipeline::coverageClassName(static_cast<pipeline::CoverageClass>(c))},
          {"colour", colours[c]}});
   }
+  return classes;
+}
+
+// The scene as one line of JSON (binary arrays in base64), appended to `out`.
+void appendScene(std::string& out,
+                 const pipeline::ReplayScene& s,
+                 const std::string& title,
+                 const Json& classes) {
+  std::vector<float> fan;
+  for (const Eigen::Vector3d& p : s.fan)
+    fan.insert(fan.end(), {float(p.x()), float(p.y()), float(p.z())});
+  Json closest = Json::array();
+  for (const auto& c : s.closest) {
+    closest.push_back({{"a", c.a}, {"b", c.b}, {"t", c.t}, {"distance", c.distance}});
+  }
   const Eigen::AlignedBox3d box = bounds(s);
   const Eigen::Vector3d look_at = box.center();
   const Eigen::Vector3d eye =
       look_at + 0.42 * box.diagonal().norm() * Eigen::Vector3d(1.2, -1.9, 1.0);
   std::vector<double> X_RP(s.X_RP.matrix().data(), s.X_RP.matrix().data() + 16);
-  Json j = {{"title", title},
-            {"bodies", bodies},
-            {"X_RP", X_RP},
-            {"frames", framesJson(s)},
-            {"fan", base64(fan)},
-            {"cloud", base64(cloud)},
-            {"cloud_t", base64(s.cloud_t)},
-            {"cloud_total", s.cloud_total},
-            {"classes", classes},
-            {"closest", closest},
-            {"look_at", {look_at.x(), look_at.y(), look_at.z()}},
-            {"eye", {eye.x(), eye.y(), eye.z()}},
-            {"floor", box.min().z()}};
-  if (!s.uncovered.empty()) {
-    j["uncovered"] = base64(uncovered);
-    j["uncovered_class"] = base64(s.uncovered_class);
+  ObjectWriter j(out);
+  j.value("title", title);
+  j.key("bodies");
+  out += '[';
+  for (const pipeline::ReplayBody& b : s.bodies) {
+    if (&b != &s.bodies.front()) out += ',';
+    appendBody(out, b);
   }
-  return j;
+  out += ']';
+  j.value("X_RP", X_RP);
+  j.key("frames");
+  appendFrames(out, s);
+  j.base64("fan", fan);
+  j.base64("cloud", flat(s.cloud));
+  j.base64("cloud_t", s.cloud_t);
+  j.value("cloud_total", s.cloud_total);
+  j.value("classes", classes);
+  j.value("closest", closest);
+  j.value("look_at", {look_at.x(), look_at.y(), look_at.z()});
+  j.value("eye", {eye.x(), eye.y(), eye.z()});
+  j.value("floor", box.min().z());
+  if (!s.uncovered.empty()) {
+    j.base64("uncovered", flat(s.uncovered));
+    j.base64("uncovered_class", s.uncovered_class);
+  }
 }
 
 // OrbitControls.js is an ES module importing from 'three': the same code reading THREE.
@@ -163,14 +238,6 @@ std::string htmlText(const std::string& text) {
   return out;
 }
 
-// Text inside <script>: no "</" (a "</script>" would end the element).
-std::string scriptSafe(std::string text) {
-  for (std::size_t at = text.find("</"); at != std::string::npos; at = text.find("</", at + 3)) {
-    text.replace(at, 2, "<\\/");
-  }
-  return text;
-}
-
 const char* kStyle = R"(
   html, body { margin: 0; height: 100%; font: 14px/1.4 "DejaVu Sans", Arial, sans-serif; }
   #view { position: absolute; inset: 0 0 64px 0; }
@@ -184,19 +251,18 @@ const char* kStyle = R"(
   #note { color: #b00; font-weight: bold; }
 )";
 
-std::string legend(const Json& data) {
-  std::string s =
-      "<div id=\"legend\"><b>" + htmlText(data["title"].get<std::string>()) + "</b><br>";
+std::string legend(const std::string& title, const Json& classes, bool uncovered) {
+  std::string s = "<div id=\"legend\"><b>" + htmlText(title) + "</b><br>";
   s +=
       "<i style=\"background:linear-gradient(90deg,#440154,#21918c,#fde725)\"></i>part: points/mm² "
       "(covered triangles)<br><i style=\"background:#dc4628\"></i>part: not covered<br>";
   s += "<i style=\"background:#1f5fbf\"></i>cloud, growing with time<br>";
   s += "<i style=\"background:#ff2020\"></i>laser fan (while scanning)<br>";
-  if (data.contains("uncovered")) {
+  if (uncovered) {
     s += "certificate, uncovered samples:<br>";
-    for (std::size_t c = 1; c < data["classes"].size(); ++c) {
-      s += "<i style=\"background:" + data["classes"][c]["colour"].get<std::string>() + "\"></i>" +
-           data["classes"][c]["name"].get<std::string>() + "<br>";
+    for (std::size_t c = 1; c < classes.size(); ++c) {
+      s += "<i style=\"background:" + classes[c]["colour"].get<std::string>() + "\"></i>" +
+           classes[c]["name"].get<std::string>() + "<br>";
     }
   }
   return s + "drag: turn · wheel: zoom · right-drag: pan</div>\n";
@@ -225,29 +291,42 @@ std::optional<std::string> replayHtml(const pipeline::ReplayScene& scene,
   if (!dir || scene.frames.empty()) return std::nullopt;
   const std::string controls = orbitControls(readText(*dir / "OrbitControls.js"));
   if (controls.empty()) return std::nullopt;
-  const Json data = sceneJson(scene, title);
+  const Json classes = coverageClasses();
   std::string licence = readText(*dir / "LICENSE");
   for (std::size_t at = licence.find("*/"); at != std::string::npos; at = licence.find("*/")) {
     licence.replace(at, 2, "* /");
   }
-  std::string html = "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n";
-  html += "<title>scanplan replay: " + htmlText(title) + "</title>\n<style>" + std::string(kStyle) +
-          "</style>\n</head>\n<body>\n<div id=\"view\"></div>\n" + legend(data);
+  const std::string three = scriptSafe(readText(*dir / "three.cjs"));
+  // One string, sized once: three.js, the scene's base64 arrays (4 characters per 3 bytes) and
+  // the viewer are nearly all of it.
+  std::string html;
+  html.reserve(three.size() + controls.size() + licence.size() +
+               std::string_view(kReplayViewerJs).size() +
+               4 * (sizeof(Eigen::Vector3f) + sizeof(float)) * scene.cloud.size() / 3 +
+               (std::size_t{1} << 20));
+  html += "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n";
+  html += "<title>scanplan replay: " + htmlText(title) + "</title>\n<style>";
+  html += kStyle;
+  html += "</style>\n</head>\n<body>\n<div id=\"view\"></div>\n";
+  html += legend(title, classes, !scene.uncovered.empty());
   html +=
       "<div id=\"bar\"><button id=\"play\">▶ Play</button> <input id=\"time\" type=\"range\" "
       "min=\"0\" max=\"0\" value=\"0\" step=\"1\"> speed <select id=\"speed\"><option "
       "value=\"1\">1×</option><option value=\"10\" selected>10×</option><option "
       "value=\"50\">50×</option></select> <button id=\"closest\">closest approach</button><br>"
       "<span id=\"label\"></span> <span id=\"note\"></span></div>\n";
-  html += "<script>\n/* three.js, from its npm package (three/build/three.cjs). Its licence:\n" +
-          licence +
-          "*/\n(function () {\nvar module = { exports: {} }, exports = module.exports;\n" +
-          scriptSafe(readText(*dir / "three.cjs")) +
-          "\nwindow.THREE = module.exports;\n})();\n</script>\n";
-  html += "<script>\n/* three.js OrbitControls (three/examples/jsm/controls), same licence */\n" +
-          scriptSafe(controls) + "</script>\n";
-  html += "<script type=\"application/json\" id=\"scanplan-data\">" + scriptSafe(jsonLine(data)) +
-          "</script>\n<script>\n" + scriptSafe(kReplayViewerJs) + "</script>\n</body>\n</html>\n";
+  html += "<script>\n/* three.js, from its npm package (three/build/three.cjs). Its licence:\n";
+  html += licence;
+  html += "*/\n(function () {\nvar module = { exports: {} }, exports = module.exports;\n";
+  html += three;
+  html += "\nwindow.THREE = module.exports;\n})();\n</script>\n";
+  html += "<script>\n/* three.js OrbitControls (three/examples/jsm/controls), same licence */\n";
+  html += scriptSafe(controls);
+  html += "</script>\n<script type=\"application/json\" id=\"scanplan-data\">";
+  appendScene(html, scene, title, classes);
+  html += "\n</script>\n<script>\n";
+  html += scriptSafe(kReplayViewerJs);
+  html += "</script>\n</body>\n</html>\n";
   return html;
 }
 

@@ -43,18 +43,19 @@ RenderRequest cloudPoints(const kinematics::TriangleMesh& part,
   RenderRequest points;
   // Fit both rows to the part's box: invisible corner markers would show, so use the part.
   points.vertices = part.vertices;
-  points.dots.reserve(cloud.size());
-  points.dot_colours.reserve(cloud.size());
+  points.dots.resize(cloud.size());
+  points.dot_colours.resize(cloud.size());
   // The points of a profile share its time: one colour each (the same as computed per point).
   double last_t = std::numeric_limits<double>::quiet_NaN();
   Rgb colour;
-  for (const auto& p : cloud) {
-    points.dots.push_back(p.p_P);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const scanner::CloudPoint& p = cloud[i];
+    points.dots[i] = p.p_P;
     if (!(p.t == last_t)) {
       last_t = p.t;
       colour = toRgb(scanner::densityColour(t_end > 0.0 ? p.t / t_end : 0.0, 1.0, true));
     }
-    points.dot_colours.push_back(colour);
+    points.dot_colours[i] = colour;
   }
   return points;
 }
@@ -152,7 +153,7 @@ void writeSimulationOutputs(const std::filesystem::path& dir,
                       ? fmt::format("not covered (fewer than {} points on the triangle)",
                                     coverage_settings.min_points)
                       : std::string("not covered (no point on the triangle)")}};
-  writePng(dir / "cloud.png", drawViewGrid(grid), settings.png);
+  writePng(dir / "cloud.png", drawViewGrid(grid), settings.views);
 
   if (run.profile_images.empty()) return;
   std::filesystem::create_directories(dir / "profiles");
@@ -242,7 +243,7 @@ void writeCertificateOutputs(const std::filesystem::path& dir,
           {kClassColours[c], share, fmt::format("{} {:.0f}%", kClassLabels[c], 100.0 * share)});
     }
   }
-  writePng(dir / "certificate.png", drawViewGrid(grid), settings.png);
+  writePng(dir / "certificate.png", drawViewGrid(grid), settings.views);
 }
 
 }  // namespace scanplan::cli

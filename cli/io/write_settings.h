@@ -17,6 +17,10 @@ struct PngSettings {
 
 struct WriteSettings {
   PngSettings png;
+  /// The 3D pictures (path.png, cloud.png, certificate.png, cell.png: views on a white ground):
+  /// level 2 without a row filter, ~15 % faster to encode than with the Up filter and 2–5 %
+  /// smaller on them (the maps, row after row alike, keep `png`).
+  PngSettings views{2, 0x08};  // PNG_FILTER_NONE
   /// SVG figures embed their raster as a PNG encoded with `png` (cairo's own encoder otherwise:
   /// level 6, every filter).
   bool svg_raster_png = true;
@@ -32,6 +36,7 @@ struct WriteSettings {
   static constexpr WriteSettings reference() {
     WriteSettings s;
     s.png = {6, 0xf8};  // PNG_ALL_FILTERS
+    s.views = s.png;
     s.svg_raster_png = false;
     s.stream_binary = false;
     s.shared_views = false;

@@ -171,11 +171,20 @@ RgbImage RgbImage::filled(int w, int h, Rgb fill_colour) {
   RgbImage image;
   image.width = w;
   image.height = h;
-  image.rgb.resize(3 * pixelCount(std::max(w, 0), std::max(h, 0)));
-  for (std::size_t i = 0; i < image.rgb.size(); i += 3) {
-    image.rgb[i] = fill_colour.r;
-    image.rgb[i + 1] = fill_colour.g;
-    image.rgb[i + 2] = fill_colour.b;
+  const std::size_t size = 3 * pixelCount(std::max(w, 0), std::max(h, 0));
+  if (fill_colour.r == fill_colour.g && fill_colour.g == fill_colour.b) {
+    image.rgb.assign(size, fill_colour.r);  // a grey: one byte repeated (a memset)
+    return image;
+  }
+  image.rgb.resize(size);
+  // One pixel, then the filled part copied onto the rest, doubling each time.
+  std::size_t filled = std::min<std::size_t>(3, size);
+  const std::array<std::uint8_t, 3> pixel{fill_colour.r, fill_colour.g, fill_colour.b};
+  std::copy_n(pixel.begin(), filled, image.rgb.begin());
+  while (filled < size) {
+    const std::size_t n = std::min(filled, size - filled);
+    std::copy_n(image.rgb.begin(), n, image.rgb.begin() + static_cast<std::ptrdiff_t>(filled));
+    filled += n;
   }
   return image;
 }
@@ -194,6 +203,7 @@ Rgb RgbImage::at(int x, int y) const {
 
 static_assert(PngSettings{}.filters == PNG_FILTER_UP);
 static_assert(WriteSettings::reference().png.filters == PNG_ALL_FILTERS);
+static_assert(WriteSettings{}.views.filters == PNG_FILTER_NONE);
 
 std::string encodePng(const RgbImage& image, const PngSettings& settings) {
   checkImage(image);
@@ -287,9 +297,21 @@ RgbImage upscale(const RgbImage& image, int factor_x, int factor_y) {
     throw InputError(fmt::format("image {} × {} enlarged {} × {}: expected at most 2^28 pixels",
                                  image.width, image.height, factor_x, factor_y));
   }
-  RgbImage out = RgbImage::filled(image.width * factor_x, image.height * factor_y);
-  for (int y = 0; y < out.height; ++y)
-    for (int x = 0; x < out.width; ++x) out.set(x, y, image.at(x / factor_x, y / factor_y));
+  RgbImage out;
+  out.width = image.width * factor_x;
+  out.height = image.height * factor_y;
+  out.rgb.resize(3 * pixelCount(out.width, out.height));
+  const std::size_t row_bytes = 3 * static_cast<std::size_t>(out.width);
+  auto to = out.rgb.begin();
+  for (int y = 0; y < image.height; ++y) {
+    // The row widened once, then copied factor_y - 1 times below itself.
+    const auto row = to;
+    auto from = image.rgb.begin() + static_cast<std::ptrdiff_t>(3 * pixelIndex(image.width, 0, y));
+    for (int x = 0; x < image.width; ++x, from += 3) {
+      for (int k = 0; k < factor_x; ++k) to = std::copy_n(from, 3, to);
+    }
+    for (int k = 1; k < factor_y; ++k) to = std::copy_n(row, row_bytes, to);
+  }
   return out;
 }
 
@@ -382,7 +404,48 @@ Rgb triangleFill(const RenderRequest& request, std::size_t ti, double shade) {
              : Rgb{toByte(235.0 * shade), toByte(235.0 * shade), toByte(235.0 * shade)};
 }
 
-// Mesh: edge functions at pixel centres, z-buffer keeps the largest depth (nearest).
+// One edge p → q of a triangle on screen, to narrow each line of pixels across its bounding box
+// (a row, or a column for a tall triangle) to those that may lie inside: where the edge function
+// has the sign of the triangle's area. The exact test at each pixel decides; the margin is far
+// above the rounding of the crossing (~1e-10 px at these sizes), and an edge (nearly) along the
+// lines narrows nothing.
+class LineEdge {
+ public:
+  // `columns`: the lines are columns (x fixed, y varies), else rows.
+  LineEdge(const Eigen::Vector3d& p, const Eigen::Vector3d& q, bool positive, bool columns) {
+    const double po = columns ? p.x() : p.y(), pi = columns ? p.y() : p.x();
+    const double qo = columns ? q.x() : q.y(), qi = columns ? q.y() : q.x();
+    const double d = qo - po;
+    if (!(std::abs(d) >= 1e-2)) return;
+    o0_ = po;
+    i0_ = pi;
+    slope_ = (qi - pi) / d;
+    // edgeFunction(p, q, x, y) = (q.x - p.x)(y - p.y) - (q.y - p.y)(x - p.x) grows along a row
+    // where q.y < p.y, along a column where q.x > p.x.
+    const bool grows = columns ? d > 0 : d < 0;
+    side_ = grows == positive ? 1 : -1;
+  }
+  // [lo, hi] narrowed to the pixels whose centres may be inside on the line whose centre is at
+  // `o` (y of a row, x of a column).
+  void narrow(double o, int& lo, int& hi) const {
+    if (side_ == 0) return;
+    const double at = std::clamp(i0_ + (o - o0_) * slope_ - 0.5, lo - 2.0, hi + 2.0);
+    if (side_ > 0) {
+      lo = std::max(lo, static_cast<int>(std::ceil(at - kMargin)));
+    } else {
+      hi = std::min(hi, static_cast<int>(std::floor(at + kMargin)));
+    }
+  }
+
+ private:
+  static constexpr double kMargin = 1e-4;  // px
+  double o0_ = 0, i0_ = 0, slope_ = 0;
+  int side_ = 0;  // +1: inside beyond the crossing, −1: before it, 0: no narrowing
+};
+
+// Mesh: edge functions at pixel centres, z-buffer keeps the largest depth (nearest). A triangle's
+// pixels are visited row by row, or column by column when it is taller than wide (the mesh's
+// slivers): each pixel once either way, so the picture is the same.
 void drawMesh(const RenderRequest& request,
               const std::vector<Eigen::Vector3d>& mesh,
               double scale,
@@ -407,19 +470,28 @@ void drawMesh(const RenderRequest& request,
     const int x1 = std::min(w - 1, static_cast<int>(std::ceil(std::max({a.x(), b.x(), c.x()}))));
     const int y0 = std::max(0, static_cast<int>(std::floor(std::min({a.y(), b.y(), c.y()}))));
     const int y1 = std::min(h - 1, static_cast<int>(std::ceil(std::max({a.y(), b.y(), c.y()}))));
-    for (int y = y0; y <= y1; ++y) {
-      for (int x = x0; x <= x1; ++x) {
-        const double sx = x + 0.5, sy = y + 0.5;
-        const double wa = edgeFunction(b, c, sx, sy) / area, wb = edgeFunction(c, a, sx, sy) / area;
-        const double wc = 1.0 - wa - wb;
-        if (wa < 0 || wb < 0 || wc < 0) continue;
-        const double z = wa * a.z() + wb * b.z() + wc * c.z();
-        double& zbuf = depth[pixelIndex(w, x, y)];
-        if (z > zbuf) {
-          zbuf = z;
-          image.set(x, y, fill);
-        }
+    const auto pixel = [&](int x, int y) {
+      const double sx = x + 0.5, sy = y + 0.5;
+      const double wa = edgeFunction(b, c, sx, sy) / area, wb = edgeFunction(c, a, sx, sy) / area;
+      const double wc = 1.0 - wa - wb;
+      if (wa < 0 || wb < 0 || wc < 0) return;
+      const double z = wa * a.z() + wb * b.z() + wc * c.z();
+      double& zbuf = depth[pixelIndex(w, x, y)];
+      if (z > zbuf) {
+        zbuf = z;
+        image.set(x, y, fill);
       }
+    };
+    const bool columns = x1 - x0<y1 - y0, positive = area> 0;
+    const LineEdge ea(b, c, positive, columns), eb(c, a, positive, columns),
+        ec(a, b, positive, columns);
+    const int o0 = columns ? x0 : y0, o1 = columns ? x1 : y1;
+    for (int o = o0; o <= o1; ++o) {
+      int lo = columns ? y0 : x0, hi = columns ? y1 : x1;
+      ea.narrow(o + 0.5, lo, hi);
+      eb.narrow(o + 0.5, lo, hi);
+      ec.narrow(o + 0.5, lo, hi);
+      for (int i = lo; i <= hi; ++i) columns ? pixel(o, i) : pixel(i, o);
     }
   }
 }
@@ -434,34 +506,79 @@ struct View {
   RgbImage image;
 };
 
+// A view's rotation as plain rows: q_i = (R_i0 p_0 + R_i1 p_1) + R_i2 p_2, the sums in the order
+// Eigen's 3 × 3 product makes them (the same bits), with nothing else loaded per dot.
+struct Rows {
+  double r[9];
+  explicit Rows(const Eigen::Matrix3d& R) {
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 3; ++k) r[3 * i + k] = R(i, k);
+  }
+  double row(int i, const Eigen::Vector3d& p) const {
+    return r[3 * i] * p.x() + r[3 * i + 1] * p.y() + r[3 * i + 2] * p.z();
+  }
+};
+
 // The dots in every view's box: one pass over them for all views (they are read from memory
 // once, not once a view).
 void extendByDots(const std::vector<Eigen::Vector3d>& dots, std::vector<View>& views) {
+  struct Extent {
+    Rows R;
+    Eigen::Vector3d lo, hi;
+  };
+  std::vector<Extent> extents;
+  for (const View& v : views)
+    extents.push_back({Rows(v.R_view), v.scene.box.min(), v.scene.box.max()});
   for (const Eigen::Vector3d& p : dots) {
-    for (View& v : views) {
-      const Eigen::Vector3d q = v.R_view * p;
-      if (q.allFinite()) v.scene.box.extend(q);
+    for (Extent& e : extents) {
+      const Eigen::Vector3d q(e.R.row(0, p), e.R.row(1, p), e.R.row(2, p));
+      if (!q.allFinite()) continue;
+      e.lo = e.lo.cwiseMin(q);
+      e.hi = e.hi.cwiseMax(q);
     }
+  }
+  for (std::size_t k = 0; k < views.size(); ++k) {
+    views[k].scene.box = Eigen::AlignedBox3d(extents[k].lo, extents[k].hi);
   }
 }
 
+// One view's dot drawing: its rotation, its fit to the screen, its buffers.
+struct DotView {
+  Rows R;
+  double cx, cy, scale, half_w, half_h, tolerance;
+  int w, h;
+  double* depth;
+  std::uint8_t* rgb;
+};
+
 // Dots: 1 px, the nearest wins; a mesh surface in front (closer than the view's tolerance) hides
-// them. All views in one pass over the dots.
+// them. All views in one pass over the dots. The pixel is the floor of the screen position
+// (ScreenFit::toScreen, the same arithmetic), taken as a truncation once it is known to be in
+// [0, w) × [0, h).
 void drawDots(const RenderRequest& request, std::vector<View>& views) {
+  std::vector<DotView> shown;
+  for (View& v : views) {
+    if (!v.fit) continue;
+    const ScreenFit& f = *v.fit;
+    shown.push_back({Rows(v.R_view), f.centre.x(), f.centre.y(), f.scale, 0.5 * f.w, 0.5 * f.h,
+                     v.tolerance, v.image.width, v.image.height, v.depth.data(),
+                     v.image.rgb.data()});
+  }
   const std::vector<Eigen::Vector3d>& dots = request.dots;
   for (std::size_t i = 0; i < dots.size(); ++i) {
     const Rgb colour = i < request.dot_colours.size() ? request.dot_colours[i] : Rgb{};
-    for (View& v : views) {
-      if (!v.fit) continue;
-      const Eigen::Vector3d p = v.fit->toScreen(v.R_view * dots[i]);
-      if (!p.allFinite()) continue;
-      const int w = v.image.width, h = v.image.height;
-      const int x = static_cast<int>(std::floor(p.x())), y = static_cast<int>(std::floor(p.y()));
-      if (x < 0 || y < 0 || x >= w || y >= h) continue;
-      double& zbuf = v.depth[pixelIndex(w, x, y)];
-      if (p.z() + v.tolerance < zbuf) continue;
-      zbuf = std::max(zbuf, p.z());
-      v.image.set(x, y, colour);
+    for (const DotView& v : shown) {
+      const double sx = v.half_w + (v.R.row(0, dots[i]) - v.cx) * v.scale;
+      const double sy = v.half_h - (v.R.row(1, dots[i]) - v.cy) * v.scale;
+      const double z = v.R.row(2, dots[i]);
+      if (!(sx >= 0 && sx < v.w && sy >= 0 && sy < v.h) || !std::isfinite(z)) continue;
+      const std::size_t at = pixelIndex(v.w, static_cast<int>(sx), static_cast<int>(sy));
+      double& zbuf = v.depth[at];
+      if (z + v.tolerance < zbuf) continue;
+      zbuf = std::max(zbuf, z);
+      v.rgb[3 * at] = colour.r;
+      v.rgb[3 * at + 1] = colour.g;
+      v.rgb[3 * at + 2] = colour.b;
     }
   }
 }
