@@ -109,7 +109,8 @@ int wholeTurnJoint(const kinematics::JointVector& prev, const kinematics::JointV
 // there, the joint unwinds over the stretch of non-scanning samples before k instead (a move
 // between passes): it turns by that whole turn evenly over the stretch, the flange rolling about
 // the joint's axis off the planned pose. Only when the stretch is long enough at 80% of the
-// joint's speed limit. False: no such stretch (the track stays broken).
+// joint's speed limit, and every unwound sample within the joint's limits. False: no such
+// stretch (the track stays broken).
 bool unwindBefore(const kinematics::RobotModel& robot,
                   const kinematics::ScanPath& path,
                   std::size_t k,
@@ -125,8 +126,15 @@ bool unwindBefore(const kinematics::RobotModel& robot,
       std::round((next(j) - q.back()(j)) / (2.0 * std::numbers::pi)) * 2.0 * std::numbers::pi;
   const double speed = robot.joint(j).max_speed;
   if (!(span > 0.0) || (speed > 0.0 && std::abs(turn) / span > 0.8 * speed)) return false;
-  for (std::size_t i = a + 1; i < k; ++i)
-    q[i](j) += turn * (path.samples[i].t - path.samples[a].t) / span;
+  // Every unwound sample inside the joint's limits, or none is changed.
+  const auto unwound = [&](std::size_t i) {
+    return q[i](j) + turn * (path.samples[i].t - path.samples[a].t) / span;
+  };
+  const kinematics::DhJoint& limits = robot.joint(j);
+  for (std::size_t i = a + 1; i < k; ++i) {
+    if (!(unwound(i) >= limits.min && unwound(i) <= limits.max)) return false;
+  }
+  for (std::size_t i = a + 1; i < k; ++i) q[i](j) = unwound(i);
   return true;
 }
 

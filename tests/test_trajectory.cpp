@@ -8,6 +8,7 @@
 #include <numbers>
 #include <random>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "cli/commands/commands.h"
@@ -15,6 +16,7 @@
 #include "cli/config/problem.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"
+#include "kinematics/joint_wrap.h"
 #include "kinematics/trajectory.h"
 #include "kinematics/units.h"
 #include "pipeline/plan_scan.h"
@@ -286,6 +288,58 @@ TEST(BuildTrajectory, WristUnwindsAWholeTurnOnlyWhereThePathDoesNotScan) {
   EXPECT_FALSE(scanning.ok);
   EXPECT_NE(scanning.reason.find("joint 6 would have to pass its limit"), std::string::npos)
       << scanning.reason;
+}
+
+// The unwinding turns joint 6 evenly over the stretch; where the joint itself swings towards the
+// other limit first, the evenly unwound values would leave the limits there: the track breaks
+// instead (before, it was kept with those samples outside the limits).
+TEST(BuildTrajectory, UnwindingThatWouldLeaveTheLimitsBreaksTheTrack) {
+  const DemoPlan d = demo();
+  const collision::Scene scene(d.cell, cli::clearanceConfig(d.job));
+  const Eigen::Isometry3d X0 = d.path.path.samples.front().X_PS;
+  const kinematics::IkBranch branch = *cli::parseBranch("RIGHTY ABOVE NOFLIP");
+  double theta = -1.0;
+  kinematics::JointVector q0 = kinematics::JointVector::Zero();
+  for (double a = 0.0; a < 360.0 && theta < 0.0; a += 5.0) {
+    for (const auto& s : d.cell.robot.ik(d.cell.flangeTarget(deg(a), X0), {true}))
+      if (s.branch == branch && theta < 0.0) std::tie(theta, q0) = std::pair{deg(a), s.q};
+  }
+  ASSERT_GE(theta, 0.0);
+  // Which way joint 6 turns as the head rolls about z_S.
+  const auto rolled = [&](double r) {
+    Eigen::Isometry3d X = X0;
+    X.linear() = X0.linear() * Eigen::AngleAxisd(r, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    return X;
+  };
+  const Eigen::Isometry3d X_small = d.cell.flangeTarget(theta, rolled(deg(1.0)));
+  double sign = 0.0;
+  for (const auto& s : d.cell.robot.ik(X_small))
+    if (s.branch == branch && std::abs(s.q(0) - q0(0)) < deg(1.0)) {
+      sign = kinematics::unwrapNear(s.q, q0)(5) > q0(5) ? 1.0 : -1.0;
+    }
+  ASSERT_NE(sign, 0.0);
+  // Over 30 s (not scanning after t = 0): joint 6 swings to 10° short of its limit one way in
+  // 10 s, then back and past the other limit, where the equivalent a turn away is inside.
+  const auto& j6 = d.cell.robot.joint(5);
+  const double near_end = sign > 0.0 ? j6.min + deg(10.0) : j6.max - deg(10.0);
+  const double dip = (near_end - q0(5)) * sign;                    // roll angle to get there
+  const double climb = (j6.max - j6.min) - deg(10.0) + deg(15.0);  // past the far limit by 15°
+  kinematics::ScanPath roll;
+  roll.dt = 0.1;
+  for (int k = 0; k <= 300; ++k) {
+    const double t = 0.1 * k;
+    const double r = t <= 10.0 ? dip * t / 10.0 : dip + climb * (t - 10.0) / 20.0;
+    roll.samples.push_back({t, rolled(r), k == 0});
+  }
+  const std::vector<double> thetas(roll.samples.size(), theta);
+  const planner::TrajectoryBuild built =
+      planner::buildTrajectory(scene, cli::constraintSettings(d.job), roll, thetas, branch);
+  for (const auto& s : built.trajectory.samples) {
+    EXPECT_TRUE(d.cell.robot.withinLimits(s.q)) << s.t;
+  }
+  EXPECT_FALSE(built.ok);
+  EXPECT_NE(built.reason.find("joint 6 would have to pass its limit"), std::string::npos)
+      << built.reason;
 }
 
 // Robustness catalogue (issue 17): a 5 MB first line was quoted whole in the message.
