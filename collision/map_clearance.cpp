@@ -35,7 +35,7 @@ MapClearance::MapClearance(const Scene& scene, std::size_t branches, MapClearanc
   }
   const std::size_t np = scene.pairs().size(), nb = scene.bodies().size();
   memory_.resize(np * (1 + branches));
-  state_.resize(memory_.size());
+  state_.resize(np);
   shared_factor_.assign(np, -1.0);
   travel_of_branch_.resize(branches);
   for (std::size_t p = 0; p < np; ++p) {
@@ -65,7 +65,6 @@ void MapClearance::beginCell(double theta, const Eigen::Isometry3d& X_BF) {
   }
   const kinematics::CellModel& cell = scene_->cell();
   theta_ = theta;
-  X_BF_ = X_BF;
   const Eigen::Isometry3d X_WR = cell.table.X_WR(theta);
   const Eigen::Isometry3d X_WS = cell.X_WB * X_BF * cell.scanner.X_FS;
   for (std::size_t i = 0; i < X_W_.size(); ++i) {
@@ -180,9 +179,6 @@ double MapClearance::linkFactor(std::size_t p,
       memory.zero_until = until(t.d_low - memory.upper - moved);
       return 0.0;
     }
-    if (q == memory.q && theta_ == memory.theta && X_BF_.matrix() == state_[slot].X_BF.matrix()) {
-      return memory.factor;  // the same poses: the same query again
-    }
   }
   return requery(p, slot, q);
 }
@@ -191,7 +187,6 @@ double MapClearance::requery(std::size_t p, std::size_t slot, const kinematics::
   Memory& memory = memory_[slot];
   memory.theta = theta_;
   memory.q = q;
-  state_[slot].X_BF = X_BF_;
   const double f = query(p, memory);
   memory.far_until = memory.zero_until = -kInf;
   if (options_.skip) {

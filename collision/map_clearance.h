@@ -32,8 +32,11 @@ struct MapClearanceOptions {
 ///   changed since from the differences of the table angle and the joints; for the others, a
 ///   body's points have moved at most the sum of |Δc| + r·‖ΔR‖_F over the steps since (c, r:
 ///   its bounding sphere). While the lower bound minus that stays at or above d_high the pair's
-///   factor is 1 without a query; while the distance plus that stays below d_low it is 0; with
-///   nothing moved, the last factor holds. Links are placed (FK) only for the pairs that query.
+///   factor is 1 without a query; while the distance plus that stays below d_low it is 0; for
+///   a pair without a link, with nothing moved, the last factor holds. Links are placed (FK)
+///   only for the pairs that query.
+/// - Travel marks: a pair with a link that the bound showed far (or deep) enough is not even
+///   bounded again until its branch has travelled (Travel, below) its slack over its lever ratio.
 /// Every factor equals the plain query's (a 1e-6 m margin covers GJK's tolerance), so the
 /// maps do not depend on the skipping, nor on which cells a thread saw before. One per thread.
 class MapClearance {
@@ -77,10 +80,8 @@ class MapClearance {
     kinematics::JointVector q = kinematics::JointVector::Zero();
     bool seen = false;
   };
-  /// The rest of it: read only when nothing moved.
+  /// Pairs without a link: the bodies' poses at the last query (the same poses, the same query).
   struct State {
-    Eigen::Isometry3d X_BF = Eigen::Isometry3d::Identity();
-    /// Pairs without a link: the bodies' poses.
     Eigen::Isometry3d X_a = Eigen::Isometry3d::Identity(), X_b = Eigen::Isometry3d::Identity();
   };
   double sharedFactor(std::size_t pair);
@@ -113,14 +114,13 @@ class MapClearance {
   std::vector<Eigen::Vector3d> centre_;  ///< per body: bounding-sphere centre, body frame
   std::vector<double> radius_;           ///< per body: bounding-sphere radius, m
   std::vector<Memory> memory_;           ///< pairs without a link, then [branch][pair]
-  std::vector<State> state_;             ///< the same slots
+  std::vector<State> state_;             ///< per pair without a link
   std::vector<double> shared_factor_;    ///< this cell's factor of each pair without a link, or < 0
   std::vector<Travel> travel_of_branch_;
   double table_lever_ = 0.0;             ///< L_θ: the largest table lever of any pair, m/rad
   ChainLevers::Weights joint_levers_{};  ///< L_k: the largest weight of joint k of any pair
-  // This cell: θ, the flange target, the branch's joints and link frames (when computed).
+  // This cell: θ, the branch's joints and link frames (when computed).
   double theta_ = 0.0;
-  Eigen::Isometry3d X_BF_ = Eigen::Isometry3d::Identity();
   const kinematics::JointVector* q_ = nullptr;
   std::array<Eigen::Isometry3d, kinematics::kNumJoints + 1> frames_;
   bool frames_ready_ = false;
