@@ -126,6 +126,10 @@ Farthest farthestFromLimits(const kinematics::RobotModel& robot,
   double best_score = 0.0;
   for (const kinematics::IkSolution& s : all) {
     if (!(s.branch == branch)) continue;
+    if (!s.within_limits) {  // a joint outside its limits: every sine product is 0
+      if (!best.solution) best = {&s, {}};
+      continue;
+    }
     std::array<double, kinematics::kNumJoints> sines{};
     for (int j = 0; j < kinematics::kNumJoints; ++j)
       sines[static_cast<std::size_t>(j)] = sine(j, s.q(j));
