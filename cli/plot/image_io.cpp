@@ -482,7 +482,8 @@ void drawMesh(const RenderRequest& request,
         image.set(x, y, fill);
       }
     };
-    const bool columns = x1 - x0<y1 - y0, positive = area> 0;
+    const bool columns = (x1 - x0) < (y1 - y0);
+    const bool positive = area > 0;
     const LineEdge ea(b, c, positive, columns), eb(c, a, positive, columns),
         ec(a, b, positive, columns);
     const int o0 = columns ? x0 : y0, o1 = columns ? x1 : y1;
