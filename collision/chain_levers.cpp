@@ -199,14 +199,11 @@ ChainLevers::Weights ChainLevers::weightsAt(
   return w;
 }
 
-double ChainLevers::wideMotion(std::size_t pair,
+double ChainLevers::wideMotion(double table_motion,
                                const Weights& weights,
-                               double theta0,
                                const kinematics::JointVector& q0,
-                               double theta1,
-                               const kinematics::JointVector& q1) const {
-  const double table = weights_[pair].table;
-  double motion = table == 0.0 ? 0.0 : table * detail::turn(theta1, theta0);
+                               const kinematics::JointVector& q1) {
+  double motion = table_motion;
   for (int k = 0; k < kinematics::kNumJoints; ++k) {
     motion += weights[static_cast<std::size_t>(k)] * detail::turn(q1(k), q0(k));
   }

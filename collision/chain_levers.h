@@ -83,17 +83,17 @@ class ChainLevers {
       motion += weights[static_cast<std::size_t>(k)] * d;
     }
     // The usual steps (every joint within half a turn) need no remainder.
-    return widest <= std::numbers::pi ? motion : wideMotion(pair, weights, theta0, q0, theta1, q1);
+    if (widest <= std::numbers::pi) return motion;
+    return wideMotion(table == 0.0 ? 0.0 : table * detail::turn(theta1, theta0), weights, q0, q1);
   }
 
  private:
-  /// motion() with a joint more than half a turn away: every difference modulo a turn.
-  double wideMotion(std::size_t pair,
-                    const Weights& weights,
-                    double theta0,
-                    const kinematics::JointVector& q0,
-                    double theta1,
-                    const kinematics::JointVector& q1) const;
+  /// motion() with a joint more than half a turn away, from the table's share: every joint's
+  /// difference modulo a turn.
+  static double wideMotion(double table_motion,
+                           const Weights& weights,
+                           const kinematics::JointVector& q0,
+                           const kinematics::JointVector& q1);
 
   struct PairWeights {
     Weights w{};

@@ -8,7 +8,7 @@
 #include <numbers>
 #include <random>
 #include <string>
-#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "cli/commands/commands.h"
@@ -240,6 +240,18 @@ TEST(BuildTrajectory, UnreachableSampleIsNotOkAndNamed) {
   EXPECT_NE(built.reason.find("unreachable"), std::string::npos) << built.reason;
 }
 
+// The first table angle in 5° steps where the pose X_PS is reachable on `branch` within the
+// joint limits, and that solution; the angle is negative where there is none.
+std::pair<double, kinematics::JointVector> reachableOn(const DemoPlan& d,
+                                                       const Eigen::Isometry3d& X_PS,
+                                                       const kinematics::IkBranch& branch) {
+  for (double a = 0.0; a < 360.0; a += 5.0) {
+    for (const auto& s : d.cell.robot.ik(d.cell.flangeTarget(deg(a), X_PS), {true}))
+      if (s.branch == branch) return {deg(a), s.q};
+  }
+  return {-1.0, kinematics::JointVector::Zero()};
+}
+
 // The head rolling three whole turns about its laser axis in place: joint 6 (±360°) cannot follow
 // it continuously. While the path does not scan, the wrist unwinds a turn over the stretch
 // instead (the flange rolls off the planned pose there); while it scans, the track breaks.
@@ -249,11 +261,7 @@ TEST(BuildTrajectory, WristUnwindsAWholeTurnOnlyWhereThePathDoesNotScan) {
   const Eigen::Isometry3d X0 = d.path.path.samples.front().X_PS;
   // A table angle where the first pose is reachable on the demo's usual branch.
   const kinematics::IkBranch branch = *cli::parseBranch("RIGHTY ABOVE NOFLIP");
-  double theta = -1.0;
-  for (double a = 0.0; a < 360.0 && theta < 0.0; a += 5.0) {
-    for (const auto& s : d.cell.robot.ik(d.cell.flangeTarget(deg(a), X0)))
-      if (s.branch == branch) theta = deg(a);
-  }
+  const double theta = reachableOn(d, X0, branch).first;
   ASSERT_GE(theta, 0.0);
   kinematics::ScanPath roll;
   roll.dt = 0.1;
@@ -298,12 +306,7 @@ TEST(BuildTrajectory, UnwindingThatWouldLeaveTheLimitsBreaksTheTrack) {
   const collision::Scene scene(d.cell, cli::clearanceConfig(d.job));
   const Eigen::Isometry3d X0 = d.path.path.samples.front().X_PS;
   const kinematics::IkBranch branch = *cli::parseBranch("RIGHTY ABOVE NOFLIP");
-  double theta = -1.0;
-  kinematics::JointVector q0 = kinematics::JointVector::Zero();
-  for (double a = 0.0; a < 360.0 && theta < 0.0; a += 5.0) {
-    for (const auto& s : d.cell.robot.ik(d.cell.flangeTarget(deg(a), X0), {true}))
-      if (s.branch == branch && theta < 0.0) std::tie(theta, q0) = std::pair{deg(a), s.q};
-  }
+  const auto [theta, q0] = reachableOn(d, X0, branch);
   ASSERT_GE(theta, 0.0);
   // Which way joint 6 turns as the head rolls about z_S.
   const auto rolled = [&](double r) {
