@@ -1,7 +1,7 @@
 #include "scanner/simulator.h"
 
-#include "scanner/embree_mesh.h"
 #include "scanner/detail/random.h"
+#include "scanner/embree_mesh.h"
 
 #include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>
@@ -112,6 +112,14 @@ void initLanes(Packet& ray) noexcept {
     ray.id[j] = 0;
     ray.flags[j] = 0;
   }
+}
+
+// An intersect context for packets of rays that run side by side (Embree's coherent hint).
+RTCIntersectContext coherentContext() {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  return context;
 }
 
 // Lane j of a packet: the ray o + t·d, t in [0, t_far] (float, as Embree takes it).
@@ -306,9 +314,7 @@ void ScanSimulator::Impl::castFan(const RunSetup& setup, Scratch& s) const {
     const Eigen::Vector3d o = a.X_GS.translation();
     if (backend == RayBackend::kEmbree) {
       // Neighbouring fan rays share the origin and nearly the direction: one packet each.
-      RTCIntersectContext context;
-      rtcInitIntersectContext(&context);
-      context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+      RTCIntersectContext context = coherentContext();
       RTCRayHit16& rh = s.fan_packet;
       assert(reinterpret_cast<std::uintptr_t>(&rh) % 64 == 0);
       alignas(64) std::array<int, kPacket> valid{};
@@ -403,9 +409,7 @@ void ScanSimulator::Impl::cameraPass(const Eigen::Vector3d& camera,
     if (backend == RayBackend::kEmbree) {
       // Rays of neighbouring candidates run side by side to the same camera centre: one packet
       // each; rays already blocked by an earlier group are masked out.
-      RTCIntersectContext context;
-      rtcInitIntersectContext(&context);
-      context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+      RTCIntersectContext context = coherentContext();
       RTCRay16& ray = s.camera_packet;
       assert(reinterpret_cast<std::uintptr_t>(&ray) % 64 == 0);
       alignas(64) std::array<int, kPacket> valid{};
@@ -490,9 +494,7 @@ struct ScanSimulator::Impl::GroupScene final : ImageScene {
       hits[i].t = rays[i].t_far;
       hits[i].part_triangle = -1;
     }
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    RTCIntersectContext context = coherentContext();
     RTCRayHit16& rh = s.fan_packet;
     alignas(64) std::array<int, kPacket> valid{};
     for (const ActiveGroup& a : s.active) {
@@ -524,9 +526,7 @@ struct ScanSimulator::Impl::GroupScene final : ImageScene {
   void occluded(std::span<const SceneRay> rays, std::span<char> blocked) const override {
     const std::size_t n = rays.size();
     std::fill(blocked.begin(), blocked.end(), 0);
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    RTCIntersectContext context = coherentContext();
     RTCRay16& ray = s.camera_packet;
     alignas(64) std::array<int, kPacket> valid{};
     for (const ActiveGroup& a : s.active) {
@@ -597,9 +597,9 @@ void ScanSimulator::Impl::imageProfile(const ScanFrame& frame,
     const Eigen::Vector3d p_S = camera.triangulate(p.x(), p.y());
     // The surface the stripe's peak pixel saw gives the normal and the triangle.
     const int r = std::clamp(static_cast<int>(std::lround(*row)), 0, image.rows - 1);
-    const SceneHit& h = image.hit[static_cast<std::size_t>(r) *
-                                      static_cast<std::size_t>(image.columns) +
-                                  static_cast<std::size_t>(k)];
+    const SceneHit& h =
+        image.hit[static_cast<std::size_t>(r) * static_cast<std::size_t>(image.columns) +
+                  static_cast<std::size_t>(k)];
     const double range = p_S.norm();
     Eigen::Vector3d n_S = h.hit ? h.n_S : -p_S / range;
     if (n_S.dot(p_S) > 0.0) n_S = -n_S;  // towards the laser

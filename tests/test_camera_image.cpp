@@ -40,6 +40,15 @@ CameraModel headCamera(int side = 1, int rows = 256, int columns = 200) {
   return camera;
 }
 
+// Image settings for `camera`'s whole sensor and a 1 mm laser sheet.
+ImageSettings sheetSettings(const CameraModel& camera) {
+  ImageSettings settings;
+  settings.rows = camera.rows;
+  settings.columns = camera.columns;
+  settings.thickness = 1e-3;
+  return settings;
+}
+
 // A triangle mesh in the scanner frame as an ImageScene (one Embree ray per query): the
 // reference the simulator's packet scene is compared against in test_scanner_sim.
 class MeshScene final : public ImageScene {
@@ -225,10 +234,7 @@ double depthTolerance(const CameraModel& camera, double z, double px) {
 // stripe is 2–4 px wide; the centroid of 8-bit samples is good to ~0.1 px, with margin).
 TEST(ImageRendering, FlatPlatePointsLieOnThePlateWithinAPixelFraction) {
   const CameraModel camera = headCamera();
-  ImageSettings settings;
-  settings.rows = camera.rows;
-  settings.columns = camera.columns;
-  settings.thickness = 1e-3;
+  ImageSettings settings = sheetSettings(camera);
   for (const auto method : {StripeMethod::kCentreOfGravity, StripeMethod::kGaussian}) {
     settings.method = method;
     for (const double z0 : {0.145, 0.16, 0.175}) {
@@ -244,8 +250,8 @@ TEST(ImageRendering, FlatPlatePointsLieOnThePlateWithinAPixelFraction) {
         EXPECT_LT(worst, tol) << "z0 " << z0 << " tilt " << tilt << " method "
                               << static_cast<int>(method);
         // The line spans the field at that depth: its ends within a column pitch of it.
-        const double half = std::tan(camera.optics.gamma) *
-                            std::hypot(camera.optics.a, z0 - camera.optics.b);
+        const double half =
+            std::tan(camera.optics.gamma) * std::hypot(camera.optics.a, z0 - camera.optics.b);
         const double pitch = 2.0 * half / camera.columns;
         double lo = 1.0, hi = -1.0;
         for (const Eigen::Vector3d& p : m.points) {
@@ -265,10 +271,7 @@ TEST(ImageRendering, FlatPlatePointsLieOnThePlateWithinAPixelFraction) {
 // tessellation's sagitta.
 TEST(ImageRendering, CylinderPointsLieOnTheCylinder) {
   const CameraModel camera = headCamera();
-  ImageSettings settings;
-  settings.rows = camera.rows;
-  settings.columns = camera.columns;
-  settings.thickness = 1e-3;
+  ImageSettings settings = sheetSettings(camera);
   const double radius = 0.04, z_c = 0.19;
   kinematics::Shape shape;
   shape.geometry = kinematics::Cylinder{radius, 0.2};
@@ -287,7 +290,8 @@ TEST(ImageRendering, CylinderPointsLieOnTheCylinder) {
   const MeshScene scene(mesh);
   const Measured m = measure(camera, settings, scene);
   ASSERT_GT(m.points.size(), static_cast<std::size_t>(camera.columns) * 9 / 10);
-  const double sagitta = radius * (1.0 - std::cos(std::numbers::pi / static_cast<double>(segments)));
+  const double sagitta =
+      radius * (1.0 - std::cos(std::numbers::pi / static_cast<double>(segments)));
   double worst = 0.0;
   for (const Eigen::Vector3d& p : m.points) {
     const double off = std::abs(std::hypot(p.y(), p.z() - z_c) - radius);
@@ -304,10 +308,7 @@ TEST(ImageRendering, CylinderPointsLieOnTheCylinder) {
 // the shadow see no stripe; those well outside it do.
 TEST(ImageRendering, PointsTheLaserCannotReachAreNotLit) {
   const CameraModel camera = headCamera();
-  ImageSettings settings;
-  settings.rows = camera.rows;
-  settings.columns = camera.columns;
-  settings.thickness = 1e-3;
+  ImageSettings settings = sheetSettings(camera);
   kinematics::TriangleMesh mesh = plate(0.16, 0.0);
   const double z_block = 0.12, half_width = 0.002;
   addQuad(mesh, {0.0, 0.0, z_block}, {0.003, 0.0, 0.0}, {0.0, half_width, 0.0});
