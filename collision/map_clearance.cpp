@@ -15,6 +15,25 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // FCL's GJK stops within its distance tolerance (1e-6 m) above the true distance, so a bound
 // carried from one of its numbers keeps this much in hand.
 constexpr double kMargin = 1e-6;  // m
+// A pair's factor not known at this cell for a branch (factors are within [0, 1]).
+constexpr double kUnknown = -1.0;
+
+// The last joint a pair with a link depends on (its bodies' farthest link: the scanner rides
+// on link 6, world and table bodies on none), beyond the joints for the others.
+int depthOf(const Scene& scene, std::size_t p, bool with_link) {
+  if (!with_link) return kinematics::kNumJoints + 1;
+  int depth = 0;
+  for (const int i : {scene.pairs()[p].a, scene.pairs()[p].b}) {
+    const BodyInfo& body = scene.bodies()[static_cast<std::size_t>(i)];
+    if (body.motion == BodyMotion::kRobotLink || body.motion == BodyMotion::kScanner) {
+      depth = std::max(depth, body.link);
+    }
+  }
+  return depth;
+}
+// SelfPairGrid's erosion: its bins' bounds lie at most this far below the distance (2, 4 and
+// 8 mm measured on the demo map: 4 and 8 the same, 2 a little worse).
+constexpr double kGridErosion = 0.004;  // m
 
 // The most any point within r of c (a body's frame) moves from pose `from` to pose `to`.
 double motionBound(const Eigen::Vector3d& c,
@@ -27,14 +46,21 @@ double motionBound(const Eigen::Vector3d& c,
 }  // namespace
 
 MapClearance::MapClearance(const Scene& scene, std::size_t branches, MapClearanceOptions options)
-    : scene_(&scene), options_(options), levers_(scene) {
+    : scene_(&scene), options_(options), levers_(scene), grid_(scene, levers_, kGridErosion) {
   for (const detail::BodyGeometry& body : scene.geometry().map_bodies) {
     const auto [c, r] = detail::boundingSphere(body);
     centre_.push_back(c);
     radius_.push_back(r);
   }
   const std::size_t np = scene.pairs().size(), nb = scene.bodies().size();
+  np_ = np;
   memory_.resize(np * (1 + branches));
+  far_until_.assign(np * branches, -kInf);
+  cell_factor_.assign(np * branches, kUnknown);
+  cell_q_.assign(branches, kinematics::JointVector::Zero());
+  cell_seen_.assign(branches, 0);
+  frames_.resize(branches);
+  for (std::size_t p = 0; p < np; ++p) depth_.push_back(depthOf(scene, p, levers_.covers(p)));
   state_.resize(np);
   shared_factor_.assign(np, -1.0);
   travel_of_branch_.resize(branches);
@@ -83,20 +109,30 @@ void MapClearance::beginCell(double theta, const Eigen::Isometry3d& X_BF) {
     }
   }
   std::fill(shared_factor_.begin(), shared_factor_.end(), -1.0);
+  std::fill(cell_seen_.begin(), cell_seen_.end(), 0);
 }
 
-const std::array<Eigen::Isometry3d, kinematics::kNumJoints + 1>& MapClearance::frames() {
-  if (!frames_ready_) {
-    frames_ = scene_->cell().robot.linkFrames(*q_, scene_->cell().X_WB);
-    frames_ready_ = true;
+const Eigen::Isometry3d& MapClearance::frame(int k) {
+  Frames& own = frames_[branch_];
+  while (own.upto < k) {
+    const int next = own.upto + 1;
+    const auto i = static_cast<std::size_t>(next);
+    if (next <= agree_ && frames_[twin_].upto >= next) {
+      own.X[i] = frames_[twin_].X[i];  // the same joints up to there: the same frame
+    } else if (next == 0) {
+      own.X[0] = scene_->cell().X_WB;
+    } else {  // as RobotModel::linkFrames, product for product
+      own.X[i] = own.X[i - 1] * scene_->cell().robot.dh(i - 1, (*q_)(next - 1));
+    }
+    own.upto = next;
   }
-  return frames_;
+  return own.X[static_cast<std::size_t>(k)];
 }
 
 const Eigen::Isometry3d& MapClearance::pose(std::size_t i) {
   const BodyInfo& body = scene_->bodies()[i];
   if (body.motion != BodyMotion::kRobotLink || placed_[i]) return X_W_[i];
-  X_W_[i] = frames()[static_cast<std::size_t>(body.link)];
+  X_W_[i] = frame(body.link);
   placed_[i] = true;
   return X_W_[i];
 }
@@ -104,7 +140,8 @@ const Eigen::Isometry3d& MapClearance::pose(std::size_t i) {
 double MapClearance::factor(std::size_t branch, const kinematics::JointVector& q) {
   if (!q.allFinite()) throw std::invalid_argument("collision::MapClearance: non-finite joints");
   q_ = &q;
-  frames_ready_ = false;
+  branch_ = branch;
+  frames_[branch].upto = -1;
   std::fill(placed_.begin(), placed_.end(), false);
   Travel& travel = travel_of_branch_.at(branch);
   if (travel.seen) {
@@ -117,21 +154,50 @@ double MapClearance::factor(std::size_t branch, const kinematics::JointVector& q
   travel.theta = theta_;
   travel.q = q;
   travel.seen = true;
-  const std::size_t np = shared_factor_.size();
+  const std::size_t np = np_;
+  const double* far_until = far_until_.data() + np * branch;
+  findTwin(branch, q);
+  const double* twin = twin_ < cell_q_.size() ? cell_factor_.data() + np * twin_ : nullptr;
+  const int agree = std::max(agree_, 0);
+  double* seen = cell_factor_.data() + np * branch;
+  std::fill(seen, seen + np, kUnknown);
   double f = 1.0;
   for (std::size_t p = 0; p < np; ++p) {
+    if (travel.sum <= far_until[p]) {  // a pair with a link that stays far: 1
+      seen[p] = 1.0;
+      continue;
+    }
     double fp = 1.0;
-    if (!levers_.covers(p)) {
+    if (twin && depth_[p] <= agree && twin[p] != kUnknown) {
+      fp = twin[p];
+    } else if (!levers_.covers(p)) {
       if (shared_factor_[p] < 0.0) shared_factor_[p] = sharedFactor(p);
       fp = shared_factor_[p];
     } else {
       fp = linkFactor(p, np * (1 + branch) + p, q, travel.sum);
     }
+    seen[p] = fp;
     if (fp == 1.0) continue;  // as ClearanceEvaluator::factor: no product with a pair beyond
     f *= fp;
     if (f == 0.0) return 0.0;
   }
   return f;
+}
+
+void MapClearance::findTwin(std::size_t branch, const kinematics::JointVector& q) {
+  twin_ = cell_q_.size();
+  agree_ = -1;  // no frame to share
+  for (std::size_t b = 0; b < cell_q_.size(); ++b) {
+    if (!cell_seen_[b] || b == branch) continue;
+    int k = 0;
+    while (k < kinematics::kNumJoints && cell_q_[b](k) == q(k)) ++k;
+    if (k > std::max(agree_, 0)) {
+      agree_ = k;
+      twin_ = b;
+    }
+  }
+  cell_q_[branch] = q;
+  cell_seen_[branch] = 1;
 }
 
 double MapClearance::sharedFactor(std::size_t p) {
@@ -162,7 +228,6 @@ double MapClearance::linkFactor(std::size_t p,
                                 double travel) {
   Memory& memory = memory_[slot];
   if (options_.skip && memory.known && !options_.exact_distances) {
-    if (travel <= memory.far_until) return 1.0;
     if (travel < memory.zero_until) return 0.0;
     const PairThresholds& t = scene_->pairs()[p].thresholds;
     const double moved =
@@ -172,7 +237,7 @@ double MapClearance::linkFactor(std::size_t p,
       return memory.lever > 0.0 ? travel + slack / memory.lever : kInf;
     };
     if (memory.lower - moved >= t.d_high) {
-      memory.far_until = until(memory.lower - moved - t.d_high);
+      far_until_[slot - np_] = until(memory.lower - moved - t.d_high);
       return 1.0;
     }
     if (memory.upper + moved < t.d_low) {
@@ -180,7 +245,32 @@ double MapClearance::linkFactor(std::size_t p,
       return 0.0;
     }
   }
+  if (options_.skip && !options_.exact_distances && grid_.covers(p)) {
+    const double lower = grid_.lower(p, q);
+    const PairThresholds& t = scene_->pairs()[p].thresholds;
+    if (lower - kMargin >= t.d_high) return anchorFar(p, slot, q, travel, lower);
+  }
   return requery(p, slot, q);
+}
+
+double MapClearance::anchorFar(std::size_t p,
+                               std::size_t slot,
+                               const kinematics::JointVector& q,
+                               double travel,
+                               double lower) {
+  Memory& memory = memory_[slot];
+  memory.theta = theta_;
+  memory.q = q;
+  memory.lower = lower;
+  memory.upper = kInf;
+  memory.factor = 1.0;
+  memory.known = true;
+  memory.weights = levers_.weights(p);
+  memory.lever = leverRatio(p, memory.weights);
+  const double slack = lower - kMargin - scene_->pairs()[p].thresholds.d_high;
+  far_until_[slot - np_] = memory.lever > 0.0 ? travel + slack / memory.lever : kInf;
+  memory.zero_until = -kInf;
+  return 1.0;
 }
 
 double MapClearance::requery(std::size_t p, std::size_t slot, const kinematics::JointVector& q) {
@@ -188,7 +278,7 @@ double MapClearance::requery(std::size_t p, std::size_t slot, const kinematics::
   memory.theta = theta_;
   memory.q = q;
   const double f = query(p, memory);
-  memory.far_until = memory.zero_until = -kInf;
+  far_until_[slot - np_] = memory.zero_until = -kInf;
   if (options_.skip) {
     memory.weights = leversNow(p);
     memory.lever = leverRatio(p, memory.weights);
@@ -206,7 +296,9 @@ double MapClearance::leverRatio(std::size_t p, const ChainLevers::Weights& weigh
 
 ChainLevers::Weights MapClearance::leversNow(std::size_t p) {
   const std::size_t body = levers_.distal(p);
-  return levers_.weightsAt(p, pose(body), frames());
+  const Eigen::Isometry3d& X_W = pose(body);
+  frame(scene_->bodies()[body].link);  // weightsAt reads the frames of the joints before it
+  return levers_.weightsAt(p, X_W, frames_[branch_].X);
 }
 
 double MapClearance::query(std::size_t p, Memory& memory) {

@@ -9,6 +9,7 @@
 
 #include "collision/chain_levers.h"
 #include "collision/scene.h"
+#include "collision/self_pair_grid.h"
 
 namespace scanplan::collision {
 
@@ -37,6 +38,13 @@ struct MapClearanceOptions {
 ///   only for the pairs that query.
 /// - Travel marks: a pair with a link that the bound showed far (or deep) enough is not even
 ///   bounded again until its branch has travelled (Travel, below) its slack over its lever ratio.
+/// - The arm's own pairs with one or two joints between them: before a query, SelfPairGrid's
+///   bound for the bin of those joints; at or above d_high the pair is 1, and its memory is
+///   anchored there.
+/// - Branches share: a pair's factor depends only on the joints up to its last link, so a
+///   branch takes it from one scored before at the same cell with the same values of those
+///   joints (FLIP and NOFLIP share J1–J3), and the DH frames the same way. Links are placed by
+///   FK up to the frame asked for.
 /// Every factor equals the plain query's (a 1e-6 m margin covers GJK's tolerance), so the
 /// maps do not depend on the skipping, nor on which cells a thread saw before. One per thread.
 class MapClearance {
@@ -64,9 +72,8 @@ class MapClearance {
     /// The largest ratio of those weights (and the table lever) to the scene's (below): the
     /// pair's distance changes by at most that times the branch's travel.
     double lever = 0.0;
-    /// Pairs with a link: the factor is 1 while the branch's travel stays at or below
-    /// far_until, 0 while it stays below zero_until (−∞: not known).
-    double far_until = -std::numeric_limits<double>::infinity();
+    /// Pairs with a link: the factor is 0 while the branch's travel stays below zero_until
+    /// (−∞: not known); far_until_ below says when it is 1.
     double zero_until = -std::numeric_limits<double>::infinity();
   };
   /// Per branch: the sum over the steps between its factor() calls of L_θ·|Δθ| + Σ_k L_k·|Δq_k|
@@ -84,11 +91,20 @@ class MapClearance {
   struct State {
     Eigen::Isometry3d X_a = Eigen::Isometry3d::Identity(), X_b = Eigen::Isometry3d::Identity();
   };
+  /// Finds the branch scored earlier at this cell whose joints agree with q from J1 on for the
+  /// most joints (twin_, agree_; none: twin_ = branches, agree_ = −1); records q as this branch's.
+  void findTwin(std::size_t branch, const kinematics::JointVector& q);
   double sharedFactor(std::size_t pair);
   double linkFactor(std::size_t pair,
                     std::size_t slot,
                     const kinematics::JointVector& q,
                     double travel);
+  /// A pair with a link that SelfPairGrid showed far: its memory anchored at q with that bound.
+  double anchorFar(std::size_t pair,
+                   std::size_t slot,
+                   const kinematics::JointVector& q,
+                   double travel,
+                   double lower);
   /// linkFactor's query, out of line: the bound checks before it stay small.
   [[gnu::noinline]] double requery(std::size_t pair,
                                    std::size_t slot,
@@ -100,8 +116,9 @@ class MapClearance {
   ChainLevers::Weights leversNow(std::size_t pair);
   /// The largest ratio of the pair's weights (and its table lever) to the scene's.
   double leverRatio(std::size_t pair, const ChainLevers::Weights& weights) const;
-  /// The DH frames in the world (X_WB · X_Bk) at this branch's joints, by FK on first use.
-  const std::array<Eigen::Isometry3d, kinematics::kNumJoints + 1>& frames();
+  /// DH frame k in the world (X_WB · X_Bk) at this branch's joints: by FK on first use, up to k
+  /// only, and taken from the twin as far as their joints agree.
+  const Eigen::Isometry3d& frame(int k);
   /// Body i's pose at this cell and branch: robot links by FK on first use.
   const Eigen::Isometry3d& pose(std::size_t i);
   /// Moves a body without a robot link to X_W, adding the most any of its points moved to its
@@ -111,9 +128,23 @@ class MapClearance {
   const Scene* scene_;
   MapClearanceOptions options_;
   ChainLevers levers_;                   ///< bounds for the pairs with a robot link
+  SelfPairGrid grid_;                    ///< the arm's own pairs: bounds per bin of joints
   std::vector<Eigen::Vector3d> centre_;  ///< per body: bounding-sphere centre, body frame
   std::vector<double> radius_;           ///< per body: bounding-sphere radius, m
+  std::size_t np_ = 0;                   ///< pairs
   std::vector<Memory> memory_;           ///< pairs without a link, then [branch][pair]
+  /// [branch][pair]: a pair with a link is 1 while its branch's travel stays at or below this
+  /// (−∞: not known; pairs without a link stay −∞). Apart from Memory: factor() reads it for
+  /// every pair at every call.
+  std::vector<double> far_until_;
+  /// Work shared between branches: a pair's factor depends on the table angle, the cell's
+  /// flange target and the joints up to the last link it rides on (depth_), so a branch takes
+  /// it from another scored at this cell with the same values of those joints (IK's FLIP and
+  /// NOFLIP solutions share J1–J3).
+  std::vector<int> depth_;             ///< per pair: that last joint (1-based; > 6: not shared)
+  std::vector<double> cell_factor_;    ///< [branch][pair] at this cell, kUnknown if not scored
+  std::vector<kinematics::JointVector> cell_q_;  ///< per branch: its joints at this cell
+  std::vector<char> cell_seen_;                  ///< per branch: scored at this cell
   std::vector<State> state_;             ///< per pair without a link
   std::vector<double> shared_factor_;    ///< this cell's factor of each pair without a link, or < 0
   std::vector<Travel> travel_of_branch_;
@@ -122,8 +153,14 @@ class MapClearance {
   // This cell: θ, the branch's joints and link frames (when computed).
   double theta_ = 0.0;
   const kinematics::JointVector* q_ = nullptr;
-  std::array<Eigen::Isometry3d, kinematics::kNumJoints + 1> frames_;
-  bool frames_ready_ = false;
+  std::size_t branch_ = 0;
+  struct Frames {
+    std::array<Eigen::Isometry3d, kinematics::kNumJoints + 1> X;
+    int upto = -1;  ///< X[0..upto] computed at this cell
+  };
+  std::vector<Frames> frames_;  ///< per branch, this cell
+  std::size_t twin_ = 0;        ///< findTwin's
+  int agree_ = 0;
   std::vector<Eigen::Isometry3d> X_W_;  ///< body poses at this cell and branch
   std::vector<bool> placed_;            ///< robot links placed at this branch
   /// Per body without a link: its last pose, whether it has one, and the sum of the most any of

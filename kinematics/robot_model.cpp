@@ -147,6 +147,12 @@ std::array<Eigen::Isometry3d, kNumJoints + 1> RobotModel::linkFrames(
   return frames;
 }
 
+Eigen::Isometry3d RobotModel::chain(int from, int to, const JointVector& q) const {
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  for (int i = from; i < to; ++i) X = X * dh(static_cast<std::size_t>(i), q(i));
+  return X;
+}
+
 Eigen::Isometry3d RobotModel::fk(const JointVector& q) const {
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
   for (std::size_t i = 0; i < kNumJoints; ++i) X = X * dh(i, q(static_cast<int>(i)));

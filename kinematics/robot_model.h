@@ -115,6 +115,11 @@ class RobotModel {
   /// X_0: six products instead of thirteen.
   std::array<Eigen::Isometry3d, kNumJoints + 1> linkFrames(const JointVector& q,
                                                            const Eigen::Isometry3d& X_0) const;
+  /// dhTransform of joint i (0-based) at q, with its α's cosine and sine computed once.
+  Eigen::Isometry3d dh(std::size_t i, double q) const;
+  /// DH frame `to` in DH frame `from` (0 ≤ from ≤ to ≤ 6): rows from + 1 … to at q, the other
+  /// joints unread.
+  Eigen::Isometry3d chain(int from, int to, const JointVector& q) const;
   /// Geometric Jacobian at the flange origin, base frame: rows vx vy vz wx wy wz.
   Jacobian jacobian(const JointVector& q) const;
 
@@ -133,8 +138,6 @@ class RobotModel {
   JointVector toOpw(const JointVector& q) const;
   JointVector fromOpw(const JointVector& q_opw) const;
   Eigen::Vector3d wristCentre(const JointVector& q) const;
-  /// dhTransform of joint i with its α's cosine and sine computed once.
-  Eigen::Isometry3d dh(std::size_t i, double q) const;
   void appendTurnVariants(const JointVector& q,
                           const IkBranch& branch,
                           const IkRequest& request,

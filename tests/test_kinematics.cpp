@@ -94,6 +94,24 @@ TEST_P(BundledRobot, FkOfEveryIkSolutionReproducesTheTarget) {
   EXPECT_GT(checked, 40000u);  // several branches per pose, so the check is not vacuous
 }
 
+// chain(i, j, q) is frame j seen from frame i: the same as the two frames of linkFrames.
+TEST_P(BundledRobot, ChainIsTheRelativePoseOfTwoLinkFrames) {
+  const RobotModel robot = bundledRobot(GetParam());
+  std::mt19937 rng(11);
+  for (int k = 0; k < 200; ++k) {
+    const JointVector q = randomJoints(robot, rng);
+    const auto frames = robot.linkFrames(q);
+    for (int i = 0; i <= 6; ++i) {
+      for (int j = i; j <= 6; ++j) {
+        const Eigen::Isometry3d expected = frames[static_cast<std::size_t>(i)].inverse() *
+                                           frames[static_cast<std::size_t>(j)];
+        ASSERT_LT((robot.chain(i, j, q).matrix() - expected.matrix()).norm(), 1e-12)
+            << "frames " << i << " to " << j;
+      }
+    }
+  }
+}
+
 TEST_P(BundledRobot, IkOfFkContainsTheOriginalJoints) {
   const RobotModel robot = bundledRobot(GetParam());
   std::mt19937 rng(7);

@@ -1,0 +1,151 @@
+#include "collision/self_pair_grid.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "collision/fcl_geometry.h"
+
+namespace scanplan::collision {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+bool ridesOnTheArm(const BodyInfo& body) {
+  return body.motion == BodyMotion::kRobotLink || body.motion == BodyMotion::kScanner;
+}
+
+// Bins along a joint of range `range` (rad) at `width` (rad), one spare for q at the top.
+std::int64_t binsAlong(double range, double width) {
+  return static_cast<std::int64_t>(std::ceil(range / width)) + 1;
+}
+
+// Where a stored key's probe starts in a table of mask + 1 slots.
+std::size_t slotOf(std::uint64_t stored, std::size_t mask) {
+  const std::uint64_t h = stored * 0x9E3779B97F4A7C15ull;
+  return static_cast<std::size_t>(h ^ (h >> 32)) & mask;
+}
+
+}  // namespace
+
+SelfPairGrid::SelfPairGrid(const Scene& scene, const ChainLevers& levers, double erosion)
+    : scene_(&scene), grids_(scene.pairs().size()) {
+  if (!(erosion > 0.0) || !std::isfinite(erosion)) {
+    throw std::invalid_argument("collision::SelfPairGrid: erosion must be positive");
+  }
+  const kinematics::RobotModel& robot = scene.cell().robot;
+  for (std::size_t p = 0; p < grids_.size(); ++p) {
+    const PairInfo& pair = scene.pairs()[p];
+    if (!levers.covers(p) || !ridesOnTheArm(scene.bodies()[static_cast<std::size_t>(pair.a)]) ||
+        !ridesOnTheArm(scene.bodies()[static_cast<std::size_t>(pair.b)])) {
+      continue;
+    }
+    Grid& grid = grids_[p];
+    const ChainLevers::Weights& w = levers.weights(p);
+    grid.dims = static_cast<int>(std::count_if(w.begin(), w.end(), [](double x) { return x > 0.0; }));
+    if (grid.dims > kMaxJoints) grid.dims = 0;
+    if (grid.dims == 0) continue;
+    // Widths sharing the erosion equally, doubled until the bins fit in a 63-bit key.
+    for (double scale = 1.0;; scale *= 2.0) {
+      double count = 1.0;
+      for (std::size_t k = 0; k < w.size(); ++k) {
+        if (w[k] <= 0.0) continue;
+        const kinematics::DhJoint& joint = robot.joint(static_cast<int>(k));
+        grid.width[k] = scale * 2.0 * erosion / (grid.dims * w[k]);
+        grid.per_width[k] = 1.0 / grid.width[k];
+        grid.origin[k] = joint.min;
+        grid.bins[k] = binsAlong(joint.max - joint.min, grid.width[k]);
+        count *= static_cast<double>(grid.bins[k]);
+      }
+      if (count < 0x1p62) break;
+    }
+    grid.erosion = 0.0;
+    for (std::size_t k = 0; k < w.size(); ++k) grid.erosion += w[k] * 0.5 * grid.width[k];
+    grid.erosion = grid.erosion * (1.0 + 1e-9) + 1e-12;  // the bin centre's rounding
+    grid.cap = pair.thresholds.d_high + grid.erosion + 1e-6;
+    grid.keys.assign(1024, 0);
+    grid.bounds.assign(1024, 0.0);
+  }
+}
+
+bool SelfPairGrid::keyOf(const Grid& grid,
+                         const kinematics::JointVector& q,
+                         std::uint64_t& key) const {
+  std::uint64_t out = 0;
+  for (std::size_t k = 0; k < grid.width.size(); ++k) {
+    if (grid.width[k] == 0.0) continue;
+    const double b = (q(static_cast<int>(k)) - grid.origin[k]) * grid.per_width[k];
+    if (!(b >= 0.0 && b < static_cast<double>(grid.bins[k]))) return false;
+    // b ≥ 0: truncation is floor.
+    out = out * static_cast<std::uint64_t>(grid.bins[k]) + static_cast<std::uint64_t>(b);
+  }
+  key = out;
+  return true;
+}
+
+double SelfPairGrid::measure(std::size_t p,
+                             const Grid& grid,
+                             std::uint64_t key,
+                             kinematics::JointVector q) const {
+  // The bin's centre: the key's digits, last joint first.
+  for (std::size_t k = grid.width.size(); k-- > 0;) {
+    if (grid.width[k] == 0.0) continue;
+    const auto bins = static_cast<std::uint64_t>(grid.bins[k]);
+    const double b = static_cast<double>(key % bins);
+    key /= bins;
+    q(static_cast<int>(k)) = grid.origin[k] + (b + 0.5) * grid.width[k];
+  }
+  // Both bodies in the DH frame of the earlier link: the chain between them is all it takes.
+  const kinematics::CellModel& cell = scene_->cell();
+  const PairInfo& pair = scene_->pairs()[p];
+  const BodyInfo &a = scene_->bodies()[static_cast<std::size_t>(pair.a)],
+                 &b = scene_->bodies()[static_cast<std::size_t>(pair.b)];
+  const int from = std::min(a.link, b.link);
+  const auto place = [&](const BodyInfo& body) {
+    const Eigen::Isometry3d X = cell.robot.chain(from, body.link, q);
+    return body.motion == BodyMotion::kScanner ? Eigen::Isometry3d(X * cell.scanner.X_FS) : X;
+  };
+  const auto& bodies = scene_->geometry().map_bodies;
+  const detail::ShapeDistance d =
+      detail::bodyDistance(bodies[static_cast<std::size_t>(pair.a)], place(a),
+                           bodies[static_cast<std::size_t>(pair.b)], place(b), grid.cap,
+                           false, false);
+  return d.lower - grid.erosion;
+}
+
+void SelfPairGrid::grow(Grid& grid) {
+  std::vector<std::uint64_t> keys(grid.keys.size() * 2, 0);
+  std::vector<double> bounds(keys.size(), 0.0);
+  const std::size_t mask = keys.size() - 1;
+  for (std::size_t i = 0; i < grid.keys.size(); ++i) {
+    if (grid.keys[i] == 0) continue;
+    std::size_t slot = slotOf(grid.keys[i], mask);
+    while (keys[slot] != 0) slot = (slot + 1) & mask;
+    keys[slot] = grid.keys[i];
+    bounds[slot] = grid.bounds[i];
+  }
+  grid.keys = std::move(keys);
+  grid.bounds = std::move(bounds);
+}
+
+double SelfPairGrid::lower(std::size_t p, const kinematics::JointVector& q) {
+  Grid& grid = grids_[p];
+  std::uint64_t key = 0;
+  if (!keyOf(grid, q, key)) return -kInf;
+  const std::uint64_t stored = key + 1;
+  const std::size_t mask = grid.keys.size() - 1;
+  std::size_t slot = slotOf(stored, mask);
+  for (; grid.keys[slot] != 0; slot = (slot + 1) & mask) {
+    if (grid.keys[slot] == stored) return grid.bounds[slot];
+  }
+  if (grid.used >= kMaxBins) return -kInf;
+  const double bound = measure(p, grid, key, q);
+  ++measured_;
+  grid.keys[slot] = stored;
+  grid.bounds[slot] = bound;
+  if (++grid.used * 2 > grid.keys.size()) grow(grid);
+  return bound;
+}
+
+}  // namespace scanplan::collision
