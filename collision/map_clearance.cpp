@@ -90,8 +90,10 @@ void MapClearance::beginCell(double theta, const Eigen::Isometry3d& X_BF) {
     throw std::invalid_argument("collision::MapClearance: non-finite table angle or target");
   }
   const kinematics::CellModel& cell = scene_->cell();
+  if (!table_seen_ || theta != theta_) X_WR_ = cell.table.X_WR(theta);  // one per θ row
+  table_seen_ = true;
   theta_ = theta;
-  const Eigen::Isometry3d X_WR = cell.table.X_WR(theta);
+  const Eigen::Isometry3d& X_WR = X_WR_;
   const Eigen::Isometry3d X_WS = cell.X_WB * X_BF * cell.scanner.X_FS;
   for (std::size_t i = 0; i < X_W_.size(); ++i) {
     switch (scene_->bodies()[i].motion) {

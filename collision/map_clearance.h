@@ -150,8 +150,10 @@ class MapClearance {
   std::vector<Travel> travel_of_branch_;
   double table_lever_ = 0.0;             ///< L_θ: the largest table lever of any pair, m/rad
   ChainLevers::Weights joint_levers_{};  ///< L_k: the largest weight of joint k of any pair
-  // This cell: θ, the branch's joints and link frames (when computed).
+  // This cell: θ, the table top's pose then, the branch's joints and link frames (when computed).
   double theta_ = 0.0;
+  Eigen::Isometry3d X_WR_ = Eigen::Isometry3d::Identity();
+  bool table_seen_ = false;
   const kinematics::JointVector* q_ = nullptr;
   std::size_t branch_ = 0;
   struct Frames {

@@ -98,6 +98,15 @@ struct CellModel {
   Eigen::Isometry3d flangeTarget(double theta, const Eigen::Isometry3d& X_PS) const {
     return kinematics::flangeTarget(X_WB, table, theta, part.X_RP, X_PS, scanner.X_FS);
   }
+  /// The same in two steps, for many sensor poses at one θ: X_BF = flangeTarget(partIn(θ),
+  /// X_PS), product for product (the same bits).
+  Eigen::Isometry3d partIn(double theta) const {
+    return X_WB.inverse() * table.X_WR(theta) * part.X_RP;
+  }
+  Eigen::Isometry3d flangeTarget(const Eigen::Isometry3d& part_in_base,
+                                 const Eigen::Isometry3d& X_PS) const {
+    return part_in_base * X_PS * scanner.X_FS.inverse();
+  }
 };
 
 }  // namespace scanplan::kinematics

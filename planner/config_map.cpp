@@ -237,10 +237,11 @@ void forEachCell(const collision::Scene& scene,
                       for (std::size_t w = r.begin(); w != r.end(); ++w) {
                         const std::size_t a = w / pieces, first = (w % pieces) * piece;
                         const std::size_t n = std::min(nt, first + piece) - std::min(nt, first);
+                        const Eigen::Isometry3d X_BP = cell.partIn(map.angles[a]);
                         for (std::size_t i = 0; i < n; ++i) {
                           const std::size_t t = a % 2 == 0 ? first + i : nt - 1 - (first + i);
                           const Eigen::Isometry3d X_BF =
-                              cell.flangeTarget(map.angles[a], path.samples[t].X_PS);
+                              cell.flangeTarget(X_BP, path.samples[t].X_PS);
                           score(map.angles[a], X_BF, cell.robot.ik(X_BF), a, t);
                           const std::size_t k = done.fetch_add(1, std::memory_order_relaxed) + 1;
                           if (progress && (k % report_every == 0 || k == cells)) progress(k, cells);
