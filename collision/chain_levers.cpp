@@ -4,7 +4,6 @@
 #include <cmath>
 #include <numbers>
 #include <optional>
-#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -177,26 +176,9 @@ ChainLevers::ChainLevers(const Scene& scene) {
         weights.table = reachFromLine(*side, axis);
       }
     }
-    std::tie(weights.centre, weights.radius) =
-        detail::boundingSphere(scene.geometry().map_bodies[weights.distal]);
     covers_.push_back(link);
     weights_.push_back(weights);
   }
-}
-
-ChainLevers::Weights ChainLevers::weightsAt(
-    std::size_t pair,
-    const Eigen::Isometry3d& X_W,
-    const std::array<Eigen::Isometry3d, kinematics::kNumJoints + 1>& frames) const {
-  const PairWeights& p = weights_[pair];
-  Weights w = p.w;
-  const Eigen::Vector3d c = X_W * p.centre;
-  for (std::size_t k = 0; k < w.size(); ++k) {
-    if (w[k] == 0.0) continue;
-    const Line axis{frames[k].translation(), frames[k].linear().col(2)};  // joint k + 1's
-    w[k] = std::min(w[k], axis.distance(c) + p.radius);
-  }
-  return w;
 }
 
 double ChainLevers::wideMotion(double table_motion,

@@ -57,16 +57,8 @@ class ChainLevers {
   double tableLever(std::size_t pair) const { return weights_[pair].table; }
   /// The pair's body after the joints between them (the one on the later link).
   std::size_t distal(std::size_t pair) const { return weights_[pair].distal; }
-  /// Tighter weights for moves from joints q0 with the DH frames `frames` in the world
-  /// (X_WB · X_B0 … X_WB · X_B6 at q0) and the distal body at X_W: motion() turns the joints in
-  /// ascending order, so joint k turns while the later ones are still at q0, and the distal body's
-  /// reach from axis k is what it is at q0 (its bounding sphere's); each weight is the lesser of
-  /// that and the configuration-free one.
-  Weights weightsAt(std::size_t pair,
-                    const Eigen::Isometry3d& X_W,
-                    const std::array<Eigen::Isometry3d, kinematics::kNumJoints + 1>& frames) const;
   /// How much the distance between the pair's bodies can change from (θ0, q0) to (θ1, q1), m,
-  /// with `weights` (these, or tighter ones for q0: see MapClearance).
+  /// with `weights` (the pair's).
   /// Inline: the maps ask it for every pair at every branch-cell.
   double motion(std::size_t pair,
                 const Weights& weights,
@@ -99,8 +91,6 @@ class ChainLevers {
     Weights w{};
     double table = 0.0;
     std::size_t distal = 0;
-    Eigen::Vector3d centre = Eigen::Vector3d::Zero();  ///< the distal body's bounding sphere
-    double radius = 0.0;
   };
   std::vector<bool> covers_;
   std::vector<PairWeights> weights_;

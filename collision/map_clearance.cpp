@@ -71,6 +71,9 @@ MapClearance::MapClearance(const Scene& scene, std::size_t branches, MapClearanc
       joint_levers_[k] = std::max(joint_levers_[k], levers_.weights(p)[k]);
     }
   }
+  for (std::size_t p = 0; p < np; ++p) {
+    lever_.push_back(levers_.covers(p) ? leverRatio(p, levers_.weights(p)) : 0.0);
+  }
   X_W_.assign(nb, Eigen::Isometry3d::Identity());
   placed_.assign(nb, false);
   last_.assign(nb, Eigen::Isometry3d::Identity());
@@ -233,10 +236,10 @@ double MapClearance::linkFactor(std::size_t p,
     if (travel < memory.zero_until) return 0.0;
     const PairThresholds& t = scene_->pairs()[p].thresholds;
     const double moved =
-        levers_.motion(p, memory.weights, memory.theta, memory.q, theta_, q) + kMargin;
+        levers_.motion(p, levers_.weights(p), memory.theta, memory.q, theta_, q) + kMargin;
     // Far or deep enough: so until the branch has travelled the slack over the lever more.
     const auto until = [&](double slack) {
-      return memory.lever > 0.0 ? travel + slack / memory.lever : kInf;
+      return lever_[p] > 0.0 ? travel + slack / lever_[p] : kInf;
     };
     if (memory.lower - moved >= t.d_high) {
       far_until_[slot - np_] = until(memory.lower - moved - t.d_high);
@@ -267,10 +270,8 @@ double MapClearance::anchorFar(std::size_t p,
   memory.upper = kInf;
   memory.factor = 1.0;
   memory.known = true;
-  memory.weights = levers_.weights(p);
-  memory.lever = leverRatio(p, memory.weights);
   const double slack = lower - kMargin - scene_->pairs()[p].thresholds.d_high;
-  far_until_[slot - np_] = memory.lever > 0.0 ? travel + slack / memory.lever : kInf;
+  far_until_[slot - np_] = lever_[p] > 0.0 ? travel + slack / lever_[p] : kInf;
   memory.zero_until = -kInf;
   return 1.0;
 }
@@ -281,10 +282,6 @@ double MapClearance::requery(std::size_t p, std::size_t slot, const kinematics::
   memory.q = q;
   const double f = query(p, memory);
   far_until_[slot - np_] = memory.zero_until = -kInf;
-  if (options_.skip) {
-    memory.weights = leversNow(p);
-    memory.lever = leverRatio(p, memory.weights);
-  }
   return f;
 }
 
@@ -294,13 +291,6 @@ double MapClearance::leverRatio(std::size_t p, const ChainLevers::Weights& weigh
     if (joint_levers_[k] > 0.0) ratio = std::max(ratio, weights[k] / joint_levers_[k]);
   }
   return ratio;
-}
-
-ChainLevers::Weights MapClearance::leversNow(std::size_t p) {
-  const std::size_t body = levers_.distal(p);
-  const Eigen::Isometry3d& X_W = pose(body);
-  frame(scene_->bodies()[body].link);  // weightsAt reads the frames of the joints before it
-  return levers_.weightsAt(p, X_W, frames_[branch_].X);
 }
 
 double MapClearance::query(std::size_t p, Memory& memory) {

@@ -64,14 +64,9 @@ class MapClearance {
     double upper = 0.0;   ///< m, the distance then when below d_high, else +∞
     double factor = 1.0;
     bool known = false;
-    // Pairs with a link: the table angle and joints then, and the levers at those joints
-    // (tighter than the static ones).
+    // Pairs with a link: the table angle and joints then.
     double theta = 0.0;
     kinematics::JointVector q = kinematics::JointVector::Zero();
-    ChainLevers::Weights weights{};
-    /// The largest ratio of those weights (and the table lever) to the scene's (below): the
-    /// pair's distance changes by at most that times the branch's travel.
-    double lever = 0.0;
     /// Pairs with a link: the factor is 0 while the branch's travel stays below zero_until
     /// (−∞: not known); far_until_ below says when it is 1.
     double zero_until = -std::numeric_limits<double>::infinity();
@@ -110,10 +105,6 @@ class MapClearance {
                                    std::size_t slot,
                                    const kinematics::JointVector& q);
   double query(std::size_t pair, Memory& memory);
-  /// The pair's weights at this branch's joints (ChainLevers::motion turns the joints in
-  /// ascending order, so joint k turns with the later ones still where they were: the distal
-  /// body's reach from axis k is what it is now).
-  ChainLevers::Weights leversNow(std::size_t pair);
   /// The largest ratio of the pair's weights (and its table lever) to the scene's.
   double leverRatio(std::size_t pair, const ChainLevers::Weights& weights) const;
   /// DH frame k in the world (X_WB · X_Bk) at this branch's joints: by FK on first use, up to k
@@ -149,6 +140,9 @@ class MapClearance {
   std::vector<double> shared_factor_;    ///< this cell's factor of each pair without a link, or < 0
   std::vector<Travel> travel_of_branch_;
   double table_lever_ = 0.0;             ///< L_θ: the largest table lever of any pair, m/rad
+  /// Per pair with a link: the largest ratio of its weights (and table lever) to the L's: its
+  /// distance changes by at most that times its branch's travel.
+  std::vector<double> lever_;
   ChainLevers::Weights joint_levers_{};  ///< L_k: the largest weight of joint k of any pair
   // This cell: θ, the table top's pose then, the branch's joints and link frames (when computed).
   double theta_ = 0.0;
