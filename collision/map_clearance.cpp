@@ -144,11 +144,11 @@ const Eigen::Isometry3d& MapClearance::pose(std::size_t i) {
 
 double MapClearance::factor(std::size_t branch, const kinematics::JointVector& q) {
   if (!q.allFinite()) throw std::invalid_argument("collision::MapClearance: non-finite joints");
+  Travel& travel = travel_of_branch_.at(branch);
   q_ = &q;
   branch_ = branch;
   frames_[branch].upto = -1;
   std::fill(placed_.begin(), placed_.end(), false);
-  Travel& travel = travel_of_branch_.at(branch);
   if (travel.seen) {
     double step = table_lever_ * std::abs(theta_ - travel.theta);
     for (int k = 0; k < kinematics::kNumJoints; ++k) {

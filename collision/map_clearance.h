@@ -132,14 +132,14 @@ class MapClearance {
   /// flange target and the joints up to the last link it rides on (depth_), so a branch takes
   /// it from another scored at this cell with the same values of those joints (IK's FLIP and
   /// NOFLIP solutions share J1–J3).
-  std::vector<int> depth_;             ///< per pair: that last joint (1-based; > 6: not shared)
-  std::vector<double> cell_factor_;    ///< [branch][pair] at this cell, kUnknown if not scored
+  std::vector<int> depth_;           ///< per pair: that last joint (1-based; > 6: not shared)
+  std::vector<double> cell_factor_;  ///< [branch][pair] at this cell, kUnknown if not scored
   std::vector<kinematics::JointVector> cell_q_;  ///< per branch: its joints at this cell
   std::vector<char> cell_seen_;                  ///< per branch: scored at this cell
-  std::vector<State> state_;             ///< per pair without a link
-  std::vector<double> shared_factor_;    ///< this cell's factor of each pair without a link, or < 0
+  std::vector<State> state_;                     ///< per pair without a link
+  std::vector<double> shared_factor_;  ///< this cell's factor of each pair without a link, or < 0
   std::vector<Travel> travel_of_branch_;
-  double table_lever_ = 0.0;             ///< L_θ: the largest table lever of any pair, m/rad
+  double table_lever_ = 0.0;  ///< L_θ: the largest table lever of any pair, m/rad
   /// Per pair with a link: the largest ratio of its weights (and table lever) to the L's: its
   /// distance changes by at most that times its branch's travel.
   std::vector<double> lever_;

@@ -41,32 +41,39 @@ SelfPairGrid::SelfPairGrid(const Scene& scene, const ChainLevers& levers, double
         !ridesOnTheArm(scene.bodies()[static_cast<std::size_t>(pair.b)])) {
       continue;
     }
-    Grid& grid = grids_[p];
-    const ChainLevers::Weights& w = levers.weights(p);
-    grid.dims = static_cast<int>(std::count_if(w.begin(), w.end(), [](double x) { return x > 0.0; }));
-    if (grid.dims > kMaxJoints) grid.dims = 0;
-    if (grid.dims == 0) continue;
-    // Widths sharing the erosion equally, doubled until the bins fit in a 63-bit key.
-    for (double scale = 1.0;; scale *= 2.0) {
-      double count = 1.0;
-      for (std::size_t k = 0; k < w.size(); ++k) {
-        if (w[k] <= 0.0) continue;
-        const kinematics::DhJoint& joint = robot.joint(static_cast<int>(k));
-        grid.width[k] = scale * 2.0 * erosion / (grid.dims * w[k]);
-        grid.per_width[k] = 1.0 / grid.width[k];
-        grid.origin[k] = joint.min;
-        grid.bins[k] = binsAlong(joint.max - joint.min, grid.width[k]);
-        count *= static_cast<double>(grid.bins[k]);
-      }
-      if (count < 0x1p62) break;
-    }
-    grid.erosion = 0.0;
-    for (std::size_t k = 0; k < w.size(); ++k) grid.erosion += w[k] * 0.5 * grid.width[k];
-    grid.erosion = grid.erosion * (1.0 + 1e-9) + 1e-12;  // the bin centre's rounding
-    grid.cap = pair.thresholds.d_high + grid.erosion + 1e-6;
-    grid.keys.assign(1024, 0);
-    grid.bounds.assign(1024, 0.0);
+    grids_[p] = gridOf(robot, levers.weights(p), pair.thresholds.d_high, erosion);
   }
+}
+
+SelfPairGrid::Grid SelfPairGrid::gridOf(const kinematics::RobotModel& robot,
+                                        const ChainLevers::Weights& w,
+                                        double d_high,
+                                        double erosion) {
+  Grid grid;
+  grid.dims = static_cast<int>(std::count_if(w.begin(), w.end(), [](double x) { return x > 0.0; }));
+  if (grid.dims > kMaxJoints) grid.dims = 0;
+  if (grid.dims == 0) return grid;
+  // Widths sharing the erosion equally, doubled until the bins fit in a 63-bit key.
+  for (double scale = 1.0;; scale *= 2.0) {
+    double count = 1.0;
+    for (std::size_t k = 0; k < w.size(); ++k) {
+      if (w[k] <= 0.0) continue;
+      const kinematics::DhJoint& joint = robot.joint(static_cast<int>(k));
+      grid.width[k] = scale * 2.0 * erosion / (grid.dims * w[k]);
+      grid.per_width[k] = 1.0 / grid.width[k];
+      grid.origin[k] = joint.min;
+      grid.bins[k] = binsAlong(joint.max - joint.min, grid.width[k]);
+      count *= static_cast<double>(grid.bins[k]);
+    }
+    if (count < 0x1p62) break;
+  }
+  grid.erosion = 0.0;
+  for (std::size_t k = 0; k < w.size(); ++k) grid.erosion += w[k] * 0.5 * grid.width[k];
+  grid.erosion = grid.erosion * (1.0 + 1e-9) + 1e-12;  // the bin centre's rounding
+  grid.cap = d_high + grid.erosion + 1e-6;
+  grid.keys.assign(1024, 0);
+  grid.bounds.assign(1024, 0.0);
+  return grid;
 }
 
 bool SelfPairGrid::keyOf(const Grid& grid,
@@ -107,10 +114,9 @@ double SelfPairGrid::measure(std::size_t p,
     return body.motion == BodyMotion::kScanner ? Eigen::Isometry3d(X * cell.scanner.X_FS) : X;
   };
   const auto& bodies = scene_->geometry().map_bodies;
-  const detail::ShapeDistance d =
-      detail::bodyDistance(bodies[static_cast<std::size_t>(pair.a)], place(a),
-                           bodies[static_cast<std::size_t>(pair.b)], place(b), grid.cap,
-                           false, false);
+  const detail::ShapeDistance d = detail::bodyDistance(
+      bodies[static_cast<std::size_t>(pair.a)], place(a), bodies[static_cast<std::size_t>(pair.b)],
+      place(b), grid.cap, false, false);
   return d.lower - grid.erosion;
 }
 

@@ -30,7 +30,9 @@ namespace scanplan::collision {
 /// One per thread (not thread-safe). Memory: at most kMaxBins bins per pair.
 class SelfPairGrid {
  public:
-  static constexpr std::size_t kMaxBins = std::size_t{1} << 20;
+  /// Bins kept per pair (the demo map visits up to ~4 000 per pair and thread): the table
+  /// stays within 2 MB a pair.
+  static constexpr std::size_t kMaxBins = std::size_t{1} << 16;
   static constexpr int kMaxJoints = 2;
 
   /// erosion: E above, m (> 0).
@@ -48,20 +50,26 @@ class SelfPairGrid {
  private:
   struct Grid {
     int dims = 0;
-    std::array<double, kinematics::kNumJoints> width{};  ///< 2h_k, rad; 0: not a dimension
-    std::array<double, kinematics::kNumJoints> per_width{};  ///< 1 / width
-    std::array<double, kinematics::kNumJoints> origin{};  ///< the joint's lower limit, rad
+    std::array<double, kinematics::kNumJoints> width{};       ///< 2h_k, rad; 0: not a dimension
+    std::array<double, kinematics::kNumJoints> per_width{};   ///< 1 / width
+    std::array<double, kinematics::kNumJoints> origin{};      ///< the joint's lower limit, rad
     std::array<std::int64_t, kinematics::kNumJoints> bins{};  ///< bins along each joint
-    double erosion = 0.0;  ///< Σ w_k·h_k, m
-    double cap = 0.0;      ///< measured exactly up to d_high + erosion (beyond: far is all)
+    double erosion = 0.0;                                     ///< Σ w_k·h_k, m
+    double cap = 0.0;  ///< measured exactly up to d_high + erosion (beyond: far is all)
     // Open addressing, linear probing: key + 1 (0 = empty), and the bin's bound.
     std::vector<std::uint64_t> keys;
     std::vector<double> bounds;
     std::size_t used = 0;
   };
+  static Grid gridOf(const kinematics::RobotModel& robot,
+                     const ChainLevers::Weights& w,
+                     double d_high,
+                     double erosion);
   /// The bin of q as one number, or false when q is outside the limits.
   bool keyOf(const Grid& grid, const kinematics::JointVector& q, std::uint64_t& key) const;
-  double measure(std::size_t pair, const Grid& grid, std::uint64_t key,
+  double measure(std::size_t pair,
+                 const Grid& grid,
+                 std::uint64_t key,
                  kinematics::JointVector q) const;
   void grow(Grid& grid);
 
