@@ -25,9 +25,7 @@ int depthOf(const Scene& scene, std::size_t p, bool with_link) {
   int depth = 0;
   for (const int i : {scene.pairs()[p].a, scene.pairs()[p].b}) {
     const BodyInfo& body = scene.bodies()[static_cast<std::size_t>(i)];
-    if (body.motion == BodyMotion::kRobotLink || body.motion == BodyMotion::kScanner) {
-      depth = std::max(depth, body.link);
-    }
+    if (body.ridesOnTheArm()) depth = std::max(depth, body.link);
   }
   return depth;
 }
@@ -72,7 +70,7 @@ MapClearance::MapClearance(const Scene& scene, std::size_t branches, MapClearanc
     }
   }
   for (std::size_t p = 0; p < np; ++p) {
-    lever_.push_back(levers_.covers(p) ? leverRatio(p, levers_.weights(p)) : 0.0);
+    lever_.push_back(levers_.covers(p) ? leverRatio(p) : 0.0);
   }
   X_W_.assign(nb, Eigen::Isometry3d::Identity());
   placed_.assign(nb, false);
@@ -285,7 +283,8 @@ double MapClearance::requery(std::size_t p, std::size_t slot, const kinematics::
   return f;
 }
 
-double MapClearance::leverRatio(std::size_t p, const ChainLevers::Weights& weights) const {
+double MapClearance::leverRatio(std::size_t p) const {
+  const ChainLevers::Weights& weights = levers_.weights(p);
   double ratio = table_lever_ > 0.0 ? levers_.tableLever(p) / table_lever_ : 0.0;
   for (std::size_t k = 0; k < weights.size(); ++k) {
     if (joint_levers_[k] > 0.0) ratio = std::max(ratio, weights[k] / joint_levers_[k]);

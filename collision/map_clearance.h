@@ -106,7 +106,7 @@ class MapClearance {
                                    const kinematics::JointVector& q);
   double query(std::size_t pair, Memory& memory);
   /// The largest ratio of the pair's weights (and its table lever) to the scene's.
-  double leverRatio(std::size_t pair, const ChainLevers::Weights& weights) const;
+  double leverRatio(std::size_t pair) const;
   /// DH frame k in the world (X_WB · X_Bk) at this branch's joints: by FK on first use, up to k
   /// only, and taken from the twin as far as their joints agree.
   const Eigen::Isometry3d& frame(int k);

@@ -76,6 +76,10 @@ struct BodyInfo {
   int link = -1;  ///< robot link index 0..6, 6 for the scanner; -1 otherwise
   std::size_t shapes = 0;
   std::size_t triangles = 0;  ///< mesh triangles over all shapes
+  /// The robot's own bodies: its base and links, and the scanner it carries.
+  bool ridesOnTheArm() const {
+    return motion == BodyMotion::kRobotLink || motion == BodyMotion::kScanner;
+  }
 };
 
 struct PairInfo {
@@ -103,6 +107,11 @@ class Scene {
   const kinematics::CellModel& cell() const { return cell_; }
   const std::vector<BodyInfo>& bodies() const { return bodies_; }
   const std::vector<PairInfo>& pairs() const { return pairs_; }
+  /// True when both bodies of the pair ride on the arm (BodyInfo::ridesOnTheArm).
+  bool armPair(std::size_t pair) const {
+    return bodies_[static_cast<std::size_t>(pairs_[pair].a)].ridesOnTheArm() &&
+           bodies_[static_cast<std::size_t>(pairs_[pair].b)].ridesOnTheArm();
+  }
   /// Index of a body by name, -1 when absent.
   int bodyIndex(const std::string& name) const;
 

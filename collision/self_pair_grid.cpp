@@ -12,10 +12,6 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-bool ridesOnTheArm(const BodyInfo& body) {
-  return body.motion == BodyMotion::kRobotLink || body.motion == BodyMotion::kScanner;
-}
-
 // Bins along a joint of range `range` (rad) at `width` (rad), one spare for q at the top.
 std::int64_t binsAlong(double range, double width) {
   return static_cast<std::int64_t>(std::ceil(range / width)) + 1;
@@ -36,12 +32,8 @@ SelfPairGrid::SelfPairGrid(const Scene& scene, const ChainLevers& levers, double
   }
   const kinematics::RobotModel& robot = scene.cell().robot;
   for (std::size_t p = 0; p < grids_.size(); ++p) {
-    const PairInfo& pair = scene.pairs()[p];
-    if (!levers.covers(p) || !ridesOnTheArm(scene.bodies()[static_cast<std::size_t>(pair.a)]) ||
-        !ridesOnTheArm(scene.bodies()[static_cast<std::size_t>(pair.b)])) {
-      continue;
-    }
-    grids_[p] = gridOf(robot, levers.weights(p), pair.thresholds.d_high, erosion);
+    if (!levers.covers(p) || !scene.armPair(p)) continue;
+    grids_[p] = gridOf(robot, levers.weights(p), scene.pairs()[p].thresholds.d_high, erosion);
   }
 }
 

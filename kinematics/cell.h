@@ -94,12 +94,13 @@ struct CellModel {
   std::vector<Obstacle> obstacles;
   std::vector<Sensor> sensors;  ///< presence and distance sensors (none: no sensor outputs)
 
-  /// Flange target X_BF for a sensor pose X_PS (part frame) with the table at θ (rad).
+  /// Flange target X_BF for a sensor pose X_PS (part frame) with the table at θ (rad):
+  /// kinematics::flangeTarget, product for product (the same bits).
   Eigen::Isometry3d flangeTarget(double theta, const Eigen::Isometry3d& X_PS) const {
-    return kinematics::flangeTarget(X_WB, table, theta, part.X_RP, X_PS, scanner.X_FS);
+    return flangeTarget(partIn(theta), X_PS);
   }
   /// The same in two steps, for many sensor poses at one θ: X_BF = flangeTarget(partIn(θ),
-  /// X_PS), product for product (the same bits).
+  /// X_PS).
   Eigen::Isometry3d partIn(double theta) const {
     return X_WB.inverse() * table.X_WR(theta) * part.X_RP;
   }

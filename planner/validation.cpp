@@ -790,15 +790,6 @@ bool emitCollisions(const collision::Scene& scene,
   return collided;
 }
 
-// A pair of the robot's own bodies (its links and the scanner it carries).
-bool selfPair(const collision::Scene& scene, std::size_t p) {
-  const auto carried = [&](int body) {
-    const collision::BodyMotion m = scene.bodies()[static_cast<std::size_t>(body)].motion;
-    return m == collision::BodyMotion::kRobotLink || m == collision::BodyMotion::kScanner;
-  };
-  return carried(scene.pairs()[p].a) && carried(scene.pairs()[p].b);
-}
-
 // The sensors' broken rules as violations: the sensor's name, the run, the rule and what the
 // sensor did there (with the bodies a presence volume saw).
 void appendSensorViolations(const collision::Scene& scene,
@@ -848,7 +839,7 @@ void concludeReport(const collision::Scene& scene,
     name = pairName(scene, pair);
     t = closest.t[static_cast<std::size_t>(pair)];
   };
-  const auto self = [&](std::size_t p) { return selfPair(scene, p); };
+  const auto self = [&](std::size_t p) { return scene.armPair(p); };
   fill(closest.least([](std::size_t) { return true; }), report.min_distance,
        report.min_distance_pair, report.min_distance_t);
   fill(closest.least([&](std::size_t p) { return !self(p); }), report.min_cell_distance,
