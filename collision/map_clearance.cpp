@@ -62,6 +62,7 @@ MapClearance::MapClearance(const Scene& scene, std::size_t branches, MapClearanc
   state_.resize(np);
   shared_factor_.assign(np, -1.0);
   travel_of_branch_.resize(branches);
+  zero_pair_.assign(branches, np_);
   for (std::size_t p = 0; p < np; ++p) {
     if (!levers_.covers(p)) continue;
     table_lever_ = std::max(table_lever_, levers_.tableLever(p));
@@ -157,34 +158,38 @@ double MapClearance::factor(std::size_t branch, const kinematics::JointVector& q
   travel.theta = theta_;
   travel.q = q;
   travel.seen = true;
-  const std::size_t np = np_;
-  const double* far_until = far_until_.data() + np * branch;
   findTwin(branch, q);
-  const double* twin = twin_ < cell_q_.size() ? cell_factor_.data() + np * twin_ : nullptr;
-  const int agree = std::max(agree_, 0);
-  double* seen = cell_factor_.data() + np * branch;
-  std::fill(seen, seen + np, kUnknown);
+  double* seen = cell_factor_.data() + np_ * branch;
+  std::fill(seen, seen + np_, kUnknown);
+  // The pair that zeroed this branch's last factor is likely to zero this one: asked first, a
+  // zero ends the call before the pairs ahead of it in order are measured. The product is the
+  // same either way (a zero anywhere makes it zero; otherwise the same factors in order).
+  std::size_t& first = zero_pair_[branch];
+  if (options_.skip && first < np_ && pairFactor(first, travel.sum) == 0.0) return 0.0;
   double f = 1.0;
-  for (std::size_t p = 0; p < np; ++p) {
-    if (travel.sum <= far_until[p]) {  // a pair with a link that stays far: 1
-      seen[p] = 1.0;
-      continue;
-    }
-    double fp = 1.0;
-    if (twin && depth_[p] <= agree && twin[p] != kUnknown) {
-      fp = twin[p];
-    } else if (!levers_.covers(p)) {
-      if (shared_factor_[p] < 0.0) shared_factor_[p] = sharedFactor(p);
-      fp = shared_factor_[p];
-    } else {
-      fp = linkFactor(p, np * (1 + branch) + p, q, travel.sum);
-    }
-    seen[p] = fp;
+  for (std::size_t p = 0; p < np_; ++p) {
+    const double fp = seen[p] != kUnknown ? seen[p] : pairFactor(p, travel.sum);
     if (fp == 1.0) continue;  // as ClearanceEvaluator::factor: no product with a pair beyond
     f *= fp;
-    if (f == 0.0) return 0.0;
+    if (f == 0.0) {
+      first = p;
+      return 0.0;
+    }
   }
   return f;
+}
+
+double MapClearance::pairFactor(std::size_t p, double travel) {
+  const std::size_t slot = np_ * (1 + branch_) + p;
+  double& seen = cell_factor_[np_ * branch_ + p];
+  if (travel <= far_until_[slot - np_]) return seen = 1.0;  // a pair with a link that stays far
+  const double* twin = twin_ < cell_q_.size() ? cell_factor_.data() + np_ * twin_ : nullptr;
+  if (twin && depth_[p] <= agree_ && twin[p] != kUnknown) return seen = twin[p];
+  if (!levers_.covers(p)) {
+    if (shared_factor_[p] < 0.0) shared_factor_[p] = sharedFactor(p);
+    return seen = shared_factor_[p];
+  }
+  return seen = linkFactor(p, slot, *q_, travel);
 }
 
 void MapClearance::findTwin(std::size_t branch, const kinematics::JointVector& q) {

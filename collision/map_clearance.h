@@ -45,6 +45,9 @@ struct MapClearanceOptions {
 ///   branch takes it from one scored before at the same cell with the same values of those
 ///   joints (FLIP and NOFLIP share J1–J3), and the DH frames the same way. Links are placed by
 ///   FK up to the frame asked for.
+/// - The zero pair first: each branch asks first the pair that zeroed its last factor; a zero
+///   again ends the call before the pairs ahead of it are measured (on the demo with hull links,
+///   where most cells are zero, this takes 40 % off the map).
 /// Every factor equals the plain query's (a 1e-6 m margin covers GJK's tolerance), so the
 /// maps do not depend on the skipping, nor on which cells a thread saw before. One per thread.
 class MapClearance {
@@ -89,6 +92,8 @@ class MapClearance {
   /// Finds the branch scored earlier at this cell whose joints agree with q from J1 on for the
   /// most joints (twin_, agree_; none: twin_ = branches, agree_ = −1); records q as this branch's.
   void findTwin(std::size_t branch, const kinematics::JointVector& q);
+  /// Pair p's factor at this cell and branch (travel: the branch's), recorded in cell_factor_.
+  double pairFactor(std::size_t p, double travel);
   double sharedFactor(std::size_t pair);
   double linkFactor(std::size_t pair,
                     std::size_t slot,
@@ -139,6 +144,8 @@ class MapClearance {
   std::vector<State> state_;                     ///< per pair without a link
   std::vector<double> shared_factor_;  ///< this cell's factor of each pair without a link, or < 0
   std::vector<Travel> travel_of_branch_;
+  /// Per branch: the pair that made its last zero factor (np_: none yet), asked first next time.
+  std::vector<std::size_t> zero_pair_;
   double table_lever_ = 0.0;  ///< L_θ: the largest table lever of any pair, m/rad
   /// Per pair with a link: the largest ratio of its weights (and table lever) to the L's: its
   /// distance changes by at most that times its branch's travel.
