@@ -166,8 +166,13 @@ double MapClearance::factor(std::size_t branch, const kinematics::JointVector& q
   // same either way (a zero anywhere makes it zero; otherwise the same factors in order).
   std::size_t& first = zero_pair_[branch];
   if (options_.skip && first < np_ && pairFactor(first, travel.sum) == 0.0) return 0.0;
+  const double* far_until = far_until_.data() + np_ * branch;
   double f = 1.0;
   for (std::size_t p = 0; p < np_; ++p) {
+    if (seen[p] == kUnknown && travel.sum <= far_until[p]) {  // most pairs: one comparison
+      seen[p] = 1.0;
+      continue;
+    }
     const double fp = seen[p] != kUnknown ? seen[p] : pairFactor(p, travel.sum);
     if (fp == 1.0) continue;  // as ClearanceEvaluator::factor: no product with a pair beyond
     f *= fp;
@@ -253,12 +258,24 @@ double MapClearance::linkFactor(std::size_t p,
       return 0.0;
     }
   }
+  if (options_.skip && !options_.exact_distances && stillBelowLow(p, memory)) return 0.0;
   if (options_.skip && !options_.exact_distances && grid_.covers(p)) {
     const double lower = grid_.lower(p, q);
     const PairThresholds& t = scene_->pairs()[p].thresholds;
     if (lower - kMargin >= t.d_high) return anchorFar(p, slot, q, travel, lower);
   }
   return requery(p, slot, q);
+}
+
+bool MapClearance::stillBelowLow(std::size_t p, const Memory& memory) {
+  const PairInfo& pair = scene_->pairs()[p];
+  if (!memory.witness || !(memory.upper < pair.thresholds.d_low)) return false;
+  // Below d_low at the last query. A point of each body from a query that found them apart:
+  // their distance now bounds the pair's from above, far tighter than the lever bound.
+  const double upper = (pose(static_cast<std::size_t>(pair.a)) * memory.w_a -
+                        pose(static_cast<std::size_t>(pair.b)) * memory.w_b)
+                           .norm();
+  return upper + kMargin < pair.thresholds.d_low;
 }
 
 double MapClearance::anchorFar(std::size_t p,
@@ -308,8 +325,14 @@ double MapClearance::query(std::size_t p, Memory& memory) {
         detail::bodyDistance(bodies[a], X_a, bodies[b], X_b, kInf, true, false);
     return d.beyond ? 1.0 : rampFactor(d.distance, t.d_low, t.d_high, t.gamma);
   }
+  const bool link = levers_.covers(p);
   const detail::ShapeDistance d =
-      detail::bodyDistance(bodies[a], X_a, bodies[b], X_b, t.d_high, false, false);
+      detail::bodyDistance(bodies[a], X_a, bodies[b], X_b, t.d_high, false, link);
+  if (link && !d.beyond && !d.penetrating) {  // the nearest points, in the bodies' frames
+    memory.w_a = X_a.inverse() * d.p_a;
+    memory.w_b = X_b.inverse() * d.p_b;
+    memory.witness = true;
+  }
   memory.lower = d.lower;
   memory.upper = d.beyond ? kInf : d.distance;
   memory.factor = d.beyond ? 1.0 : rampFactor(d.distance, t.d_low, t.d_high, t.gamma);

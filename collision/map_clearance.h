@@ -38,6 +38,9 @@ struct MapClearanceOptions {
 ///   only for the pairs that query.
 /// - Travel marks: a pair with a link that the bound showed far (or deep) enough is not even
 ///   bounded again until its branch has travelled (Travel, below) its slack over its lever ratio.
+/// - Nearest points: a pair with a link keeps a point of each body from its last query that
+///   found them apart. While the pair was below d_low then, those two points, placed at this
+///   cell, bound its distance from above: below d_low still, the factor is 0 without a query.
 /// - The arm's own pairs with one or two joints between them: before a query, SelfPairGrid's
 ///   bound for the bin of those joints; at or above d_high the pair is 1, and its memory is
 ///   anchored there.
@@ -73,6 +76,10 @@ class MapClearance {
     /// Pairs with a link: the factor is 0 while the branch's travel stays below zero_until
     /// (−∞: not known); far_until_ below says when it is 1.
     double zero_until = -std::numeric_limits<double>::infinity();
+    /// Pairs with a link: a point of each body (body frames) from the last query that found
+    /// them apart and near, if any: any two points of the bodies bound their distance above.
+    Eigen::Vector3d w_a = Eigen::Vector3d::Zero(), w_b = Eigen::Vector3d::Zero();
+    bool witness = false;
   };
   /// Per branch: the sum over the steps between its factor() calls of L_θ·|Δθ| + Σ_k L_k·|Δq_k|
   /// (m; L: the largest lever of any pair, the table's and each joint's), and the last call's
@@ -93,12 +100,15 @@ class MapClearance {
   /// most joints (twin_, agree_; none: twin_ = branches, agree_ = −1); records q as this branch's.
   void findTwin(std::size_t branch, const kinematics::JointVector& q);
   /// Pair p's factor at this cell and branch (travel: the branch's), recorded in cell_factor_.
-  double pairFactor(std::size_t p, double travel);
+  [[gnu::always_inline]] inline double pairFactor(std::size_t p, double travel);
   double sharedFactor(std::size_t pair);
   double linkFactor(std::size_t pair,
                     std::size_t slot,
                     const kinematics::JointVector& q,
                     double travel);
+  /// Whether a pair with a link, below d_low at its last query, is so still by the nearest
+  /// points kept then (Memory::w_a, w_b).
+  bool stillBelowLow(std::size_t pair, const Memory& memory);
   /// A pair with a link that SelfPairGrid showed far: its memory anchored at q with that bound.
   double anchorFar(std::size_t pair,
                    std::size_t slot,
