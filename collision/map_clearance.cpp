@@ -41,6 +41,24 @@ double motionBound(const Eigen::Vector3d& c,
   return (from * c - to * c).norm() + r * (from.linear() - to.linear()).norm();
 }
 
+// MapClearance::Travel's sums: over every joint and the table (kAll), the table and J1–J3
+// (kArm), J4–J6 (kWristOnly); kWrist: the first wrist joint, 0-based.
+constexpr std::uint8_t kAll = 0, kArm = 1, kWristOnly = 2;
+constexpr int kWrist = 3;
+
+// The travel sum a pair with a link reads: kArm when its weights on J4–J6 are all zero,
+// kWristOnly when those on J1–J3 and its table lever are, else kAll. (A sum per pair's own span
+// of joints was measured too: its upkeep cost more than it saved.)
+std::uint8_t travelClass(const ChainLevers& levers, std::size_t p) {
+  const ChainLevers::Weights& w = levers.weights(p);
+  const auto zero = [&](int from, int to) {
+    return std::all_of(w.begin() + from, w.begin() + to, [](double x) { return x == 0.0; });
+  };
+  if (zero(kWrist, kinematics::kNumJoints)) return kArm;
+  if (levers.tableLever(p) == 0.0 && zero(0, kWrist)) return kWristOnly;
+  return kAll;
+}
+
 }  // namespace
 
 MapClearance::MapClearance(const Scene& scene, std::size_t branches, MapClearanceOptions options)
@@ -72,6 +90,7 @@ MapClearance::MapClearance(const Scene& scene, std::size_t branches, MapClearanc
   }
   for (std::size_t p = 0; p < np; ++p) {
     lever_.push_back(levers_.covers(p) ? leverRatio(p) : 0.0);
+    travel_class_.push_back(levers_.covers(p) ? travelClass(levers_, p) : kAll);
   }
   X_W_.assign(nb, Eigen::Isometry3d::Identity());
   placed_.assign(nb, false);
@@ -148,13 +167,7 @@ double MapClearance::factor(std::size_t branch, const kinematics::JointVector& q
   branch_ = branch;
   frames_[branch].upto = -1;
   std::fill(placed_.begin(), placed_.end(), false);
-  if (travel.seen) {
-    double step = table_lever_ * std::abs(theta_ - travel.theta);
-    for (int k = 0; k < kinematics::kNumJoints; ++k) {
-      step += joint_levers_[static_cast<std::size_t>(k)] * std::abs(q(k) - travel.q(k));
-    }
-    travel.sum += step;
-  }
+  if (travel.seen) addTravel(travel, q);
   travel.theta = theta_;
   travel.q = q;
   travel.seen = true;
@@ -165,15 +178,19 @@ double MapClearance::factor(std::size_t branch, const kinematics::JointVector& q
   // zero ends the call before the pairs ahead of it in order are measured. The product is the
   // same either way (a zero anywhere makes it zero; otherwise the same factors in order).
   std::size_t& first = zero_pair_[branch];
-  if (options_.skip && first < np_ && pairFactor(first, travel.sum) == 0.0) return 0.0;
+  const double* sum = travel.sum.data();
+  const std::uint8_t* travel_class = travel_class_.data();
+  if (options_.skip && first < np_ && pairFactor(first, sum[travel_class[first]]) == 0.0) {
+    return 0.0;
+  }
   const double* far_until = far_until_.data() + np_ * branch;
   double f = 1.0;
   for (std::size_t p = 0; p < np_; ++p) {
-    if (seen[p] == kUnknown && travel.sum <= far_until[p]) {  // most pairs: one comparison
+    if (seen[p] == kUnknown && sum[travel_class[p]] <= far_until[p]) {  // most pairs: one test
       seen[p] = 1.0;
       continue;
     }
-    const double fp = seen[p] != kUnknown ? seen[p] : pairFactor(p, travel.sum);
+    const double fp = seen[p] != kUnknown ? seen[p] : pairFactor(p, sum[travel_class[p]]);
     if (fp == 1.0) continue;  // as ClearanceEvaluator::factor: no product with a pair beyond
     f *= fp;
     if (f == 0.0) {
@@ -182,6 +199,17 @@ double MapClearance::factor(std::size_t branch, const kinematics::JointVector& q
     }
   }
   return f;
+}
+
+void MapClearance::addTravel(Travel& travel, const kinematics::JointVector& q) const {
+  double arm = table_lever_ * std::abs(theta_ - travel.theta), wrist = 0.0;
+  for (int k = 0; k < kinematics::kNumJoints; ++k) {
+    const double step = joint_levers_[static_cast<std::size_t>(k)] * std::abs(q(k) - travel.q(k));
+    (k < kWrist ? arm : wrist) += step;
+  }
+  travel.sum[kAll] += arm + wrist;
+  travel.sum[kArm] += arm;
+  travel.sum[kWristOnly] += wrist;
 }
 
 double MapClearance::pairFactor(std::size_t p, double travel) {

@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <vector>
 
@@ -86,8 +87,11 @@ class MapClearance {
   /// table angle and joints. A pair's distance changes by at most its lever ratio times the
   /// travel since, so a pair that the exact bound showed far (or deep) enough stays so without
   /// a bound evaluated until the branch's travel reaches the pair's mark.
+  /// Three sums: over every joint and the table; over the table and J1–J3; over J4–J6. A pair
+  /// whose weights are zero on one side reads the other side's sum (travel_class_), which
+  /// motion it does not feel does not use up.
   struct Travel {
-    double sum = 0.0;
+    std::array<double, 3> sum{};
     double theta = 0.0;
     kinematics::JointVector q = kinematics::JointVector::Zero();
     bool seen = false;
@@ -101,6 +105,8 @@ class MapClearance {
   void findTwin(std::size_t branch, const kinematics::JointVector& q);
   /// Pair p's factor at this cell and branch (travel: the branch's), recorded in cell_factor_.
   [[gnu::always_inline]] inline double pairFactor(std::size_t p, double travel);
+  /// Adds the step from the branch's last call to (θ, q) to each of its travel sums.
+  void addTravel(Travel& travel, const kinematics::JointVector& q) const;
   double sharedFactor(std::size_t pair);
   double linkFactor(std::size_t pair,
                     std::size_t slot,
@@ -160,7 +166,8 @@ class MapClearance {
   /// Per pair with a link: the largest ratio of its weights (and table lever) to the L's: its
   /// distance changes by at most that times its branch's travel.
   std::vector<double> lever_;
-  ChainLevers::Weights joint_levers_{};  ///< L_k: the largest weight of joint k of any pair
+  std::vector<std::uint8_t> travel_class_;  ///< per pair: the Travel sum it reads
+  ChainLevers::Weights joint_levers_{};     ///< L_k: the largest weight of joint k of any pair
   // This cell: θ, the table top's pose then, the branch's joints and link frames (when computed).
   double theta_ = 0.0;
   Eigen::Isometry3d X_WR_ = Eigen::Isometry3d::Identity();
