@@ -82,14 +82,13 @@ class MapClearance {
     Eigen::Vector3d w_a = Eigen::Vector3d::Zero(), w_b = Eigen::Vector3d::Zero();
     bool witness = false;
   };
-  /// Per branch: the sum over the steps between its factor() calls of L_θ·|Δθ| + Σ_k L_k·|Δq_k|
-  /// (m; L: the largest lever of any pair, the table's and each joint's), and the last call's
-  /// table angle and joints. A pair's distance changes by at most its lever ratio times the
-  /// travel since, so a pair that the exact bound showed far (or deep) enough stays so without
-  /// a bound evaluated until the branch's travel reaches the pair's mark.
-  /// Three sums: over every joint and the table; over the table and J1–J3; over J4–J6. A pair
-  /// whose weights are zero on one side reads the other side's sum (travel_class_), which
-  /// motion it does not feel does not use up.
+  /// Per branch: three sums over the steps between its factor() calls of the terms of
+  /// L_θ·|Δθ| + Σ_k L_k·|Δq_k| (m; L: the largest lever of any pair, the table's and each
+  /// joint's): all of them; the table's and J1–J3's; J4–J6's. And the last call's table angle
+  /// and joints. A pair's distance changes by at most its lever ratio times the travel since, in
+  /// the sum it reads (travel_class_: the one side it depends on, else all), so a pair that the
+  /// exact bound showed far (or deep) enough stays so without a bound evaluated until that sum
+  /// reaches the pair's mark.
   struct Travel {
     std::array<double, 3> sum{};
     double theta = 0.0;
