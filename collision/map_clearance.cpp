@@ -18,14 +18,23 @@ constexpr double kMargin = 1e-6;  // m
 // A pair's factor not known at this cell for a branch (factors are within [0, 1]).
 constexpr double kUnknown = -1.0;
 
-// The last joint a pair with a link depends on (its bodies' farthest link: the scanner rides
-// on link 6, world and table bodies on none), beyond the joints for the others.
+// Whether a body is placed once per cell for every branch: the world's and the table's bodies,
+// and on the arm the base (fixed), link 6 and the scanner on it. Every branch reaches the
+// cell's flange target X_BF, so link 6 is at X_WB · X_BF (Scene::bodyPoses places it at
+// X_WB · X_B6(q), and X_B6(q) is the flange pose) and the scanner at X_WB · X_BF · X_FS.
+bool placedPerCell(const BodyInfo& body) {
+  return body.motion != BodyMotion::kRobotLink || body.link == 0 ||
+         body.link == kinematics::kNumJoints;
+}
+
+// The last joint a pair with a link depends on at a cell (its bodies' farthest link placed per
+// branch), beyond the joints for the others.
 int depthOf(const Scene& scene, std::size_t p, bool with_link) {
   if (!with_link) return kinematics::kNumJoints + 1;
   int depth = 0;
   for (const int i : {scene.pairs()[p].a, scene.pairs()[p].b}) {
     const BodyInfo& body = scene.bodies()[static_cast<std::size_t>(i)];
-    if (body.ridesOnTheArm()) depth = std::max(depth, body.link);
+    if (!placedPerCell(body)) depth = std::max(depth, body.link);
   }
   return depth;
 }
@@ -70,27 +79,33 @@ MapClearance::MapClearance(const Scene& scene, std::size_t branches, MapClearanc
   }
   const std::size_t np = scene.pairs().size(), nb = scene.bodies().size();
   np_ = np;
+  for (const BodyInfo& body : scene.bodies()) per_cell_.push_back(placedPerCell(body) ? 1 : 0);
+  for (const PairInfo& pair : scene.pairs()) {
+    const bool per_cell = per_cell_[static_cast<std::size_t>(pair.a)] != 0 &&
+                          per_cell_[static_cast<std::size_t>(pair.b)] != 0;
+    link_pair_.push_back(levers_.covers(link_pair_.size()) && !per_cell ? 1 : 0);
+  }
   memory_.resize(np * (1 + branches));
   far_until_.assign(np * branches, -kInf);
   cell_factor_.assign(np * branches, kUnknown);
   cell_q_.assign(branches, kinematics::JointVector::Zero());
   cell_seen_.assign(branches, 0);
   frames_.resize(branches);
-  for (std::size_t p = 0; p < np; ++p) depth_.push_back(depthOf(scene, p, levers_.covers(p)));
+  for (std::size_t p = 0; p < np; ++p) depth_.push_back(depthOf(scene, p, link_pair_[p] != 0));
   state_.resize(np);
   shared_factor_.assign(np, -1.0);
   travel_of_branch_.resize(branches);
   zero_pair_.assign(branches, np_);
   for (std::size_t p = 0; p < np; ++p) {
-    if (!levers_.covers(p)) continue;
+    if (!link_pair_[p]) continue;
     table_lever_ = std::max(table_lever_, levers_.tableLever(p));
     for (std::size_t k = 0; k < joint_levers_.size(); ++k) {
       joint_levers_[k] = std::max(joint_levers_[k], levers_.weights(p)[k]);
     }
   }
   for (std::size_t p = 0; p < np; ++p) {
-    lever_.push_back(levers_.covers(p) ? leverRatio(p) : 0.0);
-    travel_class_.push_back(levers_.covers(p) ? travelClass(levers_, p) : kAll);
+    lever_.push_back(link_pair_[p] ? leverRatio(p) : 0.0);
+    travel_class_.push_back(link_pair_[p] ? travelClass(levers_, p) : kAll);
   }
   X_W_.assign(nb, Eigen::Isometry3d::Identity());
   placed_.assign(nb, false);
@@ -115,7 +130,8 @@ void MapClearance::beginCell(double theta, const Eigen::Isometry3d& X_BF) {
   table_seen_ = true;
   theta_ = theta;
   const Eigen::Isometry3d& X_WR = X_WR_;
-  const Eigen::Isometry3d X_WS = cell.X_WB * X_BF * cell.scanner.X_FS;
+  const Eigen::Isometry3d X_W6 = cell.X_WB * X_BF;
+  const Eigen::Isometry3d X_WS = X_W6 * cell.scanner.X_FS;
   for (std::size_t i = 0; i < X_W_.size(); ++i) {
     switch (scene_->bodies()[i].motion) {
       case BodyMotion::kWorld:
@@ -127,8 +143,9 @@ void MapClearance::beginCell(double theta, const Eigen::Isometry3d& X_BF) {
       case BodyMotion::kScanner:
         place(i, X_WS);
         break;
-      case BodyMotion::kRobotLink:
-        break;  // per branch, on first use
+      case BodyMotion::kRobotLink:  // the base and link 6 here, the others per branch on use
+        if (per_cell_[i]) place(i, scene_->bodies()[i].link == 0 ? cell.X_WB : X_W6);
+        break;
     }
   }
   std::fill(shared_factor_.begin(), shared_factor_.end(), -1.0);
@@ -154,7 +171,7 @@ const Eigen::Isometry3d& MapClearance::frame(int k) {
 
 const Eigen::Isometry3d& MapClearance::pose(std::size_t i) {
   const BodyInfo& body = scene_->bodies()[i];
-  if (body.motion != BodyMotion::kRobotLink || placed_[i]) return X_W_[i];
+  if (per_cell_[i] || placed_[i]) return X_W_[i];
   X_W_[i] = frame(body.link);
   placed_[i] = true;
   return X_W_[i];
@@ -218,7 +235,7 @@ double MapClearance::pairFactor(std::size_t p, double travel) {
   if (travel <= far_until_[slot - np_]) return seen = 1.0;  // a pair with a link that stays far
   const double* twin = twin_ < cell_q_.size() ? cell_factor_.data() + np_ * twin_ : nullptr;
   if (twin && depth_[p] <= agree_ && twin[p] != kUnknown) return seen = twin[p];
-  if (!levers_.covers(p)) {
+  if (!link_pair_[p]) {
     if (shared_factor_[p] < 0.0) shared_factor_[p] = sharedFactor(p);
     return seen = shared_factor_[p];
   }
@@ -227,12 +244,12 @@ double MapClearance::pairFactor(std::size_t p, double travel) {
 
 void MapClearance::findTwin(std::size_t branch, const kinematics::JointVector& q) {
   twin_ = cell_q_.size();
-  agree_ = -1;  // no frame to share
+  agree_ = -1;  // no branch scored yet at this cell
   for (std::size_t b = 0; b < cell_q_.size(); ++b) {
     if (!cell_seen_[b] || b == branch) continue;
     int k = 0;
     while (k < kinematics::kNumJoints && cell_q_[b](k) == q(k)) ++k;
-    if (k > std::max(agree_, 0)) {
+    if (k > agree_) {
       agree_ = k;
       twin_ = b;
     }
@@ -353,7 +370,7 @@ double MapClearance::query(std::size_t p, Memory& memory) {
         detail::bodyDistance(bodies[a], X_a, bodies[b], X_b, kInf, true, false);
     return d.beyond ? 1.0 : rampFactor(d.distance, t.d_low, t.d_high, t.gamma);
   }
-  const bool link = levers_.covers(p);
+  const bool link = link_pair_[p] != 0;
   const detail::ShapeDistance d =
       detail::bodyDistance(bodies[a], X_a, bodies[b], X_b, t.d_high, false, link);
   if (link && !d.beyond && !d.penetrating) {  // the nearest points, in the bodies' frames

@@ -25,9 +25,10 @@ struct MapClearanceOptions {
 
 /// The configuration maps' clearance factor (ClearanceEvaluator::factor), cell after cell and
 /// branch after branch, with the work that repeats between them left out:
-/// - The scanner is placed at the cell's flange target, the pose every branch reaches, so the
-///   pairs without a robot link (scanner, table, part, world) are measured once per cell for
-///   all branches.
+/// - Every branch reaches the cell's flange target, so link 6 is placed there (X_WB · X_BF) and
+///   the scanner on it, like the base, the table and the world once per cell: the pairs between
+///   those bodies (link 6 or the scanner against the part, the table or the base, …) are
+///   measured once per cell for all branches, bounded by how far their bodies moved.
 /// - Motion-bound skipping: each pair remembers its last query (per branch for pairs with a
 ///   robot link): a lower bound on the distance then and, when it was below d_high, the
 ///   distance. For a pair with a robot link, ChainLevers bounds how much the distance can have
@@ -60,7 +61,8 @@ class MapClearance {
 
   /// Starts a cell: the table angle θ (rad) and the flange target X_BF (robot base frame).
   void beginCell(double theta, const Eigen::Isometry3d& X_BF);
-  /// The clearance factor at this cell of branch `branch` (< branches) with joints q (rad).
+  /// The clearance factor at this cell of branch `branch` (< branches) with joints q (rad): an
+  /// IK solution of the cell's flange target (link 6 and the scanner are placed at the target).
   double factor(std::size_t branch, const kinematics::JointVector& q);
 
  private:
@@ -143,13 +145,18 @@ class MapClearance {
   std::vector<Eigen::Vector3d> centre_;  ///< per body: bounding-sphere centre, body frame
   std::vector<double> radius_;           ///< per body: bounding-sphere radius, m
   std::size_t np_ = 0;                   ///< pairs
-  std::vector<Memory> memory_;           ///< pairs without a link, then [branch][pair]
+  /// Per body: placed once per cell for every branch (beginCell), not per branch by FK.
+  std::vector<char> per_cell_;
+  /// Per pair: a body placed per branch on one side and ChainLevers' bounds, so memories per
+  /// branch; else one memory for all branches and the bodies' travel (sharedFactor).
+  std::vector<char> link_pair_;
+  std::vector<Memory> memory_;  ///< per pair (for all branches), then [branch][pair]
   /// [branch][pair]: a pair with a link is 1 while its branch's travel stays at or below this
   /// (−∞: not known; pairs without a link stay −∞). Apart from Memory: factor() reads it for
   /// every pair at every call.
   std::vector<double> far_until_;
   /// Work shared between branches: a pair's factor depends on the table angle, the cell's
-  /// flange target and the joints up to the last link it rides on (depth_), so a branch takes
+  /// flange target and the joints up to its last link placed per branch (depth_), so a branch takes
   /// it from another scored at this cell with the same values of those joints (IK's FLIP and
   /// NOFLIP solutions share J1–J3).
   std::vector<int> depth_;           ///< per pair: that last joint (1-based; > 6: not shared)

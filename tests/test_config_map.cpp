@@ -618,6 +618,39 @@ TEST(ConfigMap, ClearanceFactorWithSkippingEqualsThePlainOneAlongSweepsOfEachSid
   EXPECT_GT(near, 500) << "premise: the sweeps bring pairs within d_high";
 }
 
+// The sharing between branches (a pair's factor taken from a branch scored before at the same
+// cell with the same joints up to the pair's last link placed per branch; link 6, the scanner,
+// the base, the table and the world placed once per cell) leaves every value as each branch
+// alone gives it: the demo map against one MapClearance per branch, each seeing only its own
+// branch and querying every pair, byte for byte.
+TEST(ConfigMap, SharingBetweenBranchesChangesNoValue) {
+  const DemoMap& demo = demoMap();
+  const ConfigMap& map = demo.map;
+  std::vector<std::unique_ptr<collision::MapClearance>> alone;
+  for (std::size_t b = 0; b < map.branches.size(); ++b) {
+    alone.push_back(std::make_unique<collision::MapClearance>(
+        *demo.scene, 1, collision::MapClearanceOptions{.skip = false}));
+  }
+  int clearance_limited = 0;
+  for (std::size_t a = 0; a < map.angles.size(); ++a) {
+    const Eigen::Isometry3d X_BP = demo.cell.partIn(map.angles[a]);
+    for (std::size_t t = 0; t < map.times.size(); ++t) {
+      const Eigen::Isometry3d X_BF = demo.cell.flangeTarget(X_BP, demo.path.samples[t].X_PS);
+      const auto solutions = demo.cell.robot.ik(X_BF);
+      for (std::size_t b = 0; b < map.branches.size(); ++b) {
+        alone[b]->beginCell(map.angles[a], X_BF);
+        const planner::CellScore s = planner::scoreCell(*demo.scene, demo.settings, *alone[b], 0,
+                                                        solutions, map.branches[b]);
+        const std::size_t i = map.index(b, a, t);
+        ASSERT_EQ(s.clearance, map.clearance[i])
+            << "angle " << a << ", t " << t << ", " << map.branches[b].words();
+        ASSERT_EQ(s.f, map.f[i]) << "angle " << a << ", t " << t;
+        clearance_limited += s.limit == Limit::kClearance ? 1 : 0;
+      }
+    }
+  }
+  EXPECT_GT(clearance_limited, 50) << "premise: pairs come within d_high";
+}
 TEST(ConfigMap, MotionBoundSkippingChangesNoValue) {
   const DemoMap& demo = demoMap();
   planner::MapRequest plain = demo.request;

@@ -5,11 +5,13 @@
 // compared cell by cell. CPU time of the process (both threads' work) per cell and per
 // branch-cell, best of RUNS; wall time beside it for the cells/s target of issue 4.
 // Usage (from the repository root): build/tests/bench/bench_map [JOB] [SUBSAMPLE (0: none)] [RUNS]
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cmath>
 #include <cstring>
+#include <limits>
 #include <string>
 #include <utility>
 
@@ -30,6 +32,8 @@ using namespace scanplan;
 using Clock = std::chrono::steady_clock;
 
 namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 double seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
@@ -73,7 +77,9 @@ int main(int argc, char** argv) {
   const std::string job_file = argc > 1 ? argv[1] : "data/jobs/demo_rings.yaml";
   const int subsample = argc > 2 ? std::max(0, std::atoi(argv[2])) : 25;  // 0: no exact map
   const int runs = argc > 3 ? std::max(1, std::atoi(argv[3])) : 2;
-  const tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 2);
+  const int threads = argc > 4 ? std::clamp(std::atoi(argv[4]), 1, 64) : 2;
+  const tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
+                                        static_cast<std::size_t>(threads));
 
   const cli::JobSpec job = cli::loadJob(job_file);
   const kinematics::CellModel cell = cli::buildCell(job);
@@ -97,23 +103,29 @@ int main(int argc, char** argv) {
   // Issue 20: the map as built now (closed forms, motion-bound skipping, per-cell sharing)
   // beside the same without skipping (must be identical) and the old path it replaced (FCL
   // alone, every pair at every branch-cell), best of `runs` by the process's CPU time.
+  // The three in turn, round after round: a slow spell of the machine (another process, the
+  // host) falls on all three alike instead of on one path's runs.
   planner::ConfigMap full, unskipped, old;
-  const auto [full_s, full_cpu_once] =
-      timed([&] { full = planner::buildConfigMap(scene, settings, path, request); });
-  const double full_cpu = std::min(full_cpu_once, bench::bestProcessCpuSeconds(runs - 1, [&] {
-    full = planner::buildConfigMap(scene, settings, path, request);
-  }));
   planner::MapRequest plain = request;
   plain.motion_bounds = false;
-  const double unskipped_cpu = bench::bestProcessCpuSeconds(
-      runs, [&] { unskipped = planner::buildConfigMap(scene, settings, path, plain); });
-  const double old_cpu = bench::bestProcessCpuSeconds(runs, [&] {
-    old = planner::detail::buildConfigMapReference(scene, settings, path, request);
-  });
+  double full_s = kInf, full_cpu = kInf, unskipped_cpu = kInf, old_cpu = kInf;
+  for (int r = 0; r < runs; ++r) {
+    const auto [wall, cpu] =
+        timed([&] { full = planner::buildConfigMap(scene, settings, path, request); });
+    full_s = std::min(full_s, wall);
+    full_cpu = std::min(full_cpu, cpu);
+    unskipped_cpu = std::min(
+        unskipped_cpu,
+        timed([&] { unskipped = planner::buildConfigMap(scene, settings, path, plain); }).second);
+    old_cpu = std::min(old_cpu, timed([&] {
+                                  old = planner::detail::buildConfigMapReference(scene, settings,
+                                                                                 path, request);
+                                }).second);
+  }
   const std::size_t cells = full.cellsPerBranch();
   const double nbc = static_cast<double>(cells * full.branches.size());
-  std::printf("bench_map: %s, part %zu triangles, %zu pairs, 2 threads, best of %d\n",
-              job_file.c_str(), part.mesh.triangles.size(), scene.pairs().size(), runs);
+  std::printf("bench_map: %s, part %zu triangles, %zu pairs, %d thread(s), best of %d\n",
+              job_file.c_str(), part.mesh.triangles.size(), scene.pairs().size(), threads, runs);
   std::printf(
       "full map: %zu angles x %zu samples = %zu cells, %zu branch(es): %.2f s wall = %.0f "
       "cells/s   target >= 20000 cells/s: %s\n",
@@ -128,7 +140,8 @@ int main(int argc, char** argv) {
   std::printf("CPU time, without skipping:  %s   (%.2fx the new)\n", per(unskipped_cpu).c_str(),
               unskipped_cpu / full_cpu);
   std::printf("CPU time, old path:          %s   (%.2fx the new)   target >= 5x: %s\n",
-              per(old_cpu).c_str(), old_cpu / full_cpu, old_cpu / full_cpu >= 5.0 ? "met" : "MISSED");
+              per(old_cpu).c_str(), old_cpu / full_cpu,
+              old_cpu / full_cpu >= 5.0 ? "met" : "MISSED");
   const bool same_unskipped = identical(full, unskipped);
   std::printf("new = without skipping (all layers, byte for byte): %s\n",
               same_unskipped ? "yes" : "NO");
