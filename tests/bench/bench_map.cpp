@@ -3,8 +3,10 @@
 // path (planner::detail::buildConfigMapReference: FCL alone, every pair at every branch-cell);
 // then a time-subsampled map with the bounded clearance query and with plain fcl::distance,
 // compared cell by cell. CPU time of the process (both threads' work) per cell and per
-// branch-cell, best of RUNS; wall time beside it for the cells/s target of issue 4.
-// Usage (from the repository root): build/tests/bench/bench_map [JOB] [SUBSAMPLE (0: none)] [RUNS]
+// branch-cell, best of RUNS, the three paths timed in turn round after round; wall time beside
+// it for the cells/s target of issue 4.
+// Usage (from the repository root):
+//   build/tests/bench/bench_map [JOB] [SUBSAMPLE (0: none)] [RUNS] [THREADS (default 2)]
 #include <algorithm>
 #include <chrono>
 #include <cmath>
