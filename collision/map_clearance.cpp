@@ -244,12 +244,12 @@ double MapClearance::pairFactor(std::size_t p, double travel) {
 
 void MapClearance::findTwin(std::size_t branch, const kinematics::JointVector& q) {
   twin_ = cell_q_.size();
-  agree_ = -1;  // no branch scored yet at this cell
+  agree_ = -1;  // no frame to share
   for (std::size_t b = 0; b < cell_q_.size(); ++b) {
     if (!cell_seen_[b] || b == branch) continue;
     int k = 0;
     while (k < kinematics::kNumJoints && cell_q_[b](k) == q(k)) ++k;
-    if (k > agree_) {
+    if (k > std::max(agree_, 0)) {
       agree_ = k;
       twin_ = b;
     }

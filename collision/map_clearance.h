@@ -28,16 +28,18 @@ struct MapClearanceOptions {
 /// - Every branch reaches the cell's flange target, so link 6 is placed there (X_WB · X_BF) and
 ///   the scanner on it, like the base, the table and the world once per cell: the pairs between
 ///   those bodies (link 6 or the scanner against the part, the table or the base, …) are
-///   measured once per cell for all branches, bounded by how far their bodies moved.
+///   measured once per cell for all branches, bounded by how far their bodies moved. Below, "a
+///   pair with a link" is one with a body on links 1–5, placed per branch by FK; the others
+///   are "shared".
 /// - Motion-bound skipping: each pair remembers its last query (per branch for pairs with a
-///   robot link): a lower bound on the distance then and, when it was below d_high, the
-///   distance. For a pair with a robot link, ChainLevers bounds how much the distance can have
-///   changed since from the differences of the table angle and the joints; for the others, a
-///   body's points have moved at most the sum of |Δc| + r·‖ΔR‖_F over the steps since (c, r:
-///   its bounding sphere). While the lower bound minus that stays at or above d_high the pair's
-///   factor is 1 without a query; while the distance plus that stays below d_low it is 0; for
-///   a pair without a link, with nothing moved, the last factor holds. Links are placed (FK)
-///   only for the pairs that query.
+///   link): a lower bound on the distance then and, when it was below d_high, the distance.
+///   For a pair with a link, ChainLevers bounds how much the distance can have changed since
+///   from the differences of the table angle and the joints; for a shared pair, a body's points
+///   have moved at most the sum of |Δc| + r·‖ΔR‖_F over the steps since (c, r: its bounding
+///   sphere). While the lower bound minus that stays at or above d_high the pair's factor is 1
+///   without a query; while the distance plus that stays below d_low it is 0; for a shared
+///   pair, with nothing moved, the last factor holds. Links 1–5 are placed (FK) only for the
+///   pairs that query.
 /// - Travel marks: a pair with a link that the bound showed far (or deep) enough is not even
 ///   bounded again until its branch has travelled (Travel, below) its slack over its lever ratio.
 /// - Nearest points: a pair with a link keeps a point of each body from its last query that
@@ -46,10 +48,10 @@ struct MapClearanceOptions {
 /// - The arm's own pairs with one or two joints between them: before a query, SelfPairGrid's
 ///   bound for the bin of those joints; at or above d_high the pair is 1, and its memory is
 ///   anchored there.
-/// - Branches share: a pair's factor depends only on the joints up to its last link, so a
-///   branch takes it from one scored before at the same cell with the same values of those
-///   joints (FLIP and NOFLIP share J1–J3), and the DH frames the same way. Links are placed by
-///   FK up to the frame asked for.
+/// - Branches share: a pair's factor depends only on the joints up to its last link placed per
+///   branch, so a branch takes it from one scored before at the same cell with the same values
+///   of those joints (FLIP and NOFLIP share J1–J3), and the DH frames the same way. Links are
+///   placed by FK up to the frame asked for.
 /// - The zero pair first: each branch asks first the pair that zeroed its last factor; a zero
 ///   again ends the call before the pairs ahead of it are measured (on the demo with hull links,
 ///   where most cells are zero, this takes 40 % off the map).
@@ -68,7 +70,7 @@ class MapClearance {
  private:
   /// A pair's last query: what the bound checks read on every call, together in one place.
   struct Memory {
-    double travel = 0.0;  ///< pairs without a link: the two bodies' travel then, summed
+    double travel = 0.0;  ///< shared pairs: the two bodies' travel then, summed
     double lower = 0.0;   ///< m, a lower bound on the distance then
     double upper = 0.0;   ///< m, the distance then when below d_high, else +∞
     double factor = 1.0;
@@ -97,7 +99,7 @@ class MapClearance {
     kinematics::JointVector q = kinematics::JointVector::Zero();
     bool seen = false;
   };
-  /// Pairs without a link: the bodies' poses at the last query (the same poses, the same query).
+  /// Shared pairs: the bodies' poses at the last query (the same poses, the same query).
   struct State {
     Eigen::Isometry3d X_a = Eigen::Isometry3d::Identity(), X_b = Eigen::Isometry3d::Identity();
   };
@@ -132,15 +134,15 @@ class MapClearance {
   /// DH frame k in the world (X_WB · X_Bk) at this branch's joints: by FK on first use, up to k
   /// only, and taken from the twin as far as their joints agree.
   const Eigen::Isometry3d& frame(int k);
-  /// Body i's pose at this cell and branch: robot links by FK on first use.
+  /// Body i's pose at this cell and branch: links 1–5 by FK on first use.
   const Eigen::Isometry3d& pose(std::size_t i);
-  /// Moves a body without a robot link to X_W, adding the most any of its points moved to its
+  /// Moves a body placed once per cell to X_W, adding the most any of its points moved to its
   /// travel.
   void place(std::size_t i, const Eigen::Isometry3d& X_W);
 
   const Scene* scene_;
   MapClearanceOptions options_;
-  ChainLevers levers_;                   ///< bounds for the pairs with a robot link
+  ChainLevers levers_;                   ///< bounds for the pairs with a link
   SelfPairGrid grid_;                    ///< the arm's own pairs: bounds per bin of joints
   std::vector<Eigen::Vector3d> centre_;  ///< per body: bounding-sphere centre, body frame
   std::vector<double> radius_;           ///< per body: bounding-sphere radius, m
@@ -152,19 +154,19 @@ class MapClearance {
   std::vector<char> link_pair_;
   std::vector<Memory> memory_;  ///< per pair (for all branches), then [branch][pair]
   /// [branch][pair]: a pair with a link is 1 while its branch's travel stays at or below this
-  /// (−∞: not known; pairs without a link stay −∞). Apart from Memory: factor() reads it for
+  /// (−∞: not known; shared pairs stay −∞). Apart from Memory: factor() reads it for
   /// every pair at every call.
   std::vector<double> far_until_;
   /// Work shared between branches: a pair's factor depends on the table angle, the cell's
   /// flange target and the joints up to its last link placed per branch (depth_), so a branch takes
   /// it from another scored at this cell with the same values of those joints (IK's FLIP and
   /// NOFLIP solutions share J1–J3).
-  std::vector<int> depth_;           ///< per pair: that last joint (1-based; > 6: not shared)
+  std::vector<int> depth_;  ///< per pair: that last joint (1-based; > 6: a shared pair, not so)
   std::vector<double> cell_factor_;  ///< [branch][pair] at this cell, kUnknown if not scored
   std::vector<kinematics::JointVector> cell_q_;  ///< per branch: its joints at this cell
   std::vector<char> cell_seen_;                  ///< per branch: scored at this cell
-  std::vector<State> state_;                     ///< per pair without a link
-  std::vector<double> shared_factor_;  ///< this cell's factor of each pair without a link, or < 0
+  std::vector<State> state_;                     ///< per shared pair
+  std::vector<double> shared_factor_;            ///< this cell's factor of each shared pair, or < 0
   std::vector<Travel> travel_of_branch_;
   /// Per branch: the pair that made its last zero factor (np_: none yet), asked first next time.
   std::vector<std::size_t> zero_pair_;
@@ -189,7 +191,7 @@ class MapClearance {
   int agree_ = 0;
   std::vector<Eigen::Isometry3d> X_W_;  ///< body poses at this cell and branch
   std::vector<bool> placed_;            ///< robot links placed at this branch
-  /// Per body without a link: its last pose, whether it has one, and the sum of the most any of
+  /// Per body placed per cell: its last pose, whether it has one, and the sum of the most any of
   /// its points moved at each step (|Δc| + r·‖ΔR‖_F), m: a bound on how far it moved since any
   /// earlier time by the difference of two sums.
   std::vector<Eigen::Isometry3d> last_;
