@@ -651,6 +651,7 @@ TEST(ConfigMap, SharingBetweenBranchesChangesNoValue) {
   }
   EXPECT_GT(clearance_limited, 50) << "premise: pairs come within d_high";
 }
+
 TEST(ConfigMap, MotionBoundSkippingChangesNoValue) {
   const DemoMap& demo = demoMap();
   planner::MapRequest plain = demo.request;
