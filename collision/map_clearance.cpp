@@ -80,10 +80,11 @@ MapClearance::MapClearance(const Scene& scene, std::size_t branches, MapClearanc
   const std::size_t np = scene.pairs().size(), nb = scene.bodies().size();
   np_ = np;
   for (const BodyInfo& body : scene.bodies()) per_cell_.push_back(placedPerCell(body) ? 1 : 0);
-  for (const PairInfo& pair : scene.pairs()) {
-    const bool per_cell = per_cell_[static_cast<std::size_t>(pair.a)] != 0 &&
-                          per_cell_[static_cast<std::size_t>(pair.b)] != 0;
-    link_pair_.push_back(levers_.covers(link_pair_.size()) && !per_cell ? 1 : 0);
+  for (std::size_t p = 0; p < np; ++p) {
+    const PairInfo& pair = scene.pairs()[p];
+    const bool shared = per_cell_[static_cast<std::size_t>(pair.a)] != 0 &&
+                        per_cell_[static_cast<std::size_t>(pair.b)] != 0;
+    link_pair_.push_back(levers_.covers(p) && !shared ? 1 : 0);
   }
   memory_.resize(np * (1 + branches));
   far_until_.assign(np * branches, -kInf);
