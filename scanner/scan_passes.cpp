@@ -76,10 +76,11 @@ std::vector<double> smoothStandoff(const std::vector<double>& advance, int reach
   return out;
 }
 
-// One point spacing per profile on a surface the motion meets at the incidence limit: the
-// profiles lie point_spacing · cos(max_incidence) apart along the head's path.
+// The provisional (worst-case) speed: one point spacing per profile on a surface the motion
+// meets at the incidence limit, where the profiles lie point_spacing · cos(max_incidence) apart
+// along the head's path. evaluatePass() retimes from what a pass sees.
 double scanSpeed(const PassSettings& s) {
-  return s.point_spacing * std::cos(s.max_incidence) * s.frame_rate;
+  return std::min(s.point_spacing * std::cos(s.max_incidence) * s.frame_rate, s.max_head_speed);
 }
 
 // Largest distance of a part vertex from the origin of R, and the part's height and radius.
@@ -441,7 +442,83 @@ void profilePoints(const PartOnTable& scene,
   }
 }
 
+// The time `amount` takes at `limit` per second; a limit ≤ 0 is none.
+double limitTime(double amount, double limit) { return limit > 0.0 ? amount / limit : 0.0; }
+
+// The speed caps of the 1-D profile at the keys (a key takes the lower of its two stretches';
+// the ends their one stretch's), then the classic time-optimal pass: forward, each key no
+// faster than the one before accelerating over the stretch between them (v² grows by 2·a·L at
+// most), then the same backward. Stretches of no length (a turn in place) tie no keys together.
+std::vector<double> speedProfile(const std::vector<double>& length,
+                                 const std::vector<double>& cap,
+                                 double accel) {
+  const std::size_t n = length.size() + 1;
+  std::vector<double> v(n, std::numeric_limits<double>::infinity());
+  for (std::size_t k = 0; k + 1 < n; ++k) {
+    if (!(length[k] > 0.0)) continue;
+    v[k] = std::min(v[k], cap[k]);
+    v[k + 1] = std::min(v[k + 1], cap[k]);
+  }
+  if (!(accel > 0.0) || !std::isfinite(accel)) return v;
+  for (std::size_t k = 0; k + 1 < n; ++k)
+    if (length[k] > 0.0)
+      v[k + 1] = std::min(v[k + 1], std::sqrt(v[k] * v[k] + 2.0 * accel * length[k]));
+  for (std::size_t k = n - 1; k > 0; --k)
+    if (length[k - 1] > 0.0)
+      v[k - 1] = std::min(v[k - 1], std::sqrt(v[k] * v[k] + 2.0 * accel * length[k - 1]));
+  return v;
+}
+
 }  // namespace
+
+void timePass(ScanPass& pass,
+              const PassSettings& settings,
+              const std::vector<double>& line_travel) {
+  constexpr double kMinStep = 1e-6;  // s between keys at least: times stay increasing
+  const std::size_t n = pass.X_RS.size();
+  if (n < 2) {
+    pass.t.assign(n, 0.0);
+    return;
+  }
+  const bool spin = pass.kind == PassKind::kSpin && pass.azimuth.size() == n;
+  // The head as the arm moves it: in R for strips (the table stands still), in the world for
+  // spins, where the table turns the azimuth away (only the standoff changes are left).
+  const auto head = [&](std::size_t k) {
+    if (!spin) return pass.X_RS[k];
+    return Eigen::Isometry3d(Eigen::AngleAxisd(-pass.azimuth[k], Eigen::Vector3d::UnitZ())) *
+           pass.X_RS[k];
+  };
+  // Profile lines at most point_spacing apart: one spacing per frame at the line's speed.
+  const double line_speed = settings.speed_safety * settings.point_spacing * settings.frame_rate;
+  std::vector<double> length(n - 1), least(n - 1), cap(n - 1);
+  Eigen::Isometry3d from = head(0);
+  for (std::size_t k = 0; k + 1 < n; ++k) {
+    const Eigen::Isometry3d to = head(k + 1);
+    const double move = (to.translation() - from.translation()).norm();
+    const double turn = kinematics::rotationDistance(from.linear(), to.linear());
+    double dt = std::max({k < line_travel.size() ? limitTime(line_travel[k], line_speed) : 0.0,
+                          limitTime(move, settings.max_head_speed),
+                          limitTime(turn, settings.max_head_turn), kMinStep});
+    if (spin) {
+      length[k] = std::abs(pass.azimuth[k + 1] - pass.azimuth[k]);
+      dt = std::max(dt, limitTime(length[k], settings.max_spin_rate));
+    } else {
+      length[k] = (pass.X_RS[k + 1].translation() - pass.X_RS[k].translation()).norm();
+    }
+    least[k] = dt;
+    cap[k] = length[k] / dt;
+    from = to;
+  }
+  const std::vector<double> v =
+      speedProfile(length, cap, spin ? settings.max_spin_accel : settings.max_head_accel);
+  pass.t.assign(n, 0.0);
+  for (std::size_t k = 0; k + 1 < n; ++k) {
+    // Constant acceleration between the keys' speeds: the stretch at their mean speed.
+    double dt = least[k];
+    if (length[k] > 0.0) dt = std::max(dt, 2.0 * length[k] / (v[k] + v[k + 1]));
+    pass.t[k + 1] = pass.t[k] + dt;
+  }
+}
 
 void evaluatePass(ScanPass& pass,
                   const PartOnTable& scene,
@@ -451,24 +528,52 @@ void evaluatePass(ScanPass& pass,
   std::vector<std::uint8_t> hit(index.sampling().samples.size(), 0);
   std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> points;
   std::vector<std::uint32_t> near;
-  for (std::size_t k = 0; k + 1 < pass.X_RS.size(); ++k) {
+  // line_travel[k]: how far the profile lines move over the surface from key k to key k + 1, the
+  // most over the points measured on that stretch. The laser plane is x_S = 0; a point p with
+  // normal n crosses it by Δx = |(X_b⁻¹p).x − (X_a⁻¹p).x| between the keys. On the surface (its
+  // tangent plane T at p) the line is the level set x_S·q = const of q in T: the gradient of
+  // x_S·q within T is x_S's projection on T, x_S − (x_S·n)n, of length √(1 − (x_S·n)²), so the
+  // line moves along that projection by Δx / √(1 − (x_S·n)²). This holds for any motion of the
+  // plane, strips (translation along x_S) and spins (turning about the table axis) alike. A
+  // measured point is within max_incidence of its laser ray, which lies in the plane: the root
+  // is at least cos(max_incidence).
+  const bool timed = pass.kind != PassKind::kGiven;
+  const std::size_t n_keys = pass.X_RS.size();
+  std::vector<double> line_travel(n_keys > 0 ? n_keys - 1 : 0, 0.0);
+  const double min_root = std::cos(settings.max_incidence);
+  const auto crossing = [&](const Eigen::Isometry3d& a_inv, const Eigen::Isometry3d& b_inv,
+                            const Eigen::Vector3d& p, double root) {
+    return std::abs((b_inv * p).x() - (a_inv * p).x()) / root;
+  };
+  Eigen::Isometry3d before_inv = Eigen::Isometry3d::Identity();  // key k − 1, inverted
+  for (std::size_t k = 0; k + 1 < n_keys; ++k) {
     const Eigen::Isometry3d &a = pass.X_RS[k], &b = pass.X_RS[k + 1];
+    const Eigen::Isometry3d a_inv = a.inverse(), b_inv = b.inverse();
     const double travel = (b.translation() - a.translation()).norm();
     const int steps = std::max(1, static_cast<int>(std::ceil(travel / settings.eval_step)));
-    for (int s = 0; s < steps + (k + 2 == pass.X_RS.size() ? 1 : 0); ++s) {
+    for (int s = 0; s < steps + (k + 2 == n_keys ? 1 : 0); ++s) {
       points.clear();
-      profilePoints(scene, settings, fan, kinematics::interpolatePose(a, b, double(s) / steps),
-                    points);
+      const Eigen::Isometry3d X = kinematics::interpolatePose(a, b, double(s) / steps);
+      profilePoints(scene, settings, fan, X, points);
       for (const auto& [p, n] : points) {
         near.clear();
         index.near(p, n, settings.eval_radius, near);
         for (std::uint32_t i : near) hit[i] = 1;
+        if (!timed) continue;
+        const double x_n = X.linear().col(0).dot(n);
+        const double root = std::max(std::sqrt(std::max(0.0, 1.0 - x_n * x_n)), min_root);
+        line_travel[k] = std::max(line_travel[k], crossing(a_inv, b_inv, p, root));
+        // A profile at a key also ends the stretch before it.
+        if (s == 0 && k > 0)
+          line_travel[k - 1] = std::max(line_travel[k - 1], crossing(before_inv, a_inv, p, root));
       }
     }
+    before_inv = a_inv;
   }
   pass.covers.clear();
   for (std::size_t i = 0; i < hit.size(); ++i)
     if (hit[i]) pass.covers.push_back(static_cast<std::uint32_t>(i));
+  if (timed) timePass(pass, settings, line_travel);
 }
 
 void evaluatePasses(std::vector<ScanPass>& passes,

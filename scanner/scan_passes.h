@@ -13,6 +13,12 @@
 // Each follows the surface: per profile the standoff puts the depths seen under the whole line
 // (several rays cast across it) in the middle of the depth window, never nearer than its near
 // end, smoothed to the most conservative standoff nearby.
+//
+// Timing: candidatePasses() times its keys at the worst case (a surface at the incidence limit;
+// for spins, at the largest radius), which keeps the point spacing without knowing what a pass
+// sees. evaluatePass() then retimes each pass from what it measures (timePass()): on each stretch
+// between keys as fast as keeps the profile lines on the surface it actually scans within
+// point_spacing of each other, within the head's and the table's speeds and accelerations.
 
 #include <cstddef>
 #include <cstdint>
@@ -37,8 +43,19 @@ struct PassSettings {
   double point_spacing = 2.5e-4;              ///< m, the spacing the passes must achieve
   double frame_rate = 100.0;                  ///< Hz, profiles per second
   double max_spin_rate = 0.4;  ///< rad/s, the table's turning rate in a spin; 0: no spins
-  double overlap = 0.25;       ///< of the line width between neighbouring passes
-  double lead = 0.01;          ///< m, a strip runs on this far beyond the part
+  /// rad/s², how fast a spin's table rate may change from key to key (the table drives it).
+  double max_spin_accel = 0.5;
+  /// m/s, the head's translation speed along a pass (strips: in R, the table standing still;
+  /// spins: in the world, i.e. its standoff changes). About what a 6-axis arm of the demo's
+  /// size follows smoothly while it carries a scanner.
+  double max_head_speed = 0.25;
+  double max_head_turn = 1.0;   ///< rad/s, the head's rotation along a pass (as max_head_speed)
+  double max_head_accel = 1.0;  ///< m/s², how fast a strip's head speed may change key to key
+  /// Of the speed that spaces the profile lines exactly point_spacing apart on what the
+  /// evaluated profiles see: the margin for surface between them, (0, 1].
+  double speed_safety = 0.9;
+  double overlap = 0.25;  ///< of the line width between neighbouring passes
+  double lead = 0.01;     ///< m, a strip runs on this far beyond the part
   /// The scanner housing in S (m), grown by the clearance to keep from the part and the table:
   /// strips are cut to the stretch where it fits, spins dropped where it does not. Empty: none.
   std::vector<Eigen::AlignedBox3d> housing;
@@ -61,6 +78,7 @@ struct ScanPass {
   /// start at any azimuth (rotate every pose about z).
   std::vector<double> azimuth;
   std::vector<std::uint32_t> covers;  ///< evaluation samples it covers, ascending
+  /// s, the scanning time (once evaluated, see evaluatePass()).
   double duration() const { return t.empty() ? 0.0 : t.back() - t.front(); }
 };
 
@@ -68,8 +86,9 @@ struct ScanPass {
 /// work it grows with (the square of the part's size), to check before generating.
 double candidateStations(const std::vector<Eigen::Vector3d>& part_R, const PassSettings& settings);
 
-/// Every candidate pass over the part (spins first, then strips), keys only (not evaluated).
-/// Spins need max_spin_rate > 0. Deterministic.
+/// Every candidate pass over the part (spins first, then strips), keys only (not evaluated),
+/// timed at the worst case (see the top of this file). Spins need max_spin_rate > 0.
+/// Deterministic.
 std::vector<ScanPass> candidatePasses(const PartOnTable& scene, const PassSettings& settings);
 
 /// A short straight pass through a head pose that sees a sample (a scannability witness, R
@@ -103,16 +122,38 @@ class SampleIndex {
   std::unique_ptr<Tree> tree_;
 };
 
+/// Times a pass's keys (sets `pass.t`, from 0; keeps its keys and azimuths) from how far the
+/// laser line moves over the surface it scans on each stretch between keys: `line_travel[k]`
+/// (m, 0 where the stretch sees nothing) between keys k and k + 1. Each stretch takes at least
+/// line_travel / (speed_safety · point_spacing · frame_rate), so consecutive profiles lie at most
+/// point_spacing apart on the surface, and no less than the head's limits allow: max_head_speed
+/// and max_head_turn (strips: the motion in R; spins: in the world, the table turning the
+/// azimuth away), and for spins max_spin_rate. Then the speed along the pass (strips: the head's
+/// translation, m/s; spins: the table's rate, rad/s) is made to change by at most
+/// max_head_accel / max_spin_accel: the time-optimal profile under those caps (a forward and a
+/// backward pass; the pass may start and end at full speed, the moves between passes stop).
+/// Between keys the speed is constant (keys are interpolated linearly in time). Consecutive keys
+/// are at least 1 µs apart. A limit ≤ 0 is none. `line_travel` has an entry per stretch
+/// (X_RS.size() − 1; missing ones count as seeing nothing).
+void timePass(ScanPass& pass, const PassSettings& settings, const std::vector<double>& line_travel);
+
 /// Fills `pass.covers`: the samples (of `index`, R frame) that a measured point of the pass
 /// lands near. Profiles every eval_step of head travel, eval_rays fan rays each; a ray yields a
 /// point when it hits the part first inside the window trapezoid, within max_incidence of the
 /// normal, and a camera sees the point within max_incidence with nothing in between.
+///
+/// Also retimes the pass (timePass(); not a PassKind::kGiven pass, whose times are the user's):
+/// a point p (normal n) measured between keys X_a and X_b moves across the laser plane by
+/// Δx = |(X_b⁻¹p).x − (X_a⁻¹p).x|, so its profile line moves over the surface by
+/// Δx / √(1 − (x_S·n)²); the stretch's line_travel is the largest of those. Afterwards
+/// `pass.duration()` is the pass's scanning time.
 void evaluatePass(ScanPass& pass,
                   const PartOnTable& scene,
                   const PassSettings& settings,
                   const SampleIndex& index);
 
-/// evaluatePass() over all passes, in parallel (TBB); the result does not depend on threads.
+/// evaluatePass() over all passes (covers and times), in parallel (TBB); the result does not
+/// depend on threads.
 /// `progress` (passes done, passes in all) is called from worker threads: serialise inside.
 void evaluatePasses(std::vector<ScanPass>& passes,
                     const PartOnTable& scene,
