@@ -10,7 +10,7 @@ packages=(
   libompl-dev libboost-dev libboost-serialization-dev libboost-filesystem-dev libboost-system-dev
   libnlopt-dev libnlopt-cxx-dev libyaml-cpp-dev libembree-dev libnanoflann-dev libassimp-dev
   libcli11-dev libspdlog-dev libfmt-dev libtbb-dev libpng-dev nlohmann-json3-dev
-  liburdfdom-dev libqhull-dev
+  liburdfdom-dev libqhull-dev libglpk-dev
   libgtest-dev libgmock-dev libcairo2-dev fonts-dejavu-core
   # for tests: OMPL's ompl_benchmark_statistics reads `batch`'s log, GNU parallel runs shards
   ompl-demos parallel
