@@ -1,9 +1,11 @@
 #include "scanner/scan_passes.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -52,6 +54,22 @@ double probeLine(const PartOnTable& scene,
   }
   if (!part) return kNaN;
   return std::min(0.5 * (nearest + farthest) - zMid(window), nearest - window.z_min);
+}
+
+// Does the line of a head at o (looking along v, the line along y) meet the part first, inside
+// the depth window, with any of the rays probeLine() casts?
+bool seesPart(const PartOnTable& scene,
+              const LaserWindow& window,
+              const Eigen::Vector3d& o,
+              const Eigen::Vector3d& v,
+              const Eigen::Vector3d& y) {
+  const double half = 0.9 * window.y_near;
+  for (int k = -3; k <= 3; ++k) {
+    const auto hit = scene.cast(o + (half * k / 3.0) * y, v);
+    if (hit && scene.onPart(*hit) && hit->distance >= window.z_min && hit->distance <= window.z_max)
+      return true;
+  }
+  return false;
 }
 
 // The most conservative (least advanced) standoff within ±reach stations; NaN stations take the
@@ -142,6 +160,78 @@ bool spinPass(const PartOnTable& scene,
   return true;
 }
 
+// One helix: a spin at elevation e whose line centre climbs along the line direction by `pitch`
+// per revolution while the table turns, from u_first over `turns` revolutions, the camera ahead
+// (+1) or behind (−1). Cut to the longest run of keys where the housing fits; dropped when that
+// is less than a whole turn.
+bool helixPass(const PartOnTable& scene,
+               const HousingCheck& housing,
+               const PassSettings& settings,
+               double e,
+               double u_first,
+               double pitch,
+               double turns,
+               int camera_side,
+               double far,
+               ScanPass& pass) {
+  const int per_turn = static_cast<int>(std::lround(360.0 / kSpinStation));
+  const int n = static_cast<int>(std::ceil(turns * per_turn));
+  const auto stations = static_cast<std::size_t>(n) + 1;
+  std::vector<double> advance(stations), phi(stations);
+  std::vector<Eigen::Vector3d> origin(stations), view(stations), tangent(stations), line(stations);
+  double rho = 0.0;
+  for (int j = 0; j <= n; ++j) {
+    const auto i = static_cast<std::size_t>(j);
+    phi[i] = deg(kSpinStation * j);
+    const Eigen::Vector3d r(std::cos(phi[i]), std::sin(phi[i]), 0.0), z = Eigen::Vector3d::UnitZ();
+    line[i] = -std::sin(e) * r + std::cos(e) * z;
+    view[i] = -std::cos(e) * r - std::sin(e) * z;
+    tangent[i] = z.cross(r);
+    origin[i] = (u_first + pitch * phi[i] / (2.0 * std::numbers::pi)) * line[i] - far * view[i];
+    advance[i] = probeLine(scene, settings.window, origin[i], view[i], line[i], rho);
+  }
+  if (std::all_of(advance.begin(), advance.end(), [](double a) { return std::isnan(a); }))
+    return false;
+  const std::vector<double> smooth = smoothStandoff(advance, kSpinSmoothing, false);
+  // Its ends where the line sees no part inside the window (beyond the part, or backed off from
+  // the table) are left out.
+  std::size_t seen_first = stations, seen_last = 0;
+  for (std::size_t i = 0; i < stations; ++i) {
+    if (!seesPart(scene, settings.window, origin[i] + smooth[i] * view[i], view[i], line[i]))
+      continue;
+    seen_first = std::min(seen_first, i);
+    seen_last = i;
+  }
+  if (seen_first > seen_last) return false;
+  // The longest run of keys where the housing fits.
+  std::vector<Eigen::Isometry3d> keys(stations);
+  std::size_t best_first = 0, best_count = 0, first = seen_first;
+  for (std::size_t i = seen_first; i <= seen_last; ++i) {
+    keys[i] = kinematics::frameFromAxes(origin[i] + smooth[i] * view[i], view[i],
+                                        camera_side * tangent[i]);
+    if (!housing.fits(keys[i])) {
+      first = i + 1;
+      continue;
+    }
+    if (i + 1 - first > best_count) {
+      best_first = first;
+      best_count = i + 1 - first;
+    }
+  }
+  if (best_count < static_cast<std::size_t>(per_turn) + 1) return false;
+  const double omega = std::min(scanSpeed(settings) / std::max(rho, 1e-3), settings.max_spin_rate);
+  pass.kind = PassKind::kSpin;
+  pass.label = fmt::format("helix elevation {:.0f} deg, {:.1f} turns{}", toDeg(e),
+                           static_cast<double>(best_count - 1) / per_turn,
+                           camera_side > 0 ? "" : ", camera behind");
+  for (std::size_t i = best_first; i < best_first + best_count; ++i) {
+    pass.t.push_back((phi[i] - phi[best_first]) / omega);
+    pass.azimuth.push_back(phi[i]);
+    pass.X_RS.push_back(keys[i]);
+  }
+  return true;
+}
+
 void addSpins(const PartOnTable& scene,
               const HousingCheck& housing,
               const PassSettings& settings,
@@ -149,15 +239,20 @@ void addSpins(const PartOnTable& scene,
   if (!(settings.max_spin_rate > 0.0)) return;
   const PartSpan span = partSpan(scene.part());
   const double spacing = 2.0 * settings.window.y_near * (1.0 - settings.overlap);
-  for (double e_deg : {-20.0, 0.0, 25.0, 50.0, 70.0, 90.0}) {
-    const double e = deg(e_deg);
-    // The part's (ρ, z) profile projected on the line direction (−sin e, cos e).
+  const std::array<double, 6> elevations{-20.0, 0.0, 25.0, 50.0, 70.0, 90.0};
+  // The part's (ρ, z) profile projected on the line direction (−sin e, cos e).
+  const auto extent = [&](double e) {
     double lo = 1e30, hi = -1e30;
     for (double rho : {0.0, span.rho})
       for (double z : {0.0, span.z_top}) {
         lo = std::min(lo, -rho * std::sin(e) + z * std::cos(e));
         hi = std::max(hi, -rho * std::sin(e) + z * std::cos(e));
       }
+    return std::pair{lo, hi};
+  };
+  for (double e_deg : elevations) {
+    const double e = deg(e_deg);
+    const auto [lo, hi] = extent(e);
     const int lines = std::max(1, static_cast<int>(std::ceil((hi - lo) / spacing)));
     for (int k = 0; k < lines; ++k) {
       const double u = lo + (hi - lo) * (k + 0.5) / lines;
@@ -166,6 +261,24 @@ void addSpins(const PartOnTable& scene,
         if (spinPass(scene, housing, settings, e, u, side, span.reach + std::abs(u) + 0.05, pass))
           out.push_back(std::move(pass));
       }
+    }
+  }
+  // Helices, where the extent takes more than one spin. At every azimuth the helix's turns lie
+  // one spacing apart, shifted by the turned fraction of a spacing: the lowest is at most half a
+  // spacing above lo, the highest at least half a spacing below hi (the margins the spins keep
+  // between neighbouring lines) when it runs from lo − spacing / 2 to hi + spacing / 2, over
+  // 1 + (hi − lo) / spacing turns.
+  for (double e_deg : elevations) {
+    const double e = deg(e_deg);
+    const auto [lo, hi] = extent(e);
+    if (!(hi - lo > spacing)) continue;
+    const double u_first = lo - 0.5 * spacing, turns = 1.0 + (hi - lo) / spacing;
+    const double far =
+        span.reach + std::max(std::abs(u_first), std::abs(hi + 0.5 * spacing)) + 0.05;
+    for (int side : {1, -1}) {
+      ScanPass pass;
+      if (helixPass(scene, housing, settings, e, u_first, spacing, turns, side, far, pass))
+        out.push_back(std::move(pass));
     }
   }
 }

@@ -4,10 +4,17 @@
 // turns about R's z axis, so a pass's azimuth around the part is free and the arm only has to
 // reach its view elevation.
 //
-// Two families:
+// Three families:
 // - spins: the head holds a pose in the world while the table turns a full revolution; in R the
 //   head circles the axis with its laser plane through the axis, at a view elevation and an
 //   offset along the line (a band of the part's surface of revolution);
+// - helices: spins whose line centre climbs one line spacing along the line direction per
+//   revolution, over several revolutions: one continuous pass over the whole surface of
+//   revolution at a view elevation (PassKind::kSpin: the table turns with them, their azimuth
+//   grows past 2π; the pass ends elsewhere than it starts). At every azimuth their turns lie
+//   one line spacing apart, so they cover the part's extent when they run from half a spacing
+//   below it to half a spacing above, 1 + extent / spacing turns: up to a turn more than the
+//   spins of that elevation, without the moves between those;
 // - strips: straight passes across the part seen from a view direction sampled on the sphere,
 //   the table standing still.
 // Each follows the surface: per profile the standoff puts the depths seen under the whole line
@@ -57,7 +64,8 @@ struct PassSettings {
   double overlap = 0.25;  ///< of the line width between neighbouring passes
   double lead = 0.01;     ///< m, a strip runs on this far beyond the part
   /// The scanner housing in S (m), grown by the clearance to keep from the part and the table:
-  /// strips are cut to the stretch where it fits, spins dropped where it does not. Empty: none.
+  /// strips are cut to the stretch where it fits, spins dropped where it does not, helices cut
+  /// to the longest stretch where it fits (dropped below a whole turn). Empty: none.
   std::vector<Eigen::AlignedBox3d> housing;
   double housing_spacing = 0.015;  ///< m, the housing test's grid (HousingCheck)
   int eval_rays = 41;              ///< fan rays per evaluated profile
@@ -71,11 +79,12 @@ const char* passKindName(PassKind kind);  ///< "spin", "strip", "given"
 /// One pass: keyed scanner poses (R frame) with their times; scanning along all of it.
 struct ScanPass {
   PassKind kind = PassKind::kStrip;
-  std::string label;                    ///< e.g. "spin elevation 25 deg, offset 12 mm"
+  /// e.g. "spin elevation 25 deg, line at 12 mm", "helix elevation 0 deg, 5.2 turns"
+  std::string label;
   std::vector<double> t;                ///< s from the pass start, per key, increasing
   std::vector<Eigen::Isometry3d> X_RS;  ///< scanner frame S in R, per key
-  /// Spins: the azimuth (rad, about R's z) the head has turned by at each key; the pass can
-  /// start at any azimuth (rotate every pose about z).
+  /// Spins: the azimuth (rad, about R's z) the head has turned by at each key, increasing (past
+  /// 2π for a helix); the pass can start at any azimuth (rotate every pose about z).
   std::vector<double> azimuth;
   std::vector<std::uint32_t> covers;  ///< evaluation samples it covers, ascending
   /// s, the scanning time (once evaluated, see evaluatePass()).
@@ -86,7 +95,8 @@ struct ScanPass {
 /// work it grows with (the square of the part's size), to check before generating.
 double candidateStations(const std::vector<Eigen::Vector3d>& part_R, const PassSettings& settings);
 
-/// Every candidate pass over the part (spins first, then strips), keys only (not evaluated),
+/// Every candidate pass over the part (spins first, then helices, then strips), keys only (not
+/// evaluated),
 /// timed at the worst case (see the top of this file). Spins need max_spin_rate > 0.
 /// Deterministic.
 std::vector<ScanPass> candidatePasses(const PartOnTable& scene, const PassSettings& settings);

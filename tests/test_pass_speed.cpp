@@ -5,8 +5,10 @@
 // the part's faces analytically.
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <numbers>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -21,6 +23,7 @@
 #include "scanner/area_coverage.h"
 #include "scanner/laser_model.h"
 #include "scanner/part_on_table.h"
+#include "scanner/pass_selection.h"
 #include "scanner/scan_passes.h"
 #include "scanner/simulator.h"
 
@@ -448,6 +451,107 @@ TEST(SpinSpeed, ASpinAroundAPrismChangesRateWithinTheTablesAcceleration) {
   const Achieved a = achievedOnBox(pass, box, s);
   EXPECT_GT(a.checked, 1000);
   EXPECT_LE(a.worst, s.point_spacing * (1.0 + 1e-6));
+}
+
+// The level helix around a cylinder taller than several lines: its line climbs one line spacing
+// per turn, so one pass sweeps the wall that the level spins sweep band by band. At every
+// azimuth its turns lie one spacing apart (the spins' pitch spreads their lines evenly and is at
+// most that), so it covers all they cover together. It turns up to one revolution more than
+// they do (1 + H / spacing turns against ⌈H / spacing⌉ spins for an extent H) but saves the
+// moves between them: back off to the transfer sphere, along it, in again (as the automatic scan
+// connects passes).
+TEST(Helix, AHelixCoversWhatTheLevelSpinsCoverInLessTimeThanThemAndTheMovesBetween) {
+  constexpr double kRadius = 0.04, kHeight = 0.15;
+  const PartOnTable scene(cylinder(kRadius, kHeight, 128), Isometry3d::Identity(), kTable);
+  PassSettings s = demoHead();
+  s.max_spin_rate = 2.0;  // a fast table: the point spacing sets the rate
+  std::vector<ScanPass> passes = scanplan::scanner::candidatePasses(scene, s);
+  std::vector<ScanPass> spins, helices;
+  for (ScanPass& p : passes) {
+    if (p.kind != PassKind::kSpin || p.label.find("behind") != std::string::npos) continue;
+    if (p.label.starts_with("spin elevation 0 deg")) spins.push_back(p);
+    if (p.label.starts_with("helix elevation 0 deg")) helices.push_back(p);
+  }
+  ASSERT_GE(spins.size(), 3u);
+  ASSERT_EQ(helices.size(), 1u);
+  ScanPass& helix = helices.front();
+  const double spacing = 2.0 * s.window.y_near * (1.0 - s.overlap);
+  const double turns = 1.0 + kHeight / spacing;
+  // Azimuth and climb: at most 1 + H / spacing turns (from half a spacing below the part to half
+  // a spacing above it, less the ends where its line sees nothing), one spacing per turn.
+  ASSERT_GE(helix.azimuth.size(), 2u);
+  const double turned = helix.azimuth.back() - helix.azimuth.front();
+  EXPECT_LE(turned, 2.0 * kPi * turns + deg(2.0));
+  EXPECT_GT(turned, 2.0 * kPi * (static_cast<double>(spins.size()) - 1.0));
+  std::ostringstream label;
+  label << "helix elevation 0 deg, " << std::fixed << std::setprecision(1) << turned / (2.0 * kPi)
+        << " turns";
+  EXPECT_EQ(helix.label, label.str());
+  for (std::size_t k = 0; k + 1 < helix.azimuth.size(); ++k)
+    ASSERT_GT(helix.azimuth[k + 1], helix.azimuth[k]) << k;
+  EXPECT_NEAR(helix.X_RS.back().translation().z() - helix.X_RS.front().translation().z(),
+              spacing * turned / (2.0 * kPi), 1e-9);
+
+  const auto sampling = scanplan::scanner::sampleArea(scene.part(), 0.003);
+  const SampleIndex index(sampling);
+  scanplan::scanner::evaluatePasses(spins, scene, s, index);
+  scanplan::scanner::evaluatePass(helix, scene, s, index);
+  std::vector<std::uint8_t> by_spins(sampling.samples.size(), 0), by_helix(by_spins);
+  for (const ScanPass& p : spins)
+    for (std::uint32_t i : p.covers) by_spins[i] = 1;
+  for (std::uint32_t i : helix.covers) by_helix[i] = 1;
+  // At the wall's foot a line reaching below the table top backs off (the standoff keeps the
+  // table beyond the window's near end), so what a pass gets there depends on where its line
+  // passes; above the reach of such lines the helix covers everything the spins do.
+  const double foot = 2.0 * s.window.y_near;
+  std::size_t spun = 0, missed = 0, missed_above = 0;
+  for (std::size_t i = 0; i < by_spins.size(); ++i) {
+    if (!by_spins[i]) continue;
+    ++spun;
+    if (by_helix[i]) continue;
+    ++missed;
+    if (sampling.samples[i].p.z() > foot) ++missed_above;
+  }
+  EXPECT_GT(spun, sampling.samples.size() / 2);  // the wall: most of the area
+  EXPECT_EQ(missed_above, 0u) << "of " << spun;
+  EXPECT_LE(missed, spun / 100) << "of " << spun;
+  EXPECT_GT(helix.covers.size(), spun);
+
+  // Where its whole line is on the wall the table turns at the spins' rate (the same wall at the
+  // same radius).
+  const double rate = s.point_spacing * s.frame_rate * s.speed_safety / kRadius;
+  const auto on_wall = [&](const Isometry3d& X) {
+    return X.translation().z() > s.window.y_far && X.translation().z() < kHeight - s.window.y_far;
+  };
+  std::size_t level = 0;
+  for (std::size_t k = 0; k + 1 < helix.X_RS.size(); ++k) {
+    if (!on_wall(helix.X_RS[k]) || !on_wall(helix.X_RS[k + 1])) continue;
+    ASSERT_NEAR(speed(helix, k), rate, 1e-3 * rate) << k;
+    ++level;
+  }
+  EXPECT_GT(level, helix.X_RS.size() / 2);
+
+  // The spins in the order of their height, each turned to start where the last one ended.
+  std::sort(spins.begin(), spins.end(), [](const ScanPass& a, const ScanPass& b) {
+    return a.X_RS.front().translation().z() < b.X_RS.front().translation().z();
+  });
+  scanplan::scanner::TransferSphere sphere;  // around the part, grown by the demo head's reach
+  sphere.centre = Vector3d(0.0, 0.0, 0.5 * kHeight);
+  sphere.radius = std::hypot(kRadius, 0.5 * kHeight) + 0.156 + 0.02;
+  double spin_time = 0.0, moves = 0.0;
+  Isometry3d at = spins.front().X_RS.front();
+  for (const ScanPass& p : spins) {
+    const Vector3d from = at.translation(), to = p.X_RS.front().translation();
+    const ScanPass turned_spin = scanplan::scanner::rotatedPass(
+        p, std::atan2(from.y(), from.x()) - std::atan2(to.y(), to.x()));
+    moves += scanplan::scanner::transferTime(at, turned_spin.X_RS.front(), sphere);
+    spin_time += p.duration();
+    at = turned_spin.X_RS.back();
+  }
+  EXPECT_LT(helix.duration(), spin_time + moves)
+      << "spins " << spin_time << " s, moves between them " << moves << " s";
+  // At most one turn more than the spins.
+  EXPECT_LT(helix.duration(), spin_time * (1.0 + 1.0 / static_cast<double>(spins.size())));
 }
 
 }  // namespace
