@@ -16,7 +16,7 @@ using Jacobian = Eigen::Matrix<double, 6, kNumJoints>;
 
 /// One revolute joint, standard DH (DESIGN.md §3.1, Eq. 1):
 /// T_i = Rz(θ_i) · T(a_i, 0, d_i) · Rx(α_i) with θ_i = direction · q_i + theta_offset.
-/// Lengths in m, angles in rad, speed in rad/s.
+/// Lengths in m, angles in rad, speed in rad/s, acceleration in rad/s².
 struct DhJoint {
   double a = 0.0;
   double d = 0.0;
@@ -26,6 +26,7 @@ struct DhJoint {
   double min = 0.0;
   double max = 0.0;
   double max_speed = 0.0;
+  double max_accel = 0.0;  ///< rad/s²; 0: unknown (moves assume full speed in 0.25 s)
 };
 
 /// The transform of one DH row at joint value q (Eq. 1): DH frame i in frame i − 1, m.

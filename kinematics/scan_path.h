@@ -1,5 +1,6 @@
 #pragma once
 
+#include <utility>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -17,9 +18,20 @@ struct ScanSample {
 struct ScanPath {
   double dt = 0.1;  ///< s
   std::vector<ScanSample> samples;
+  /// Sample indices where a new segment starts, ascending, each in (0, samples.size()); empty:
+  /// one segment. The path does not connect one segment to the next: the table and the arm are
+  /// planned per segment, and the program joins segments with point-to-point moves of every
+  /// axis (kinematics/ptp_move.h). The automatic scan makes each pass a segment.
+  std::vector<std::size_t> breaks;
 
   double duration() const { return samples.empty() ? 0.0 : samples.back().t; }
 };
+
+/// The segments of `path` as [begin, end) sample ranges, in order (one range without breaks).
+std::vector<std::pair<std::size_t, std::size_t>> segmentRanges(const ScanPath& path);
+
+/// The samples [begin, end) of `path` as a path of their own (times unchanged, no breaks).
+ScanPath slicePath(const ScanPath& path, std::size_t begin, std::size_t end);
 
 /// Pose between two samples: linear position, slerp orientation, s in [0, 1].
 Eigen::Isometry3d interpolatePose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double s);

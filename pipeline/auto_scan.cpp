@@ -11,11 +11,14 @@
 
 #include "collision/clearance.h"
 #include "kinematics/error.h"
+#include "kinematics/ptp_move.h"
 #include "kinematics/units.h"
+#include "pipeline/program_moves.h"
 #include "planner/config_map.h"
 #include "scanner/pass_selection.h"
 #include "scanner/scan_passes.h"
 #include "scanner/scannability.h"
+#include "scanner/set_cover.h"
 #include "scanner/simulator.h"
 
 namespace scanplan::pipeline {
@@ -28,6 +31,11 @@ constexpr std::size_t kMaxSamples = 400'000;  // evaluation samples at most (mem
 constexpr std::size_t kMaxAimed = 600;        // aimed candidate passes at most
 constexpr double kTargetMargin = 0.01;        // planned coverage over the target (see below)
 constexpr double kMaxStations = 5e6;          // probed strip stations of the candidates
+// The set-cover programme's search (improveCover): nodes, model size, and a time limit that is
+// only a safety net (the node and size limits decide, so the answer does not depend on speed).
+constexpr std::size_t kCoverNodes = 200;
+constexpr std::size_t kCoverNonzeros = 150'000;
+constexpr double kCoverSeconds = 60.0;
 
 double since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -79,6 +87,9 @@ scanner::PassSettings passSettings(const ScanProblem& p, const collision::Scene&
   const kinematics::RotaryTableModel& table = p.cell.table;
   // A spin turns the table a whole revolution; leave a fifth of its speed for the planner.
   s.max_spin_rate = table.continuous ? 0.8 * (table.max_speed > 0.0 ? table.max_speed : 0.5) : 0.0;
+  // A spin's rate changes only as fast as half the table's acceleration limit: the planner keeps
+  // the other half.
+  if (table.max_accel > 0.0) s.max_spin_accel = 0.5 * table.max_accel;
   s.housing = housingBoxes(p, housingMargin(scene));
   return s;
 }
@@ -216,17 +227,6 @@ scanner::TransferSphere transferSphere(const ScanProblem& p,
   return s;
 }
 
-// Appends `keys` (R frame, times from 0) to the element after `offset` s, skipping the first.
-void append(scanner::FileSpec& out,
-            const std::vector<Eigen::Isometry3d>& X_RS,
-            const std::vector<double>& t,
-            bool scanning,
-            const Eigen::Isometry3d& X_PR) {
-  const double offset = out.samples.empty() ? 0.0 : out.samples.back().t;
-  for (std::size_t k = out.samples.empty() ? 0 : 1; k < X_RS.size(); ++k)
-    out.samples.push_back({offset + t[k] - t.front(), X_PR * X_RS[k], scanning && k > 0});
-}
-
 }  // namespace
 
 double autoPointSpacing(const AutoScanSettings& settings,
@@ -310,28 +310,22 @@ void markOutOfReach(std::vector<scanner::SampleClass>& classes,
   }
 }
 
-// The program: transfers (not scanning) and the passes in tour order, part frame.
-void buildElement(const ScanProblem& problem,
-                  const std::vector<scanner::ScanPass>& passes,
-                  const std::vector<scanner::TourStep>& tour,
-                  std::optional<Eigen::Isometry3d> at,
-                  const scanner::TransferSphere& sphere,
-                  const std::vector<double>& gain,
-                  AutoScanPlan& plan) {
+// The program's passes in tour order (part frame), and their lines in the report.
+void buildPasses(const ScanProblem& problem,
+                 const std::vector<scanner::ScanPass>& passes,
+                 const std::vector<scanner::TourStep>& tour,
+                 const std::vector<double>& gain,
+                 AutoScanPlan& plan) {
   const Eigen::Isometry3d X_PR = problem.cell.part.X_RP.inverse();
   for (const scanner::TourStep& step : tour) {
     const scanner::ScanPass pass = scanner::stepPass(passes, step);
-    if (at) {
-      const scanner::Move move = scanner::transferMove(*at, pass.X_RS.front(), sphere);
-      if (plan.element.samples.empty()) plan.element.samples.push_back({0.0, X_PR * *at, false});
-      append(plan.element, move.X_RS, move.t, false, X_PR);
-    }
-    const double begin = plan.element.samples.empty() ? 0.0 : plan.element.samples.back().t;
-    append(plan.element, pass.X_RS, pass.t, true, X_PR);
-    plan.report.passes.push_back(
-        {scanner::passKindName(pass.kind), pass.label, begin, pass.duration(), gain[step.pass]});
+    scanner::FileSpec keys;
+    for (std::size_t k = 0; k < pass.X_RS.size(); ++k)
+      keys.samples.push_back({pass.t[k] - pass.t.front(), X_PR * pass.X_RS[k], true});
+    plan.passes.push_back(std::move(keys));
+    plan.report.passes.push_back({scanner::passKindName(pass.kind), pass.label,
+                                  plan.report.scan_time, pass.duration(), gain[step.pass]});
     plan.report.scan_time += pass.duration();
-    at = pass.X_RS.back();
   }
 }
 
@@ -351,6 +345,72 @@ std::vector<double> gains(const std::vector<scanner::ScanPass>& passes,
     gain[p] = static_cast<double>(n) / counted;
   }
   return gain;
+}
+
+// The time a typical move between passes takes on this cell (a pass's overhead in the cover):
+// a point-to-point move turning the table and every joint by 30°, as the program makes it.
+double moveOverhead(const ScanProblem& problem) {
+  const kinematics::AxisLimits limits =
+      kinematics::axisLimits(problem.cell.robot, problem.cell.table, MoveSettings{}.speed_scale,
+                             MoveSettings{}.accel_time);
+  const kinematics::AxisVector zero = kinematics::AxisVector::Zero();
+  return kinematics::ptpDuration(zero, kinematics::AxisVector::Constant(deg(30.0)), zero, zero,
+                                 limits);
+}
+
+// The greedy cover improved by the set-cover integer programme (scanner/set_cover.h): the same
+// target at the least estimated time (each pass's scanning plus a move), over a pool of the
+// greedy passes and as many again of the reachable passes with the most counting samples per
+// second besides. Deterministic: a node limit, and a model-size limit rather than a time limit
+// decide how far it searches. The report keeps the greedy and optimised estimates and the
+// proven lower bound.
+void improveCover(const std::vector<scanner::ScanPass>& passes,
+                  const std::vector<std::uint8_t>& counts,
+                  const std::vector<std::uint8_t>& covered,
+                  const std::vector<std::uint8_t>& reach,
+                  const scanner::CoverSettings& cover,
+                  scanner::CoverResult& chosen,
+                  AutoScanReport& report) {
+  scanner::CoverProblem problem;
+  problem.counts = counts;
+  problem.covered = covered;
+  problem.target = cover.target;
+  std::vector<std::pair<double, std::size_t>> value;
+  for (std::size_t p = 0; p < passes.size(); ++p) {
+    problem.cost.push_back(passes[p].duration() + cover.pass_overhead);
+    problem.covers.push_back(passes[p].covers);
+    std::size_t n = 0;
+    for (const std::uint32_t i : passes[p].covers) n += counts[i] && !covered[i] ? 1u : 0u;
+    if (reach[p] && n > 0) value.push_back({-static_cast<double>(n) / problem.cost[p], p});
+  }
+  std::sort(value.begin(), value.end());
+  problem.allowed.assign(passes.size(), 0);
+  for (const std::size_t p : chosen.chosen) problem.allowed[p] = 1;
+  for (std::size_t k = 0, added = 0; k < value.size() && added < chosen.chosen.size(); ++k) {
+    if (problem.allowed[value[k].second]) continue;
+    problem.allowed[value[k].second] = 1;
+    ++added;
+  }
+  scanner::CoverLimits limits;
+  limits.node_limit = kCoverNodes;
+  limits.max_nonzeros = kCoverNonzeros;
+  const scanner::CoverSolution best = scanner::solveCover(problem, chosen.chosen, kCoverSeconds,
+                                                          limits);
+  report.greedy_cost = 0.0;
+  for (const std::size_t p : chosen.chosen) report.greedy_cost += problem.cost[p];
+  report.cover_cost = best.cost;
+  report.cover_bound = best.lower_bound;
+  report.cover_status = best.status;
+  report.cover_seconds = best.seconds;
+  if (!best.reached || !(best.cost < report.greedy_cost)) return;
+  chosen.chosen = best.chosen;
+  chosen.covered.assign(counts.size(), 0);
+  for (std::size_t i = 0; i < covered.size(); ++i) chosen.covered[i] = covered[i];
+  for (const std::size_t p : best.chosen)
+    for (const std::uint32_t i : passes[p].covers) chosen.covered[i] = 1;
+  chosen.covered_counted = 0;
+  for (std::size_t i = 0; i < counts.size(); ++i)
+    chosen.covered_counted += counts[i] && chosen.covered[i] ? 1u : 0u;
 }
 
 // The evaluation samples and their classes in the part frame, for the report.
@@ -470,9 +530,21 @@ AutoScanPlan planAutoScan(const ScanProblem& problem,
   // cloud, which covers a little less than planned at the edges of each pass.
   cover.target = std::min(1.0, settings.target_coverage + kTargetMargin);
   cover.max_passes = settings.max_passes;
-  const scanner::CoverResult chosen = scanner::greedyCover(
-      passes, counts, covered, cover, [&](std::size_t p) { return reach[p] != 0; },
-      [&] { return since(start) < settings.time_budget; });
+  cover.pass_overhead = moveOverhead(problem);
+  // With a time limit, a pass is taken only while the program's estimate (its passes and a move
+  // before each) stays within it.
+  double estimate = 0.0;
+  const auto accept = [&](std::size_t p) {
+    if (!reach[p]) return false;
+    const double cost = passes[p].duration() + cover.pass_overhead;
+    if (settings.max_program > 0.0 && estimate + cost > settings.max_program) return false;
+    estimate += cost;
+    return true;
+  };
+  scanner::CoverResult chosen = scanner::greedyCover(
+      passes, counts, covered, cover, accept, [&] { return since(start) < settings.time_budget; });
+  if (settings.max_program <= 0.0 && chosen.stop == "target reached")
+    improveCover(passes, counts, covered, reach, cover, chosen, report);
   reportCover(chosen, counts, covered, report);
   keepCertificate(sampling, X_RP, classes, report);
   if (chosen.chosen.empty()) {
@@ -488,7 +560,7 @@ AutoScanPlan planAutoScan(const ScanProblem& problem,
   const std::vector<scanner::TourStep> tour =
       scanner::orderPasses(passes, chosen.chosen, at, sphere);
   report.transfer_time = scanner::tourTransferTime(passes, tour, at, sphere);
-  buildElement(problem, passes, tour, at, sphere, gains(passes, chosen, counts, covered), plan);
+  buildPasses(problem, passes, tour, gains(passes, chosen, counts, covered), plan);
   report.seconds = since(start);
   return plan;
 }

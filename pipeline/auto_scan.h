@@ -3,7 +3,8 @@
 // on the table, each evaluated on area samples with the scanner model, a greedy set cover of the
 // scannable area by new area per second, every chosen pass checked for reach on the cell (some
 // table angle where the arm follows it on one IK branch), the passes ordered to keep the
-// connecting moves short, and the whole program as one path element for the planners.
+// connecting moves short. Each pass becomes a segment of the scan path: the planners plan the
+// table per pass, and the program joins the passes with point-to-point moves (plan_scan.h).
 
 #include <cstddef>
 #include <cstdint>
@@ -23,7 +24,7 @@ namespace scanplan::pipeline {
 struct AutoPass {
   std::string kind;         ///< spin | strip
   std::string label;        ///< what it is ("spin elevation 25 deg, line at 40 mm")
-  double start_time = 0.0;  ///< s from the start of the automatic element
+  double start_time = 0.0;  ///< s of scanning before it (its place on the map's time axis)
   double duration = 0.0;    ///< s of scanning
   double gain = 0.0;        ///< share of the counted area it newly covers, as planned
 };
@@ -39,9 +40,20 @@ struct AutoScanReport {
   double planned_fraction = 0.0;  ///< counted samples the chosen passes cover (the prediction)
   double given_fraction = 0.0;    ///< of them, covered by the hand-written paths already
   std::string stop;               ///< why the selection stopped
-  double scan_time = 0.0;         ///< s of scanning in the automatic element
-  double transfer_time = 0.0;     ///< s of moves between passes
+  double scan_time = 0.0;         ///< s of scanning in the automatic passes
+  /// s of moves between passes as the tour estimated them (the program's own moves are
+  /// point-to-point moves timed by the pipeline: ScanPlan::program).
+  double transfer_time = 0.0;
   double seconds = 0.0;           ///< planning time
+  /// The set cover's estimated program time (scanning + a move per pass), s: the greedy cover's,
+  /// the integer programme's (scanner::solveCover, the passes used) and its proven lower bound
+  /// (0: none proven); its status. All 0 / empty when the programme did not run (a time limit,
+  /// or the greedy cover missed the target).
+  double greedy_cost = 0.0;
+  double cover_cost = 0.0;
+  double cover_bound = 0.0;
+  std::string cover_status;
+  double cover_seconds = 0.0;
   std::size_t aimed = 0;          ///< of the candidates, aimed at surfaces the others miss
   /// The certificate before simulation: the evaluation samples (part frame P) and why each can
   /// or cannot be scanned (kOutOfReach: every pass that sees it was refused by the reach check).
@@ -49,9 +61,12 @@ struct AutoScanReport {
   std::vector<scanner::SampleClass> classes;
 };
 
-/// The automatic element and its report.
+/// The automatic passes and their report.
 struct AutoScanPlan {
-  scanner::FileSpec element;  ///< part frame, timed keys (transfers not scanning)
+  /// The passes in tour order, each as timed keys of the scanner in the part frame (times from
+  /// 0, all scanning). They are not joined: the pipeline plans each as a path segment and joins
+  /// them with point-to-point moves.
+  std::vector<scanner::FileSpec> passes;
   AutoScanReport report;
 };
 

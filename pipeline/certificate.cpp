@@ -1,5 +1,8 @@
 #include "pipeline/certificate.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include "scanner/scan_passes.h"
 
 namespace scanplan::pipeline {
@@ -49,6 +52,39 @@ Certificate certify(const scanner::AreaSampling& sampling,
   out.covered_of_scannable =
       out.scannable_fraction > 0.0 ? out.fraction[0] / out.scannable_fraction : 0.0;
   return out;
+}
+
+std::optional<double> CoverageCurve::timeTo(double share) const {
+  for (std::size_t k = 0; k < t.size(); ++k)
+    if (fraction[k] >= share - 1e-12) return t[k];
+  return std::nullopt;
+}
+
+CoverageCurve coverageCurve(const Certificate& certificate, const scanner::AreaCoverage& covered) {
+  CoverageCurve curve;
+  if (covered.first_time.size() != certificate.classes.size()) return curve;
+  std::vector<double> first;
+  std::size_t scannable = 0;
+  for (std::size_t i = 0; i < certificate.classes.size(); ++i) {
+    const CoverageClass c = certificate.classes[i];
+    if (c != CoverageClass::kCovered && c != CoverageClass::kMissed) continue;
+    ++scannable;
+    if (std::isfinite(covered.first_time[i])) first.push_back(covered.first_time[i]);
+  }
+  if (scannable == 0 || first.empty()) return curve;
+  std::sort(first.begin(), first.end());
+  constexpr std::size_t kPoints = 400;
+  const double n = static_cast<double>(scannable);
+  for (std::size_t k = 1; k <= kPoints; ++k) {
+    const std::size_t i = std::max<std::size_t>(1, first.size() * k / kPoints) - 1;
+    if (!curve.t.empty() && first[i] <= curve.t.back()) {
+      curve.fraction.back() = static_cast<double>(i + 1) / n;
+      continue;
+    }
+    curve.t.push_back(first[i]);
+    curve.fraction.push_back(static_cast<double>(i + 1) / n);
+  }
+  return curve;
 }
 
 }  // namespace scanplan::pipeline

@@ -8,6 +8,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "pipeline/auto_scan.h"
@@ -33,6 +34,20 @@ struct Certificate {
   double scannable_fraction = 0.0;    ///< covered or missed: the area some reachable pass sees
   double covered_of_scannable = 0.0;  ///< covered / scannable
 };
+
+/// Coverage of the scannable area against program time: after t[k] s, fraction[k] of the
+/// scannable area (Certificate::scannable_fraction) has a point within the point spacing.
+/// Ascending; at most 401 points (every 1/400 of the final coverage, and the end).
+struct CoverageCurve {
+  std::vector<double> t;         ///< s of program time
+  std::vector<double> fraction;  ///< of the scannable area, non-decreasing
+  /// The first time the curve reaches `share` of the scannable area; nullopt when it never does.
+  std::optional<double> timeTo(double share) const;
+};
+
+/// The curve of `covered` (made with point times: AreaCoverage::first_time) over the samples
+/// `certificate` calls scannable. Empty without first_time or scannable samples.
+CoverageCurve coverageCurve(const Certificate& certificate, const scanner::AreaCoverage& covered);
 
 /// The certificate of `sampling` (part frame) covered as `covered` says, with the reasons of
 /// `report` (whose sampling is in the part frame too). Precondition: report.classes not empty.

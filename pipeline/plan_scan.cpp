@@ -9,6 +9,7 @@
 #include "kinematics/units.h"
 #include "pipeline/auto_scan.h"
 #include "pipeline/no_path.h"
+#include "pipeline/segment_plan.h"
 #include "scanner/raycaster.h"
 
 namespace scanplan::pipeline {
@@ -26,18 +27,6 @@ void require(bool ok, const std::string& field, const std::string& what) {
 }
 
 bool positive(double v) { return std::isfinite(v) && v > 0.0; }
-
-// The map scores each cell on its own; a path must also be followable continuously (joints such
-// as J4 and J6 cannot wrap past their limits) and keep f > 0 between the grid angles.
-std::string executable(const planner::TrajectoryBuild& build) {
-  if (!build.ok) return build.reason;
-  if (build.min_f > 0.0) return {};
-  const auto& s = build.trajectory.samples[build.min_f_sample];
-  return fmt::format(
-      "time sample {} (t = {:.2f} s, table {:.2f} deg): f = 0 ({}) between the map's grid "
-      "angles; a finer map.angle_step_deg resolves it",
-      build.min_f_sample, s.t, toDeg(s.theta), s.limit);
-}
 
 // Validation and simulation of the accepted trajectory.
 void proveAndSimulate(const ScanProblem& problem, const PreparedScan& prepared, ScanPlan& plan) {
@@ -57,9 +46,11 @@ void proveAndSimulate(const ScanProblem& problem, const PreparedScan& prepared, 
     plan.simulation = simulateTrajectory(problem.cell, problem.part, problem.optics,
                                          *problem.simulation, trajectory);
     plan.times.simulation = plan.simulation->seconds;
-    if (prepared.auto_scan && !prepared.auto_scan->classes.empty())
+    if (prepared.auto_scan && !prepared.auto_scan->classes.empty()) {
       plan.certificate =
           certify(plan.simulation->sampling, plan.simulation->area, *prepared.auto_scan);
+      plan.coverage_curve = coverageCurve(*plan.certificate, plan.simulation->area);
+    }
   }
   plan.status = ScanStatus::kPlanned;
 }
@@ -75,9 +66,33 @@ void checkAutoScan(const AutoScanSettings& a) {
   require(a.max_passes >= 1, "auto_scan.max_passes", "0: expected at least 1");
   require(positive(a.time_budget), "auto_scan.time_budget", "expected > 0 s");
   require(positive(a.sample_spacing), "auto_scan.sample_spacing", "expected > 0 m");
+  require(std::isfinite(a.max_program) && a.max_program >= 0.0, "auto_scan.max_program",
+          fmt::format("{} s: expected 0 (no limit) or a time > 0 s", a.max_program));
 }
 
-// The hand-written elements (if any), then the automatic passes as one more element.
+// Appends a pass (part-frame keys, times from 0) to `path` as a segment of its own, sampled every
+// path.dt: n steps over its duration rounded up to whole steps (a little slower, never faster),
+// the first sample one step after the path's last.
+void appendSegment(kinematics::ScanPath& path, const scanner::FileSpec& pass) {
+  const auto& keys = pass.samples;
+  const double duration = keys.back().t - keys.front().t;
+  const auto n = static_cast<std::size_t>(std::max(1.0, std::ceil(duration / path.dt - 1e-9)));
+  const double t0 = path.samples.empty() ? 0.0 : path.samples.back().t + path.dt;
+  if (!path.samples.empty()) path.breaks.push_back(path.samples.size());
+  std::size_t k = 0;
+  for (std::size_t i = 0; i <= n; ++i) {
+    const double t = duration * static_cast<double>(i) / static_cast<double>(n);
+    while (k + 2 < keys.size() && keys[k + 1].t - keys.front().t < t) ++k;
+    const auto& a = keys[k];
+    const auto& b = keys[std::min(k + 1, keys.size() - 1)];
+    const double span = b.t - a.t;
+    const double u = span > 0.0 ? std::clamp((t - (a.t - keys.front().t)) / span, 0.0, 1.0) : 0.0;
+    path.samples.push_back({t0 + path.dt * static_cast<double>(i),
+                            kinematics::interpolatePose(a.X_PS, b.X_PS, u), true});
+  }
+}
+
+// The hand-written elements (if any), then the automatic passes, each a segment of the path.
 void autoPath(const ScanProblem& problem,
               const collision::Scene& scene,
               const scanner::Raycaster& raycaster,
@@ -85,17 +100,37 @@ void autoPath(const ScanProblem& problem,
               ScanPathResult& out) {
   if (!problem.path.elements.empty())
     out.path = scanner::generatePath(problem.path, problem.part, raycaster, out.window);
+  out.path.path.dt = problem.path.dt;
   std::function<void(std::size_t, std::size_t)> auto_progress;
   if (progress)
     auto_progress = [&progress](std::size_t d, std::size_t n) { progress("auto", d, n); };
   AutoScanPlan plan = planAutoScan(problem, scene, out.path.path, auto_progress);
   out.auto_scan = std::move(plan.report);
-  if (plan.element.samples.empty()) return;
-  scanner::PathRequest request = problem.path;
-  request.elements.push_back(std::move(plan.element));
-  out.path = scanner::generatePath(request, problem.part, raycaster, out.window);
-  out.path.elements.back().kind = "auto";
-  out.path.elements.back().note = fmt::format("{} passes", out.auto_scan->passes.size());
+  if (plan.passes.empty()) return;
+  kinematics::ScanPath& path = out.path.path;
+  const double start = path.samples.empty() ? 0.0 : path.samples.back().t + path.dt;
+  double samples = static_cast<double>(path.samples.size());
+  for (const scanner::FileSpec& pass : plan.passes)
+    samples += std::ceil((pass.samples.back().t - pass.samples.front().t) / path.dt) + 1.0;
+  if (!(samples <= static_cast<double>(scanner::kMaxPathSamples)))
+    throw InputError(fmt::format(
+        "scan.auto: the passes take {:.0f} samples every {} s: expected at most {} (raise "
+        "scan.dt_s or lower scan.auto.target_coverage)",
+        samples, path.dt, scanner::kMaxPathSamples));
+  for (std::size_t i = 0; i < plan.passes.size(); ++i) {
+    const double begin = path.samples.empty() ? 0.0 : path.samples.back().t + path.dt;
+    appendSegment(path, plan.passes[i]);
+    out.auto_scan->passes[i].start_time = begin;
+  }
+  scanner::ElementReport report;
+  report.kind = "auto";
+  report.start_time = start;
+  report.duration = path.samples.back().t - start;
+  report.note = fmt::format(
+      "{} passes (scanning time; the moves between them come after "
+      "planning)",
+      plan.passes.size());
+  out.path.elements.push_back(report);
 }
 
 }  // namespace
@@ -201,12 +236,17 @@ ScanPlan planPrepared(const ScanProblem& problem,
   const PreparedScan& p = *plan.prepared;
   plan.times.path = p.path_seconds;
   plan.times.map = p.map_seconds;
+  if (!p.path.path.breaks.empty()) {
+    planSegments(problem, options, plan);
+    if (plan.trajectory) proveAndSimulate(problem, p, plan);
+    return plan;
+  }
   const auto accept = [&](std::size_t b, const std::vector<double>& theta) {
     const auto t = Clock::now();
     plan.trajectory = planner::buildTrajectory(*p.scene, problem.constraints, p.path.path, theta,
                                                p.map.branches[b]);
     plan.times.trajectory += since(t);
-    return executable(*plan.trajectory);
+    return executableReason(*plan.trajectory);
   };
   // Joint wrap: the sheets of a branch whose path a joint could not follow within its limits.
   const auto wrap_sheets = [&](std::size_t b) -> std::shared_ptr<const planner::WrapSheets> {
@@ -226,6 +266,7 @@ ScanPlan planPrepared(const ScanProblem& problem,
     plan.trajectory.reset();
     return plan;
   }
+  plan.program = programTimes(plan.trajectory->trajectory);
   proveAndSimulate(problem, p, plan);
   return plan;
 }

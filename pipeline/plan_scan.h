@@ -18,6 +18,7 @@
 #include "pipeline/auto_scan.h"
 #include "pipeline/certificate.h"
 #include "pipeline/problem.h"
+#include "pipeline/program_moves.h"
 #include "pipeline/simulation.h"
 #include "planner/config_map.h"
 #include "planner/joint_wrap.h"
@@ -69,6 +70,11 @@ struct PathChoice {
   /// That sheet as a one-branch map (the DP yardstick and the comparisons ran on it); null when
   /// the path was planned on the map itself.
   std::shared_ptr<const planner::ConfigMap> sheet_map;
+  /// A path of several segments (kinematics::ScanPath::breaks): each segment's own choice, in
+  /// order (empty for one segment). The fields above then join them: `theta` over every time
+  /// sample, `terms` and the J of `chosen`, `dp` and `others` summed, `chosen.result.branch`
+  /// the branch most samples use; `rejected` and `why_chosen` name the segment.
+  std::vector<PathChoice> segments;
   bool solved() const { return chosen.result.solved(); }
   /// (J − J_dp) / J_dp of the final path, when DP solved; negative when the continuous path
   /// beats DP's grid.
@@ -117,6 +123,22 @@ struct ScanPlan {
   std::optional<SimulationRun> simulation;
   /// With the automatic scan and the simulation: every area sample covered or why not.
   std::optional<Certificate> certificate;
+  /// With the certificate: the share of the scannable area covered against program time.
+  CoverageCurve coverage_curve;
+  /// The program's time: scanning and moving (set with `trajectory`).
+  ProgramTimes program;
+  /// A path of segments: the order the program runs them in (segment index, run backwards,
+  /// program time of its first sample). Empty for one segment.
+  struct Run {
+    std::size_t segment = 0;
+    bool reversed = false;
+    double start = 0.0;
+  };
+  std::vector<Run> order;
+  /// Segments (passes) left out of the program, with the reason: no executable path on any
+  /// branch, or no move reaches them. Their samples keep the previous segment's last table
+  /// angle in `choice.theta` and are not in the trajectory.
+  std::vector<std::pair<std::size_t, std::string>> dropped;
   StageTimes times;
   bool planned() const { return status == ScanStatus::kPlanned; }
 };

@@ -73,11 +73,15 @@ struct AutoScanSettings {
   /// point to count.
   double max_incidence = 1.0471975511965976;  // 60°
   /// m, an area counts as covered when a point lies within this; 0: the line's point pitch at
-  /// the middle of the depth window. The passes move one spacing per profile.
+  /// the middle of the depth window. The passes move at most 0.9 spacing per profile on the
+  /// surface they see (scanner::timePass).
   double point_spacing = 0.0;
   double target_coverage = 0.98;  ///< of the scannable area
   std::size_t max_passes = 250;
   double time_budget = 60.0;      ///< s of planning for choosing the passes
+  /// s, the program's time at most (passes chosen by the most new area per second until their
+  /// estimated time fills it; the passes that would run past it are left out); 0: no limit.
+  double max_program = 0.0;
   double sample_spacing = 0.003;  ///< m between the area samples the passes are chosen on
 };
 

@@ -82,12 +82,17 @@ SimulationRun simulateTrajectory(const kinematics::CellModel& cell,
   const scanner::AreaSampling& sampling = run.sampling;
   // A point counts when it lies on the part and the laser met the surface within the limit.
   std::vector<Eigen::Vector3d> on_part;
+  std::vector<double> times;
   on_part.reserve(run.cloud.points.size());
+  times.reserve(run.cloud.points.size());
   for (const auto& p : run.cloud.points) {
-    if (p.part_triangle >= 0 && p.incidence <= settings.max_incidence) on_part.push_back(p.p_P);
+    if (p.part_triangle >= 0 && p.incidence <= settings.max_incidence) {
+      on_part.push_back(p.p_P);
+      times.push_back(p.t);
+    }
   }
   run.area_samples = sampling.samples.size();
-  run.area = scanner::areaCoverage(sampling, on_part, run.point_spacing);
+  run.area = scanner::areaCoverage(sampling, on_part, run.point_spacing, &times);
   const std::vector<std::uint8_t> facing = scanner::facesTable(
       sampling, cell.part.X_RP, settings.max_incidence, scanner::laserWindow(optics).z_max);
   if (!facing.empty()) {

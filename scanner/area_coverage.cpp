@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <stdexcept>
+#include <utility>
 
 #include <tbb/parallel_for.h>
 #include <nanoflann.hpp>
@@ -89,7 +91,8 @@ AreaSampling sampleArea(const kinematics::TriangleMesh& mesh,
 
 AreaCoverage areaCoverage(const AreaSampling& sampling,
                           const std::vector<Eigen::Vector3d>& points,
-                          double radius) {
+                          double radius,
+                          const std::vector<double>* times) {
   AreaCoverage out;
   out.radius = radius;
   out.covered.assign(sampling.samples.size(), 0);
@@ -105,6 +108,16 @@ AreaCoverage areaCoverage(const AreaSampling& sampling,
     tree.findNeighbors(result, sampling.samples[i].p.data(), nanoflann::SearchParams(10));
     out.covered[i] = d2 <= r2 ? 1 : 0;
   });
+  if (times && times->size() == points.size()) {
+    out.first_time.assign(sampling.samples.size(), std::numeric_limits<double>::infinity());
+    tbb::parallel_for(std::size_t{0}, sampling.samples.size(), [&](std::size_t i) {
+      if (!out.covered[i]) return;
+      std::vector<std::pair<std::uint32_t, double>> near;
+      tree.radiusSearch(sampling.samples[i].p.data(), r2, near, nanoflann::SearchParams(10));
+      for (const auto& item : near)
+        out.first_time[i] = std::min(out.first_time[i], (*times)[item.first]);
+    });
+  }
   for (const std::uint8_t c : out.covered) out.covered_samples += c;
   out.covered_fraction =
       static_cast<double>(out.covered_samples) / static_cast<double>(sampling.samples.size());

@@ -44,13 +44,18 @@ struct AreaCoverage {
   std::size_t covered_samples = 0;
   double covered_fraction = 0.0;  ///< covered samples / samples (each stands for equal area)
   double radius = 0.0;            ///< m, as asked
+  /// With point times: per sample, the earliest time (s) of a point within the radius; +inf
+  /// where none. Empty without times.
+  std::vector<double> first_time;
 };
 
 /// The coverage of `sampling` by `points` (same frame): a k-d tree over the points (nanoflann),
-/// the nearest point of every sample. Deterministic; parallel over samples.
+/// the nearest point of every sample. With `times` (one per point, s), also when each sample was
+/// first covered (every point within the radius searched). Deterministic; parallel over samples.
 AreaCoverage areaCoverage(const AreaSampling& sampling,
                           const std::vector<Eigen::Vector3d>& points,
-                          double radius);
+                          double radius,
+                          const std::vector<double>* times = nullptr);
 
 /// Which samples face the table or lie on it (the first class of the scannability certificate,
 /// DESIGN.md §11): no laser ray from a scanner above the table top can reach them within the

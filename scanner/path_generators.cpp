@@ -24,7 +24,6 @@ struct Key {
 };
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr std::size_t kMaxPathSamples = 2'000'000;  // samples of a whole path
 constexpr double kMaxStations = 2e6;                // probed raster stations of one element
 
 std::string where(std::size_t index) { return "scan.paths[" + std::to_string(index) + "]"; }

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstddef>
 #include <optional>
 #include <string>
 #include <variant>
@@ -57,6 +58,9 @@ struct FileSpec {
 };
 
 using PathElement = std::variant<RingSpec, RasterSpec, WaypointSpec, FileSpec>;
+
+/// Samples a whole scan path may have (bounds the memory of the path and its maps).
+inline constexpr std::size_t kMaxPathSamples = 2'000'000;
 
 struct PathRequest {
   std::vector<PathElement> elements;

@@ -188,6 +188,7 @@ std::string writePlannedOutputs(const std::filesystem::path& out,
   if (plan.certificate) {
     writeCertificateOutputs(out, problem.part, plan.simulation->sampling, *plan.certificate,
                             settings);
+    writeCoverageCurve(out, plan.coverage_curve, plan.program.total, settings);
   }
   const std::string replay = writeReplay(out, job, problem, plan, settings);
   const std::string sensors = writeSensorOutputs(out, plan);
@@ -198,6 +199,7 @@ std::string writePlannedOutputs(const std::filesystem::path& out,
   summary += replay;
   if (plan.simulation) summary += simulationSummary(*plan.simulation);
   if (plan.certificate) summary += certificateSummary(*plan.certificate, !second);
+  summary += curveSummary(plan);
   return summary;
 }
 
@@ -285,7 +287,8 @@ const std::vector<std::string> kPlanOutputs{
     "job.yaml",        "report.json",  "trajectory.csv", "trajectory_invalid.csv",
     "programs",        "path.csv",     "path.png",       "configmap*",
     "cloud.ply",       "coverage.ply", "cloud.png",      "uncovered.ply",
-    "certificate.png", "replay.html",  "cell.png",       "setup2",
+    "certificate.png", "replay.html",  "cell.png",       "setup2", "coverage_time.png",
+    "coverage_time.svg",
     "profiles",        "sensors.csv"};
 
 // The command's result on stdout: the text summary, or with --json one JSON document (the

@@ -284,6 +284,7 @@ void describeAuto(A& a, AutoSpec& s) {
   a.field("target_coverage", s.target_coverage, Expect{0.01, 1.0, false, false, {}});
   a.field("max_passes", s.max_passes, Expect::range(1, 1000));
   a.field("time_budget_s", s.time_budget_s, Expect{0.1, 86400.0, false, false, {}});
+  a.field("max_program_s", s.max_program_s, Expect{0.0, 86400.0, false, false, {}});
   a.field("sample_spacing_mm", s.sample_spacing_mm, Expect{0.2, 100.0, false, false, {}});
 }
 

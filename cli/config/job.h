@@ -164,6 +164,7 @@ struct AutoSpec {
   double target_coverage = 0.98;  ///< of the scannable area
   int max_passes = 250;
   double time_budget_s = 60.0;     ///< for choosing the passes
+  double max_program_s = 0.0;      ///< the program's time at most; 0: no limit
   double sample_spacing_mm = 3.0;  ///< area samples the passes are chosen on
 };
 

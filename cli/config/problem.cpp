@@ -177,6 +177,7 @@ pipeline::AutoScanSettings autoScanSettings(const JobSpec& job) {
   s.target_coverage = a.target_coverage;
   s.max_passes = static_cast<std::size_t>(a.max_passes);
   s.time_budget = a.time_budget_s;
+  s.max_program = a.max_program_s;
   s.sample_spacing = a.sample_spacing_mm * kMmToM;
   return s;
 }

@@ -246,4 +246,43 @@ void writeCertificateOutputs(const std::filesystem::path& dir,
   writePng(dir / "certificate.png", drawViewGrid(grid), settings.views);
 }
 
+void writeCoverageCurve(const std::filesystem::path& dir,
+                        const pipeline::CoverageCurve& curve,
+                        double program_s,
+                        const WriteSettings& settings) {
+  if (curve.t.empty()) return;
+  const Rgb blue{0, 114, 178}, vermilion{213, 94, 0}, grey{120, 120, 120};
+  Figure f;
+  f.grid = true;
+  FigureLabels& l = f.labels;
+  l.title = fmt::format("Coverage against program time: {:.1f}% of the scannable area in {:.0f} s",
+                        100.0 * curve.fraction.back(), program_s);
+  l.x_label = "program time (s)";
+  l.y_label = "scannable area covered (%)";
+  l.x0 = 0.0;
+  l.x1 = std::max(program_s, curve.t.back());
+  l.y0 = 0.0;
+  l.y1 = 100.0;
+  Overlay line{Overlay::Kind::kLine, {{0.0, 0.0}}, blue, 2.0};
+  for (std::size_t k = 0; k < curve.t.size(); ++k) {
+    const double before = line.points.back().second;
+    line.points.push_back({curve.t[k], before});  // a step: nothing new until t[k]
+    line.points.push_back({curve.t[k], 100.0 * curve.fraction[k]});
+  }
+  line.points.push_back({l.x1, 100.0 * curve.fraction.back()});
+  f.overlays.push_back(line);
+  l.legend.push_back({blue, "covered so far", LegendEntry::Mark::kLine});
+  for (const double share : {0.95, 0.98}) {
+    const auto t = curve.timeTo(share);
+    if (!t) continue;
+    f.overlays.push_back({Overlay::Kind::kCrosses, {{*t, 100.0 * share}}, vermilion, 2.0});
+    l.legend.push_back({vermilion, fmt::format("{:.0f}% in {:.0f} s", 100.0 * share, *t),
+                        LegendEntry::Mark::kCross});
+  }
+  f.overlays.push_back({Overlay::Kind::kLine, {{program_s, 0.0}, {program_s, 100.0}}, grey, 1.0});
+  l.legend.push_back(
+      {grey, fmt::format("program ends at {:.0f} s", program_s), LegendEntry::Mark::kLine});
+  writeFigureFiles(dir, "coverage_time", f, settings);
+}
+
 }  // namespace scanplan::cli

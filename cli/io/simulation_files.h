@@ -21,6 +21,13 @@ void writeSimulationOutputs(const std::filesystem::path& dir,
 
 /// The scannability certificate (scan.auto): uncovered.ply (the area samples not covered, each
 /// with its reason) and certificate.png (the part's samples coloured by class, three sides).
+/// coverage_time.png and .svg: the share of the scannable area covered against program time,
+/// with the times to 95 % and 98 % and the program's end marked. Nothing without a curve.
+void writeCoverageCurve(const std::filesystem::path& dir,
+                        const pipeline::CoverageCurve& curve,
+                        double program_s,
+                        const WriteSettings& settings = {});
+
 void writeCertificateOutputs(const std::filesystem::path& dir,
                              const kinematics::TriangleMesh& part,
                              const scanner::AreaSampling& sampling,

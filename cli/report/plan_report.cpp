@@ -6,6 +6,8 @@
 #include <utility>
 #include <vector>
 
+#include <fmt/format.h>
+
 #include "cli/io/json.h"
 #include "cli/report/sensor_report.h"
 #include "cli/report/verify_report.h"
@@ -162,8 +164,14 @@ Json autoScanJson(const pipeline::AutoScanReport& r) {
           {"given_fraction", r.given_fraction},
           {"stop", r.stop},
           {"scan_s", r.scan_time},
-          {"transfer_s", r.transfer_time},
+          {"transfer_estimate_s", r.transfer_time},
           {"seconds", r.seconds},
+          {"set_cover",
+           {{"greedy_s", r.greedy_cost},
+            {"optimised_s", r.cover_cost},
+            {"lower_bound_s", r.cover_bound},
+            {"status", r.cover_status},
+            {"seconds", r.cover_seconds}}},
           {"passes", passes}};
 }
 
@@ -189,6 +197,26 @@ std::string planReportJson(const JobSpec& job,
     json["objective"] = std::move(objective);
     if (planning.refine) json["refine"] = refineJson(*planning.refine);
     json["path"] = pathJson(job, map, planning, plan.trajectory ? &*plan.trajectory : nullptr);
+  }
+  if (plan.trajectory) {
+    Json dropped = Json::array();
+    for (const auto& [segment, why] : plan.dropped)
+      dropped.push_back({{"pass", segment + 1}, {"reason", why}});
+    json["program"] = {{"total_s", plan.program.total},
+                       {"scanning_s", plan.program.scanning},
+                       {"moving_s", plan.program.moving},
+                       {"moves", plan.program.moves},
+                       {"backed_off_moves", plan.program.detours},
+                       {"dropped_passes", dropped}};
+  }
+  if (!plan.coverage_curve.t.empty()) {
+    const pipeline::CoverageCurve& c = plan.coverage_curve;
+    Json curve = {{"t_s", c.t}, {"of_scannable", c.fraction}};
+    for (const double share : {0.90, 0.95, 0.98}) {
+      const auto t = c.timeTo(share);
+      curve[fmt::format("time_to_{:.0f}_percent_s", 100.0 * share)] = t ? Json(*t) : Json();
+    }
+    json["coverage_curve"] = std::move(curve);
   }
   if (planning.dp) json["dp_baseline"] = dpJson(planning);
   addBranches(json, map, planning);

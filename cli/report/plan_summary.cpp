@@ -60,11 +60,19 @@ std::string autoScanSummary(const pipeline::AutoScanReport& r) {
       "scannable area planned ({} samples every {:.1f} mm); stopped: {}\n",
       r.passes.size(), spins, r.passes.size() - spins, r.candidates, r.seconds,
       100.0 * r.planned_fraction, r.counted, toMm(r.sample_spacing), r.stop);
-  s += fmt::format("           {:.1f} s scanning, {:.1f} s moving between passes{}\n", r.scan_time,
-                   r.transfer_time,
+  s += fmt::format("           {:.1f} s scanning in the passes chosen{}\n", r.scan_time,
                    r.unreachable.empty() ? std::string()
                                          : fmt::format("; {} candidates out of the arm's reach",
                                                        r.unreachable.size()));
+  if (!r.cover_status.empty()) {
+    s += fmt::format(
+        "           set cover: {:.1f} s of passes and moves by greedy, {:.1f} s by the integer "
+        "programme ({}, {:.2f} s); proven bound {:.1f} s{}\n",
+        r.greedy_cost, r.cover_cost, r.cover_status, r.cover_seconds, r.cover_bound,
+        r.cover_bound > 0.0 && r.cover_cost > 0.0
+            ? fmt::format(", gap {:.1f}%", 100.0 * (r.cover_cost - r.cover_bound) / r.cover_cost)
+            : std::string());
+  }
   std::array<std::size_t, 5> count{};
   for (const auto c : r.classes) ++count[static_cast<std::size_t>(c)];
   const double n = std::max<double>(1.0, static_cast<double>(r.classes.size()));
@@ -124,6 +132,33 @@ std::string mapSummary(const planner::ConfigMap& map, double seconds) {
   return text;
 }
 
+// The program's time: scanning, the moves between passes, and passes left out.
+std::string programSummary(const pipeline::ScanPlan& plan) {
+  const pipeline::ProgramTimes& p = plan.program;
+  std::string s = fmt::format("program    {:.1f} s: {:.1f} s scanning, {:.1f} s moving", p.total,
+                              p.scanning, p.moving);
+  if (p.moves > 0)
+    s += fmt::format(" in {} point-to-point moves between passes ({} backed off)", p.moves,
+                     p.detours);
+  s += "\n";
+  for (const auto& [segment, why] : plan.dropped)
+    s += fmt::format("  dropped pass {}: {}\n", segment + 1, why);
+  return s;
+}
+
+std::string curveSummary(const pipeline::ScanPlan& plan) {
+  const pipeline::CoverageCurve& c = plan.coverage_curve;
+  if (c.t.empty()) return {};
+  std::string s = "curve      ";
+  for (const double share : {0.90, 0.95, 0.98}) {
+    const auto t = c.timeTo(share);
+    s += t ? fmt::format("{:.0f}% of the scannable area in {:.0f} s, ", 100.0 * share, *t)
+           : fmt::format("{:.0f}% not reached, ", 100.0 * share);
+  }
+  return s + fmt::format("{:.1f}% at the end ({:.0f} s; coverage_time.png)\n",
+                         100.0 * c.fraction.back(), plan.program.total);
+}
+
 // The plan's lines after the map: the path, the choice, refinement, the DP gap, comparisons and
 // the trajectory.
 std::string choiceSummary(const pipeline::ScanPlan& plan) {
@@ -152,6 +187,7 @@ std::string choiceSummary(const pipeline::ScanPlan& plan) {
                            o.result.terms.total, o.seconds)
              : fmt::format("compare    {:<5} no path: {}\n", o.method, o.result.reason);
   }
+  s += programSummary(plan);
   const planner::TrajectoryBuild& tb = *plan.trajectory;
   const auto& worst = tb.trajectory.samples[tb.min_f_sample];
   s += fmt::format(

@@ -31,5 +31,9 @@ std::string mapSummary(const planner::ConfigMap& map, double seconds);
 /// The plan's lines after the map: the chosen path, rejected branches, refinement, the DP gap,
 /// comparisons and the trajectory. `plan` must hold a trajectory.
 std::string choiceSummary(const pipeline::ScanPlan& plan);
+/// The program's time: scanning, moving, the moves between passes and passes left out.
+std::string programSummary(const pipeline::ScanPlan& plan);
+/// The times to 90, 95 and 98 % of the scannable area (empty without a coverage curve).
+std::string curveSummary(const pipeline::ScanPlan& plan);
 
 }  // namespace scanplan::cli

@@ -1,0 +1,584 @@
+#include "pipeline/program_moves.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+#include <fmt/format.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include "collision/clearance.h"
+#include "kinematics/units.h"
+
+namespace scanplan::pipeline {
+
+namespace {
+
+using kinematics::AxisVector;
+using kinematics::JointVector;
+using kinematics::Trajectory;
+using kinematics::TrajectorySample;
+
+constexpr double kTwoPi = 6.283185307179586;
+
+AxisVector axesOf(const TrajectorySample& s) {
+  AxisVector x;
+  x(0) = s.theta;
+  x.tail<kinematics::kNumJoints>() = s.q;
+  return x;
+}
+
+// The speed at a segment's start (first interval) or end (last interval).
+AxisVector startSpeed(const Trajectory& seg) {
+  const auto& s = seg.samples;
+  if (s.size() < 2) return AxisVector::Zero();
+  return (axesOf(s[1]) - axesOf(s[0])) / (s[1].t - s[0].t);
+}
+AxisVector endSpeed(const Trajectory& seg) {
+  const auto& s = seg.samples;
+  if (s.size() < 2) return AxisVector::Zero();
+  const std::size_t n = s.size();
+  return (axesOf(s[n - 1]) - axesOf(s[n - 2])) / (s[n - 1].t - s[n - 2].t);
+}
+
+// The segment turned by whole turns of the table (a table that turns without end) and of each
+// joint whose whole track then stays in its limits, to start as near `at` as it can.
+Trajectory unwound(const kinematics::CellModel& cell, Trajectory seg, const AxisVector& at) {
+  auto& s = seg.samples;
+  if (cell.table.continuous) {
+    const double turns = std::round((at(0) - s.front().theta) / kTwoPi);
+    for (auto& x : s) x.theta += turns * kTwoPi;
+  }
+  for (int j = 0; j < kinematics::kNumJoints; ++j) {
+    const kinematics::DhJoint& joint = cell.robot.joint(j);
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const auto& x : s) {
+      lo = std::min(lo, x.q(j));
+      hi = std::max(hi, x.q(j));
+    }
+    double best = 0.0;
+    for (const double k : {-2.0, -1.0, 1.0, 2.0}) {
+      const double shift = k * kTwoPi;
+      if (lo + shift < joint.min || hi + shift > joint.max) continue;
+      if (std::abs(s.front().q(j) + shift - at(j + 1)) <
+          std::abs(s.front().q(j) + best - at(j + 1)))
+        best = shift;
+    }
+    if (best != 0.0)
+      for (auto& x : s) x.q(j) += best;
+  }
+  return seg;
+}
+
+// A sample of a move: the scanner pose it reaches (part frame), not scanning, f unknown.
+TrajectorySample moveSample(const kinematics::CellModel& cell, double t, const AxisVector& x) {
+  TrajectorySample s;
+  s.t = t;
+  s.theta = x(0);
+  s.q = x.tail<kinematics::kNumJoints>();
+  s.f = std::numeric_limits<double>::quiet_NaN();
+  s.scanning = false;
+  s.X_PS = cell.partIn(s.theta).inverse() * cell.robot.fk(s.q) * cell.scanner.X_FS;
+  return s;
+}
+
+// Every pair of the cell beyond its d_low (f_C > 0, Eq. 8) and every joint within its limits,
+// at poses along the move. The poses advance by how far the nearest pair is from its d_low: a
+// point moves at most levers(j) metres per radian of axis j, so the next pose is at most 0.8 of
+// that margin (and at least kMinMotion) of motion further; at least every `check_step` rad on
+// the fastest axis when nothing is near. The validation proves the motion between them.
+constexpr double kMinMotion = 1.5e-3;  // m
+bool moveClear(const collision::Scene& scene,
+               collision::ClearanceEvaluator& clearance,
+               const kinematics::PtpMove& move,
+               const AxisVector& levers,
+               double check_step) {
+  const kinematics::CellModel& cell = scene.cell();
+  const auto& pairs = scene.pairs();
+  for (std::size_t k = 0; k < move.axes.size(); ++k) {
+    const AxisVector b = move.axes[k];
+    const AxisVector a = k == 0 ? b : move.axes[k - 1];
+    const double travel = levers.dot((b - a).cwiseAbs());
+    const double widest = (b - a).cwiseAbs().maxCoeff();
+    double u = k == 0 ? 1.0 : 0.0;
+    while (true) {
+      u = std::min(u, 1.0);
+      const AxisVector x = a + (b - a) * u;
+      const JointVector q = x.tail<kinematics::kNumJoints>();
+      if (!cell.robot.withinLimits(q)) return false;
+      const collision::ClearanceResult r = clearance.evaluate(x(0), q);
+      if (!(r.factor > 0.0)) return false;
+      if (u >= 1.0) break;
+      double margin = std::numeric_limits<double>::infinity();
+      for (std::size_t p = 0; p < pairs.size(); ++p)
+        margin = std::min(margin, r.pairs[p].distance - pairs[p].thresholds.d_low);
+      const double motion = std::max(0.8 * margin, kMinMotion);
+      double du = travel > 0.0 ? motion / travel : 1.0;
+      if (widest > 0.0) du = std::min(du, std::max(check_step / widest, kMinMotion / travel));
+      u += du;
+    }
+  }
+  return true;
+}
+
+// How far a point of the cell can move per radian of each axis, m: for the table the farthest
+// vertex of the part from its axis (or the table's edge); for joint j the links after it laid
+// end to end (Σ |a_i| + |d_i|) and the scanner's reach from the flange.
+AxisVector axisLevers(const kinematics::CellModel& cell, double part_reach) {
+  double tool = cell.scanner.X_FS.translation().norm();
+  for (const kinematics::Shape& shape : cell.scanner.body) {
+    double far = 0.0;
+    for (const Eigen::Vector3d& v : kinematics::shapeSurface(shape).vertices)
+      far = std::max(far, (cell.scanner.X_FS * v).norm());
+    tool = std::max(tool, far);
+  }
+  AxisVector l;
+  l(0) = std::max(cell.table.radius, part_reach);
+  double after = tool;
+  for (int j = kinematics::kNumJoints - 1; j >= 0; --j) {
+    l(j + 1) = after;
+    after += std::abs(cell.robot.joint(j).a) + std::abs(cell.robot.joint(j).d);
+  }
+  return l;
+}
+
+// The IK solution at table angle theta for the scanner pose X_PS whose joints are nearest q.
+std::optional<JointVector> nearestIk(const kinematics::CellModel& cell,
+                                     double theta,
+                                     const Eigen::Isometry3d& X_PS,
+                                     const JointVector& q) {
+  std::optional<JointVector> best;
+  double best_d = std::numeric_limits<double>::infinity();
+  for (const auto& sol : cell.robot.ik(cell.flangeTarget(theta, X_PS))) {
+    if (!sol.within_limits) continue;
+    JointVector v = sol.q;
+    for (int j = 0; j < kinematics::kNumJoints; ++j) {
+      // The whole-turn variant nearest q within the limits.
+      const kinematics::DhJoint& joint = cell.robot.joint(j);
+      for (const double k : {-1.0, 1.0}) {
+        const double w = v(j) + k * kTwoPi;
+        if (w >= joint.min && w <= joint.max && std::abs(w - q(j)) < std::abs(v(j) - q(j)))
+          v(j) = w;
+      }
+    }
+    const double d = (v - q).cwiseAbs().maxCoeff();
+    if (d < best_d) {
+      best_d = d;
+      best = v;
+    }
+  }
+  return best;
+}
+
+struct Leg {
+  AxisVector from, to, v_from, v_to;
+};
+using Way = std::vector<Leg>;  // legs run one after the other; empty: not possible
+
+// Joint values of `q` with the pose of `x`'s table: an axis vector.
+AxisVector withJoints(const AxisVector& x, const JointVector& q) {
+  AxisVector out = x;
+  out.tail<kinematics::kNumJoints>() = q;
+  return out;
+}
+
+// The move backed off by `r` along −z_S at both ends; empty when an end has no IK there.
+Way backedOff(const kinematics::CellModel& cell,
+              const TrajectorySample& a,
+              const TrajectorySample& b,
+              const AxisVector& v_a,
+              const AxisVector& v_b,
+              double r) {
+  const Eigen::Isometry3d back(Eigen::Translation3d(0.0, 0.0, -r));
+  const auto qa = nearestIk(cell, a.theta, a.X_PS * back, a.q);
+  const auto qb = nearestIk(cell, b.theta, b.X_PS * back, b.q);
+  if (!qa || !qb) return {};
+  const AxisVector xa = axesOf(a), xb = axesOf(b);
+  const AxisVector xa2 = withJoints(xa, *qa), xb2 = withJoints(xb, *qb);
+  const AxisVector zero = AxisVector::Zero();
+  return {{xa, xa2, v_a, zero}, {xa2, xb2, zero, zero}, {xb2, xb, zero, v_b}};
+}
+
+// The head above the part: laser straight down at `above` (part frame), turned about the
+// vertical to keep the end pose's x_S as far as it can (the wrist turns least).
+Eigen::Isometry3d abovePose(const Eigen::Isometry3d& above, const Eigen::Isometry3d& X_PS) {
+  const Eigen::Vector3d z = above.linear().col(2);
+  Eigen::Vector3d x = X_PS.linear().col(0) - X_PS.linear().col(0).dot(z) * z;
+  if (x.norm() < 1e-6) x = above.linear().col(0);
+  x.normalize();
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear().col(0) = x;
+  out.linear().col(1) = z.cross(x);
+  out.linear().col(2) = z;
+  out.translation() = above.translation();
+  return out;
+}
+
+// The last resort: backed off, up above the part, across there (the table turning), down the
+// other side.
+Way viaAbove(const kinematics::CellModel& cell,
+             const Eigen::Isometry3d& above,
+             const TrajectorySample& a,
+             const TrajectorySample& b,
+             const AxisVector& v_a,
+             const AxisVector& v_b,
+             double r) {
+  const Eigen::Isometry3d back(Eigen::Translation3d(0.0, 0.0, -r));
+  const auto qa = nearestIk(cell, a.theta, a.X_PS * back, a.q);
+  const auto qb = nearestIk(cell, b.theta, b.X_PS * back, b.q);
+  if (!qa || !qb) return {};
+  const auto ua = nearestIk(cell, a.theta, abovePose(above, a.X_PS), *qa);
+  const auto ub = nearestIk(cell, b.theta, abovePose(above, b.X_PS), *qb);
+  if (!ua || !ub) return {};
+  const AxisVector xa = axesOf(a), xb = axesOf(b);
+  const AxisVector z = AxisVector::Zero();
+  const AxisVector a1 = withJoints(xa, *qa), a2 = withJoints(xa, *ua);
+  const AxisVector b1 = withJoints(xb, *qb), b2 = withJoints(xb, *ub);
+  return {{xa, a1, v_a, z}, {a1, a2, z, z}, {a2, b2, z, z}, {b2, b1, z, z}, {b1, xb, z, v_b}};
+}
+
+// The samples of a way after `a` (its first sample, `a` itself, left out); nullopt when a leg
+// is blocked.
+std::optional<std::vector<TrajectorySample>> runWay(const collision::Scene& scene,
+                                                    collision::ClearanceEvaluator& clearance,
+                                                    const kinematics::AxisLimits& limits,
+                                                    const AxisVector& levers,
+                                                    const Way& way,
+                                                    double t_a,
+                                                    const MoveSettings& settings) {
+  std::vector<TrajectorySample> out;
+  for (const Leg& leg : way) {
+    const kinematics::PtpMove move =
+        kinematics::ptpMove(leg.from, leg.to, leg.v_from, leg.v_to, limits, settings.max_step);
+    if (!moveClear(scene, clearance, move, levers, settings.check_step)) return std::nullopt;
+    const double t0 = out.empty() ? t_a : out.back().t;
+    for (std::size_t k = 1; k < move.t.size(); ++k)
+      out.push_back(moveSample(scene.cell(), t0 + move.t[k], move.axes[k]));
+  }
+  return out;
+}
+
+// A checked move from `a` (the end of one segment, moving at v_a) to `b` (the start of the
+// next, moving at v_b): direct, else backed off, else via above the part.
+struct Move {
+  std::optional<std::vector<TrajectorySample>> samples;  // times from `from`
+  double from = 0.0;                                     // s, the time of `a` they count from
+  bool detour = false;
+};
+Move planMove(const collision::Scene& scene,
+              collision::ClearanceEvaluator& clearance,
+              const kinematics::AxisLimits& limits,
+              const AxisVector& levers,
+              const TrajectorySample& a,
+              const TrajectorySample& b,
+              const AxisVector& v_a,
+              const AxisVector& v_b,
+              const MoveSettings& settings) {
+  const kinematics::CellModel& cell = scene.cell();
+  Move m;
+  m.from = a.t;
+  m.samples =
+      runWay(scene, clearance, limits, levers, {{axesOf(a), axesOf(b), v_a, v_b}}, a.t, settings);
+  if (m.samples) return m;
+  m.detour = true;
+  for (const double r : settings.retreats) {
+    const Way way = backedOff(cell, a, b, v_a, v_b, r);
+    if (way.empty()) continue;
+    m.samples = runWay(scene, clearance, limits, levers, way, a.t, settings);
+    if (m.samples) return m;
+  }
+  if (settings.above) {
+    for (const double r : {0.05, 0.0}) {
+      const Way way = viaAbove(cell, *settings.above, a, b, v_a, v_b, r);
+      if (way.empty()) continue;
+      m.samples = runWay(scene, clearance, limits, levers, way, a.t, settings);
+      if (m.samples) return m;
+    }
+  }
+  return m;
+}
+
+// Segment i's samples after the program so far, moved to start at t0.
+void appendSegment(const Trajectory& seg, double t0, std::vector<TrajectorySample>& samples) {
+  const double s0 = seg.samples.front().t;
+  for (auto s : seg.samples) {
+    s.t = t0 + (s.t - s0);
+    samples.push_back(std::move(s));
+  }
+}
+
+}  // namespace
+
+ProgramTimes programTimes(const Trajectory& trajectory) {
+  ProgramTimes t;
+  const auto& s = trajectory.samples;
+  if (s.empty()) return t;
+  t.total = s.back().t - s.front().t;
+  for (std::size_t k = 1; k < s.size(); ++k)
+    if (s[k].scanning && s[k - 1].scanning) t.scanning += s[k].t - s[k - 1].t;
+  t.moving = t.total - t.scanning;
+  return t;
+}
+
+JoinedProgram joinSegments(const collision::Scene& scene,
+                           const std::vector<Trajectory>& segments,
+                           const MoveSettings& settings) {
+  const kinematics::CellModel& cell = scene.cell();
+  const kinematics::AxisLimits limits =
+      kinematics::axisLimits(cell.robot, cell.table, settings.speed_scale, settings.accel_time);
+  const AxisVector levers = axisLevers(cell, settings.part_reach);
+  JoinedProgram out;
+  out.start_times.assign(segments.size(), std::numeric_limits<double>::quiet_NaN());
+  // Each segment unwound against the one before (as if none is dropped), then every move
+  // between neighbours planned in parallel; a move that fails drops its segment and the next
+  // one is joined from the same end, in order.
+  std::vector<Trajectory> unwrapped(segments.size());
+  for (std::size_t i = 0; i < segments.size(); ++i) {
+    if (segments[i].samples.empty()) continue;
+    unwrapped[i] = i == 0 || unwrapped[i - 1].samples.empty()
+                       ? segments[i]
+                       : unwound(cell, segments[i], axesOf(unwrapped[i - 1].samples.back()));
+  }
+  std::vector<Move> moves(segments.size());
+  tbb::enumerable_thread_specific<collision::ClearanceEvaluator> evaluators(std::cref(scene));
+  tbb::parallel_for(std::size_t{1}, segments.size(), [&](std::size_t i) {
+    const Trajectory &a = unwrapped[i - 1], &b = unwrapped[i];
+    if (a.samples.empty() || b.samples.empty()) return;
+    moves[i] = planMove(scene, evaluators.local(), limits, levers, a.samples.back(),
+                        b.samples.front(), endSpeed(a), startSpeed(b), settings);
+  });
+  collision::ClearanceEvaluator clearance(scene);
+  auto& samples = out.trajectory.samples;
+  std::size_t last = 0;  // the segment the program ends with
+  bool in_step = true;   // it ends as unwrapped[last] does
+  for (std::size_t i = 0; i < segments.size(); ++i) {
+    if (segments[i].samples.empty()) continue;
+    if (samples.empty()) {
+      appendSegment(segments[i], 0.0, samples);
+      out.start_times[i] = 0.0;
+      last = i;
+      continue;
+    }
+    Trajectory seg = unwrapped[i];
+    Move move = std::move(moves[i]);
+    if (last + 1 != i || !in_step) {
+      // After a dropped segment: unwound and planned again from where the program ends.
+      seg = unwound(cell, segments[i], axesOf(samples.back()));
+      move = planMove(scene, clearance, limits, levers, samples.back(), seg.samples.front(),
+                      endSpeed(out.trajectory), startSpeed(seg), settings);
+    }
+    // The next precomputed move starts from unwrapped[i]: usable only if that is what runs.
+    in_step = axesOf(seg.samples.back()) == axesOf(unwrapped[i].samples.back());
+    if (!move.samples) {
+      out.dropped.emplace_back(
+          i,
+          "no collision-free point-to-point move reaches it from the pass before: direct, "
+          "backed off along the laser or via above the part");
+      continue;
+    }
+    ++out.times.moves;
+    out.times.detours += move.detour ? 1u : 0u;
+    // The move ends on the segment's first pose: the segment's samples follow its last step.
+    // (Nothing to move: the segment starts one step later, where the last one ended.)
+    auto& m = *move.samples;
+    for (auto& x : m) x.t += samples.back().t - move.from;
+    const double t0 = m.empty() ? samples.back().t + settings.max_step : m.back().t;
+    samples.insert(samples.end(), m.begin(), m.empty() ? m.end() : m.end() - 1);
+    out.start_times[i] = t0;
+    appendSegment(seg, t0, samples);
+    last = i;
+  }
+  const ProgramTimes split = programTimes(out.trajectory);
+  out.times.total = split.total;
+  out.times.scanning = split.scanning;
+  out.times.moving = split.moving;
+  return out;
+}
+
+}  // namespace scanplan::pipeline
+
+namespace scanplan::pipeline {
+
+namespace {
+
+// Where a segment is entered and left, run forwards or backwards, with the speeds there.
+struct SegmentEnds {
+  kinematics::AxisVector in, out, v_in, v_out;
+};
+
+SegmentEnds endsOf(const kinematics::Trajectory& seg, bool reversed) {
+  SegmentEnds e{axesOf(seg.samples.front()), axesOf(seg.samples.back()), startSpeed(seg),
+                endSpeed(seg)};
+  if (reversed) e = {e.out, e.in, -e.v_out, -e.v_in};
+  return e;
+}
+
+class MoveCosts {
+ public:
+  MoveCosts(const kinematics::CellModel& cell,
+            const std::vector<kinematics::Trajectory>& segments,
+            const MoveSettings& settings)
+      : continuous_(cell.table.continuous),
+        limits_(kinematics::axisLimits(
+            cell.robot, cell.table, settings.speed_scale, settings.accel_time)) {
+    for (const auto& s : segments) ends_.push_back({endsOf(s, false), endsOf(s, true)});
+  }
+  // From the end of (i, ri) to the start of (j, rj), s.
+  double operator()(std::size_t i, bool ri, std::size_t j, bool rj) const {
+    const SegmentEnds& a = ends_[i][ri ? 1 : 0];
+    const SegmentEnds& b = ends_[j][rj ? 1 : 0];
+    kinematics::AxisVector to = b.in;
+    if (continuous_) to(0) = a.out(0) + std::remainder(b.in(0) - a.out(0), kTwoPi);
+    return kinematics::ptpDuration(a.out, to, a.v_out, b.v_in, limits_);
+  }
+
+ private:
+  bool continuous_;
+  kinematics::AxisLimits limits_;
+  std::vector<std::array<SegmentEnds, 2>> ends_;
+};
+
+double tourCost(const MoveCosts& cost, const SegmentOrder& o) {
+  double c = 0.0;
+  for (std::size_t k = 1; k < o.order.size(); ++k)
+    c += cost(o.order[k - 1], o.reversed[k - 1] != 0, o.order[k], o.reversed[k] != 0);
+  return c;
+}
+
+// Nearest neighbour from `first` (after the fixed head), each segment either way.
+SegmentOrder nearestFrom(const MoveCosts& cost,
+                         std::size_t n,
+                         std::size_t fixed,
+                         std::size_t first) {
+  SegmentOrder o;
+  std::vector<std::uint8_t> used(n, 0);
+  for (std::size_t i = 0; i < fixed; ++i) {
+    o.order.push_back(i);
+    o.reversed.push_back(0);
+    used[i] = 1;
+  }
+  if (!used[first]) {
+    o.order.push_back(first);
+    o.reversed.push_back(0);
+    used[first] = 1;
+  }
+  while (o.order.size() < n) {
+    double best = std::numeric_limits<double>::infinity();
+    std::size_t bj = 0;
+    bool br = false;
+    for (std::size_t j = 0; j < n; ++j) {
+      if (used[j]) continue;
+      for (const bool r : {false, true}) {
+        const double c = cost(o.order.back(), o.reversed.back() != 0, j, r);
+        if (c < best - 1e-12) {
+          best = c;
+          bj = j;
+          br = r;
+        }
+      }
+    }
+    o.order.push_back(bj);
+    o.reversed.push_back(br ? 1 : 0);
+    used[bj] = 1;
+  }
+  return o;
+}
+
+// 2-opt: reverse the stretch k+1 … m (and each segment in it) where that shortens the tour. The
+// move durations are symmetric under running a move backwards, so only the two cut edges change.
+void twoOpt(const MoveCosts& cost, std::size_t fixed, SegmentOrder& o) {
+  const std::size_t n = o.order.size();
+  const auto c = [&](std::size_t a, bool ra, std::size_t b, bool rb) {
+    return cost(o.order[a], ra, o.order[b], rb);
+  };
+  for (int sweep = 0; sweep < 50; ++sweep) {
+    bool improved = false;
+    for (std::size_t k = fixed == 0 ? 0 : fixed - 1; k + 1 < n; ++k) {
+      for (std::size_t m = k + 1; m < n; ++m) {
+        const bool rk = o.reversed[k] != 0, rk1 = o.reversed[k + 1] != 0, rm = o.reversed[m] != 0;
+        double before = c(k, rk, k + 1, rk1), after = c(k, rk, m, !rm);
+        if (m + 1 < n) {
+          const bool rm1 = o.reversed[m + 1] != 0;
+          before += c(m, rm, m + 1, rm1);
+          after += c(k + 1, !rk1, m + 1, rm1);
+        }
+        if (after < before - 1e-9) {
+          std::reverse(o.order.begin() + static_cast<std::ptrdiff_t>(k + 1),
+                       o.order.begin() + static_cast<std::ptrdiff_t>(m + 1));
+          std::reverse(o.reversed.begin() + static_cast<std::ptrdiff_t>(k + 1),
+                       o.reversed.begin() + static_cast<std::ptrdiff_t>(m + 1));
+          for (std::size_t i = k + 1; i <= m; ++i) o.reversed[i] ^= 1;
+          improved = true;
+        }
+      }
+    }
+    if (!improved) break;
+  }
+}
+
+}  // namespace
+
+SegmentOrder orderSegments(const kinematics::CellModel& cell,
+                           const std::vector<kinematics::Trajectory>& segments,
+                           std::size_t fixed,
+                           const MoveSettings& settings) {
+  const std::size_t n = segments.size();
+  fixed = std::min(fixed, n);
+  if (n == 0) return {};
+  const MoveCosts cost(cell, segments, settings);
+  SegmentOrder best;
+  double best_cost = std::numeric_limits<double>::infinity();
+  const std::size_t free = n - fixed;
+  const std::size_t step = std::max<std::size_t>(1, free / 12);
+  for (std::size_t first = fixed; first < n || (free == 0 && first == fixed); first += step) {
+    SegmentOrder o = nearestFrom(cost, n, fixed, std::min(first, n - 1));
+    const double c = tourCost(cost, o);
+    if (c < best_cost - 1e-12) {
+      best_cost = c;
+      best = std::move(o);
+    }
+    if (free == 0) break;
+  }
+  twoOpt(cost, fixed, best);
+  return best;
+}
+
+kinematics::Trajectory reversedSegment(const kinematics::Trajectory& segment) {
+  kinematics::Trajectory out;
+  const auto& s = segment.samples;
+  if (s.empty()) return out;
+  const double t0 = s.front().t, t1 = s.back().t;
+  for (auto it = s.rbegin(); it != s.rend(); ++it) {
+    kinematics::TrajectorySample x = *it;
+    x.t = t0 + (t1 - it->t);
+    out.samples.push_back(std::move(x));
+  }
+  return out;
+}
+
+}  // namespace scanplan::pipeline
+
+namespace scanplan::pipeline {
+
+double slowToLimits(const kinematics::CellModel& cell,
+                    kinematics::Trajectory& segment,
+                    double speed_scale) {
+  const kinematics::AxisLimits limits = kinematics::axisLimits(cell.robot, cell.table);
+  auto& s = segment.samples;
+  double ratio = 1.0;
+  for (std::size_t k = 1; k < s.size(); ++k) {
+    const double dt = s[k].t - s[k - 1].t;
+    const AxisVector speed = (axesOf(s[k]) - axesOf(s[k - 1])).cwiseAbs() / dt;
+    ratio = std::max(ratio, (speed.array() / (speed_scale * limits.speed.array())).maxCoeff());
+  }
+  if (ratio > 1.0) {
+    const double t0 = s.front().t;
+    for (auto& x : s) x.t = t0 + ratio * (x.t - t0);
+  }
+  return ratio;
+}
+
+}  // namespace scanplan::pipeline

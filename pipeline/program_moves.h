@@ -1,0 +1,109 @@
+#pragma once
+// The moves between the segments of a scan (ScanPath::breaks: the automatic scan's passes): each
+// a point-to-point move of all seven axes at the robot's and the table's own speed and
+// acceleration limits (kinematics/ptp_move.h), checked against the cell at every step. Where the
+// direct move is blocked the head backs off along its laser at both ends, only as far as needed.
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "collision/scene.h"
+#include "kinematics/cell.h"
+#include "kinematics/ptp_move.h"
+#include "kinematics/trajectory.h"
+
+namespace scanplan::pipeline {
+
+/// How the moves are made.
+struct MoveSettings {
+  /// Share of each axis's speed and acceleration limit a move may use (a margin for the
+  /// controller's own profile). In (0, 1].
+  double speed_scale = 0.95;
+  /// s, a joint without an acceleration limit reaches its full speed in this time.
+  double accel_time = 0.25;
+  /// s, the longest step between the samples of a move (the programs' points).
+  double max_step = 0.1;
+  /// Back-off distances tried, in order, when the direct move is blocked, m.
+  std::vector<double> retreats{0.02, 0.05, 0.1, 0.15, 0.25};
+  /// rad, the largest change of any axis between two poses at which the clearance is checked
+  /// (nearer the cell the poses lie closer: at most half the distance to the nearest pair's
+  /// d_low of motion apart).
+  double check_step = 0.02;
+  /// The head above the part (part frame, laser pointing down): the last resort of a blocked
+  /// move goes up there and across. Unset: no such detour.
+  std::optional<Eigen::Isometry3d> above;
+  /// m, the farthest point the table carries from its axis (the part): with the links' lengths
+  /// it bounds how fast the cell's points move, which spaces the checked poses.
+  double part_reach = 0.0;
+};
+
+/// The program's time split.
+struct ProgramTimes {
+  double total = 0.0;       ///< s, the whole program
+  double scanning = 0.0;    ///< s, intervals whose both ends scan
+  double moving = 0.0;      ///< s, the rest: moves between passes (and stretches that do not scan)
+  std::size_t moves = 0;    ///< moves between segments
+  std::size_t detours = 0;  ///< of them, backed off because the direct move was blocked
+};
+
+/// The segments joined into one program.
+struct JoinedProgram {
+  kinematics::Trajectory trajectory;  ///< program time from 0
+  ProgramTimes times;
+  /// Segments left out because no move reaches them (index into the input, reason).
+  std::vector<std::pair<std::size_t, std::string>> dropped;
+  /// Per input segment: the time its first sample runs at in the program (NaN when dropped).
+  std::vector<double> start_times;
+};
+
+/// An order to run segments in: `order[k]` runs k-th, backwards when `reversed[k]`.
+struct SegmentOrder {
+  std::vector<std::size_t> order;
+  std::vector<std::uint8_t> reversed;
+};
+
+/// The order that keeps the moves between `segments` short, each costed by ptpDuration() from
+/// one segment's end (at its end speed) to the next one's start (at its start speed), the table
+/// a whole turn the shorter way round when it turns without end. The first `fixed` segments run
+/// first, in order and forwards (hand-written paths); every other one may run either way (a pass
+/// run backwards covers what it covers forwards). Nearest neighbour from up to 12 first
+/// segments, then 2-opt (reversing a stretch of the tour and every segment in it) until no move
+/// shortens it or 50 sweeps. Deterministic.
+SegmentOrder orderSegments(const kinematics::CellModel& cell,
+                           const std::vector<kinematics::Trajectory>& segments,
+                           std::size_t fixed,
+                           const MoveSettings& settings = {});
+
+/// A segment run backwards: the same poses in reverse order over the same times.
+kinematics::Trajectory reversedSegment(const kinematics::Trajectory& segment);
+
+/// Joins `segments` (each a trajectory with its own times, on the path's time axis) into one
+/// program: a table that turns without end is unwound by whole turns to the nearest equivalent,
+/// a joint whose range exceeds a turn likewise where the whole segment stays in its limits; then
+/// a move from each segment's end (at its end speed) to the next one's start (at its start
+/// speed). A move whose every checked pose keeps each pair of the cell beyond its d_low is taken;
+/// else the head backs off along −z_S at both ends by MoveSettings::retreats in turn (inverse
+/// kinematics nearest the end poses), else it goes via MoveSettings::above. A segment no move
+/// reaches is dropped (and the next one tried from the same end). The first segment is never
+/// dropped. The moves are planned in parallel (TBB); the result does not depend on threads.
+JoinedProgram joinSegments(const collision::Scene& scene,
+                           const std::vector<kinematics::Trajectory>& segments,
+                           const MoveSettings& settings = {});
+
+/// The segment slowed down evenly, where needed, so that no joint and not the table turns
+/// faster than `speed_scale` of its limit between two samples (a pass too fast for the arm at
+/// some point runs slower as a whole: its points only get denser). Returns the factor its
+/// duration grew by (1: unchanged).
+double slowToLimits(const kinematics::CellModel& cell,
+                    kinematics::Trajectory& segment,
+                    double speed_scale = 0.98);
+
+/// The program's time split of a trajectory.
+ProgramTimes programTimes(const kinematics::Trajectory& trajectory);
+
+}  // namespace scanplan::pipeline

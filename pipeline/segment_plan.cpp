@@ -1,0 +1,412 @@
+#include "pipeline/segment_plan.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <tuple>
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include "kinematics/units.h"
+#include "pipeline/certificate.h"
+#include "planner/joint_wrap.h"
+
+namespace scanplan::pipeline {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+struct Segment {
+  std::size_t begin = 0, end = 0;
+  kinematics::ScanPath path;
+  planner::ConfigMap map;
+  PathChoice choice;
+  std::optional<planner::TrajectoryBuild> build;
+  double trajectory_seconds = 0.0;
+};
+
+// The path search and the trajectory of one segment, on its slice of the map.
+void planSegment(const ScanProblem& problem,
+                 const PreparedScan& p,
+                 const PlanOptions& options,
+                 Segment& seg) {
+  seg.path = kinematics::slicePath(p.path.path, seg.begin, seg.end);
+  seg.map = sliceMap(p.map, seg.begin, seg.end);
+  const auto accept = [&](std::size_t b, const std::vector<double>& theta) {
+    const auto t = Clock::now();
+    seg.build = planner::buildTrajectory(*p.scene, problem.constraints, seg.path, theta,
+                                         seg.map.branches[b]);
+    seg.trajectory_seconds += since(t);
+    return executableReason(*seg.build);
+  };
+  const auto wrap_sheets = [&](std::size_t b) -> std::shared_ptr<const planner::WrapSheets> {
+    if (!seg.build || seg.build->wrap_joint < 0) return nullptr;
+    return std::make_shared<const planner::WrapSheets>(p.scene->cell(), problem.constraints,
+                                                       seg.path, seg.map, b, seg.build->wrap_joint);
+  };
+  seg.choice = choosePath(seg.map, problem.planning, options, accept, wrap_sheets);
+  if (!seg.choice.solved()) seg.build.reset();
+}
+
+void addTerms(planner::ObjectiveTerms& sum, const planner::ObjectiveTerms& t, std::size_t offset) {
+  sum.cost_f += t.cost_f;
+  sum.cost_omega += t.cost_omega;
+  sum.cost_alpha += t.cost_alpha;
+  sum.total += t.total;
+  if (t.min_f < sum.min_f) {
+    sum.min_f = t.min_f;
+    sum.min_f_sample = offset + t.min_f_sample;
+  }
+  sum.max_abs_omega = std::max(sum.max_abs_omega, t.max_abs_omega);
+  sum.max_abs_alpha = std::max(sum.max_abs_alpha, t.max_abs_alpha);
+  sum.feasible = sum.feasible && t.feasible;
+}
+
+// θ over every time sample: each planned segment's own, a dropped one held at the angle before.
+std::vector<double> joinedTheta(const std::vector<Segment>& segs,
+                                const std::vector<const std::vector<double>*>& thetas) {
+  std::vector<double> theta;
+  for (std::size_t s = 0; s < segs.size(); ++s) {
+    const double hold = theta.empty() ? 0.0 : theta.back();
+    if (thetas[s] && thetas[s]->size() == segs[s].end - segs[s].begin) {
+      theta.insert(theta.end(), thetas[s]->begin(), thetas[s]->end());
+    } else {
+      theta.insert(theta.end(), segs[s].end - segs[s].begin, hold);
+    }
+  }
+  return theta;
+}
+
+// One planner's results over the segments it solved, summed; nullopt when one is missing.
+template <class Get>
+std::optional<planner::PlanResult> sumResults(const std::vector<Segment>& segs,
+                                              const std::vector<std::uint8_t>& kept,
+                                              Get get) {
+  planner::PlanResult sum;
+  sum.status = planner::PlannerStatus::kExact;
+  sum.terms.min_f = 1.0;
+  sum.terms.feasible = true;
+  std::vector<const std::vector<double>*> thetas(segs.size(), nullptr);
+  for (std::size_t s = 0; s < segs.size(); ++s) {
+    if (!kept[s]) continue;
+    const planner::PlanResult* r = get(segs[s].choice);
+    if (!r || !r->solved()) return std::nullopt;
+    addTerms(sum.terms, r->terms, segs[s].begin);
+    sum.seconds += r->seconds;
+    thetas[s] = &r->theta;
+  }
+  sum.theta = joinedTheta(segs, thetas);
+  return sum;
+}
+
+// The branch most time samples were planned on.
+std::size_t mainBranch(const std::vector<Segment>& segs, const std::vector<std::uint8_t>& kept) {
+  std::map<std::size_t, std::size_t> samples;
+  for (std::size_t s = 0; s < segs.size(); ++s)
+    if (kept[s]) samples[segs[s].choice.chosen.result.branch] += segs[s].end - segs[s].begin;
+  std::size_t best = 0, most = 0;
+  for (const auto& [b, n] : samples)
+    if (n > most) {
+      best = b;
+      most = n;
+    }
+  return best;
+}
+
+// The refinements summed, when any segment was refined.
+std::optional<planner::RefineResult> joinedRefine(const std::vector<Segment>& segs,
+                                                  const std::vector<std::uint8_t>& kept) {
+  std::optional<planner::RefineResult> out;
+  for (std::size_t s = 0; s < segs.size(); ++s) {
+    const auto& r = segs[s].choice.refine;
+    if (!kept[s] || !r) continue;
+    if (!out) {
+      out.emplace();
+      out->algorithm = r->algorithm;
+      out->stop_reason = "per pass";
+    }
+    out->before.total += r->before.total;
+    out->after.total += r->after.total;
+    out->improved = out->improved || r->improved;
+    out->evaluations += r->evaluations;
+    out->seconds += r->seconds;
+  }
+  return out;
+}
+
+// The segments' choices as one: J summed, θ joined, the DP yardstick and comparisons summed.
+PathChoice joinChoices(const std::vector<Segment>& segs, const std::vector<std::uint8_t>& kept) {
+  PathChoice out;
+  const auto own = [](const PathChoice& c) { return &c.chosen.result; };
+  const auto chosen = sumResults(segs, kept, own);
+  for (const Segment& s : segs) out.chosen.method = s.choice.chosen.method;
+  if (!chosen) return out;  // not reached: every kept segment is solved
+  out.chosen.result = *chosen;
+  out.chosen.result.branch = mainBranch(segs, kept);
+  out.chosen.seconds = chosen->seconds;
+  std::vector<const std::vector<double>*> final_theta(segs.size(), nullptr);
+  for (std::size_t s = 0; s < segs.size(); ++s) {
+    if (!kept[s]) continue;
+    final_theta[s] = &segs[s].choice.theta;
+    addTerms(out.terms, segs[s].choice.terms, segs[s].begin);
+  }
+  out.terms.min_f = std::min(out.terms.min_f, 1.0);
+  out.theta = joinedTheta(segs, final_theta);
+  out.refine = joinedRefine(segs, kept);
+  out.dp = sumResults(segs, kept, [](const PathChoice& c) {
+    return c.dp ? &*c.dp : static_cast<const planner::PlanResult*>(nullptr);
+  });
+  if (out.dp) out.dp->branch = out.chosen.result.branch;
+  for (const Segment& s : segs) out.dp_subdivisions = s.choice.dp_subdivisions;
+  if (!segs.empty()) {
+    for (const PlannerOutcome& o : segs.front().choice.others) {
+      PlannerOutcome sum;
+      sum.method = o.method;
+      const auto r = sumResults(segs, kept, [&](const PathChoice& c) {
+        for (const PlannerOutcome& x : c.others)
+          if (x.method == o.method) return &x.result;
+        return static_cast<const planner::PlanResult*>(nullptr);
+      });
+      if (r) {
+        sum.result = *r;
+        sum.seconds = r->seconds;
+      } else {
+        sum.result.reason = "no path on every pass";
+      }
+      out.others.push_back(std::move(sum));
+    }
+  }
+  std::set<std::size_t> branches;
+  for (std::size_t s = 0; s < segs.size(); ++s) {
+    const PathChoice& c = segs[s].choice;
+    for (const auto& [b, why] : c.rejected)
+      out.rejected.emplace_back(b, fmt::format("pass {}: {}", s + 1, why));
+    if (kept[s]) branches.insert(c.chosen.result.branch);
+    out.segments.push_back(c);
+  }
+  out.why_chosen =
+      fmt::format("per pass, the lowest J the arm can follow: {} passes on {} branch(es)",
+                  std::count(kept.begin(), kept.end(), std::uint8_t{1}), branches.size());
+  return out;
+}
+
+// The program cut after the last segment that ends within `limit` s (never before the first):
+// the segments after it are dropped.
+void cutAt(double limit,
+           const std::vector<kinematics::Trajectory>& ordered,
+           JoinedProgram& joined) {
+  std::optional<double> end;
+  for (std::size_t k = 0; k < ordered.size(); ++k) {
+    const double start = joined.start_times[k];
+    if (std::isnan(start)) continue;
+    const double stop = start + ordered[k].duration() - ordered[k].samples.front().t;
+    if (!end || stop <= limit + 1e-9) {
+      end = stop;
+      continue;
+    }
+    joined.dropped.emplace_back(
+        k, fmt::format("it would end at {:.1f} s, past scan.auto.max_program_s ({:.1f} s)", stop,
+                       limit));
+    joined.start_times[k] = std::numeric_limits<double>::quiet_NaN();
+  }
+  // Keep everything up to the last segment kept (runs after a dropped one cannot be reached
+  // without it: only a prefix of the program stays).
+  double last = 0.0;
+  for (std::size_t k = 0; k < ordered.size(); ++k) {
+    if (std::isnan(joined.start_times[k])) {
+      for (std::size_t m = k + 1; m < ordered.size(); ++m) {
+        if (std::isnan(joined.start_times[m])) continue;
+        joined.dropped.emplace_back(m,
+                                    fmt::format("past scan.auto.max_program_s ({:.1f} s)", limit));
+        joined.start_times[m] = std::numeric_limits<double>::quiet_NaN();
+      }
+      break;
+    }
+    last = joined.start_times[k] + ordered[k].duration() - ordered[k].samples.front().t;
+  }
+  auto& s = joined.trajectory.samples;
+  while (!s.empty() && s.back().t > last + 1e-9) s.pop_back();
+  const ProgramTimes split = programTimes(joined.trajectory);
+  joined.times.total = split.total;
+  joined.times.scanning = split.scanning;
+  joined.times.moving = split.moving;
+}
+
+// The moves' settings for this problem: the detour's pose above the part is the top of a sphere
+// around it (its bounding sphere grown by the scanner housing's reach and 20 mm), the laser
+// pointing down the table's axis.
+MoveSettings moveSettings(const ScanProblem& problem) {
+  MoveSettings m;
+  if (problem.part.vertices.empty()) return m;
+  const Eigen::Vector3d centre = problem.part.bounds().center();
+  double part = 0.0, head = 0.0;
+  for (const Eigen::Vector3d& v : problem.part.vertices) part = std::max(part, (v - centre).norm());
+  for (const kinematics::Shape& shape : problem.cell.scanner.body)
+    for (const Eigen::Vector3d& v : kinematics::shapeSurface(shape).vertices)
+      head = std::max(head, v.norm());
+  const Eigen::Vector3d up = problem.cell.part.X_RP.linear().transpose().col(2);
+  Eigen::Isometry3d above = Eigen::Isometry3d::Identity();
+  const Eigen::Vector3d z = -up;
+  const Eigen::Vector3d x = z.unitOrthogonal();
+  above.linear().col(0) = x;
+  above.linear().col(1) = z.cross(x);
+  above.linear().col(2) = z;
+  above.translation() = centre + (part + head + 0.02) * up;
+  m.above = above;
+  for (const Eigen::Vector3d& v : problem.part.vertices)
+    m.part_reach = std::max(m.part_reach, (problem.cell.part.X_RP * v).head<2>().norm());
+  return m;
+}
+
+// The kept segments slowed to the axes' speed limits where needed, put in the order of the
+// shortest moves (the hand-written path, when there is one, first) and joined. The program's
+// start times and the dropped segments are mapped back to the segments' own indices.
+JoinedProgram joinInOrder(const collision::Scene& scene,
+                          std::vector<kinematics::Trajectory>& trajectories,
+                          const std::vector<std::uint8_t>& kept,
+                          bool automatic,
+                          std::size_t given_segments,
+                          double max_program,
+                          const MoveSettings& moves,
+                          ScanPlan& plan) {
+  std::vector<std::size_t> index;
+  std::vector<kinematics::Trajectory> run;
+  for (std::size_t s = 0; s < trajectories.size(); ++s) {
+    if (!kept[s]) continue;
+    slowToLimits(scene.cell(), trajectories[s]);
+    index.push_back(s);
+    run.push_back(std::move(trajectories[s]));
+  }
+  const std::size_t fixed = automatic && kept[0] && given_segments > 0 ? 1 : 0;
+  const SegmentOrder order = orderSegments(scene.cell(), run, fixed);
+  std::vector<kinematics::Trajectory> ordered;
+  for (std::size_t k = 0; k < order.order.size(); ++k) {
+    const auto& seg = run[order.order[k]];
+    ordered.push_back(order.reversed[k] ? reversedSegment(seg) : seg);
+  }
+  JoinedProgram joined = joinSegments(scene, ordered, moves);
+  if (max_program > 0.0) cutAt(max_program, ordered, joined);
+  JoinedProgram out;
+  out.trajectory = std::move(joined.trajectory);
+  out.times = joined.times;
+  out.start_times.assign(trajectories.size(), std::numeric_limits<double>::quiet_NaN());
+  for (std::size_t k = 0; k < order.order.size(); ++k)
+    out.start_times[index[order.order[k]]] = joined.start_times[k];
+  for (const auto& [k, why] : joined.dropped) {
+    plan.dropped.emplace_back(index[order.order[k]], why);
+    out.dropped.emplace_back(index[order.order[k]], why);
+  }
+  plan.order.clear();
+  for (std::size_t k = 0; k < order.order.size(); ++k)
+    plan.order.push_back({index[order.order[k]], order.reversed[k] != 0, joined.start_times[k]});
+  return out;
+}
+
+}  // namespace
+
+std::string executableReason(const planner::TrajectoryBuild& build) {
+  if (!build.ok) return build.reason;
+  if (build.min_f > 0.0) return {};
+  const auto& s = build.trajectory.samples[build.min_f_sample];
+  return fmt::format(
+      "time sample {} (t = {:.2f} s, table {:.2f} deg): f = 0 ({}) between the map's grid "
+      "angles; a finer map.angle_step_deg resolves it",
+      build.min_f_sample, s.t, toDeg(s.theta), s.limit);
+}
+
+planner::ConfigMap sliceMap(const planner::ConfigMap& map, std::size_t begin, std::size_t end) {
+  planner::ConfigMap out;
+  out.angles = map.angles;
+  out.times.assign(map.times.begin() + static_cast<std::ptrdiff_t>(begin),
+                   map.times.begin() + static_cast<std::ptrdiff_t>(end));
+  out.branches = map.branches;
+  const auto copy = [&](const auto& from, auto& to) {
+    to.clear();
+    to.reserve(map.branches.size() * map.angles.size() * (end - begin));
+    for (std::size_t b = 0; b < map.branches.size(); ++b)
+      for (std::size_t a = 0; a < map.angles.size(); ++a) {
+        const auto row = from.begin() + static_cast<std::ptrdiff_t>(map.index(b, a, 0));
+        to.insert(to.end(), row + static_cast<std::ptrdiff_t>(begin),
+                  row + static_cast<std::ptrdiff_t>(end));
+      }
+  };
+  copy(map.f, out.f);
+  copy(map.joint, out.joint);
+  copy(map.singularity, out.singularity);
+  copy(map.clearance, out.clearance);
+  copy(map.limit, out.limit);
+  return out;
+}
+
+void planSegments(const ScanProblem& problem, const PlanOptions& options, ScanPlan& plan) {
+  const PreparedScan& p = *plan.prepared;
+  const auto ranges = kinematics::segmentRanges(p.path.path);
+  std::vector<Segment> segs(ranges.size());
+  for (std::size_t s = 0; s < ranges.size(); ++s) std::tie(segs[s].begin, segs[s].end) = ranges[s];
+  const auto t = Clock::now();
+  tbb::parallel_for(std::size_t{0}, segs.size(),
+                    [&](std::size_t s) { planSegment(problem, p, options, segs[s]); });
+  const double wall = since(t);
+  std::vector<std::uint8_t> kept(segs.size(), 0);
+  std::vector<kinematics::Trajectory> trajectories(segs.size());
+  double trajectory_cpu = 0.0, all_cpu = 0.0;
+  for (std::size_t s = 0; s < segs.size(); ++s) {
+    trajectory_cpu += segs[s].trajectory_seconds;
+    all_cpu += segs[s].choice.chosen.seconds + segs[s].trajectory_seconds;
+    if (segs[s].build) {
+      kept[s] = 1;
+      trajectories[s] = segs[s].build->trajectory;
+    } else {
+      plan.dropped.emplace_back(s, segs[s].choice.chosen.result.reason);
+    }
+  }
+  // Wall time split between the search and the trajectories as their CPU time splits.
+  plan.times.trajectory = all_cpu > 0.0 ? wall * trajectory_cpu / all_cpu : 0.0;
+  plan.times.plan = wall - plan.times.trajectory;
+  if (std::find(kept.begin(), kept.end(), std::uint8_t{1}) == kept.end() ||
+      (!p.auto_scan && !kept[0])) {
+    plan.status = ScanStatus::kNoExecutablePath;
+    plan.reason = segs.front().choice.chosen.result.reason;
+    if (plan.reason.empty()) plan.reason = "no segment of the path can be planned";
+    return;
+  }
+  plan.choice = joinChoices(segs, kept);
+  if (plan.choice.dp && plan.choice.chosen.method != "dp") plan.times.dp = plan.choice.dp->seconds;
+  const auto tj = Clock::now();
+  JoinedProgram joined = joinInOrder(
+      *p.scene, trajectories, kept, p.auto_scan.has_value(), problem.path.elements.empty() ? 0 : 1,
+      problem.auto_scan ? problem.auto_scan->max_program : 0.0, moveSettings(problem), plan);
+  std::sort(plan.dropped.begin(), plan.dropped.end());
+  planner::TrajectoryBuild build;
+  build.ok = true;
+  build.trajectory = std::move(joined.trajectory);
+  build.min_f = 1.0;
+  build.min_clearance = std::numeric_limits<double>::infinity();
+  for (std::size_t s = 0; s < segs.size(); ++s) {
+    if (!segs[s].build || std::isnan(joined.start_times[s])) continue;
+    build.min_clearance = std::min(build.min_clearance, segs[s].build->min_clearance);
+  }
+  const auto& js = build.trajectory.samples;
+  for (std::size_t k = 0; k < js.size(); ++k) {
+    if (!std::isnan(js[k].f) && js[k].f < build.min_f) {
+      build.min_f = js[k].f;
+      build.min_f_sample = k;
+    }
+  }
+  plan.trajectory = std::move(build);
+  plan.program = joined.times;
+  plan.times.trajectory += since(tj);
+}
+
+}  // namespace scanplan::pipeline

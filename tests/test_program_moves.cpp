@@ -1,0 +1,141 @@
+// The automatic scan's program: each pass a segment planned on its own, joined by point-to-point
+// moves at the robot's limits (pipeline/program_moves.h). Checked on a synthetic part by the
+// validation of the whole program and by recomputing its time split and moves from the samples.
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "cli/config/job.h"
+#include "cli/config/problem.h"
+#include "kinematics/ptp_move.h"
+#include "kinematics/units.h"
+#include "pipeline/plan_scan.h"
+#include "pipeline/program_moves.h"
+#include "tests/part_support.h"
+#include "test_support.h"
+
+namespace {
+
+using namespace scanplan;
+
+// A box x × y × z (mm) as an STL file.
+std::filesystem::path writeBox(const std::filesystem::path& file, double x, double y, double z) {
+  std::vector<test::Quad> quads;
+  test::addBox(quads, Eigen::Vector3d::Zero(), Eigen::Vector3d(x, y, z));
+  test::writeStl(file, quads);
+  return file;
+}
+
+pipeline::ScanProblem boxProblem(const std::filesystem::path& mesh,
+                                 std::vector<std::string> extra = {}) {
+  std::vector<std::string> set{"part.mesh=" + mesh.string(),
+                               "part.place=table",
+                               "scan.paths=[]",
+                               "scan.auto={point_spacing_mm: 1.0, sample_spacing_mm: 4}",
+                               "scan.dt_s=0.2",
+                               "map.angle_step_deg=4",
+                               "scanner.rays_per_profile=80"};
+  set.insert(set.end(), extra.begin(), extra.end());
+  return cli::toProblem(cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", set));
+}
+
+class ProgramMoves : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = std::filesystem::temp_directory_path() / "scanplan_test_program_moves";
+    std::filesystem::create_directories(dir_);
+    problem_ =
+        std::make_unique<pipeline::ScanProblem>(boxProblem(writeBox(dir_ / "box.stl", 80, 60, 50)));
+    plan_ = std::make_unique<pipeline::ScanPlan>(pipeline::planScan(*problem_));
+  }
+  static void TearDownTestSuite() {
+    plan_.reset();
+    problem_.reset();
+    std::filesystem::remove_all(dir_);
+  }
+  static std::filesystem::path dir_;
+  static std::unique_ptr<pipeline::ScanProblem> problem_;
+  static std::unique_ptr<pipeline::ScanPlan> plan_;
+};
+std::filesystem::path ProgramMoves::dir_;
+std::unique_ptr<pipeline::ScanProblem> ProgramMoves::problem_;
+std::unique_ptr<pipeline::ScanPlan> ProgramMoves::plan_;
+
+TEST_F(ProgramMoves, EveryPassIsASegmentAndTheJoinedProgramIsValid) {
+  const pipeline::ScanPlan& plan = *plan_;
+  ASSERT_TRUE(plan.planned()) << plan.reason;
+  ASSERT_TRUE(plan.prepared->auto_scan);
+  const auto& path = plan.prepared->path.path;
+  EXPECT_EQ(path.breaks.size() + 1, plan.prepared->auto_scan->passes.size());
+  ASSERT_TRUE(plan.validation);
+  // The validation proves the whole program: limits, joint and table speeds, the table's
+  // acceleration at every knot (the seams between passes and moves included), collisions.
+  EXPECT_TRUE(plan.validation->valid);
+  // Every pass runs once, each in the program; no pass dropped on a box.
+  EXPECT_TRUE(plan.dropped.empty());
+  EXPECT_EQ(plan.order.size(), path.breaks.size() + 1);
+  EXPECT_EQ(plan.program.moves + 1, plan.order.size());
+}
+
+TEST_F(ProgramMoves, TheTimeSplitAddsUpFromTheSamples) {
+  const pipeline::ScanPlan& plan = *plan_;
+  ASSERT_TRUE(plan.trajectory);
+  const auto& s = plan.trajectory->trajectory.samples;
+  double scanning = 0.0;
+  std::size_t runs = 0;
+  for (std::size_t k = 1; k < s.size(); ++k) {
+    ASSERT_GT(s[k].t, s[k - 1].t) << k;
+    if (s[k].scanning && s[k - 1].scanning) scanning += s[k].t - s[k - 1].t;
+    if (s[k].scanning && !s[k - 1].scanning) ++runs;
+  }
+  EXPECT_EQ(runs + (s.front().scanning ? 1 : 0), plan.order.size());
+  EXPECT_NEAR(plan.program.scanning, scanning, 1e-9);
+  EXPECT_NEAR(plan.program.total, s.back().t - s.front().t, 1e-9);
+  EXPECT_NEAR(plan.program.scanning + plan.program.moving, plan.program.total, 1e-9);
+  // Each pass is sampled on whole map steps: its scanning time is at least what it was planned
+  // to take (never faster), and the sum matches within a step per pass.
+  const auto& report = *plan.prepared->auto_scan;
+  const double dt = plan.prepared->path.path.dt;
+  EXPECT_GE(plan.program.scanning, report.scan_time - 1e-9);
+  EXPECT_LE(plan.program.scanning,
+            report.scan_time + dt * static_cast<double>(report.passes.size()) + 1e-9);
+}
+
+TEST_F(ProgramMoves, MovesBetweenPassesBeatTheOldDetourAroundTheSafeSphere) {
+  // The tour's estimate is the old program's moves: back off, around the sphere at 100 mm/s,
+  // in again. The point-to-point moves at the robot's limits must be shorter.
+  const pipeline::ScanPlan& plan = *plan_;
+  ASSERT_TRUE(plan.planned());
+  EXPECT_LT(plan.program.moving, plan.prepared->auto_scan->transfer_time);
+}
+
+TEST_F(ProgramMoves, AMoveIsNoSlowerThanItsSlowestAxisNeeds) {
+  // Between two runs the move's time is bounded below by each axis's own trapezoid at the
+  // limits the moves use (the brake and launch only add to it).
+  const pipeline::ScanPlan& plan = *plan_;
+  ASSERT_TRUE(plan.trajectory);
+  const auto& cell = problem_->cell;
+  const pipeline::MoveSettings ms;
+  const auto lim = kinematics::axisLimits(cell.robot, cell.table, ms.speed_scale, ms.accel_time);
+  const auto& s = plan.trajectory->trajectory.samples;
+  for (std::size_t k = 1; k < s.size(); ++k) {
+    if (!(s[k - 1].scanning && !s[k].scanning)) continue;
+    std::size_t m = k;
+    while (m < s.size() && !s[m].scanning) ++m;
+    if (m == s.size()) break;
+    const double d_table = std::abs(s[m].theta - s[k - 1].theta);
+    const double need = d_table >= lim.speed(0) * lim.speed(0) / lim.accel(0)
+                            ? d_table / lim.speed(0) + lim.speed(0) / lim.accel(0)
+                            : 2.0 * std::sqrt(d_table / lim.accel(0));
+    // Brakes and launches can reduce how far the middle part has to go by at most v²/(2a) at
+    // each end; allow that much.
+    const double slack = 2.0 * lim.speed(0) / lim.accel(0);
+    EXPECT_GE(s[m].t - s[k - 1].t, need - slack) << "move at t = " << s[k - 1].t;
+  }
+}
+
+}  // namespace
