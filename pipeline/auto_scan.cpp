@@ -34,7 +34,7 @@ constexpr double kMaxStations = 5e6;          // probed strip stations of the ca
 // The set-cover programme's search (improveCover): nodes, model size, and a time limit that is
 // only a safety net (the node and size limits decide, so the answer does not depend on speed).
 constexpr std::size_t kCoverNodes = 200;
-constexpr std::size_t kCoverNonzeros = 150'000;
+constexpr std::size_t kCoverNonzeros = 200'000;
 constexpr double kCoverSeconds = 60.0;
 
 double since(Clock::time_point start) {
@@ -360,7 +360,7 @@ double moveOverhead(const ScanProblem& problem) {
 
 // The greedy cover improved by the set-cover integer programme (scanner/set_cover.h): the same
 // target at the least estimated time (each pass's scanning plus a move), over a pool of the
-// greedy passes and as many again of the reachable passes with the most counting samples per
+// greedy passes and half as many again of the reachable passes with the most counting samples per
 // second besides. Deterministic: a node limit, and a model-size limit rather than a time limit
 // decide how far it searches. The report keeps the greedy and optimised estimates and the
 // proven lower bound.
@@ -386,7 +386,7 @@ void improveCover(const std::vector<scanner::ScanPass>& passes,
   std::sort(value.begin(), value.end());
   problem.allowed.assign(passes.size(), 0);
   for (const std::size_t p : chosen.chosen) problem.allowed[p] = 1;
-  for (std::size_t k = 0, added = 0; k < value.size() && added < chosen.chosen.size(); ++k) {
+  for (std::size_t k = 0, added = 0; k < value.size() && 2 * added < chosen.chosen.size(); ++k) {
     if (problem.allowed[value[k].second]) continue;
     problem.allowed[value[k].second] = 1;
     ++added;
@@ -394,8 +394,8 @@ void improveCover(const std::vector<scanner::ScanPass>& passes,
   scanner::CoverLimits limits;
   limits.node_limit = kCoverNodes;
   limits.max_nonzeros = kCoverNonzeros;
-  const scanner::CoverSolution best = scanner::solveCover(problem, chosen.chosen, kCoverSeconds,
-                                                          limits);
+  const scanner::CoverSolution best =
+      scanner::solveCover(problem, chosen.chosen, kCoverSeconds, limits);
   report.greedy_cost = 0.0;
   for (const std::size_t p : chosen.chosen) report.greedy_cost += problem.cost[p];
   report.cover_cost = best.cost;

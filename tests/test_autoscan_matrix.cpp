@@ -13,8 +13,8 @@
 #include "cli/config/problem.h"
 #include "kinematics/trajectory.h"
 #include "pipeline/plan_scan.h"
-#include "tests/part_support.h"
 #include "test_support.h"
+#include "tests/part_support.h"
 
 namespace {
 
@@ -97,9 +97,10 @@ TEST_P(AutoScanMatrix, EverySettingPlansAValidProgramOrSaysWhy) {
   fs::remove_all(dir);
 }
 
-INSTANTIATE_TEST_SUITE_P(Parts, AutoScanMatrix, ::testing::Values(0, 1, 2), [](const auto& param_info) {
-  return parts()[param_info.param].name;
-});
+INSTANTIATE_TEST_SUITE_P(Parts,
+                         AutoScanMatrix,
+                         ::testing::Values(0, 1, 2),
+                         [](const auto& param_info) { return parts()[param_info.param].name; });
 
 TEST(AutoScanMatrix, TheSameJobGivesTheSameProgramBytes) {
   const fs::path dir = fs::temp_directory_path() / "scanplan_test_matrix_same";

@@ -284,12 +284,11 @@ std::string writePlanOutputs(const std::filesystem::path& dir,
 // Everything `plan` may write into its output folder: on each run, what it does not write again
 // is removed (no trajectory.csv or program of an earlier run beside a new report).
 const std::vector<std::string> kPlanOutputs{
-    "job.yaml",        "report.json",  "trajectory.csv", "trajectory_invalid.csv",
-    "programs",        "path.csv",     "path.png",       "configmap*",
-    "cloud.ply",       "coverage.ply", "cloud.png",      "uncovered.ply",
-    "certificate.png", "replay.html",  "cell.png",       "setup2", "coverage_time.png",
-    "coverage_time.svg",
-    "profiles",        "sensors.csv"};
+    "job.yaml",          "report.json",       "trajectory.csv", "trajectory_invalid.csv",
+    "programs",          "path.csv",          "path.png",       "configmap*",
+    "cloud.ply",         "coverage.ply",      "cloud.png",      "uncovered.ply",
+    "certificate.png",   "replay.html",       "cell.png",       "setup2",
+    "coverage_time.png", "coverage_time.svg", "profiles",       "sensors.csv"};
 
 // The command's result on stdout: the text summary, or with --json one JSON document (the
 // report, the output folder and the summary's lines).
@@ -383,7 +382,8 @@ ExitCode runPlan(const PlanOptions& options) {
       std::string(plan.simulation ? "cloud.ply, coverage.ply, cloud.png, " : "") +
           (plan.simulation && !plan.simulation->profile_images.empty() ? "profiles/, " : "") +
           (std::filesystem::exists(options.out_dir / "replay.html") ? "replay.html, " : "") +
-          "cell.png, " + (plan.certificate ? "uncovered.ply, certificate.png, " : "") +
+          "cell.png, " +
+          (plan.certificate ? "uncovered.ply, certificate.png, coverage_time.png/.svg, " : "") +
           (plan.validation && plan.validation->sensors ? "sensors.csv, " : "") +
           (setups.contains("setups") ? "setup2/, " : ""),
       kMapFilesNote);
