@@ -25,6 +25,7 @@ third_party_rules=(
   "fcl/            collision/"
   "embree[0-9]*/   scanner/"
   "nanoflann       scanner/"
+  "glpk\.h         scanner/"
   "ompl/           planner/"
   "nlopt           planner/"
   "yaml-cpp/       cli/"
