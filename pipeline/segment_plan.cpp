@@ -155,13 +155,14 @@ PathChoice joinChoices(const std::vector<Segment>& segs, const std::vector<std::
   out.chosen.result = *chosen;
   out.chosen.result.branch = mainBranch(segs, kept);
   out.chosen.seconds = chosen->seconds;
+  out.terms.min_f = 1.0;
+  out.terms.feasible = true;
   std::vector<const std::vector<double>*> final_theta(segs.size(), nullptr);
   for (std::size_t s = 0; s < segs.size(); ++s) {
     if (!kept[s]) continue;
     final_theta[s] = &segs[s].choice.theta;
     addTerms(out.terms, segs[s].choice.terms, segs[s].begin);
   }
-  out.terms.min_f = std::min(out.terms.min_f, 1.0);
   out.theta = joinedTheta(segs, final_theta);
   out.refine = joinedRefine(segs, kept);
   out.dp = sumResults(segs, kept, [](const PathChoice& c) {
