@@ -59,8 +59,14 @@ Json pathJson(const JobSpec& job,
               const planner::ConfigMap& map,
               const pipeline::PathChoice& planning,
               const planner::TrajectoryBuild* trajectory) {
+  // The program's time: the trajectory's when there is one (with the moves between passes),
+  // else the map's time axis.
+  const double cycle = trajectory && !trajectory->trajectory.samples.empty()
+                           ? trajectory->trajectory.duration() -
+                                 trajectory->trajectory.samples.front().t
+                           : map.times.back() - map.times.front();
   Json json = {{"samples", planning.theta.size()},
-               {"cycle_time_s", map.times.back() - map.times.front()},
+               {"cycle_time_s", cycle},
                {"map_min_f", planning.terms.min_f},
                {"map_min_f_time_s", map.times[planning.terms.min_f_sample]},
                {"max_abs_omega_deg_s", toDeg(planning.terms.max_abs_omega)},
