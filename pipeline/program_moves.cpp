@@ -291,7 +291,7 @@ Move planMove(const collision::Scene& scene,
     if (m.samples) return m;
   }
   if (settings.above) {
-    for (const double r : {0.05, 0.0}) {
+    for (const double r : {0.05, 0.12, 0.2, 0.0}) {
       const Way way = viaAbove(cell, *settings.above, a, b, v_a, v_b, r);
       if (way.empty()) continue;
       m.samples = runWay(scene, clearance, limits, levers, way, a.t, settings);
