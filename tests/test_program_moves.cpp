@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include "cli/config/job.h"
@@ -15,8 +17,8 @@
 #include "kinematics/units.h"
 #include "pipeline/plan_scan.h"
 #include "pipeline/program_moves.h"
-#include "tests/part_support.h"
 #include "test_support.h"
+#include "tests/part_support.h"
 
 namespace {
 
@@ -46,7 +48,10 @@ pipeline::ScanProblem boxProblem(const std::filesystem::path& mesh,
 class ProgramMoves : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = std::filesystem::temp_directory_path() / "scanplan_test_program_moves";
+    // One folder per process: ctest runs each test of the suite in a process of its own, in
+    // parallel, and one's teardown must not remove another's part.
+    dir_ = std::filesystem::temp_directory_path() /
+           ("scanplan_test_program_moves_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir_);
     problem_ =
         std::make_unique<pipeline::ScanProblem>(boxProblem(writeBox(dir_ / "box.stl", 80, 60, 50)));
