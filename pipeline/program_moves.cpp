@@ -226,18 +226,15 @@ Way viaAbove(const kinematics::CellModel& cell,
              const AxisVector& v_a,
              const AxisVector& v_b,
              double r) {
-  const Eigen::Isometry3d back(Eigen::Translation3d(0.0, 0.0, -r));
-  const auto qa = nearestIk(cell, a.theta, a.X_PS * back, a.q);
-  const auto qb = nearestIk(cell, b.theta, b.X_PS * back, b.q);
-  if (!qa || !qb) return {};
-  const auto ua = nearestIk(cell, a.theta, abovePose(above, a.X_PS), *qa);
-  const auto ub = nearestIk(cell, b.theta, abovePose(above, b.X_PS), *qb);
+  const Way back = backedOff(cell, a, b, v_a, v_b, r);  // out, across, in
+  if (back.empty()) return {};
+  const AxisVector &a1 = back[0].to, &b1 = back[2].from;
+  const auto ua = nearestIk(cell, a.theta, abovePose(above, a.X_PS), a1.tail<6>());
+  const auto ub = nearestIk(cell, b.theta, abovePose(above, b.X_PS), b1.tail<6>());
   if (!ua || !ub) return {};
-  const AxisVector xa = axesOf(a), xb = axesOf(b);
   const AxisVector z = AxisVector::Zero();
-  const AxisVector a1 = withJoints(xa, *qa), a2 = withJoints(xa, *ua);
-  const AxisVector b1 = withJoints(xb, *qb), b2 = withJoints(xb, *ub);
-  return {{xa, a1, v_a, z}, {a1, a2, z, z}, {a2, b2, z, z}, {b2, b1, z, z}, {b1, xb, z, v_b}};
+  const AxisVector a2 = withJoints(a1, *ua), b2 = withJoints(b1, *ub);
+  return {back[0], {a1, a2, z, z}, {a2, b2, z, z}, {b2, b1, z, z}, back[2]};
 }
 
 // The samples of a way after `a` (its first sample, `a` itself, left out); nullopt when a leg
