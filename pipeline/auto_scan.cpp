@@ -267,7 +267,7 @@ std::vector<scanner::ScanPass> aimedPasses(const scanner::PartOnTable& part,
   std::vector<std::uint8_t> reached(classes.size(), 0);
   for (const auto& p : general)
     for (std::uint32_t i : p.covers) reached[i] = 1;
-  std::vector<scanner::ScanPass> out;
+  std::vector<scanner::ScanPass> out, spins;
   for (std::size_t i = 0; i < classes.size() && out.size() < limit; ++i) {
     if (classes[i] != scanner::SampleClass::kScannable || reached[i]) continue;
     scanner::ScanPass aimed = scanner::aimedPass(part, pass, witnesses[i]);
@@ -275,8 +275,18 @@ std::vector<scanner::ScanPass> aimedPasses(const scanner::PartOnTable& part,
     if (aimed.X_RS.empty()) continue;
     scanner::evaluatePass(aimed, part, pass, index);
     for (std::uint32_t k : aimed.covers) reached[k] = 1;
-    if (!aimed.covers.empty()) out.push_back(std::move(aimed));
+    if (aimed.covers.empty()) continue;
+    out.push_back(std::move(aimed));
+    // The same view held while the table turns: one pass for a band of such samples (a bore on
+    // the axis, features repeated around it) where the strips would take one each.
+    for (double arc : {1.5707963267948966, 6.283185307179586}) {
+      scanner::ScanPass spin = scanner::aimedSpin(part, pass, witnesses[i], 0.35, arc);
+      if (!spin.X_RS.empty()) spins.push_back(std::move(spin));
+    }
   }
+  scanner::evaluatePasses(spins, part, pass, index);
+  for (auto& spin : spins)
+    if (!spin.covers.empty()) out.push_back(std::move(spin));
   return out;
 }
 

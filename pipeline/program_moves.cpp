@@ -307,6 +307,53 @@ void appendSegment(const Trajectory& seg, double t0, std::vector<TrajectorySampl
   }
 }
 
+// A checked move and then segment i after it, at the end of the program. The move ends on the
+// segment's first pose: the segment's samples follow its last step. (Nothing to move: the segment
+// starts one step later, where the last one ended.)
+void appendRun(Move move,
+               const Trajectory& seg,
+               std::size_t i,
+               double max_step,
+               JoinedProgram& out) {
+  auto& samples = out.trajectory.samples;
+  ++out.times.moves;
+  out.times.detours += move.detour ? 1u : 0u;
+  auto& m = *move.samples;
+  for (auto& x : m) x.t += samples.back().t - move.from;
+  const double t0 = m.empty() ? samples.back().t + max_step : m.back().t;
+  samples.insert(samples.end(), m.begin(), m.empty() ? m.end() : m.end() - 1);
+  out.start_times[i] = t0;
+  appendSegment(seg, t0, samples);
+}
+
+// A segment no move reached from the one before it, tried once more at the end of the program,
+// run forwards and then backwards; dropped when neither is reached.
+void appendDeferred(const collision::Scene& scene,
+                    collision::ClearanceEvaluator& clearance,
+                    const kinematics::AxisLimits& limits,
+                    const AxisVector& levers,
+                    const std::vector<Trajectory>& segments,
+                    std::size_t i,
+                    const MoveSettings& settings,
+                    JoinedProgram& out) {
+  const kinematics::CellModel& cell = scene.cell();
+  auto& samples = out.trajectory.samples;
+  for (const bool backwards : {false, true}) {
+    const Trajectory seg = unwound(
+        cell, backwards ? reversedSegment(segments[i]) : segments[i], axesOf(samples.back()));
+    Move move = planMove(scene, clearance, limits, levers, samples.back(), seg.samples.front(),
+                         endSpeed(out.trajectory), startSpeed(seg), settings);
+    if (!move.samples) continue;
+    appendRun(std::move(move), seg, i, settings.max_step, out);
+    out.flipped[i] = backwards ? 1 : 0;
+    return;
+  }
+  out.dropped.emplace_back(
+      i,
+      "no collision-free point-to-point move reaches it, from the pass before or from the end of "
+      "the program, either way round: direct, backed off along the laser or via above the part");
+}
+
 }  // namespace
 
 ProgramTimes programTimes(const Trajectory& trajectory) {
@@ -329,6 +376,7 @@ JoinedProgram joinSegments(const collision::Scene& scene,
   const AxisVector levers = axisLevers(cell, settings.part_reach);
   JoinedProgram out;
   out.start_times.assign(segments.size(), std::numeric_limits<double>::quiet_NaN());
+  out.flipped.assign(segments.size(), 0);
   // Each segment unwound against the one before (as if none is dropped), then every move
   // between neighbours planned in parallel; a move that fails drops its segment and the next
   // one is joined from the same end, in order.
@@ -349,7 +397,8 @@ JoinedProgram joinSegments(const collision::Scene& scene,
   });
   collision::ClearanceEvaluator clearance(scene);
   auto& samples = out.trajectory.samples;
-  std::size_t last = 0;  // the segment the program ends with
+  std::vector<std::size_t> deferred;  // segments no move reaches from the one before
+  std::size_t last = 0;               // the segment the program ends with
   bool in_step = true;   // it ends as unwrapped[last] does
   for (std::size_t i = 0; i < segments.size(); ++i) {
     if (segments[i].samples.empty()) continue;
@@ -370,24 +419,14 @@ JoinedProgram joinSegments(const collision::Scene& scene,
     // The next precomputed move starts from unwrapped[i]: usable only if that is what runs.
     in_step = axesOf(seg.samples.back()) == axesOf(unwrapped[i].samples.back());
     if (!move.samples) {
-      out.dropped.emplace_back(
-          i,
-          "no collision-free point-to-point move reaches it from the pass before: direct, "
-          "backed off along the laser or via above the part");
+      deferred.push_back(i);
       continue;
     }
-    ++out.times.moves;
-    out.times.detours += move.detour ? 1u : 0u;
-    // The move ends on the segment's first pose: the segment's samples follow its last step.
-    // (Nothing to move: the segment starts one step later, where the last one ended.)
-    auto& m = *move.samples;
-    for (auto& x : m) x.t += samples.back().t - move.from;
-    const double t0 = m.empty() ? samples.back().t + settings.max_step : m.back().t;
-    samples.insert(samples.end(), m.begin(), m.empty() ? m.end() : m.end() - 1);
-    out.start_times[i] = t0;
-    appendSegment(seg, t0, samples);
+    appendRun(std::move(move), seg, i, settings.max_step, out);
     last = i;
   }
+  for (const std::size_t i : deferred)
+    appendDeferred(scene, clearance, limits, levers, segments, i, settings, out);
   const ProgramTimes split = programTimes(out.trajectory);
   out.times.total = split.total;
   out.times.scanning = split.scanning;

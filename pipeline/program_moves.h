@@ -59,6 +59,8 @@ struct JoinedProgram {
   std::vector<std::pair<std::size_t, std::string>> dropped;
   /// Per input segment: the time its first sample runs at in the program (NaN when dropped).
   std::vector<double> start_times;
+  /// Per input segment: 1 when it runs backwards (put off to the end and reached that way).
+  std::vector<std::uint8_t> flipped;
 };
 
 /// An order to run segments in: `order[k]` runs k-th, backwards when `reversed[k]`.
@@ -89,8 +91,9 @@ kinematics::Trajectory reversedSegment(const kinematics::Trajectory& segment);
 /// speed). A move whose every checked pose keeps each pair of the cell beyond its d_low is taken;
 /// else the head backs off along −z_S at both ends by MoveSettings::retreats in turn (inverse
 /// kinematics nearest the end poses), else it goes via MoveSettings::above. A segment no move
-/// reaches is dropped (and the next one tried from the same end). The first segment is never
-/// dropped. The moves are planned in parallel (TBB); the result does not depend on threads.
+/// reaches is put off (the next one is tried from the same end) and tried again at the end of the
+/// program, forwards and then backwards; it is dropped only when neither is reached. The first
+/// segment is never dropped. The moves are planned in parallel (TBB); the result does not depend on threads.
 JoinedProgram joinSegments(const collision::Scene& scene,
                            const std::vector<kinematics::Trajectory>& segments,
                            const MoveSettings& settings = {});

@@ -207,34 +207,29 @@ PathChoice joinChoices(const std::vector<Segment>& segs, const std::vector<std::
 void cutAt(double limit,
            const std::vector<kinematics::Trajectory>& ordered,
            JoinedProgram& joined) {
-  std::optional<double> end;
-  for (std::size_t k = 0; k < ordered.size(); ++k) {
-    const double start = joined.start_times[k];
-    if (std::isnan(start)) continue;
-    const double stop = start + ordered[k].duration() - ordered[k].samples.front().t;
-    if (!end || stop <= limit + 1e-9) {
-      end = stop;
+  // In the order they run: the first always, then each that ends within the limit; the runs
+  // follow each other, so the first past it ends the program.
+  std::vector<std::size_t> runs;
+  for (std::size_t k = 0; k < ordered.size(); ++k)
+    if (!std::isnan(joined.start_times[k])) runs.push_back(k);
+  std::sort(runs.begin(), runs.end(), [&](std::size_t a, std::size_t b) {
+    return joined.start_times[a] < joined.start_times[b];
+  });
+  double last = 0.0;
+  bool past = false;
+  for (std::size_t r = 0; r < runs.size(); ++r) {
+    const std::size_t k = runs[r];
+    const double stop = joined.start_times[k] + ordered[k].duration() - ordered[k].samples.front().t;
+    if (r == 0 || (!past && stop <= limit + 1e-9)) {
+      last = stop;
       continue;
     }
     joined.dropped.emplace_back(
-        k, fmt::format("it would end at {:.1f} s, past scan.auto.max_program_s ({:.1f} s)", stop,
-                       limit));
+        k, past ? fmt::format("past scan.auto.max_program_s ({:.1f} s)", limit)
+                : fmt::format("it would end at {:.1f} s, past scan.auto.max_program_s ({:.1f} s)",
+                              stop, limit));
+    past = true;
     joined.start_times[k] = std::numeric_limits<double>::quiet_NaN();
-  }
-  // Keep everything up to the last segment kept (runs after a dropped one cannot be reached
-  // without it: only a prefix of the program stays).
-  double last = 0.0;
-  for (std::size_t k = 0; k < ordered.size(); ++k) {
-    if (std::isnan(joined.start_times[k])) {
-      for (std::size_t m = k + 1; m < ordered.size(); ++m) {
-        if (std::isnan(joined.start_times[m])) continue;
-        joined.dropped.emplace_back(m,
-                                    fmt::format("past scan.auto.max_program_s ({:.1f} s)", limit));
-        joined.start_times[m] = std::numeric_limits<double>::quiet_NaN();
-      }
-      break;
-    }
-    last = joined.start_times[k] + ordered[k].duration() - ordered[k].samples.front().t;
   }
   auto& s = joined.trajectory.samples;
   while (!s.empty() && s.back().t > last + 1e-9) s.pop_back();
@@ -310,7 +305,13 @@ JoinedProgram joinInOrder(const collision::Scene& scene,
   }
   plan.order.clear();
   for (std::size_t k = 0; k < order.order.size(); ++k)
-    plan.order.push_back({index[order.order[k]], order.reversed[k] != 0, joined.start_times[k]});
+    plan.order.push_back({index[order.order[k]], (order.reversed[k] != joined.flipped[k]),
+                          joined.start_times[k]});
+  // In the order they run (a segment put off to the end runs last), the dropped ones after.
+  std::stable_sort(plan.order.begin(), plan.order.end(), [](const auto& a, const auto& b) {
+    if (std::isnan(a.start) || std::isnan(b.start)) return !std::isnan(a.start) && std::isnan(b.start);
+    return a.start < b.start;
+  });
   return out;
 }
 

@@ -252,7 +252,7 @@ struct Ends {
 
 Ends ends(const ScanPass& pass, bool reversed, const std::optional<Eigen::Isometry3d>& at) {
   Ends e;
-  if (pass.kind == PassKind::kSpin) {
+  if (pass.turnable()) {
     e.turn = at ? azimuthOf(*at) - azimuthOf(pass.X_RS.front()) : 0.0;
     e.entry = Eigen::AngleAxisd(e.turn, Eigen::Vector3d::UnitZ()) * pass.X_RS.front();
     e.exit = e.entry;  // a full turn
@@ -341,7 +341,7 @@ void twoOpt(const std::vector<ScanPass>& passes,
       TourState st = tourState(passes, tour, start, sphere);
       for (std::size_t j = i; j < n; ++j) {
         std::size_t m = j + 1;
-        while (m < n && passes[tour[m].pass].kind == PassKind::kSpin) ++m;
+        while (m < n && passes[tour[m].pass].turnable()) ++m;
         const std::size_t last = std::min(m, n - 1);
         double before = 0.0;
         for (std::size_t k = i; k <= last; ++k) before += st.into[k];
@@ -413,7 +413,7 @@ std::vector<TourStep> orderPasses(const std::vector<ScanPass>& passes,
 
 ScanPass stepPass(const std::vector<ScanPass>& passes, const TourStep& step) {
   ScanPass p = passes[step.pass];
-  if (p.kind == PassKind::kSpin && step.turn != 0.0) p = rotatedPass(p, step.turn);
+  if (p.turnable() && step.turn != 0.0) p = rotatedPass(p, step.turn);
   if (step.reversed) {
     std::reverse(p.X_RS.begin(), p.X_RS.end());
     std::reverse(p.azimuth.begin(), p.azimuth.end());

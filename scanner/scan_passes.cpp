@@ -476,6 +476,41 @@ ScanPass aimedPass(const PartOnTable& scene,
   return pass;
 }
 
+ScanPass aimedSpin(const PartOnTable& scene,
+                   const PassSettings& settings,
+                   const Eigen::Isometry3d& witness,
+                   double min_arc,
+                   double max_arc) {
+  const HousingCheck housing(scene, settings.housing, settings.housing_spacing);
+  const int half =
+      static_cast<int>(std::floor(std::min(180.0, 0.5 * toDeg(max_arc)) / kSpinStation + 1e-9));
+  const int full = static_cast<int>(std::lround(180.0 / kSpinStation));
+  const auto turned = [&](int j) {
+    return Eigen::Isometry3d(Eigen::AngleAxisd(deg(kSpinStation * j), Eigen::Vector3d::UnitZ())) *
+           witness;
+  };
+  if (!(settings.max_spin_rate > 0.0) || !housing.fits(witness)) return {};
+  // The run of fitting stations either side of the witness; a whole turn when they all fit.
+  int lo = 0, hi = 0;
+  while (hi < half && housing.fits(turned(hi + 1))) ++hi;
+  while (lo > std::max(hi - 2 * full + 1, -half) && housing.fits(turned(lo - 1))) --lo;
+  if (hi - lo == 2 * full - 1) hi = lo + 2 * full;  // all 180 stations: close the turn
+  if (deg(kSpinStation * (hi - lo)) < min_arc) return {};
+  const Eigen::Vector3d p = witness.translation() + zMid(settings.window) * witness.linear().col(2);
+  const double rho = std::max(p.head<2>().norm(), 1e-3);
+  const double omega = std::min(scanSpeed(settings) / rho, settings.max_spin_rate);
+  ScanPass pass;
+  pass.kind = PassKind::kSpin;
+  pass.label = fmt::format("aimed spin at ({:.0f}, {:.0f}, {:.0f}) mm, {:.0f} deg", toMm(p.x()),
+                           toMm(p.y()), toMm(p.z()), kSpinStation * (hi - lo));
+  for (int j = lo; j <= hi; ++j) {
+    pass.azimuth.push_back(deg(kSpinStation * j));
+    pass.t.push_back((pass.azimuth.back() - pass.azimuth.front()) / omega);
+    pass.X_RS.push_back(turned(j));
+  }
+  return pass;
+}
+
 // ---- evaluation ---------------------------------------------------------------------------
 
 struct SampleIndex::Tree {

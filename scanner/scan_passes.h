@@ -89,6 +89,12 @@ struct ScanPass {
   std::vector<std::uint32_t> covers;  ///< evaluation samples it covers, ascending
   /// s, the scanning time (once evaluated, see evaluatePass()).
   double duration() const { return t.empty() ? 0.0 : t.back() - t.front(); }
+  /// A spin over a whole turn or more: it sees the same whatever azimuth it starts at, so a
+  /// tour may turn it (rotatedPass()). A shorter arc sees what it sees only where it is.
+  bool turnable() const {
+    return kind == PassKind::kSpin && azimuth.size() >= 2 &&
+           azimuth.back() - azimuth.front() >= 2.0 * 3.141592653589793 - 1e-9;
+  }
 };
 
 /// The strip stations candidatePasses() probes for a part with these vertices (R frame): the
@@ -109,6 +115,17 @@ ScanPass aimedPass(const PartOnTable& scene,
                    const PassSettings& settings,
                    const Eigen::Isometry3d& witness,
                    double half_length = 0.03);
+
+/// An arc of the table under a head that holds a scannability witness's pose in the world (R
+/// frame): the witness turned about R's z, for a band of the part at that view, such as a bore
+/// on the axis or features repeated around it (PassKind::kSpin, not turnable() unless a whole
+/// turn fits). The longest run of 2° stations holding the witness where the housing fits, a
+/// whole turn when all do; empty keys when that is less than `min_arc` (rad).
+ScanPass aimedSpin(const PartOnTable& scene,
+                   const PassSettings& settings,
+                   const Eigen::Isometry3d& witness,
+                   double min_arc = 0.35,
+                   double max_arc = 6.283185307179586);
 
 /// Area samples and a spatial index over them, for evaluating many passes.
 class SampleIndex {

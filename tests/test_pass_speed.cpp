@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include "geometry_support.h"
+#include "pass_support.h"
 
 #include "kinematics/mesh.h"
 #include "kinematics/pose.h"
@@ -40,21 +41,12 @@ using scanplan::scanner::SampleIndex;
 using scanplan::scanner::ScanPass;
 
 constexpr double kPi = std::numbers::pi;
-constexpr scanplan::scanner::TableTop kTable{0.2, 0.15};
+constexpr scanplan::scanner::TableTop kTable = scanplan::test::kDemoTable;
 // Relative tolerance of speeds computed in closed form from exact geometry (a flat face, a pure
 // translation): only rounding separates the two.
 constexpr double kExact = 1e-9;
 
-// The demo head (data/jobs/demo.yaml): camera 100 mm beside the laser along x_S, depth window
-// 107 … 196 mm (Eq. 5), a 0.5 mm spacing at 100 profiles per second; no housing.
-PassSettings demoHead() {
-  PassSettings s;
-  s.window = scanplan::scanner::laserWindow({0.1, 0.0, deg(35.0), deg(8.0)});
-  s.cameras = {Vector3d(0.1, 0.0, 0.0)};
-  s.point_spacing = 5e-4;
-  s.frame_rate = 100.0;
-  return s;
-}
+using scanplan::test::demoHead;
 
 // A box of half extents `half` placed by X_RB (R frame, m).
 struct Box {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,7 @@
 
 #include "cli/config/job.h"
 #include "cli/config/problem.h"
+#include "collision/clearance.h"
 #include "kinematics/ptp_move.h"
 #include "kinematics/units.h"
 #include "pipeline/plan_scan.h"
@@ -141,6 +143,90 @@ TEST_F(ProgramMoves, AMoveIsNoSlowerThanItsSlowestAxisNeeds) {
     const double slack = 2.0 * lim.speed(0) / lim.accel(0);
     EXPECT_GE(s[m].t - s[k - 1].t, need - slack) << "move at t = " << s[k - 1].t;
   }
+}
+
+// The program's scanning runs, each as a segment of its own (times as in the program).
+std::vector<kinematics::Trajectory> scanningRuns(const kinematics::Trajectory& program) {
+  std::vector<kinematics::Trajectory> runs;
+  const auto& s = program.samples;
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    if (!s[k].scanning) continue;
+    if (k == 0 || !s[k - 1].scanning) runs.emplace_back();
+    runs.back().samples.push_back(s[k]);
+  }
+  return runs;
+}
+
+// Joint 2 turned from the sample's until the arm meets something (f = 0), never past its limits.
+std::optional<kinematics::JointVector> blocked(const pipeline::ScanPlan& plan,
+                                               const kinematics::TrajectorySample& at) {
+  collision::ClearanceEvaluator clearance(*plan.prepared->scene);
+  const auto& robot = plan.prepared->scene->cell().robot;
+  for (const double sign : {1.0, -1.0})
+    for (double d = 0.05; d < 3.0; d += 0.05) {
+      kinematics::JointVector q = at.q;
+      q(1) += sign * d;
+      if (!robot.withinLimits(q)) break;
+      if (!(clearance.factor(at.theta, q) > 0.0)) return q;
+    }
+  return std::nullopt;
+}
+
+TEST_F(ProgramMoves, APassNoMoveEntersIsRunLastAndBackwardsWhereItsOtherEndIsClear) {
+  const pipeline::ScanPlan& plan = *plan_;
+  ASSERT_TRUE(plan.trajectory);
+  std::vector<kinematics::Trajectory> runs = scanningRuns(plan.trajectory->trajectory);
+  ASSERT_GE(runs.size(), 3u);
+  runs.resize(3);
+  // The middle pass starts where the arm is in a collision: no move can end there.
+  auto& b = runs[1].samples;
+  ASSERT_GE(b.size(), 3u);
+  const auto q = blocked(plan, b.front());
+  ASSERT_TRUE(q) << "no colliding joint 2 found";
+  b[0].q = b[1].q = *q;
+  const collision::Scene& scene = *plan.prepared->scene;
+  const pipeline::JoinedProgram joined = pipeline::joinSegments(scene, runs, {});
+  EXPECT_TRUE(joined.dropped.empty());
+  ASSERT_EQ(joined.start_times.size(), 3u);
+  EXPECT_LT(joined.start_times[0], joined.start_times[2]);
+  EXPECT_LT(joined.start_times[2], joined.start_times[1]);
+  EXPECT_EQ(joined.flipped, (std::vector<std::uint8_t>{0, 1, 0}));
+  // It runs last and backwards: the program ends on the pass's first (blocked) pose.
+  EXPECT_EQ(joined.trajectory.samples.back().q, *q);
+  EXPECT_EQ(joined.times.moves, 2u);
+
+  // Blocked at both ends: dropped, and the reason says what was tried.
+  b.back().q = b[b.size() - 2].q = *q;
+  const pipeline::JoinedProgram dropped = pipeline::joinSegments(scene, runs, {});
+  ASSERT_EQ(dropped.dropped.size(), 1u);
+  EXPECT_EQ(dropped.dropped[0].first, 1u);
+  EXPECT_NE(dropped.dropped[0].second.find("either way round"), std::string::npos);
+  EXPECT_TRUE(std::isnan(dropped.start_times[1]));
+  EXPECT_EQ(dropped.times.moves, 1u);
+}
+
+TEST_F(ProgramMoves, AProgramTimeLimitKeepsTheBestCoverageThatFitsIt) {
+  const pipeline::ScanPlan& full = *plan_;
+  ASSERT_TRUE(full.planned());
+  const double limit = 0.5 * full.program.total;
+  const pipeline::ScanProblem problem =
+      boxProblem(dir_ / "box.stl", {"scan.auto.max_program_s=" + std::to_string(limit)});
+  const pipeline::ScanPlan plan = pipeline::planScan(problem);
+  ASSERT_TRUE(plan.planned()) << plan.reason;
+  ASSERT_TRUE(plan.validation);
+  EXPECT_TRUE(plan.validation->valid);
+  EXPECT_LE(plan.program.total, limit + 1e-9);
+  EXPECT_GT(plan.program.total, 0.0);
+  // Every pass left out says why, naming the key.
+  for (const auto& [segment, why] : plan.dropped)
+    EXPECT_NE(why.find("max_program_s"), std::string::npos) << segment << ": " << why;
+  // Fewer passes run than in the unlimited program, covering less of the part.
+  EXPECT_LT(plan.order.size() - plan.dropped.size(), full.order.size());
+  // The simulated clouds (on by default) tell.
+  ASSERT_FALSE(plan.coverage_curve.fraction.empty());
+  ASSERT_FALSE(full.coverage_curve.fraction.empty());
+  EXPECT_LT(plan.coverage_curve.fraction.back(), full.coverage_curve.fraction.back());
+  EXPECT_LE(plan.coverage_curve.t.back(), limit + 1e-9);
 }
 
 }  // namespace
