@@ -10,7 +10,7 @@ namespace scanplan::collision {
 
 struct ClearanceRequest {
   /// Only distances below each pair's d_high are computed exactly; farther pairs are reported
-  /// as "at least d_high" (DESIGN.md §9). False: plain fcl::distance on every shape pair.
+  /// as "at least d_high" (docs/design.md §9). False: plain fcl::distance on every shape pair.
   bool bounded = true;
   /// Bounded requests: when > 0, every pair is measured below this distance (m) instead of its
   /// own d_high (the collision watch asks for its warning distance).

@@ -113,7 +113,7 @@ ShapeDistance meshShape(const MeshModel& mesh,
   request.enable_nearest_points = witness;
   fcl::DistanceResultd result;
   // Seeding the result with the bound before initialize() makes the traversal prune every
-  // bounding-volume pair at or beyond it (DESIGN.md §9); FCL's preprocess step, which seeds
+  // bounding-volume pair at or beyond it (docs/design.md §9); FCL's preprocess step, which seeds
   // with triangle 0, is skipped on purpose.
   result.min_distance = bound;
   fcl::detail::MeshShapeDistanceTraversalNodeOBBRSS<Shape, ShapeSolver> node;
@@ -146,7 +146,7 @@ ShapeDistance meshMesh(const MeshModel& a,
 }
 
 // A box against a mesh, in the box's frame. FCL's mesh–mesh traversal of the box's 12
-// triangles measured 2 000–7 000 leaf tests per query near a curved part (DESIGN.md §9): the
+// triangles measured 2 000–7 000 leaf tests per query near a curved part (docs/design.md §9): the
 // RSS rectangle around each of the box's big triangles reaches past the box, and the part
 // triangles under a box face all lie within the slack of their own leaf volumes. Here the
 // traversal walks FCL's own BVH of the part with bounds taken in the box frame, where the box is

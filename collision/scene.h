@@ -94,7 +94,7 @@ struct SceneGeometry;
 
 /// The cell's collision scene, built once per job: FCL geometry for every body (BVH models,
 /// OBBRSS, for meshes; FCL primitives for primitives) and the set of body pairs to check with
-/// their thresholds (DESIGN.md §4, seed §4.1). Immutable and safe to share across threads.
+/// their thresholds (docs/design.md §4, seed §4.1). Immutable and safe to share across threads.
 class Scene {
  public:
   /// Loads meshes and builds the geometry (and the hulls of robot link meshes for the maps).

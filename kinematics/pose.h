@@ -4,7 +4,7 @@
 
 namespace scanplan::kinematics {
 
-/// Elementary rotations and the boundary Euler conventions (DESIGN.md §2). Angles in rad.
+/// Elementary rotations and the boundary Euler conventions (docs/design.md §2). Angles in rad.
 Eigen::Matrix3d rotX(double angle);
 Eigen::Matrix3d rotY(double angle);
 Eigen::Matrix3d rotZ(double angle);

@@ -5,7 +5,7 @@
 
 namespace scanplan {
 
-/// The constraint ramp of Eq. 8, made monotone (DESIGN.md §4): 0 below `low`, 1 at and above
+/// The constraint ramp of Eq. 8, made monotone (docs/design.md §4): 0 below `low`, 1 at and above
 /// `high`, sin(π/2 · (x − low)/(high − low))^γ between. The seed's literal sin(π·…) would fall
 /// back to 0 at `high`, contradicting "fully satisfied above high". Requires low < high, γ > 0.
 inline double rampFactor(double x, double low, double high, double gamma) noexcept {

@@ -14,7 +14,7 @@ inline constexpr int kNumJoints = 6;
 using JointVector = Eigen::Matrix<double, kNumJoints, 1>;
 using Jacobian = Eigen::Matrix<double, 6, kNumJoints>;
 
-/// One revolute joint, standard DH (DESIGN.md §3.1, Eq. 1):
+/// One revolute joint, standard DH (docs/design.md §3.1, Eq. 1):
 /// T_i = Rz(θ_i) · T(a_i, 0, d_i) · Rx(α_i) with θ_i = direction · q_i + theta_offset.
 /// Lengths in m, angles in rad, speed in rad/s, acceleration in rad/s².
 struct DhJoint {
@@ -58,7 +58,7 @@ struct RobotDefinition {
   std::vector<std::array<std::string, 2>> allowed_collisions;
 };
 
-/// The V+ configuration words of an IK branch (DESIGN.md §3.2).
+/// The V+ configuration words of an IK branch (docs/design.md §3.2).
 /// RIGHTY: the wrist centre is in front of the J1 axis (on the side of the shoulder offset);
 /// LEFTY: behind it. ABOVE: the elbow is above the line from shoulder to wrist centre.
 /// FLIP: joint 5 negative.
@@ -88,7 +88,7 @@ struct IkRequest {
   bool within_limits_only = false;
 };
 
-/// Normalised singularity measures of a configuration (DESIGN.md §3.3); each is 0 at the
+/// Normalised singularity measures of a configuration (docs/design.md §3.3); each is 0 at the
 /// singularity. `shoulder` is a length (m): the wrist centre's distance from the J1 axis.
 struct SingularityMeasures {
   double wrist = 0.0;           ///< |sin q5|
@@ -131,7 +131,7 @@ class RobotModel {
 
   bool withinLimits(const JointVector& q) const;
   IkBranch branchOf(const JointVector& q) const;
-  /// The measures of DESIGN.md §3.3; manipulability (a Jacobian and a determinant) only when
+  /// The measures of docs/design.md §3.3; manipulability (a Jacobian and a determinant) only when
   /// asked for, the rest is a few trigonometric terms.
   SingularityMeasures singularity(const JointVector& q, bool with_manipulability = true) const;
 

@@ -4,7 +4,7 @@
 
 namespace scanplan::kinematics {
 
-/// A rotary table (DESIGN.md §2, seed §5.6). Frame A is the axis frame at θ = 0: z along the
+/// A rotary table (docs/design.md §2, seed §5.6). Frame A is the axis frame at θ = 0: z along the
 /// rotation axis, origin at the centre of the table top. Frame R is the table top, turning
 /// with θ. A real table is never ideal: the top can sit off the axis (eccentricity) and be
 /// tilted on it; both turn with the table.
@@ -27,7 +27,7 @@ struct RotaryTableModel {
   Eigen::Isometry3d X_WR(double theta) const;
 };
 
-/// The 7-DOF chain (DESIGN.md §2): the flange pose the arm must reach for a sensor pose X_PS
+/// The 7-DOF chain (docs/design.md §2): the flange pose the arm must reach for a sensor pose X_PS
 /// on a part placed at X_RP on a table turned to θ, with the sensor mounted at X_FS.
 /// X_BF = X_WB⁻¹ · X_WA · Rz(θ) · E · X_RP · X_PS · X_FS⁻¹. All poses in m.
 Eigen::Isometry3d flangeTarget(const Eigen::Isometry3d& X_WB,

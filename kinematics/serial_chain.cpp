@@ -132,7 +132,7 @@ double parallelOff(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::min(angle, kPi - angle);
 }
 
-// Every ortho-parallel condition (DESIGN.md §12) the chain breaks at q = 0, with by how much.
+// Every ortho-parallel condition (docs/design.md §12) the chain breaks at q = 0, with by how much.
 std::vector<std::string> orthoParallelFailures(const SerialChain& chain,
                                                const std::array<AxisLine, kNumJoints>& ax,
                                                const Eigen::Isometry3d& X_BT) {

@@ -1,6 +1,6 @@
 #pragma once
 // A 6R serial chain as URDF describes it (joint origins and axes), and its conversion to the
-// robot model's standard DH rows and OPW parameters (DESIGN.md §3, §12). Pure Eigen: the URDF
+// robot model's standard DH rows and OPW parameters (docs/design.md §3, §12). Pure Eigen: the URDF
 // reader lives in cli/config.
 
 #include <array>
@@ -57,7 +57,7 @@ std::array<AxisLine, kNumJoints> chainAxes(const SerialChain& chain, const Joint
 /// at a right angle (a tool frame with z along the J6 axis does).
 std::array<DhJoint, kNumJoints> dhFromChain(const SerialChain& chain);
 
-/// The OPW parameters (Brandstötter et al. 2014; DESIGN.md §3.2, §12) of the chain, with the
+/// The OPW parameters (Brandstötter et al. 2014; docs/design.md §3.2, §12) of the chain, with the
 /// offsets and signs for the chain's joint values and the tip as the OPW tool frame. Throws
 /// InputError naming every ortho-parallel condition the chain breaks and by how much: J1 along
 /// B's z, J2 ⟂ J1, J3 ∥ J2 (and apart), J4 ⟂ J3, J5 ⟂ J4, J6 ⟂ J5, the J4, J5, J6 axes meeting

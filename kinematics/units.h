@@ -4,7 +4,7 @@
 
 namespace scanplan {
 
-/// Unit conversions: SI inside the libraries, mm and degrees at the boundary (DESIGN.md §2).
+/// Unit conversions: SI inside the libraries, mm and degrees at the boundary (docs/design.md §2).
 inline constexpr double kMmToM = 1e-3;
 inline constexpr double kMToMm = 1e3;
 inline constexpr double kDegToRad = std::numbers::pi / 180.0;

@@ -96,7 +96,7 @@ scanner::PassSettings passSettings(const ScanProblem& p, const collision::Scene&
 
 // Can the arm follow `pass` (R frame), backed off along the laser to the transfer sphere before
 // and after it, with the table at one angle (strips) or turning with the head (spins) on one IK
-// branch, f > 0 at its keys, every 0.25 s between and every 10 mm on the legs? Table angles
+// branch, f > 0 at its keys, every 0.25 s between and every 20 mm on the legs? Table angles
 // every 10°. (A spin the tour turns to start elsewhere keeps its legs' shape in the world only
 // when the sphere's centre is on the table axis; off it, they differ a little.)
 class ReachCheck {

@@ -1,5 +1,5 @@
 #pragma once
-// The automatic scan (job keys scan.auto, DESIGN.md §11): candidate passes over the part placed
+// The automatic scan (job keys scan.auto, docs/design.md §11): candidate passes over the part placed
 // on the table, each evaluated on area samples with the scanner model, a greedy set cover of the
 // scannable area by new area per second, every chosen pass checked for reach on the cell (some
 // table angle where the arm follows it on one IK branch), the passes ordered to keep the

@@ -1,5 +1,5 @@
 #pragma once
-// The scannability certificate after the simulation (DESIGN.md §11): every area sample of the
+// The scannability certificate after the simulation (docs/design.md §11): every area sample of the
 // part is covered by the simulated cloud, or it says why not — scannable but missed, facing the
 // table, occluded, no standoff fits the housing, or out of the arm's reach. The reasons come
 // from the automatic scan's classification of its (coarser) evaluation samples: a sample not

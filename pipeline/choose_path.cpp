@@ -248,7 +248,16 @@ PlannerOutcome runPlanner(const std::string& method,
   }
   if (!any) {
     out.result = planner::PlanResult{};
-    out.result.reason = fmt::format("{} found no path on any branch:{}", method, reasons);
+    out.budget_ended = std::any_of(out.branches.begin(), out.branches.end(), [](const auto& r) {
+      return r.status == planner::PlannerStatus::kApproximate ||
+             r.status == planner::PlannerStatus::kTimeout;
+    });
+    out.result.reason =
+        out.budget_ended ? fmt::format(
+                               "{} reached the end on no branch within its budget (a larger budget "
+                               "may; see each branch):{}",
+                               method, reasons)
+                         : fmt::format("{} found no path on any branch:{}", method, reasons);
   }
   out.seconds = since(start);
   return out;

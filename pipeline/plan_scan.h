@@ -48,6 +48,9 @@ struct PlannerOutcome {
   planner::PlanResult result;                 ///< the chosen branch's, or why none was chosen
   std::vector<planner::PlanResult> branches;  ///< per map branch
   double seconds = 0.0;                       ///< all branches
+  /// No branch solved, and on some the search's budget ended it (an approximate path or a
+  /// timeout of an iterative search): a larger budget may solve it.
+  bool budget_ended = false;
 };
 
 /// The path search: the chosen planner on every branch, the branch choice, refinement, the DP

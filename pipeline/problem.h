@@ -25,7 +25,7 @@
 
 namespace scanplan::pipeline {
 
-/// The configuration map grid (DESIGN.md §4).
+/// The configuration map grid (docs/design.md §4).
 struct MapSettings {
   double angle_step = 0.017453292519943295;  ///< rad, table-angle grid step
   /// IK branches to map and plan on; empty: all eight.
@@ -33,7 +33,7 @@ struct MapSettings {
   std::size_t memory_limit_bytes = std::size_t{8192} << 20;  ///< the maps refuse to exceed it
 };
 
-/// How the table-angle path is searched, refined and judged (DESIGN.md §5).
+/// How the table-angle path is searched, refined and judged (docs/design.md §5).
 struct PlanSettings {
   std::string method = "ray";          ///< a planner::plannerNames() entry
   planner::PlannerSettings objective;  ///< weights and table bounds, SI
@@ -42,12 +42,12 @@ struct PlanSettings {
   planner::PlannerConfig planners;     ///< every planner's own settings
   /// Each planner run's budget (per branch); OMPL honours both, see planner::Termination.
   planner::Termination termination;
-  bool refine = true;  ///< NLopt refinement of each candidate path (DESIGN.md §5.4)
+  bool refine = true;  ///< NLopt refinement of each candidate path (docs/design.md §5.4)
   planner::RefineSettings refine_settings;
   bool dp_gap = true;  ///< also run DP on the chosen branch: the gap to the optimum
 };
 
-/// The scanner simulation along the planned motion (DESIGN.md §6).
+/// The scanner simulation along the planned motion (docs/design.md §6).
 struct SimulationSettings {
   double frame_rate_hz = 100.0;         ///< profiles per second while the path scans
   scanner::SimulationSettings scanner;  ///< fan, cameras, noise, real table error
@@ -67,7 +67,7 @@ struct SimulationSettings {
   double max_incidence = 1.0471975511965976;  // 60°
 };
 
-/// The automatic scan (DESIGN.md §11, job keys scan.auto), SI.
+/// The automatic scan (docs/design.md §11, job keys scan.auto), SI.
 struct AutoScanSettings {
   /// rad, the largest angle between a surface normal and the laser ray, and the camera ray, for a
   /// point to count.

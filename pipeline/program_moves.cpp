@@ -310,11 +310,8 @@ void appendSegment(const Trajectory& seg, double t0, std::vector<TrajectorySampl
 // A checked move and then segment i after it, at the end of the program. The move ends on the
 // segment's first pose: the segment's samples follow its last step. (Nothing to move: the segment
 // starts one step later, where the last one ended.)
-void appendRun(Move move,
-               const Trajectory& seg,
-               std::size_t i,
-               double max_step,
-               JoinedProgram& out) {
+void appendRun(
+    Move move, const Trajectory& seg, std::size_t i, double max_step, JoinedProgram& out) {
   auto& samples = out.trajectory.samples;
   ++out.times.moves;
   out.times.detours += move.detour ? 1u : 0u;
@@ -339,8 +336,8 @@ void appendDeferred(const collision::Scene& scene,
   const kinematics::CellModel& cell = scene.cell();
   auto& samples = out.trajectory.samples;
   for (const bool backwards : {false, true}) {
-    const Trajectory seg = unwound(
-        cell, backwards ? reversedSegment(segments[i]) : segments[i], axesOf(samples.back()));
+    const Trajectory seg = unwound(cell, backwards ? reversedSegment(segments[i]) : segments[i],
+                                   axesOf(samples.back()));
     Move move = planMove(scene, clearance, limits, levers, samples.back(), seg.samples.front(),
                          endSpeed(out.trajectory), startSpeed(seg), settings);
     if (!move.samples) continue;
@@ -399,7 +396,7 @@ JoinedProgram joinSegments(const collision::Scene& scene,
   auto& samples = out.trajectory.samples;
   std::vector<std::size_t> deferred;  // segments no move reaches from the one before
   std::size_t last = 0;               // the segment the program ends with
-  bool in_step = true;   // it ends as unwrapped[last] does
+  bool in_step = true;                // it ends as unwrapped[last] does
   for (std::size_t i = 0; i < segments.size(); ++i) {
     if (segments[i].samples.empty()) continue;
     if (samples.empty()) {

@@ -93,7 +93,8 @@ kinematics::Trajectory reversedSegment(const kinematics::Trajectory& segment);
 /// kinematics nearest the end poses), else it goes via MoveSettings::above. A segment no move
 /// reaches is put off (the next one is tried from the same end) and tried again at the end of the
 /// program, forwards and then backwards; it is dropped only when neither is reached. The first
-/// segment is never dropped. The moves are planned in parallel (TBB); the result does not depend on threads.
+/// segment is never dropped. The moves are planned in parallel (TBB); the result does not depend on
+/// threads.
 JoinedProgram joinSegments(const collision::Scene& scene,
                            const std::vector<kinematics::Trajectory>& segments,
                            const MoveSettings& settings = {});

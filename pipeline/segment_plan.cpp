@@ -36,6 +36,9 @@ struct Segment {
   double trajectory_seconds = 0.0;
 };
 
+constexpr std::size_t kSegmentIterations = 1000;  // segmentBudget()'s least
+constexpr double kSegmentSeconds = 1.0;
+
 // The path search and the trajectory of one segment, on its slice of the map.
 void planSegment(const ScanProblem& problem,
                  const PreparedScan& p,
@@ -55,7 +58,23 @@ void planSegment(const ScanProblem& problem,
     return std::make_shared<const planner::WrapSheets>(p.scene->cell(), problem.constraints,
                                                        seg.path, seg.map, b, seg.build->wrap_joint);
   };
-  seg.choice = choosePath(seg.map, problem.planning, options, accept, wrap_sheets);
+  // An iterative search (OMPL) starts with the segment's share of the budget and doubles it,
+  // up to the whole path's, while its budget is what ended it.
+  PlanSettings planning = problem.planning;
+  const planner::Termination& whole = problem.planning.termination;
+  planning.termination = segmentBudget(whole, seg.end - seg.begin, p.map.times.size());
+  while (true) {
+    seg.choice = choosePath(seg.map, planning, options, accept, wrap_sheets);
+    planner::Termination& t = planning.termination;
+    bool short_of_budget = !seg.choice.solved() && seg.choice.chosen.budget_ended;
+    for (const PlannerOutcome& other : seg.choice.others)  // --compare's planners alike
+      short_of_budget = short_of_budget || (!other.result.solved() && other.budget_ended);
+    if (!short_of_budget ||
+        (t.max_iterations == whole.max_iterations && t.time_limit_s == whole.time_limit_s))
+      break;
+    t.max_iterations = std::min(whole.max_iterations, 2 * t.max_iterations);
+    t.time_limit_s = std::min(whole.time_limit_s, 2.0 * t.time_limit_s);
+  }
   if (!seg.choice.solved()) seg.build.reset();
 }
 
@@ -219,7 +238,8 @@ void cutAt(double limit,
   bool past = false;
   for (std::size_t r = 0; r < runs.size(); ++r) {
     const std::size_t k = runs[r];
-    const double stop = joined.start_times[k] + ordered[k].duration() - ordered[k].samples.front().t;
+    const double stop =
+        joined.start_times[k] + ordered[k].duration() - ordered[k].samples.front().t;
     if (r == 0 || (!past && stop <= limit + 1e-9)) {
       last = stop;
       continue;
@@ -305,17 +325,35 @@ JoinedProgram joinInOrder(const collision::Scene& scene,
   }
   plan.order.clear();
   for (std::size_t k = 0; k < order.order.size(); ++k)
-    plan.order.push_back({index[order.order[k]], (order.reversed[k] != joined.flipped[k]),
-                          joined.start_times[k]});
+    plan.order.push_back(
+        {index[order.order[k]], (order.reversed[k] != joined.flipped[k]), joined.start_times[k]});
   // In the order they run (a segment put off to the end runs last), the dropped ones after.
   std::stable_sort(plan.order.begin(), plan.order.end(), [](const auto& a, const auto& b) {
-    if (std::isnan(a.start) || std::isnan(b.start)) return !std::isnan(a.start) && std::isnan(b.start);
+    if (std::isnan(a.start) || std::isnan(b.start))
+      return !std::isnan(a.start) && std::isnan(b.start);
     return a.start < b.start;
   });
   return out;
 }
 
 }  // namespace
+
+planner::Termination segmentBudget(const planner::Termination& whole,
+                                   std::size_t samples,
+                                   std::size_t path_samples) {
+  const double share =
+      static_cast<double>(samples) / static_cast<double>(std::max<std::size_t>(1, path_samples));
+  planner::Termination t = whole;
+  if (whole.max_iterations > 0) {
+    const auto part =
+        static_cast<std::size_t>(std::ceil(share * static_cast<double>(whole.max_iterations)));
+    t.max_iterations = std::min(whole.max_iterations, std::max(kSegmentIterations, part));
+  }
+  if (whole.time_limit_s > 0.0)
+    t.time_limit_s =
+        std::min(whole.time_limit_s, std::max(kSegmentSeconds, share * whole.time_limit_s));
+  return t;
+}
 
 std::string executableReason(const planner::TrajectoryBuild& build) {
   if (!build.ok) return build.reason;

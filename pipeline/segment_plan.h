@@ -19,6 +19,14 @@ std::string executableReason(const planner::TrajectoryBuild& build);
 /// The time samples [begin, end) of every branch of `map`.
 planner::ConfigMap sliceMap(const planner::ConfigMap& map, std::size_t begin, std::size_t end);
 
+/// A segment's first budget for an iterative search (OMPL's): the whole path's iterations and
+/// time limit (`whole`, 0 = none) in proportion to its time samples, at least 1 000 iterations
+/// and 1 s, at most `whole`. planSegments() doubles it, up to `whole`, while the budget is what
+/// ended the search (an approximate path or a timeout) on some branch.
+planner::Termination segmentBudget(const planner::Termination& whole,
+                                   std::size_t samples,
+                                   std::size_t path_samples);
+
 /// planPrepared() for a path with breaks: fills plan.choice (the segments' choices joined),
 /// plan.trajectory (the joined program), plan.program and plan.dropped, or a status and reason.
 void planSegments(const ScanProblem& problem, const PlanOptions& options, ScanPlan& plan);

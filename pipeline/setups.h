@@ -1,5 +1,5 @@
 #pragma once
-// A second setup (DESIGN.md §11, `plan --setups 2`): what faces the table in the first setup
+// A second setup (docs/design.md §11, `plan --setups 2`): what faces the table in the first setup
 // cannot be scanned there; turned onto another face it rests on stably, the part shows it. The
 // turn is chosen for the area it brings out of the table's shadow; the second program is planned
 // like the first (automatic scan only), and the coverage of both is combined on the same area

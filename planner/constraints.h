@@ -9,7 +9,7 @@
 
 namespace scanplan::planner {
 
-/// A monotone ramp (DESIGN.md §4): 0 below low, 1 at and above high.
+/// A monotone ramp (docs/design.md §4): 0 below low, 1 at and above high.
 struct RampSettings {
   double low = 0.0;
   double high = 1.0;

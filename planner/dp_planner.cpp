@@ -97,7 +97,7 @@ std::string noPathReason(const DpGrid& dp, const PlannerSettings& settings, Inde
                      open, dp.na, settings.omega_max, settings.alpha_max, dp.D, dp.A);
 }
 
-// Layer k from layer k − 1 as DESIGN.md §5.2 writes it: the best predecessor of every (a, j),
+// Layer k from layer k − 1 as docs/design.md §5.2 writes it: the best predecessor of every (a, j),
 // and its step index in back_k. Each (a, j) reads only the previous layer: the parallel loop is
 // deterministic. Kept as the reference planDp's step-major kernels must equal (tests, bench_dp).
 void relaxLayerReference(const DpGrid& dp,
@@ -347,7 +347,7 @@ bool relaxSpanPortable(const KernelArgs<Back>& x, Index a0, Index a1) noexcept {
 
 #if defined(__x86_64__)
 // The same source for wider registers, chosen at run time: the build assumes no more than
-// x86-64 (DESIGN.md §9). Same results bit for bit: the same operations per lane, and no
+// x86-64 (docs/design.md §9). Same results bit for bit: the same operations per lane, and no
 // contraction (there is no product to fuse). AVX2: four lanes a register; AVX-512: eight, and
 // a compare into a mask register selects the mark in one µop.
 template <class Back>

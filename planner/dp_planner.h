@@ -11,7 +11,7 @@
 
 namespace scanplan::planner {
 
-/// The exact optimum of the discretised problem (DESIGN.md §5.2): dynamic programming over
+/// The exact optimum of the discretised problem (docs/design.md §5.2): dynamic programming over
 /// (grid angle, previous step). The path sits on grid angles and moves an integer number d_k of
 /// grid steps Δθ per time sample, with |d_k|·Δθ/Δt ≤ ω_max and, from the second step on,
 /// |d_k − d_{k−1}|·Δθ/Δt² ≤ α_max (the first step is free, as in evaluate()). Cost per time
@@ -75,7 +75,7 @@ PlanResult planDpWithKernel(const ConfigMap& map,
                             DpKernel kernel,
                             std::optional<double> start_theta = {});
 
-/// planDp with each layer relaxed the straightforward way (DESIGN.md §5.2, one (angle, step)
+/// planDp with each layer relaxed the straightforward way (docs/design.md §5.2, one (angle, step)
 /// cell at a time): the reference planDp must equal bit for bit (tests, bench_dp).
 PlanResult planDpReference(const ConfigMap& map,
                            std::size_t branch,

@@ -7,7 +7,7 @@
 
 namespace scanplan::planner {
 
-/// Weights and bounds of the planning problem (DESIGN.md §5), SI units. The objective's
+/// Weights and bounds of the planning problem (docs/design.md §5), SI units. The objective's
 /// integrand is dimensionless, so J is in seconds: k_omega is in s²/rad² (k_omega·ω² is
 /// dimensionless like −ln f) and k_alpha in s⁴/rad².
 struct PlannerSettings {

@@ -396,6 +396,12 @@ std::string solveDetail(const OmplSettings& os, const SolveOutcome& o, std::size
       starts, starts == 1 ? "" : "s");
 }
 
+// `x` rounded up to two significant figures (a budget to suggest).
+std::size_t roundedUp(double x) {
+  const double unit = std::pow(10.0, std::max(0.0, std::floor(std::log10(std::max(x, 1.0))) - 1.0));
+  return static_cast<std::size_t>(std::ceil(x / unit) * unit);
+}
+
 // Why no exact solution: none at all, or an approximate one ending before the last sample.
 std::string unsolvedReason(const ConfigMap& map,
                            const OmplSettings& os,
@@ -409,11 +415,22 @@ std::string unsolvedReason(const ConfigMap& map,
   auto* path = pdef.getSolutionPath()->as<oc::PathControl>();
   const std::size_t reached = StateView::sample(path->getStates().back());
   const std::size_t first_missed = std::min(reached + 1, nt - 1);
+  // The budget ended the search, not a missing path: say how much more it would need, in
+  // proportion to the samples it has yet to reach.
+  const bool by_cap = cap != 0 && o.iterations >= cap;
+  const double need =
+      static_cast<double>(nt - 1) / static_cast<double>(std::max<std::size_t>(reached, 1));
+  const std::string raise =
+      by_cap ? fmt::format("raise planner.ompl.max_iterations to about {} (now {})",
+                           roundedUp(static_cast<double>(cap) * need), cap)
+             : fmt::format("raise planner.ompl.time_limit_s to about {:.3g} s (now {:.3g} s)",
+                           os.time_limit_s * need, os.time_limit_s);
   return fmt::format(
-      "time sample {} (t = {} s): not reached; OMPL {} ended with an approximate solution "
-      "whose furthest state is time sample {} of {} ({})",
+      "time sample {} (t = {} s): not reached in the budget: OMPL {} reached time sample {} of "
+      "{} (an approximate solution) when its {} ended it; a larger budget may reach the end: {}; "
+      "or use dp, which finds a path on the map's grid whenever there is one, or ray",
       first_missed, map.times[first_missed], plannerName(os.planner), reached, nt - 1,
-      cap != 0 && o.iterations > cap ? "iteration cap" : "time limit");
+      by_cap ? "iteration cap" : "time limit", raise);
 }
 
 // One angle per sample: replay each control for its duration from the root, unwrapped (ω does

@@ -10,7 +10,7 @@
 
 namespace scanplan::planner {
 
-/// Which OMPL control planner searches (DESIGN.md §5.3).
+/// Which OMPL control planner searches (docs/design.md §5.3).
 enum class OmplPlanner {
   kSst,  ///< ompl::control::SST: asymptotically near-optimal, keeps improving J until stopped
   kRrt,  ///< ompl::control::RRT: feasibility only (J is scored, not optimised); stops when solved
@@ -39,7 +39,7 @@ struct OmplSettings {
   bool stop_at_first_solution = false;  ///< SST: stop at the first exact solution
 };
 
-/// The planning problem (DESIGN.md §5) as an OMPL control problem (§5.3). State: table angle θ
+/// The planning problem (docs/design.md §5) as an OMPL control problem (§5.3). State: table angle θ
 /// (SO(2) for a continuous table, [angles.front(), angles.back()] for a limited one), speed
 /// ω ∈ [−ω_max, ω_max], time sample k, and the objective accumulated so far (not part of the
 /// distance). Control: a target speed u·ω_max, u ∈ [−1, 1], held for 1..max_steps samples of Δt

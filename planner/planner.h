@@ -23,7 +23,7 @@ struct Termination {
   double time_limit_s = 0.0;       ///< s, wall clock of one solve(), 0: no limit
 };
 
-/// The table-angle problem on one branch of a configuration map (DESIGN.md §5). `map` must
+/// The table-angle problem on one branch of a configuration map (docs/design.md §5). `map` must
 /// outlive the solve() call.
 struct PlanningProblem {
   const ConfigMap* map = nullptr;

@@ -10,7 +10,7 @@
 
 namespace scanplan::planner {
 
-/// Parameters of Ray Shooting (DESIGN.md §5.1).
+/// Parameters of Ray Shooting (docs/design.md §5.1).
 struct RayShootingSettings {
   int rays = 21;    ///< N_a candidate accelerations evenly over [−α_max, α_max] (0 when odd)
   int horizon = 5;  ///< H, samples each ray holds its acceleration (fewer near the end)
@@ -23,7 +23,7 @@ struct RayShootingSettings {
   bool dp_fallback = true;
 };
 
-/// Ray Shooting (DESIGN.md §5.1), a receding-horizon heuristic in continuous (unwrapped) θ.
+/// Ray Shooting (docs/design.md §5.1), a receding-horizon heuristic in continuous (unwrapped) θ.
 /// From the state (θ_k, ω_k) every candidate acceleration a is held for up to H samples:
 /// ω_{j+1} = clamp(ω_j + a·Δt, ±ω_max), θ_{j+1} = θ_j + ω_{j+1}·Δt (so ω and α are exactly
 /// evaluate()'s finite differences and |α| ≤ α_max). A ray costs the objective terms of its steps

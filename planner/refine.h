@@ -42,7 +42,7 @@ struct RefineResult {
   std::string stop_reason;    ///< why the optimiser stopped, and why the input was kept if it was
 };
 
-/// Refinement (DESIGN.md §5.4): moves a feasible path off the grid to lower
+/// Refinement (docs/design.md §5.4): moves a feasible path off the grid to lower
 /// J = evaluate(map, branch, theta, settings, continuous).total in continuous θ (f read with
 /// mapValue(), ω and α the finite differences of evaluate()), keeping |ω_k| ≤ ω_max,
 /// |α_k| ≤ α_max and f(θ_k, t_k) > 0.

@@ -1,5 +1,5 @@
 #pragma once
-// Coverage measured on area, not triangles (DESIGN.md §11): the part's surface sampled
+// Coverage measured on area, not triangles (docs/design.md §11): the part's surface sampled
 // area-uniformly, a sample covered when a measured point lies within the point spacing of it.
 // Per-triangle counts overstate coverage on coarse meshes (one point on a large triangle counts
 // the whole triangle); area samples do not depend on how the mesh is cut.
@@ -58,7 +58,7 @@ AreaCoverage areaCoverage(const AreaSampling& sampling,
                           const std::vector<double>* times = nullptr);
 
 /// Which samples face the table or lie on it (the first class of the scannability certificate,
-/// DESIGN.md §11): no laser ray from a scanner above the table top can reach them within the
+/// docs/design.md §11): no laser ray from a scanner above the table top can reach them within the
 /// incidence limit. With the part on the table by X_RP (R: table top frame, z up, the top at
 /// z = 0), a sample at height z with normal n (elevation ε = asin n_z) is seen at most from the
 /// elevation ε + `max_incidence`; from `max_standoff` away the scanner is then at height

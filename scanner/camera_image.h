@@ -12,7 +12,7 @@
 
 namespace scanplan::scanner {
 
-/// The camera of a profile scanner (seed §5.3, Eq. 4–5; DESIGN.md §6) in the scanner frame S:
+/// The camera of a profile scanner (seed §5.3, Eq. 4–5; docs/design.md §6) in the scanner frame S:
 /// the laser plane is X = 0, the camera centre C = (s·a, 0, b) with s = +1 (camera C+) or −1
 /// (C−), its optical axis in the XZ plane at the angle φ to +Z, looking back at the plane.
 ///
@@ -46,7 +46,7 @@ struct CameraModel {
   /// Image-plane coordinates of point p_S (scanner frame, m); none when it lies behind the
   /// camera (not within ±90° of the optical axis in the XZ plane).
   std::optional<Eigen::Vector2d> project(const Eigen::Vector3d& p_S) const;
-  /// Eq. 4 (DESIGN.md §6 form): the laser-plane point (0, P_Y, P_Z) seen at (p_x, p_y), m.
+  /// Eq. 4 (docs/design.md §6 form): the laser-plane point (0, P_Y, P_Z) seen at (p_x, p_y), m.
   Eigen::Vector3d triangulate(double p_x, double p_y) const;
 };
 
@@ -135,7 +135,7 @@ struct RenderScratch {
   std::vector<char> blocked;
 };
 
-/// Renders what `camera` sees (DESIGN.md §6, seed §5.3 "ray tracing simulation"): each pixel's
+/// Renders what `camera` sees (docs/design.md §6, seed §5.3 "ray tracing simulation"): each pixel's
 /// ray (through its centre) meets the scene's nearest surface; the pixel is lit when that point
 /// lies within the laser sheet (|x| ≤ thickness/2, z > 0), faces the laser, and the segment
 /// from the laser origin to it is clear. Intensity per Reflectance (plus the ambient term),

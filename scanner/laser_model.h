@@ -36,7 +36,7 @@ struct LaserWindow {
 /// Eq. 5. Precondition: the optics are valid (see LaserOptics).
 LaserWindow laserWindow(const LaserOptics& optics);
 
-/// Eq. 4 in the consistent form of DESIGN.md §6: pixel (p_x, p_y) → laser-plane point (y, z),
+/// Eq. 4 in the consistent form of docs/design.md §6: pixel (p_x, p_y) → laser-plane point (y, z),
 /// f = H / (2 tan γ) in pixels for an image H pixels high.
 void triangulate(const LaserOptics& optics,
                  double image_height_px,

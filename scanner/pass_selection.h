@@ -1,5 +1,5 @@
 #pragma once
-// Choosing and ordering scan passes (DESIGN.md §11): a greedy weighted set cover of the area
+// Choosing and ordering scan passes (docs/design.md §11): a greedy weighted set cover of the area
 // samples (new area per second of scanning), then a tour through the chosen passes, each run
 // either way, that keeps the connecting moves short (nearest neighbour, then 2-opt), and the
 // connecting moves themselves: out to a safe sphere around the part, along it, and in.

@@ -1,5 +1,5 @@
 #pragma once
-// Candidate laser-line passes for the automatic scan (DESIGN.md §11) and what each one covers.
+// Candidate laser-line passes for the automatic scan (docs/design.md §11) and what each one covers.
 // Everything is in the table-top frame R at table angle 0 (scanner/part_on_table.h): the table
 // turns about R's z axis, so a pass's azimuth around the part is free and the arm only has to
 // reach its view elevation.

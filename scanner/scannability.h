@@ -1,5 +1,5 @@
 #pragma once
-// The scannability certificate (DESIGN.md §11, issue 16): why each area sample of the part can or
+// The scannability certificate (docs/design.md §11, issue 16): why each area sample of the part can or
 // cannot be scanned on this setup, before any planning. A sample that no scanner pose could see
 // is not a planner's failure; the classes say which limit stands in the way.
 
@@ -21,10 +21,10 @@ enum class SampleClass : std::uint8_t {
   kScannable = 0,   ///< some scanner pose sees it within the limits and fits
   kFacesTable = 1,  ///< faces the table or lies on it (facesTable())
   kOccluded = 2,    ///< no free line of sight for the laser and a camera within the incidence limit
-  kNoStandoff = 3,
+  kNoStandoff = 3,  ///< lines of sight exist but the housing fits at no standoff in the window
   /// Scannable, but every pass the automatic scan found that sees it is out of the arm's reach
   /// (set by the automatic scan, never by classifyScannability()).
-  kOutOfReach = 4,  ///< lines of sight exist but the housing fits at no standoff in the window
+  kOutOfReach = 4,
 };
 
 /// "scannable", "faces_table", "occluded", "no_standoff" (the names reports use).

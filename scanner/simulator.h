@@ -26,7 +26,7 @@ struct ScanFrame {
 };
 
 /// Which camera(s) must see a lit point for it to be measured. The head's camera geometry
-/// (DESIGN.md §6, Eq. 4–5) in the scanner frame S: the laser leaves the origin in the plane
+/// (docs/design.md §6, Eq. 4–5) in the scanner frame S: the laser leaves the origin in the plane
 /// X = 0 (the fan spreads about +Z); a camera centre sits at C± = (±a, 0, b), its optical axis
 /// in the XZ plane at the angle φ to the laser's +Z, looking back at the plane. A single-camera
 /// head has only C+.
@@ -59,7 +59,7 @@ struct SimulationSettings {
   ImageSettings image;
   int rays_per_profile = 200;  ///< fan rays per profile, spread evenly in angle (≥ 1)
   CameraRule cameras = CameraRule::kPositive;
-  /// Gaussian measurement noise (DESIGN.md §6): along the ray (σ_l) and across it in the laser
+  /// Gaussian measurement noise (docs/design.md §6): along the ray (σ_l) and across it in the laser
   /// plane (σ_o), m. Zero: no noise.
   double sigma_longitudinal = 0.0;
   double sigma_orthogonal = 0.0;
@@ -123,7 +123,7 @@ std::vector<double> fanAngles(const LaserWindow& window, int rays_per_profile);
 /// The camera centre(s) of the rule, scanner frame, m (see CameraRule).
 std::vector<Eigen::Vector3d> cameraCentres(const LaserOptics& optics, CameraRule rule);
 
-/// Geometric laser scanner simulation (DESIGN.md §6, seed §5.2–5.6) of a whole cell.
+/// Geometric laser scanner simulation (docs/design.md §6, seed §5.2–5.6) of a whole cell.
 ///
 /// The scene is built once, one rigid group at a time, and the rays are moved into each group's
 /// frame instead of moving geometry: the table group (table cylinder, part, table-carried

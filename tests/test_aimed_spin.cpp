@@ -90,8 +90,7 @@ TEST(AimedSpin, AWholeTurnSeesEverySideOfABoxOnTheAxisWhereTheStripSeesOne) {
   EXPECT_NEAR(spin.azimuth.back() - spin.azimuth.front(), 2.0 * kPi, 1e-12);
   for (std::size_t k = 0; k < spin.X_RS.size(); ++k) {
     // The head holds the witness in the world: turned back by its azimuth, every key is it.
-    const Isometry3d world =
-        Eigen::AngleAxisd(-spin.azimuth[k], Vector3d::UnitZ()) * spin.X_RS[k];
+    const Isometry3d world = Eigen::AngleAxisd(-spin.azimuth[k], Vector3d::UnitZ()) * spin.X_RS[k];
     EXPECT_LT((world.matrix() - wallWitness().matrix()).norm(), 1e-12) << k;
   }
   scanplan::scanner::evaluatePass(spin, scene, settings, index);
@@ -121,8 +120,7 @@ TEST(AimedSpin, ABlockBesideTheBoxStopsTheTurnWhereTheHousingWouldMeetIt) {
   // (vertical here, clear of the table top), from 80 mm behind the origin to 20 mm before it.
   settings.housing = {
       Eigen::AlignedBox3d(Vector3d(-0.03, -0.015, -0.08), Vector3d(0.03, 0.015, 0.02))};
-  const scanplan::scanner::HousingCheck housing(scene, settings.housing,
-                                                settings.housing_spacing);
+  const scanplan::scanner::HousingCheck housing(scene, settings.housing, settings.housing_spacing);
   ASSERT_TRUE(housing.fits(wallWitness()));
   const Isometry3d half_turn(Eigen::AngleAxisd(kPi, Vector3d::UnitZ()));
   ASSERT_FALSE(housing.fits(half_turn * wallWitness()));
@@ -136,8 +134,8 @@ TEST(AimedSpin, ABlockBesideTheBoxStopsTheTurnWhereTheHousingWouldMeetIt) {
   EXPECT_LT(arc.azimuth.back() - arc.azimuth.front(), 2.0 * kPi);
   for (const Isometry3d& X : arc.X_RS) EXPECT_TRUE(housing.fits(X));
   for (const double beyond : {arc.azimuth.front() - deg(2.0), arc.azimuth.back() + deg(2.0)})
-    EXPECT_FALSE(housing.fits(Isometry3d(Eigen::AngleAxisd(beyond, Vector3d::UnitZ())) *
-                              wallWitness()));
+    EXPECT_FALSE(
+        housing.fits(Isometry3d(Eigen::AngleAxisd(beyond, Vector3d::UnitZ())) * wallWitness()));
   // A tour never turns it to start elsewhere (that would scan something else).
   std::vector<ScanPass> passes{arc};
   const ScanPass step = scanplan::scanner::stepPass(passes, {0, false, 1.0});

@@ -27,7 +27,7 @@ constexpr double kRoundTripTol = 1e-9;  // m (and pixels for the pixel round tri
 // The target of sub-pixel peak detection on an ideal (noise-free, unquantised) stripe.
 constexpr double kSubPixelTol = 0.05;  // px
 
-// The seed's head (DESIGN.md §6 example): a 100 mm, b 100 mm, φ 60°, γ 10°: depth window
+// The seed's head (docs/design.md §6 example): a 100 mm, b 100 mm, φ 60°, γ 10°: depth window
 // 136.4 … 183.9 mm.
 LaserOptics headOptics() { return {0.1, 0.1, std::numbers::pi / 3.0, std::numbers::pi / 18.0}; }
 

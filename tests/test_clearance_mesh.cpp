@@ -1,4 +1,4 @@
-// Mesh distances of the clearance constraint (DESIGN.md §4 Eq. 8, §9) cross-checked against an
+// Mesh distances of the clearance constraint (docs/design.md §4 Eq. 8, §9) cross-checked against an
 // independent brute-force triangle–triangle distance written here without FCL: the plain
 // fcl::distance reference (exactShapeDistance) must match the brute force, and the bounded
 // query (shapeDistance) must match the reference below its bound and report "beyond" at or
@@ -984,7 +984,7 @@ TEST(ShapeDistanceFrameInvariance, MeshBoxExactlyAndCurvedPrimitivesWithinTheGjk
   }
 }
 
-// 5. Shared data (DESIGN.md §10): Viper link meshes and the scanned bunny, none of them closed.
+// 5. Shared data (docs/design.md §10): Viper link meshes and the scanned bunny, none of them closed.
 
 const fs::path kSharedData = SCANPLAN_SHARED_DATA_DIR;
 

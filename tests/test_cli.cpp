@@ -37,7 +37,7 @@ const std::string kViper = (kSourceDir / "data/robots/viper_s650.yaml").string()
 const std::string kDemoJob = (kSourceDir / "data/jobs/demo_rings.yaml").string();
 
 // The JSON prints 17 significant digits and the DH chain is a handful of products of mm-sized
-// numbers, so the golden poses of DESIGN.md §3.1 come out within rounding noise (~1e-13 mm).
+// numbers, so the golden poses of docs/design.md §3.1 come out within rounding noise (~1e-13 mm).
 constexpr double kPositionTolMm = 1e-9;
 constexpr double kRotationTol = 1e-9;  // unitless matrix entries, same reasoning
 constexpr double kAngleTolDeg = 1e-9;
@@ -324,7 +324,7 @@ TEST_F(Cli, ADeviceAsTheTrajectoryIsBadInput) {
   EXPECT_TRUE(contains(run.err, "/dev/zero: is not a regular file")) << run.err;
 }
 
-// DESIGN.md §3.1 (standard DH, zero offsets). q = 0: the α's of J1/J3 cancel, so the flange
+// docs/design.md §3.1 (standard DH, zero offsets). q = 0: the α's of J1/J3 cancel, so the flange
 // sits at x = a1 + a2 + a3 = 75 + 270 − 90 = 255, z = d1 + d4 + d6 = 335 + 295 + 80 = 710 mm.
 // q2 = −90 stands the upper arm up (J3 at z = 335 + 270) and q3 = 180 points the forearm along
 // +x: wrist centre (75 + 295, 0, 605 + 90) = (370, 0, 695). q5 = 0 keeps the flange pointing
@@ -393,7 +393,7 @@ TEST_F(Cli, IkOfAnUnreachablePoseExitsThreeAndSaysNoSolution) {
 }
 
 TEST_F(Cli, IkWithinLimitsListsOnlyTheInLimitSolutions) {
-  // Joint limits of DESIGN.md §3.1, an independent copy of the robot file's numbers.
+  // Joint limits of docs/design.md §3.1, an independent copy of the robot file's numbers.
   constexpr std::array<std::array<double, 2>, 6> kLimitsDeg = {
       {{-170, 170}, {-190, 45}, {-29, 256}, {-190, 190}, {-120, 120}, {-360, 360}}};
   for (const std::string trans : {"450,0,695,0,90,0", "-300,100,500,30,120,45"}) {
@@ -629,7 +629,7 @@ TEST_F(Cli, CheckReportsASelfCollisionAsAForbiddenPose) {
 }
 
 // --time picks the scan-path sample at that time and solves it: the joints it reports put the
-// flange where the chain of DESIGN.md §2 says the scan pose needs it at that table angle.
+// flange where the chain of docs/design.md §2 says the scan pose needs it at that table angle.
 TEST_F(Cli, CheckAtATimeSolvesTheScanPathSample) {
   const Result run = scanplan({"check", kDemoJob, "--table", "40", "--time", "5", "--json"});
   ASSERT_EQ(run.exit_code, 0) << describe(run);

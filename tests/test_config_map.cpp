@@ -1,4 +1,4 @@
-// Configuration maps (seed §7.2, DESIGN.md §4): cells recomputed independently from IK and the
+// Configuration maps (seed §7.2, docs/design.md §4): cells recomputed independently from IK and the
 // Eq. 6–8 formulas, an analytic clearance band, the wrap-around of a continuous table,
 // determinism across thread counts, the memory limit, branch words, and `scanplan map`.
 #include <gtest/gtest.h>
@@ -123,7 +123,7 @@ double jointFactor(double q, double min, double max, double gamma) {
   return std::pow(std::sin(std::numbers::pi * (q - min) / (max - min)), gamma);
 }
 
-// The monotone Eq. 8 ramp of DESIGN.md §4: sin(π/2 · x)^γ on [low, high].
+// The monotone Eq. 8 ramp of docs/design.md §4: sin(π/2 · x)^γ on [low, high].
 double ramp(double x, double low, double high, double gamma) {
   if (x < low) return 0.0;
   if (x >= high) return 1.0;

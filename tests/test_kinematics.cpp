@@ -48,7 +48,7 @@ bool sameJointsModTurn(const JointVector& a, const JointVector& b) {
 
 TEST(ViperFk, GoldenValuesFromDesignDoc) {
   const RobotModel robot = bundledRobot("viper_s650");
-  // DESIGN.md §3.1: q = 0 puts the flange at (255, 0, 710) mm: x = a1 + a2 + a3 = 75 + 270 − 90,
+  // docs/design.md §3.1: q = 0 puts the flange at (255, 0, 710) mm: x = a1 + a2 + a3 = 75 + 270 − 90,
   // z = d1 + d4 + d6 = 335 + 295 + 80 (upper arm horizontal, forearm vertical).
   EXPECT_TRUE(robot.fk(JointVector::Zero())
                   .translation()
@@ -279,7 +279,7 @@ TEST(ViperIk, JointSixRangeBeyondOneTurnGivesBothVariants) {
 
 TEST(ViperIk, BranchWordsFollowTheGeometry) {
   const RobotModel robot = bundledRobot("viper_s650");
-  // The "flange down" pose of DESIGN.md: wrist in front of J1, elbow up, q5 = +90°.
+  // docs/design.md §3.1's "facing down" anchor: wrist in front of J1, elbow up, q5 = +90°.
   EXPECT_EQ(robot.branchOf(degrees({0, -90, 180, 0, 90, 0})).words(), "RIGHTY ABOVE NOFLIP");
   EXPECT_EQ(robot.branchOf(degrees({0, -90, 180, 0, -90, 0})).words(), "RIGHTY ABOVE FLIP");
   // Every branch index maps back to itself through fromIndex.

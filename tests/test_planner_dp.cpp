@@ -1,4 +1,4 @@
-// The planning objective (DESIGN.md §5) and the exact DP baseline (§5.2) on hand-built maps:
+// The planning objective (docs/design.md §5) and the exact DP baseline (§5.2) on hand-built maps:
 // a hand-computed J, interpolation and wrap-around, corridors with known answers, a blocked
 // time column, and DP against brute-force enumeration of every grid path on tiny maps.
 #include <gtest/gtest.h>

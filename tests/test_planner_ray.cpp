@@ -1,4 +1,4 @@
-// Ray Shooting (DESIGN.md §5.1) on hand-built maps: corridors with known answers (with and
+// Ray Shooting (docs/design.md §5.1) on hand-built maps: corridors with known answers (with and
 // without the cost-to-go), blocked time columns, a fixed start, a gap one cell wide that only DP
 // passes, determinism across thread counts, feasibility of every solved path on seeded random
 // maps and its gap to the DP optimum; the cost-to-go against a straightforward recursion.

@@ -1,4 +1,4 @@
-// Refinement (DESIGN.md §5.4) on hand-built maps: the smooth model against evaluate() and its
+// Refinement (docs/design.md §5.4) on hand-built maps: the smooth model against evaluate() and its
 // gradients against central finite differences; the guarantees (J never rises, the result is
 // feasible, deterministic, an infeasible input throws) on DP, Ray Shooting and random paths over
 // seeded random maps; a strict gain where the grid forces a DP path into jerky steps.

@@ -1,4 +1,4 @@
-// Robot programs (DESIGN.md §7): golden files of every format on a small hand-built trajectory,
+// Robot programs (docs/design.md §7): golden files of every format on a small hand-built trajectory,
 // the CSV and V+ round trips to the printed precision (and validation of what is read back), the
 // V+ and KRL speed settings against the planned timing, each language's structure, and bad
 // input.

@@ -1,4 +1,4 @@
-// The scanner simulation (DESIGN.md §6): a plane at a known distance against the fan geometry
+// The scanner simulation (docs/design.md §6): a plane at a known distance against the fan geometry
 // and the depth window, a wall and a robot link that shadow known rays, Embree against a
 // brute-force loop over whole simulations, points on the demo part and the bunny, the noise
 // model, table calibration errors, coverage statistics, the PLY writers and the tessellated

@@ -56,7 +56,7 @@ JointVector jointsDeg(double q1, double q2, double q3, double q4, double q5, dou
   return q;
 }
 
-// The arm folded over itself, scanner pointing down (DESIGN.md §3.1 golden pose, J1 turned).
+// The arm folded over itself, scanner pointing down (docs/design.md §3.1 golden pose, J1 turned).
 JointVector home(double q1_deg) { return jointsDeg(q1_deg, -90.0, 180.0, 0.0, 90.0, 0.0); }
 
 TrajectorySample sample(double t, double theta, const JointVector& q) {

@@ -1,5 +1,5 @@
 // `scanplan plan`: the job from part to plan — scan path, configuration maps, the table-angle
-// path (DESIGN.md §5), the 7-DOF trajectory, and the report.
+// path (docs/design.md §5), the 7-DOF trajectory, and the report.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -348,7 +348,9 @@ ExitCode runPlan(const PlanOptions& options) {
   const std::string method = plan.choice.chosen.method;
   if (!plan.trajectory) {
     finish();
-    summary += fmt::format("plan       NO PATH ({}): {}\n", method, plan.reason);
+    summary += fmt::format("plan       {} ({}): {}\n",
+                           plan.choice.chosen.budget_ended ? "NOT SOLVED IN THE BUDGET" : "NO PATH",
+                           method, plan.reason);
     summary += fmt::format("wrote      {}: job.yaml, report.json, {}\n", options.out_dir.string(),
                            kMapFilesNote);
     return printPlanResult(options, summary, report, ExitCode::kNoPlan);

@@ -54,7 +54,7 @@ struct OpticsSpec {
   double gamma_deg = 10.0;
 };
 
-/// `scanner.noise`: Gaussian measurement noise of the simulated scanner (DESIGN.md §6).
+/// `scanner.noise`: Gaussian measurement noise of the simulated scanner (docs/design.md §6).
 struct NoiseSpec {
   double longitudinal_mm = 0.0;  ///< σ_l, along the laser ray
   double orthogonal_mm = 0.0;    ///< σ_o, across it in the laser plane
@@ -183,7 +183,7 @@ struct MapSpec {
   double memory_limit_mb = 8192.0;
 };
 
-/// `planner.ray`: Ray Shooting (DESIGN.md §5.1).
+/// `planner.ray`: Ray Shooting (docs/design.md §5.1).
 struct RaySpec {
   int rays = 21;
   int horizon = 5;

@@ -10,7 +10,7 @@
 
 namespace scanplan::cli {
 
-/// One DH row of a robot file (DESIGN.md §3.1): mm, degrees, deg/s.
+/// One DH row of a robot file (docs/design.md §3.1): mm, degrees, deg/s.
 struct JointSpec {
   double a_mm = 0.0;
   double d_mm = 0.0;
@@ -22,7 +22,7 @@ struct JointSpec {
   double max_speed_deg_s = 180.0;
 };
 
-/// OPW parameters of a robot file (DESIGN.md §3.2), mm and degrees.
+/// OPW parameters of a robot file (docs/design.md §3.2), mm and degrees.
 struct OpwSpec {
   double a1_mm = 0.0, a2_mm = 0.0, b_mm = 0.0, c1_mm = 0.0, c2_mm = 0.0, c3_mm = 0.0, c4_mm = 0.0;
   std::array<double, 6> offsets_deg{};

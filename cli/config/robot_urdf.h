@@ -1,5 +1,5 @@
 #pragma once
-// Robots from URDF (DESIGN.md §12): the chain base_link → tip_link of a URDF file, read with
+// Robots from URDF (docs/design.md §12): the chain base_link → tip_link of a URDF file, read with
 // urdfdom, becomes the same RobotSpec a robot file gives (DH rows, OPW parameters, link shapes),
 // so everything downstream is unchanged. urdfdom stays inside this file's .cpp.
 

@@ -1,5 +1,5 @@
 #pragma once
-// Robot programs (DESIGN.md §7): a planned trajectory written for the controller that runs it —
+// Robot programs (docs/design.md §7): a planned trajectory written for the controller that runs it —
 // Adept V+, KUKA KRL, ABB RAPID, URScript — or as the CSV interchange file, and every program
 // read back into a trajectory so that it can be validated before it is sent (§7.3).
 

@@ -19,10 +19,16 @@
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
+#include "cli/config/job.h"
+#include "cli/config/problem.h"
+#include "kinematics/scan_path.h"
+#include "pipeline/plan_scan.h"
+#include "pipeline/segment_plan.h"
 #include "planner/config_map.h"
 #include "planner/dp_planner.h"
 #include "planner/objective.h"
 #include "planner/ompl_planner.h"
+#include "planner/planner.h"
 #include "planner/ray_shooting.h"
 #include "planner/refine.h"
 #include "tests/bench/bench_maps.h"
@@ -178,6 +184,107 @@ void details(const std::string& name, const JobMap& m) {
   std::printf("\n");
 }
 
+// One OMPL solve the way `plan` runs it on a pass: the pass's share of the budget, doubled while
+// the budget is what ended it. CPU time of all the tries.
+struct Tries {
+  PlanResult result;
+  std::size_t iterations = 0;  // the last try's cap
+};
+Tries omplAsPlanned(const planner::ConfigMap& slice,
+                    std::size_t branch,
+                    const pipeline::PlanSettings& plan,
+                    std::size_t path_samples) {
+  const auto ompl = planner::makePlanner("ompl", plan.planners);
+  planner::PlanningProblem pp;
+  pp.map = &slice;
+  pp.branch = branch;
+  pp.settings = plan.objective;
+  pp.continuous = plan.continuous;
+  planner::Termination t =
+      pipeline::segmentBudget(plan.termination, slice.times.size(), path_samples);
+  Tries out;
+  const double cpu = bench::bestProcessCpuSeconds(1, [&] {
+    while (true) {
+      out.result = ompl->solve(pp, t);
+      out.iterations = t.max_iterations;
+      const bool budget = out.result.status == planner::PlannerStatus::kApproximate ||
+                          out.result.status == planner::PlannerStatus::kTimeout;
+      if (out.result.solved() || !budget || t.max_iterations >= plan.termination.max_iterations)
+        break;
+      t.max_iterations = std::min(plan.termination.max_iterations, 2 * t.max_iterations);
+      t.time_limit_s = std::min(plan.termination.time_limit_s, 2.0 * t.time_limit_s);
+    }
+  });
+  out.result.seconds = cpu;
+  return out;
+}
+
+// The automatic demo (data/jobs/demo.yaml) as `plan` plans it: every pass on its own slice of the
+// map, on the branch where DP's optimum is lowest; OMPL with the pass's budget against DP, before
+// and after refinement, summed over the passes. Then OMPL on the whole path's map at the job's
+// budget, as one problem.
+void autoDemo() {
+  const pipeline::ScanProblem problem =
+      cli::toProblem(cli::loadJob("data/jobs/demo.yaml", {"simulation.enabled=false"}));
+  const auto prepared = pipeline::prepareScan(problem);
+  const planner::ConfigMap& map = prepared->map;
+  const pipeline::PlanSettings& plan = problem.planning;
+  const auto ranges = kinematics::segmentRanges(prepared->path.path);
+  double dp_j = 0.0, dp_s = 0.0, ompl_j = 0.0, refined_j = 0.0, ompl_s = 0.0;
+  std::size_t solved = 0, unsolved = 0, most = 0, doubled = 0;
+  for (const auto& [begin, end] : ranges) {
+    const planner::ConfigMap slice = pipeline::sliceMap(map, begin, end);
+    PlanResult dp;
+    std::size_t branch = 0;
+    for (std::size_t b = 0; b < slice.branches.size(); ++b) {
+      const int r = planner::autoAngleSubdivisions(slice, b, plan.objective, plan.continuous);
+      const PlanResult x = cpuTimed(
+          1, [&] { return planner::planDpRefined(slice, b, plan.objective, plan.continuous, r); });
+      dp_s += x.seconds;
+      if (x.solved() && (!dp.solved() || x.terms.total < dp.terms.total)) {
+        dp = x;
+        branch = b;
+      }
+    }
+    if (!dp.solved()) continue;
+    const Tries o = omplAsPlanned(slice, branch, plan, map.times.size());
+    ompl_s += o.result.seconds;
+    most = std::max(most, o.iterations);
+    doubled += o.iterations >
+               pipeline::segmentBudget(plan.termination, slice.times.size(), map.times.size())
+                   .max_iterations;
+    if (!o.result.solved()) {
+      ++unsolved;
+      std::printf("  pass at samples %zu-%zu: %s\n", begin, end, o.result.reason.c_str());
+      continue;
+    }
+    ++solved;
+    dp_j += dp.terms.total;
+    ompl_j += o.result.terms.total;
+    refined_j += planner::refinePath(slice, branch, o.result.theta, plan.objective, plan.continuous)
+                     .after.total;
+  }
+  std::printf(
+      "automatic demo, per pass (%zu passes, %zu samples; each on the branch of its lowest DP J):\n"
+      "  DP  J %.3f s, %.2f s CPU (every branch)\n"
+      "  OMPL J %.3f s (%+.2f %% of DP) -> refined %.3f s (%+.2f %%), %.2f s CPU; %zu passes "
+      "solved, %zu not; budget: %zu iterations at most per pass, doubled on %zu passes\n",
+      ranges.size(), map.times.size(), dp_j, dp_s, ompl_j, 100.0 * gap(ompl_j, dp_j), refined_j,
+      100.0 * gap(refined_j, dp_j), ompl_s, solved, unsolved, most, doubled);
+  // Every pass's samples as one OMPL problem, at the job's budget, on the first branch: what a
+  // single search over the whole scan faces (the passes' ends joined without the moves).
+  planner::OmplSettings os;
+  os.max_iterations = plan.termination.max_iterations;
+  os.time_limit_s = plan.termination.time_limit_s;
+  const PlanResult whole =
+      cpuTimed(1, [&] { return planner::planOmpl(map, 0, plan.objective, plan.continuous, os); });
+  std::printf(
+      "  all the passes as one problem (%zu iterations, %s): %.2f s CPU, %s\n\n", os.max_iterations,
+      map.branches[0].words().c_str(), whole.seconds,
+      whole.solved() ? fmt::format("J {:.3f} s", whole.terms.total).c_str() : whole.reason.c_str());
+  std::fflush(stdout);
+}
+
 std::vector<Job> defaultJobs() {
   const auto synthetic = [](unsigned seed) {
     return [seed] { return JobMap{bench::syntheticMap(360, 1000, 0.1, seed), {}, true}; };
@@ -223,7 +330,7 @@ int main(int argc, char** argv) {
   }
   std::printf(
       "bench_planners: 2 threads; times are the process's CPU time (both threads' work), best of "
-      "%d for Ray Shooting and the cost-to-go, one DP run; J in s (DESIGN.md §5); gap = (J - "
+      "%d for Ray Shooting and the cost-to-go, one DP run; J in s (docs/design.md §5); gap = (J - "
       "J_DP) / J_DP, before → after NLopt refinement; DP on the map grid / (its subdivision)\n\n",
       kRuns);
   std::printf("| job | map | DP | seed Ray (H 15) | Ray (cost-to-go, H 5) | cost-to-go |\n");
@@ -256,5 +363,6 @@ int main(int argc, char** argv) {
       totals.no_path_mismatch == 0 ? "met" : "MISSED", 1e3 * totals.ray_min, 1e3 * totals.ray_max,
       100 * totals.ratio_max);
   for (const auto& [name, m] : kept) details(name, m);
+  if (argc <= 1) autoDemo();
   return 0;
 }

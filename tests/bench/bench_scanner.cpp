@@ -326,7 +326,7 @@ int main(int argc, char** argv) {
         count, hits, static_cast<double>(count) / wall / 1e6,
         static_cast<double>(count) / used / 1e6);
 
-    // The kind of rays DESIGN.md §6's throughput anchor was measured with: random rays from a
+    // The kind of rays docs/design.md §6's throughput anchor was measured with: random rays from a
     // box twice the part's size through random points of the part's box (many miss).
     std::mt19937 rng(5);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
