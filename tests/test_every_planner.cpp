@@ -5,6 +5,7 @@
 // beside the repository and is skipped without it.
 #include <algorithm>
 #include <filesystem>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,9 @@ std::vector<Case> bundledJobs() {
       {"bunny_shared", {"simulation.enabled=false"}},
   };
 }
+
+// The case's name in ctest's listing, not its bytes.
+void PrintTo(const Case& c, std::ostream* os) { *os << c.job; }
 
 class EveryPlanner : public ::testing::TestWithParam<Case> {};
 
