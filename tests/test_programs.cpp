@@ -1,7 +1,7 @@
-// Robot programs (docs/design.md §7): golden files of every format on a small hand-built trajectory,
-// the CSV and V+ round trips to the printed precision (and validation of what is read back), the
-// V+ and KRL speed settings against the planned timing, each language's structure, and bad
-// input.
+// Robot programs (docs/design.md §7): golden files of every format on a small hand-built
+// trajectory, the CSV and V+ round trips to the printed precision (and validation of what is read
+// back), the V+ and KRL speed settings against the planned timing, each language's structure, and
+// bad input.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -273,7 +273,7 @@ TEST_F(Programs, EachLanguageBeginsEndsAndMovesOncePerSample) {
   const ProgramFiles ur = cli::writeProgram(tr, viper_, ProgramFormat::kUrscript, options);
   const std::string& script = content(ur, "p3D_part__1.script");
   EXPECT_EQ(script.rfind("def p3D_part__1():\n", 0), 0u);
-  EXPECT_TRUE(script.ends_with("\nend\n"));
+  EXPECT_TRUE(script.ends_with("\nend\np3D_part__1()\n"));  // defined, then run
   EXPECT_EQ(count(script, "\n  movej(["), 1u);
   EXPECT_EQ(count(script, "\n  servo(["),
             static_cast<std::size_t>(std::round(tr.duration() / 0.008)));
@@ -431,6 +431,29 @@ JointVector plannedJoints(const Trajectory& tr, double t) {
     }
   }
   return s.back().q;
+}
+
+// URScript: the program is defined, then run; it uses the current function names (UR's script
+// manual marks set_digital_out and set_payload deprecated), and reads back the same.
+TEST_F(Programs, UrscriptRunsWhatItDefinesWithCurrentFunctionNames) {
+  std::mt19937 rng(9);
+  const Trajectory tr = randomTrajectory(viper_, rng, 20);
+  ProgramOptions options;
+  options.trigger.output = 2;
+  options.payload_kg = 0.9;
+  const std::string text =
+      cli::writeProgram(tr, viper_, ProgramFormat::kUrscript, options).files[0].second;
+  ASSERT_EQ(text.rfind("def scan():\n", 0), 0u);
+  const std::string tail = "\nend\nscan()\n";
+  ASSERT_GE(text.size(), tail.size());
+  EXPECT_EQ(text.substr(text.size() - tail.size()), tail);
+  EXPECT_GT(count(text, "\n  set_standard_digital_out(2, "), 0u);
+  EXPECT_EQ(count(text, "\n  set_target_payload(0.900, ["), 1u);
+  EXPECT_EQ(count(text, "set_digital_out("), 0u);
+  EXPECT_EQ(count(text, "set_payload("), 0u);
+  const cli::ProgramReading back = cli::readProgram(text, ProgramFormat::kUrscript, "p");
+  EXPECT_NEAR(back.payload_kg, 0.9, 1e-12);
+  EXPECT_FALSE(back.trajectory.samples.empty());
 }
 
 // URScript: movej to the first sample, then one servoj per controller period on the
@@ -845,6 +868,11 @@ TEST(ProgramReaders, RefuseWhatTheyDoNotModel) {
       {ProgramFormat::kUrscript,
        replaceFirst(script, "    servoj(q,", "    sleep(0.1)\n    servoj(q,"),
        "expected servo(q) to hold one 'servoj"},
+      {ProgramFormat::kUrscript, replaceFirst(script, "\nscan()\n", "\n"),
+       "defined but never run: expected a line 'scan()' after its end"},
+      {ProgramFormat::kUrscript, script + "scan()\n", "expected only 'scan()' after"},
+      {ProgramFormat::kUrscript, replaceFirst(script, "\nscan()\n", "\nmovej([0,0,0,0,0,0])\n"),
+       "expected only 'scan()' after"},
   };
   for (const Case& c : cases) {
     const std::string name = cli::programFormatName(c.format);

@@ -57,7 +57,7 @@ struct ProgramOptions {
   /// kg, the scanner's mass; ≤ 0: unknown (no payload is set, and the header says so).
   double payload_kg = 0.0;
   /// m, the scanner's centre of gravity in the flange frame. KRL $LOAD, RAPID tload, URScript
-  /// set_payload; a comment in V+ (its PAYLOAD instruction is a percentage, on some arms only).
+  /// set_target_payload; a comment in V+ (its PAYLOAD instruction is a percentage, on some arms only).
   Eigen::Vector3d payload_cog = Eigen::Vector3d::Zero();
   ProgramTrigger trigger;
   /// The table is an endless axis: its angles are written within (-180, 180] and the
@@ -102,9 +102,10 @@ struct ProgramFiles {
 ///   procedure, MoveAbsJ with the table in eax_a and \T:= the step's planned time, zone z0;
 ///   SetDO after the MoveAbsJ that reaches the pass's sample, which RAPID runs as the arm
 ///   enters that point's z0 zone.
-/// - kUrscript: <name>.script, set_tcp/set_payload, movej to the start, then servoj every
-///   options.servo_period along the joint-linear path between samples (continuous motion);
-///   set_digital_out between them at the servo step of the pass's sample; the table through
+/// - kUrscript: <name>.script, `def <name>(): … end` and then `<name>()`, which runs it;
+///   set_tcp/set_target_payload, movej to the start, then servoj every options.servo_period
+///   along the joint-linear path between samples (continuous motion); set_standard_digital_out
+///   between them at the servo step of the pass's sample; the table through
 ///   table_start()/table_move(), which the integrator implements (UR has no external axis).
 ///
 /// Joint values are the robot file's q, which the bundled robots define as their controllers'

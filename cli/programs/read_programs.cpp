@@ -612,8 +612,11 @@ class UrscriptReader {
       if (line[0] == '#') {
         step(line.substr(1));
       } else if (!in_program_) {
-        if (line.rfind("def ", 0) != 0)
+        static const std::regex kDef(R"(def ([A-Za-z_][A-Za-z0-9_]*)\(\):)");
+        std::smatch m;
+        if (!std::regex_match(line, m, kDef))
           r_.in.fail("'" + clipForMessage(line) + "': expected 'def name():' first");
+        name_ = m[1].str();
         in_program_ = true;
       } else if (line.rfind("def ", 0) == 0) {
         helper(line);
@@ -625,6 +628,7 @@ class UrscriptReader {
     }
     if (!in_program_) r_.in.fail("no 'def name():' line: expected a URScript program");
     if (!ended_) r_.in.fail("the program has no end");
+    callAfterEnd();
     const auto& steps = r_.reading.step_times;
     if (!steps.empty() && !r_.reading.trajectory.samples.empty() &&
         r_.reading.trajectory.samples.back().t < steps.back() - 1e-6) {
@@ -637,6 +641,22 @@ class UrscriptReader {
   }
 
  private:
+  // After the program's end: the one line that runs it, `name()`, and nothing else.
+  void callAfterEnd() {
+    std::string line;
+    bool called = false;
+    while (r_.in.next(line)) {
+      if (line.empty() || line[0] == '#') continue;
+      if (line != name_ + "()" || called)
+        r_.in.fail("'" + clipForMessage(line) + "': expected only '" + name_ +
+                   "()' after the program's end");
+      called = true;
+    }
+    if (!called)
+      r_.in.fail("the program '" + name_ + "' is defined but never run: expected a line '" + name_ +
+                 "()' after its end");
+  }
+
   // A step comment: the scanning flag from here on (and the start's time).
   void step(const std::string& body) {
     PendingStep p;
@@ -683,16 +703,17 @@ class UrscriptReader {
       movej(args);
     } else if (f == "table_start" || f == "table_move") {
       table(f, args);
-    } else if (f == "set_digital_out") {
-      digitalOut(args);
+    } else if (f == "set_standard_digital_out" || f == "set_digital_out") {
+      digitalOut(f, args);
     } else if (f == "set_tcp") {
       tcp(args);
-    } else if (f == "set_payload") {
-      payload(args);
+    } else if (f == "set_target_payload" || f == "set_payload") {
+      payload(f, args);
     } else if (f != "stopj") {
       r_.in.fail("'" + clipForMessage(s) +
                  "': not a call this reader knows (servo, movej, table_start, table_move, "
-                 "set_digital_out, set_tcp, set_payload, stopj)");
+                 "set_standard_digital_out, set_tcp, set_target_payload, stopj; or the deprecated "
+                 "set_digital_out, set_payload)");
     }
   }
 
@@ -752,10 +773,10 @@ class UrscriptReader {
     return d0 + (t - t0) / (t1 - t0) * (d1 - d0);
   }
 
-  void digitalOut(const std::string& args) {
+  void digitalOut(const std::string& f, const std::string& args) {
     static const std::regex kOut(R"(\s*([0-9]{1,6})\s*,\s*(True|False)\s*)");
     std::smatch m;
-    if (!std::regex_match(args, m, kOut)) r_.in.fail("set_digital_out: expected (n, True|False)");
+    if (!std::regex_match(args, m, kOut)) r_.in.fail(f + ": expected (n, True|False)");
     r_.addSwitch(now_, std::stoi(m[1].str()), m[2].str() == "True");
   }
 
@@ -769,16 +790,17 @@ class UrscriptReader {
     r_.reading.tool = X;
   }
 
-  void payload(const std::string& args) {
+  void payload(const std::string& f, const std::string& args) {
     double m = 0.0;
     if (!parseNumber(args.substr(0, args.find(',')), m) || m < 0.0)
-      r_.in.fail("set_payload: expected a mass in kg");
-    const std::vector<double> c = bracketed(args, 3, "set_payload centre of gravity");
+      r_.in.fail(f + ": expected a mass in kg");
+    const std::vector<double> c = bracketed(args, 3, f + " centre of gravity");
     r_.reading.payload_kg = m;
     r_.reading.payload_cog = Eigen::Vector3d(c[0], c[1], c[2]);
   }
 
   ReaderState r_;
+  std::string name_;  // the program's, from its def line
   bool in_program_ = false, ended_ = false, scanning_ = false;
   std::optional<double> start_t_, period_;
   double now_ = 0.0;

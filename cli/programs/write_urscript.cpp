@@ -1,4 +1,6 @@
-// Universal Robots URScript: movej to the start, then servoj at the controller's period.
+// Universal Robots URScript: movej to the start, then servoj at the controller's period; the file
+// defines the program and then calls it. Current function names (set_standard_digital_out,
+// set_target_payload: UR's script manual marks set_digital_out and set_payload deprecated).
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -31,7 +33,7 @@ std::string radians(const JointVector& q) {
 }
 
 std::string setOut(const ProgramContext& c, bool level) {
-  return fmt::format("  set_digital_out({}, {})\n", c.options.trigger.output,
+  return fmt::format("  set_standard_digital_out({}, {})\n", c.options.trigger.output,
                      level ? "True" : "False");
 }
 
@@ -47,9 +49,9 @@ Header urHeader(const ProgramContext& c, double approach_v) {
                          fixed(kLookahead, 2), kGain));
   header.add("  the last step reaching the last sample within one period of its time.");
   header.add("Tool: set_tcp, the scanner's laser frame on the flange (rotation vector).");
-  header.add(payloadLines(o, "set_payload."));
-  header.add(triggerLines(o, "Each set_digital_out follows the servo step that reaches its"));
-  if (o.trigger.output > 0) header.add("  sample (within one servo period).");
+  header.add(payloadLines(o, "set_target_payload."));
+  header.add(triggerLines(o, "Each set_standard_digital_out follows the servo step that"));
+  if (o.trigger.output > 0) header.add("  reaches its sample (within one servo period).");
   header.add("Table: URScript has no external axis. table_start() and table_move() below are");
   header.add("  the cell's to implement (socket, Modbus register or digital IO); as written they");
   header.add("  only publish the target on RTDE output float registers 0 (deg) and 1 (s).");
@@ -66,7 +68,7 @@ std::string urSetup(const ProgramContext& c) {
                               fixed(r.x(), kRadDecimals), fixed(r.y(), kRadDecimals),
                               fixed(r.z(), kRadDecimals));
   if (o.payload_kg > 0.0) {
-    s += fmt::format("  set_payload({}, [{}, {}, {}])\n", fixed(o.payload_kg, 3),
+    s += fmt::format("  set_target_payload({}, [{}, {}, {}])\n", fixed(o.payload_kg, 3),
                      fixed(o.payload_cog.x(), 6), fixed(o.payload_cog.y(), 6),
                      fixed(o.payload_cog.z(), 6));
   }
@@ -96,7 +98,7 @@ std::string urscriptProgram(const ProgramContext& c) {
   if (o.trigger.output > 7) {
     throw InputError(
         fmt::format("URScript program: trigger output {}: expected 1 ... 7 "
-                    "(set_digital_out's standard outputs; 0: none)",
+                    "(set_standard_digital_out's outputs; 0: none)",
                     o.trigger.output));
   }
   double slowest = std::numeric_limits<double>::infinity();
@@ -137,6 +139,7 @@ std::string urscriptProgram(const ProgramContext& c) {
   s += "  stopj(2.0)\n";
   if (o.trigger.output > 0) s += setOut(c, levelAfter(Switch::kOff, o.trigger));
   s += "end\n";
+  s += c.name + "()\n";  // the program runs what it defines
   return s;
 }
 
