@@ -5,6 +5,7 @@
 #include <bit>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <sstream>
 #include <vector>
 
@@ -122,7 +123,7 @@ void writeCoveragePly(std::ostream& out,
   header << "ply\n"
          << "format binary_little_endian 1.0\n"
          << "comment scanplan coverage: part frame, mm; colour = points/mm2, viridis 0 .. " << top
-         << ", grey = not covered\n"
+         << ", red-orange (220, 70, 40) = not covered\n"
          << "element vertex " << 3 * n << "\n"
          << "property float x\n"
          << "property float y\n"
@@ -131,7 +132,7 @@ void writeCoveragePly(std::ostream& out,
          << "property uchar green\n"
          << "property uchar blue\n"
          << "property float density_per_mm2\n"
-         << "property uint points\n"
+         << "property int points\n"  // int, not uint: Open3D's tensor reader refuses uint
          << "element face " << n << "\n"
          << "property list uchar int vertex_indices\n"
          << "end_header\n";
@@ -153,7 +154,9 @@ void writeCoveragePly(std::ostream& out,
       w.f32(toMm(v.z()));
       for (const std::uint8_t c : colours[i]) w.u8(c);
       w.f32(densities[i]);
-      w.u32(i < coverage.hits.size() ? coverage.hits[i] : 0);
+      const std::uint32_t hits = i < coverage.hits.size() ? coverage.hits[i] : 0;
+      w.i32(static_cast<std::int32_t>(
+          std::min<std::uint32_t>(hits, std::numeric_limits<std::int32_t>::max())));
     }
     w.endRecord();
   }

@@ -1163,6 +1163,19 @@ TEST(CoveragePly, LoadsAsThePartMeshWithDensityColours) {
   EXPECT_EQ(v.column("green")[2], 231);
   EXPECT_EQ(v.column("red")[3], 220);  // not covered: red-orange (220, 70, 40)
   EXPECT_EQ(v.column("blue")[5], 40);
+  EXPECT_EQ(v.column("points")[0], 4.0);
+  EXPECT_EQ(v.column("points")[3], 0.0);
+  // The header says what the colours are, and the point count is a signed int (Open3D's tensor
+  // reader refuses unsigned ones).
+  std::ifstream again(file, std::ios::binary);
+  std::string header, line;
+  while (std::getline(again, line) && line.rfind("end_header", 0) != 0) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();  // the header's lines end CR LF
+    header += line + "\n";
+  }
+  EXPECT_NE(header.find("red-orange (220, 70, 40) = not covered"), std::string::npos) << header;
+  EXPECT_NE(header.find("property int points\n"), std::string::npos) << header;
+  EXPECT_EQ(header.find("grey"), std::string::npos) << header;
   fs::remove_all(dir);
 }
 
