@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "cli/config/job.h"
+#include "cli/programs/detail/program_text.h"
 #include "cli/programs/programs.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"
@@ -431,6 +432,40 @@ JointVector plannedJoints(const Trajectory& tr, double t) {
     }
   }
   return s.back().q;
+}
+
+// Controllers read programs in their own code page (KUKA: Windows-1252): every file is 7-bit
+// ASCII, the header's symbols spelled out, even for a job named in another script.
+TEST_F(Programs, EveryFileIsAsciiWhateverTheJobIsCalled) {
+  std::mt19937 rng(12);
+  const Trajectory tr = randomTrajectory(viper_, rng, 20);
+  ProgramOptions options;
+  options.job = "Gehäuse · 3°";
+  options.trigger.output = 1;
+  options.payload_kg = 0.5;
+  for (const ProgramFormat format :
+       {ProgramFormat::kVplus, ProgramFormat::kKrl, ProgramFormat::kRapid, ProgramFormat::kUrscript,
+        ProgramFormat::kCsv}) {
+    const ProgramFiles files = cli::writeProgram(tr, viper_, format, options);
+    for (const auto& [name, content] : files.files) {
+      const auto bad =
+          std::find_if(content.begin(), content.end(), [](char ch) { return (ch & 0x80) != 0; });
+      EXPECT_EQ(bad, content.end()) << name << " at byte " << (bad - content.begin());
+    }
+    if (format == ProgramFormat::kKrl) {
+      const std::string& src = files.files[0].second;
+      EXPECT_NE(src.find("(A, B, C: Rz*Ry*Rx)"), std::string::npos);
+      // The helper's declaration section holds its declarations only (no comment before them).
+      EXPECT_NE(src.find("(ARM_PCT:IN, E1_PCT:IN)\n  INT ARM_PCT, E1_PCT, AXIS\n"),
+                std::string::npos);
+      EXPECT_NE(src.find("Geh?use * 3 deg"), std::string::npos);
+    }
+    // Read back, the same motion (the readers need no more than ASCII).
+    if (format != ProgramFormat::kCsv) {
+      EXPECT_NO_THROW(cli::readProgram(files.files[0].second, format, "p"));
+    }
+  }
+  EXPECT_EQ(cli::detail::asciiText("a\u2264b \u2192 c\u00b2 \u4e2d"), "a<=b -> c^2 ?");
 }
 
 // URScript: the program is defined, then run; it uses the current function names (UR's script

@@ -7,6 +7,8 @@
 #include <limits>
 #include <regex>
 #include <sstream>
+#include <string_view>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -64,7 +66,7 @@ std::string identifier(const std::string& name, bool allow_dot, std::size_t max_
 
 std::string commentText(const std::string& s) {
   std::string out;
-  for (const char c : s) out += c >= 0x20 && c < 0x7f ? c : '?';
+  for (const char c : asciiText(s)) out += c >= 0x20 && c < 0x7f ? c : '?';
   return out;
 }
 
@@ -400,6 +402,36 @@ void appendSample(const LineReader& in,
   if (!std::isfinite(t)) in.fail("a non-finite time");
   s.theta = table * kDegToRad;
   trajectory.samples.push_back(s);
+}
+
+std::string asciiText(const std::string& text) {
+  static const std::pair<std::string_view, std::string_view> kWords[] = {
+      {"\u00b7", "*"},   {"\u00b0", " deg"}, {"\u2026", "..."}, {"\u00b1", "+/-"}, {"\u2212", "-"},
+      {"\u00d7", "x"},   {"\u00b2", "^2"},   {"\u2192", "->"},  {"\u2264", "<="},  {"\u2265", ">="},
+      {"\u2213", "-/+"}, {"\u2013", "-"},    {"\u2014", "-"},   {"\u00b3", "^3"}};
+  if (std::all_of(text.begin(), text.end(), [](char ch) { return (ch & 0x80) == 0; })) return text;
+  std::string out;
+  out.reserve(text.size());
+  for (std::size_t i = 0; i < text.size();) {
+    if ((text[i] & 0x80) == 0) {
+      out += text[i++];
+      continue;
+    }
+    const std::string_view rest(text.data() + i, text.size() - i);
+    bool known = false;
+    for (const auto& [from, to] : kWords) {
+      if (rest.substr(0, from.size()) != from) continue;
+      out += to;
+      i += from.size();
+      known = true;
+      break;
+    }
+    if (known) continue;
+    out += '?';  // one character of any length: its lead byte, then its continuation bytes
+    for (++i; i < text.size() && (static_cast<unsigned char>(text[i]) & 0xC0) == 0x80; ++i) {
+    }
+  }
+  return out;
 }
 
 }  // namespace scanplan::cli::detail

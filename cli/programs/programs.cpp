@@ -145,6 +145,7 @@ ProgramFiles writeProgram(const Trajectory& trajectory,
       result.files.emplace_back(c.name + ".script", detail::urscriptProgram(c));
       break;
   }
+  for (auto& file : result.files) file.second = detail::asciiText(file.second);
   return result;
 }
 

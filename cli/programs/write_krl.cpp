@@ -146,9 +146,10 @@ std::string krlProgram(const ProgramContext& c) {
     s += "  " + out(c, levelAfter(Switch::kOff, o.trigger)) + "\n";
   }
   s += "END\n\n";
+  // The declarations come first, alone: a strict KRL parser allows nothing before them.
   s += "DEF " + std::string(kVel) + "(ARM_PCT:IN, E1_PCT:IN)\n";
-  s += "  ; $VEL_AXIS[1..6] and $VEL_EXTAX[1] in percent of the axes' maximum speeds.\n";
   s += "  INT ARM_PCT, E1_PCT, AXIS\n";
+  s += "  ; $VEL_AXIS[1..6] and $VEL_EXTAX[1] in percent of the axes' maximum speeds.\n";
   s += "  FOR AXIS=1 TO 6\n    $VEL_AXIS[AXIS]=ARM_PCT\n  ENDFOR\n";
   s += "  $VEL_EXTAX[1]=E1_PCT\nEND\n";
   return s;

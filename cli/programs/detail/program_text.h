@@ -160,4 +160,11 @@ ProgramReading readKrl(const std::string& text, const std::string& source);
 ProgramReading readRapid(const std::string& text, const std::string& source);
 ProgramReading readUrscript(const std::string& text, const std::string& source);
 
+/// `text` in 7-bit ASCII: controllers read their programs in their own code page (a KUKA
+/// controller in Windows-1252, where UTF-8's "·" shows as "Â·"). The symbols the headers and
+/// comments use become ASCII words ("·" → "*", "°" → " deg", "…" → "...", "±" → "+/-", "−" → "-",
+/// "×" → "x", "²" → "^2", "→" → "->", "≤" → "<=", "≥" → ">="); any other non-ASCII character
+/// becomes "?".
+std::string asciiText(const std::string& text);
+
 }  // namespace scanplan::cli::detail
