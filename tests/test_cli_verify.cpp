@@ -18,6 +18,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "cli/config/job.h"
+#include "cli/report/verify_report.h"
 #include "cli_support.h"
 #include "geometry_support.h"
 #include "kinematics/mesh.h"
@@ -187,10 +188,15 @@ TEST_F(CliVerify, SimulatedCloudLiesOnThePartAndCoverageIsReported) {
 // images (camera image beside the same with the stripe marked, 2 × 2 per pixel); with sensor
 // noise, the same seed gives the same cloud.ply bytes.
 TEST_F(CliVerify, ImageModeWritesTheCloudAndProfileImagesDeterministically) {
-  const std::vector<std::string> image = {
-      "--set", "simulation.mode=image", "--set", "scanner.camera={rows: 64, columns: 50, "
-      "noise_grey: 3}", "--set", "simulation.profile_images=3", "--set",
-      "scanner.frame_rate_hz=20"};
+  const std::vector<std::string> image = {"--set",
+                                          "simulation.mode=image",
+                                          "--set",
+                                          "scanner.camera={rows: 64, columns: 50, "
+                                          "noise_grey: 3}",
+                                          "--set",
+                                          "simulation.profile_images=3",
+                                          "--set",
+                                          "scanner.frame_rate_hz=20"};
   std::vector<std::string> args[2];
   for (int k = 0; k < 2; ++k) {
     args[k] = withLightDemo({"simulate", kDemoJob, "-t", plannedTrajectory().string(), "-o",
@@ -423,6 +429,29 @@ TEST_F(CliVerify, UnwritableOutputFolderIsAnInputErrorWithNoPartialFiles) {
   EXPECT_EQ(run.exit_code, 4) << describe(run);
   EXPECT_TRUE(contains(run.err, "scanplan: error:")) << run.err;
   EXPECT_TRUE(tmpFiles(dir_).empty());
+}
+
+}  // namespace
+
+namespace {
+
+// A closest approach nothing was measured for (every pair beyond its d_high) has no distance, no
+// pair and no time in report.json: all null, never a time of 0.
+TEST(ValidationJson, AnUnmeasuredClosestApproachIsNullThroughout) {
+  scanplan::planner::ValidationReport r;
+  r.valid = true;
+  r.min_cell_distance = std::numeric_limits<double>::infinity();
+  r.min_self_distance = r.min_distance = 0.0253;
+  r.min_self_distance_pair = r.min_distance_pair = "link4 - link6";
+  r.min_self_distance_t = r.min_distance_t = 1.5;
+  const scanplan::cli::Json j = scanplan::cli::validationJson(r);
+  EXPECT_TRUE(j["min_cell_distance_mm"].is_null());
+  EXPECT_TRUE(j["min_cell_distance_pair"].is_null());
+  EXPECT_TRUE(j["min_cell_distance_time_s"].is_null());
+  EXPECT_NEAR(j["min_self_distance_mm"].get<double>(), 25.3, 1e-9);
+  EXPECT_EQ(j["min_self_distance_pair"], "link4 - link6");
+  EXPECT_EQ(j["min_self_distance_time_s"].get<double>(), 1.5);
+  EXPECT_EQ(j["min_distance_time_s"].get<double>(), 1.5);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "cli/report/verify_report.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 
 #include <fmt/format.h>
@@ -73,26 +74,33 @@ Json violationJson(const planner::Violation& v) {
   return json;
 }
 
+// A closest approach: its distance (mm), pair and time; all three null when no pair came within
+// its d_high (nothing was measured closer: there is no "where").
+void closest(
+    Json& json, const std::string& key, double distance, const std::string& pair, double t) {
+  const bool measured = std::isfinite(distance);
+  json[key + "_mm"] = measured ? Json(toMm(distance)) : Json(nullptr);
+  json[key + "_pair"] = measured ? Json(pair) : Json(nullptr);
+  json[key + "_time_s"] = measured ? Json(t) : Json(nullptr);
+}
+
 }  // namespace
 
 Json validationJson(const planner::ValidationReport& r) {
   Json violations = Json::array();
   for (const planner::Violation& v : r.violations) violations.push_back(violationJson(v));
-  return {{"valid", r.valid},
-          {"poses", r.samples},
-          {"clearance_evaluations", r.poses_checked},
-          {"seconds", r.seconds},
-          {"min_distance_mm", toMm(r.min_distance)},
-          {"min_distance_pair", r.min_distance_pair},
-          {"min_distance_time_s", r.min_distance_t},
-          {"min_cell_distance_mm", toMm(r.min_cell_distance)},
-          {"min_cell_distance_pair", r.min_cell_distance_pair},
-          {"min_cell_distance_time_s", r.min_cell_distance_t},
-          {"min_self_distance_mm", toMm(r.min_self_distance)},
-          {"min_self_distance_pair", r.min_self_distance_pair},
-          {"min_self_distance_time_s", r.min_self_distance_t},
-          {"proven_clearance_mm", toMm(r.proven_clearance)},
-          {"violations", std::move(violations)}};
+  Json json = {{"valid", r.valid},
+               {"poses", r.samples},
+               {"clearance_evaluations", r.poses_checked},
+               {"seconds", r.seconds}};
+  closest(json, "min_distance", r.min_distance, r.min_distance_pair, r.min_distance_t);
+  closest(json, "min_cell_distance", r.min_cell_distance, r.min_cell_distance_pair,
+          r.min_cell_distance_t);
+  closest(json, "min_self_distance", r.min_self_distance, r.min_self_distance_pair,
+          r.min_self_distance_t);
+  json["proven_clearance_mm"] = toMm(r.proven_clearance);
+  json["violations"] = std::move(violations);
+  return json;
 }
 
 std::string simulationSummary(const pipeline::SimulationRun& run) {
@@ -108,8 +116,8 @@ std::string simulationSummary(const pipeline::SimulationRun& run) {
           : fmt::format(
                 "simulation {} profiles, {} laser + {} occlusion rays in {:.1f} s: {} points ({} "
                 "outside the window, {} hidden from the camera)\n",
-                s.profiles, s.laser_rays, s.occlusion_rays, run.seconds, s.points,
-                s.outside_window, s.occluded);
+                s.profiles, s.laser_rays, s.occlusion_rays, run.seconds, s.points, s.outside_window,
+                s.occluded);
   text += fmt::format(
       "coverage   {:.1f}% of the part's area within {:.2f} mm of a point ({} area samples); "
       "{:.1f}% faces or lies on the table\n",
