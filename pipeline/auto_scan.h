@@ -1,7 +1,7 @@
 #pragma once
-// The automatic scan (job keys scan.auto, docs/design.md §11): candidate passes over the part placed
-// on the table, each evaluated on area samples with the scanner model, a greedy set cover of the
-// scannable area by new area per second, every chosen pass checked for reach on the cell (some
+// The automatic scan (job keys scan.auto, docs/design.md §11): candidate passes over the part
+// placed on the table, each evaluated on area samples with the scanner model, a greedy set cover of
+// the scannable area by new area per second, every chosen pass checked for reach on the cell (some
 // table angle where the arm follows it on one IK branch), the passes ordered to keep the
 // connecting moves short. Each pass becomes a segment of the scan path: the planners plan the
 // table per pass, and the program joins the passes with point-to-point moves (plan_scan.h).
@@ -44,7 +44,7 @@ struct AutoScanReport {
   /// s of moves between passes as the tour estimated them (the program's own moves are
   /// point-to-point moves timed by the pipeline: ScanPlan::program).
   double transfer_time = 0.0;
-  double seconds = 0.0;           ///< planning time
+  double seconds = 0.0;  ///< planning time
   /// The set cover's estimated program time (scanning + a move per pass), s: the greedy cover's,
   /// the integer programme's (scanner::solveCover, the passes used) and its proven lower bound
   /// (0: none proven); its status. All 0 / empty when the programme did not run (a time limit,
@@ -54,7 +54,7 @@ struct AutoScanReport {
   double cover_bound = 0.0;
   std::string cover_status;
   double cover_seconds = 0.0;
-  std::size_t aimed = 0;          ///< of the candidates, aimed at surfaces the others miss
+  std::size_t aimed = 0;  ///< of the candidates, aimed at surfaces the others miss
   /// The certificate before simulation: the evaluation samples (part frame P) and why each can
   /// or cannot be scanned (kOutOfReach: every pass that sees it was refused by the reach check).
   scanner::AreaSampling sampling;

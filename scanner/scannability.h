@@ -1,6 +1,6 @@
 #pragma once
-// The scannability certificate (docs/design.md §11, issue 16): why each area sample of the part can or
-// cannot be scanned on this setup, before any planning. A sample that no scanner pose could see
+// The scannability certificate (docs/design.md §11, issue 16): why each area sample of the part can
+// or cannot be scanned on this setup, before any planning. A sample that no scanner pose could see
 // is not a planner's failure; the classes say which limit stands in the way.
 
 #include <cstdint>

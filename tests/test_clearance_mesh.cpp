@@ -984,7 +984,8 @@ TEST(ShapeDistanceFrameInvariance, MeshBoxExactlyAndCurvedPrimitivesWithinTheGjk
   }
 }
 
-// 5. Shared data (docs/design.md §10): Viper link meshes and the scanned bunny, none of them closed.
+// 5. Shared data (docs/design.md §10): Viper link meshes and the scanned bunny, none of them
+// closed.
 
 const fs::path kSharedData = SCANPLAN_SHARED_DATA_DIR;
 

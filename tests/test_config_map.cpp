@@ -561,8 +561,8 @@ TEST(ConfigMap, RowZeroAndTheRowAfterTheLastAreTheSameTableAngle) {
     const auto solutions = demo.cell.robot.ik(X_BF);
     evaluator.beginCell(2.0 * std::numbers::pi, X_BF);
     for (std::size_t b = 0; b < map.branches.size(); ++b) {
-      const planner::CellScore s = planner::scoreCell(*demo.scene, demo.settings, evaluator, b,
-                                                      solutions, map.branches[b]);
+      const planner::CellScore s =
+          planner::scoreCell(*demo.scene, demo.settings, evaluator, b, solutions, map.branches[b]);
       EXPECT_NEAR(s.f, map.f[map.index(b, 0, t)], kTol);
     }
   }
@@ -656,7 +656,8 @@ TEST(ConfigMap, MotionBoundSkippingChangesNoValue) {
   const DemoMap& demo = demoMap();
   planner::MapRequest plain = demo.request;
   plain.motion_bounds = false;
-  EXPECT_TRUE(sameMap(demo.map, planner::buildConfigMap(*demo.scene, demo.settings, demo.path, plain)));
+  EXPECT_TRUE(
+      sameMap(demo.map, planner::buildConfigMap(*demo.scene, demo.settings, demo.path, plain)));
   std::mt19937 rng(2026);
   std::uniform_real_distribution<double> height(20.0, 110.0), tilt(-10.0, 70.0), step(3.0, 12.0);
   int clearance_limited = 0;
@@ -679,8 +680,8 @@ TEST(ConfigMap, MotionBoundSkippingChangesNoValue) {
       plain_map = planner::buildConfigMap(scene, demo.settings, path, request);
     }
     EXPECT_TRUE(sameMap(skipped, plain_map)) << "job " << job_index;
-    clearance_limited += static_cast<int>(std::count(
-        skipped.limit.begin(), skipped.limit.end(), static_cast<std::uint8_t>(Limit::kClearance)));
+    clearance_limited += static_cast<int>(std::count(skipped.limit.begin(), skipped.limit.end(),
+                                                     static_cast<std::uint8_t>(Limit::kClearance)));
   }
   EXPECT_GT(clearance_limited, 100);  // the clearance layer is exercised, not all 1
 }
@@ -707,8 +708,10 @@ TEST_F(MapJob, MeshLinksMapAsHullsConservativelyAndSkippingStaysExact) {
       }
     }
     std::string off = fmt::format("OFF\n{} {} 0\n", mesh.vertices.size(), mesh.triangles.size());
-    for (const Eigen::Vector3d& v : mesh.vertices) off += fmt::format("{:.17g} {:.17g} {:.17g}\n", v.x(), v.y(), v.z());
-    for (const Eigen::Vector3i& t : mesh.triangles) off += fmt::format("3 {} {} {}\n", t[0], t[1], t[2]);
+    for (const Eigen::Vector3d& v : mesh.vertices)
+      off += fmt::format("{:.17g} {:.17g} {:.17g}\n", v.x(), v.y(), v.z());
+    for (const Eigen::Vector3i& t : mesh.triangles)
+      off += fmt::format("3 {} {} {}\n", t[0], t[1], t[2]);
     const fs::path file = write(link.name + ".off", off);
     robot += fmt::format("  - {{name: {}, shapes: [{{type: mesh, file: {}, units: m}}]}}\n",
                          link.name, file.string());

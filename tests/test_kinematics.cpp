@@ -48,8 +48,8 @@ bool sameJointsModTurn(const JointVector& a, const JointVector& b) {
 
 TEST(ViperFk, GoldenValuesFromDesignDoc) {
   const RobotModel robot = bundledRobot("viper_s650");
-  // docs/design.md §3.1: q = 0 puts the flange at (255, 0, 710) mm: x = a1 + a2 + a3 = 75 + 270 − 90,
-  // z = d1 + d4 + d6 = 335 + 295 + 80 (upper arm horizontal, forearm vertical).
+  // docs/design.md §3.1: q = 0 puts the flange at (255, 0, 710) mm: x = a1 + a2 + a3 = 75 + 270 −
+  // 90, z = d1 + d4 + d6 = 335 + 295 + 80 (upper arm horizontal, forearm vertical).
   EXPECT_TRUE(robot.fk(JointVector::Zero())
                   .translation()
                   .isApprox(Eigen::Vector3d(0.255, 0, 0.710), 1e-12));
@@ -103,8 +103,8 @@ TEST_P(BundledRobot, ChainIsTheRelativePoseOfTwoLinkFrames) {
     const auto frames = robot.linkFrames(q);
     for (int i = 0; i <= 6; ++i) {
       for (int j = i; j <= 6; ++j) {
-        const Eigen::Isometry3d expected = frames[static_cast<std::size_t>(i)].inverse() *
-                                           frames[static_cast<std::size_t>(j)];
+        const Eigen::Isometry3d expected =
+            frames[static_cast<std::size_t>(i)].inverse() * frames[static_cast<std::size_t>(j)];
         ASSERT_LT((robot.chain(i, j, q).matrix() - expected.matrix()).norm(), 1e-12)
             << "frames " << i << " to " << j;
       }

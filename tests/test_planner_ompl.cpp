@@ -1,5 +1,5 @@
-// The OMPL planner (docs/design.md §5.3) on hand-built maps: corridors with known answers against the
-// DP optimum, a lane left and re-entered within the acceleration bound, blocked columns and
+// The OMPL planner (docs/design.md §5.3) on hand-built maps: corridors with known answers against
+// the DP optimum, a lane left and re-entered within the acceleration bound, blocked columns and
 // unreachable jumps (no path, with the sample named and approximate solutions reported), limited
 // tables, a fixed start, and repeatability for a seed. Runs are capped by iterations (and a
 // generous clock) so the results do not depend on machine speed.

@@ -1,6 +1,6 @@
 #pragma once
-// Robot programs (docs/design.md §7): a planned trajectory written for the controller that runs it —
-// Adept V+, KUKA KRL, ABB RAPID, URScript — or as the CSV interchange file, and every program
+// Robot programs (docs/design.md §7): a planned trajectory written for the controller that runs it
+// — Adept V+, KUKA KRL, ABB RAPID, URScript — or as the CSV interchange file, and every program
 // read back into a trajectory so that it can be validated before it is sent (§7.3).
 
 #include <cstddef>
@@ -57,7 +57,8 @@ struct ProgramOptions {
   /// kg, the scanner's mass; ≤ 0: unknown (no payload is set, and the header says so).
   double payload_kg = 0.0;
   /// m, the scanner's centre of gravity in the flange frame. KRL $LOAD, RAPID tload, URScript
-  /// set_target_payload; a comment in V+ (its PAYLOAD instruction is a percentage, on some arms only).
+  /// set_target_payload; a comment in V+ (its PAYLOAD instruction is a percentage, on some arms
+  /// only).
   Eigen::Vector3d payload_cog = Eigen::Vector3d::Zero();
   ProgramTrigger trigger;
   /// The table is an endless axis: its angles are written within (-180, 180] and the

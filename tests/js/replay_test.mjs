@@ -57,9 +57,12 @@ shots.push(await shot('replay_end'));
 await page.keyboard.press('Home');
 const before = await page.evaluate(() => window.scanplanReplay.frame);
 await page.click('#play');
-// Software WebGL draws a frame in up to a second or two: wait for the motion, not a fixed time.
-await page.waitForFunction(() => window.scanplanReplay.frame > 0, null, { timeout: 60000 })
-  .catch(() => {});
+// Software WebGL draws a frame in up to a second or two, longer on a loaded machine: poll for the
+// motion every 100 ms for up to 60 s, not a fixed time.
+for (const deadline = Date.now() + 60000; Date.now() < deadline;) {
+  if (await page.evaluate(() => window.scanplanReplay.frame) > 0) break;
+  await page.waitForTimeout(100);
+}
 await page.click('#play');
 const after = await page.evaluate(() => window.scanplanReplay.frame);
 console.log(JSON.stringify({ shots, before, after, frames:
