@@ -33,6 +33,25 @@ const char* coverageClassName(CoverageClass c) {
   return kNames[static_cast<std::size_t>(c)];
 }
 
+const char* coverageClassWords(CoverageClass c) {
+  static constexpr const char* kWords[kCoverageClasses] = {
+      "covered",  "scannable, not covered",       "faces the table",
+      "occluded", "no standoff fits the housing", "out of the arm's reach"};
+  return kWords[static_cast<std::size_t>(c)];
+}
+
+std::array<std::uint8_t, 3> coverageClassColour(CoverageClass c) {
+  static constexpr std::array<std::array<std::uint8_t, 3>, kCoverageClasses> kColours{{
+      {0, 158, 115},    // covered: green
+      {230, 159, 0},    // scannable, not covered: orange
+      {150, 150, 150},  // faces the table: grey
+      {0, 114, 178},    // occluded: blue
+      {204, 121, 167},  // no standoff fits the housing: purple
+      {213, 94, 0},     // out of reach: vermilion
+  }};
+  return kColours[static_cast<std::size_t>(c)];
+}
+
 Certificate certify(const scanner::AreaSampling& sampling,
                     const scanner::AreaCoverage& covered,
                     const AutoScanReport& report) {

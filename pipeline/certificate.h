@@ -27,6 +27,13 @@ enum class CoverageClass : std::uint8_t {
 inline constexpr std::size_t kCoverageClasses = 6;
 /// "covered", "scannable_not_covered", "faces_table", "occluded", "no_standoff", "out_of_reach".
 const char* coverageClassName(CoverageClass c);
+/// The same in words for pictures and legends: "covered", "scannable, not covered", "faces the
+/// table", "occluded", "no standoff fits the housing", "out of the arm's reach".
+const char* coverageClassWords(CoverageClass c);
+/// The class's colour in every picture (sRGB; Okabe-Ito, colour-blind safe): covered green,
+/// missed orange, faces the table grey, occluded blue, no standoff purple, out of reach
+/// vermilion.
+std::array<std::uint8_t, 3> coverageClassColour(CoverageClass c);
 
 struct Certificate {
   std::vector<CoverageClass> classes;               ///< per area sample

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "kinematics/shape.h"
 #include "scanner/coverage.h"
@@ -79,6 +80,17 @@ std::vector<std::array<std::uint8_t, 3>> coverageColours(const TriangleMesh& par
   return out;
 }
 
+// Per part triangle: the time of the first point on it (+inf: none).
+std::vector<float> coveredTimes(const TriangleMesh& part, const SimulationRun& run) {
+  std::vector<float> out(part.triangles.size(), std::numeric_limits<float>::infinity());
+  for (const scanner::CloudPoint& p : run.cloud.points) {
+    if (p.part_triangle < 0 || static_cast<std::size_t>(p.part_triangle) >= out.size()) continue;
+    float& t = out[static_cast<std::size_t>(p.part_triangle)];
+    t = std::min(t, static_cast<float>(p.t));
+  }
+  return out;
+}
+
 void addCloud(const SimulationRun& run, const ReplayOptions& options, ReplayScene& scene) {
   const auto& points = run.cloud.points;
   scene.cloud_total = points.size();
@@ -116,7 +128,10 @@ ReplayScene replayScene(const kinematics::CellModel& cell,
                Eigen::Vector3d(0.0, -w.y_far, w.z_max)};
   if (plan.simulation) {
     for (ReplayBody& body : scene.bodies) {
-      if (body.name == "part") body.colours = coverageColours(part, *plan.simulation);
+      if (body.name != "part") continue;
+      body.colours = coverageColours(part, *plan.simulation);
+      body.covered_t = coveredTimes(part, *plan.simulation);
+      scene.density_top_per_mm2 = plan.simulation->coverage.density_p95_per_mm2;
     }
     addCloud(*plan.simulation, options, scene);
     if (plan.certificate) {

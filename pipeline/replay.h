@@ -30,6 +30,9 @@ struct ReplayBody {
   int frame = kReplayWorld;
   kinematics::TriangleMesh mesh;                     ///< in its frame, m
   std::vector<std::array<std::uint8_t, 3>> colours;  ///< per triangle; empty: the body's own
+  /// The part only, per triangle: s, when the first point of the cloud lands on it (its colour
+  /// holds from then on); +infinity: never. Empty for other bodies and without a simulation.
+  std::vector<float> covered_t;
 };
 
 struct ReplayFrame {
@@ -48,6 +51,8 @@ struct ReplayScene {
   std::vector<Eigen::Vector3f> cloud;
   std::vector<float> cloud_t;
   std::size_t cloud_total = 0;  ///< points in the whole cloud
+  /// points/mm², the top of the part's density colour scale (viridis from 0; 0: no coverage)
+  double density_top_per_mm2 = 0.0;
   /// Area samples the certificate leaves uncovered (part frame, m) and their class.
   std::vector<Eigen::Vector3f> uncovered;
   std::vector<std::uint8_t> uncovered_class;

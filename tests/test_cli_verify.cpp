@@ -376,8 +376,8 @@ TEST_F(CliVerify, ExportedProgramsReadBackAndValidate) {
   }
   EXPECT_TRUE(contains(run.out, "programs   " + out.string() + ": ")) << "the folder as given\n"
                                                                       << run.out;
-  // The V+ program and the CSV load back and pass validation (the seed's §7.3 point).
-  for (const char* f : {"scan.v2", "scan.csv"}) {
+  // Every program loads back and passes validation (the seed's §7.3 point).
+  for (const char* f : {"scan.v2", "scan.src", "scan.mod", "scan.script", "scan.csv"}) {
     SCOPED_TRACE(f);
     const Result v = scanplan(withLightDemo({"validate", kDemoJob, "-t", (out / f).string()}));
     EXPECT_EQ(v.exit_code, 0) << describe(v);

@@ -276,9 +276,11 @@ TEST_F(Programs, EachLanguageBeginsEndsAndMovesOncePerSample) {
   EXPECT_EQ(script.rfind("def p3D_part__1():\n", 0), 0u);
   EXPECT_TRUE(script.ends_with("\nend\np3D_part__1()\n"));  // defined, then run
   EXPECT_EQ(count(script, "\n  movej(["), 1u);
-  EXPECT_EQ(count(script, "\n  servo(["),
-            static_cast<std::size_t>(std::round(tr.duration() / 0.008)));
-  EXPECT_EQ(count(script, "\n  table_move("), n - 1);
+  EXPECT_EQ(count(script, "\n  a = [0, "), 1u);                    // the start's row
+  EXPECT_EQ(count(script, "\n  a = seg(a, ["), n - 1);             // a row per later sample
+  EXPECT_EQ(count(script, "\n    table_move(d[1], d[0])\n"), 1u);  // in seg(), once per row
+  EXPECT_EQ(cli::readProgram(script, ProgramFormat::kUrscript, "p").trajectory.samples.size(),
+            static_cast<std::size_t>(std::round(tr.duration() / 0.008)) + 1);
   EXPECT_EQ(count(script, "\n  table_start("), 1u);
   EXPECT_EQ(count(script, "\n  set_tcp(p["), 1u);
   EXPECT_EQ(count(script, "\n  stopj("), 1u);
@@ -491,8 +493,33 @@ TEST_F(Programs, UrscriptRunsWhatItDefinesWithCurrentFunctionNames) {
   EXPECT_FALSE(back.trajectory.samples.empty());
 }
 
-// URScript: movej to the first sample, then one servoj per controller period on the
-// joint-linear path between the samples, in radians, ending at the last sample within a period.
+// URScript for a scan as long as the automatic demo's (2 800 samples over 448 s): within the
+// size a controller loads, and read back it equals the plan at every planned sample to 0.01°.
+TEST_F(Programs, UrscriptOfADemoLongScanFitsAndReadsBackToThePlan) {
+  std::mt19937 rng(21);
+  Trajectory tr = randomTrajectory(viper_, rng, 2800);
+  for (TrajectorySample& s : tr.samples) s.t *= 1.6;
+  ProgramOptions options;
+  options.trigger.output = 1;
+  const std::string text =
+      cli::writeProgram(tr, viper_, ProgramFormat::kUrscript, options).files[0].second;
+  EXPECT_LE(text.size(), cli::kUrscriptMaxBytes);
+  EXPECT_TRUE(text.ends_with("\nend\nscan()\n"));
+  const cli::ProgramReading back = cli::readProgram(text, ProgramFormat::kUrscript, "scan.script");
+  const Trajectory at = cli::atStepTimes(back);
+  ASSERT_EQ(at.samples.size(), tr.samples.size());
+  double worst = 0.0;
+  for (std::size_t k = 0; k < tr.samples.size(); ++k) {
+    EXPECT_NEAR(at.samples[k].t, tr.samples[k].t, 1e-6) << k;
+    worst = std::max(worst, (at.samples[k].q - tr.samples[k].q).cwiseAbs().maxCoeff());
+    worst = std::max(worst, std::abs(at.samples[k].theta - tr.samples[k].theta));
+  }
+  EXPECT_LT(worst, deg(0.01));
+}
+
+// URScript: movej to the first sample, then one data row per sample, which seg() plays as one
+// servoj per controller period on the joint-linear path between the samples, in radians, ending
+// at the last sample within a period.
 TEST_F(Programs, UrscriptServoStepsFollowThePlannedPath) {
   std::mt19937 rng(6);
   const Trajectory tr = randomTrajectory(viper_, rng, 60);
@@ -503,11 +530,11 @@ TEST_F(Programs, UrscriptServoStepsFollowThePlannedPath) {
         cli::writeProgram(tr, viper_, ProgramFormat::kUrscript, options).files[0].second;
     const std::size_t steps =
         static_cast<std::size_t>(std::ceil((tr.duration() - tr.samples[0].t) / period - 1e-9));
-    EXPECT_EQ(count(text, "\n  servo(["), steps) << period;
+    EXPECT_EQ(count(text, "\n  a = seg(a, ["), tr.samples.size() - 1) << period;
     EXPECT_EQ(count(text, "\n  movej(["), 1u);
     std::ostringstream t;
     t << std::fixed << std::setprecision(4) << period;
-    EXPECT_EQ(count(text, "servoj(q, t=" + t.str() + ","), 1u);
+    EXPECT_EQ(count(text, "], t=" + t.str() + ", lookahead_time=0.03, gain=300)"), 2u);
     const cli::ProgramReading back =
         cli::readProgram(text, ProgramFormat::kUrscript, "scan.script");
     ASSERT_EQ(back.trajectory.samples.size(), steps + 1);
@@ -712,16 +739,14 @@ TEST_F(Programs, EmptyOrBackwardsTrajectoryIsAnInputError) {
       EXPECT_NE(std::string(e.what()).find("sample 2"), std::string::npos) << e.what();
     }
   }
-  // URScript writes a line per servo step: a day-long trajectory at 1 ms is refused, not written.
-  Trajectory long_run = smallTrajectory();
-  long_run.samples.back().t = 86400.0;
-  ProgramOptions fine;
-  fine.servo_period = 0.001;
+  // URScript over the size a controller loads is refused, naming the limit, not written.
+  std::mt19937 rng(3);
   try {
-    cli::writeProgram(long_run, viper_, ProgramFormat::kUrscript, fine);
+    cli::writeProgram(randomTrajectory(viper_, rng, 9000), viper_, ProgramFormat::kUrscript, {});
     ADD_FAILURE() << "no error";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("servo steps"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("expected at most 1000000 bytes"), std::string::npos)
+        << e.what();
   }
   ProgramOptions bad;
   bad.approach_speed_percent = 0.0;
@@ -901,8 +926,14 @@ TEST(ProgramReaders, RefuseWhatTheyDoNotModel) {
       {ProgramFormat::kRapid, replaceFirst(mod, "    scan;\n", "    other;\n"),
        "expected the call of a procedure of this module"},
       {ProgramFormat::kUrscript,
-       replaceFirst(script, "    servoj(q,", "    sleep(0.1)\n    servoj(q,"),
-       "expected servo(q) to hold one 'servoj"},
+       replaceFirst(script, "      i = i + 1\n", "      sleep(0.1)\n      i = i + 1\n"),
+       "seg() function: 'sleep(0.1)' where scanplan writes 'i = i + 1'"},
+      {ProgramFormat::kUrscript, replaceFirst(script, "i * 0.0500 <=", "i * 0.0500 <"),
+       "the reader models only the seg() function scanplan writes"},
+      {ProgramFormat::kUrscript, replaceFirst(script, "  a = seg(a, [", "  a = seg(a, [1, "),
+       "the data row: 11 values: expected 10"},
+      {ProgramFormat::kUrscript, replaceFirst(script, "  stopj(2.0)\n", "  a = [0, 1]\n"),
+       "after the last step"},
       {ProgramFormat::kUrscript, replaceFirst(script, "\nscan()\n", "\n"),
        "defined but never run: expected a line 'scan()' after its end"},
       {ProgramFormat::kUrscript, script + "scan()\n", "expected only 'scan()' after"},
@@ -920,10 +951,10 @@ TEST(ProgramReaders, RefuseWhatTheyDoNotModel) {
       EXPECT_EQ(std::string(e.what()).rfind("p:", 0), 0u) << e.what();
     }
   }
-  // A servo path cut short: the last servo step before the last step comment's time.
+  // A program without its last step: the motion would end short of the last sample.
   std::string cut = script;
-  const auto last = cut.rfind("\n  servo([");
-  cut.erase(last, cut.find('\n', last + 1) - last);
+  const auto last = cut.find("\n  if a[0] * ");
+  cut.erase(last, cut.find("  stopj") - last - 1);
   EXPECT_THROW(cli::readProgram(cut, ProgramFormat::kUrscript, "p"), InputError);
 }
 

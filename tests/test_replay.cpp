@@ -2,7 +2,7 @@
 // trajectory.csv through the robot's own FK and the table model), its cloud is the plan's, and
 // — in headless Chromium (Debian's chromium, playwright-core from web/node_modules; skipped
 // without them) — it loads without errors, draws a non-blank cell that changes as the slider
-// moves, and plays.
+// moves, colours the part as the scan covers it, plays, and shows the closest approach.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -176,6 +176,12 @@ TEST_F(Replay, ChromiumDrawsTheCellMovesWithTheSliderAndPlays) {
   EXPECT_NE(shots[1]["hash"], shots[2]["hash"]);
   EXPECT_NE(shots[0]["label"], shots[2]["label"]);
   EXPECT_GT(result["after"].get<int>(), result["before"].get<int>()) << "Play advances";
+  // The part's coverage grows with time: fewer triangles coloured as covered at the first frame
+  // than at the last, and some at the last.
+  EXPECT_LT(shots[0]["coloured"].get<int>(), shots[2]["coloured"].get<int>()) << shots.dump();
+  EXPECT_GT(shots[2]["coloured"].get<int>(), 0) << shots.dump();
+  // "closest approach" jumps to one and says so in red.
+  EXPECT_FALSE(result["closest"]["note"].get<std::string>().empty()) << result["closest"].dump();
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <string_view>
 #include <vector>
 
+#include <fmt/format.h>
 #include <Eigen/Geometry>
 
 #include "cli/io/json.h"
@@ -117,6 +118,7 @@ void appendBody(std::string& out, const pipeline::ReplayBody& b) {
     for (const auto& rgb : b.colours) c.insert(c.end(), rgb.begin(), rgb.end());
     j.base64("colours", c);
   }
+  if (!b.covered_t.empty()) j.base64("covered_t", b.covered_t);
 }
 
 void appendFrames(std::string& out, const pipeline::ReplayScene& s) {
@@ -158,15 +160,15 @@ std::vector<float> flat(const std::vector<Eigen::Vector3f>& points) {
   return out;
 }
 
-// The certificate's classes: name and colour, in CoverageClass order.
+// The certificate's classes: key, words and colour (as certificate.png), in CoverageClass order.
 Json coverageClasses() {
-  const std::array<const char*, pipeline::kCoverageClasses> colours = {
-      "#1f5fbf", "#e6194b", "#911eb4", "#f58231", "#1cb5c9", "#222222"};
   Json classes = Json::array();
   for (std::size_t c = 0; c < pipeline::kCoverageClasses; ++c) {
-    classes.push_back(
-        {{"name", pipeline::coverageClassName(static_cast<pipeline::CoverageClass>(c))},
-         {"colour", colours[c]}});
+    const auto cls = static_cast<pipeline::CoverageClass>(c);
+    const auto rgb = pipeline::coverageClassColour(cls);
+    classes.push_back({{"name", pipeline::coverageClassName(cls)},
+                       {"words", pipeline::coverageClassWords(cls)},
+                       {"colour", fmt::format("#{:02x}{:02x}{:02x}", rgb[0], rgb[1], rgb[2])}});
   }
   return classes;
 }
@@ -184,9 +186,6 @@ void appendScene(std::string& out,
     closest.push_back({{"a", c.a}, {"b", c.b}, {"t", c.t}, {"distance", c.distance}});
   }
   const Eigen::AlignedBox3d box = bounds(s);
-  const Eigen::Vector3d look_at = box.center();
-  const Eigen::Vector3d eye =
-      look_at + 0.42 * box.diagonal().norm() * Eigen::Vector3d(1.2, -1.9, 1.0);
   std::vector<double> X_RP(s.X_RP.matrix().data(), s.X_RP.matrix().data() + 16);
   ObjectWriter j(out);
   j.value("title", title);
@@ -204,10 +203,9 @@ void appendScene(std::string& out,
   j.base64("cloud", flat(s.cloud));
   j.base64("cloud_t", s.cloud_t);
   j.value("cloud_total", s.cloud_total);
+  j.value("density_top", s.density_top_per_mm2);
   j.value("classes", classes);
   j.value("closest", closest);
-  j.value("look_at", {look_at.x(), look_at.y(), look_at.z()});
-  j.value("eye", {eye.x(), eye.y(), eye.z()});
   j.value("floor", box.min().z());
   if (!s.uncovered.empty()) {
     j.base64("uncovered", flat(s.uncovered));
@@ -243,29 +241,55 @@ const char* kStyle = R"(
   #view { position: absolute; inset: 0 0 64px 0; }
   #bar { position: absolute; left: 0; right: 0; bottom: 0; height: 64px; padding: 6px 12px;
          box-sizing: border-box; background: #fff; border-top: 1px solid #ccc; }
-  #bar input[type=range] { width: 55%; vertical-align: middle; }
+  #track { position: relative; display: inline-block; width: 55%; vertical-align: middle; }
+  #track input { width: 100%; margin: 0; vertical-align: middle; }
+  #ticks i { position: absolute; top: -3px; bottom: -3px; width: 3px; margin-left: -1px;
+             background: #d00; pointer-events: none; }
   #legend { position: absolute; top: 8px; left: 8px; background: rgba(255,255,255,0.9);
             padding: 6px 10px; border: 1px solid #ccc; font-size: 12px; }
+  #legend summary { cursor: pointer; }
   #legend i { display: inline-block; width: 12px; height: 12px; margin-right: 5px;
               vertical-align: -2px; }
-  #note { color: #b00; font-weight: bold; }
+  #scale { position: relative; display: inline-block; width: 160px; height: 27px;
+           margin: 3px 12px 0 6px; vertical-align: top; }
+  #ramp { height: 11px; border: 1px solid #777; box-sizing: border-box;
+          background: linear-gradient(90deg, #440154, #3b528b, #21918c, #5ec962, #fde725); }
+  #scale span { position: absolute; top: 13px; transform: translateX(-50%); font-size: 11px;
+                white-space: nowrap; }
+  #scale span::before { content: ""; position: absolute; left: 50%; top: -4px; height: 4px;
+                        border-left: 1px solid #333; }
+  #legend label { white-space: nowrap; }
+  #legend input { margin: 0 2px 0 6px; vertical-align: -2px; }
+  #note { color: #c00; font-weight: bold; font-size: 16px; }
 )";
 
+// The legend: what each colour means, in words for someone who has never seen scanplan; a click
+// on the title folds it. The viewer writes the density scale's numbers (#scale-mid, #scale-top)
+// from the scene's data.
 std::string legend(const std::string& title, const Json& classes, bool uncovered) {
-  std::string s = "<div id=\"legend\"><b>" + htmlText(title) + "</b><br>";
-  s +=
-      "<i style=\"background:linear-gradient(90deg,#440154,#21918c,#fde725)\"></i>part: points/mm² "
-      "(covered triangles)<br><i style=\"background:#dc4628\"></i>part: not covered<br>";
-  s += "<i style=\"background:#1f5fbf\"></i>cloud, growing with time<br>";
+  std::string s =
+      "<div id=\"legend\"><details open><summary><b>" + htmlText(title) + "</b></summary>";
+  s += "<i style=\"background:#f39c34\"></i>robot arm <i style=\"background:#333a44\"></i>laser "
+       "scanner <i style=\"background:#9a9a9a\"></i>rotary table<br>";
+  s += "part surface, once scanned: its point density<br>";
+  s += "<div id=\"scale\"><div id=\"ramp\"></div><span style=\"left:0\">0</span>"
+       "<span id=\"scale-mid\" style=\"left:50%\"></span>"
+       "<span id=\"scale-top\" style=\"left:100%\"></span></div> points/mm²<br>";
+  s += "<i style=\"background:#d0d0d0\"></i>not yet scanned<br>";
+  s += "<i style=\"background:#dc4628\"></i>never covered (shown at the end)<br>";
+  s += "<i style=\"background:#1f5fbf\"></i>latest scanned points <label><input "
+       "type=\"checkbox\" id=\"all-points\">all</label><br>";
   s += "<i style=\"background:#ff2020\"></i>laser fan (while scanning)<br>";
+  s += "<i style=\"background:#ff0000;border-radius:6px\"></i>glowing red, red tick on the time "
+       "bar: closest approach<br>";
   if (uncovered) {
-    s += "certificate, uncovered samples:<br>";
+    s += "at the end, uncovered area samples, by reason:<br>";
     for (std::size_t c = 1; c < classes.size(); ++c) {
       s += "<i style=\"background:" + classes[c]["colour"].get<std::string>() + "\"></i>" +
-           classes[c]["name"].get<std::string>() + "<br>";
+           htmlText(classes[c]["words"].get<std::string>()) + "<br>";
     }
   }
-  return s + "drag: turn · wheel: zoom · right-drag: pan</div>\n";
+  return s + "drag: turn · wheel: zoom · right-drag: pan</details></div>\n";
 }
 
 }  // namespace
@@ -310,8 +334,9 @@ std::optional<std::string> replayHtml(const pipeline::ReplayScene& scene,
   html += "</style>\n</head>\n<body>\n<div id=\"view\"></div>\n";
   html += legend(title, classes, !scene.uncovered.empty());
   html +=
-      "<div id=\"bar\"><button id=\"play\">▶ Play</button> <input id=\"time\" type=\"range\" "
-      "min=\"0\" max=\"0\" value=\"0\" step=\"1\"> speed <select id=\"speed\"><option "
+      "<div id=\"bar\"><button id=\"play\">▶ Play</button> <span id=\"track\"><input "
+      "id=\"time\" type=\"range\" min=\"0\" max=\"0\" value=\"0\" step=\"1\"><span "
+      "id=\"ticks\"></span></span> speed <select id=\"speed\"><option "
       "value=\"1\">1×</option><option value=\"10\" selected>10×</option><option "
       "value=\"50\">50×</option></select> <button id=\"closest\">closest approach</button><br>"
       "<span id=\"label\"></span> <span id=\"note\"></span></div>\n";

@@ -165,19 +165,14 @@ void writeSimulationOutputs(const std::filesystem::path& dir,
 
 namespace {
 
-// One colour per certificate class (Okabe–Ito, colour-blind safe), in CoverageClass order.
-constexpr std::array<Rgb, pipeline::kCoverageClasses> kClassColours{{
-    {0, 158, 115},    // covered: green
-    {230, 159, 0},    // scannable, not covered: orange
-    {150, 150, 150},  // faces the table: grey
-    {0, 114, 178},    // occluded: blue
-    {204, 121, 167},  // no standoff fits the housing: purple
-    {213, 94, 0},     // out of reach: vermilion
-}};
+Rgb classColour(std::size_t c) {
+  const auto rgb = pipeline::coverageClassColour(static_cast<pipeline::CoverageClass>(c));
+  return {rgb[0], rgb[1], rgb[2]};
+}
 
-constexpr std::array<const char*, pipeline::kCoverageClasses> kClassLabels{
-    "covered",  "scannable, not covered",       "faces the table",
-    "occluded", "no standoff fits the housing", "out of the arm's reach"};
+const char* classWords(std::size_t c) {
+  return pipeline::coverageClassWords(static_cast<pipeline::CoverageClass>(c));
+}
 
 void writeUncoveredPly(const std::filesystem::path& file,
                        const scanner::AreaSampling& sampling,
@@ -224,13 +219,13 @@ void writeCertificateOutputs(const std::filesystem::path& dir,
   r.triangles = part.triangles;
   for (std::size_t i = 0; i < sampling.samples.size(); ++i) {
     r.dots.push_back(sampling.samples[i].p + lift * sampling.samples[i].n);
-    r.dot_colours.push_back(kClassColours[static_cast<std::size_t>(certificate.classes[i])]);
+    r.dot_colours.push_back(classColour(static_cast<std::size_t>(certificate.classes[i])));
   }
   for (const NamedView& view : partViews()) grid.captions.push_back(view.name);
   row.views = renderScenes(r, partViewRotations());
   for (std::size_t c = 0; c < pipeline::kCoverageClasses; ++c)
-    grid.legend.push_back({kClassColours[c], fmt::format("{} {:.1f}%", kClassLabels[c],
-                                                         100.0 * certificate.fraction[c])});
+    grid.legend.push_back({classColour(c), fmt::format("{} {:.1f}%", classWords(c),
+                                                       100.0 * certificate.fraction[c])});
   // Why the area is not covered: the classes other than covered, as shares of what is not.
   double uncovered = 0.0;
   for (std::size_t c = 1; c < pipeline::kCoverageClasses; ++c) uncovered += certificate.fraction[c];
@@ -240,7 +235,7 @@ void writeCertificateOutputs(const std::filesystem::path& dir,
     for (std::size_t c = 1; c < pipeline::kCoverageClasses; ++c) {
       const double share = certificate.fraction[c] / uncovered;
       bar.segments.push_back(
-          {kClassColours[c], share, fmt::format("{} {:.0f}%", kClassLabels[c], 100.0 * share)});
+          {classColour(c), share, fmt::format("{} {:.0f}%", classWords(c), 100.0 * share)});
     }
   }
   writePng(dir / "certificate.png", drawViewGrid(grid), settings.views);

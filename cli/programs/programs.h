@@ -104,20 +104,28 @@ struct ProgramFiles {
 ///   SetDO after the MoveAbsJ that reaches the pass's sample, which RAPID runs as the arm
 ///   enters that point's z0 zone.
 /// - kUrscript: <name>.script, `def <name>(): … end` and then `<name>()`, which runs it;
-///   set_tcp/set_target_payload, movej to the start, then servoj every options.servo_period
-///   along the joint-linear path between samples (continuous motion); set_standard_digital_out
-///   between them at the servo step of the pass's sample; the table through
+///   set_tcp/set_target_payload, movej to the start, then one data row per planned sample,
+///   `a = seg(a, [t, table, j1..j6, scan, out])`, which servoj's every options.servo_period
+///   along the joint-linear path from the previous row (continuous motion) and switches
+///   set_standard_digital_out where the row's output level changes; the table through
 ///   table_start()/table_move(), which the integrator implements (UR has no external axis).
+///   At most kUrscriptMaxBytes: a longer program is refused (InputError).
 ///
 /// Joint values are the robot file's q, which the bundled robots define as their controllers'
 /// own joint convention. Joint limits and collisions are not checked here: validate first.
 /// Throws InputError for an empty trajectory, non-finite values, times not strictly increasing,
 /// an approach speed outside (0, 100], a trigger output outside 0..4096, a non-finite tool or
-/// payload, a servo period outside [0.001, 0.1] s, or (endless table) a step of 180° or more.
+/// payload, a servo period outside [0.001, 0.1] s, (endless table) a step of 180° or more, or a
+/// URScript program over kUrscriptMaxBytes.
 ProgramFiles writeProgram(const kinematics::Trajectory& trajectory,
                           const kinematics::RobotModel& robot,
                           ProgramFormat format,
                           const ProgramOptions& options = {});
+
+/// URScript: the largest program written, bytes. UR controllers have failed to load scripts of
+/// several megabytes (an 18 MB one crashed a UR5 on import); at about 130 bytes per planned
+/// sample this holds some 7 500 samples, a 25-minute scan at 0.2 s.
+inline constexpr std::size_t kUrscriptMaxBytes = 1'000'000;
 
 /// KRL: the most SPTP segments one PTP_SPLINE block holds.
 inline constexpr std::size_t kKrlMaxSegments = 1000;
@@ -132,16 +140,17 @@ struct TriggerSwitch {
 /// A program read back: the motion as the controller would run it, timed by the language's own
 /// timing model (V+ DURATION, KRL TIME_BLOCK, RAPID \T, URScript servoj t), from the first
 /// sample's time in its step comment (0 without one). Table angles are unwrapped (each step the
-/// shorter way: what an endless axis does); the scanning flag comes from the step comments and
-/// holds until the next one (URScript's servo steps between samples). f is NaN and X_PS the
-/// identity (unknown).
+/// shorter way: what an endless axis does); the scanning flag comes from the step comments (URScript:
+/// its data rows) and holds until the next one (URScript's servo steps between samples). f is NaN
+/// and X_PS the identity (unknown).
 struct ProgramReading {
   kinematics::Trajectory trajectory;
   std::vector<TriggerSwitch> triggers;
   std::optional<Eigen::Isometry3d> tool;  ///< the tool the program sets (flange frame, m)
   double payload_kg = 0.0;                ///< 0: none set
   Eigen::Vector3d payload_cog = Eigen::Vector3d::Zero();  ///< m, flange frame
-  /// The step comments' times: the planned samples (URScript's servo steps lie between them).
+  /// The planned samples' times: the step comments' (URScript: its data rows', between which its
+  /// servo steps lie).
   std::vector<double> step_times;
   bool servo_steps = false;  ///< the samples are servo steps between the step times (URScript)
 };
@@ -154,8 +163,8 @@ kinematics::Trajectory atStepTimes(const ProgramReading& reading);
 
 /// Reads a program written by writeProgram(format) (or edited by hand in its form; kCsv: the
 /// trajectory CSV). A reader refuses what it does not model (a V+ MOVE without DURATION or with
-/// DURATION ALWAYS, a RAPID MoveAbsJ without \\T, calls other than main()'s, anything in
-/// URScript's servo() but its servoj), so that what it returns is what the controller runs.
+/// DURATION ALWAYS, a RAPID MoveAbsJ without \\T, calls other than main()'s, a URScript seg()
+/// other than the one written), so that what it returns is what the controller runs.
 /// Errors (InputError) name `source` and the line: an instruction the reader does not know,
 /// malformed values, a move without its step comment (V+: the table angle is only there),
 /// times not strictly increasing, no moves.

@@ -599,8 +599,9 @@ class RapidReader {
 };
 
 // ---------------------------------------------------------------------------------------------
-// URScript: movej to the start, then one servo step per servoj period; the table follows its
-// table_move() targets linearly.
+// URScript: movej to the start, then data rows `a = seg(a, [...])`, each played by seg() as
+// servo steps every period along the joint-linear path from the previous row; the table follows
+// its table_move() targets linearly.
 class UrscriptReader {
  public:
   UrscriptReader(const std::string& text, const std::string& source) : r_(text, source) {}
@@ -622,6 +623,8 @@ class UrscriptReader {
         helper(line);
       } else if (line == "end") {
         ended_ = true;
+      } else if (line.rfind("if ", 0) == 0) {
+        lastStep(line);
       } else {
         instruction(line);
       }
@@ -629,18 +632,18 @@ class UrscriptReader {
     if (!in_program_) r_.in.fail("no 'def name():' line: expected a URScript program");
     if (!ended_) r_.in.fail("the program has no end");
     callAfterEnd();
-    const auto& steps = r_.reading.step_times;
-    if (!steps.empty() && !r_.reading.trajectory.samples.empty() &&
-        r_.reading.trajectory.samples.back().t < steps.back() - 1e-6) {
-      r_.in.fail(fmt::format("the servo steps end at t = {} s, before the last step comment's {} s",
-                             fixed(r_.reading.trajectory.samples.back().t, kDecimals),
-                             fixed(steps.back(), kDecimals)));
-    }
+    if (!last_step_)
+      r_.in.fail("no step to the last sample ('" + firstLine(urscriptLastStep(1)) +
+                 "' after the last row)");
     r_.reading.servo_steps = true;
     return r_.finish();
   }
 
  private:
+  static std::string firstLine(const std::string& text) {
+    return trim(text.substr(0, text.find('\n')));
+  }
+
   // After the program's end: the one line that runs it, `name()`, and nothing else.
   void callAfterEnd() {
     std::string line;
@@ -657,49 +660,90 @@ class UrscriptReader {
                  "()' after its end");
   }
 
-  // A step comment: the scanning flag from here on (and the start's time).
+  // The start's step comment: its time.
   void step(const std::string& body) {
     PendingStep p;
     if (!readStepComment(r_.in, body, p.t, p.table_deg, p.scanning)) return;
-    scanning_ = p.scanning;
-    if (!start_t_) start_t_ = p.t;
-    r_.reading.step_times.push_back(p.t);
+    if (start_t_) r_.in.fail("a second step comment: the data rows time the motion");
+    start_t_ = p.t;
+    start_scanning_ = p.scanning;
   }
 
-  // A helper function: servo(q)'s servoj period is read; the others' bodies are the cell's.
-  void helper(const std::string& first) {
-    static const std::regex kServoj("servoj\\(q,\\s*t\\s*=\\s*(" + kNum + ").*\\)");
-    const bool servo = first.rfind("def servo(", 0) == 0;
+  // The lines up to the `end` that closes `first` (nested blocks counted), trimmed.
+  std::vector<std::string> block(const std::string& first) {
+    std::vector<std::string> lines{first};
     std::string line;
     for (int depth = 1; depth > 0;) {
       if (!r_.in.next(line)) r_.in.fail("'" + clipForMessage(first) + "' has no end");
-      if (line.rfind("def ", 0) == 0) ++depth;
-      if (line == "end") {
-        --depth;
-        continue;
+      if (line.empty() || line[0] == '#') continue;
+      if (line.rfind("def ", 0) == 0 || line.rfind("if ", 0) == 0 || line.rfind("while ", 0) == 0) {
+        ++depth;
       }
-      if (!servo) continue;  // the table functions are the cell's
-      std::smatch m;
-      if (period_ || !std::regex_match(line, m, kServoj)) {
-        r_.in.fail("'" + clipForMessage(line) +
-                   "': expected servo(q) to hold one 'servoj(q, t=<s>, ...)' and nothing else");
-      }
-      period_ = std::strtod(m[1].str().c_str(), nullptr);
-      if (!(*period_ > 0.0) || !std::isfinite(*period_)) {
-        r_.in.fail("servoj: t must be a positive time");
-      }
+      if (line == "end") --depth;
+      lines.push_back(line);
     }
+    return lines;
+  }
+
+  // `expected` (as written) against the block read, line by line.
+  void same(const std::vector<std::string>& read,
+            const std::string& expected,
+            int first_line,
+            const std::string& what) {
+    std::vector<std::string> want;
+    std::istringstream in(expected);
+    for (std::string line; std::getline(in, line);) want.push_back(trim(line));
+    for (std::size_t i = 0; i < std::max(read.size(), want.size()); ++i) {
+      if (i < read.size() && i < want.size() && read[i] == want[i]) continue;
+      r_.in.failAt(first_line + static_cast<int>(i),
+                   fmt::format("{}: '{}' where scanplan writes '{}' (the reader models only the {} "
+                               "scanplan writes)",
+                               what, i < read.size() ? clipForMessage(read[i]) : "(nothing)",
+                               i < want.size() ? want[i] : "end", what));
+    }
+  }
+
+  // A helper function: seg() must be the one written (its period and output read from it); the
+  // table functions' bodies are the cell's.
+  void helper(const std::string& first) {
+    const int at = r_.in.lineNumber();
+    const std::vector<std::string> lines = block(first);
+    if (first.rfind("def seg(", 0) != 0) return;
+    static const std::regex kPeriod("servoj\\(.*\\], t=(" + kNum + "),.*");
+    static const std::regex kOut(R"(set_standard_digital_out\(([0-9]{1,2}), .*)");
+    std::smatch m;
+    for (const std::string& line : lines) {
+      if (std::regex_match(line, m, kPeriod)) period_ = std::strtod(m[1].str().c_str(), nullptr);
+      if (std::regex_match(line, m, kOut)) output_ = std::stoi(m[1].str());
+    }
+    if (!period_ || !(*period_ >= 0.001 && *period_ <= 0.1))
+      r_.in.failAt(at, "seg(): expected servoj(..., t=<period in 0.001 ... 0.1 s>, ...)");
+    same(lines, urscriptStepFunction(*period_, output_), at, "seg() function");
+  }
+
+  // The step after the last row: one more servo step to the last sample unless one reached it.
+  void lastStep(const std::string& first) {
+    const int at = r_.in.lineNumber();
+    if (!period_) r_.in.fail("'" + clipForMessage(first) + "' before seg() is defined");
+    same(block(first), urscriptLastStep(*period_), at, "last step");
+    if (!row_) r_.in.fail("the last step before any data row");
+    if (steps_ * *period_ < (*row_)[0] - 1e-6) servoStep(steps_ + 1, *row_, *row_);
+    last_step_ = true;
   }
 
   void instruction(const std::string& s) {
     static const std::regex kCall(R"(([a-z_]+)\((.*)\))");
+    static const std::regex kRow(R"(a = seg\(a, \[(.*)\]\))");
+    static const std::regex kState(R"(a = \[(.*)\])");
     std::smatch m;
+    if (last_step_ && s != "stopj(2.0)" && s.rfind("set_standard_digital_out(", 0) != 0)
+      r_.in.fail("'" + clipForMessage(s) + "' after the last step: expected stopj and the output");
+    if (std::regex_match(s, m, kRow)) return row(m[1].str());
+    if (std::regex_match(s, m, kState)) return state(m[1].str());
     if (!std::regex_match(s, m, kCall))
-      r_.in.fail("'" + clipForMessage(s) + "': expected a function call");
+      r_.in.fail("'" + clipForMessage(s) + "': expected a function call or a data row");
     const std::string f = m[1].str(), args = m[2].str();
-    if (f == "servo") {
-      servo(args);
-    } else if (f == "movej") {
+    if (f == "movej") {
       movej(args);
     } else if (f == "table_start" || f == "table_move") {
       table(f, args);
@@ -711,9 +755,9 @@ class UrscriptReader {
       payload(f, args);
     } else if (f != "stopj") {
       r_.in.fail("'" + clipForMessage(s) +
-                 "': not a call this reader knows (servo, movej, table_start, table_move, "
-                 "set_standard_digital_out, set_tcp, set_target_payload, stopj; or the deprecated "
-                 "set_digital_out, set_payload)");
+                 "': not a call this reader knows (movej, table_start, table_move, "
+                 "set_standard_digital_out, set_tcp, set_target_payload, stopj, data rows "
+                 "'a = seg(a, [...])'; or the deprecated set_digital_out, set_payload)");
     }
   }
 
@@ -725,24 +769,57 @@ class UrscriptReader {
     return numberList(r_.in, args.substr(open + 1, close - open - 1), n, what);
   }
 
-  void add(double t, const std::vector<double>& q_rad) {
+  void add(double t, const std::vector<double>& q_rad, bool scanning) {
     std::vector<double> q(q_rad.size());
     for (std::size_t j = 0; j < q.size(); ++j) q[j] = q_rad[j] * kRadToDeg;
-    appendSample(r_.in, r_.reading.trajectory, t, q, tableAt(t), scanning_);
+    appendSample(r_.in, r_.reading.trajectory, t, q, tableAt(t), scanning);
     now_ = t;
   }
 
   void movej(const std::string& args) {
     if (!r_.reading.trajectory.samples.empty())
-      r_.in.fail("movej after the start: expected servo steps");
+      r_.in.fail("movej after the start: expected data rows");
     now_ = start_t_.value_or(0.0);
-    add(now_, bracketed(args, kNumJoints, "movej joints"));
+    add(now_, bracketed(args, kNumJoints, "movej joints"), start_scanning_);
   }
 
-  void servo(const std::string& args) {
-    if (r_.reading.trajectory.samples.empty()) r_.in.fail("servo before the movej to the start");
-    if (!period_) r_.in.fail("servo() before its definition (def servo(q): servoj(q, t=...))");
-    add(now_ + *period_, bracketed(args, kNumJoints, "servo joints"));
+  // a = [0, row 0]: the state before the first row (no servo step yet, the start sample).
+  void state(const std::string& list) {
+    if (row_) r_.in.fail("a second 'a = [...]': the state is set once, before the rows");
+    const std::vector<double> v = numberList(r_.in, list, kUrscriptRow + 1, "the state a");
+    if (v[0] != 0.0 || v[1] != 0.0) r_.in.fail("the state a: expected [0, 0, ...] (the start)");
+    if (r_.reading.trajectory.samples.empty()) r_.in.fail("the state a before the movej");
+    row_.emplace(v.begin() + 1, v.end());
+    r_.reading.step_times.push_back(start_t_.value_or(0.0));
+  }
+
+  // A data row: seg() as the controller runs it.
+  void row(const std::string& list) {
+    if (!period_) r_.in.fail("a data row before seg() is defined");
+    if (!row_) r_.in.fail("a data row before the state 'a = [0, ...]'");
+    const std::vector<double> d = numberList(r_.in, list, kUrscriptRow, "the data row");
+    const std::vector<double> a = *row_;
+    if (!(d[0] > a[0])) r_.in.fail("the data row's time is not after the previous row's");
+    tableMove(d[1], d[0]);
+    std::size_t i = steps_ + 1;
+    for (; static_cast<double>(i) * *period_ <= d[0] + 1e-6; ++i) servoStep(i, a, d);
+    steps_ = i - 1;
+    if (output_ > 0 && d[9] != a[9]) r_.addSwitch(now_, output_, d[9] == 1.0);
+    r_.reading.step_times.push_back(start_t_.value_or(0.0) + d[0]);
+    row_ = d;
+  }
+
+  // Servo step i: the joints w of the way from row a to row d at i periods from the start.
+  void servoStep(std::size_t i, const std::vector<double>& a, const std::vector<double>& d) {
+    const double tau = static_cast<double>(i) * *period_;
+    const double w = d[0] > a[0] ? (tau - a[0]) / (d[0] - a[0]) : 1.0;
+    std::vector<double> q(kNumJoints);
+    for (int j = 0; j < kNumJoints; ++j) {
+      const auto k = static_cast<std::size_t>(j + 2);
+      q[static_cast<std::size_t>(j)] = a[k] + w * (d[k] - a[k]);
+    }
+    add(start_t_.value_or(0.0) + tau, q, d[8] != 0.0);
+    steps_ = i;
   }
 
   // table_start(deg): the table's angle at the start; table_move(deg, t): at deg t s after the
@@ -755,11 +832,15 @@ class UrscriptReader {
       cursor_ = 0;
       return;
     }
+    tableMove(v[0], v[1]);
+  }
+
+  void tableMove(double deg, double t_from_start) {
     if (timeline_.empty()) r_.in.fail("table_move before table_start");
     const auto& [t_prev, deg_prev] = timeline_.back();
-    const double t = start_t_.value_or(0.0) + v[1];
+    const double t = start_t_.value_or(0.0) + t_from_start;
     if (!(t > t_prev)) r_.in.fail("table_move: its time is not after the previous point's");
-    timeline_.emplace_back(t, deg_prev + std::remainder(v[0] - deg_prev, 360.0));
+    timeline_.emplace_back(t, deg_prev + std::remainder(deg - deg_prev, 360.0));
   }
 
   // The times asked only grow: a cursor walks the points.
@@ -799,10 +880,14 @@ class UrscriptReader {
     r_.reading.payload_cog = Eigen::Vector3d(c[0], c[1], c[2]);
   }
 
+  static constexpr std::size_t kUrscriptRow = 10;  // t, table, j1..j6, scan, out
   ReaderState r_;
   std::string name_;  // the program's, from its def line
-  bool in_program_ = false, ended_ = false, scanning_ = false;
+  bool in_program_ = false, ended_ = false, last_step_ = false, start_scanning_ = false;
   std::optional<double> start_t_, period_;
+  int output_ = 0;                          // the trigger output seg() switches; 0: none
+  std::optional<std::vector<double>> row_;  // the last data row
+  std::size_t steps_ = 0;                   // servo steps so far
   double now_ = 0.0;
   std::vector<std::pair<double, double>> timeline_;  // the table's (t, deg) points so far
   std::size_t cursor_ = 0;

@@ -1,6 +1,8 @@
-// Universal Robots URScript: movej to the start, then servoj at the controller's period; the file
-// defines the program and then calls it. Current function names (set_standard_digital_out,
-// set_target_payload: UR's script manual marks set_digital_out and set_payload deprecated).
+// Universal Robots URScript: the trajectory as data, one row per planned sample, played by a
+// short interpolating function (seg) that sends servoj every controller period along the
+// joint-linear path between the rows. The file defines the program and then calls it. Current
+// function names (set_standard_digital_out, set_target_payload: UR's script manual marks
+// set_digital_out and set_payload deprecated).
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -23,8 +25,6 @@ using kinematics::TrajectorySample;
 // is URScript's default.
 constexpr double kLookahead = 0.03;  // s
 constexpr int kGain = 300;
-// One program line per step (about 90 bytes): 2 M steps, 4.4 h at 8 ms, are 180 MB of script.
-constexpr std::size_t kMaxServoSteps = 2'000'000;
 
 std::string radians(const JointVector& q) {
   std::string s;
@@ -42,16 +42,24 @@ Header urHeader(const ProgramContext& c, double approach_v) {
   Header header(c, "servoj cannot keep the path");
   header.add("Units: joints in radians, lengths in m, table angles in degrees, times in s.");
   header.add("Timing: movej goes to the start at v = " + fixed(approach_v, 3) +
-             " rad/s. Then servo() streams the");
-  header.add(fmt::format("  joint-linear path between the samples every {} s (servoj, t = the",
-                         fixed(o.servo_period, 4)));
-  header.add(fmt::format("  controller period; lookahead_time {}, gain {}): one continuous motion,",
-                         fixed(kLookahead, 2), kGain));
-  header.add("  the last step reaching the last sample within one period of its time.");
+             " rad/s. Then each row a = seg(a, [t, table,");
+  header.add(
+      "  j1 .. j6, scan, out]) is a planned sample: t s from the start, the table in deg, the");
+  header.add(
+      "  joints in rad, scanning (1|0) and the trigger output's level after the sample (1|0).");
+  header.add(
+      fmt::format("  seg() sends servoj every {} s (the controller period; lookahead_time {},",
+                  fixed(o.servo_period, 4), fixed(kLookahead, 2)));
+  header.add(fmt::format(
+      "  gain {}) along the joint-linear path from the previous row: one continuous", kGain));
+  header.add("  motion, the last step reaching the last sample within one period of its time.");
+  header.add("Size: at most 1 MB (UR controllers fail to load multi-megabyte scripts); a");
+  header.add("  longer plan is refused, not cut.");
   header.add("Tool: set_tcp, the scanner's laser frame on the flange (rotation vector).");
   header.add(payloadLines(o, "set_target_payload."));
-  header.add(triggerLines(o, "Each set_standard_digital_out follows the servo step that"));
-  if (o.trigger.output > 0) header.add("  reaches its sample (within one servo period).");
+  header.add(triggerLines(o, "seg() switches it after the servo step that reaches the"));
+  if (o.trigger.output > 0)
+    header.add("  sample whose out column changes it (within one servo period).");
   header.add("Table: URScript has no external axis. table_start() and table_move() below are");
   header.add("  the cell's to implement (socket, Modbus register or digital IO); as written they");
   header.add("  only publish the target on RTDE output float registers 0 (deg) and 1 (s).");
@@ -85,12 +93,63 @@ std::string urSetup(const ProgramContext& c) {
        "    write_output_float_register(0, deg)\n"
        "    write_output_float_register(1, t)\n"
        "  end\n";
-  s += fmt::format("  def servo(q):\n    servoj(q, t={}, lookahead_time={}, gain={})\n  end\n",
-                   fixed(o.servo_period, 4), fixed(kLookahead, 2), kGain);
+  s += urscriptStepFunction(o.servo_period, o.trigger.output);
   return s;
 }
 
+// servoj to q (URScript expressions), at the controller period.
+std::string servojCall(const std::string& q, double period) {
+  return fmt::format("servoj([{}], t={}, lookahead_time={}, gain={})", q, fixed(period, 4),
+                     fixed(kLookahead, 2), kGain);
+}
+
+// One row of the program's data, a planned sample: t from the start, table, joints, scanning,
+// the trigger output's level after it.
+std::string urRow(const ProgramContext& c, std::size_t k, bool level) {
+  const TrajectorySample& s = c.trajectory.samples[k];
+  return fmt::format("{}, {}, {}, {}, {}", fixed(s.t - c.trajectory.samples.front().t, kDecimals),
+                     fixed(c.table_deg[k], kDecimals), radians(s.q), s.scanning ? 1 : 0,
+                     level ? 1 : 0);
+}
+
 }  // namespace
+
+std::string urscriptStepFunction(double period, int output) {
+  std::string q, previous;
+  for (int j = 0; j < kNumJoints; ++j) {
+    q += fmt::format("{}a[{}] + w * (d[{}] - a[{}])", j ? ", " : "", j + 3, j + 2, j + 3);
+  }
+  const std::string p = fixed(period, 4);
+  std::string s =
+      "  def seg(a, d):\n"
+      "    table_move(d[1], d[0])\n"
+      "    i = a[0] + 1\n"
+      "    while i * " +
+      p +
+      " <= d[0] + 0.000001:\n"
+      "      w = (i * " +
+      p +
+      " - a[1]) / (d[0] - a[1])\n"
+      "      " +
+      servojCall(q, period) +
+      "\n"
+      "      i = i + 1\n"
+      "    end\n";
+  if (output > 0) {
+    s += fmt::format(
+        "    if d[9] != a[10]:\n      set_standard_digital_out({}, d[9] == 1)\n    end\n", output);
+  }
+  return s +
+         "    return [i - 1, d[0], d[1], d[2], d[3], d[4], d[5], d[6], d[7], d[8], d[9]]\n"
+         "  end\n";
+}
+
+std::string urscriptLastStep(double period) {
+  std::string q;
+  for (int j = 0; j < kNumJoints; ++j) q += fmt::format("{}a[{}]", j ? ", " : "", j + 3);
+  return "  if a[0] * " + fixed(period, 4) + " < a[1] - 0.000001:\n    " + servojCall(q, period) +
+         "\n  end\n";
+}
 
 std::string urscriptProgram(const ProgramContext& c) {
   const auto& samples = c.trajectory.samples;
@@ -108,38 +167,30 @@ std::string urscriptProgram(const ProgramContext& c) {
   s += "  # " + stepText(samples[0], c.table_deg[0]) + "\n";
   s += "  table_start(" + fixed(c.table_deg[0], kDecimals) + ")\n";
   s += "  movej([" + radians(samples[0].q) + "], a=1.4, v=" + fixed(approach_v, 3) + ")\n";
-  if (c.switches[0] != Switch::kNone) s += setOut(c, levelAfter(c.switches[0], o.trigger));
-  // Servo step i reaches t0 + i·period (the last one: the last sample).
-  const double t0 = samples.front().t, period = o.servo_period;
-  const double count = std::max(0.0, std::ceil((samples.back().t - t0) / period - 1e-9));
-  if (count > static_cast<double>(kMaxServoSteps)) {
-    throw InputError(fmt::format(
-        "URScript program: {:.0f} servo steps of {} s over {} s: expected at most {} (a longer "
-        "outputs.servo_period_s, or the scan in parts)",
-        count, fixed(period, 4), fixed(samples.back().t - t0, 1), kMaxServoSteps));
+  bool level = levelAfter(Switch::kOff, o.trigger) && o.trigger.output > 0;
+  if (c.switches[0] != Switch::kNone) {
+    level = levelAfter(c.switches[0], o.trigger);
+    s += setOut(c, level);
   }
-  const auto steps = static_cast<std::size_t>(count);
-  std::size_t i = 0;  // servo steps written
+  s += "  a = [0, " + urRow(c, 0, level) + "]\n";  // the state: no servo step yet, row 0
   for (std::size_t k = 1; k < samples.size(); ++k) {
     if (c.step[k].over_speed) s += "  # " + warningText(k, c.step[k]) + "\n";
-    s += "  # " + stepText(samples[k], c.table_deg[k]) + "\n";
-    s += "  table_move(" + fixed(c.table_deg[k], kDecimals) + ", " +
-         fixed(samples[k].t - t0, kDecimals) + ")\n";
-    const TrajectorySample& a = samples[k - 1];
-    const TrajectorySample& b = samples[k];
-    while (i < steps &&
-           (k + 1 == samples.size() || t0 + static_cast<double>(i + 1) * period <= b.t + 1e-12)) {
-      ++i;
-      const double tau = std::min(t0 + static_cast<double>(i) * period, b.t);
-      const double w = std::clamp((tau - a.t) / (b.t - a.t), 0.0, 1.0);
-      s += "  servo([" + radians(a.q + w * (b.q - a.q)) + "])\n";
-    }
-    if (c.switches[k] != Switch::kNone) s += setOut(c, levelAfter(c.switches[k], o.trigger));
+    if (c.switches[k] != Switch::kNone) level = levelAfter(c.switches[k], o.trigger);
+    s += "  a = seg(a, [" + urRow(c, k, level) + "])\n";
   }
+  s += urscriptLastStep(o.servo_period);
   s += "  stopj(2.0)\n";
   if (o.trigger.output > 0) s += setOut(c, levelAfter(Switch::kOff, o.trigger));
   s += "end\n";
   s += c.name + "()\n";  // the program runs what it defines
+  if (s.size() > kUrscriptMaxBytes) {
+    throw InputError(fmt::format(
+        "URScript program: {} bytes for {} samples over {} s: expected at most {} bytes (UR "
+        "controllers fail to load multi-megabyte scripts): plan with a longer scan.dt_s, or in "
+        "parts (scan.auto.max_program_s)",
+        s.size(), samples.size(), fixed(samples.back().t - samples.front().t, 1),
+        kUrscriptMaxBytes));
+  }
   return s;
 }
 

@@ -1,8 +1,9 @@
 // Drives OUT/replay.html in headless Chromium (playwright-core from web/node_modules, Debian's
 // chromium): waits for the viewer, moves the time slider with the keyboard as a user would,
-// takes screenshots, presses Play, and prints one JSON line: per screenshot the slider label and
-// the canvas's pixel statistics (mean, spread, a hash), the frame before and after playing, and
-// any page errors. test_replay checks them.
+// takes screenshots, presses Play, presses "closest approach", and prints one JSON line: per
+// screenshot the slider label, the number of part triangles coloured as covered and the canvas's
+// pixel statistics (mean, spread, a hash), the frame before and after playing, the frame and red
+// note the closest approach shows, and any page errors. test_replay checks them.
 //   node replay_test.mjs REPLAY.html OUTDIR
 import { createRequire } from 'node:module';
 
@@ -43,7 +44,9 @@ const canvasStats = () => page.evaluate(() => {
 const shot = async (name) => {
   await page.screenshot({ path: `${out}/${name}.png` });
   return { name, label: await page.textContent('#label'),
-    frame: await page.evaluate(() => window.scanplanReplay.frame), ...(await canvasStats()) };
+    frame: await page.evaluate(() => window.scanplanReplay.frame),
+    coloured: await page.evaluate(() => window.scanplanReplay.coloured()),
+    ...(await canvasStats()) };
 };
 
 const shots = [];
@@ -65,6 +68,9 @@ for (const deadline = Date.now() + 60000; Date.now() < deadline;) {
 }
 await page.click('#play');
 const after = await page.evaluate(() => window.scanplanReplay.frame);
-console.log(JSON.stringify({ shots, before, after, frames:
+await page.click('#closest');
+const closest = { frame: await page.evaluate(() => window.scanplanReplay.frame),
+  note: await page.textContent('#note') };
+console.log(JSON.stringify({ shots, before, after, closest, frames:
   await page.evaluate(() => window.scanplanReplay.frames), errors }));
 await browser.close();

@@ -155,6 +155,10 @@ std::string vplusTable(const ProgramContext& c);
 std::string krlProgram(const ProgramContext& c);
 std::string rapidProgram(const ProgramContext& c);
 std::string urscriptProgram(const ProgramContext& c);
+/// URScript's seg(a, d), which plays one row of the program's data (write_urscript.cpp), and
+/// the step after the last row: the writer writes them and the reader accepts only these.
+std::string urscriptStepFunction(double period, int output);
+std::string urscriptLastStep(double period);
 ProgramReading readVplus(const std::string& text, const std::string& source);
 ProgramReading readKrl(const std::string& text, const std::string& source);
 ProgramReading readRapid(const std::string& text, const std::string& source);
