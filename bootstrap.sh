@@ -19,9 +19,13 @@ packages=(
 # Debian's node and npm when the machine has no npm of its own.
 command -v npm >/dev/null || packages+=(nodejs npm)
 # CI also builds with the second compiler, and runs the fuzz tests with its libFuzzer (.ci/run).
-# CI also runs the replay.html browser test in Debian's chromium and reads cloud.ply with
-# Debian's Open3D (both tests skip where these are absent).
-if [ "${CI:-}" = "true" ]; then packages+=(clang-14 libclang-rt-14-dev chromium python3-open3d); fi
+# CI also runs the replay.html browser test in Debian's chromium and opens the clouds in the
+# viewers users open them with: CloudCompare, MeshLab (under xvfb), Open3D and PCL's tools (each
+# test skips where its tool is absent).
+if [ "${CI:-}" = "true" ]; then
+  packages+=(clang-14 libclang-rt-14-dev chromium python3-open3d cloudcompare meshlab xvfb xauth
+             pcl-tools)
+fi
 
 missing=()
 for p in "${packages[@]}"; do

@@ -75,7 +75,8 @@ void writeCloudPly(std::ostream& out, const std::vector<CloudPoint>& points) {
   header << "ply\n"
          << "format binary_little_endian 1.0\n"
          << "comment scanplan simulated cloud: part frame, mm; normals unit, towards the laser; "
-            "time s; range mm; incidence deg; part_triangle -1 = on another body\n"
+            "time s; range mm; incidence deg; part_triangle -1 = on another body; quality = "
+            "incidence deg (for MeshLab)\n"
          << "element vertex " << points.size() << "\n"
          << "property float x\n"
          << "property float y\n"
@@ -83,12 +84,13 @@ void writeCloudPly(std::ostream& out, const std::vector<CloudPoint>& points) {
          << "property float nx\n"
          << "property float ny\n"
          << "property float nz\n"
-         << "property float time\n"
-         << "property int profile\n"
-         << "property int ray\n"
-         << "property float range_mm\n"
-         << "property float incidence_deg\n"
-         << "property int part_triangle\n"
+         << "property float scalar_time\n"
+         << "property int scalar_profile\n"
+         << "property int scalar_ray\n"
+         << "property float scalar_range_mm\n"
+         << "property float scalar_incidence_deg\n"
+         << "property int scalar_part_triangle\n"
+         << "property float quality\n"
          << "end_header\n";
   writeHeader(out, header.str());
   LittleEndianWriter w(out);
@@ -108,6 +110,7 @@ void writeCloudPly(std::ostream& out, const std::vector<CloudPoint>& points) {
     w.f32(toMm(p.range));
     w.f32(toDeg(p.incidence));
     w.i32(p.part_triangle);
+    w.f32(toDeg(p.incidence));  // quality
     w.endRecord();
   }
 }
@@ -123,7 +126,7 @@ void writeCoveragePly(std::ostream& out,
   header << "ply\n"
          << "format binary_little_endian 1.0\n"
          << "comment scanplan coverage: part frame, mm; colour = points/mm2, viridis 0 .. " << top
-         << ", red-orange (220, 70, 40) = not covered\n"
+         << ", red-orange (220, 70, 40) = not covered; quality = points/mm2 (for MeshLab)\n"
          << "element vertex " << 3 * n << "\n"
          << "property float x\n"
          << "property float y\n"
@@ -131,8 +134,9 @@ void writeCoveragePly(std::ostream& out,
          << "property uchar red\n"
          << "property uchar green\n"
          << "property uchar blue\n"
-         << "property float density_per_mm2\n"
-         << "property int points\n"  // int, not uint: Open3D's tensor reader refuses uint
+         << "property float scalar_density_per_mm2\n"
+         << "property int scalar_points\n"  // int, not uint: Open3D's tensor reader refuses uint
+         << "property float quality\n"
          << "element face " << n << "\n"
          << "property list uchar int vertex_indices\n"
          << "end_header\n";
@@ -157,6 +161,7 @@ void writeCoveragePly(std::ostream& out,
       const std::uint32_t hits = i < coverage.hits.size() ? coverage.hits[i] : 0;
       w.i32(static_cast<std::int32_t>(
           std::min<std::uint32_t>(hits, std::numeric_limits<std::int32_t>::max())));
+      w.f32(densities[i]);  // quality
     }
     w.endRecord();
   }
@@ -175,12 +180,14 @@ void writeLabelledSamplesPly(std::ostream& out,
   std::ostringstream header;
   header << "ply\n"
          << "format binary_little_endian 1.0\n"
-         << "comment scanplan surface samples: part frame, mm; unit normals; reason:";
+         << "comment scanplan surface samples: part frame, mm; unit normals; quality = reason "
+            "(for MeshLab); reason:";
   for (std::size_t i = 0; i < reasons.size(); ++i) header << ' ' << i << " = " << reasons[i];
   header << "\nelement vertex " << points.size() << "\n"
          << "property float x\nproperty float y\nproperty float z\n"
          << "property float nx\nproperty float ny\nproperty float nz\n"
-         << "property uchar reason\n"
+         << "property uchar scalar_reason\n"
+         << "property float quality\n"
          << "end_header\n";
   writeHeader(out, header.str());
   LittleEndianWriter w(out);
@@ -188,6 +195,7 @@ void writeLabelledSamplesPly(std::ostream& out,
     for (int k = 0; k < 3; ++k) w.f32(toMm(points[i][k]));
     for (int k = 0; k < 3; ++k) w.f32(normals[i][k]);
     w.u8(labels[i]);
+    w.f32(labels[i]);  // quality
     w.endRecord();
   }
 }

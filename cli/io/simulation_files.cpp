@@ -117,8 +117,12 @@ void writeSimulationOutputs(const std::filesystem::path& dir,
   cloud.title =
       fmt::format("Simulated cloud, {} points, by acquisition time:", run.cloud.points.size());
   ViewRow& density = grid.rows[1];
-  density.title = fmt::format("Coverage, {:.1f}% of the area, point density:",
-                              100.0 * run.area.covered_fraction);
+  // The picture colours whole triangles: its title gives the triangles' measure (the summary's
+  // area coverage, within the spacing of a point, is the stricter one).
+  density.title = fmt::format(
+      "The part by triangle: {:.1f}% of its area on triangles with a point (red-orange: none); "
+      "point density:",
+      100.0 * run.coverage.covered_fraction);
   for (int i = 0; i < 64; ++i) {
     const double u = i / 63.0;
     cloud.scale.push_back(toRgb(scanner::densityColour(u, 1.0, true)));

@@ -124,14 +124,18 @@ std::vector<Switch> triggerSwitches(const Trajectory& trajectory, const ProgramT
     std::size_t last = k;
     while (last + 1 < samples.size() && samples[last + 1].scanning) ++last;
     out[k] = Switch::kOn;
-    if (last > k) {
-      out[last] = Switch::kOff;
-    } else if (last + 1 < samples.size()) {
-      out[last + 1] = Switch::kOff;
-    }
+    // A pass that runs to the end stays on until the program switches the output off last.
+    if (last + 1 == samples.size()) continue;
+    out[last > k ? last : last + 1] = Switch::kOff;
   }
-  // A pass that runs to the end stays on until the program switches the output off last.
   return out;
+}
+
+bool endsSwitchedOn(const ProgramContext& c) {
+  for (auto s = c.switches.rbegin(); s != c.switches.rend(); ++s) {
+    if (*s != Switch::kNone) return *s == Switch::kOn;
+  }
+  return false;
 }
 
 bool levelAfter(Switch s, const ProgramTrigger& trigger) {

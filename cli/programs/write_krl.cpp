@@ -141,7 +141,7 @@ std::string krlProgram(const ProgramContext& c) {
     s += block(c, first, last);
     first = last + 1;
   }
-  if (o.trigger.output > 0) {
+  if (endsSwitchedOn(c)) {
     s += "  WAIT SEC 0  ; stops the advance run: the output goes off after the last point\n";
     s += "  " + out(c, levelAfter(Switch::kOff, o.trigger)) + "\n";
   }

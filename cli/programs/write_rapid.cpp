@@ -97,7 +97,7 @@ std::string rapidProgram(const ProgramContext& c) {
     s += moveAbsJ(c, k);
     if (c.switches[k] != Switch::kNone) s += setDo(c, levelAfter(c.switches[k], o.trigger));
   }
-  if (trigger) s += setDo(c, levelAfter(Switch::kOff, o.trigger));
+  if (endsSwitchedOn(c)) s += setDo(c, levelAfter(Switch::kOff, o.trigger));
   s += "  ENDPROC\nENDMODULE\n";
   return s;
 }

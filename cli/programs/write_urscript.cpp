@@ -180,7 +180,7 @@ std::string urscriptProgram(const ProgramContext& c) {
   }
   s += urscriptLastStep(o.servo_period);
   s += "  stopj(2.0)\n";
-  if (o.trigger.output > 0) s += setOut(c, levelAfter(Switch::kOff, o.trigger));
+  if (endsSwitchedOn(c)) s += setOut(c, levelAfter(Switch::kOff, o.trigger));
   s += "end\n";
   s += c.name + "()\n";  // the program runs what it defines
   if (s.size() > kUrscriptMaxBytes) {

@@ -39,8 +39,11 @@ Header vplusHeader(const ProgramContext& c, const std::string& table_file) {
   header.add(triggerLines(o, "V+ runs the instructions after a MOVE as that move starts:"));
   if (o.trigger.output > 0) header.add("  each SIGNAL follows the MOVE that leaves its sample.");
   header.add("Table: V+ has no rotary-table axis. Each step's comment has its table angle, and");
-  header.add("  " + table_file + " (t_s,table_deg,scanning) lists them for the table");
-  header.add("  controller, which plays it in step with the arm from the start of the second");
+  header.add("  " + table_file + " lists them for the table controller, one row per MOVE:");
+  header.add(std::string("  t_s (s, as in the step comments), table_deg (degrees") +
+             (o.table_endless ? ", within (-180, 180]" : ", as planned") + "), scanning (0/1).");
+  header.add("  The table reaches each angle at its time, linearly between rows: the controller");
+  header.add("  plays the list in step with the arm from the start of the second");
   header.add(o.vplus_table_start_signal > 0
                  ? "  move: SIGNAL " + std::to_string(o.vplus_table_start_signal) +
                        " turns on then."
@@ -92,21 +95,15 @@ std::string vplusProgram(const ProgramContext& c, const std::string& table_file)
   }
   out += "    BREAK\n";
   if (samples.size() >= 2) switchAt(samples.size() - 1);
-  if (trigger) out += signal(c, levelAfter(Switch::kOff, o.trigger));
+  if (endsSwitchedOn(c)) out += signal(c, levelAfter(Switch::kOff, o.trigger));
   out += ".END\n";
   return out;
 }
 
+// A plain CSV, header row first (a '#' line would read as data in most CSV readers): what it
+// holds is in the program's header.
 std::string vplusTable(const ProgramContext& c) {
-  std::string out =
-      "# The table angles of V+ program " + c.name +
-      ", one row per MOVE: t_s (s, as in the program's comments),\n"
-      "# table_deg (degrees" +
-      std::string(c.options.table_endless ? ", within (-180, 180]: an endless axis, the shorter way"
-                                          : ", as planned") +
-      "), scanning (0/1).\n"
-      "# The table reaches each angle at its time, linearly between rows.\n"
-      "t_s,table_deg,scanning\n";
+  std::string out = "t_s,table_deg,scanning\n";
   const auto& samples = c.trajectory.samples;
   for (std::size_t k = 0; k < samples.size(); ++k) {
     out += fixed(samples[k].t, kDecimals) + "," + fixed(c.table_deg[k], kDecimals) + "," +

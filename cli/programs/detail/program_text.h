@@ -62,10 +62,14 @@ std::vector<Step> steps(const kinematics::Trajectory& trajectory,
                         const kinematics::RobotModel& robot,
                         const ProgramOptions& options);
 /// Per sample: kOn at the first sample of each run of scanning samples, kOff at its last (a run
-/// of one sample gets kOn, and kOff at the next sample; at the end, none). kNone everywhere
-/// without a trigger output.
+/// of one sample gets kOn, and kOff at the next sample; a run that reaches the trajectory's end,
+/// none: the program switches the output off after its motion). kNone everywhere without a
+/// trigger output.
 std::vector<Switch> triggerSwitches(const kinematics::Trajectory& trajectory,
                                     const ProgramTrigger& trigger);
+/// Whether the last switch turns the output on (a pass runs to the end): the program then
+/// switches it off after its motion; otherwise it is already off and is not switched again.
+bool endsSwitchedOn(const ProgramContext& c);
 /// The output's level after a switch: on_at_scan_start decides the polarity.
 bool levelAfter(Switch s, const ProgramTrigger& trigger);
 /// The table angles as written, degrees: within (-180, 180] when endless (each step must then

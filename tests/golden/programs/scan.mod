@@ -45,6 +45,5 @@ MODULE MOD_scan
     ! WARNING: step 4 needs 116.67 % of joint 6's maximum speed
     ! t=0.400000 s table=4.000000 deg scan=0
     MoveAbsJ [[17.000000,-64.000000,153.000000,19.000000,42.000000,103.123457],[4.000000,9E9,9E9,9E9,9E9,9E9]]\NoEOffs, v1000\T:=0.100000, fine, t_scan;
-    SetDO do3, 0;
   ENDPROC
 ENDMODULE
