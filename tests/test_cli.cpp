@@ -562,7 +562,12 @@ TEST_F(Cli, PlanDemoWritesControllerReadyProgramsInEveryLanguage) {
       (s.on ? on : off) += 1;
     }
     EXPECT_EQ(on, passes) << file;
-    EXPECT_EQ(off, passes + 2) << file;  // each pass's end, and idle before and after
+    // Idle before; each pass's end (the last pass's, when it runs to the end, after the motion).
+    EXPECT_EQ(off, passes + 1) << file;
+    ASSERT_FALSE(back.triggers.empty()) << file;
+    EXPECT_FALSE(back.triggers.back().on) << file;
+    for (std::size_t i = 1; i < back.triggers.size(); ++i)
+      EXPECT_NE(back.triggers[i].on, back.triggers[i - 1].on) << file << ", switch " << i;
     const double planned = plan.duration() - plan.samples.front().t;
     const double timed = back.trajectory.duration() - back.trajectory.samples.front().t;
     EXPECT_LT(std::abs(timed - planned) / planned, 0.01) << file << ": " << timed << " s";
