@@ -18,6 +18,8 @@
 #include <yaml-cpp/yaml.h>
 
 #include "cli/config/job.h"
+#include "cli/config/problem.h"
+#include "cli/io/program_files.h"
 #include "cli/report/verify_report.h"
 #include "cli_support.h"
 #include "geometry_support.h"
@@ -386,6 +388,35 @@ TEST_F(CliVerify, ExportedProgramsReadBackAndValidate) {
                                (dir_ / "x").string(), "--format", "vplus,gcode"});
   EXPECT_EQ(bad.exit_code, 4) << describe(bad);
   EXPECT_TRUE(contains(bad.err, "gcode")) << bad.err;
+}
+
+// A URScript program over the size a UR controller loads: `export` refuses it naming the limit
+// (exit 4, nothing written); `plan` writes the rest of its programs and says which it left out.
+TEST_F(CliVerify, AnOversizeUrscriptIsRefusedByExportAndLeftOutByPlan) {
+  const cli::JobSpec job = cli::loadJob(kDemoJob);
+  const pipeline::ScanProblem problem = cli::toProblem(job);
+  kinematics::Trajectory long_run;
+  for (int k = 0; k < 9000; ++k) {  // about 130 bytes a row: 1.2 MB
+    kinematics::TrajectorySample s;
+    s.t = 0.1 * k;
+    s.q << 0.1, -0.2 + 1e-5 * k, 2.0, 0.0, 0.5, 0.0;
+    s.theta = 1e-3 * k;
+    long_run.samples.push_back(s);
+  }
+  const fs::path csv = dir_ / "long.csv";
+  writeFile(csv, kinematics::trajectoryToCsv(long_run));
+  const Result run = scanplan({"export", kDemoJob, "-t", csv.string(), "-o", (dir_ / "ur").string(),
+                               "--format", "urscript,csv"});
+  EXPECT_EQ(run.exit_code, 4) << describe(run);
+  EXPECT_TRUE(contains(run.err, "expected at most 1000000 bytes")) << run.err;
+  EXPECT_FALSE(fs::exists(dir_ / "ur" / "scan.script"));
+
+  const fs::path out = dir_ / "plan_programs";
+  const std::string summary =
+      cli::writePrograms(out, "programs/", job, problem.cell, long_run, {"urscript", "csv"}, true);
+  EXPECT_TRUE(fs::exists(out / "scan.csv"));
+  EXPECT_FALSE(fs::exists(out / "scan.script"));
+  EXPECT_TRUE(contains(summary, "urscript NOT written (URScript program: ")) << summary;
 }
 
 // `plan` writes the robot controller's program and the CSV: for the Viper (adept_vplus) the V+

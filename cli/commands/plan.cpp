@@ -183,7 +183,7 @@ std::string writePlannedOutputs(const std::filesystem::path& out,
   const kinematics::Trajectory& trajectory = plan.trajectory->trajectory;
   writeFileAtomically(out / "trajectory.csv", kinematics::trajectoryToCsv(trajectory));
   const std::string programs = writePrograms(out / "programs", "programs/", job, problem.cell,
-                                             trajectory, job.outputs.programs);
+                                             trajectory, job.outputs.programs, true);
   if (plan.simulation) writeSimulationOutputs(out, job, problem.part, *plan.simulation, settings);
   if (plan.certificate) {
     writeCertificateOutputs(out, problem.part, plan.simulation->sampling, *plan.certificate,

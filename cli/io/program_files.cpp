@@ -74,9 +74,10 @@ std::string writePrograms(const std::filesystem::path& dir,
                           const JobSpec& job,
                           const kinematics::CellModel& cell,
                           const kinematics::Trajectory& trajectory,
-                          const std::vector<std::string>& formats) {
+                          const std::vector<std::string>& formats,
+                          bool skip_refused) {
   const ProgramOptions options = programOptions(job, cell);
-  std::vector<std::string> written;
+  std::vector<std::string> written, refused;
   double max_percent = 0.0;
   std::size_t over = 0;
   for (const std::string& name : formats) {
@@ -84,7 +85,15 @@ std::string writePrograms(const std::filesystem::path& dir,
     if (!format)
       throw InputError(fmt::format("program format '{}': expected one of {}", name,
                                    fmt::join(programFormatNames(), ", ")));
-    const ProgramFiles files = writeProgram(trajectory, cell.robot, *format, options);
+    ProgramFiles files;
+    try {
+      files = writeProgram(trajectory, cell.robot, *format, options);
+    } catch (const InputError& e) {
+      if (!skip_refused) throw;
+      spdlog::warn("programs: {} not written: {}", name, e.what());
+      refused.push_back(fmt::format("{} NOT written ({})", name, e.what()));
+      continue;
+    }
     for (const auto& [file, content] : files.files) {
       writeFileAtomically(dir / file, content);
       written.push_back(file);
@@ -92,14 +101,19 @@ std::string writePrograms(const std::filesystem::path& dir,
     max_percent = std::max(max_percent, files.max_speed_percent);
     over = std::max(over, files.over_speed_segments);
   }
-  if (written.empty()) return "programs   none (outputs.programs is empty)\n";
+  const std::string not_written =
+      refused.empty() ? std::string() : fmt::format("; {}", fmt::join(refused, "; "));
+  if (written.empty()) {
+    return refused.empty() ? "programs   none (outputs.programs is empty)\n"
+                           : "programs   none written" + not_written + "\n";
+  }
   return fmt::format(
-      "programs   {}: {}; fastest step {:.0f}% of an axis's max speed (joints, table){}{}\n",
+      "programs   {}: {}; fastest step {:.0f}% of an axis's max speed (joints, table){}{}{}\n",
       shown_as, fmt::join(written, ", "), max_percent,
       over == 0
           ? std::string()
           : fmt::format(", {} step(s) need more than 100% (marked WARNING, run slower)", over),
-      controllerNote(job.robot, formats));
+      controllerNote(job.robot, formats), not_written);
 }
 
 }  // namespace scanplan::cli

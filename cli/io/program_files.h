@@ -19,12 +19,15 @@ ProgramOptions programOptions(const JobSpec& job, const kinematics::CellModel& c
 /// The robot programs of `formats` (names as in programFormatNames()) for the trajectory, into
 /// `dir`; returns one summary line (the folder as `shown_as`, the files, the fastest step as % of
 /// the joints' max speed, steps that need more than 100 %, a warning for another vendor's
-/// language than the robot's controller).
+/// language than the robot's controller). A program its language cannot hold (URScript over
+/// kUrscriptMaxBytes) throws InputError, or with `skip_refused` is left out with a warning that
+/// the summary line repeats (`plan`: the rest of the plan is still written).
 std::string writePrograms(const std::filesystem::path& dir,
                           const std::string& shown_as,
                           const JobSpec& job,
                           const kinematics::CellModel& cell,
                           const kinematics::Trajectory& trajectory,
-                          const std::vector<std::string>& formats);
+                          const std::vector<std::string>& formats,
+                          bool skip_refused = false);
 
 }  // namespace scanplan::cli

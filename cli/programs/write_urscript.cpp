@@ -186,8 +186,8 @@ std::string urscriptProgram(const ProgramContext& c) {
   if (s.size() > kUrscriptMaxBytes) {
     throw InputError(fmt::format(
         "URScript program: {} bytes for {} samples over {} s: expected at most {} bytes (UR "
-        "controllers fail to load multi-megabyte scripts): plan with a longer scan.dt_s, or in "
-        "parts (scan.auto.max_program_s)",
+        "controllers fail to load multi-megabyte scripts): plan with a longer scan.dt_s (fewer "
+        "samples), or scan the part in several jobs",
         s.size(), samples.size(), fixed(samples.back().t - samples.front().t, 1),
         kUrscriptMaxBytes));
   }
