@@ -163,10 +163,20 @@ TEST_F(Cli, HelpOnTheAppAndEverySubcommandNamesItsOptions) {
 // ones that need no earlier output (fk, ik, check, job show) run as printed, from the
 // repository root (here: with data/ made absolute).
 TEST_F(Cli, HelpExamplesNameBundledFilesAndRun) {
-  const std::vector<std::vector<std::string>> commands = {
-      {"plan"},  {"validate"},        {"simulate"},       {"export"},      {"path"},  {"map"},
-      {"batch"}, {"batch", "report"}, {"batch", "merge"}, {"job", "show"}, {"check"}, {"fk"},
-      {"ik"},    {"watch"}};
+  const std::vector<std::vector<std::string>> commands = {{"plan"},
+                                                          {"validate"},
+                                                          {"simulate"},
+                                                          {"export"},
+                                                          {"path"},
+                                                          {"map"},
+                                                          {"batch"},
+                                                          {"batch", "report"},
+                                                          {"batch", "merge"},
+                                                          {"job", "show"},
+                                                          {"check"},
+                                                          {"fk"},
+                                                          {"ik"},
+                                                          {"watch"}};
   int ran = 0;
   for (const auto& command : commands) {
     std::vector<std::string> args = command;
@@ -841,12 +851,25 @@ std::vector<std::string> leftovers(const fs::path& dir) {
 }
 
 // An earlier run's OUT: an owned file this run writes again, one it does not, the user's file
-// and folder.
+// and folder; and in a folder this run writes into, the same three and another run's folder.
 void earlierRun(const fs::path& out) {
   write(out / "report.json", "old report");
   write(out / "trajectory.csv", "old trajectory");
   write(out / "notes.txt", "mine");
   write(out / "mine" / "a.txt", "mine too");
+  write(out / "programs" / "scan.v2", "old program");
+  write(out / "programs" / "scan.src", "old krl");
+  write(out / "programs" / "note.txt", "my note");
+  write(out / "programs" / "other_run" / "x.v2", "another run's");
+}
+
+const std::vector<std::string> kOwned = {"report.json", "trajectory.csv", "programs/scan.v2",
+                                         "programs/scan.src"};
+
+// This run: a report and a program.
+void stageRun(const fs::path& stage) {
+  write(stage / "report.json", "new report");
+  write(stage / "programs" / "scan.v2", "new program");
 }
 
 void expectPublished(const fs::path& out) {
@@ -854,6 +877,10 @@ void expectPublished(const fs::path& out) {
   EXPECT_FALSE(fs::exists(out / "trajectory.csv")) << "owned, not written again: dropped";
   EXPECT_EQ(read(out / "notes.txt"), "mine");
   EXPECT_EQ(read(out / "mine" / "a.txt"), "mine too");
+  EXPECT_EQ(read(out / "programs" / "scan.v2"), "new program");
+  EXPECT_FALSE(fs::exists(out / "programs" / "scan.src")) << "owned, not written again: dropped";
+  EXPECT_EQ(read(out / "programs" / "note.txt"), "my note") << "a folder is not replaced whole";
+  EXPECT_EQ(read(out / "programs" / "other_run" / "x.v2"), "another run's");
   EXPECT_TRUE(leftovers(out).empty());
 }
 
@@ -866,8 +893,8 @@ TEST_F(Cli, AStagedOutputReplacesTheOwnedFilesAndKeepsTheUsersOwn) {
   }, after{};
   ASSERT_EQ(::stat((out / "notes.txt").c_str(), &before), 0);
   {
-    OutputStage stage(out, {"report.json", "trajectory.csv"});
-    write(stage.dir() / "report.json", "new report");
+    OutputStage stage(out, kOwned);
+    stageRun(stage.dir());
     EXPECT_EQ(read(out / "report.json"), "old report") << "nothing changes before commit";
     stage.commit();
   }
@@ -884,8 +911,8 @@ TEST_F(Cli, AStagedOutputFallsBackToMovingEntriesWhenOutIsTheWorkingFolder) {
   const fs::path cwd = fs::current_path();
   fs::current_path(out);
   {
-    OutputStage stage(".", {"report.json", "trajectory.csv"});
-    write(stage.dir() / "report.json", "new report");
+    OutputStage stage(".", kOwned);
+    stageRun(stage.dir());
     stage.commit();
   }
   fs::current_path(cwd);

@@ -73,6 +73,64 @@ void expectReachesTargets(const kinematics::Trajectory& trajectory) {
 
 // A second run into a folder another run is writing is refused, naming the holder's pid; the
 // lock of a run that was killed is stale and taken over (issue 17).
+// An output folder that is, holds or lies inside an input is refused before anything is written,
+// naming the input: the job (plan into the job's own folder), the part mesh, the trajectory
+// (simulate), the URDF (robot import onto itself). The inputs are untouched.
+TEST_F(CliPlan, AnOutputThatCouldReplaceAnInputIsRefusedNamingIt) {
+  const fs::path data = dir_ / "data";
+  for (const char* f : {"jobs/demo_rings.yaml", "robots/viper_s650.yaml", "parts/demo_housing.stl",
+                        "robots/urdf/viper_s650.urdf"}) {
+    fs::create_directories((data / f).parent_path());
+    fs::copy_file(kSourceDir / "data" / f, data / f);
+  }
+  const fs::path job = data / "jobs/demo_rings.yaml";
+  const std::string job_text = readFile(job);
+  struct Case {
+    std::vector<std::string> args;
+    std::string input;  // the input the error names
+  };
+  const std::vector<Case> cases = {
+      {{"plan", job.string(), "-o", (data / "jobs").string()}, job.string()},
+      {{"plan", job.string(), "-o", data.string()}, job.string()},
+      {{"plan", job.string(), "-o", (data / "parts").string()},
+       (data / "parts/demo_housing.stl").string()},
+      {{"path", job.string(), "-o", (data / "robots").string()},
+       (data / "robots/viper_s650.yaml").string()},
+      {{"simulate", job.string(), "-t", job.string(), "-o", (data / "jobs").string()},
+       job.string()},
+      {{"robot", "import", (data / "robots/urdf/viper_s650.urdf").string(), "-o",
+        (data / "robots/urdf/viper_s650.urdf").string()},
+       (data / "robots/urdf/viper_s650.urdf").string()},
+  };
+  for (const Case& c : cases) {
+    const Result r = scanplan(c.args);
+    EXPECT_EQ(r.exit_code, 4) << describe(r);
+    EXPECT_TRUE(contains(r.err, "the input " + c.input + ": writing there could replace it"))
+        << r.err;
+  }
+  EXPECT_EQ(readFile(job), job_text);
+  EXPECT_FALSE(fs::exists(data / "jobs/report.json"));
+  EXPECT_FALSE(fs::exists(data / "report.json"));
+  EXPECT_EQ(readFile(data / "robots/urdf/viper_s650.urdf"),
+            readFile(kSourceDir / "data/robots/urdf/viper_s650.urdf"));
+}
+
+// A second plan into the same OUT replaces its own files one by one: a user's note and another
+// run's folder inside programs/ stay; a program of a language no longer asked for goes.
+TEST_F(CliPlan, ASecondPlanKeepsTheUsersFilesInItsFolders) {
+  ASSERT_EQ(plan({"--set", "outputs.programs=[vplus, krl, csv]"}).exit_code, 0);
+  ASSERT_TRUE(fs::exists(out() / "programs/scan.src"));
+  writeFile(out() / "programs/note.txt", "checked on the cell, 2026-11-28");
+  fs::create_directories(out() / "programs/cell_b");
+  writeFile(out() / "programs/cell_b/scan.v2", "another cell's program");
+  const Result again = plan({"--set", "outputs.programs=[vplus, csv]"});
+  ASSERT_EQ(again.exit_code, 0) << describe(again);
+  EXPECT_EQ(readFile(out() / "programs/note.txt"), "checked on the cell, 2026-11-28");
+  EXPECT_EQ(readFile(out() / "programs/cell_b/scan.v2"), "another cell's program");
+  EXPECT_TRUE(fs::exists(out() / "programs/scan.v2"));
+  EXPECT_FALSE(fs::exists(out() / "programs/scan.src")) << "an earlier output not written again";
+}
+
 TEST_F(CliPlan, AFolderInUseIsRefusedAndAStaleLockTakenOver) {
   fs::create_directories(out());
   std::ofstream(beside("lock")) << ::getpid() << "\n";  // this test process: alive

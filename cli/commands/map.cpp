@@ -121,6 +121,7 @@ scanner::GeneratedPath generateScanPath(const JobSpec& job, const kinematics::Ce
 
 ExitCode runPath(const PlanOptions& options) {
   const JobSpec job = loadJob(options.job_file, options.overrides);
+  checkOutputApartFromInputs(options.out_dir, jobInputFiles(job));
   const kinematics::CellModel cell = buildCell(job);
   OutputStage stage(options.out_dir, {"path.csv", "path.png"});
   const PathContext context = buildPath(job, cell);
@@ -186,6 +187,7 @@ std::string buildAndWriteMaps(const JobSpec& job,
 
 ExitCode runMap(const PlanOptions& options) {
   const JobSpec job = loadJob(options.job_file, options.overrides);
+  checkOutputApartFromInputs(options.out_dir, jobInputFiles(job));
   const kinematics::CellModel cell = buildCell(job);
   std::fputs(buildAndWriteMaps(job, cell, options.out_dir).c_str(), stdout);
   return ExitCode::kOk;

@@ -19,6 +19,7 @@
 #include "cli/io/simulation_files.h"
 #include "cli/plot/cell_figure.h"
 #include "cli/plot/image_io.h"
+#include "cli/programs/programs.h"
 #include "cli/report/plan_report.h"
 #include "cli/report/plan_summary.h"
 #include "cli/report/sensor_report.h"
@@ -283,12 +284,21 @@ std::string writePlanOutputs(const std::filesystem::path& dir,
 
 // Everything `plan` may write into its output folder: on each run, what it does not write again
 // is removed (no trajectory.csv or program of an earlier run beside a new report).
-const std::vector<std::string> kPlanOutputs{
-    "job.yaml",          "report.json",       "trajectory.csv", "trajectory_invalid.csv",
-    "programs",          "path.csv",          "path.png",       "configmap*",
-    "cloud.ply",         "coverage.ply",      "cloud.png",      "uncovered.ply",
-    "certificate.png",   "replay.html",       "cell.png",       "setup2",
-    "coverage_time.png", "coverage_time.svg", "profiles",       "sensors.csv"};
+// What `plan` writes into OUT, relative to it (OutputStage's `owned`): its files, the programs
+// of any language under the job's program name, the profile images, and the same in setup2/.
+std::vector<std::string> planOutputs(const JobSpec& job) {
+  std::vector<std::string> top{
+      "job.yaml",     "report.json",       "trajectory.csv",    "trajectory_invalid.csv",
+      "path.csv",     "path.png",          "configmap*",        "cloud.ply",
+      "coverage.ply", "cloud.png",         "uncovered.ply",     "certificate.png",
+      "replay.html",  "cell.png",          "coverage_time.png", "coverage_time.svg",
+      "sensors.csv",  "profiles/profile_*"};
+  for (const std::string& file : programFileNames(job.outputs.program_name))
+    top.push_back("programs/" + file);
+  std::vector<std::string> owned = top;
+  for (const std::string& name : top) owned.push_back("setup2/" + name);
+  return owned;
+}
 
 // The command's result on stdout: the text summary, or with --json one JSON document (the
 // report, the output folder and the summary's lines).
@@ -314,10 +324,11 @@ ExitCode printPlanResult(const PlanOptions& options,
 ExitCode runPlan(const PlanOptions& options) {
   const auto start = Clock::now();
   const JobSpec job = loadJob(options.job_file, options.overrides);
+  checkOutputApartFromInputs(options.out_dir, jobInputFiles(job));
   const kinematics::CellModel cell = buildCell(job);
   const kinematics::LoadedMesh part = loadPart(job, cell);
   std::string summary = cellSummary(job, cell, part);
-  OutputStage stage(options.out_dir, kPlanOutputs);
+  OutputStage stage(options.out_dir, planOutputs(job));
   const std::filesystem::path& out = stage.dir();
   writeFileAtomically(out / "job.yaml", jobToYaml(job));
   if (job.scan.paths.empty() && !job.scan.auto_scan.enabled) {

@@ -125,6 +125,13 @@ ExitCode runRobotCheck(const RobotCheckOptions& options) {
 
 ExitCode runRobotImport(const RobotImportOptions& options) {
   UrdfRobot robot = importUrdf(options.source);
+  std::vector<std::filesystem::path> inputs{options.source.urdf};
+  for (const LinkSpec& link : robot.spec.links) {
+    for (const ShapeSpec& shape : link.shapes) {
+      if (!shape.file.resolved.empty()) inputs.push_back(shape.file.resolved);
+    }
+  }
+  checkOutputApartFromInputs(options.out_file, inputs);
   // The same checks as a job's robot: OPW against DH over the workspace.
   buildRobotModel(robot.spec, options.source.urdf.string());
   relativeMeshPaths(robot.spec, options.out_file);

@@ -49,10 +49,19 @@ auto onTrajectory(const std::filesystem::path& file, const Run& run) {
   }
 }
 
+// OUT (when given) apart from every input: the job's files and the trajectory.
+void checkOut(const VerifyOptions& options, const JobSpec& job) {
+  if (options.out_dir.empty()) return;
+  std::vector<std::filesystem::path> inputs = jobInputFiles(job);
+  inputs.push_back(options.trajectory_file);
+  checkOutputApartFromInputs(options.out_dir, inputs);
+}
+
 }  // namespace
 
 ExitCode runValidate(const VerifyOptions& options) {
   const JobSpec job = loadJob(options.job_file, options.overrides);
+  checkOut(options, job);
   const kinematics::CellModel cell = buildCell(job);
   const kinematics::Trajectory trajectory = loadTrajectory(options.trajectory_file);
   const collision::Scene scene(cell, clearanceConfig(job));
@@ -87,11 +96,12 @@ ExitCode runValidate(const VerifyOptions& options) {
 
 ExitCode runSimulate(const VerifyOptions& options) {
   const JobSpec job = loadJob(options.job_file, options.overrides);
+  checkOut(options, job);
   const kinematics::CellModel cell = buildCell(job);
   const kinematics::LoadedMesh part = loadPart(job, cell);
   const kinematics::Trajectory trajectory = loadTrajectory(options.trajectory_file);
   OutputStage stage(options.out_dir, {"cloud.ply", "coverage.ply", "cloud.png", "simulation.json",
-                                          "profiles", "sensors.csv"});
+                                      "profiles/profile_*", "sensors.csv"});
   const pipeline::SimulationRun run = onTrajectory(options.trajectory_file, [&] {
     return pipeline::simulateTrajectory(cell, part.mesh, laserOptics(job),
                                         simulationSettings(job, cell), trajectory);
@@ -127,6 +137,7 @@ ExitCode runSimulate(const VerifyOptions& options) {
 
 ExitCode runExport(const VerifyOptions& options) {
   const JobSpec job = loadJob(options.job_file, options.overrides);
+  checkOut(options, job);
   const kinematics::CellModel cell = buildCell(job);
   const kinematics::Trajectory trajectory = loadTrajectory(options.trajectory_file);
   std::vector<std::string> formats = job.outputs.programs;

@@ -110,7 +110,8 @@ class LatencyHistogram {
     std::size_t seen = 0;
     for (std::size_t b = 0; b < bins_.size(); ++b) {
       seen += bins_[b];
-      if (seen >= std::max<std::size_t>(rank, 1)) return std::min(max_, static_cast<double>(b + 1) * kBin);
+      if (seen >= std::max<std::size_t>(rank, 1))
+        return std::min(max_, static_cast<double>(b + 1) * kBin);
     }
     return max_;
   }

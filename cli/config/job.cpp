@@ -1276,4 +1276,20 @@ std::optional<double> startAngle(const JobSpec& job) {
   return deg(*parseFiniteNumber(job.planner.start_deg));
 }
 
+std::vector<std::filesystem::path> jobInputFiles(const JobSpec& job) {
+  std::vector<std::filesystem::path> files{job.source};
+  const auto add = [&](const FilePath& f) {
+    if (!f.resolved.empty()) files.push_back(f.resolved);
+  };
+  add(job.robot_file);
+  add(job.part.mesh);
+  for (const LinkSpec& link : job.robot.links) {
+    for (const ShapeSpec& shape : link.shapes) add(shape.file);
+  }
+  for (const ShapeSpec& shape : job.scanner.body) add(shape.file);
+  for (const ObstacleSpec& obstacle : job.obstacles) add(obstacle.shape.file);
+  for (const PathElementSpec& path : job.scan.paths) add(path.file);
+  return files;
+}
+
 }  // namespace scanplan::cli

@@ -349,6 +349,10 @@ struct JobSpec {
 /// (e.g. "planner.ray.horizon=20", "scan.paths[0].height_mm=60") replaces or adds that value
 /// before validation, as if the file said so; errors in it name the override.
 JobSpec loadJob(const std::filesystem::path& file, const std::vector<std::string>& overrides = {});
+
+/// Every file the job reads: the job file, the robot file, the part mesh, the mesh files of the
+/// robot's links, the scanner's housing and the obstacles, and path files (resolved paths).
+std::vector<std::filesystem::path> jobInputFiles(const JobSpec& job);
 /// A JSON Schema (draft-07) of the job file: every key, its type, range and choices, and which
 /// keys are required; unknown keys are refused (additionalProperties: false). For editors (VS
 /// Code's YAML extension) and scripts; `scanplan job schema` prints it.

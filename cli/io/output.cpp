@@ -206,6 +206,41 @@ bool isRegularFile(const std::filesystem::path& file) noexcept {
   return std::filesystem::is_regular_file(file, ec);
 }
 
+namespace {
+
+namespace fs = std::filesystem;
+
+// `inner` is `outer` or lies inside it (both absolute and normal).
+bool within(const fs::path& inner, const fs::path& outer) {
+  const auto [o, i] = std::mismatch(outer.begin(), outer.end(), inner.begin(), inner.end());
+  return o == outer.end();
+}
+
+}  // namespace
+
+void checkOutputApartFromInputs(const fs::path& out,
+                                const std::vector<fs::path>& inputs,
+                                const std::string& option) {
+  std::error_code ec;
+  const fs::path o = fs::weakly_canonical(fs::absolute(out, ec), ec);
+  if (ec) return;  // the output's own checks report what is wrong with it
+  for (const fs::path& input : inputs) {
+    std::error_code ie;
+    const fs::path i = fs::weakly_canonical(fs::absolute(input, ie), ie);
+    if (ie || i.empty()) continue;
+    const bool clash = within(i, o) || within(o, i);
+    if (!clash) continue;
+    throw InputError(fmt::format(
+        "{} {}: {} the input {}: writing there could replace it; expected an output apart from "
+        "the inputs",
+        option, out.string(),
+        i == o         ? "is"
+        : within(i, o) ? "holds"
+                       : "lies inside",
+        input.string()));
+  }
+}
+
 void prepareOutputDir(const std::filesystem::path& dir) {
   std::error_code ec;
   if (std::filesystem::exists(dir, ec) && !std::filesystem::is_directory(dir, ec)) {
@@ -462,6 +497,55 @@ void OutputStage::commit() {
   committed_ = true;
 }
 
+namespace {
+
+// `path` is a folder, not a link to one.
+bool realFolder(const fs::path& path) {
+  std::error_code ec;
+  return fs::is_directory(fs::symlink_status(path, ec));
+}
+
+bool present(const fs::path& path) {
+  std::error_code ec;
+  return fs::exists(fs::symlink_status(path, ec));
+}
+
+}  // namespace
+
+// `rel` is a folder (not a link to one) both in OUT and in the staging folder.
+bool OutputStage::bothFolders(const fs::path& rel) const {
+  return realFolder(out_ / rel) && realFolder(stage_ / rel);
+}
+
+// An entry of OUT this run drops: one of its own outputs that it did not write again.
+bool OutputStage::dropped(const fs::path& rel) const {
+  return owned(rel.generic_string()) && !present(stage_ / rel);
+}
+
+// OUT's folder `rel`: its entries this run does not write again are linked into the staged folder
+// (made if this run wrote none; folders merged the same way), but for those it drops, so that
+// publishing keeps a user's files in the folders it writes into. A staged folder left empty of
+// a folder that held only dropped entries is removed.
+bool OutputStage::mergeFolder(const fs::path& rel, std::size_t& entries) const {
+  std::error_code ec;
+  const fs::path staged = stage_ / rel;
+  const bool made = !present(staged);
+  if (made) fs::create_directory(staged, ec);
+  bool any = false;
+  for (const auto& e : fs::directory_iterator(out_ / rel, ec)) {
+    any = true;
+    const fs::path sub = rel / e.path().filename();
+    if (dropped(sub)) continue;
+    if (realFolder(e.path()) && (!present(stage_ / sub) || realFolder(stage_ / sub))) {
+      if (!mergeFolder(sub, entries)) return false;
+    } else if (!present(stage_ / sub) && !linkTree(e.path(), stage_ / sub, 0, entries)) {
+      return false;
+    }
+  }
+  if (made && any && fs::is_empty(staged, ec)) fs::remove(staged, ec);
+  return !ec;
+}
+
 // The staging folder, with OUT's other entries linked in, exchanged with OUT in one step; false
 // when that cannot be done here.
 bool OutputStage::exchange() {
@@ -469,8 +553,15 @@ bool OutputStage::exchange() {
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(out_, ec)) {
     const fs::path name = e.path().filename();
-    std::error_code missing;
-    if (owned(name.string()) || fs::exists(stage_ / name, missing)) continue;
+    if (dropped(name)) continue;
+    if (realFolder(e.path()) && (!present(stage_ / name) || realFolder(stage_ / name))) {
+      if (!mergeFolder(name, entries)) {
+        why_ = fmt::format("{} holds a special file or too many entries", name.string());
+        return false;
+      }
+      continue;
+    }
+    if (present(stage_ / name)) continue;
     carried_.push_back(name);
     if (!linkTree(e.path(), stage_ / name, 0, entries)) {
       why_ = fmt::format("{} holds a special file or too many entries", name.string());
@@ -499,6 +590,44 @@ bool OutputStage::exchange() {
   return true;
 }
 
+// The fallback, for OUT's folder `rel` that this run writes nothing into: its dropped entries
+// removed (in its folders too), and the folder itself when that empties it.
+void OutputStage::dropOwned(const fs::path& rel) const {
+  std::error_code ec;
+  std::vector<fs::path> names;
+  for (const auto& e : fs::directory_iterator(out_ / rel, ec)) names.push_back(e.path().filename());
+  for (const fs::path& name : names) {
+    if (dropped(rel / name)) {
+      fs::remove_all(out_ / rel / name, ec);
+    } else if (realFolder(out_ / rel / name) && !present(stage_ / rel / name)) {
+      dropOwned(rel / name);
+    }
+  }
+  if (!names.empty() && fs::is_empty(out_ / rel, ec)) fs::remove(out_ / rel, ec);
+}
+
+// The fallback for a folder in both: the staged entries renamed into OUT's folder one by one
+// (folders in both merged the same way), its dropped entries removed.
+void OutputStage::moveInto(const fs::path& rel) const {
+  std::error_code ec;
+  std::vector<fs::path> staged;
+  for (const auto& e : fs::directory_iterator(stage_ / rel, ec))
+    staged.push_back(e.path().filename());
+  dropOwned(rel);
+  for (const fs::path& name : staged) {
+    if (bothFolders(rel / name)) {
+      moveInto(rel / name);
+      continue;
+    }
+    fs::remove_all(out_ / rel / name, ec);
+    fs::rename(stage_ / rel / name, out_ / rel / name, ec);
+    if (ec) {
+      throw InputError(fmt::format("{}: cannot move the finished output into place: {}",
+                                   (out_ / rel / name).string(), ec.message()));
+    }
+  }
+}
+
 // The fallback: one rename per entry (a kill between them can mix old and new files).
 void OutputStage::commitByEntries() {
   spdlog::warn("{}: cannot be swapped in one step ({}); moving the outputs one by one",
@@ -508,14 +637,21 @@ void OutputStage::commitByEntries() {
   for (const fs::directory_entry& e : fs::directory_iterator(out_)) earlier.push_back(e.path());
   for (const fs::directory_entry& e : fs::directory_iterator(stage_)) staged.push_back(e.path());
   for (const fs::path& p : earlier) {
-    const std::string name = p.filename().string();
-    if (owned(name) && !fs::exists(stage_ / name)) fs::remove_all(p, ec);
+    if (dropped(p.filename())) {
+      fs::remove_all(p, ec);
+    } else if (realFolder(p) && !present(stage_ / p.filename())) {
+      dropOwned(p.filename());
+    }
   }
   for (const fs::path& p : staged) {
     if (std::find(carried_.begin(), carried_.end(), p.filename()) != carried_.end())
       continue;  // linked in for an exchange: already in OUT
     const fs::path target = out_ / p.filename();
-    if (fs::is_directory(p)) fs::remove_all(target, ec);  // a folder is replaced as a whole
+    if (bothFolders(p.filename())) {  // merged: the user's files in it stay
+      moveInto(p.filename());
+      continue;
+    }
+    if (fs::is_directory(p)) fs::remove_all(target, ec);
     fs::rename(p, target, ec);
     if (ec) {
       throw InputError(fmt::format("{}: cannot move the finished output into place: {}",

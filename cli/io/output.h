@@ -30,6 +30,13 @@ void writeFileAtomically(const std::filesystem::path& file,
 /// look at (too long, a component not a folder, no permission) is not one.
 bool isRegularFile(const std::filesystem::path& file) noexcept;
 
+/// Refuses (InputError) an output path that is one of `inputs`, or a folder that holds one at
+/// any depth, or lies inside one: writing there could replace a file the user gave. The error
+/// names `option` (e.g. "-o"), the output, and the input it would clash with.
+void checkOutputApartFromInputs(const std::filesystem::path& out,
+                                const std::vector<std::filesystem::path>& inputs,
+                                const std::string& option = "-o");
+
 /// Creates the output folder (and parents); an existing file in the way is an InputError.
 void prepareOutputDir(const std::filesystem::path& dir);
 
@@ -59,10 +66,11 @@ class OutputLock {
 /// when it did not exist; staging folders of runs that are gone are removed by the next run.
 class OutputStage {
  public:
-  /// `owned`: the names this command writes into the folder (files or folders; a trailing '*'
-  /// matches any name with that prefix): on commit, the owned entries it did not write again
-  /// are dropped, everything else in OUT is kept. An existing file in OUT's place is an
-  /// InputError.
+  /// `owned`: the names this command writes into the folder, as paths relative to OUT ("cloud.ply",
+  /// "programs/scan.v2"; a trailing '*' matches any path with that prefix): on commit, the owned
+  /// entries it did not write again are dropped, and everything else in OUT is kept, in the
+  /// folders it writes into too ("programs/": a user's note there stays). An existing file in
+  /// OUT's place is an InputError.
   OutputStage(std::filesystem::path out_dir, std::vector<std::string> owned);
   ~OutputStage();
   OutputStage(const OutputStage&) = delete;
@@ -75,8 +83,12 @@ class OutputStage {
 
  private:
   bool owned(const std::string& name) const;
-  void carryOver() const;
+  bool bothFolders(const std::filesystem::path& rel) const;
+  bool dropped(const std::filesystem::path& rel) const;
+  void dropOwned(const std::filesystem::path& rel) const;
+  bool mergeFolder(const std::filesystem::path& rel, std::size_t& entries) const;
   bool exchange();
+  void moveInto(const std::filesystem::path& rel) const;
   void commitByEntries();
 
   std::filesystem::path out_;

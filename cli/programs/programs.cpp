@@ -105,6 +105,32 @@ std::optional<ProgramFormat> programFormatOfFile(const std::string& file_name) {
   return std::nullopt;
 }
 
+std::vector<std::string> programFileNames(const std::string& name) {
+  std::vector<std::string> out;
+  for (const ProgramFormat f : {ProgramFormat::kCsv, ProgramFormat::kVplus, ProgramFormat::kKrl,
+                                ProgramFormat::kRapid, ProgramFormat::kUrscript}) {
+    const std::string n = programName(f, name);
+    switch (f) {
+      case ProgramFormat::kCsv:
+        out.push_back(n + ".csv");
+        break;
+      case ProgramFormat::kVplus:
+        out.insert(out.end(), {n + ".v2", n + "_table.csv"});
+        break;
+      case ProgramFormat::kKrl:
+        out.push_back(n + ".src");
+        break;
+      case ProgramFormat::kRapid:
+        out.push_back(n + ".mod");
+        break;
+      case ProgramFormat::kUrscript:
+        out.push_back(n + ".script");
+        break;
+    }
+  }
+  return out;
+}
+
 ProgramFiles writeProgram(const Trajectory& trajectory,
                           const kinematics::RobotModel& robot,
                           ProgramFormat format,

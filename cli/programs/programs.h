@@ -122,6 +122,10 @@ ProgramFiles writeProgram(const kinematics::Trajectory& trajectory,
                           ProgramFormat format,
                           const ProgramOptions& options = {});
 
+/// The files writeProgram() writes, in every format, for a program named `name` (the names as
+/// each language makes them valid): what a command that writes programs owns in its folder.
+std::vector<std::string> programFileNames(const std::string& name);
+
 /// URScript: the largest program written, bytes. UR controllers have failed to load scripts of
 /// several megabytes (an 18 MB one crashed a UR5 on import); at about 130 bytes per planned
 /// sample this holds some 7 500 samples, a 25-minute scan at 0.2 s.
