@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include <fmt/format.h>
+
 #include "collision/convex_hull.h"
 #include "collision/fcl_geometry.h"
 #include "kinematics/error.h"
@@ -222,6 +224,7 @@ Scene::Scene(const kinematics::CellModel& cell, const ClearanceConfig& config)
   }
 
   pairs_ = selectPairs(bodies_, config, cell.robot.definition().allowed_collisions);
+  refuseTableOverlaps();
 
   geometry_->map_bodies = geometry_->bodies;
   if (config.link_meshes == LinkMeshes::kExact) return;
@@ -275,6 +278,35 @@ void Scene::bodyPoses(double theta,
         X_W[i] = cell_.X_WB * frames[6] * cell_.scanner.X_FS;
         break;
     }
+  }
+}
+
+// The table turns about its own axis into no new space, so no motion pair measures it against
+// what stands still (the robot's base, world obstacles): an overlap there is a cell that cannot
+// be built, refused here rather than planned and validated as clear.
+void Scene::refuseTableOverlaps() const {
+  const int table = bodyIndex("table");
+  if (table < 0) return;
+  std::vector<Eigen::Isometry3d> X_W;
+  bodyPoses(0.0, kinematics::JointVector::Zero(), X_W);
+  const auto t = static_cast<std::size_t>(table);
+  for (std::size_t i = 0; i < bodies_.size(); ++i) {
+    const BodyInfo& b = bodies_[i];
+    const bool base = b.motion == BodyMotion::kRobotLink && b.link == 0;
+    if (!base && b.motion != BodyMotion::kWorld) continue;
+    const detail::ShapeDistance d = detail::bodyDistance(
+        geometry_->bodies[t], X_W[t], geometry_->bodies[i], X_W[i], 1e-3, false, false);
+    if (!d.penetrating) continue;
+    throw InputError(
+        base ? fmt::format("the table (table.axis, table.radius_mm, table.height_mm) overlaps "
+                           "the robot's base '{}': expected the table clear of the robot; move "
+                           "table.axis away from the robot or make the table smaller",
+                           b.name)
+             : fmt::format("the table (table.axis, table.radius_mm, table.height_mm) overlaps "
+                           "the obstacle '{}', which stands in the world: expected the table to "
+                           "turn clear of it; move the obstacle, or carry it on the table "
+                           "(carrier: table)",
+                           b.name));
   }
 }
 

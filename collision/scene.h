@@ -127,6 +127,9 @@ class Scene {
   const detail::SceneGeometry& geometry() const { return *geometry_; }
 
  private:
+  /// InputError when the table overlaps the robot's base or a world obstacle where it stands.
+  void refuseTableOverlaps() const;
+
   kinematics::CellModel cell_;
   std::vector<BodyInfo> bodies_;
   std::vector<PairInfo> pairs_;

@@ -467,6 +467,45 @@ TEST(Clearance, ThreadsSharingOneSceneGetIdenticalResults) {
   for (const auto& r : results) EXPECT_EQ(r, reference);
 }
 
+// The table turns into no new space, so nothing measures it against the base or the world's
+// obstacles in motion: a cell where it overlaps them where it stands is refused, naming the
+// keys; one where it is clear of them (the demo, a post beside the table) is not.
+TEST(Scene, ATableOverlappingTheBaseOrAWorldObstacleIsRefused) {
+  const auto scene = [](const std::vector<std::string>& set) {
+    const cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", set);
+    return Scene(cli::buildCell(job), cli::clearanceConfig(job));
+  };
+  EXPECT_NO_THROW(scene({}));
+  const std::string post =
+      "obstacles=[{name: post, type: box, size_mm: [40, 40, 300], pose: "
+      "{xyz_mm: [%X, 0, 0]}}]";
+  const auto with_post = [&](const std::string& x) {
+    std::string s = post;
+    s.replace(s.find("%X"), 2, x);
+    return s;
+  };
+  EXPECT_NO_THROW(scene({with_post("760")}));  // 20 mm beyond the table's rim (520 + 200 + 20)
+  struct Case {
+    std::vector<std::string> set;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      // The table's rim 35 mm into the base (its disc ends 165 mm from the robot's axis).
+      {{"table.axis.xyz_mm=[165, 0, 0]"}, "overlaps the robot's base"},
+      {{"table.axis.xyz_mm=[0, 0, 0]"}, "overlaps the robot's base"},
+      {{with_post("700")}, "overlaps the obstacle 'post', which stands in the world"},
+  };
+  for (const Case& c : cases) {
+    try {
+      scene(c.set);
+      ADD_FAILURE() << c.set[0] << ": no error";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(c.message), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("table.axis"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(Scene, CornerBoxesWithNegativeSizesAreNormalised) {
   const fs::path dir =
       fs::temp_directory_path() / ("scanplan_test_scene_" + std::to_string(::getpid()));
@@ -777,13 +816,13 @@ TEST(SelfPairGrid, ABinsBoundHoldsAtEveryConfigurationInIt) {
       ASSERT_LE(lower, d + 1e-9) << scene.bodies()[a].name << " - " << scene.bodies()[b].name;
       ++checked;
       if (d >= scene.pairs()[p].thresholds.d_high) continue;
-      ASSERT_GE(lower, d - 2.0 * kErosion * 1.001) << scene.bodies()[a].name << " - "
-                                                   << scene.bodies()[b].name;
+      ASSERT_GE(lower, d - 2.0 * kErosion * 1.001)
+          << scene.bodies()[a].name << " - " << scene.bodies()[b].name;
       ++near;
     }
   }
   EXPECT_GT(checked, 1000u * covered * 9 / 10);
-  EXPECT_GT(near, 200u);  // the second check is not vacuous
+  EXPECT_GT(near, 200u);                // the second check is not vacuous
   EXPECT_LT(grid.measured(), checked);  // neighbours share bins
 }
 
