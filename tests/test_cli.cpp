@@ -861,15 +861,19 @@ void earlierRun(const fs::path& out) {
   write(out / "programs" / "scan.src", "old krl");
   write(out / "programs" / "note.txt", "my note");
   write(out / "programs" / "other_run" / "x.v2", "another run's");
+  write(out / "profiles" / "profile_000001.png", "old image");  // replaced by another
+  write(out / "setup2" / "job.yaml", "old second setup");       // a folder only of old outputs
 }
 
-const std::vector<std::string> kOwned = {"report.json", "trajectory.csv", "programs/scan.v2",
-                                         "programs/scan.src"};
+const std::vector<std::string> kOwned = {"report.json",        "trajectory.csv",
+                                         "programs/scan.v2",   "programs/scan.src",
+                                         "profiles/profile_*", "setup2/job.yaml"};
 
 // This run: a report and a program.
 void stageRun(const fs::path& stage) {
   write(stage / "report.json", "new report");
   write(stage / "programs" / "scan.v2", "new program");
+  write(stage / "profiles" / "profile_000002.png", "new image");
 }
 
 void expectPublished(const fs::path& out) {
@@ -881,6 +885,9 @@ void expectPublished(const fs::path& out) {
   EXPECT_FALSE(fs::exists(out / "programs" / "scan.src")) << "owned, not written again: dropped";
   EXPECT_EQ(read(out / "programs" / "note.txt"), "my note") << "a folder is not replaced whole";
   EXPECT_EQ(read(out / "programs" / "other_run" / "x.v2"), "another run's");
+  EXPECT_FALSE(fs::exists(out / "profiles" / "profile_000001.png"));
+  EXPECT_EQ(read(out / "profiles" / "profile_000002.png"), "new image");
+  EXPECT_FALSE(fs::exists(out / "setup2")) << "held only earlier outputs";
   EXPECT_TRUE(leftovers(out).empty());
 }
 

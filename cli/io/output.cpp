@@ -590,9 +590,10 @@ bool OutputStage::exchange() {
   return true;
 }
 
-// The fallback, for OUT's folder `rel` that this run writes nothing into: its dropped entries
-// removed (in its folders too), and the folder itself when that empties it.
-void OutputStage::dropOwned(const fs::path& rel) const {
+// The fallback, for OUT's folder `rel`: its dropped entries removed (in its folders that this run
+// writes nothing into too), and, when this run writes nothing into it (`remove_emptied`), the
+// folder itself if that empties it.
+void OutputStage::dropOwned(const fs::path& rel, bool remove_emptied) const {
   std::error_code ec;
   std::vector<fs::path> names;
   for (const auto& e : fs::directory_iterator(out_ / rel, ec)) names.push_back(e.path().filename());
@@ -600,10 +601,10 @@ void OutputStage::dropOwned(const fs::path& rel) const {
     if (dropped(rel / name)) {
       fs::remove_all(out_ / rel / name, ec);
     } else if (realFolder(out_ / rel / name) && !present(stage_ / rel / name)) {
-      dropOwned(rel / name);
+      dropOwned(rel / name, true);
     }
   }
-  if (!names.empty() && fs::is_empty(out_ / rel, ec)) fs::remove(out_ / rel, ec);
+  if (remove_emptied && !names.empty() && fs::is_empty(out_ / rel, ec)) fs::remove(out_ / rel, ec);
 }
 
 // The fallback for a folder in both: the staged entries renamed into OUT's folder one by one
@@ -613,7 +614,7 @@ void OutputStage::moveInto(const fs::path& rel) const {
   std::vector<fs::path> staged;
   for (const auto& e : fs::directory_iterator(stage_ / rel, ec))
     staged.push_back(e.path().filename());
-  dropOwned(rel);
+  dropOwned(rel, false);
   for (const fs::path& name : staged) {
     if (bothFolders(rel / name)) {
       moveInto(rel / name);
@@ -640,7 +641,7 @@ void OutputStage::commitByEntries() {
     if (dropped(p.filename())) {
       fs::remove_all(p, ec);
     } else if (realFolder(p) && !present(stage_ / p.filename())) {
-      dropOwned(p.filename());
+      dropOwned(p.filename(), true);
     }
   }
   for (const fs::path& p : staged) {

@@ -85,7 +85,7 @@ class OutputStage {
   bool owned(const std::string& name) const;
   bool bothFolders(const std::filesystem::path& rel) const;
   bool dropped(const std::filesystem::path& rel) const;
-  void dropOwned(const std::filesystem::path& rel) const;
+  void dropOwned(const std::filesystem::path& rel, bool remove_emptied) const;
   bool mergeFolder(const std::filesystem::path& rel, std::size_t& entries) const;
   bool exchange();
   void moveInto(const std::filesystem::path& rel) const;
