@@ -59,6 +59,23 @@ void checkOptions(const ProgramOptions& o) {
 }
 
 // The program's identifier in each language.
+// The files of a program named `n` (as its language makes it) in `format`, the program first.
+std::vector<std::string> filesOf(ProgramFormat format, const std::string& n) {
+  switch (format) {
+    case ProgramFormat::kCsv:
+      return {n + ".csv"};
+    case ProgramFormat::kVplus:
+      return {n + ".v2", n + "_table.csv"};
+    case ProgramFormat::kKrl:
+      return {n + ".src"};
+    case ProgramFormat::kRapid:
+      return {n + ".mod"};
+    case ProgramFormat::kUrscript:
+      return {n + ".script"};
+  }
+  return {};
+}
+
 std::string programName(ProgramFormat format, const std::string& name) {
   switch (format) {
     case ProgramFormat::kVplus:
@@ -109,24 +126,8 @@ std::vector<std::string> programFileNames(const std::string& name) {
   std::vector<std::string> out;
   for (const ProgramFormat f : {ProgramFormat::kCsv, ProgramFormat::kVplus, ProgramFormat::kKrl,
                                 ProgramFormat::kRapid, ProgramFormat::kUrscript}) {
-    const std::string n = programName(f, name);
-    switch (f) {
-      case ProgramFormat::kCsv:
-        out.push_back(n + ".csv");
-        break;
-      case ProgramFormat::kVplus:
-        out.insert(out.end(), {n + ".v2", n + "_table.csv"});
-        break;
-      case ProgramFormat::kKrl:
-        out.push_back(n + ".src");
-        break;
-      case ProgramFormat::kRapid:
-        out.push_back(n + ".mod");
-        break;
-      case ProgramFormat::kUrscript:
-        out.push_back(n + ".script");
-        break;
-    }
+    const std::vector<std::string> files = filesOf(f, programName(f, name));
+    out.insert(out.end(), files.begin(), files.end());
   }
   return out;
 }
@@ -151,24 +152,24 @@ ProgramFiles writeProgram(const Trajectory& trajectory,
     if (s.over_speed) ++result.over_speed_segments;
   }
   c.over_speed = result.over_speed_segments;
+  const std::vector<std::string> files = filesOf(format, c.name);
   switch (format) {
     case ProgramFormat::kCsv:
-      result.files.emplace_back(c.name + ".csv", kinematics::trajectoryToCsv(trajectory));
+      result.files.emplace_back(files[0], kinematics::trajectoryToCsv(trajectory));
       break;
     case ProgramFormat::kVplus: {
-      const std::string table_file = c.name + "_table.csv";
-      result.files.emplace_back(c.name + ".v2", detail::vplusProgram(c, table_file));
-      result.files.emplace_back(table_file, detail::vplusTable(c));
+      result.files.emplace_back(files[0], detail::vplusProgram(c, files[1]));
+      result.files.emplace_back(files[1], detail::vplusTable(c));
       break;
     }
     case ProgramFormat::kKrl:
-      result.files.emplace_back(c.name + ".src", detail::krlProgram(c));
+      result.files.emplace_back(files[0], detail::krlProgram(c));
       break;
     case ProgramFormat::kRapid:
-      result.files.emplace_back(c.name + ".mod", detail::rapidProgram(c));
+      result.files.emplace_back(files[0], detail::rapidProgram(c));
       break;
     case ProgramFormat::kUrscript:
-      result.files.emplace_back(c.name + ".script", detail::urscriptProgram(c));
+      result.files.emplace_back(files[0], detail::urscriptProgram(c));
       break;
   }
   for (auto& file : result.files) file.second = detail::asciiText(file.second);
