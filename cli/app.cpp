@@ -6,6 +6,7 @@
 #include <exception>
 #include <optional>
 #include <string>
+#include <system_error>
 #include <utility>
 #include <vector>
 
@@ -95,6 +96,21 @@ class SilencedStdout {
  private:
   int saved_ = -1;
 };
+
+// What the command printed reached standard output, or the run is an error: a summary, a JSON
+// document or a job lost to a full disk or a closed descriptor must not look like success.
+ExitCode withStdoutWritten(ExitCode code) {
+  errno = 0;
+  const bool flushed = std::fflush(stdout) == 0;
+  const int error = errno;
+  if (flushed && !std::ferror(stdout)) return code;
+  std::fprintf(stderr,
+               "scanplan: error: standard output: cannot be written%s%s: what the "
+               "command printed there is incomplete\n",
+               error != 0 ? ": " : "",
+               error != 0 ? std::error_code(error, std::generic_category()).message().c_str() : "");
+  return code == ExitCode::kOk ? ExitCode::kInput : code;
+}
 
 void addOverrides(CLI::App& cmd, std::vector<std::string>& overrides) {
   cmd.add_option("--set", overrides,
@@ -707,7 +723,7 @@ int run(int argc, char** argv) {
   if (!checkChoices(commands)) return static_cast<int>(ExitCode::kUsage);
   if (commands.completion_cmd->parsed()) {
     std::fputs(completionScript(app, commands.completion_shell).c_str(), stdout);
-    return static_cast<int>(ExitCode::kOk);
+    return static_cast<int>(withStdoutWritten(ExitCode::kOk));
   }
 
   setUpLogging(commands.quiet ? -1 : commands.verbose);
@@ -715,12 +731,15 @@ int run(int argc, char** argv) {
   try {
     requireInputs(commands);
     spdlog::debug("scanplan {}: {}", SCANPLAN_VERSION, fmt::join(argv, argv + argc, " "));
-    const SilencedStdout silenced(commands.quiet && printsSummaryOnly(commands));
-    const ExitCode code = dispatch(commands);
+    ExitCode code = ExitCode::kOk;
+    {
+      const SilencedStdout silenced(commands.quiet && printsSummaryOnly(commands));
+      code = dispatch(commands);
+    }
     spdlog::debug("done in {:.2f} s, exit code {}",
                   std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
                   static_cast<int>(code));
-    return static_cast<int>(code);
+    return static_cast<int>(withStdoutWritten(code));
   } catch (const InputError& e) {
     std::fprintf(stderr, "scanplan: error: %s\n", e.what());
     return static_cast<int>(ExitCode::kInput);

@@ -61,8 +61,22 @@ bool pairByDefault(const BodyInfo& a, const BodyInfo& b) {
   return true;
 }
 
+// Two bodies that can move relative to one another: of different rigid groups, apart from the
+// table and what stands in the world (the table turns about its own axis, into no new space; an
+// overlap at rest is refused by Scene::refuseTableOverlaps). Only such pairs are candidates, so
+// that thousands of obstacles standing still cost nothing among themselves.
+bool canMoveApart(const BodyInfo& a, const BodyInfo& b) {
+  const int ga = rigidGroup(a), gb = rigidGroup(b);
+  if (ga == gb) return false;
+  const auto table = [](const BodyInfo& body) {
+    return body.motion == BodyMotion::kTable && body.name == "table";
+  };
+  return !((table(a) && gb == -1) || (table(b) && ga == -1));
+}
+
 // A pair checked or not, and its thresholds.
 struct Candidate {
+  int a, b;
   bool enabled;
   PairThresholds t;
 };
@@ -76,35 +90,30 @@ int bodyNamed(const std::vector<BodyInfo>& bodies, const std::string& name) {
   return -1;
 }
 
-// Applies one rule to every pair of bodies it matches (candidates in the order of the pairs
-// a < b); a rule that matches no pair is an input error.
+// Applies one rule to every candidate pair it matches; a rule that matches none is an input
+// error.
 void applyRule(const PairRule& rule,
                const std::vector<BodyInfo>& bodies,
                std::vector<Candidate>& candidates) {
-  const int n = static_cast<int>(bodies.size());
   bool any = false;
-  std::size_t c = 0;
-  for (int a = 0; a < n; ++a) {
-    for (int b = a + 1; b < n; ++b, ++c) {
-      const BodyInfo& A = bodies[static_cast<std::size_t>(a)];
-      const BodyInfo& B = bodies[static_cast<std::size_t>(b)];
-      if (!((matches(rule.a, A) && matches(rule.b, B)) ||
-            (matches(rule.a, B) && matches(rule.b, A)))) {
-        continue;
-      }
-      any = true;
-      Candidate& cand = candidates[c];
-      if (rule.action == PairRule::Action::kExclude) cand.enabled = false;
-      if (rule.action == PairRule::Action::kInclude) cand.enabled = true;
-      if (rule.d_low >= 0.0) cand.t.d_low = rule.d_low;
-      if (rule.d_high >= 0.0) cand.t.d_high = rule.d_high;
-      if (rule.gamma > 0.0) cand.t.gamma = rule.gamma;
+  for (Candidate& cand : candidates) {
+    const BodyInfo& A = bodies[static_cast<std::size_t>(cand.a)];
+    const BodyInfo& B = bodies[static_cast<std::size_t>(cand.b)];
+    if (!((matches(rule.a, A) && matches(rule.b, B)) ||
+          (matches(rule.a, B) && matches(rule.b, A)))) {
+      continue;
     }
+    any = true;
+    if (rule.action == PairRule::Action::kExclude) cand.enabled = false;
+    if (rule.action == PairRule::Action::kInclude) cand.enabled = true;
+    if (rule.d_low >= 0.0) cand.t.d_low = rule.d_low;
+    if (rule.d_high >= 0.0) cand.t.d_high = rule.d_high;
+    if (rule.gamma > 0.0) cand.t.gamma = rule.gamma;
   }
   if (!any) {
     throw InputError("constraints.clearance.pairs: rule [" + rule.a + ", " + rule.b +
-                     "] matches no pair of bodies: expected body names, globs, 'robot' or "
-                     "'obstacles'");
+                     "] matches no pair of bodies that can move relative to one another: "
+                     "expected body names, globs, 'robot' or 'obstacles'");
   }
 }
 
@@ -114,12 +123,12 @@ std::vector<PairInfo> selectPairs(const std::vector<BodyInfo>& bodies,
                                   const ClearanceConfig& config,
                                   const std::vector<std::array<std::string, 2>>& allowed) {
   const int n = static_cast<int>(bodies.size());
-  std::vector<Candidate> candidates;
+  std::vector<Candidate> candidates;  // in the order of the pairs a < b
   for (int a = 0; a < n; ++a) {
+    const BodyInfo& A = bodies[static_cast<std::size_t>(a)];
     for (int b = a + 1; b < n; ++b) {
-      candidates.push_back(
-          {pairByDefault(bodies[static_cast<std::size_t>(a)], bodies[static_cast<std::size_t>(b)]),
-           config.defaults});
+      const BodyInfo& B = bodies[static_cast<std::size_t>(b)];
+      if (canMoveApart(A, B)) candidates.push_back({a, b, pairByDefault(A, B), config.defaults});
     }
   }
   // Allowed pairs by exact name (not as rule patterns: a link may be named `robot` or hold glob
@@ -128,25 +137,23 @@ std::vector<PairInfo> selectPairs(const std::vector<BodyInfo>& bodies,
     int a = bodyNamed(bodies, name_a), b = bodyNamed(bodies, name_b);
     if (a < 0 || b < 0 || a == b) continue;
     if (a > b) std::swap(a, b);
-    // Candidates run over pairs (i < j) row by row: (a, b) is at a·n − a(a+1)/2 + (b − a − 1).
-    const auto index = static_cast<std::size_t>(a * n - a * (a + 1) / 2 + (b - a - 1));
-    candidates[index].enabled = false;
+    const auto it = std::lower_bound(candidates.begin(), candidates.end(), std::pair{a, b},
+                                     [](const Candidate& c, const std::pair<int, int>& p) {
+                                       return std::pair{c.a, c.b} < p;
+                                     });
+    if (it != candidates.end() && it->a == a && it->b == b) it->enabled = false;
   }
   for (const PairRule& rule : config.rules) applyRule(rule, bodies, candidates);
   std::vector<PairInfo> pairs;
-  std::size_t c = 0;
-  for (int a = 0; a < n; ++a) {
-    for (int b = a + 1; b < n; ++b, ++c) {
-      if (!candidates[c].enabled) continue;
-      const PairThresholds& t = candidates[c].t;
-      if (!(t.d_low < t.d_high)) {
-        throw InputError("constraints.clearance: pair " + bodies[static_cast<std::size_t>(a)].name +
-                         " ↔ " + bodies[static_cast<std::size_t>(b)].name + ": d_low " +
-                         std::to_string(toMm(t.d_low)) + " mm is not below d_high " +
-                         std::to_string(toMm(t.d_high)) + " mm: expected d_low < d_high");
-      }
-      pairs.push_back({a, b, t});
+  for (const Candidate& c : candidates) {
+    if (!c.enabled) continue;
+    if (!(c.t.d_low < c.t.d_high)) {
+      throw InputError("constraints.clearance: pair " + bodies[static_cast<std::size_t>(c.a)].name +
+                       " ↔ " + bodies[static_cast<std::size_t>(c.b)].name + ": d_low " +
+                       std::to_string(toMm(c.t.d_low)) + " mm is not below d_high " +
+                       std::to_string(toMm(c.t.d_high)) + " mm: expected d_low < d_high");
     }
+    pairs.push_back({c.a, c.b, c.t});
   }
   return pairs;
 }

@@ -36,19 +36,19 @@ void addBodies(const kinematics::CellModel& cell,
     const auto& link = robot.links[static_cast<std::size_t>(k)];
     const std::string fallback = k == 0 ? std::string("base") : "link" + std::to_string(k);
     scene.bodies.push_back(
-        {link.name.empty() ? fallback : link.name, k, surfaces(link.shapes, tess), {}});
+        {link.name.empty() ? fallback : link.name, k, surfaces(link.shapes, tess), {}, {}});
   }
-  scene.bodies.push_back({"scanner", kReplayScannerFrame, surfaces(cell.scanner.body, tess), {}});
+  scene.bodies.push_back({"scanner", kReplayScannerFrame, surfaces(cell.scanner.body, tess), {}, {}});
   kinematics::Shape table;
   table.geometry = kinematics::Cylinder{cell.table.radius, cell.table.height};
   table.X_BG.translation() << 0.0, 0.0, -0.5 * cell.table.height;
-  scene.bodies.push_back({"table", kReplayTableFrame, surfaces({table}, tess), {}});
+  scene.bodies.push_back({"table", kReplayTableFrame, surfaces({table}, tess), {}, {}});
   TriangleMesh part_R = part;
   for (Eigen::Vector3d& v : part_R.vertices) v = cell.part.X_RP * v;
-  scene.bodies.push_back({"part", kReplayTableFrame, std::move(part_R), {}});
+  scene.bodies.push_back({"part", kReplayTableFrame, std::move(part_R), {}, {}});
   for (const kinematics::Obstacle& o : cell.obstacles) {
     const int frame = o.carrier == kinematics::Carrier::kTable ? kReplayTableFrame : kReplayWorld;
-    scene.bodies.push_back({o.name, frame, surfaces(o.shapes, tess), {}});
+    scene.bodies.push_back({o.name, frame, surfaces(o.shapes, tess), {}, {}});
   }
 }
 

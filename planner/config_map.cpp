@@ -13,6 +13,7 @@
 
 #include "kinematics/error.h"
 #include "kinematics/ramp.h"
+#include "kinematics/resources.h"
 #include "kinematics/units.h"
 
 namespace scanplan::planner {
@@ -178,6 +179,41 @@ CellScore scoreJoints(const kinematics::RobotModel& robot,
   return best;
 }
 
+// The map's memory against map.memory_limit_mb and what this process can still allocate, and its
+// work (a distance per body pair, branch and cell at most) against kMaxMapPairChecks: refused
+// before anything is allocated or computed.
+void checkMapCost(const collision::Scene& scene,
+                  std::size_t nb,
+                  std::size_t na,
+                  std::size_t nt,
+                  const MapRequest& request) {
+  const std::string grid = fmt::format("{} branch(es) x {} angles x {} time samples", nb, na, nt);
+  const std::string coarser =
+      "a coarser map.angle_step_deg, a larger scan.dt_s, a fixed map.branch";
+  const std::size_t bytes = mapBytes(nb, na, nt);
+  const std::size_t available = kinematics::availableMemoryBytes();
+  if (bytes > request.memory_limit_bytes || bytes > available) {
+    const bool setting = request.memory_limit_bytes <= available;
+    throw InputError(
+        fmt::format("map: {} need {}, over {} ({}): expected {} or {}", grid,
+                    kinematics::megabytes(static_cast<double>(bytes)),
+                    setting ? "map.memory_limit_mb" : "the memory this machine has available",
+                    kinematics::megabytes(
+                        static_cast<double>(setting ? request.memory_limit_bytes : available)),
+                    coarser, setting ? "a higher limit" : "more memory"));
+  }
+  const double checks =
+      static_cast<double>(nb * na * nt) * static_cast<double>(scene.pairs().size());
+  if (checks > kMaxMapPairChecks) {
+    throw InputError(fmt::format(
+        "map: {} x {} body pairs = {:.1e} distance checks at most, over the {:.0e} a map takes "
+        "on (hours of work on a workstation): expected fewer obstacles, "
+        "constraints.clearance.pairs "
+        "that exclude pairs which cannot meet, or {}",
+        grid, scene.pairs().size(), checks, kMaxMapPairChecks, coarser));
+  }
+}
+
 ConfigMap emptyMap(const collision::Scene& scene,
                    const kinematics::ScanPath& path,
                    const MapRequest& request) {
@@ -186,17 +222,7 @@ ConfigMap emptyMap(const collision::Scene& scene,
   for (const auto& s : path.samples) map.times.push_back(s.t);
   map.branches = request.branches;
   const std::size_t nb = map.branches.size(), na = map.angles.size(), nt = map.times.size();
-  const std::size_t bytes = mapBytes(nb, na, nt);
-  if (bytes > request.memory_limit_bytes) {
-    const auto mb = [](std::size_t b) {
-      return fmt::format("{:.1f}", static_cast<double>(b) / (1 << 20));
-    };
-    throw InputError(fmt::format(
-        "map: {} branch(es) x {} angles x {} time samples need {} MB, over map.memory_limit_mb "
-        "({}): expected a "
-        "coarser map.angle_step_deg, a larger scan.dt_s, a fixed map.branch or a higher limit",
-        nb, na, nt, mb(bytes), mb(request.memory_limit_bytes)));
-  }
+  checkMapCost(scene, nb, na, nt, request);
   const std::size_t cells = nb * na * nt;
   map.f.assign(cells, 0.0f);
   map.joint.assign(cells, 0.0f);

@@ -54,6 +54,11 @@ struct ConfigMap {
   std::size_t cellsPerBranch() const { return angles.size() * times.size(); }
 };
 
+/// The distance checks a map takes on at most (branches × angles × times × body pairs): about
+/// hours of work on a workstation. buildConfigMaps refuses a larger map before it starts, as it
+/// refuses one over memory_limit_bytes or over the memory this process can still allocate.
+inline constexpr double kMaxMapPairChecks = 2e10;
+
 /// Bytes a map of this size needs (all layers).
 std::size_t mapBytes(std::size_t branches, std::size_t angles, std::size_t times);
 

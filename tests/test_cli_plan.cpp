@@ -5,16 +5,22 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
 #include "cli/config/job.h"
+#include "cli/config/problem.h"
 #include "cli/plot/image_io.h"
 #include "cli_support.h"
 #include "kinematics/trajectory.h"
@@ -131,13 +137,41 @@ TEST_F(CliPlan, ASecondPlanKeepsTheUsersFilesInItsFolders) {
   EXPECT_FALSE(fs::exists(out() / "programs/scan.src")) << "an earlier output not written again";
 }
 
+// This process's start time (/proc/self/stat field 22), as a run writes it into its lock.
+long long ownStartTime() {
+  std::ifstream in("/proc/self/stat");
+  std::string stat;
+  std::getline(in, stat);
+  std::istringstream fields(stat.substr(stat.rfind(')') + 1));
+  std::string field;
+  for (int i = 3; i <= 22; ++i) fields >> field;
+  return std::stoll(field);
+}
+
 TEST_F(CliPlan, AFolderInUseIsRefusedAndAStaleLockTakenOver) {
   fs::create_directories(out());
-  std::ofstream(beside("lock")) << ::getpid() << "\n";  // this test process: alive
+  // This test process stands for a run holding the lock: its pid and its start time.
+  std::ofstream(beside("lock")) << ::getpid() << " " << ownStartTime() << "\n";
   const Result busy = plan({"--set", "simulation.enabled=false"});
   EXPECT_EQ(busy.exit_code, 4) << describe(busy);
   EXPECT_TRUE(contains(busy.err, "is in use by pid " + std::to_string(::getpid()))) << busy.err;
   EXPECT_FALSE(fs::exists(out() / "report.json")) << "nothing written";
+  // The same live pid with another start time, or alone while its process is not scanplan: a
+  // later process reusing a dead run's pid. The lock is stale.
+  for (const std::string& holder :
+       {fmt::format("{} {}", ::getpid(), ownStartTime() + 1), std::to_string(::getpid())}) {
+    std::ofstream(beside("lock")) << holder << "\n";
+    const Result taken = plan({"--set", "simulation.enabled=false"});
+    EXPECT_EQ(taken.exit_code, 0) << holder << ": " << describe(taken);
+    EXPECT_FALSE(fs::exists(beside("lock"))) << "released when done";
+  }
+  // A FIFO where the lock goes is no lock: refused at once (a read would block), and kept.
+  ASSERT_EQ(::mkfifo(beside("lock").c_str(), 0644), 0);
+  const Result fifo = plan({"--set", "simulation.enabled=false"});
+  EXPECT_EQ(fifo.exit_code, 4) << describe(fifo);
+  EXPECT_TRUE(contains(fifo.err, "is not a lock file scanplan wrote")) << fifo.err;
+  EXPECT_TRUE(fs::is_fifo(beside("lock")));
+  fs::remove(beside("lock"));
   // A pid that has exited: a child that ends at once.
   const pid_t child = ::fork();
   if (child == 0) ::_exit(0);
@@ -415,3 +449,63 @@ TEST_F(CliPlan, SetOverridesAreValidatedLikeTheFile) {
 }
 
 }  // namespace
+
+namespace {
+
+// Coverage is claimed only at a resolution the simulated scanner has: one ray per profile is
+// refused naming the key; rays farther apart than the coverage spacing are a warning that gives
+// the real pitch (the line's width at mid depth over the gaps between rays) and the rays needed.
+TEST(ScannerResolution, OneRayIsRefusedAndSparseRaysAreWarnedWithTheRealPitch) {
+  cli::JobSpec job = cli::loadJob(kDemoJob, {"scanner.rays_per_profile=1"});
+  try {
+    (void)cli::toProblem(job);
+    ADD_FAILURE() << "one ray per profile was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("scanner.rays_per_profile: 1"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("demo_rings.yaml"), std::string::npos) << e.what();
+  }
+  job = cli::loadJob(kDemoJob, {"scanner.rays_per_profile=11"});
+  const kinematics::CellModel cell = cli::buildCell(job);
+  pipeline::ScanProblem problem = cli::toProblem(job, cell, kinematics::TriangleMesh{});
+  ASSERT_TRUE(problem.simulation);
+  const scanner::LaserWindow w = scanner::laserWindow(problem.optics);
+  const double pitch = 2.0 * w.halfWidth(0.5 * (w.z_min + w.z_max)) / 10.0;
+  problem.simulation->point_spacing = 0.0;  // measured at the rays' own pitch: no warning
+  EXPECT_EQ(cli::checkScannerResolution(job, problem), "");
+  problem.simulation->point_spacing = 1.01 * pitch;
+  EXPECT_EQ(cli::checkScannerResolution(job, problem), "");
+  problem.simulation->point_spacing = 0.5 * pitch;
+  const std::string warning = cli::checkScannerResolution(job, problem);
+  EXPECT_NE(warning.find(fmt::format("{:.2f} mm apart", toMm(pitch))), std::string::npos)
+      << warning;
+  EXPECT_NE(warning.find(" 21 rays match"), std::string::npos) << warning;
+}
+
+}  // namespace
+
+// Output that cannot reach standard output (/dev/full: every write fails with ENOSPC) is an
+// error, exit 4, never a silent success: a job shown, a schema, a plan's JSON document.
+TEST_F(CliPlan, StandardOutputThatCannotBeWrittenIsAnError) {
+  if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  const fs::path err = dir_ / "err.txt";
+  const auto run = [&](const std::string& args) {
+    const std::string command =
+        std::string(SCANPLAN_BINARY) + " " + args + " > /dev/full 2> '" + err.string() + "'";
+    const int status = std::system(command.c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  };
+  for (const std::string& args :
+       {"job show '" + kDemoJob + "'", std::string("job schema"),
+        "plan '" + kDemoJob + "' -o '" + out().string() +
+            "' --json --set scan.dt_s=0.2 --set simulation.enabled=false"}) {
+    EXPECT_EQ(run(args), 4) << args;
+    EXPECT_NE(readFile(err).find("standard output: cannot be written"), std::string::npos)
+        << args << ": " << readFile(err);
+  }
+  // --quiet: the summary goes nowhere, so nothing is lost.
+  EXPECT_EQ(run("plan '" + kDemoJob + "' -o '" + out().string() +
+                "' --quiet --set scan.dt_s=0.2 --set simulation.enabled=false"),
+            0)
+      << readFile(err);
+}

@@ -339,9 +339,9 @@ TEST(Clearance, RulesExcludeIncludeAndSetThresholdsByGroup) {
   ClearanceConfig config = cli::clearanceConfig(demo.job);
   config.rules.push_back({"scanner", "*", PairRule::Action::kSet, 0.001, 0.040, 2.0});
   config.rules.push_back({"link3", "robot", PairRule::Action::kExclude});
-  config.rules.push_back({"table", "part", PairRule::Action::kInclude});
+  config.rules.push_back({"link5", "link6", PairRule::Action::kInclude});  // consecutive: off
   const Scene scene(demo.scene.cell(), config);
-  bool table_part = false;
+  bool link5_link6 = false;
   for (const auto& p : scene.pairs()) {
     const auto& na = scene.bodies()[static_cast<std::size_t>(p.a)].name;
     const auto& nb = scene.bodies()[static_cast<std::size_t>(p.b)].name;
@@ -351,12 +351,22 @@ TEST(Clearance, RulesExcludeIncludeAndSetThresholdsByGroup) {
       EXPECT_DOUBLE_EQ(p.thresholds.d_high, 0.040);
       EXPECT_DOUBLE_EQ(p.thresholds.gamma, 2.0);
     }
-    table_part = table_part || (na == "table" && nb == "part");
+    link5_link6 = link5_link6 || (na == "link5" && nb == "link6");
   }
-  EXPECT_TRUE(table_part);
+  EXPECT_TRUE(link5_link6);
   ClearanceConfig bad = config;
   bad.rules.push_back({"scaner", "*", PairRule::Action::kExclude});
   EXPECT_THROW(Scene(demo.scene.cell(), bad), InputError);
+  // The table and the part it carries never move apart: no pair to include, said so.
+  ClearanceConfig still = config;
+  still.rules.push_back({"table", "part", PairRule::Action::kInclude});
+  try {
+    const Scene s(demo.scene.cell(), still);
+    ADD_FAILURE() << "a rule over bodies that never move apart was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("can move relative to one another"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(Clearance, ScannerFoldedIntoLinkOneIsACollision) {

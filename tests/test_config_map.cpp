@@ -1001,3 +1001,59 @@ TEST_F(MapJob, MapCommandOverTheMemoryLimitIsAnInputError) {
 }
 
 }  // namespace
+
+namespace {
+
+// Thousands of obstacles standing in the world: the scene pairs each with the bodies that move
+// past it only (the arm's links, the scanner, what the table carries), never with one another;
+// a map whose distance checks (branches x angles x samples x pairs) would take hours is refused
+// before anything is computed, naming the obstacles among the remedies.
+TEST(ConfigMap, ManyObstaclesPairOnlyWithMovingBodiesAndAnOversizedMapIsRefused) {
+  const DemoMap& demo = demoMap();
+  kinematics::CellModel cell = demo.cell;
+  const std::size_t before = cell.obstacles.size();
+  constexpr std::size_t kCrates = 10000;
+  for (std::size_t i = 0; i < kCrates; ++i) {
+    kinematics::Shape crate;
+    crate.geometry = kinematics::Sphere{0.01};
+    crate.X_BG.translation() << -3.0 - 0.05 * static_cast<double>(i % 100),
+        0.05 * static_cast<double>(i / 100), 0.0;
+    cell.obstacles.push_back({"crate" + std::to_string(i), kinematics::Carrier::kWorld, {crate}});
+  }
+  const collision::Scene scene(cell, cli::clearanceConfig(demo.job));
+  std::size_t moving = 0;  // bodies that pass a world obstacle: arm links 1..6, scanner, cargo
+  for (const collision::BodyInfo& b : scene.bodies()) {
+    const bool cargo = b.motion == collision::BodyMotion::kTable && b.name != "table";
+    if ((b.ridesOnTheArm() && b.link != 0) || cargo) ++moving;
+  }
+  std::size_t crate_pairs = 0, crate_crate = 0;
+  for (const collision::PairInfo& p : scene.pairs()) {
+    const bool a = scene.bodies()[static_cast<std::size_t>(p.a)].name.rfind("crate", 0) == 0;
+    const bool b = scene.bodies()[static_cast<std::size_t>(p.b)].name.rfind("crate", 0) == 0;
+    crate_pairs += a || b;
+    crate_crate += a && b;
+  }
+  EXPECT_EQ(crate_crate, 0u);
+  EXPECT_EQ(crate_pairs, kCrates * moving) << moving << " moving bodies, " << before;
+  planner::MapRequest request = demo.request;
+  request.angle_step = deg(0.1);
+  const double checks =
+      static_cast<double>(request.branches.size() * 3600 * demo.path.samples.size()) *
+      static_cast<double>(scene.pairs().size());
+  ASSERT_GT(checks, planner::kMaxMapPairChecks) << "the case must be over the limit";
+  int progress_calls = 0;
+  try {
+    planner::buildConfigMap(scene, demo.settings, demo.path, request,
+                            [&](std::size_t, std::size_t) { ++progress_calls; });
+    ADD_FAILURE() << "no exception";
+  } catch (const InputError& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("distance checks"), std::string::npos) << message;
+    EXPECT_NE(message.find("fewer obstacles"), std::string::npos) << message;
+    EXPECT_NE(message.find(fmt::format("{} body pairs", scene.pairs().size())), std::string::npos)
+        << message;
+  }
+  EXPECT_EQ(progress_calls, 0) << "nothing computed";
+}
+
+}  // namespace

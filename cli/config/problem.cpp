@@ -43,9 +43,10 @@ void checkInReach(const JobSpec& job,
         toMm(reach.arm_reach)));
   }
   if (reach.beyond_fraction > 0.0) {
-    spdlog::warn("{}: part: {:.1f} % of the part's vertices are beyond the arm's reach at every "
-                 "table angle; they cannot be scanned",
-                 job.source.filename().string(), 100.0 * reach.beyond_fraction);
+    spdlog::warn(
+        "{}: part: {:.1f} % of the part's vertices are beyond the arm's reach at every "
+        "table angle; they cannot be scanned",
+        job.source.filename().string(), 100.0 * reach.beyond_fraction);
   }
 }
 
@@ -73,6 +74,32 @@ void checkOnTable(const JobSpec& job,
 }
 
 }  // namespace
+
+// One ray has no line width to measure with (coverage would count the whole line's width around
+// each point); rays farther apart than the spacing leave their tracks only.
+std::string checkScannerResolution(const JobSpec& job, const pipeline::ScanProblem& p) {
+  if (!p.simulation) return {};
+  const scanner::LaserWindow w = scanner::laserWindow(p.optics);
+  const double width = 2.0 * w.halfWidth(0.5 * (w.z_min + w.z_max));
+  const int rays = job.scanner.rays_per_profile;
+  if (rays < 2) {
+    throw InputError(fmt::format(
+        "{}: scanner.rays_per_profile: {}: one ray per profile has no line width, and coverage "
+        "would be measured over the whole {:.1f} mm line around each point: expected at least 2 "
+        "(the scanner's points per line; {} gives a {:.2f} mm pitch at mid depth)",
+        job.source.string(), rays, toMm(width), 200, toMm(width / 199.0)));
+  }
+  const double pitch = width / static_cast<double>(rays - 1);
+  const double spacing = p.simulation->point_spacing;
+  if (!(spacing > 0.0 && pitch > spacing * (1.0 + 1e-9))) return {};
+  return fmt::format(
+      "{}: scanner.rays_per_profile: {} rays put points {:.2f} mm apart across the line at "
+      "mid depth, coarser than the {:.2f} mm coverage is measured at: only the rays' tracks "
+      "count as covered; {} rays match the spacing",
+      job.source.filename().string(), rays, toMm(pitch), toMm(spacing),
+      static_cast<long long>(std::ceil(width / spacing - 1e-9)) + 1);
+}
+
 
 kinematics::LoadedMesh loadPart(const JobSpec& job, const kinematics::CellModel& cell) {
   kinematics::LoadedMesh part = loadPartMesh(job, cell.part);
@@ -202,6 +229,7 @@ pipeline::ScanProblem toProblem(const JobSpec& job,
       p.simulation->max_incidence = p.auto_scan->max_incidence;
     }
   }
+  if (const std::string w = checkScannerResolution(job, p); !w.empty()) spdlog::warn("{}", w);
   p.part = std::move(part);
   return p;
 }

@@ -19,12 +19,18 @@ kinematics::LoadedMesh loadPart(const JobSpec& job, const kinematics::CellModel&
 /// ring heights count from the table top (along the part's z), so they move into the part frame.
 scanner::PathRequest placedPathRequest(const JobSpec& job, const kinematics::CellModel& cell);
 
-/// The whole job as a problem: the cell, the part mesh, the scan path request and every
-/// stage's settings (validation and simulation nullopt when the job turns them off).
 /// The automatic scan's settings (`scan.auto`), SI.
 pipeline::AutoScanSettings autoScanSettings(const JobSpec& job);
+/// The whole job as a problem: the cell, the part mesh, the scan path request and every
+/// stage's settings (validation and simulation nullopt when the job turns them off). Logs
+/// checkScannerResolution's warning.
 pipeline::ScanProblem toProblem(const JobSpec& job);
-/// As above, with the cell and part mesh already built.
+/// The simulated scanner's resolution against the spacing coverage is measured at (the problem's
+/// simulation settings): InputError naming scanner.rays_per_profile for fewer than 2 rays; the
+/// warning (empty when none) when neighbouring rays lie farther apart at mid depth than that
+/// spacing, so that coverage counts their tracks only. Nothing without a simulation.
+std::string checkScannerResolution(const JobSpec& job, const pipeline::ScanProblem& problem);
+/// toProblem(job) with the cell and part mesh already built.
 pipeline::ScanProblem toProblem(const JobSpec& job,
                                 kinematics::CellModel cell,
                                 kinematics::TriangleMesh part);

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <functional>
 #include <mutex>
+#include <sstream>
 #include <streambuf>
 #include <string_view>
 #include <system_error>
@@ -286,12 +287,59 @@ bool alive(long pid) {
   return pid > 0 && (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH);
 }
 
-// The pid a lock file names, or 0 when it names none.
-long lockHolder(const fs::path& lock) {
-  std::ifstream in(lock);
+// The start time of process `pid` (clock ticks after boot, /proc/<pid>/stat field 22), or -1
+// when there is no such process. It tells a run from a later process that reuses its pid.
+long long startTime(long pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string stat;
+  std::getline(in, stat);
+  const auto close = stat.rfind(')');  // the name in parentheses may hold spaces
+  if (close == std::string::npos) return -1;
+  std::istringstream fields(stat.substr(close + 1));
+  std::string field;
+  for (int i = 3; i <= 22 && fields >> field; ++i) {
+    if (i == 22) return std::strtoll(field.c_str(), nullptr, 10);
+  }
+  return -1;
+}
+
+// A lock's holder: the pid and start time of the run that wrote it (0 and -1 when it names none).
+struct LockHolder {
   long pid = 0;
-  in >> pid;
-  return in ? pid : 0;
+  long long start = -1;
+};
+
+// The holder a lock file names. Anything but a regular file at the lock's name is not one
+// scanplan wrote (a FIFO would block the read): refused, and left alone.
+LockHolder lockHolder(const fs::path& lock, const fs::path& out_dir) {
+  std::error_code ec;
+  const fs::file_status status = fs::symlink_status(lock, ec);
+  if (!ec && fs::exists(status) && !fs::is_regular_file(status)) {
+    throw InputError(fmt::format(
+        "{}: {} is not a lock file scanplan wrote (a folder, link, pipe or device): expected "
+        "nothing there, or a lock file; remove it or choose another output folder",
+        out_dir.string(), lock.string()));
+  }
+  std::ifstream in(lock);
+  LockHolder holder;
+  in >> holder.pid;
+  if (!in) return {};
+  if (!(in >> holder.start)) holder.start = -1;
+  return holder;
+}
+
+// The lock's run is still going: its pid names a process started when the run started (a lock
+// without a start time: a process named scanplan). Any other process that now has the pid is
+// not the run: the lock is stale.
+bool holding(const LockHolder& holder) {
+  if (holder.pid <= 0 || !alive(holder.pid)) return false;
+  const long long start = startTime(holder.pid);
+  if (start < 0) return true;  // no /proc to tell: alive is all we know
+  if (holder.start >= 0) return start == holder.start;
+  std::ifstream comm("/proc/" + std::to_string(holder.pid) + "/comm");
+  std::string name;
+  std::getline(comm, name);
+  return name == "scanplan";
 }
 
 // OUT as an absolute path without a trailing separator; a symbolic link to a folder is followed
@@ -337,7 +385,8 @@ OutputLock::OutputLock(const fs::path& out_dir) : file_(beside(absoluteOut(out_d
   for (int attempt = 0; attempt < 2; ++attempt) {
     const int fd = ::open(file_.c_str(), O_CREAT | O_EXCL | O_WRONLY | O_CLOEXEC, 0644);
     if (fd >= 0) {
-      const std::string pid = std::to_string(static_cast<long>(::getpid())) + "\n";
+      const long self = static_cast<long>(::getpid());
+      const std::string pid = fmt::format("{} {}\n", self, startTime(self));
       const bool written = ::write(fd, pid.data(), pid.size()) == static_cast<ssize_t>(pid.size());
       ::close(fd);
       if (!written) break;
@@ -345,15 +394,15 @@ OutputLock::OutputLock(const fs::path& out_dir) : file_(beside(absoluteOut(out_d
       return;
     }
     if (errno != EEXIST) break;
-    const long holder = lockHolder(file_);
-    if (holder > 0 && alive(holder)) {
+    const LockHolder holder = lockHolder(file_, out_dir);
+    if (holding(holder)) {
       throw InputError(fmt::format(
           "{} is in use by pid {} (another scanplan run writing there): wait for it, or choose "
           "another output folder",
-          out_dir.string(), holder));
+          out_dir.string(), holder.pid));
     }
     std::error_code ignored;
-    fs::remove(file_, ignored);  // stale: its run was killed
+    fs::remove(file_, ignored);  // stale: its run ended without removing it
   }
   const int error = errno;
   throw InputError(fmt::format("{}: cannot create the lock file {}: {}", out_dir.string(),
