@@ -727,7 +727,7 @@ class UrscriptReader {
     if (!period_) r_.in.fail("'" + clipForMessage(first) + "' before seg() is defined");
     same(block(first), urscriptLastStep(*period_), at, "last step");
     if (!row_) r_.in.fail("the last step before any data row");
-    if (steps_ * *period_ < (*row_)[0] - 1e-6) servoStep(steps_ + 1, *row_, *row_);
+    if (static_cast<double>(steps_) * *period_ < (*row_)[0] - 1e-6) servoStep(steps_ + 1, *row_, *row_);
     last_step_ = true;
   }
 
