@@ -541,6 +541,19 @@ std::vector<SensorSpan> runs(const SensorEvaluation& e, std::size_t s, const Pic
 
 constexpr double kWindowTolerance = 1e-9;  // s: a window's ends count as inside it
 
+// The parts of a `during` window outside the trajectory's samples: the sensor must fire there,
+// and nothing shows it does (a window after the motion's end is never met, not met vacuously).
+std::vector<SensorSpan> unobserved(const kinematics::SensorExpectation& x,
+                                   const SensorEvaluation& evaluation) {
+  std::vector<SensorSpan> out;
+  if (x.kind != kinematics::SensorExpectation::Kind::kDuring) return out;
+  if (evaluation.t.empty()) return {SensorSpan{x.t0, x.t1, {}}};
+  const double first = evaluation.t.front(), last = evaluation.t.back();
+  if (x.t0 < first - kWindowTolerance) out.push_back({x.t0, std::min(x.t1, first), {}});
+  if (x.t1 > last + kWindowTolerance) out.push_back({std::max(x.t0, last), x.t1, {}});
+  return out;
+}
+
 }  // namespace
 
 std::vector<SensorSpan> firingSpans(const SensorEvaluation& evaluation, std::size_t s) {
@@ -601,6 +614,7 @@ std::vector<SensorRuleViolation> checkSensorRules(const std::vector<kinematics::
         found.push_back({s, fired, std::move(span)});
       }
     }
+    for (SensorSpan& span : unobserved(x, evaluation)) found.push_back({s, false, std::move(span)});
     std::stable_sort(found.begin(), found.end(),
                      [](const auto& a, const auto& b) { return a.span.t_start < b.span.t_start; });
     out.insert(out.end(), found.begin(), found.end());

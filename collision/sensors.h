@@ -115,7 +115,9 @@ struct SensorRuleViolation {
 std::string describeExpectation(const kinematics::SensorExpectation& expect);
 /// The rules of the cell's sensors on an evaluation: runs of samples where a sensor fires
 /// against its rule, or is silent where it must fire (kDuring, kAlways). A window's ends count
-/// as inside it (to 1e-9 s). In order of sensor, then time.
+/// as inside it (to 1e-9 s). The part of a kDuring window beyond the first or last sample is a
+/// violation (silent): the rule asks for firing there, and no sample shows it. In order of
+/// sensor, then time.
 std::vector<SensorRuleViolation> checkSensorRules(const std::vector<kinematics::Sensor>& sensors,
                                                   const SensorEvaluation& evaluation);
 

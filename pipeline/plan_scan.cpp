@@ -114,8 +114,9 @@ void autoPath(const ScanProblem& problem,
     samples += std::ceil((pass.samples.back().t - pass.samples.front().t) / path.dt) + 1.0;
   if (!(samples <= static_cast<double>(scanner::kMaxPathSamples)))
     throw InputError(fmt::format(
-        "scan.auto: the passes take {:.0f} samples every {} s: expected at most {} (raise "
-        "scan.dt_s or lower scan.auto.target_coverage)",
+        "scan.auto: the passes take {:.0f} samples every {} s: expected at most {} (the passes "
+        "move at scan.auto.point_spacing_mm times the frame rate: raise it or scan.dt_s, or "
+        "lower scan.auto.target_coverage)",
         samples, path.dt, scanner::kMaxPathSamples));
   for (std::size_t i = 0; i < plan.passes.size(); ++i) {
     const double begin = path.samples.empty() ? 0.0 : path.samples.back().t + path.dt;

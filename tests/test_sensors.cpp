@@ -293,6 +293,24 @@ TEST(Sensors, RulesBreakOverTheRightSpans) {
     EXPECT_EQ(v[0].span.t_start, 5.0);
     EXPECT_EQ(v[0].span.t_end, 5.0);
   }
+  {
+    // A `during` window after the motion's end (samples 0…9 s) is never met: nothing shows the
+    // sensor firing there. One straddling the end breaks over its unobserved part only.
+    const auto after = check({K::kDuring, 20.0, 30.0});
+    ASSERT_EQ(after.size(), 2u) << "fired at 3…5 outside it, silent over 20…30 s unseen";
+    EXPECT_TRUE(after[0].fired);
+    EXPECT_FALSE(after[1].fired);
+    EXPECT_EQ(after[1].span.t_start, 20.0);
+    EXPECT_EQ(after[1].span.t_end, 30.0);
+    e.readings[0][9].fires = true;  // fires at 9 s too: of [9, 12] only 9 s is seen
+    const auto straddling = check({K::kDuring, 9.0, 12.0});
+    ASSERT_EQ(straddling.size(), 2u) << "fired at 3…5 outside it, silent over 9…12 s unseen";
+    EXPECT_FALSE(straddling[1].fired);
+    EXPECT_EQ(straddling[1].span.t_start, 9.0);
+    EXPECT_EQ(straddling[1].span.t_end, 12.0);
+    // `not during` a window after the end: nothing fires there, nothing is asked.
+    EXPECT_TRUE(check({K::kNotDuring, 20.0, 30.0}).empty());
+  }
 }
 
 TEST(Sensors, ASensorNeverSeesTheBodyCarryingIt) {

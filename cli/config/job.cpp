@@ -281,6 +281,17 @@ template <class A>
 void describeAuto(A& a, AutoSpec& s) {
   a.field("max_incidence_deg", s.max_incidence_deg, Expect{1.0, 89.0, false, false, {}});
   a.field("point_spacing_mm", s.point_spacing_mm, Expect{0.0, 100.0, false, false, {}});
+  if constexpr (A::kReading) {
+    // Finer than any line scanner resolves: the passes, at spacing × frame rate, would crawl.
+    constexpr double kFinest = 0.001;
+    if (s.point_spacing_mm > 0.0 && s.point_spacing_mm < kFinest) {
+      a.fail("point_spacing_mm", formatNumber(s.point_spacing_mm),
+             fmt::format("0 (the line's point pitch at mid depth) or at least {} mm: the passes "
+                         "scan at the spacing times the frame rate, and finer than a micrometre "
+                         "no line scanner resolves",
+                         kFinest));
+    }
+  }
   a.field("target_coverage", s.target_coverage, Expect{0.01, 1.0, false, false, {}});
   a.field("max_passes", s.max_passes, Expect::range(1, 1000));
   a.field("time_budget_s", s.time_budget_s, Expect{0.1, 86400.0, false, false, {}});

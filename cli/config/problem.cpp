@@ -33,6 +33,13 @@ void checkInReach(const JobSpec& job,
   const double lever = cell.robot.definition().opw.c4 + cell.scanner.X_FS.translation().norm() +
                        std::hypot(window.z_max, window.y_far);
   const kinematics::PartReach reach = kinematics::partReach(cell, mesh, lever);
+  const double mount = cell.scanner.X_FS.translation().norm();
+  if (mount > reach.arm_reach - lever) {  // the arm's own stretch, shoulder to flange
+    throw InputError(fmt::format(
+        "{}: scanner.mount: the laser frame sits {:.0f} mm from the flange, more than the arm's "
+        "whole stretch of {:.0f} mm: expected the scanner's offset on the flange (xyz_mm, mm)",
+        job.source.string(), toMm(mount), toMm(reach.arm_reach - lever)));
+  }
   if (reach.nearest_excess > 0.0) {
     throw InputError(fmt::format(
         "{}: part: no point of the part ({:.0f} mm across) is within the arm's reach at any "
