@@ -175,11 +175,24 @@ void runCases(const std::vector<const SweepCase*>& todo,
   for (const std::string& key : keys) runGroup(groups[key], todo, jobs, finish, maps);
 }
 
+// The sweep file, its base jobs and their files: OUT must not be, hold or lie inside any.
+void checkOut(const fs::path& out, const Sweep& sweep) {
+  std::vector<fs::path> inputs{sweep.file};
+  std::set<fs::path> jobs;
+  for (const SweepCase& c : sweep.cases) {
+    if (!jobs.insert(c.job_file).second) continue;
+    const std::vector<fs::path> files = jobInputFiles(loadJob(c.job_file));
+    inputs.insert(inputs.end(), files.begin(), files.end());
+  }
+  checkOutputApartFromInputs(out, inputs);
+}
+
 }  // namespace
 
 BatchStats runBatchCases(const BatchOptions& options) {
   const auto start = Clock::now();
   const Sweep sweep = loadSweep(options.sweep_file);
+  checkOut(options.out_dir, sweep);
   const auto [shard, shards] = options.shard.empty() ? std::pair{1, 1} : parseShard(options.shard);
   const fs::path& out = options.out_dir;
   const int threads = options.jobs > 0 ? options.jobs : tbb::info::default_concurrency();
