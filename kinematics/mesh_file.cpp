@@ -164,8 +164,25 @@ namespace {
 
 // --- STL and OBJ: their triangles, counted before reading --------------------------------------
 
+// A keyword found in a stream of characters, one at a time.
+class Keyword {
+ public:
+  explicit Keyword(std::string_view word) : word_(word) {}
+  bool feed(char c) {
+    matched_ = c == word_[matched_] ? matched_ + 1 : (c == word_[0] ? 1 : 0);
+    if (matched_ < word_.size()) return false;
+    matched_ = 0;
+    return true;
+  }
+
+ private:
+  std::string_view word_;
+  std::size_t matched_ = 0;
+};
+
 // A binary STL is the size its count says (assimp's test); an ASCII one makes a triangle of
-// every three `vertex` keywords, up to a NUL byte (assimp reads the text as a C string).
+// every three `vertex` keywords, up to a NUL byte (assimp reads the text as a C string). Every
+// ASCII facet must hold three: assimp would keep three of a polygon's corners and drop the rest.
 std::uintmax_t stlTriangles(const std::filesystem::path& path, std::uintmax_t size) {
   const std::string start = head(path, 84);
   if (start.size() == 84) {
@@ -174,14 +191,18 @@ std::uintmax_t stlTriangles(const std::filesystem::path& path, std::uintmax_t si
     if (std::uintmax_t{count} * 50 + 84 == size) return count;
   }
   FileBytes bytes(path, size, 0);
-  constexpr std::string_view kVertex = "vertex";
-  std::size_t matched = 0;
-  std::uintmax_t vertices = 0;
+  Keyword vertex("vertex"), endfacet("endfacet");
+  std::uintmax_t vertices = 0, in_facet = 0, line = 1;
   for (char c = 0; bytes.peek(c) && c != '\0'; bytes.take()) {
-    matched = c == kVertex[matched] ? matched + 1 : (c == kVertex[0] ? 1 : 0);
-    if (matched == kVertex.size()) {
-      ++vertices;
-      matched = 0;
+    if (c == '\n') ++line;
+    if (vertex.feed(c)) ++vertices, ++in_facet;
+    if (endfacet.feed(c)) {
+      if (in_facet != 3) {
+        failMesh(path, "line " + std::to_string(line) + ": a facet with " +
+                           std::to_string(in_facet) +
+                           " vertices; expected 3 (an STL facet is a triangle)");
+      }
+      in_facet = 0;
     }
   }
   return vertices / 3;

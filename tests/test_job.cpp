@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
+#include <iterator>
 #include <string>
 #include <system_error>
 #include <variant>
@@ -252,6 +253,14 @@ TEST_F(JobFile, MalformedEmptyAndNonMappingFilesAreRejected) {
                         {at("empty.yaml", " the file holds nothing"), "expected a YAML mapping"}));
   EXPECT_TRUE(loadFails(write("list.yaml", "- robot: r.yaml\n"),
                         {at("list.yaml", " the file holds a list"), "mapping"}));
+  // A second document would be dropped: refused naming where it starts. One document with its
+  // own leading `---` is fine.
+  EXPECT_TRUE(loadFails(writeJob("---\ntable: {radius_mm: 200}\n"),
+                        {at("job.yaml", " holds 2 YAML documents"), "by line 4", "expected one"}));
+  EXPECT_TRUE(loadFails(writeJob("---\n"), {at("job.yaml", " holds 2 YAML documents")}));
+  std::ifstream plain(writeJob(""));
+  const std::string text((std::istreambuf_iterator<char>(plain)), std::istreambuf_iterator<char>());
+  EXPECT_NO_THROW(cli::loadJob(write("lead.yaml", "---\n" + text)));
 }
 
 TEST_F(JobFile, UnknownKeysAreNamedWithLineAndSuggestion) {

@@ -386,6 +386,24 @@ TEST_F(MeshLoadTest, MissingFileAndDirectoryAreInputErrors) {
   EXPECT_TRUE(containsAll(loadError(dir_ / "folder.stl"), {"folder.stl", "is a directory"}));
 }
 
+// An ASCII STL facet is a triangle: a facet of four corners (which assimp would cut to three)
+// or of two is refused naming the file and the facet's line; the cube it sits in still loads.
+TEST_F(MeshLoadTest, AnStlFacetOtherThanATriangleIsRefusedNamingItsLine) {
+  const std::string cube_text = asciiStl(facets(cube(7.0)));
+  EXPECT_EQ(loadMesh(write("cube.stl", cube_text)).mesh.triangles.size(), 12u);
+  const auto withFacet = [&](const std::string& corners) {
+    const std::string facet = "facet normal 0 0 1\nouter loop\n" + corners + "endloop\nendfacet\n";
+    std::string text = cube_text;
+    return text.insert(text.find("facet"), facet);
+  };
+  const std::string quad = withFacet("vertex 0 0 0\nvertex 1 0 0\nvertex 1 1 0\nvertex 0 1 0\n");
+  EXPECT_TRUE(containsAll(loadError(write("quad.stl", quad)),
+                          {"quad.stl", "a facet with 4 vertices; expected 3"}));
+  const std::string line = withFacet("vertex 0 0 0\nvertex 1 0 0\n");
+  EXPECT_TRUE(containsAll(loadError(write("line.stl", line)),
+                          {"line.stl", "line 7: a facet with 2 vertices; expected 3"}));
+}
+
 TEST_F(MeshLoadTest, EmptyFileIsAnInputError) {
   EXPECT_TRUE(containsAll(loadError(write("nothing.stl", "")), {"nothing.stl", "is empty"}));
 }
@@ -498,16 +516,12 @@ TEST(SharedBrokenMeshes, EachThrowsOrWarnsAsAssimpAllows) {
   // 66 facets stated, 4 held: the size fits neither layout, assimp refuses the file.
   EXPECT_TRUE(containsAll(loadError(dir / "incorrectFaceCounter.bin.stl"),
                           {"incorrectFaceCounter.bin.stl", "could not be read", "STL"}));
+  // An STL facet is a triangle: one of two or four corners is refused naming its line (assimp
+  // would keep three corners of the quad and drop the fourth).
   EXPECT_TRUE(containsAll(loadError(dir / "twoVertices.ascii.stl"),
-                          {"twoVertices.ascii.stl", "Invalid number of vertices"}));
-
-  // assimp keeps the first three corners of the 4-corner facet, which are collinear: the
-  // facet is dropped as degenerate, so the part loads open, with a warning.
-  const auto quad = loadMesh(dir / "quad.ascii.stl", inMetres());
-  EXPECT_EQ(quad.mesh.triangles.size(), 3u);
-  EXPECT_EQ(quad.report.degenerate_dropped, 1u);
-  EXPECT_EQ(quad.report.warnings.size(), 1u);
-  EXPECT_FALSE(quad.mesh.isClosed());
+                          {"twoVertices.ascii.stl", "a facet with 2 vertices; expected 3"}));
+  EXPECT_TRUE(containsAll(loadError(dir / "quad.ascii.stl"),
+                          {"quad.ascii.stl", "line 9: a facet with 4 vertices; expected 3"}));
 
   // Its normals are all zero, which STL permits; the winding is consistent, so it is a
   // correct closed tetrahedron with nothing to report.

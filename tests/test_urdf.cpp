@@ -198,6 +198,46 @@ TEST(Urdf, BadLinksJointsAndOpwFilesAreClearErrors) {
   fs::remove_all(dir);
 }
 
+// A joint of the chain that mimics another, and a link that two joints name as their child (a
+// closed chain, which urdfdom turns into a loop of parents), are refused naming the joint and the
+// link; a mimic on a joint off the chain is no concern of the arm's.
+TEST(Urdf, AMimicJointOnTheChainAndAClosedChainAreRefused) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("scanplan_urdf_tree_" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  const std::string text = test::readFile(urdfDir() / "viper_s650.urdf");
+  const auto imported = [&](const std::string& name, const std::string& from,
+                            const std::string& to) {
+    std::string edited = text;
+    const auto at = edited.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    test::writeFile(dir / name, edited.replace(at, from.size(), to));
+    cli::UrdfRobotSource src = source({"viper_s650", "", ""});
+    src.urdf = dir / name;
+    return [src] { cli::importUrdf(src); };
+  };
+  const std::string chain = "<parent link=\"link_2\"/><child link=\"link_3\"/>";
+  EXPECT_TRUE(
+      test::throwsInputError(imported("mimic.urdf", chain, chain + "<mimic joint=\"joint_2\"/>"),
+                             {"mimic.urdf", "joint 'joint_3' has <mimic joint=\"joint_2\">"}));
+  EXPECT_TRUE(test::throwsInputError(
+      imported("loop.urdf", "</robot>",
+               "<joint name=\"loop\" type=\"fixed\"><parent link=\"link_5\"/>"
+               "<child link=\"link_2\"/></joint></robot>"),
+      {"loop.urdf", "link 'link_2' is the child of two joints", "'joint_2' and 'loop'"}));
+  EXPECT_TRUE(test::throwsInputError(
+      imported("self.urdf", "</robot>",
+               "<link name=\"x\"/><joint name=\"self\" type=\"fixed\"><parent link=\"x\"/>"
+               "<child link=\"x\"/></joint></robot>"),
+      {"self.urdf"}));
+  EXPECT_NO_THROW(imported("off_chain.urdf", "</robot>",
+                           "<link name=\"finger\"/><joint name=\"finger_joint\" "
+                           "type=\"revolute\"><parent link=\"link_6\"/><child "
+                           "link=\"finger\"/><limit lower=\"0\" upper=\"1\" effort=\"0\" "
+                           "velocity=\"1\"/><mimic joint=\"joint_6\"/></joint></robot>")());
+  fs::remove_all(dir);
+}
+
 // A copy of the KR6 R700 URDF with a mesh in a ROS package, a box on a link fixed to link_6,
 // and a joint to a gripper finger off the chain, in a scratch folder.
 class UrdfPackages : public test::Cli {

@@ -143,15 +143,7 @@ constexpr double kMaxSweepChecks = 300;
 
 YAML::Node loadRoot(const fs::path& file) {
   requireYamlFile(file);
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(file.string());
-  } catch (const YAML::BadFile&) {
-    throw InputError(file.string() + ": cannot read the sweep file");
-  } catch (const YAML::Exception& e) {
-    throw InputError(
-        fmt::format("{}:{}:{}: {}", file.string(), e.mark.line + 1, e.mark.column + 1, e.msg));
-  }
+  const YAML::Node root = loadOneDocument(file);
   checkYamlSize(root, file.string());
   if (!root.IsMap()) throw InputError(file.string() + ": expected a mapping (jobs, vary, …)");
   std::set<std::string> top;

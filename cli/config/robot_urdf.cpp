@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <map>
 #include <mutex>
 #include <numbers>
 #include <sstream>
@@ -58,6 +59,28 @@ std::string readUrdfText(const fs::path& file) {
   return text.str();
 }
 
+// A URDF is a tree: each link the child of one joint at most, none its own parent. urdfdom
+// keeps the last of two joints naming one child, which can close a loop its walks never leave.
+void requireTree(const urdf::ModelInterface& model, const fs::path& file) {
+  std::map<std::string, std::string> parent_joint;  // child link → the joint naming it
+  for (const auto& [name, joint] : model.joints_) {
+    if (!joint) continue;
+    if (joint->parent_link_name == joint->child_link_name) {
+      throw InputError(
+          fmt::format("{}: joint '{}': link '{}' is its own parent: expected a tree "
+                      "of links (URDF has no closed chains)",
+                      file.string(), name, joint->child_link_name));
+    }
+    const auto [it, first] = parent_joint.emplace(joint->child_link_name, name);
+    if (!first) {
+      throw InputError(fmt::format(
+          "{}: link '{}' is the child of two joints, '{}' and '{}': expected a tree of links "
+          "(a closed chain is not a URDF scanplan can model)",
+          file.string(), joint->child_link_name, it->second, name));
+    }
+  }
+}
+
 urdf::ModelInterfaceSharedPtr parseUrdf(const fs::path& file) {
   const std::string text = readUrdfText(file);
   static std::mutex mutex;  // console_bridge's output handler is global
@@ -77,6 +100,7 @@ urdf::ModelInterfaceSharedPtr parseUrdf(const fs::path& file) {
         log.lines.empty() ? "urdfdom could not parse it"
                           : clipForMessage(fmt::format("{}", fmt::join(log.lines, "; ")), 400)));
   }
+  requireTree(*model, file);
   return model;
 }
 
@@ -136,8 +160,22 @@ std::vector<urdf::JointConstSharedPtr> chainPath(const urdf::ModelInterface& mod
           "expected a tip_link that base_link carries",
           source.urdf.string(), source.tip_link, source.base_link, link->name));
     }
+    if (link->parent_joint->mimic) {
+      throw InputError(fmt::format(
+          "{}: joint '{}' has <mimic joint=\"{}\">: it follows another joint, which scanplan's "
+          "chain of independent joints does not model; expected no <mimic> between base_link "
+          "'{}' and tip_link '{}'",
+          source.urdf.string(), link->parent_joint->name, link->parent_joint->mimic->joint_name,
+          source.base_link, source.tip_link));
+    }
     path.push_back(link->parent_joint);
     link = model.getLink(link->parent_joint->parent_link_name);
+    if (path.size() > model.joints_.size()) {
+      throw InputError(
+          fmt::format("{}: the links above tip_link '{}' form a loop: expected a "
+                      "tree of links",
+                      source.urdf.string(), source.tip_link));
+    }
   }
   std::reverse(path.begin(), path.end());
   return path;

@@ -87,8 +87,17 @@ const std::string* OverrideOrigins::find(const YAML::Node& node) const {
   return nullptr;
 }
 
+std::string Expect::describe(double v, const char* kind) const {
+  if (v == 0.0 || !std::isfinite(v) || std::isnormal(v)) return describe(kind);
+  return describe(kind) +
+         ", and a normal one (this is a denormal, below 2.2e-308: arithmetic "
+         "on it underflows)";
+}
+
 bool Expect::accepts(double v) const {
-  if (!std::isfinite(v)) return false;
+  // Not a normal number (a denormal such as 1e-320): arithmetic on it loses its precision and
+  // underflows to 0, so it is refused where SI values are made.
+  if (!std::isfinite(v) || (v != 0.0 && !std::isnormal(v))) return false;
   if (lo_open ? !(v > lo) : !(v >= lo)) return false;
   if (hi_open ? !(v < hi) : !(v <= hi)) return false;
   return true;
@@ -179,17 +188,30 @@ void requireYamlFile(const std::filesystem::path& file) {
   }
 }
 
-YAML::Node loadYamlFile(const std::filesystem::path& file) {
-  requireYamlFile(file);
+YAML::Node loadOneDocument(const std::filesystem::path& file) {
   std::ifstream in(file);
   if (!in) throw InputError(fmt::format("{}: cannot be read", file.string()));
-  YAML::Node root;
+  std::vector<YAML::Node> documents;
   try {
-    root = YAML::Load(in);
+    documents = YAML::LoadAll(in);
   } catch (const YAML::Exception& e) {
     throw InputError(fmt::format("{}:{}:{}: malformed YAML: {}", file.string(), e.mark.line + 1,
                                  e.mark.column + 1, e.msg));
   }
+  if (documents.size() > 1) {
+    const YAML::Mark mark = documents[1].Mark();
+    throw InputError(fmt::format(
+        "{}: holds {} YAML documents (a second starts{}): expected one; scanplan would read the "
+        "first only, so remove the '---' that starts another",
+        file.string(), documents.size(),
+        mark.is_null() ? std::string() : fmt::format(" by line {}", mark.line + 1)));
+  }
+  return documents.empty() ? YAML::Node() : documents.front();
+}
+
+YAML::Node loadYamlFile(const std::filesystem::path& file) {
+  requireYamlFile(file);
+  YAML::Node root = loadOneDocument(file);
   checkYamlSize(root, file.string());
   if (!root.IsMap()) {
     throw InputError(
@@ -344,7 +366,7 @@ void YamlIn::field(const char* key, double& value, const Expect& expect) {
     }
     fail(key, nodeText(n) + " is not a number", expect.describe("number") + hint);
   }
-  if (!expect.accepts(v)) fail(key, formatNumber(v), expect.describe("number"));
+  if (!expect.accepts(v)) fail(key, formatNumber(v), expect.describe(v, "number"));
   if (const std::string limit = beyondMagnitude(key, v); !limit.empty())
     fail(key, formatNumber(v), limit);
   value = v;
@@ -360,7 +382,7 @@ void YamlIn::field(const char* key, int& value, const Expect& expect) {
   if (std::floor(v) != v || std::abs(v) > 1e9) {
     fail(key, nodeText(n) + " is not a whole number", expect.describe("integer"));
   }
-  if (!expect.accepts(v)) fail(key, formatNumber(v), expect.describe("integer"));
+  if (!expect.accepts(v)) fail(key, formatNumber(v), expect.describe(v, "integer"));
   value = static_cast<int>(v);
 }
 
@@ -478,7 +500,7 @@ void YamlIn::numbers(const char* key,
     }
     if (!expect.accepts(v)) {
       throw InputError(fmt::format("{}: {}: {}: expected {}", where(item), fieldPath(sub),
-                                   formatNumber(v), expect.describe("number")));
+                                   formatNumber(v), expect.describe(v, "number")));
     }
     if (const std::string limit = beyondMagnitude(key, v); !limit.empty()) {
       throw InputError(fmt::format("{}: {}: {}: expected {}", where(item), fieldPath(sub),

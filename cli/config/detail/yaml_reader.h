@@ -38,9 +38,12 @@ struct Expect {
     e.choices = std::move(choices);
     return e;
   }
+  /// Finite, in range and normal (0 or a normal double: a denormal is refused).
   bool accepts(double v) const;
   bool accepts(const std::string& v) const;
   std::string describe(const char* kind) const;
+  /// describe(kind), saying why when `v` is a denormal.
+  std::string describe(double v, const char* kind) const;
 };
 
 /// The nodes of a YAML tree that came from the command line (`--set key.path=value`), each with
@@ -232,6 +235,11 @@ void checkYamlSize(const YAML::Node& root, const std::string& where);
 /// Loads a YAML file (a mapping at the top), turning parse errors into InputError with
 /// file:line:column.
 YAML::Node loadYamlFile(const std::filesystem::path& file);
+
+/// The one YAML document of a file (a null node when it holds none), parse errors as InputError
+/// with file:line:column; a file of more than one document (another `---` after the first) is an
+/// InputError naming the line where the second starts: its keys would otherwise be dropped.
+YAML::Node loadOneDocument(const std::filesystem::path& file);
 
 /// Throws InputError naming `file` unless it is a regular file of at most kMaxYamlFileBytes (a
 /// FIFO or device would be read until it ends, which may be never).
