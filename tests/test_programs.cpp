@@ -922,6 +922,12 @@ TEST(ProgramReaders, RefuseWhatTheyDoNotModel) {
   };
   const std::string v2 = text(ProgramFormat::kVplus), src = text(ProgramFormat::kKrl),
                     mod = text(ProgramFormat::kRapid), script = text(ProgramFormat::kUrscript);
+  // The random trajectory at a fifth of its pace keeps to the joints' top speeds: no V+ SPEED is
+  // capped at 100 short of its step's time.
+  Trajectory slow = tr;
+  for (auto& sample : slow.samples) sample.t *= 5.0;
+  const std::string slow_v2 =
+      cli::writeProgram(slow, viper, ProgramFormat::kVplus, options).files[0].second;
   const std::vector<Case> cases = {
       {ProgramFormat::kVplus, replaceFirst(v2, "    DURATION 0.100000\n", ""),
        "MOVE without DURATION"},
@@ -939,7 +945,39 @@ TEST(ProgramReaders, RefuseWhatTheyDoNotModel) {
       {ProgramFormat::kRapid, replaceFirst(mod, "  PROC scan()\n", "  PROC scan()\n    Stop;\n"),
        "a call outside PROC main()"},
       {ProgramFormat::kRapid, replaceFirst(mod, "    scan;\n", "    other;\n"),
-       "expected the call of a procedure of this module"},
+       "'OTHER;': expected 'SCAN;'"},
+      {ProgramFormat::kRapid, replaceFirst(mod, "    scan;\n", "    scan;\n    scan;\n"),
+       "a second call in main() (the first is on line"},
+      {ProgramFormat::kRapid, replaceFirst(mod, "    scan;\n", ""), "PROC main() calls nothing"},
+      {ProgramFormat::kRapid, replaceFirst(mod, "  PROC main()\n", "  PROC start()\n"),
+       "a call outside PROC main()"},
+      {ProgramFormat::kRapid, replaceFirst(mod, "  PROC main()\n    scan;\n  ENDPROC\n", ""),
+       "no PROC main()"},
+      {ProgramFormat::kRapid,
+       replaceFirst(mod, "    scan;\n", "    scan;\n  ENDPROC\n  PROC extra()\n"),
+       "3 procedures: expected two"},
+      {ProgramFormat::kRapid,
+       replaceFirst(mod, "    scan;\n",
+                    "    scan;\n    MoveAbsJ [[0,0,90,0,0,0],[0,9E9,9E9,9E9,9E9,9E9]]\\NoEOffs, "
+                    "v100\\T:=1, fine, tool0;\n"),
+       "outside the scan procedure"},
+      {ProgramFormat::kVplus,
+       replaceFirst(v2, "    DURATION 0.100000\n", "    SPEED 0.01\n    DURATION 0.100000\n"),
+       "SPEED 0.01 makes this MOVE take"},
+      {ProgramFormat::kVplus,
+       replaceFirst(v2, "    DURATION 0.100000\n", "    SPEED 50 MMPS\n    DURATION 0.100000\n"),
+       "SPEED in mm/s applies to straight-line moves"},
+      {ProgramFormat::kVplus,
+       replaceFirst(v2, "    DURATION 0.100000\n", "    SPEED 120\n    DURATION 0.100000\n"),
+       "expected SPEED in (0, 100] percent"},
+      {ProgramFormat::kVplus, slow_v2 + ".PROGRAM other()\n.END\n", "after .END: expected nothing"},
+      {ProgramFormat::kKrl, replaceFirst(src, "SCANPLAN_VEL(100, 100)", "SCANPLAN_VEL(50, 50)"),
+       "a timed PTP_SPLINE block after SCANPLAN_VEL(50, 50)"},
+      {ProgramFormat::kKrl, replaceFirst(src, "$VEL_AXIS[AXIS]=ARM_PCT", "$VEL_AXIS[AXIS]=5"),
+       "'$VEL_AXIS[AXIS]=5' after the program's END: expected '$VEL_AXIS[AXIS]=ARM_PCT'"},
+      {ProgramFormat::kKrl,
+       replaceFirst(src, "  PTP_SPLINE\n", "  BAS(#VEL_PTP,20)\n  PTP_SPLINE\n"),
+       "expected BAS(#INITMOV,0) alone, before the first motion"},
       {ProgramFormat::kUrscript,
        replaceFirst(script, "      i = i + 1\n", "      sleep(0.1)\n      i = i + 1\n"),
        "seg() function: 'sleep(0.1)' where scanplan writes 'i = i + 1'"},
@@ -959,12 +997,20 @@ TEST(ProgramReaders, RefuseWhatTheyDoNotModel) {
     const std::string name = cli::programFormatName(c.format);
     ASSERT_NE(c.edited, text(c.format)) << name << ": the edit did not apply: " << c.message;
     try {
-      cli::readProgram(c.edited, c.format, "p");
+      cli::readProgram(c.edited, c.format, "p", &viper);
       ADD_FAILURE() << name << ": no error for " << c.message;
     } catch (const InputError& e) {
       EXPECT_NE(std::string(e.what()).find(c.message), std::string::npos) << e.what();
       EXPECT_EQ(std::string(e.what()).rfind("p:", 0), 0u) << e.what();
     }
+  }
+  // Written programs read back with the robot's speeds: every V+ SPEED covers its step where the
+  // trajectory keeps to the joints' top speeds.
+  for (const ProgramFormat f :
+       {ProgramFormat::kVplus, ProgramFormat::kKrl, ProgramFormat::kRapid}) {
+    EXPECT_NO_THROW(cli::readProgram(cli::writeProgram(slow, viper, f, options).files[0].second, f,
+                                     "p", &viper))
+        << cli::programFormatName(f);
   }
   // A program without its last step: the motion would end short of the last sample.
   std::string cut = script;

@@ -26,9 +26,11 @@ namespace scanplan::cli {
 
 namespace {
 
-// The trajectory file (CSV or a program), at least two samples.
-kinematics::Trajectory loadTrajectory(const std::filesystem::path& file) {
-  kinematics::Trajectory t = loadTrajectoryFile(file);
+// The trajectory file (CSV or a program, its timing read with the cell's robot), at least two
+// samples.
+kinematics::Trajectory loadTrajectory(const std::filesystem::path& file,
+                                      const kinematics::CellModel& cell) {
+  kinematics::Trajectory t = loadTrajectoryFile(file, &cell.robot);
   if (t.samples.size() < 2) {
     throw InputError(
         fmt::format("{}: {} sample(s): expected at least 2", file.string(), t.samples.size()));
@@ -63,7 +65,7 @@ ExitCode runValidate(const VerifyOptions& options) {
   const JobSpec job = loadJob(options.job_file, options.overrides);
   checkOut(options, job);
   const kinematics::CellModel cell = buildCell(job);
-  const kinematics::Trajectory trajectory = loadTrajectory(options.trajectory_file);
+  const kinematics::Trajectory trajectory = loadTrajectory(options.trajectory_file, cell);
   const collision::Scene scene(cell, clearanceConfig(job));
   const planner::ValidationReport report = onTrajectory(options.trajectory_file, [&] {
     return planner::validateTrajectory(scene, trajectory, validationSettings(job));
@@ -99,7 +101,7 @@ ExitCode runSimulate(const VerifyOptions& options) {
   checkOut(options, job);
   const kinematics::CellModel cell = buildCell(job);
   const kinematics::LoadedMesh part = loadPart(job, cell);
-  const kinematics::Trajectory trajectory = loadTrajectory(options.trajectory_file);
+  const kinematics::Trajectory trajectory = loadTrajectory(options.trajectory_file, cell);
   OutputStage stage(options.out_dir, {"cloud.ply", "coverage.ply", "cloud.png", "simulation.json",
                                       "profiles/profile_*", "sensors.csv"});
   const pipeline::SimulationRun run = onTrajectory(options.trajectory_file, [&] {
@@ -139,7 +141,7 @@ ExitCode runExport(const VerifyOptions& options) {
   const JobSpec job = loadJob(options.job_file, options.overrides);
   checkOut(options, job);
   const kinematics::CellModel cell = buildCell(job);
-  const kinematics::Trajectory trajectory = loadTrajectory(options.trajectory_file);
+  const kinematics::Trajectory trajectory = loadTrajectory(options.trajectory_file, cell);
   std::vector<std::string> formats = job.outputs.programs;
   if (!options.formats.empty()) {
     formats.clear();

@@ -41,14 +41,15 @@ std::string readWhole(const std::filesystem::path& file) {
 
 }  // namespace
 
-kinematics::Trajectory loadTrajectoryFile(const std::filesystem::path& file) {
+kinematics::Trajectory loadTrajectoryFile(const std::filesystem::path& file,
+                                          const kinematics::RobotModel* robot) {
   const std::string text = readWhole(file);
   const auto format = programFormatOfFile(file.filename().string());
   if (format && *format != ProgramFormat::kCsv) {
-    return atStepTimes(readProgram(text, *format, file.string()));
+    return atStepTimes(readProgram(text, *format, file.string(), robot));
   }
   const bool vplus = text.rfind(".PROGRAM", 0) == 0 || text.find("\n.PROGRAM") != std::string::npos;
-  return vplus ? readVplusProgram(text, file.string())
+  return vplus ? readVplusProgram(text, file.string(), robot)
                : kinematics::parseTrajectoryCsv(text, file.string());
 }
 

@@ -2,6 +2,7 @@
 
 #include <filesystem>
 
+#include "kinematics/robot_model.h"
 #include "kinematics/trajectory.h"
 
 namespace scanplan::cli {
@@ -9,7 +10,8 @@ namespace scanplan::cli {
 /// A trajectory file: the CSV interchange format, or a program written by `plan`/`export`
 /// (by its extension .v2, .src, .mod, .script; a V+ program also by its .PROGRAM line), timed
 /// by its own timing statements (URScript: at its step comments' times, atStepTimes()); errors
-/// name the file and the line.
-kinematics::Trajectory loadTrajectoryFile(const std::filesystem::path& file);
+/// name the file and the line. `robot`'s joint speeds time a V+ program's SPEED (readProgram).
+kinematics::Trajectory loadTrajectoryFile(const std::filesystem::path& file,
+                                          const kinematics::RobotModel* robot = nullptr);
 
 }  // namespace scanplan::cli

@@ -178,10 +178,11 @@ ProgramFiles writeProgram(const Trajectory& trajectory,
 
 ProgramReading readProgram(const std::string& text,
                            ProgramFormat format,
-                           const std::string& source) {
+                           const std::string& source,
+                           const kinematics::RobotModel* robot) {
   switch (format) {
     case ProgramFormat::kVplus:
-      return detail::readVplus(text, source);
+      return detail::readVplus(text, source, robot);
     case ProgramFormat::kKrl:
       return detail::readKrl(text, source);
     case ProgramFormat::kRapid:
@@ -217,8 +218,10 @@ Trajectory atStepTimes(const ProgramReading& reading) {
   return out;
 }
 
-Trajectory readVplusProgram(const std::string& text, const std::string& source) {
-  return detail::readVplus(text, source).trajectory;
+Trajectory readVplusProgram(const std::string& text,
+                            const std::string& source,
+                            const kinematics::RobotModel* robot) {
+  return detail::readVplus(text, source, robot).trajectory;
 }
 
 }  // namespace scanplan::cli

@@ -144,9 +144,9 @@ struct TriggerSwitch {
 /// A program read back: the motion as the controller would run it, timed by the language's own
 /// timing model (V+ DURATION, KRL TIME_BLOCK, RAPID \T, URScript servoj t), from the first
 /// sample's time in its step comment (0 without one). Table angles are unwrapped (each step the
-/// shorter way: what an endless axis does); the scanning flag comes from the step comments (URScript:
-/// its data rows) and holds until the next one (URScript's servo steps between samples). f is NaN
-/// and X_PS the identity (unknown).
+/// shorter way: what an endless axis does); the scanning flag comes from the step comments
+/// (URScript: its data rows) and holds until the next one (URScript's servo steps between samples).
+/// f is NaN and X_PS the identity (unknown).
 struct ProgramReading {
   kinematics::Trajectory trajectory;
   std::vector<TriggerSwitch> triggers;
@@ -166,20 +166,33 @@ struct ProgramReading {
 kinematics::Trajectory atStepTimes(const ProgramReading& reading);
 
 /// Reads a program written by writeProgram(format) (or edited by hand in its form; kCsv: the
-/// trajectory CSV). A reader refuses what it does not model (a V+ MOVE without DURATION or with
-/// DURATION ALWAYS, a RAPID MoveAbsJ without \\T, calls other than main()'s, a URScript seg()
-/// other than the one written), so that what it returns is what the controller runs.
+/// trajectory CSV). A reader models or refuses every statement that changes motion or timing,
+/// so that what it returns is what the controller runs:
+/// - V+: a MOVE takes the longer of its DURATION and its time at SPEED (percent of each joint's
+///   top speed in `robot`; SPEED without ALWAYS holds for the next move): a SPEED that makes a
+///   move outlast its DURATION is refused (without `robot`, SPEED is checked for its form only).
+///   Refused: a MOVE without DURATION, DURATION ALWAYS, SPEED in MMPS or outside (0, 100],
+///   CALL, WAIT, DELAY and any other instruction, anything after .END.
+/// - KRL: SCANPLAN_VEL must be (100, 100) under the timed PTP_SPLINE blocks, and its routine
+///   after the program's END the one writeProgram writes; BAS only as BAS(#INITMOV,0) before
+///   the first motion; loops, waits and other statements are refused.
+/// - RAPID: PROC main() holds exactly one call, to the procedure that holds every MoveAbsJ and
+///   SetDO, and the module no other procedure; a MoveAbsJ without \\T is refused.
+/// - URScript: only the seg() and last step writeProgram writes, compared line by line.
 /// Errors (InputError) name `source` and the line: an instruction the reader does not know,
 /// malformed values, a move without its step comment (V+: the table angle is only there),
 /// times not strictly increasing, no moves.
 ProgramReading readProgram(const std::string& text,
                            ProgramFormat format,
-                           const std::string& source);
+                           const std::string& source,
+                           const kinematics::RobotModel* robot = nullptr);
 
 /// The format of a program file from its extension (.v2, .src, .mod, .script, .csv).
 std::optional<ProgramFormat> programFormatOfFile(const std::string& file_name);
 
-/// readProgram(text, kVplus, source).trajectory.
-kinematics::Trajectory readVplusProgram(const std::string& text, const std::string& source);
+/// readProgram(text, kVplus, source, robot).trajectory.
+kinematics::Trajectory readVplusProgram(const std::string& text,
+                                        const std::string& source,
+                                        const kinematics::RobotModel* robot = nullptr);
 
 }  // namespace scanplan::cli

@@ -17,6 +17,7 @@ namespace scanplan::cli::detail {
 namespace {
 
 using kinematics::kNumJoints;
+using kinematics::RobotModel;
 
 const std::string kNum = R"([-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?)";
 
@@ -90,7 +91,8 @@ bool isTrue(const std::string& word) {
 // V+: MOVE #PPOINT per step, DURATION its time; SIGNAL runs as the move before it starts.
 class VplusReader {
  public:
-  VplusReader(const std::string& text, const std::string& source) : r_(text, source) {}
+  VplusReader(const std::string& text, const std::string& source, const RobotModel* robot)
+      : r_(text, source), robot_(robot) {}
 
   ProgramReading read() {
     std::string line;
@@ -108,6 +110,10 @@ class VplusReader {
     if (!in_program_) r_.in.fail("no '.PROGRAM name()' line: expected a V+ program");
     if (r_.pending) r_.in.failAt(r_.pending->line, "step comment without its MOVE #PPOINT(...)");
     if (!ended_) r_.in.fail("the program has no .END");
+    while (r_.in.next(line)) {  // another program would run only if called: nothing may follow
+      if (!trim(line).empty() && line[0] != ';')
+        r_.in.fail("'" + clipForMessage(line) + "' after .END: expected nothing after the program");
+    }
     return r_.finish();
   }
 
@@ -165,10 +171,30 @@ class VplusReader {
           "MOVE without DURATION: expected 'DURATION <s>' (the step's time) before each "
           "MOVE after the first");
     }
+    const double speed = next_speed_.value_or(always_speed_);
+    if (!samples.empty()) checkSpeed(q, speed);
     const double t = samples.empty() ? p.t : samples.back().t + *duration_;
     r_.append(t, q, p.table_deg, p);
     duration_.reset();
+    next_speed_.reset();
     break_after_move_ = false;
+  }
+
+  // A joint move takes the longer of its DURATION and its time at SPEED (percent of each joint's
+  // top speed): longer than the DURATION, the arm falls behind the table the plan times.
+  void checkSpeed(const std::vector<double>& q_deg, double speed) {
+    if (!robot_) return;
+    const kinematics::JointVector& from = r_.reading.trajectory.samples.back().q;
+    double at_speed = 0.0;
+    for (int j = 0; j < kNumJoints; ++j) {
+      const double travel = std::abs(q_deg[static_cast<std::size_t>(j)] * kDegToRad - from(j));
+      at_speed = std::max(at_speed, travel / (robot_->joint(j).max_speed * speed / 100.0));
+    }
+    if (at_speed <= *duration_ * (1.0 + 1e-3) + 1e-6) return;
+    r_.in.fail(fmt::format(
+        "SPEED {} makes this MOVE take {:.4f} s where its DURATION is {:.4f} s: the arm would "
+        "fall behind the table, which the plan times (expected SPEED ≥ {:.2f})",
+        fixed(speed, 2), at_speed, *duration_, speed * at_speed / *duration_));
   }
 
   // SPEED or DURATION <value> [ALWAYS] (SPEED also in MMPS): DURATION times the next MOVE.
@@ -190,7 +216,17 @@ class VplusReader {
                    "': DURATION ... ALWAYS is not read: expected 'DURATION <s>' before each MOVE");
       }
       duration_ = v;
+      return;
     }
+    if (tail.rfind("MMPS", 0) == 0) {
+      r_.in.fail("'" + clipForMessage(line) +
+                 "': SPEED in mm/s applies to straight-line moves, which this reader does not "
+                 "model: expected 'SPEED <percent>' for the joint moves");
+    }
+    if (!(v > 0.0 && v <= 100.0)) {
+      r_.in.fail("'" + clipForMessage(line) + "': expected SPEED in (0, 100] percent");
+    }
+    (tail == "ALWAYS" ? always_speed_ : next_speed_.emplace()) = v;
   }
 
   // SIGNAL n[, -m ...]: at the start of the last MOVE, or at its end after a BREAK.
@@ -224,8 +260,11 @@ class VplusReader {
   }
 
   ReaderState r_;
+  const RobotModel* robot_;  // its joint speeds time SPEED; none: SPEED is read, not timed
   bool in_program_ = false, ended_ = false, break_after_move_ = false;
   std::optional<double> duration_;
+  double always_speed_ = 100.0;       // SPEED ... ALWAYS (monitor SPEED 100 assumed)
+  std::optional<double> next_speed_;  // SPEED for the next motion only
 };
 
 // A KRL spline segment waiting for its block's TIME_BLOCK END.
@@ -268,6 +307,7 @@ class KrlReader {
     if (!in_program_) r_.in.fail("no 'DEF name( )' line: expected a KRL program");
     if (!ended_) r_.in.fail("the program has no END");
     if (block_) r_.in.fail("PTP_SPLINE without ENDSPLINE");
+    velocityRoutine();
     return r_.finish();
   }
 
@@ -280,6 +320,13 @@ class KrlReader {
       approach(s);
     } else if (u == "PTP_SPLINE") {
       if (block_) r_.in.fail("PTP_SPLINE inside another: expected ENDSPLINE first");
+      if (velocity_ != std::pair{100, 100}) {
+        r_.in.fail(fmt::format(
+            "a timed PTP_SPLINE block after {}: TIME_BLOCK holds its times only at full axis "
+            "velocity, expected SCANPLAN_VEL(100, 100) before it",
+            velocity_ ? fmt::format("SCANPLAN_VEL({}, {})", velocity_->first, velocity_->second)
+                      : std::string("no SCANPLAN_VEL")));
+      }
       block_ = KrlBlock{};
     } else if (u.rfind("SPTP ", 0) == 0 || u.rfind("SPTP{", 0) == 0) {
       segment(s);
@@ -298,8 +345,16 @@ class KrlReader {
       tool(s);
     } else if (u.rfind("$LOAD", 0) == 0) {
       load(s);
-    } else if (u.rfind("BAS(", 0) == 0 || u.rfind("$APO", 0) == 0 ||
-               u.rfind("SCANPLAN_VEL(", 0) == 0 || u == "WAIT SEC 0") {
+    } else if (u.rfind("SCANPLAN_VEL(", 0) == 0) {
+      velocity(s);
+    } else if (u.rfind("BAS(", 0) == 0) {
+      if (!std::regex_match(u, std::regex(R"(BAS\s*\(\s*#INITMOV\s*,\s*0\s*\))")) ||
+          !r_.reading.trajectory.samples.empty()) {
+        r_.in.fail("'" + clipForMessage(s) +
+                   "': BAS sets velocities and accelerations this reader does not model: "
+                   "expected BAS(#INITMOV,0) alone, before the first motion");
+      }
+    } else if (u.rfind("$APO", 0) == 0 || u == "WAIT SEC 0") {
       // Settings that do not change the planned motion.
     } else {
       r_.in.fail(
@@ -307,6 +362,44 @@ class KrlReader {
           "': not an instruction this reader knows (PTP, PTP_SPLINE, SPTP, TIME_BLOCK, "
           "ENDSPLINE, TRIGGER WHEN, $OUT, $TOOL, $LOAD, BAS, SCANPLAN_VEL, WAIT SEC 0, END)");
     }
+  }
+
+  // SCANPLAN_VEL(arm %, E1 %): the axes' velocity limits the routine after END sets.
+  void velocity(const std::string& s) {
+    static const std::regex kVel(R"(SCANPLAN_VEL\s*\(\s*([0-9]{1,3})\s*,\s*([0-9]{1,3})\s*\))",
+                                 std::regex::icase);
+    std::smatch m;
+    const auto percent = [&](std::size_t i) { return std::stoi(m[i].str()); };
+    if (!std::regex_match(s, m, kVel) || percent(1) < 1 || percent(1) > 100 || percent(2) < 1 ||
+        percent(2) > 100) {
+      r_.in.fail("'" + clipForMessage(s) + "': expected SCANPLAN_VEL(arm %, E1 %), each 1 ... 100");
+    }
+    velocity_ = std::pair{percent(1), percent(2)};
+  }
+
+  // After the program's END: the SCANPLAN_VEL routine as written (comments and blank lines
+  // aside), and nothing else.
+  void velocityRoutine() {
+    std::vector<std::string> want;
+    std::istringstream routine(krlVelocityRoutine());
+    for (std::string line; std::getline(routine, line);) {
+      line = trim(line);
+      if (!line.empty() && line[0] != ';') want.push_back(line);
+    }
+    std::size_t i = 0;
+    for (std::string line; r_.in.next(line);) {
+      line = trim(line);
+      if (line.empty() || line[0] == ';') continue;
+      if (i >= want.size() || line != want[i]) {
+        r_.in.fail(
+            fmt::format("'{}' after the program's END: expected '{}' (the SCANPLAN_VEL "
+                        "routine as scanplan writes it, which sets the axes' velocity)",
+                        clipForMessage(line), i < want.size() ? want[i] : "nothing"));
+      }
+      ++i;
+    }
+    if (i < want.size())
+      r_.in.fail("the SCANPLAN_VEL routine is missing or cut short: expected '" + want[i] + "'");
   }
 
   // {A1 v, ..., A6 v, E1 v} → joints (degrees) and E1.
@@ -463,6 +556,7 @@ class KrlReader {
 
   ReaderState r_;
   bool in_program_ = false, ended_ = false;
+  std::optional<std::pair<int, int>> velocity_;  // the last SCANPLAN_VEL (arm %, E1 %)
   std::optional<KrlBlock> block_;
   std::vector<std::pair<int, bool>> trigger_;  // for the next motion's end
 };
@@ -485,11 +579,7 @@ class RapidReader {
     }
     if (!module_) r_.in.fail("no 'MODULE name' line: expected a RAPID module");
     if (!ended_) r_.in.fail("the module has no ENDMODULE");
-    for (const auto& [name, at] : calls_) {
-      if (name == "MAIN" || std::find(procs_.begin(), procs_.end(), name) == procs_.end()) {
-        r_.in.failAt(at, "'" + name + ";': expected the call of a procedure of this module");
-      }
-    }
+    checkCalls();
     return r_.finish();
   }
 
@@ -515,8 +605,10 @@ class RapidReader {
       if (proc_ != "MAIN") r_.in.fail("'" + clipForMessage(s) + "': a call outside PROC main()");
       calls_.emplace_back(upper(trim(s.substr(0, s.find(';')))), r_.in.lineNumber());
     } else if (u.rfind("MOVEABSJ ", 0) == 0) {
+      requireScanProcedure(s);
       move(s);
     } else if (u.rfind("SETDO ", 0) == 0) {
+      requireScanProcedure(s);
       setDo(s);
     } else if (u.rfind("PERS TOOLDATA ", 0) == 0) {
       toolData(s);
@@ -524,6 +616,40 @@ class RapidReader {
       r_.in.fail("'" + clipForMessage(s) +
                  "': not an instruction this reader knows (MODULE, PROC, MoveAbsJ, SetDO, PERS "
                  "tooldata, ENDPROC, ENDMODULE)");
+    }
+  }
+
+  // One run of the scan: main() calls, once, the one other procedure, which holds the motion.
+  void checkCalls() {
+    if (std::find(procs_.begin(), procs_.end(), "MAIN") == procs_.end()) {
+      r_.in.fail("no PROC main(): expected main() calling the scan procedure once");
+    }
+    if (procs_.size() != 2) {
+      r_.in.fail(
+          fmt::format("{} procedures: expected two, main() and the scan procedure it "
+                      "calls (the reader models one run of one scan)",
+                      procs_.size()));
+    }
+    const std::string scan = procs_[0] == "MAIN" ? procs_[1] : procs_[0];
+    if (calls_.empty()) r_.in.fail("PROC main() calls nothing: expected one call, '" + scan + ";'");
+    if (calls_.size() > 1) {
+      r_.in.failAt(calls_[1].second,
+                   fmt::format("a second call in main() (the first is on line {}): expected one "
+                               "call (a second run starts from wherever the first ended, which "
+                               "no validation saw)",
+                               calls_[0].second));
+    }
+    if (calls_[0].first != scan) {
+      r_.in.failAt(calls_[0].second, "'" + calls_[0].first + ";': expected '" + scan + ";'");
+    }
+  }
+
+  // The motion lives in the scan procedure alone (not in main(), not outside a procedure).
+  void requireScanProcedure(const std::string& s) {
+    if (proc_.empty() || proc_ == "MAIN") {
+      r_.in.fail("'" + clipForMessage(s) +
+                 "': outside the scan procedure: expected every MoveAbsJ and SetDO in the "
+                 "procedure main() calls");
     }
   }
 
@@ -727,7 +853,8 @@ class UrscriptReader {
     if (!period_) r_.in.fail("'" + clipForMessage(first) + "' before seg() is defined");
     same(block(first), urscriptLastStep(*period_), at, "last step");
     if (!row_) r_.in.fail("the last step before any data row");
-    if (static_cast<double>(steps_) * *period_ < (*row_)[0] - 1e-6) servoStep(steps_ + 1, *row_, *row_);
+    if (static_cast<double>(steps_) * *period_ < (*row_)[0] - 1e-6)
+      servoStep(steps_ + 1, *row_, *row_);
     last_step_ = true;
   }
 
@@ -895,8 +1022,10 @@ class UrscriptReader {
 
 }  // namespace
 
-ProgramReading readVplus(const std::string& text, const std::string& source) {
-  return VplusReader(text, source).read();
+ProgramReading readVplus(const std::string& text,
+                         const std::string& source,
+                         const RobotModel* robot) {
+  return VplusReader(text, source, robot).read();
 }
 
 ProgramReading readKrl(const std::string& text, const std::string& source) {

@@ -146,8 +146,12 @@ std::string krlProgram(const ProgramContext& c) {
     s += "  " + out(c, levelAfter(Switch::kOff, o.trigger)) + "\n";
   }
   s += "END\n\n";
+  return s + krlVelocityRoutine();
+}
+
+std::string krlVelocityRoutine() {
   // The declarations come first, alone: a strict KRL parser allows nothing before them.
-  s += "DEF " + std::string(kVel) + "(ARM_PCT:IN, E1_PCT:IN)\n";
+  std::string s = "DEF " + std::string(kVel) + "(ARM_PCT:IN, E1_PCT:IN)\n";
   s += "  INT ARM_PCT, E1_PCT, AXIS\n";
   s += "  ; $VEL_AXIS[1..6] and $VEL_EXTAX[1] in percent of the axes' maximum speeds.\n";
   s += "  FOR AXIS=1 TO 6\n    $VEL_AXIS[AXIS]=ARM_PCT\n  ENDFOR\n";

@@ -13,7 +13,11 @@
 namespace scanplan::robustness {
 
 std::string expand(const std::string& text) {
-  const std::string src = "@src/", fix = "@fix/", plan = "@fix/plan";
+  const std::string src = "@src/", fix = "@fix/", plan = "@fix/plan", programs = "@fix/programs";
+  if (text.rfind(programs, 0) == 0) {  // a plan that writes every program language
+    return planFixture("programs", {"outputs.programs=[vplus, krl, rapid, urscript]"}).string() +
+           text.substr(programs.size());
+  }
   if (text.rfind(plan, 0) == 0) return planFixture().string() + text.substr(plan.size());
   if (text.rfind(src, 0) == 0)
     return (fs::path(SCANPLAN_SOURCE_DIR) / text.substr(src.size())).string();

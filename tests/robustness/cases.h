@@ -2,19 +2,20 @@
 // The robustness catalogue: hand-written cases by class (cases.cpp) and the cases generated from
 // the job's key list (generated.cpp). tests/robustness/README.md says how to add one.
 
-#include <string>
 #include <initializer_list>
+#include <string>
 #include <vector>
 
 #include "tests/robustness/runner.h"
 
 namespace scanplan::robustness {
 
-std::vector<Case> issueCases();      // the problems reported in issue 17
-std::vector<Case> fileCases();       // truncated, garbage, special and misplaced files
-std::vector<Case> pathCases();       // unicode and odd paths, output folders
-std::vector<Case> commandCases();    // every command's own arguments
-std::vector<Case> generatedCases();  // every numeric key of the job × hostile values
+std::vector<Case> issueCases();       // the problems reported in issue 17
+std::vector<Case> fileCases();        // truncated, garbage, special and misplaced files
+std::vector<Case> pathCases();        // unicode and odd paths, output folders
+std::vector<Case> commandCases();     // every command's own arguments
+std::vector<Case> generatedCases();   // every numeric key of the job × hostile values
+std::vector<Case> modelLimitCases();  // users' files, unmodelled input, estimates, causes
 
 /// Helpers shared by the case files (defined in cases.cpp).
 Case meshFileCase(const std::string& name, InputFile file, std::vector<int> exits = {4});

@@ -108,7 +108,8 @@ std::vector<Case> generatedCases() {
 
 std::vector<Case> allCases() {
   std::vector<Case> all;
-  for (auto part : {issueCases(), fileCases(), pathCases(), commandCases(), generatedCases()}) {
+  for (auto part : {issueCases(), fileCases(), pathCases(), commandCases(), modelLimitCases(),
+                    generatedCases()}) {
     all.insert(all.end(), part.begin(), part.end());
   }
   return all;

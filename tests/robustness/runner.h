@@ -36,10 +36,11 @@ struct Case {
   std::vector<int> exits{4};       // the exit codes that pass
   std::vector<std::string> names;  // what stderr must hold when the exit code is not 0
   OutState out = OutState::kNone;
-  bool as_nobody = false;     // run as uid 65534 when root (read-only folders bind root not)
-  long file_size_limit = 0;   // RLIMIT_FSIZE in bytes (a full disk), 0: none
-  bool needs_shared = false;  // skipped without ../shared/data
-  std::string xfail;          // non-empty: known to fail today, why (reported, not failed)
+  bool as_nobody = false;         // run as uid 65534 when root (read-only folders bind root not)
+  long file_size_limit = 0;       // RLIMIT_FSIZE in bytes (a full disk), 0: none
+  bool needs_shared = false;      // skipped without ../shared/data
+  std::string xfail;              // non-empty: known to fail today, why (reported, not failed)
+  std::vector<std::string> kept;  // files that must be byte-identical after the run
 };
 
 /// How a run ended.

@@ -144,13 +144,24 @@ TEST_P(Catalogue, Case) {
   fs::create_directories(dir);
   fs::permissions(dir, fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
                            fs::perms::others_read | fs::perms::others_exec);
-  for (const InputFile& f : c.files) f.make(dir / f.name);
+  for (const InputFile& f : c.files) {
+    fs::create_directories((dir / f.name).parent_path());
+    f.make(dir / f.name);
+  }
   const fs::path out = dir / "out";
   if (c.out == OutState::kExisting) makeExistingOut(out, c.as_nobody);
   const Snapshot before = snapshot(out);
+  std::vector<std::string> kept_before;
+  for (const std::string& k : c.kept) kept_before.push_back(readText(dir / k));
   const Outcome run = runScanplan(expandArgs(c.args), dir, c);
   std::error_code ec;
-  report(c, run, judge(c, run, before, snapshot(out), fs::exists(fs::symlink_status(out, ec))));
+  std::vector<std::string> problems =
+      judge(c, run, before, snapshot(out), fs::exists(fs::symlink_status(out, ec)));
+  for (std::size_t i = 0; i < c.kept.size(); ++i) {
+    if (!fs::is_regular_file(dir / c.kept[i]) || readText(dir / c.kept[i]) != kept_before[i])
+      problems.push_back("the input " + c.kept[i] + " was changed or removed");
+  }
+  report(c, run, problems);
   if (!std::getenv("SCANPLAN_ROBUSTNESS_KEEP")) removeCase(dir);
 }
 

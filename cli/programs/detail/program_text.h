@@ -157,13 +157,17 @@ void appendSample(const LineReader& in,
 std::string vplusProgram(const ProgramContext& c, const std::string& table_file);
 std::string vplusTable(const ProgramContext& c);
 std::string krlProgram(const ProgramContext& c);
+/// The SCANPLAN_VEL routine krlProgram writes after the program (its reader compares it).
+std::string krlVelocityRoutine();
 std::string rapidProgram(const ProgramContext& c);
 std::string urscriptProgram(const ProgramContext& c);
 /// URScript's seg(a, d), which plays one row of the program's data (write_urscript.cpp), and
 /// the step after the last row: the writer writes them and the reader accepts only these.
 std::string urscriptStepFunction(double period, int output);
 std::string urscriptLastStep(double period);
-ProgramReading readVplus(const std::string& text, const std::string& source);
+ProgramReading readVplus(const std::string& text,
+                         const std::string& source,
+                         const kinematics::RobotModel* robot);
 ProgramReading readKrl(const std::string& text, const std::string& source);
 ProgramReading readRapid(const std::string& text, const std::string& source);
 ProgramReading readUrscript(const std::string& text, const std::string& source);
