@@ -10,6 +10,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -58,8 +59,14 @@ fs::path stderrFile(const fs::path& cwd) {
 
 }  // namespace
 
+// SCANPLAN_ROBUSTNESS_BINARY, when set, runs the catalogue against another build (README.md).
+std::string scanplanBinary() {
+  const char* other = std::getenv("SCANPLAN_ROBUSTNESS_BINARY");
+  return other && *other ? other : SCANPLAN_BINARY;
+}
+
 pid_t startScanplan(const std::vector<std::string>& args, const fs::path& cwd, const Case& limits) {
-  std::vector<std::string> text{SCANPLAN_BINARY};
+  std::vector<std::string> text{scanplanBinary()};
   text.insert(text.end(), args.begin(), args.end());
   std::vector<char*> argv;
   for (auto& a : text) argv.push_back(a.data());
@@ -236,7 +243,7 @@ void once(const fs::path& done, const fs::path& lock_file, Make make) {
   ::flock(lock, LOCK_EX);
   std::error_code ec;
   const bool fresh = fs::exists(done, ec) &&
-                     fs::last_write_time(done, ec) > fs::last_write_time(SCANPLAN_BINARY, ec);
+                     fs::last_write_time(done, ec) > fs::last_write_time(scanplanBinary(), ec);
   if (!fresh) make();
   ::close(lock);
 }
@@ -245,7 +252,9 @@ void once(const fs::path& done, const fs::path& lock_file, Make make) {
 
 fs::path fixtureDir() {
   static const fs::path fixtures = [] {
-    const fs::path dir = SCANPLAN_ROBUSTNESS_FIXTURE_DIR;
+    const char* other = std::getenv("SCANPLAN_ROBUSTNESS_BINARY");
+    const fs::path dir = fs::path(std::string(SCANPLAN_ROBUSTNESS_FIXTURE_DIR) +
+                                  (other && *other ? "_other" : ""));
     fs::create_directories(dir.parent_path());
     once(dir / "resolved.yaml", dir.string() + ".lock", [&dir] {
       fs::remove_all(dir);
