@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <exception>
+#include <numbers>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -58,11 +59,45 @@ void inspectFaces(const aiScene& scene, MeshLoadReport& report) {
   }
 }
 
+// assimp cuts a polygon of more than four corners into triangles by ear clipping, which can cut
+// across a concave one (an L-shaped hexagon wound counter-clockwise came out with a third more
+// area, over its notch); quads, concave or not, and convex polygons come out right. A larger
+// polygon must be convex in the plane of its Newell normal, turning once around (not a star).
+void checkConvexPolygon(const std::filesystem::path& path, const aiMesh& mesh, unsigned f) {
+  constexpr double kTurnTol = 1e-3;  // rad: float corners on a straight edge turn by less
+  const aiFace& face = mesh.mFaces[f];
+  const unsigned n = face.mNumIndices;
+  const auto corner = [&](unsigned k) { return toEigen(mesh.mVertices[face.mIndices[k % n]]); };
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // Newell's: 0 for a line or a figure 8
+  for (unsigned k = 0; k < n; ++k) normal += corner(k).cross(corner(k + 1));
+  bool convex = normal.norm() > 0.0;
+  normal = normal.normalized();
+  double turned = 0.0;
+  for (unsigned k = 0; k < n && convex; ++k) {
+    const Eigen::Vector3d in = corner(k + 1) - corner(k), out = corner(k + 2) - corner(k + 1);
+    const double sine = in.cross(out).dot(normal), cosine = in.dot(out);
+    convex = sine >= -kTurnTol * in.norm() * out.norm();
+    turned += std::atan2(sine, cosine);
+  }
+  // A closed polygon turns by a multiple of 2π: once around is convex, twice a star.
+  if (convex && std::abs(turned - 2.0 * std::numbers::pi) < std::numbers::pi) return;
+  std::ostringstream what;
+  what << "face " << f + 1 << " is a polygon of " << n << " corners that is not convex (";
+  for (unsigned k = 0; k < 3; ++k) {
+    const Eigen::Vector3d c = corner(k);
+    what << (k ? ", " : "") << c.x() << " " << c.y() << " " << c.z();
+  }
+  what << ", …): assimp's triangulation can cut across it; expected triangles, quads or convex "
+          "polygons (triangulate the mesh in the tool that wrote it)";
+  fail(path, what.str());
+}
+
 // assimp's triangulation aborts the process (an always-on assertion) when a mesh claims polygons
 // it does not have: a face with no vertex index (a PLY face list of length 0 passes assimp's
-// own validation) counts as a polygon. Such files are refused before triangulating, and so is
-// a mesh whose polygons make more triangles than the limit (the pre-check counts an OBJ face
-// continued over lines short): triangulating and welding take the time and memory.
+// own validation) counts as a polygon. Such files are refused before triangulating, and so are
+// a polygon checkConvexPolygon refuses and a mesh whose polygons make more triangles than the
+// limit (the pre-check counts an OBJ face continued over lines short): triangulating and
+// welding take the time and memory.
 void checkTriangulable(const std::filesystem::path& path, const aiScene& scene) {
   std::size_t triangles = 0;
   for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
@@ -75,6 +110,7 @@ void checkTriangulable(const std::filesystem::path& path, const aiScene& scene) 
              "face " + std::to_string(f + 1) +
                  " has no vertex index; expected 3 or more per face (1 or 2: a point or line)");
       }
+      if (corners > 4) checkConvexPolygon(path, mesh, f);
       polygon = polygon || corners > 3;
       triangles += corners >= 3 ? corners - 2 : 0;
     }
@@ -206,6 +242,15 @@ double TriangleMesh::area() const {
     sum += 0.5 * (b - a).cross(c - a).norm();
   }
   return sum;
+}
+
+double TriangleMesh::signedVolume() const {
+  double sum = 0.0;  // divergence theorem: tetrahedra from the origin to each triangle
+  for (const auto& t : triangles) {
+    sum += vertices[static_cast<std::size_t>(t[0])].dot(
+        vertices[static_cast<std::size_t>(t[1])].cross(vertices[static_cast<std::size_t>(t[2])]));
+  }
+  return sum / 6.0;
 }
 
 LoadedMesh loadMesh(const std::filesystem::path& path, const MeshLoadOptions& options) {

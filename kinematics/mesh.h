@@ -24,6 +24,9 @@ struct TriangleMesh {
   bool isClosed() const;
   /// Total surface area, m².
   double area() const;
+  /// The enclosed volume by the triangles' winding, m³: positive for a closed mesh whose
+  /// triangles turn counter-clockwise seen from outside, negative when it is inside out.
+  double signedVolume() const;
 };
 
 struct MeshLoadOptions {
@@ -50,8 +53,9 @@ struct LoadedMesh {
 
 /// Loads STL (ASCII and binary), OBJ, PLY or OFF through assimp, welds identical vertices and
 /// converts to metres. Throws scanplan::InputError naming the file when it is missing, empty,
-/// truncated, malformed, holds no triangles, or is larger than the loader's bounds (1 GB,
-/// 4 000 000 triangles: kinematics/mesh_file.h, checked before assimp does the work).
+/// truncated, malformed, holds no triangles, holds a polygon of more than four corners that is
+/// not convex (assimp's triangulation can cut across it), or is larger than the loader's bounds
+/// (1 GB, 4 000 000 triangles: kinematics/mesh_file.h, checked before assimp does the work).
 LoadedMesh loadMesh(const std::filesystem::path& path, const MeshLoadOptions& options = {});
 
 }  // namespace scanplan::kinematics

@@ -2,10 +2,13 @@
 
 #include "kinematics/error.h"
 #include "kinematics/mesh_file_formats.h"
+#include "kinematics/resources.h"
 
 #include <algorithm>
 #include <cctype>
 #include <cstring>
+#include <sstream>
+#include <string>
 #include <system_error>
 
 namespace scanplan::kinematics::detail {
@@ -164,25 +167,12 @@ namespace {
 
 // --- STL and OBJ: their triangles, counted before reading --------------------------------------
 
-// A keyword found in a stream of characters, one at a time.
-class Keyword {
- public:
-  explicit Keyword(std::string_view word) : word_(word) {}
-  bool feed(char c) {
-    matched_ = c == word_[matched_] ? matched_ + 1 : (c == word_[0] ? 1 : 0);
-    if (matched_ < word_.size()) return false;
-    matched_ = 0;
-    return true;
-  }
-
- private:
-  std::string_view word_;
-  std::size_t matched_ = 0;
-};
-
 // A binary STL is the size its count says (assimp's test); an ASCII one makes a triangle of
-// every three `vertex` keywords, up to a NUL byte (assimp reads the text as a C string). Every
-// ASCII facet must hold three: assimp would keep three of a polygon's corners and drop the rest.
+// every three `vertex` words, up to a NUL byte (assimp reads the text as a C string). Words are
+// read as assimp reads them, separated by white space, the name after `solid` and `endsolid`
+// skipped (it may hold any word). A facet runs from `facet` to `endfacet` (or, that missing,
+// to the next `facet`, `endsolid` or the end) and must hold three vertices: assimp would keep
+// three of a polygon's corners and drop the rest.
 std::uintmax_t stlTriangles(const std::filesystem::path& path, std::uintmax_t size) {
   const std::string start = head(path, 84);
   if (start.size() == 84) {
@@ -191,45 +181,90 @@ std::uintmax_t stlTriangles(const std::filesystem::path& path, std::uintmax_t si
     if (std::uintmax_t{count} * 50 + 84 == size) return count;
   }
   FileBytes bytes(path, size, 0);
-  Keyword vertex("vertex"), endfacet("endfacet");
-  std::uintmax_t vertices = 0, in_facet = 0, line = 1;
+  std::uintmax_t vertices = 0, in_facet = 0, line = 1, facet_line = 1;
+  std::string word;  // up to 9 bytes: longer than any keyword
+  bool name = false;
+  const auto endFacet = [&](std::uintmax_t at) {
+    if (in_facet != 3) {
+      failMesh(path, "line " + std::to_string(at) + ": a facet with " + std::to_string(in_facet) +
+                         " vertices; expected 3 (an STL facet is a triangle)");
+    }
+    in_facet = 0;
+  };
+  const auto endWord = [&] {
+    if (word == "vertex") ++vertices, ++in_facet;
+    if (word == "endfacet") endFacet(line);
+    if ((word == "facet" || word == "endsolid") && in_facet > 0) endFacet(facet_line);
+    if (word == "facet") facet_line = line;
+    name = name || word == "solid" || word == "endsolid";
+    word.clear();
+  };
   for (char c = 0; bytes.peek(c) && c != '\0'; bytes.take()) {
-    if (c == '\n') ++line;
-    if (vertex.feed(c)) ++vertices, ++in_facet;
-    if (endfacet.feed(c)) {
-      if (in_facet != 3) {
-        failMesh(path, "line " + std::to_string(line) + ": a facet with " +
-                           std::to_string(in_facet) +
-                           " vertices; expected 3 (an STL facet is a triangle)");
-      }
-      in_facet = 0;
+    if (isLineEnd(c) || isBlank(c)) {
+      if (!name) endWord();
+      if (c == '\n') ++line, name = false;
+    } else if (!name && word.size() < 9) {
+      word += c;
     }
   }
+  if (!name) endWord();
+  if (in_facet > 0) endFacet(facet_line);
   return vertices / 3;
 }
 
+// A material library an OBJ names (`mtllib`), which assimp opens beside it: a regular file of
+// at most kMaxMeshBytes, or none (assimp then goes without materials). A pipe would block the
+// read, a device or a huge file would fill the memory.
+void checkMaterialLibrary(const std::filesystem::path& obj, const std::string& name) {
+  if (name.empty()) return;
+  const std::filesystem::path library = obj.parent_path() / name;
+  std::error_code ec;
+  const auto status = std::filesystem::status(library, ec);
+  if (!std::filesystem::exists(status)) return;
+  if (!std::filesystem::is_regular_file(status)) {
+    failMesh(obj, "names the material library '" + clipForMessage(name) +
+                      "' (mtllib), which is not a regular file (a folder, pipe or device); "
+                      "expected a .mtl file or none");
+  }
+  const std::uintmax_t size = std::filesystem::file_size(library, ec);
+  if (!ec && size > kMaxMeshBytes) {
+    failMesh(obj, "names the material library '" + clipForMessage(name) + "' (mtllib) of " +
+                      std::to_string(size >> 20) + " MB; expected at most " +
+                      std::to_string(kMaxMeshBytes >> 20) + " MB");
+  }
+}
+
 // An OBJ face line (`f` and n vertices) makes n − 2 triangles. (A face continued over lines with
-// '\' counts short; loadMesh counts again after reading.)
+// '\' counts short; loadMesh counts again after reading.) Every `mtllib` it names is checked.
 std::uintmax_t objTriangles(const std::filesystem::path& path, std::uintmax_t size) {
+  constexpr std::size_t kMaxName = 4096;
   FileBytes bytes(path, size, 0);
-  std::uintmax_t triangles = 0, words = 0, first_length = 0;
-  char first = 0;
+  std::uintmax_t triangles = 0, words = 0;
+  std::string first, rest;  // the line's first word (up to 8 bytes); an mtllib's names
   bool in_word = false;
   const auto endLine = [&] {
-    if (first == 'f' && first_length == 1 && words >= 4) triangles += words - 3;
-    words = first_length = 0;
-    first = 0;
+    if (first == "f" && words >= 4) triangles += words - 3;
+    if (first == "mtllib") {
+      std::istringstream names(rest);
+      for (std::string name; names >> name;) checkMaterialLibrary(path, name);
+    }
+    words = 0;
+    first.clear();
+    rest.clear();
     in_word = false;
   };
   for (char c = 0; bytes.peek(c) && c != '\0'; bytes.take()) {
     if (isLineEnd(c)) {
       endLine();
-    } else if (isBlank(c)) {
+      continue;
+    }
+    if (first == "mtllib" && words >= 1 && rest.size() < kMaxName) rest += c;
+    if (isBlank(c)) {
       in_word = false;
     } else {
-      if (!in_word && ++words == 1) first = c;
+      if (!in_word) ++words;
       in_word = true;
-      if (words == 1) ++first_length;
+      if (words == 1 && first.size() < 8) first += c;
     }
   }
   endLine();
@@ -288,6 +323,18 @@ void checkMeshFile(const std::filesystem::path& path) {
     failMesh(path, "has " + std::to_string(triangles) + " triangles (counted before reading it); " +
                        "expected at most " + std::to_string(kMaxMeshTriangles) +
                        " (simplify the mesh)");
+  }
+  // assimp's reading, triangulating and welding peak at about 600 bytes a triangle (a 4 M
+  // triangle STL: 2.3 GB).
+  constexpr double kLoadBytesPerTriangle = 600.0;
+  const double need = kLoadBytesPerTriangle * static_cast<double>(triangles);
+  const std::size_t available = availableMemoryBytes();
+  if (need > static_cast<double>(available)) {
+    failMesh(path, "has " + std::to_string(triangles) + " triangles, which take about " +
+                       megabytes(need) + " to load, over the " +
+                       megabytes(static_cast<double>(available)) +
+                       " this process can still allocate (free memory, ulimit -v); expected a "
+                       "smaller mesh or more memory");
   }
 }
 

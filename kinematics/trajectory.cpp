@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <map>
 #include <sstream>
 
 #include "kinematics/error.h"
@@ -72,6 +73,29 @@ std::string header(std::size_t columns) {
   return h;
 }
 
+// The number of columns a header line names: all of kColumns, or all but `limit`, in order.
+// A name given twice is reported with both its positions (which of the two is meant?).
+template <class Fail>
+std::size_t headerColumns(const std::string& line,
+                          const std::vector<std::string>& cells,
+                          const Fail& fail) {
+  for (const std::size_t n : {std::size(kColumns), kNumeric}) {
+    if (line == header(n)) return n;
+  }
+  std::map<std::string, std::size_t> first;  // name → its first column, from 1
+  for (std::size_t c = 0; c < cells.size(); ++c) {
+    const auto [at, fresh] = first.emplace(cells[c], c + 1);
+    if (!fresh && !cells[c].empty()) {
+      fail("header: column '" + clipForMessage(cells[c]) + "' twice, as columns " +
+           std::to_string(at->second) + " and " + std::to_string(c + 1) +
+           ": expected each column once, as in '" + header(std::size(kColumns)) + "'");
+    }
+  }
+  fail("header '" + clipForMessage(line) + "': expected '" + header(std::size(kColumns)) +
+       "' (the limit column may be left out)");
+  return 0;
+}
+
 }  // namespace
 
 std::string trajectoryToCsv(const Trajectory& trajectory) {
@@ -114,13 +138,7 @@ Trajectory parseTrajectoryCsv(const std::string& text, const std::string& source
     if (line.find_first_not_of(" \t") == std::string::npos || line[0] == '#') continue;
     const std::vector<std::string> cells = splitCells(line);
     if (columns == 0) {
-      for (const std::size_t n : {std::size(kColumns), kNumeric}) {
-        if (line == header(n)) columns = n;
-      }
-      if (columns == 0) {
-        fail("header '" + clipForMessage(line) + "': expected '" + header(std::size(kColumns)) +
-             "' (the limit column may be left out)");
-      }
+      columns = headerColumns(line, cells, fail);
       continue;
     }
     if (cells.size() != columns) {

@@ -723,10 +723,10 @@ TEST_F(Batch, OmplBenchmarkLogLoadsIntoThePlannerArenaDatabase) {
     // the experiment's run count is -1: the planners ran 2 and 4 times).
     const std::string label =
         r.method == "ray" ? " planner.ray.horizon=" + param(r, "planner.ray.horizon") : "";
-    expected.push_back(fmt::format(
-        "run|{}{}|{:.12g}|1|0|{:.12g}|{:.12g}|{}|{}", r.method, label, *metric(r, "plan_s"),
-        *metric(r, "J_s"),
-        *metric(r, "min_f"), *r.seed, dp_s ? fmt::format("{:.12g}", *dp_s) : std::string("-")));
+    expected.push_back(fmt::format("run|{}{}|{:.12g}|1|0|{:.12g}|{:.12g}|{}|{}", r.method, label,
+                                   *metric(r, "plan_s"), *metric(r, "J_s"), *metric(r, "min_f"),
+                                   *r.seed,
+                                   dp_s ? fmt::format("{:.12g}", *dp_s) : std::string("-")));
   }
   ASSERT_EQ(expected.size(), 8u);
   std::sort(expected.begin(), expected.end());
@@ -959,6 +959,20 @@ TEST_F(Batch, HugeSweepsAreRefusedBeforeTheCasesAreMade) {
     SCOPED_TRACE(body);
     EXPECT_TRUE(test::throwsInputError([&] { cli::loadSweep(writeSweep(body)); }, {expect}));
   }
+}
+
+// A sweep of two YAML documents would run the first only: refused before anything runs, naming
+// the file and where the second starts. A leading `---` is one document, as before.
+TEST_F(Batch, ASecondYamlDocumentInTheSweepIsRefusedNamingWhereItStarts) {
+  const std::string text = sweepHeader() + kQuickSweep;
+  const auto lines = std::count(text.begin(), text.end(), '\n');
+  EXPECT_TRUE(throwsInputError(
+      [&] { cli::loadSweep(writeSweep(kQuickSweep + "---\nrepeats: 2\n")); },
+      {"sweep.yaml:" + std::to_string(lines + 1) + ":1: a second YAML document starts here",
+       "expected one YAML document"}));
+  const fs::path lead = dir_ / "lead.yaml";
+  writeFile(lead, "---\n" + text);
+  EXPECT_EQ(cli::loadSweep(lead).cases.size(), 12u);
 }
 
 // Found by fuzzing in CI (yaml_sweep): a job path the OS cannot look at (a name over 255

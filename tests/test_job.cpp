@@ -10,6 +10,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
@@ -253,14 +254,28 @@ TEST_F(JobFile, MalformedEmptyAndNonMappingFilesAreRejected) {
                         {at("empty.yaml", " the file holds nothing"), "expected a YAML mapping"}));
   EXPECT_TRUE(loadFails(write("list.yaml", "- robot: r.yaml\n"),
                         {at("list.yaml", " the file holds a list"), "mapping"}));
-  // A second document would be dropped: refused naming where it starts. One document with its
-  // own leading `---` is fine.
+}
+
+// A second YAML document would be dropped (yaml-cpp reads one): refused naming the file and the
+// line and column where it starts, be it after `---` or after a `...` that ended the first, empty
+// or not, in a job or in its robot file. One document with its own leading `---`, or its
+// closing `...`, is fine.
+TEST_F(JobFile, ASecondYamlDocumentIsRefusedNamingWhereItStarts) {
+  const std::string second = "a second YAML document starts here";
   EXPECT_TRUE(loadFails(writeJob("---\ntable: {radius_mm: 200}\n"),
-                        {at("job.yaml", " holds 2 YAML documents"), "by line 4", "expected one"}));
-  EXPECT_TRUE(loadFails(writeJob("---\n"), {at("job.yaml", " holds 2 YAML documents")}));
+                        {at("job.yaml", "3:1: " + second), "expected one YAML document"}));
+  EXPECT_TRUE(loadFails(writeJob("---\n"), {at("job.yaml", "3:1: " + second)}));
+  EXPECT_TRUE(
+      loadFails(writeJob("...\ntable: {radius_mm: 200}\n"), {at("job.yaml", "4:1: " + second)}));
+  EXPECT_TRUE(loadFails(writeJob("name: a\n---\nname: b\n---\nname: c\n"),
+                        {at("job.yaml", "4:1: " + second)}));
+  const auto robot_lines = std::count(kRobot.begin(), kRobot.end(), '\n');
+  EXPECT_TRUE(loadFails(writeJob("", kRobot + "---\nname: other\n"),
+                        {at("robot.yaml", std::to_string(robot_lines + 1) + ":1: " + second)}));
   std::ifstream plain(writeJob(""));
   const std::string text((std::istreambuf_iterator<char>(plain)), std::istreambuf_iterator<char>());
   EXPECT_NO_THROW(cli::loadJob(write("lead.yaml", "---\n" + text)));
+  EXPECT_NO_THROW(cli::loadJob(write("end.yaml", "---\n" + text + "...\n")));
 }
 
 TEST_F(JobFile, UnknownKeysAreNamedWithLineAndSuggestion) {

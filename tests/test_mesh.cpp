@@ -16,6 +16,7 @@
 #include <initializer_list>
 #include <limits>
 #include <map>
+#include <numbers>
 #include <ostream>
 #include <random>
 #include <sstream>
@@ -243,6 +244,19 @@ TEST(TriangleMesh, CubeWithOneFlippedTriangleIsNotClosed) {
   EXPECT_FALSE(mesh.isClosed());
 }
 
+// The volume by the winding: s³ for an outward cube wherever it stands (the origin outside it),
+// −s³ for the same cube inside out.
+TEST(TriangleMesh, SignedVolumeIsTheCubesAndNegativeInsideOut) {
+  const Soup soup = cube(2.0);
+  TriangleMesh mesh{soup.vertices, soup.triangles};
+  EXPECT_NEAR(mesh.signedVolume(), 8.0, 1e-12);
+  for (Eigen::Vector3d& v : mesh.vertices) v += Eigen::Vector3d(5.0, -3.0, 7.0);
+  EXPECT_NEAR(mesh.signedVolume(), 8.0, 1e-9);
+  for (Eigen::Vector3i& t : mesh.triangles) std::swap(t[1], t[2]);
+  EXPECT_TRUE(mesh.isClosed()) << "consistently oriented, inward";
+  EXPECT_NEAR(mesh.signedVolume(), -8.0, 1e-9);
+}
+
 // 12 facets carry 36 corners; welding must leave the 8 cube corners. Area 6·s², s = 20 mm.
 TEST_F(MeshLoadTest, AsciiStlCubeWeldsToEightVerticesInMillimetres) {
   const auto loaded = loadMesh(write("cube.stl", asciiStl(facets(cube(20.0)))));
@@ -326,6 +340,67 @@ TEST_F(MeshLoadTest, ObjQuadsAreTriangulated) {
   EXPECT_NEAR(loaded.mesh.area(), 6.0, kFloatTol);
 }
 
+// One polygon (corners in order, one face) as OBJ, PLY and OFF text, keyed by file name.
+std::vector<std::pair<std::string, std::string>> polygonFiles(
+    const std::string& stem, const std::vector<Eigen::Vector3d>& corners) {
+  std::ostringstream v, obj_face, list;
+  v.precision(9);
+  for (std::size_t k = 0; k < corners.size(); ++k) {
+    v << corners[k].x() << ' ' << corners[k].y() << ' ' << corners[k].z() << '\n';
+    obj_face << ' ' << k + 1;
+    list << ' ' << k;
+  }
+  const std::string n = std::to_string(corners.size());
+  std::string obj;
+  std::istringstream lines(v.str());
+  for (std::string line; std::getline(lines, line);) obj += "v " + line + "\n";
+  return {{stem + ".obj", obj + "f" + obj_face.str() + "\n"},
+          {stem + ".ply", "ply\nformat ascii 1.0\nelement vertex " + n +
+                              "\nproperty float x\nproperty float y\nproperty float z\nelement "
+                              "face 1\nproperty list uchar int vertex_indices\nend_header\n" +
+                              v.str() + n + list.str() + "\n"},
+          {stem + ".off", "OFF\n" + n + " 1 0\n" + v.str() + n + list.str() + "\n"}};
+}
+
+// assimp's ear clipping cut a counter-clockwise L-shaped hexagon across its notch (area 4 for
+// 3) and a star's points into overlapping triangles: a polygon of more than four corners that
+// is not convex is refused naming the file, the face and its first corners. A convex hexagon
+// (either winding) and a concave quad, which assimp cuts at its reflex corner, load with their
+// true area.
+TEST_F(MeshLoadTest, AConcavePolygonIsRefusedAndConvexOnesAreTriangulated) {
+  const std::vector<Eigen::Vector3d> l_shape{{0, 0, 0}, {2, 0, 0}, {2, 1, 0},
+                                             {1, 1, 0}, {1, 2, 0}, {0, 2, 0}};
+  for (const auto& [name, text] : polygonFiles("l_shape", l_shape)) {
+    SCOPED_TRACE(name);
+    EXPECT_TRUE(containsAll(loadError(write(name, text), inMetres()),
+                            {name, "face 1 is a polygon of 6 corners that is not convex",
+                             "(0 0 0, 2 0 0, 2 1 0, …)", "expected triangles, quads or convex"}));
+  }
+  std::vector<Eigen::Vector3d> star, hexagon;
+  for (int k = 0; k < 5; ++k) {
+    const double a = std::numbers::pi / 2 + k * 4 * std::numbers::pi / 5;
+    star.emplace_back(std::cos(a), std::sin(a), 0.0);
+  }
+  EXPECT_TRUE(containsAll(loadError(write("star.obj", polygonFiles("star", star)[0].second)),
+                          {"star.obj", "face 1 is a polygon of 5 corners that is not convex"}));
+  for (int k = 0; k < 6; ++k) {
+    const double a = k * std::numbers::pi / 3;
+    hexagon.emplace_back(std::cos(a), std::sin(a), 1.0);
+  }
+  const std::vector<Eigen::Vector3d> reversed(hexagon.rbegin(), hexagon.rend());
+  const std::vector<Eigen::Vector3d> dart{{0, 0, 0}, {2, 0, 0}, {1, 0.5, 0}, {0, 2, 0}};
+  for (const auto& [corners, area] :
+       {std::pair{hexagon, 1.5 * std::sqrt(3.0)}, std::pair{reversed, 1.5 * std::sqrt(3.0)},
+        std::pair{dart, 1.5}}) {
+    for (const auto& [name, text] : polygonFiles("polygon", corners)) {
+      SCOPED_TRACE(name);
+      const auto loaded = loadMesh(write(name, text), inMetres());
+      EXPECT_EQ(loaded.mesh.triangles.size(), corners.size() - 2);
+      EXPECT_NEAR(loaded.mesh.area(), area, kFloatTol * area);
+    }
+  }
+}
+
 TEST_F(MeshLoadTest, ObjPointsAndLinesAreIgnoredWithAWarning) {
   const auto loaded =
       loadMesh(write("tet_extras.obj", obj(tetrahedron()) + "p 1\nl 1 2\n"), inMetres());
@@ -402,6 +477,25 @@ TEST_F(MeshLoadTest, AnStlFacetOtherThanATriangleIsRefusedNamingItsLine) {
   const std::string line = withFacet("vertex 0 0 0\nvertex 1 0 0\n");
   EXPECT_TRUE(containsAll(loadError(write("line.stl", line)),
                           {"line.stl", "line 7: a facet with 2 vertices; expected 3"}));
+}
+
+// STL words are read as assimp reads them: a solid named with a keyword is a name, and a last
+// facet of four vertices whose `endfacet` is missing is refused naming the line it starts on.
+TEST_F(MeshLoadTest, AnStlFacetIsCountedFromFacetToItsEndLikeAssimp) {
+  const std::string body = asciiStl(facets(cube(7.0)));
+  std::string named = body;
+  named.replace(0, named.find('\n'), "solid vertex_part endfacet");
+  EXPECT_EQ(loadMesh(write("named.stl", named)).mesh.triangles.size(), 12u);
+  const std::string open =
+      "facet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 1 1 0\nvertex 0 1 0\n"
+      "endloop\n";
+  std::string text = body;
+  const auto end = text.rfind("endsolid");
+  const auto line = std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(end), '\n');
+  text.insert(end, open);
+  EXPECT_TRUE(containsAll(
+      loadError(write("open.stl", text)),
+      {"open.stl", "line " + std::to_string(line + 1) + ": a facet with 4 vertices; expected 3"}));
 }
 
 TEST_F(MeshLoadTest, EmptyFileIsAnInputError) {
@@ -711,8 +805,13 @@ TEST_F(MeshLoadTest, MeshesOverTheTriangleLimitAreRefusedBeforeTheExpensiveSteps
     }
     obj += '\n';
   }
-  EXPECT_TRUE(containsAll(loadError(write("polygon.obj", obj)),
-                          {"polygon.obj", "has 4030095 triangles; expected at most 4000000"}));
+  // (Its faces, repeating three corners, are not convex polygons either: that refusal, also
+  // before triangulating, comes first.)
+  const std::string error = loadError(write("polygon.obj", obj));
+  EXPECT_TRUE(
+      containsAll(error, {"polygon.obj", "has 4030095 triangles; expected at most 4000000"}) ||
+      containsAll(error, {"polygon.obj", "is a polygon of 32767 corners that is not convex"}))
+      << error;
 }
 
 // `value` as a binary PLY file stores it: little-endian (this host's order) or big-endian.

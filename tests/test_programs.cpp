@@ -579,7 +579,10 @@ TEST(ProgramsValidate, ReadBackProgramsPassValidation) {
     EXPECT_EQ(files.over_speed_segments, 0u);
     // URScript's servo steps lie between the samples: checked at the step comments' times, where
     // the servo path cuts the table's corners by a fraction of its speed change times a period.
-    const Trajectory back = cli::atStepTimes(cli::readProgram(files.files[0].second, format, name));
+    // Read as `scanplan validate` reads it: with the cell's robot, whose joint speeds time V+
+    // SPEED.
+    const Trajectory back =
+        cli::atStepTimes(cli::readProgram(files.files[0].second, format, name, &cell.robot));
     if (format != ProgramFormat::kUrscript) {
       EXPECT_TRUE(sameToPrintedPrecision(back, tr)) << name;
     } else {
@@ -963,7 +966,7 @@ TEST(ProgramReaders, RefuseWhatTheyDoNotModel) {
        "outside the scan procedure"},
       {ProgramFormat::kVplus,
        replaceFirst(v2, "    DURATION 0.100000\n", "    SPEED 0.01\n    DURATION 0.100000\n"),
-       "SPEED 0.01 makes this MOVE take"},
+       "SPEED 0.01 (line "},
       {ProgramFormat::kVplus,
        replaceFirst(v2, "    DURATION 0.100000\n", "    SPEED 50 MMPS\n    DURATION 0.100000\n"),
        "SPEED in mm/s applies to straight-line moves"},
@@ -1017,6 +1020,248 @@ TEST(ProgramReaders, RefuseWhatTheyDoNotModel) {
   const auto last = cut.find("\n  if a[0] * ");
   cut.erase(last, cut.find("  stopj") - last - 1);
   EXPECT_THROW(cli::readProgram(cut, ProgramFormat::kUrscript, "p"), InputError);
+}
+
+}  // namespace
+
+namespace {
+
+// The 1-based number of the n-th line of `text` that starts with `prefix`.
+int lineOf(const std::string& text, const std::string& prefix, int n = 1) {
+  const std::vector<std::string> all = lines(text);
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    if (all[i].rfind(prefix, 0) == 0 && --n == 0) return static_cast<int>(i) + 1;
+  }
+  ADD_FAILURE() << "no line starting with '" << prefix << "'";
+  return 0;
+}
+
+std::string lineText(const std::string& text, int line) {
+  const std::vector<std::string> all = lines(text);
+  return line >= 1 && static_cast<std::size_t>(line) <= all.size()
+             ? all[static_cast<std::size_t>(line - 1)]
+             : std::string();
+}
+
+// `text` with its line `line` (1-based) replaced by `with`: none removes it, several insert.
+std::string withLine(const std::string& text, int line, const std::vector<std::string>& with) {
+  std::vector<std::string> all = lines(text);
+  if (line < 1 || static_cast<std::size_t>(line) > all.size()) return text;
+  const auto at = all.begin() + (line - 1);
+  all.insert(all.erase(at), with.begin(), with.end());
+  std::string out;
+  for (const std::string& l : all) out += l + "\n";
+  return out;
+}
+
+// The error reading `text`, or "no error".
+std::string readError(const std::string& text, ProgramFormat format, const RobotModel* robot) {
+  try {
+    cli::readProgram(text, format, "p", robot);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+// An edited program and the error it must get: its line (0: not checked) and a fragment.
+struct EditCase {
+  std::string what;
+  std::string edited;
+  int line = 0;
+  std::string message;
+};
+
+void expectRefused(const std::vector<EditCase>& cases,
+                   ProgramFormat format,
+                   const std::string& original,
+                   const RobotModel& robot) {
+  ASSERT_EQ(readError(original, format, &robot), "no error");
+  for (const EditCase& c : cases) {
+    ASSERT_NE(c.edited, original) << c.what << ": the edit did not apply";
+    const std::string error = readError(c.edited, format, &robot);
+    const std::string prefix = c.line > 0 ? "p:" + std::to_string(c.line) + ": " : "p:";
+    EXPECT_EQ(error.rfind(prefix, 0), 0u) << c.what << ": " << error;
+    EXPECT_NE(error.find(c.message), std::string::npos) << c.what << ": " << error;
+  }
+}
+
+// The random trajectory at a fifth of its pace: within the joints' top speeds at every step.
+Trajectory slowTrajectory(const RobotModel& robot) {
+  std::mt19937 rng(13);
+  Trajectory tr = randomTrajectory(robot, rng, 30);
+  for (auto& sample : tr.samples) sample.t *= 5.0;
+  return tr;
+}
+
+// Programs written for the robot read back with its joint speeds at the planned times; a V+
+// step the joints cannot keep (SPEED capped at 100) is refused with them and read without.
+TEST(ProgramReaders, WrittenProgramsReadBackWithTheRobotsSpeedsAtThePlannedTimes) {
+  const RobotModel viper = test::bundledRobot("viper_s650");
+  const Trajectory slow = slowTrajectory(viper);
+  for (const ProgramFormat f :
+       {ProgramFormat::kVplus, ProgramFormat::kKrl, ProgramFormat::kRapid}) {
+    const ProgramFiles files = cli::writeProgram(slow, viper, f, {});
+    EXPECT_EQ(files.over_speed_segments, 0u);
+    const cli::ProgramReading back = cli::readProgram(files.files[0].second, f, "p", &viper);
+    EXPECT_TRUE(sameToPrintedPrecision(back.trajectory, slow,
+                                       f == ProgramFormat::kKrl ? kKrlTimeTol : kPrintedTol))
+        << cli::programFormatName(f);
+  }
+  std::mt19937 rng(13);
+  const Trajectory fast = randomTrajectory(viper, rng, 30);  // step 25 needs some 130 %
+  const ProgramFiles files = cli::writeProgram(fast, viper, ProgramFormat::kVplus, {});
+  const std::string& v2 = files.files[0].second;
+  ASSERT_EQ(files.over_speed_segments, 1u);
+  ASSERT_NE(v2.find("; WARNING: step 25 needs"), std::string::npos);
+  const std::string error = readError(v2, ProgramFormat::kVplus, &viper);
+  EXPECT_EQ(
+      error.rfind("p:" + std::to_string(lineOf(v2, "    MOVE", 26)) + ": SPEED 100.00 (line " +
+                      std::to_string(lineOf(v2, "    SPEED", 26)) + ") makes this MOVE take",
+                  0),
+      0u)
+      << error;
+  EXPECT_NE(error.find("of joint 2's top speed: re-plan it slower"), std::string::npos) << error;
+  EXPECT_EQ(readError(v2, ProgramFormat::kVplus, nullptr), "no error");
+}
+
+// V+ SPEED: the next MOVE's, or every later one's with ALWAYS; a move it makes outlast its
+// DURATION is refused naming the MOVE and the SPEED. Without a robot, SPEED is not timed.
+TEST(ProgramReaders, VplusSpeedTimesEachMoveAndNamesTheLines) {
+  const RobotModel viper = test::bundledRobot("viper_s650");
+  const std::string v2 =
+      cli::writeProgram(slowTrajectory(viper), viper, ProgramFormat::kVplus, {}).files[0].second;
+  const auto speedLine = [&](int n) { return lineOf(v2, "    SPEED", n); };  // the n-th MOVE's
+  // A timed move that SPEED 0.2 cannot cover.
+  int n = 2;
+  while (n < 30 && std::stod(lineText(v2, speedLine(n)).substr(10)) <= 0.4) ++n;
+  ASSERT_LT(n, 30);
+  const double written = std::stod(lineText(v2, speedLine(n)).substr(10));
+  const std::string one = withLine(v2, speedLine(n), {"    SPEED 0.2"});
+  const std::string error = readError(one, ProgramFormat::kVplus, &viper);
+  EXPECT_EQ(error.rfind("p:" + std::to_string(lineOf(v2, "    MOVE", n)) + ": SPEED 0.20 (line " +
+                            std::to_string(speedLine(n)) + ") makes this MOVE take",
+                        0),
+            0u)
+      << error;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(error, m, std::regex("expected SPEED ≥ ([0-9.]+)\\)"))) << error;
+  EXPECT_NEAR(std::stod(m[1].str()), written, 0.011) << error;  // the writer's, rounded up
+  EXPECT_EQ(readError(one, ProgramFormat::kVplus, nullptr), "no error");
+  // SPEED ... ALWAYS before the approach holds for a later move without a SPEED of its own
+  // (the moves between have theirs); SPEED without ALWAYS holds for the next move only.
+  const std::string always =
+      withLine(withLine(v2, speedLine(n), {}), speedLine(1), {"    SPEED 0.2 ALWAYS"});
+  EXPECT_EQ(readError(always, ProgramFormat::kVplus, &viper)
+                .rfind("p:" + std::to_string(lineOf(always, "    MOVE", n)) +
+                           ": SPEED 0.20 ALWAYS (line " + std::to_string(speedLine(1)) + ")",
+                       0),
+            0u)
+      << readError(always, ProgramFormat::kVplus, &viper);
+  const std::string once =
+      withLine(withLine(v2, speedLine(n), {}), speedLine(1), {"    SPEED 0.2"});
+  EXPECT_EQ(readError(once, ProgramFormat::kVplus, &viper), "no error");
+  const int s3 = speedLine(3), m3 = lineOf(v2, "    MOVE", 3), end = lineOf(v2, ".END");
+  expectRefused(
+      {{"SPEED 0", withLine(v2, s3, {"    SPEED 0"}), s3, "expected SPEED in (0, 100] percent"},
+       {"SPEED -5", withLine(v2, s3, {"    SPEED -5"}), s3, "expected SPEED in (0, 100] percent"},
+       {"SPEED 150", withLine(v2, s3, {"    SPEED 150"}), s3, "expected SPEED in (0, 100] percent"},
+       {"MMPS", withLine(v2, s3, {"    SPEED 50 MMPS"}), s3, "SPEED in mm/s applies to straight"},
+       {"MMPS ALWAYS", withLine(v2, s3, {"    SPEED 50 MMPS ALWAYS"}), s3, "SPEED in mm/s"},
+       {"BREAK between moves", withLine(v2, m3, {lineText(v2, m3), "    BREAK"}), m3 + 1,
+        "BREAK between timed moves: the arm would stop here"},
+       {"a program after .END", v2 + ".PROGRAM other()\n    MOVE #PPOINT(0, 0, 90, 0, 0, 0)\n",
+        end + 1, "'.PROGRAM other()' after .END: expected nothing after the program"},
+       {"an instruction after .END", withLine(v2, end, {".END", "", "    SPEED 5 ALWAYS"}), end + 2,
+        "after .END"}},
+      ProgramFormat::kVplus, v2, viper);
+  EXPECT_EQ(readError(v2 + "\n; a comment\n\n", ProgramFormat::kVplus, &viper), "no error");
+}
+
+// KRL: the timed blocks at full axis velocity, the SCANPLAN_VEL routine as written, BAS only to
+// initialise, one PTP (to the start); anything else that changes motion is refused.
+TEST(ProgramReaders, KrlTimeBlocksRunAtFullVelocityUnderTheWrittenRoutine) {
+  const RobotModel viper = test::bundledRobot("viper_s650");
+  const std::string src =
+      cli::writeProgram(slowTrajectory(viper), viper, ProgramFormat::kKrl, {}).files[0].second;
+  const int vel = lineOf(src, "  SCANPLAN_VEL(100, 100)"), block = lineOf(src, "  PTP_SPLINE"),
+            start = lineOf(src, "    TIME_BLOCK START"), end = lineOf(src, "  ENDSPLINE"),
+            axis = lineOf(src, "    $VEL_AXIS[AXIS]=ARM_PCT"),
+            extax = lineOf(src, "  $VEL_EXTAX[1]=E1_PCT");
+  const auto before = [&](int line, const std::string& text) {
+    return withLine(src, line, {text, lineText(src, line)});
+  };
+  const std::string other = "not an instruction this reader knows";
+  expectRefused(
+      {{"half velocity", withLine(src, vel, {"  SCANPLAN_VEL(50, 50)"}), block,
+        "a timed PTP_SPLINE block after SCANPLAN_VEL(50, 50): TIME_BLOCK holds its times only"},
+       {"approach velocity", withLine(src, vel, {}), block - 1,
+        "a timed PTP_SPLINE block after SCANPLAN_VEL(10, 10)"},
+       {"velocity in a block", before(start + 1, "    SCANPLAN_VEL(100, 100)"), start + 1,
+        "inside a PTP_SPLINE block"},
+       {"velocity 0", withLine(src, vel, {"  SCANPLAN_VEL(0, 100)"}), vel, "each 1 ... 100"},
+       {"routine edited", withLine(src, axis, {"    $VEL_AXIS[AXIS]=5"}), axis,
+        "'$VEL_AXIS[AXIS]=5' after the program's END: expected '$VEL_AXIS[AXIS]=ARM_PCT'"},
+       {"routine grown", before(extax, "  $ACC_AXIS[1]=10"), extax,
+        "'$ACC_AXIS[1]=10' after the program's END: expected '$VEL_EXTAX[1]=E1_PCT'"},
+       {"routine missing", src.substr(0, src.find("\nEND\n") + 5), 0,
+        "the SCANPLAN_VEL routine is missing or cut short"},
+       {"a program after the routine", src + "DEF EXTRA( )\nEND\n", 0, "expected 'nothing'"},
+       {"BAS velocity", before(block, "  BAS(#VEL_PTP,20)"), block,
+        "BAS sets velocities and accelerations this reader does not model"},
+       {"BAS after the start", before(vel, "  BAS(#INITMOV,0)"), vel,
+        "expected BAS(#INITMOV,0) alone, before the first motion"},
+       {"a second PTP",
+        withLine(src, end,
+                 {"  ENDSPLINE", "  PTP {A1 0, A2 -60, A3 150, A4 0, A5 45, A6 0, E1 0}"}),
+        end + 1, "a PTP after the start"},
+       {"loop", before(block, "  LOOP"), block, other},
+       {"for", before(block, "  FOR I=1 TO 2"), block, other},
+       {"while", before(block, "  WHILE TRUE"), block, other},
+       {"wait", before(block, "  WAIT SEC 5"), block, other},
+       {"override", before(block, "  $OV_PRO=10"), block, other},
+       {"axis velocity", before(block, "  $VEL_AXIS[1]=10"), block, other},
+       {"another call", before(block, "  OTHER()"), block, other}},
+      ProgramFormat::kKrl, src, viper);
+}
+
+// RAPID: main() calls the scan procedure once; the moves are there alone, passing through their
+// points (z0); anything else that changes motion is refused.
+TEST(ProgramReaders, RapidMainCallsTheScanProcedureOnce) {
+  const RobotModel viper = test::bundledRobot("viper_s650");
+  const std::string mod =
+      cli::writeProgram(slowTrajectory(viper), viper, ProgramFormat::kRapid, {}).files[0].second;
+  const int call = lineOf(mod, "    scan;"), main_proc = lineOf(mod, "  PROC main()"),
+            scan = lineOf(mod, "  PROC scan()"), second = lineOf(mod, "    MoveAbsJ", 2);
+  const std::string move =
+      "    MoveAbsJ [[0,0,90,0,0,0],[0,9E9,9E9,9E9,9E9,9E9]]\\NoEOffs, v100\\T:=1, fine, tool0;";
+  const auto zone = [&](const std::string& z) {
+    return withLine(mod, second, {replaceFirst(lineText(mod, second), ", z0, ", z)});
+  };
+  const std::string other = "not an instruction this reader knows";
+  expectRefused(
+      {{"scan twice", withLine(mod, call, {"    scan;", "    scan;"}), call + 1,
+        "a second call in main() (the first is on line " + std::to_string(call) + ")"},
+       {"empty main", withLine(mod, call, {}), 0, "PROC main() calls nothing: expected one call"},
+       {"no main",
+        withLine(withLine(withLine(mod, main_proc + 2, {}), main_proc + 1, {}), main_proc, {}), 0,
+        "no PROC main()"},
+       {"a move in main", withLine(mod, call, {"    scan;", move}), call + 1,
+        "outside the scan procedure"},
+       {"a move outside a procedure", withLine(mod, scan, {move, "  PROC scan()"}), scan,
+        "outside the scan procedure"},
+       {"another procedure", withLine(mod, scan, {"  PROC extra()", "  ENDPROC", "  PROC scan()"}),
+        0, "3 procedures: expected two"},
+       {"a call in the scan", withLine(mod, scan, {"  PROC scan()", "    other;"}), scan + 1,
+        "a call outside PROC main()"},
+       {"a procedure inside another", withLine(mod, main_proc + 2, {}), scan - 1,
+        "PROC inside PROC MAIN"},
+       {"zone z50", zone(", z50, "), second, "zone z50 rounds the corner"},
+       {"zone fine between moves", zone(", fine, "), second,
+        "zone fine between timed moves: the arm would stop here"},
+       {"VelSet", withLine(mod, call, {"    VelSet 10, 100;", "    scan;"}), call, other},
+       {"WaitTime", withLine(mod, scan, {"  PROC scan()", "    WaitTime 5;"}), scan + 1, other}},
+      ProgramFormat::kRapid, mod, viper);
 }
 
 }  // namespace

@@ -6,7 +6,9 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <optional>
 #include <random>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -14,6 +16,7 @@
 #include "cli/commands/commands.h"
 #include "cli/config/job.h"
 #include "cli/config/problem.h"
+#include "cli/io/axis_stream.h"
 #include "collision/scene.h"
 #include "kinematics/error.h"
 #include "kinematics/joint_wrap.h"
@@ -165,6 +168,48 @@ TEST(TrajectoryCsv, MalformedInputNamesFileLineAndColumn) {
       EXPECT_EQ(std::string(e.what()).rfind("t.csv:", 0), 0u) << e.what();
     }
   }
+}
+
+// A column named twice is ambiguous (which one holds the values?): refused naming the name and
+// both positions, in a trajectory CSV and in a `watch` axis log; plan's header still reads.
+TEST(TrajectoryCsv, AColumnNamedTwiceIsRefusedNamingBothPositions) {
+  const std::string header =
+      "t_s,table_deg,j1_deg,j2_deg,j3_deg,j4_deg,j5_deg,j6_deg,f,scanning,px_mm,py_mm,pz_mm,qw,qx,"
+      "qy,qz\n";
+  const std::string good = "0,0,0,0,0,0,0,0,1,1,0,0,0,1,0,0,0\n";
+  const auto edited = [&](const std::string& from, const std::string& to) {
+    std::string text = header;
+    return text.replace(text.find(from), from.size(), to) + good;
+  };
+  EXPECT_TRUE(test::throwsInputError(
+      [&] { kinematics::parseTrajectoryCsv(edited(",j5_deg,", ",j4_deg,"), "t.csv"); },
+      {"t.csv:1: header: column 'j4_deg' twice, as columns 6 and 7", "expected each column once"}));
+  EXPECT_TRUE(test::throwsInputError(
+      [&] { kinematics::parseTrajectoryCsv(edited(",f,", ",t_s,"), "t.csv"); },
+      {"t.csv:1: header: column 't_s' twice, as columns 1 and 9"}));
+  EXPECT_EQ(kinematics::parseTrajectoryCsv(header + good, "t.csv").samples.size(), 1u);
+}
+
+std::optional<kinematics::AxisSample> firstAxisSample(const std::string& log) {
+  std::istringstream in(log);
+  cli::AxisStreamReader reader(in, "log.csv");
+  return reader.next();
+}
+
+TEST(AxisStream, AColumnNamedTwiceIsRefusedNamingBothPositions) {
+  const std::string eight = "t_s,table_deg,j1_deg,j2_deg,j3_deg,j4_deg,j5_deg,j6_deg";
+  const std::string row = "0,1,2,3,4,5,6,7,99\n";
+  EXPECT_TRUE(test::throwsInputError([&] { firstAxisSample(eight + ",j4_deg\n" + row); },
+                                     {"log.csv:1: the header has column j4_deg twice, as "
+                                      "columns 6 and 9",
+                                      "expected each of t_s,table_deg,j1_deg,…,j6_deg once"}));
+  EXPECT_TRUE(test::throwsInputError([&] { firstAxisSample("# log\nt_s,t_s," + eight + "\n"); },
+                                     {"log.csv:2: the header has column t_s twice, as columns "
+                                      "1 and 2"}));
+  // Other columns may repeat: they are not read.
+  const auto sample = firstAxisSample(eight + ",note,note\n" + row);
+  ASSERT_TRUE(sample.has_value());
+  EXPECT_DOUBLE_EQ(sample->q(3), deg(5.0));
 }
 
 // The demo cell on a coarse map (2° × 0.2 s) so the test stays quick.

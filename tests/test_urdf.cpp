@@ -238,6 +238,37 @@ TEST(Urdf, AMimicJointOnTheChainAndAClosedChainAreRefused) {
   fs::remove_all(dir);
 }
 
+// Links in a loop of parents away from the root (each the child of one joint, so urdfdom finds
+// its root elsewhere and reads the file) are refused naming a link of the loop and its joints;
+// a link hung from the tree off the chain is fine.
+TEST(Urdf, ALinkThatIsItsOwnAncestorIsRefusedNamingTheLoop) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("scanplan_urdf_loop_" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  const std::string text = test::readFile(urdfDir() / "viper_s650.urdf");
+  const auto withLinks = [&](const std::string& name, const std::string& extra) {
+    std::string edited = text;
+    test::writeFile(dir / name, edited.replace(edited.find("</robot>"), 8, extra + "</robot>"));
+    cli::UrdfRobotSource src = source({"viper_s650", "", ""});
+    src.urdf = dir / name;
+    return [src] { cli::importUrdf(src); };
+  };
+  const auto fixed = [](const std::string& name, const std::string& parent,
+                        const std::string& child) {
+    return "<joint name=\"" + name + "\" type=\"fixed\"><parent link=\"" + parent +
+           "\"/><child link=\"" + child + "\"/></joint>";
+  };
+  const std::string links = "<link name=\"a\"/><link name=\"b\"/><link name=\"c\"/>";
+  EXPECT_TRUE(test::throwsInputError(
+      withLinks("cycle.urdf",
+                links + fixed("ab", "a", "b") + fixed("bc", "b", "c") + fixed("ca", "c", "a")),
+      {"cycle.urdf", "link 'a' is its own ancestor", "the joints 'ca', 'bc', 'ab' lead from it",
+       "expected a tree of links"}));
+  EXPECT_NO_THROW(withLinks("tree.urdf", links + fixed("ab", "a", "b") + fixed("bc", "b", "c") +
+                                             fixed("base-a", "base_link", "a"))());
+  fs::remove_all(dir);
+}
+
 // A copy of the KR6 R700 URDF with a mesh in a ROS package, a box on a link fixed to link_6,
 // and a joint to a gripper finger off the chain, in a scratch folder.
 class UrdfPackages : public test::Cli {
@@ -310,6 +341,42 @@ TEST_F(UrdfPackages, PackageUrisResolveAgainstThePackagePathOrTheEnvironment) {
   EXPECT_TRUE(test::throwsInputError(
       [&] { cli::importUrdf(robot()); },
       {"package 'my_robot_description' is", "but it has no file", "meshes/cover.stl"}));
+}
+
+// A package:// mesh path is inside its package: one that climbs out of it ('..' past the
+// package folder, an absolute path after the name, '..' as the name) is refused naming the URDF,
+// the link, the URI and its normal form, even where a file lies there. '..' that stays inside,
+// and a path relative to the URDF (ROS's urdf/ beside meshes/), are fine.
+TEST_F(UrdfPackages, AMeshPathLeavingItsPackageIsRefused) {
+  writeCube(dir_ / "ws/outside.stl", 20.0);
+  const std::string text = test::readFile(dir_ / "robot.urdf");
+  const std::string uri = "package://my_robot_description/meshes/cover.stl";
+  const auto importWith = [&](const std::string& mesh, const fs::path& file) {
+    std::string edited = text;
+    test::writeFile(file, edited.replace(edited.find(uri), uri.size(), mesh));
+    cli::UrdfRobotSource src = robot();
+    src.urdf = file;
+    return [src] { cli::importUrdf(src); };
+  };
+  const fs::path leaves = dir_ / "leaves.urdf";
+  EXPECT_TRUE(test::throwsInputError(
+      importWith("package://my_robot_description/meshes/../../outside.stl", leaves),
+      {"leaves.urdf", "link 'link_3'",
+       "mesh 'package://my_robot_description/meshes/../../outside.stl'",
+       "the path 'meshes/../../outside.stl' leaves package 'my_robot_description' (normalised: "
+       "'../outside.stl')",
+       "expected a file inside the package"}));
+  const std::string absolute = (dir_ / "ws/outside.stl").string();
+  EXPECT_TRUE(test::throwsInputError(
+      importWith("package://my_robot_description/" + absolute, leaves),
+      {"leaves.urdf", "the path '" + absolute + "' leaves package 'my_robot_description'"}));
+  EXPECT_TRUE(test::throwsInputError(importWith("package://../ws/outside.stl", leaves),
+                                     {"leaves.urdf", "package name '..'"}));
+  EXPECT_NO_THROW(importWith("package://my_robot_description/meshes/../meshes/cover.stl",
+                             dir_ / "inside.urdf")());
+  fs::create_directories(dir_ / "urdf");
+  EXPECT_NO_THROW(
+      importWith("../ws/my_robot_description/meshes/cover.stl", dir_ / "urdf/robot.urdf")());
 }
 
 TEST_F(UrdfPackages, EveryCollisionElementSitsWhereTheUrdfPutsItAtAnyPose) {

@@ -107,11 +107,18 @@ std::string checkScannerResolution(const JobSpec& job, const pipeline::ScanProbl
       static_cast<long long>(std::ceil(width / spacing - 1e-9)) + 1);
 }
 
-
 kinematics::LoadedMesh loadPart(const JobSpec& job, const kinematics::CellModel& cell) {
   kinematics::LoadedMesh part = loadPartMesh(job, cell.part);
   for (const std::string& w : part.report.warnings) {
     spdlog::warn("{}: part.mesh: {}", job.source.filename().string(), w);
+  }
+  // Inside out, every surface would face away from the scanner: say so, not "nothing seen".
+  if (part.mesh.isClosed() && part.mesh.signedVolume() < 0.0) {
+    throw InputError(fmt::format(
+        "{}: part.mesh: {} is closed but inside out: its triangles' winding puts their normals "
+        "into the part (volume {:.0f} mm³ by the winding): expected outward normals; reverse "
+        "the winding of every face in a mesh tool",
+        job.source.string(), job.part.mesh.as_written, part.mesh.signedVolume() * 1e9));
   }
   checkOnTable(job, cell, part.mesh);
   return part;

@@ -59,10 +59,45 @@ std::string readUrdfText(const fs::path& file) {
   return text.str();
 }
 
-// A URDF is a tree: each link the child of one joint at most, none its own parent. urdfdom
-// keeps the last of two joints naming one child, which can close a loop its walks never leave.
+// A link's parent joint, and the link that joint hangs it from.
+struct ParentJoint {
+  std::string joint;
+  std::string link;
+};
+
+// Following parents up from every link must end at the root. A loop of links each the child of
+// one joint (disconnected from the root, so urdfdom still finds one) never ends: refused naming
+// the link that is its own ancestor and the joints of the loop. Each link is walked up once.
+void requireNoLoop(const std::map<std::string, ParentJoint>& parent, const fs::path& file) {
+  std::map<std::string, std::pair<std::size_t, std::size_t>> reached;  // link → walk, step
+  std::size_t walk = 0;
+  for (const auto& [start, unused] : parent) {
+    ++walk;
+    std::vector<std::string> joints;  // the joints this walk went up through
+    for (std::string link = start;;) {
+      const auto [it, fresh] = reached.emplace(link, std::pair{walk, joints.size()});
+      if (!fresh && it->second.first != walk) break;  // an earlier walk went on from here
+      if (!fresh) {
+        const auto loop = joints.begin() + static_cast<std::ptrdiff_t>(it->second.second);
+        throw InputError(fmt::format(
+            "{}: link '{}' is its own ancestor: the joints '{}' lead from it back to it (a "
+            "closed chain): expected a tree of links (URDF has no closed chains)",
+            file.string(), link,
+            clipForMessage(fmt::format("{}", fmt::join(loop, joints.end(), "', '")), 300)));
+      }
+      const auto up = parent.find(link);
+      if (up == parent.end()) break;  // the root
+      joints.push_back(up->second.joint);
+      link = up->second.link;
+    }
+  }
+}
+
+// A URDF is a tree: each link the child of one joint at most, none its own parent or ancestor.
+// urdfdom keeps the last of two joints naming one child, which can close a loop its walks never
+// leave.
 void requireTree(const urdf::ModelInterface& model, const fs::path& file) {
-  std::map<std::string, std::string> parent_joint;  // child link → the joint naming it
+  std::map<std::string, ParentJoint> parent;  // child link → the joint naming it
   for (const auto& [name, joint] : model.joints_) {
     if (!joint) continue;
     if (joint->parent_link_name == joint->child_link_name) {
@@ -71,18 +106,34 @@ void requireTree(const urdf::ModelInterface& model, const fs::path& file) {
                       "of links (URDF has no closed chains)",
                       file.string(), name, joint->child_link_name));
     }
-    const auto [it, first] = parent_joint.emplace(joint->child_link_name, name);
+    const auto [it, first] =
+        parent.emplace(joint->child_link_name, ParentJoint{name, joint->parent_link_name});
     if (!first) {
       throw InputError(fmt::format(
           "{}: link '{}' is the child of two joints, '{}' and '{}': expected a tree of links "
           "(a closed chain is not a URDF scanplan can model)",
-          file.string(), joint->child_link_name, it->second, name));
+          file.string(), joint->child_link_name, it->second.joint, name));
     }
   }
+  requireNoLoop(parent, file);
+}
+
+// A document type declaration (entities, an external DTD): URDF uses none, and urdfdom's XML
+// reader would not expand it but report the robot element missing.
+void refuseDoctype(const std::string& text, const fs::path& file) {
+  const auto at = text.find("<!DOCTYPE");
+  if (at == std::string::npos) return;
+  const auto line =
+      1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n');
+  throw InputError(fmt::format(
+      "{}:{}: a <!DOCTYPE> declaration{}: URDF uses none and scanplan does not expand entities; "
+      "expected plain URDF XML",
+      file.string(), line, text.find("<!ENTITY", at) != std::string::npos ? " with entities" : ""));
 }
 
 urdf::ModelInterfaceSharedPtr parseUrdf(const fs::path& file) {
   const std::string text = readUrdfText(file);
+  refuseDoctype(text, file);
   static std::mutex mutex;  // console_bridge's output handler is global
   const std::lock_guard lock(mutex);
   CollectedLog log;
@@ -274,6 +325,28 @@ PoseSpec cleanPose(const Eigen::Isometry3d& X) {
   for (double& v : p.xyz_mm) v = clean(v);
   for (double& v : p.rpy_deg) v = clean(v);
   return p;
+}
+
+// `package://PACKAGE/PATH` names a file inside the package. A PATH whose normal form climbs out
+// of it ('..' past the package folder, or an absolute path), or no package name, would take
+// whatever lies beside the folder the search finds, and write it into the robot file.
+void requireInsidePackage(const std::string& uri,
+                          const std::string& package,
+                          const std::string& inside) {
+  if (package.empty() || package == "." || package == "..") {
+    throw InputError(fmt::format(
+        "mesh '{}': package name '{}': expected package://PACKAGE/PATH naming a package folder",
+        clipForMessage(uri), clipForMessage(package)));
+  }
+  const fs::path normal = fs::path(inside).lexically_normal();
+  if (fs::path(inside).has_root_path() || (!normal.empty() && *normal.begin() == "..")) {
+    throw InputError(fmt::format(
+        "mesh '{}': the path '{}' leaves package '{}' (normalised: '{}'): expected a file "
+        "inside the package (a mesh elsewhere: package:// of its own package, or a path "
+        "relative to the URDF)",
+        clipForMessage(uri, 300), clipForMessage(inside, 300), clipForMessage(package),
+        clipForMessage(normal.generic_string(), 300)));
+  }
 }
 
 // Where a shape of a URDF link comes from, for its error messages and mesh paths.
@@ -576,6 +649,7 @@ fs::path resolveUrdfUri(const std::string& uri,
   const std::string rest = uri.substr(kPackage.size());
   const std::string package = rest.substr(0, rest.find('/'));
   const std::string inside = rest.size() > package.size() ? rest.substr(package.size() + 1) : "";
+  requireInsidePackage(uri, package, inside);
   std::vector<std::string> searched;
   for (fs::path dir : search) {
     if (dir.filename().empty()) dir = dir.parent_path();  // "meshes/" names "meshes"

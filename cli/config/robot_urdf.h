@@ -41,7 +41,8 @@ struct UrdfRobot {
 /// `base`, `link1` … `link6` (what jobs' clearance rules name). Throws InputError naming the
 /// file, the element and the value: a missing link, a joint that is not revolute, an arm that is
 /// not ortho-parallel (which condition, by how much), a package or mesh not found (with the
-/// folders searched).
+/// folders searched), a `<mimic>` joint on the chain, a closed chain (a link the child of two
+/// joints, or its own ancestor), a `package://` mesh path leaving its package.
 UrdfRobot importUrdf(const UrdfRobotSource& source);
 
 /// `explicit_paths`, then the folders of SCANPLAN_PACKAGE_PATH (colon-separated).
@@ -50,7 +51,9 @@ std::vector<std::filesystem::path> packageSearchPath(
 
 /// A URDF mesh `filename`: `package://PKG/REST` (PKG/REST under a folder of `search`, or REST in
 /// a folder of `search` named PKG), `file://PATH`, or a path (relative to `urdf_dir`). Throws
-/// InputError naming the URI and the folders searched when the package or the file is missing.
+/// InputError naming the URI and the folders searched when the package or the file is missing,
+/// and naming the URI and its normal form when REST leaves the package (`..` past PKG, or an
+/// absolute path).
 std::filesystem::path resolveUrdfUri(const std::string& uri,
                                      const std::filesystem::path& urdf_dir,
                                      const std::vector<std::filesystem::path>& search);

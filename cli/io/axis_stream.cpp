@@ -63,7 +63,14 @@ void AxisStreamReader::readHeader(const std::string& line) {
   for (int k = 0; k < 8; ++k) {
     column_of_[k] = -1;
     for (std::size_t c = 0; c < cells.size(); ++c) {
-      if (cells[c] == kNames[k]) column_of_[k] = static_cast<int>(c);
+      if (cells[c] != kNames[k]) continue;
+      if (column_of_[k] >= 0) {  // which one is meant? Neither is taken.
+        throw InputError(
+            fmt::format("{}:{}: the header has column {} twice, as columns {} and {}: expected "
+                        "each of t_s,table_deg,j1_deg,…,j6_deg once",
+                        source_, line_, kNames[k], column_of_[k] + 1, c + 1));
+      }
+      column_of_[k] = static_cast<int>(c);
     }
     if (column_of_[k] < 0) {
       throw InputError(

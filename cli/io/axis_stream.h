@@ -13,8 +13,9 @@ namespace scanplan::cli {
 /// Columns: `t_s,table_deg,j1_deg,…,j6_deg`, in that order without a header, or named by a
 /// header line (other columns are ignored, so plan's trajectory.csv reads as it is). Lines
 /// starting with # and blank lines are skipped. Errors (InputError) name the source, the line,
-/// the column and the value: a line longer than kMaxLineBytes, a missing column, a non-number,
-/// a value beyond kinematics::kMaxTrajectoryAngleDeg, a time not after the previous one.
+/// the column and the value: a line longer than kMaxLineBytes, a missing column, one of the
+/// eight named twice (with both positions), a non-number, a value beyond
+/// kinematics::kMaxTrajectoryAngleDeg, a time not after the previous one.
 class AxisStreamReader {
  public:
   static constexpr std::size_t kMaxLineBytes = 64 * 1024;

@@ -168,20 +168,29 @@ kinematics::Trajectory atStepTimes(const ProgramReading& reading);
 /// Reads a program written by writeProgram(format) (or edited by hand in its form; kCsv: the
 /// trajectory CSV). A reader models or refuses every statement that changes motion or timing,
 /// so that what it returns is what the controller runs:
-/// - V+: a MOVE takes the longer of its DURATION and its time at SPEED (percent of each joint's
-///   top speed in `robot`; SPEED without ALWAYS holds for the next move): a SPEED that makes a
-///   move outlast its DURATION is refused (without `robot`, SPEED is checked for its form only).
-///   Refused: a MOVE without DURATION, DURATION ALWAYS, SPEED in MMPS or outside (0, 100],
-///   CALL, WAIT, DELAY and any other instruction, anything after .END.
-/// - KRL: SCANPLAN_VEL must be (100, 100) under the timed PTP_SPLINE blocks, and its routine
-///   after the program's END the one writeProgram writes; BAS only as BAS(#INITMOV,0) before
-///   the first motion; loops, waits and other statements are refused.
-/// - RAPID: PROC main() holds exactly one call, to the procedure that holds every MoveAbsJ and
-///   SetDO, and the module no other procedure; a MoveAbsJ without \\T is refused.
+/// - V+: a MOVE takes the longer of its DURATION and its time at SPEED s % (the largest
+///   |Δq_j| / (s/100 · robot.joint(j).max_speed), monitor speed 100 assumed). SPEED holds for
+///   the next MOVE only, SPEED ... ALWAYS for every MOVE after it (default 100). A SPEED that
+///   makes a move outlast its DURATION (beyond 1e-3 of it + 1e-6 s, the printed rounding) is
+///   refused, naming the MOVE's line and the SPEED's. Without `robot` (a library caller with no
+///   robot) SPEED is checked for its form and range only and the DURATIONs time the moves.
+///   Refused: a MOVE without DURATION, DURATION ALWAYS, SPEED in MMPS or outside (0, 100], a
+///   BREAK between timed moves (the arm would stop), CALL, WAIT, DELAY and any other
+///   instruction, anything but comments after .END.
+/// - KRL: SCANPLAN_VEL(arm %, E1 %) (each 1 ... 100) is kept, and every timed PTP_SPLINE block
+///   must start under SCANPLAN_VEL(100, 100); the text after the program's END must be the
+///   SCANPLAN_VEL routine writeProgram writes (line by line, comments and blank lines aside).
+///   Refused: SCANPLAN_VEL inside a block, BAS other than BAS(#INITMOV,0) before the first
+///   motion, a PTP after the first (untimed) one, loops, waits (but WAIT SEC 0), other calls.
+/// - RAPID: PROC main() holds exactly one call, to the module's only other procedure, which
+///   holds every MoveAbsJ and SetDO. Refused: a second call (naming both lines), no call, no
+///   main(), moves in main() or outside a procedure, any other procedure or call, a MoveAbsJ
+///   after the first without \\T, a zone other than z0 (fine only on the first and the last
+///   MoveAbsJ: the arm stops there).
 /// - URScript: only the seg() and last step writeProgram writes, compared line by line.
-/// Errors (InputError) name `source` and the line: an instruction the reader does not know,
-/// malformed values, a move without its step comment (V+: the table angle is only there),
-/// times not strictly increasing, no moves.
+/// `robot` is read by the V+ reader alone. Errors (InputError) name `source` and the line: an
+/// instruction the reader does not know, malformed values, a move without its step comment (V+:
+/// the table angle is only there), times not strictly increasing, no moves.
 ProgramReading readProgram(const std::string& text,
                            ProgramFormat format,
                            const std::string& source,

@@ -87,6 +87,13 @@ bool isTrue(const std::string& word) {
   return w == "TRUE" || w == "1";
 }
 
+// A V+ SPEED setting: percent of the joints' top speeds, and its line (0: the default, 100).
+struct VplusSpeed {
+  double percent = 100.0;
+  int line = 0;
+  bool always = false;
+};
+
 // ---------------------------------------------------------------------------------------------
 // V+: MOVE #PPOINT per step, DURATION its time; SIGNAL runs as the move before it starts.
 class VplusReader {
@@ -143,6 +150,8 @@ class VplusReader {
     } else if (keyword == "BREAK") {
       if (!args.empty()) r_.in.fail("'" + clipForMessage(line) + "': expected 'BREAK' alone");
       break_after_move_ = true;
+      // After a timed move: the arm stops there, which only the last sample may do.
+      if (r_.reading.trajectory.samples.size() >= 2 && !stop_line_) stop_line_ = r_.in.lineNumber();
     } else if (keyword == "LEFTY" || keyword == "RIGHTY" || keyword == "ABOVE" ||
                keyword == "BELOW" || keyword == "FLIP" || keyword == "NOFLIP") {
       if (!args.empty())
@@ -171,8 +180,12 @@ class VplusReader {
           "MOVE without DURATION: expected 'DURATION <s>' (the step's time) before each "
           "MOVE after the first");
     }
-    const double speed = next_speed_.value_or(always_speed_);
-    if (!samples.empty()) checkSpeed(q, speed);
+    if (stop_line_) {
+      r_.in.failAt(*stop_line_,
+                   "BREAK between timed moves: the arm would stop here, where the plan moves on "
+                   "without stopping (expected BREAK only after the first MOVE and the last)");
+    }
+    if (!samples.empty()) checkSpeed(q, next_speed_.value_or(always_speed_));
     const double t = samples.empty() ? p.t : samples.back().t + *duration_;
     r_.append(t, q, p.table_deg, p);
     duration_.reset();
@@ -181,20 +194,39 @@ class VplusReader {
   }
 
   // A joint move takes the longer of its DURATION and its time at SPEED (percent of each joint's
-  // top speed): longer than the DURATION, the arm falls behind the table the plan times.
-  void checkSpeed(const std::vector<double>& q_deg, double speed) {
+  // top speed; a joint without one is not limited, as the writer assumes): longer than the
+  // DURATION, the arm falls behind the table the plan times.
+  void checkSpeed(const std::vector<double>& q_deg, const VplusSpeed& speed) {
     if (!robot_) return;
     const kinematics::JointVector& from = r_.reading.trajectory.samples.back().q;
     double at_speed = 0.0;
+    int limiting = 0;
     for (int j = 0; j < kNumJoints; ++j) {
+      const double v_max = robot_->joint(j).max_speed;
+      if (!(v_max > 0.0)) continue;
       const double travel = std::abs(q_deg[static_cast<std::size_t>(j)] * kDegToRad - from(j));
-      at_speed = std::max(at_speed, travel / (robot_->joint(j).max_speed * speed / 100.0));
+      const double t = travel / (v_max * speed.percent / 100.0);
+      if (t > at_speed) {
+        at_speed = t;
+        limiting = j;
+      }
     }
     if (at_speed <= *duration_ * (1.0 + 1e-3) + 1e-6) return;
+    const double needed = speed.percent * at_speed / *duration_;
     r_.in.fail(fmt::format(
-        "SPEED {} makes this MOVE take {:.4f} s where its DURATION is {:.4f} s: the arm would "
-        "fall behind the table, which the plan times (expected SPEED ≥ {:.2f})",
-        fixed(speed, 2), at_speed, *duration_, speed * at_speed / *duration_));
+        "SPEED {}{} makes this MOVE take {:.4f} s where its DURATION is {:.4f} s: the arm would "
+        "fall behind the table, which the plan times ({})",
+        speed.percent >= 0.01 ? fixed(speed.percent, 2) : fmt::format("{:g}", speed.percent),
+        speedOrigin(speed), at_speed, *duration_,
+        needed <= 100.0
+            ? fmt::format("expected SPEED ≥ {:.2f}", needed)
+            : fmt::format("the step needs {:.2f} % of joint {}'s top speed: re-plan it slower",
+                          needed, limiting + 1)));
+  }
+
+  static std::string speedOrigin(const VplusSpeed& speed) {
+    if (speed.line == 0) return " (the default: no SPEED before this MOVE)";
+    return fmt::format("{} (line {})", speed.always ? " ALWAYS" : "", speed.line);
   }
 
   // SPEED or DURATION <value> [ALWAYS] (SPEED also in MMPS): DURATION times the next MOVE.
@@ -207,7 +239,7 @@ class VplusReader {
     const std::string tail = upper(trim(rest));
     const bool units_ok = tail.empty() || tail == "ALWAYS" ||
                           (keyword == "SPEED" && (tail == "MMPS" || tail == "MMPS ALWAYS"));
-    if (!parseNumber(value, v) || v < 0.0 || !units_ok) {
+    if (!parseNumber(value, v) || (keyword == "DURATION" && v < 0.0) || !units_ok) {
       r_.in.fail("'" + clipForMessage(line) + "': expected '" + keyword + " <value> [ALWAYS]'");
     }
     if (keyword == "DURATION") {
@@ -224,9 +256,13 @@ class VplusReader {
                  "model: expected 'SPEED <percent>' for the joint moves");
     }
     if (!(v > 0.0 && v <= 100.0)) {
-      r_.in.fail("'" + clipForMessage(line) + "': expected SPEED in (0, 100] percent");
+      r_.in.fail("'" + clipForMessage(line) +
+                 "': expected SPEED in (0, 100] percent of the joints' top speeds");
     }
-    (tail == "ALWAYS" ? always_speed_ : next_speed_.emplace()) = v;
+    // The latest setting times the next motion; ALWAYS also the ones after it.
+    const VplusSpeed set{v, r_.in.lineNumber(), tail == "ALWAYS"};
+    next_speed_ = set;
+    if (set.always) always_speed_ = set;
   }
 
   // SIGNAL n[, -m ...]: at the start of the last MOVE, or at its end after a BREAK.
@@ -262,9 +298,10 @@ class VplusReader {
   ReaderState r_;
   const RobotModel* robot_;  // its joint speeds time SPEED; none: SPEED is read, not timed
   bool in_program_ = false, ended_ = false, break_after_move_ = false;
+  std::optional<int> stop_line_;  // a BREAK after a timed move
   std::optional<double> duration_;
-  double always_speed_ = 100.0;       // SPEED ... ALWAYS (monitor SPEED 100 assumed)
-  std::optional<double> next_speed_;  // SPEED for the next motion only
+  VplusSpeed always_speed_;               // SPEED ... ALWAYS (monitor SPEED 100 assumed)
+  std::optional<VplusSpeed> next_speed_;  // SPEED for the next motion only
 };
 
 // A KRL spline segment waiting for its block's TIME_BLOCK END.
@@ -366,6 +403,10 @@ class KrlReader {
 
   // SCANPLAN_VEL(arm %, E1 %): the axes' velocity limits the routine after END sets.
   void velocity(const std::string& s) {
+    if (block_) {
+      r_.in.fail("'" + clipForMessage(s) +
+                 "' inside a PTP_SPLINE block: expected SCANPLAN_VEL before PTP_SPLINE");
+    }
     static const std::regex kVel(R"(SCANPLAN_VEL\s*\(\s*([0-9]{1,3})\s*,\s*([0-9]{1,3})\s*\))",
                                  std::regex::icase);
     std::smatch m;
@@ -427,6 +468,11 @@ class KrlReader {
 
   void approach(const std::string& s) {
     if (block_) r_.in.fail("PTP inside a PTP_SPLINE block: expected SPTP");
+    if (!r_.reading.trajectory.samples.empty()) {
+      r_.in.fail(
+          "a PTP after the start: only the first motion, to the start, may be a PTP (TIME_BLOCK "
+          "times the PTP_SPLINE blocks alone): expected SPTP segments in a timed block");
+    }
     const auto [q, e1] = axes(s);
     const PendingStep p = r_.takeStep("PTP");
     r_.append(p.t, q, e1, p);
@@ -596,9 +642,11 @@ class RapidReader {
     } else if (u == "ENDMODULE") {
       ended_ = true;
     } else if (u.rfind("PROC ", 0) == 0) {
+      if (!proc_.empty()) r_.in.fail("PROC inside PROC " + proc_ + ": expected ENDPROC first");
       proc_ = upper(trim(s.substr(5, s.find('(') - 5)));
       procs_.push_back(proc_);
     } else if (u == "ENDPROC") {
+      if (proc_.empty()) r_.in.fail("ENDPROC without its PROC");
       proc_.clear();
     } else if (std::regex_match(s, kCall)) {
       // main() calls the scan procedure, and nothing else calls anything.
@@ -664,6 +712,7 @@ class RapidReader {
                  "': expected 'MoveAbsJ [[j1,...,j6],[eax_a,9E9,...]]\\NoEOffs, v..[\\T:=s], "
                  "zone, tool;'");
     }
+    checkZone(s, m[6].str());
     const std::vector<double> q = numberList(r_.in, m[1].str(), kNumJoints, "MoveAbsJ robax");
     const std::vector<double> eax = numberList(r_.in, m[2].str(), 6, "MoveAbsJ extax");
     const PendingStep p = r_.takeStep("MoveAbsJ");
@@ -680,6 +729,25 @@ class RapidReader {
       t = samples.back().t + dt;
     }
     r_.append(t, q, eax[0], p);
+  }
+
+  // z0 passes through the point, fine stops there, which only the first and the last move may
+  // do (the plan moves on without stopping); a larger zone rounds the corner, a path the reader
+  // does not model.
+  void checkZone(const std::string& s, const std::string& zone) {
+    const std::string u = upper(zone);
+    if (u != "Z0" && u != "FINE") {
+      r_.in.fail("'" + clipForMessage(s) + "': zone " + zone +
+                 " rounds the corner at this point, a path the reader does not model: expected "
+                 "z0 (or fine, on the first and the last MoveAbsJ)");
+    }
+    if (stop_line_) {
+      r_.in.failAt(*stop_line_,
+                   "zone fine between timed moves: the arm would stop here, where the plan moves "
+                   "on without stopping (expected z0, fine only on the first and the last "
+                   "MoveAbsJ)");
+    }
+    if (u == "FINE" && !r_.reading.trajectory.samples.empty()) stop_line_ = r_.in.lineNumber();
   }
 
   void setDo(const std::string& s) {
@@ -719,6 +787,7 @@ class RapidReader {
 
   ReaderState r_;
   bool module_ = false, ended_ = false;
+  std::optional<int> stop_line_;                    // a timed MoveAbsJ with zone fine
   std::string proc_;                                // the procedure being read (upper case)
   std::vector<std::string> procs_;                  // every procedure's name
   std::vector<std::pair<std::string, int>> calls_;  // main()'s calls and their lines

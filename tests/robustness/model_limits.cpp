@@ -345,7 +345,8 @@ std::vector<Case> cellCases() {
   for (const std::string command : {"plan", "validate"}) {
     Case c = set("sensor_window_after_the_end_" + command, g, command,
                  {"sensors=[{name: s, kind: presence, shape: sphere, radius_mm: 5, "
-                  "expect: during, window_s: [5000, 6000]}]"},
+                  "pose: {xyz_mm: [0, 0, 5000], rpy_deg: [0, 0, 0]}, expect: during, "
+                  "window_s: [5000, 6000]}]"},
                  {});
     if (command == "validate") c.args.insert(c.args.begin() + 2, {"-t", kTrajectory});
     c.exits = {3};
@@ -428,9 +429,65 @@ std::vector<Case> estimateCases() {
 // ---------------------------------------------------------------------------------------------
 // Errors that name the real cause: the key whose value is wrong, or the geometric fact.
 
+// A mesh file the part's job names, with files it pulls in: `path` of the light demo.
+Case meshWith(const std::string& name,
+              const std::string& group,
+              const std::string& mesh,
+              std::vector<InputFile> files,
+              std::vector<std::string> names) {
+  files.push_back(jobWith("job.yaml", {{"part.mesh", mesh}}));
+  return Case{.name = name,
+              .group = group,
+              .args = {"path", "job.yaml", "-o", "out"},
+              .files = std::move(files),
+              .names = std::move(names),
+              .out = OutState::kExisting};
+}
+
+const std::string kObj =
+    "mtllib m.mtl\nv 0 0 0\nv 100 0 0\nv 0 100 0\nv 0 0 100\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+const std::string kDoctype =
+    "<?xml version=\"1.0\"?>\n<!DOCTYPE robot [\n <!ENTITY a \"aaaaaaaaaa\">\n"
+    " <!ENTITY b \"&a;&a;&a;&a;&a;&a;&a;&a;&a;&a;\">\n <!ENTITY c "
+    "\"&b;&b;&b;&b;&b;&b;&b;&b;&b;&b;\">\n]>\n"
+    "<robot name=\"&c;\"><link name=\"base_link\"/></robot>\n";
+
 std::vector<Case> causeCases() {
   const std::string g = "real causes";
   std::vector<Case> cases;
+  // Every file a mesh loader opens is checked first: an OBJ's material library too.
+  cases.push_back(meshWith("obj_material_library_fifo", "work estimates", "m.obj",
+                           {text("m.obj", kObj), fifo("m.mtl")}, {"m.obj", "m.mtl"}));
+  cases.push_back(meshWith("obj_material_library_folder", "work estimates", "m.obj",
+                           {text("m.obj", kObj), folder("m.mtl")}, {"m.obj", "m.mtl"}));
+  cases.push_back(meshWith("obj_material_library_dev_zero", "work estimates", "m.obj",
+                           {text("m.obj", kObj), symlinkTo("m.mtl", "/dev/zero")},
+                           {"m.obj", "m.mtl"}));
+  // Inside out: the winding, not "no pass sees the part".
+  const std::string inside_out =
+      "OFF\n4 4 0\n0 0 0\n100 0 0\n0 100 0\n0 0 100\n3 0 1 2\n3 0 3 1\n3 0 2 3\n3 1 3 2\n";
+  cases.push_back(meshWith("mesh_inside_out_off", g, "m.off", {text("m.off", inside_out)},
+                           {"part.mesh", "inside out"}));
+  cases.push_back(meshWith("mesh_inside_out_obj", g, "m.obj",
+                           {text("m.obj",
+                                 "v 0 0 0\nv 100 0 0\nv 0 100 0\nv 0 0 100\nf 1 2 3\n"
+                                 "f 1 4 2\nf 1 3 4\nf 2 4 3\n")},
+                           {"part.mesh", "inside out"}));
+  // An XML entity bomb or an external DTD: the declaration, not "no robot element".
+  cases.push_back(Case{.name = "urdf_entity_bomb",
+                       .group = g,
+                       .args = {"robot", "import", "k.urdf", "-o", "k.yaml"},
+                       .files = {text("k.urdf", kDoctype)},
+                       .names = {"k.urdf", "DOCTYPE"}});
+  cases.push_back(Case{
+      .name = "urdf_external_dtd",
+      .group = g,
+      .args = {"robot", "import", "k.urdf", "-o", "k.yaml"},
+      .files = {edit("k.urdf", "@src/data/robots/urdf/viper_s650.urdf",
+                     [](std::string t) {
+                       return replaced(t, "?>\n", "?>\n<!DOCTYPE robot SYSTEM \"robot.dtd\">\n");
+                     })},
+      .names = {"k.urdf:2", "DOCTYPE"}});
   cases.push_back(set("scanner_mount_one_km_path", g, "path",
                       {"scanner.mount.xyz_mm=[1000000, 0, 0]"}, {"scanner.mount"}));
   cases.push_back(set("scanner_mount_one_km_plan", g, "plan",

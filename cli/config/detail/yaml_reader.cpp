@@ -7,6 +7,8 @@
 #include <fstream>
 
 #include <fmt/format.h>
+#include <yaml-cpp/eventhandler.h>
+#include <yaml-cpp/parser.h>
 
 #include "kinematics/error.h"
 
@@ -149,6 +151,44 @@ void countNodes(const YAML::Node& node,
   }
 }
 
+// Where a file's second YAML document starts; thrown to stop the parse there.
+struct SecondDocument {
+  YAML::Mark mark;
+};
+
+// Parser events seen only for where documents start: the second one ends the parse.
+class DocumentStarts : public YAML::EventHandler {
+ public:
+  void OnDocumentStart(const YAML::Mark& mark) override {
+    if (++documents_ > 1) throw SecondDocument{mark};
+  }
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnScalar(const YAML::Mark&,
+                const std::string&,
+                YAML::anchor_t,
+                const std::string&) override {}
+  void OnSequenceStart(const YAML::Mark&,
+                       const std::string&,
+                       YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {}
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark&,
+                  const std::string&,
+                  YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {}
+  void OnMapEnd() override {}
+
+ private:
+  int documents_ = 0;
+};
+
+[[noreturn]] void failMalformed(const std::filesystem::path& file, const YAML::Exception& e) {
+  throw InputError(fmt::format("{}:{}:{}: malformed YAML: {}", file.string(), e.mark.line + 1,
+                               e.mark.column + 1, e.msg));
+}
+
 }  // namespace
 
 void checkYamlSize(const YAML::Node& root, const std::string& where) {
@@ -189,24 +229,31 @@ void requireYamlFile(const std::filesystem::path& file) {
 }
 
 YAML::Node loadOneDocument(const std::filesystem::path& file) {
-  std::ifstream in(file);
+  std::ifstream in(file, std::ios::binary);
   if (!in) throw InputError(fmt::format("{}: cannot be read", file.string()));
-  std::vector<YAML::Node> documents;
+  // First only where documents start (no tree is built, so a file of many documents costs no
+  // memory), then the one document itself.
   try {
-    documents = YAML::LoadAll(in);
-  } catch (const YAML::Exception& e) {
-    throw InputError(fmt::format("{}:{}:{}: malformed YAML: {}", file.string(), e.mark.line + 1,
-                                 e.mark.column + 1, e.msg));
-  }
-  if (documents.size() > 1) {
-    const YAML::Mark mark = documents[1].Mark();
+    YAML::Parser parser(in);
+    DocumentStarts starts;
+    while (parser.HandleNextDocument(starts)) {
+    }
+  } catch (const SecondDocument& second) {
     throw InputError(fmt::format(
-        "{}: holds {} YAML documents (a second starts{}): expected one; scanplan would read the "
-        "first only, so remove the '---' that starts another",
-        file.string(), documents.size(),
-        mark.is_null() ? std::string() : fmt::format(" by line {}", mark.line + 1)));
+        "{}:{}:{}: a second YAML document starts here: expected one YAML document (scanplan "
+        "would read the first and drop the rest); join them by removing the document marker "
+        "('---' or '...') between them",
+        file.string(), second.mark.line + 1, second.mark.column + 1));
+  } catch (const YAML::Exception& e) {
+    failMalformed(file, e);
   }
-  return documents.empty() ? YAML::Node() : documents.front();
+  in.clear();
+  in.seekg(0);
+  try {
+    return YAML::Load(in);
+  } catch (const YAML::Exception& e) {
+    failMalformed(file, e);
+  }
 }
 
 YAML::Node loadYamlFile(const std::filesystem::path& file) {

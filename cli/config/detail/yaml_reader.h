@@ -237,8 +237,9 @@ void checkYamlSize(const YAML::Node& root, const std::string& where);
 YAML::Node loadYamlFile(const std::filesystem::path& file);
 
 /// The one YAML document of a file (a null node when it holds none), parse errors as InputError
-/// with file:line:column; a file of more than one document (another `---` after the first) is an
-/// InputError naming the line where the second starts: its keys would otherwise be dropped.
+/// with file:line:column; a file of more than one document (another `---` after the first, or
+/// text after a `...` that ends it; an empty one too) is an InputError naming file:line:column
+/// where the second starts: its keys would otherwise be dropped.
 YAML::Node loadOneDocument(const std::filesystem::path& file);
 
 /// Throws InputError naming `file` unless it is a regular file of at most kMaxYamlFileBytes (a
