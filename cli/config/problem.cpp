@@ -12,6 +12,7 @@
 #include "kinematics/error.h"
 #include "kinematics/placement.h"
 #include "kinematics/units.h"
+#include "pipeline/auto_scan.h"
 
 namespace scanplan::cli {
 
@@ -86,8 +87,8 @@ void checkOnTable(const JobSpec& job,
 // each point); rays farther apart than the spacing leave their tracks only.
 std::string checkScannerResolution(const JobSpec& job, const pipeline::ScanProblem& p) {
   if (!p.simulation) return {};
-  const scanner::LaserWindow w = scanner::laserWindow(p.optics);
-  const double width = 2.0 * w.halfWidth(0.5 * (w.z_min + w.z_max));
+  // The line's width at mid depth: the pitch of two rays (pipeline::autoPointSpacing).
+  const double width = pipeline::autoPointSpacing({}, p.optics, 2);
   const int rays = job.scanner.rays_per_profile;
   if (rays < 2) {
     throw InputError(fmt::format(
