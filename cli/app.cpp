@@ -3,7 +3,9 @@
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <ctime>
 #include <exception>
+#include <memory>
 #include <optional>
 #include <string>
 #include <system_error>
@@ -14,6 +16,7 @@
 #include <unistd.h>
 
 #include <fmt/format.h>
+#include <spdlog/pattern_formatter.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
@@ -40,9 +43,25 @@ void addRobotSource(CLI::App& cmd, RobotSource& source) {
   });
 }
 
+// The `%*` of the log pattern: the message with invisible characters made visible, as in errors.
+class VisibleMessage : public spdlog::custom_flag_formatter {
+ public:
+  void format(const spdlog::details::log_msg& msg,
+              const std::tm& /*time*/,
+              spdlog::memory_buf_t& dest) override {
+    const std::string text = visibleText(std::string(msg.payload.data(), msg.payload.size()));
+    dest.append(text.data(), text.data() + text.size());
+  }
+  [[nodiscard]] std::unique_ptr<custom_flag_formatter> clone() const override {
+    return std::make_unique<VisibleMessage>();
+  }
+};
+
 void setUpLogging(int verbosity) {
   auto logger = spdlog::stderr_color_mt("scanplan");
-  logger->set_pattern("scanplan: %^%l%$: %v");
+  auto formatter = std::make_unique<spdlog::pattern_formatter>();
+  formatter->add_flag<VisibleMessage>('*').set_pattern("scanplan: %^%l%$: %*");
+  logger->set_formatter(std::move(formatter));
   logger->set_level(verbosity > 0   ? spdlog::level::debug
                     : verbosity < 0 ? spdlog::level::err
                                     : spdlog::level::info);
@@ -612,7 +631,7 @@ std::optional<int> parseArguments(CLI::App& app, int argc, char** argv) {
     std::fprintf(stderr,
                  "scanplan: error: %s\nRun 'scanplan --help' (or 'scanplan "
                  "COMMAND --help') for usage.\n",
-                 (hint.empty() ? std::string(e.what()) : hint).c_str());
+                 visibleText(hint.empty() ? std::string(e.what()) : hint).c_str());
     return static_cast<int>(ExitCode::kUsage);
   }
   return std::nullopt;
@@ -744,7 +763,8 @@ int run(int argc, char** argv) {
     std::fprintf(stderr, "scanplan: error: %s\n", e.what());
     return static_cast<int>(ExitCode::kInput);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "scanplan: internal error: %s (please report this)\n", e.what());
+    std::fprintf(stderr, "scanplan: internal error: %s (please report this)\n",
+                 visibleText(e.what()).c_str());
     return static_cast<int>(ExitCode::kInternal);
   }
 }

@@ -935,6 +935,15 @@ TEST_F(Batch, ResultLinesThatAreNotRowsAreRefusedNamingTheLine) {
   std::string bad_metric = good;
   bad_metric.replace(bad_metric.find("25.5"), 4, "\"x\"");
   EXPECT_TRUE(fails(bad_metric, {"\"J_s\": \"x\": expected a number or null"}));
+  // A key twice (a hand-merged row): nlohmann keeps the last value; refused, naming the key, at
+  // the top and inside params.
+  std::string twice = good;
+  twice.replace(twice.rfind('}'), 1, ", \"status\": \"error\"}");
+  EXPECT_TRUE(fails(twice, {"results.jsonl:1: the key \"status\" appears twice"}));
+  std::string twice_param = good;
+  twice_param.replace(twice_param.find("\"params\": {"), 11,
+                      "\"params\": {\"a\": \"1\", \"a\": \"2\"");
+  EXPECT_TRUE(fails(twice_param, {"results.jsonl:1: the key \"a\" appears twice"}));
 
   // A torn last line (a kill while a row is appended) is skipped, the rows before it kept.
   writeFile(jsonl, good + "{\"case_id\": \"01");

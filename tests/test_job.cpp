@@ -601,6 +601,10 @@ TEST_F(JobFile, OverrideErrorsNameTheOverride) {
   EXPECT_TRUE(fails("scan.paths[0]={type: ring}",
                     {"--set scan.paths[0]={type: ring}: scan.paths[0].height_mm: required field "
                      "is missing"}));
+  // A second YAML document inside a value would be dropped: refused, naming its line.
+  EXPECT_TRUE(fails("table.axis.xyz_mm=[600,0,0]\n---\n[1,2,3]",
+                    {"the value holds a second YAML document at its line 2"}));
+  EXPECT_NO_THROW(loadJob(job, {"table.axis.xyz_mm=[600,0,0]\n...\n"}));
   for (const std::string o : {"table.radius_m=5", "table.axis.xyz_mm=[600,0]"}) {
     try {
       loadJob(job, {o});
@@ -759,5 +763,26 @@ TEST_F(JobFile, FifoAsJobOrRobotFileIsRefusedNotReadForever) {
   EXPECT_TRUE(throwsInputError([&] { loadRobotFile(fifo); }, {"job.yaml", "not a regular file"}));
 }
 
+// What a terminal would not show is shown: a byte-order mark, zero-width and no-break spaces,
+// control characters and bytes that are not UTF-8; printable UTF-8 and line breaks stay.
+TEST(VisibleText, InvisibleCharactersAreNamedAndPrintableTextKept) {
+  EXPECT_EQ(visibleText("\xEF\xBB\xBFrobot.yaml"), "<U+FEFF>robot.yaml");
+  EXPECT_EQ(visibleText("a\xE2\x80\x8B"
+                        "b\xC2\xA0"
+                        "c"),
+            "a<U+200B>b<U+00A0>c");
+  EXPECT_EQ(visibleText("0.1\r\tx\x01\x7F"), "0.1\\r\\tx\\x01\\x7F");
+  EXPECT_EQ(visibleText("x\xFF\xC3"), "x\\xFF\\xC3");         // not UTF-8, and a cut sequence
+  EXPECT_EQ(visibleText("\xC0\xAF"), "\\xC0\\xAF");           // an overlong '/'
+  EXPECT_EQ(visibleText("\xED\xA0\x80"), "\\xED\\xA0\\x80");  // a surrogate
+  const std::string plain =
+      "90\xC2\xB0 \xE2\x80\xA6 2\xC3\x97"
+      "3\nnext line \xF0\x9F\x99\x82";
+  EXPECT_EQ(visibleText(plain), plain);
+  // Every InputError's message is shown so, wherever it is printed.
+  EXPECT_STREQ(InputError("part.mesh: '\xEF\xBB\xBFm.stl'").what(), "part.mesh: '<U+FEFF>m.stl'");
+}
+
 }  // namespace
 }  // namespace scanplan::cli
+

@@ -8,9 +8,11 @@
 #include <fstream>
 #include <limits>
 #include <mutex>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <tuple>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -79,6 +81,22 @@ std::int64_t integerOf(const Json& v, const char* key, std::int64_t lo, std::int
   const auto i = v.get<std::int64_t>();
   if (i < lo || i > hi) badMember(key, v, expected);
   return i;
+}
+
+// A line of results.jsonl as JSON; a key twice in one object throws BadRow (nlohmann would keep
+// the last value silently, and a hand-merged row could then report another case's figures).
+Json parseRow(const std::string& line) {
+  std::vector<std::set<std::string>> keys;  // one per object being read
+  return Json::parse(line, [&keys](int /*depth*/, Json::parse_event_t event, Json& parsed) {
+    if (event == Json::parse_event_t::object_start) keys.emplace_back();
+    if (event == Json::parse_event_t::object_end) keys.pop_back();
+    if (event == Json::parse_event_t::key &&
+        !keys.back().insert(parsed.get<std::string>()).second) {
+      throw BadRow(fmt::format("the key \"{}\" appears twice in one object: expected each once",
+                               clipForMessage(parsed.get<std::string>())));
+    }
+    return true;
+  });
 }
 
 // A row of results.jsonl, every field of the type a batch writes; throws BadRow otherwise.
@@ -237,7 +255,7 @@ std::vector<BatchRow> readBatchRows(const fs::path& jsonl) {
     const bool torn = in.eof() && line.front() == '{';
     std::string what;
     try {
-      rows.push_back(detail::rowOf(Json::parse(line)));
+      rows.push_back(detail::rowOf(detail::parseRow(line)));
       continue;
     } catch (const Json::parse_error& e) {
       if (torn) break;

@@ -946,10 +946,18 @@ OverrideParent overrideParent(YAML::Node root,
 
 // The override's value: a flow sequence or mapping is YAML, anything else a scalar.
 YAML::Node overrideValue(const std::string& text, const std::string& value) {
+  const bool yaml = !value.empty() && (value[0] == '[' || value[0] == '{');
   YAML::Node v;
   try {
-    v = !value.empty() && (value[0] == '[' || value[0] == '{') ? YAML::Load(value)
-                                                               : YAML::Node(value);
+    if (yaml) {
+      std::istringstream in(value);
+      if (const auto second = secondDocumentStart(in)) {
+        badOverride(text, fmt::format("the value holds a second YAML document at its line {}: "
+                                      "expected one value (the rest would be dropped)",
+                                      second->line + 1));
+      }
+    }
+    v = yaml ? YAML::Load(value) : YAML::Node(value);
   } catch (const YAML::Exception& e) {
     badOverride(text, "the value is malformed YAML: " + e.msg);
   }

@@ -4,6 +4,7 @@
 // tests/robustness/README.md has the rules.
 #include <stdexcept>
 #include <string>
+#include <tuple>
 
 #include "tests/robustness/builders.h"
 #include "tests/robustness/cases.h"
@@ -243,6 +244,12 @@ const std::string kStlFacet =
     "      vertex 0 100 0\n";
 std::string stl(const std::string& facets) { return "solid m\n" + facets + "endsolid m\n"; }
 
+Case set(const std::string& name,
+         const std::string& group,
+         const std::string& command,
+         std::vector<std::string> overrides,
+         std::vector<std::string> names);
+
 std::vector<Case> formatCases() {
   std::vector<Case> cases;
   cases.push_back(urdf("urdf_mimic_on_the_chain", [](std::string t) {
@@ -301,6 +308,27 @@ std::vector<Case> formatCases() {
   cases.push_back(trajectoryFileCase(
       "csv_duplicate_time_column",
       edit("t.csv", kTrajectory, [](std::string t) { return replaced(t, ",f,", ",t_s,"); })));
+  cases.push_back(set("set_value_second_yaml_document", "unmodelled input", "path",
+                      {"table.axis.xyz_mm=[600, 0, 0]\n---\n[0, 0, 0]"}, {"second YAML document"}));
+  cases.push_back(set("set_value_third_yaml_document", "unmodelled input", "plan",
+                      {"scan.auto={point_spacing_mm: 1}\n...\n{}\n...\n{}"},
+                      {"second YAML document"}));
+  // A results row with a key twice (nlohmann keeps the last): refused, naming the key.
+  const std::string row =
+      "{\"case_id\": \"c0\", \"index\": 0, \"job\": \"j.yaml\", \"params\": {}, "
+      "\"repeat\": 0, \"method\": \"ray\", \"status\": \"planned\", \"reason\": \"\", "
+      "\"map_reused\": false";
+  for (const auto& [name, body, key] :
+       {std::tuple<std::string, std::string, std::string>{
+            "batch_row_status_twice", row + ", \"status\": \"error\"}\n", "status"},
+        {"batch_row_param_twice", replaced(row, "{}", "{\"k\": \"1\", \"k\": \"2\"}") + "}\n", "k"},
+        {"batch_row_metric_twice", row + ", \"J_s\": 1, \"J_s\": 2}\n", "J_s"}}) {
+    cases.push_back(Case{.name = name,
+                         .group = "unmodelled input",
+                         .args = {"batch", "report", "r"},
+                         .files = {folder("r"), text("r/results.jsonl", body)},
+                         .names = {"results.jsonl:1", "\"" + key + "\" appears twice"}});
+  }
   cases.push_back(
       Case{.name = "watch_log_duplicate_column",
            .group = "unmodelled input",
@@ -504,6 +532,27 @@ std::vector<Case> causeCases() {
                       {"table.axis"}));
   cases.push_back(set("table_at_the_robot_origin_plan", g, "plan", {"table.axis.xyz_mm=[0, 0, 0]"},
                       {"table.axis"}));
+  // What a terminal does not show is shown: a byte-order mark, zero-width and no-break spaces,
+  // a carriage return (a file saved on Windows), bytes that are not UTF-8.
+  cases.push_back(set("bom_in_a_value", g, "path", {"part.mesh=\xEF\xBB\xBFpart.stl"},
+                      {"part.mesh", "<U+FEFF>part.stl"}));
+  cases.push_back(set("zero_width_space_in_a_key", g, "path",
+                      {"planner.ray\xE2\x80\x8B.horizon=20"}, {"planner.ray<U+200B>"}));
+  cases.push_back(set("no_break_space_after_a_number", g, "map", {"table.radius_mm=250\xC2\xA0"},
+                      {"table.radius_mm", "250<U+00A0>"}));
+  cases.push_back(set("carriage_return_after_a_number", g, "plan", {"scan.dt_s=0.1\r"},
+                      {"scan.dt_s", "0.1\\r"}));
+  cases.push_back(set("latin1_byte_in_a_path", g, "path", {"part.mesh=p\xE4rt.stl"},
+                      {"part.mesh", "p\\xE4rt.stl"}));
+  cases.push_back(Case{.name = "bom_inside_a_job_value",
+                       .group = g,
+                       .args = {"path", "job.yaml", "-o", "out"},
+                       .files = {edit("job.yaml", kLight,
+                                      [](std::string t) {
+                                        return replaced(t, "\nrobot: ", "\nrobot: \xEF\xBB\xBF");
+                                      })},
+                       .names = {"job.yaml:5", "robot", "<U+FEFF>"},
+                       .out = OutState::kExisting});
   // A lock naming a live process that is not a scanplan run (pid 1) is stale: taken over.
   cases.push_back(Case{.name = "lock_of_another_process",
                        .group = g,

@@ -228,22 +228,31 @@ void requireYamlFile(const std::filesystem::path& file) {
   }
 }
 
-YAML::Node loadOneDocument(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(fmt::format("{}: cannot be read", file.string()));
-  // First only where documents start (no tree is built, so a file of many documents costs no
-  // memory), then the one document itself.
+std::optional<YAML::Mark> secondDocumentStart(std::istream& in) {
   try {
     YAML::Parser parser(in);
     DocumentStarts starts;
     while (parser.HandleNextDocument(starts)) {
     }
   } catch (const SecondDocument& second) {
-    throw InputError(fmt::format(
-        "{}:{}:{}: a second YAML document starts here: expected one YAML document (scanplan "
-        "would read the first and drop the rest); join them by removing the document marker "
-        "('---' or '...') between them",
-        file.string(), second.mark.line + 1, second.mark.column + 1));
+    return second.mark;
+  }
+  return std::nullopt;
+}
+
+YAML::Node loadOneDocument(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(fmt::format("{}: cannot be read", file.string()));
+  // First only where documents start (no tree is built, so a file of many documents costs no
+  // memory), then the one document itself.
+  try {
+    if (const auto second = secondDocumentStart(in)) {
+      throw InputError(fmt::format(
+          "{}:{}:{}: a second YAML document starts here: expected one YAML document (scanplan "
+          "would read the first and drop the rest); join them by removing the document marker "
+          "('---' or '...') between them",
+          file.string(), second->line + 1, second->column + 1));
+    }
   } catch (const YAML::Exception& e) {
     failMalformed(file, e);
   }

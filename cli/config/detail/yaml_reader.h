@@ -6,8 +6,10 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <istream>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -241,6 +243,10 @@ YAML::Node loadYamlFile(const std::filesystem::path& file);
 /// text after a `...` that ends it; an empty one too) is an InputError naming file:line:column
 /// where the second starts: its keys would otherwise be dropped.
 YAML::Node loadOneDocument(const std::filesystem::path& file);
+
+/// Where the second YAML document of `in` starts (read up to there, no tree built), or none when
+/// it holds at most one; a malformed text throws YAML::Exception.
+std::optional<YAML::Mark> secondDocumentStart(std::istream& in);
 
 /// Throws InputError naming `file` unless it is a regular file of at most kMaxYamlFileBytes (a
 /// FIFO or device would be read until it ends, which may be never).
