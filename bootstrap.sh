@@ -11,6 +11,8 @@ packages=(
   libnlopt-dev libnlopt-cxx-dev libyaml-cpp-dev libembree-dev libnanoflann-dev libassimp-dev
   libcli11-dev libspdlog-dev libfmt-dev libtbb-dev libpng-dev nlohmann-json3-dev
   liburdfdom-dev libqhull-dev libglpk-dev
+  # for tests: the function-length check reads the sources with Universal Ctags
+  universal-ctags
   libgtest-dev libgmock-dev libcairo2-dev fonts-dejavu-core
   # for tests: OMPL's ompl_benchmark_statistics reads `batch`'s log, GNU parallel runs shards
   ompl-demos parallel

@@ -21,12 +21,12 @@
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
+#include <scanplan/config/text.h>
+#include <scanplan/kinematics/error.h>
+#include <scanplan/planner/registry.h>
 #include "cli/batch/batch.h"
 #include "cli/commands/commands.h"
 #include "cli/completion.h"
-#include "cli/config/text.h"
-#include "kinematics/error.h"
-#include "planner/planner.h"
 
 namespace scanplan::cli {
 namespace {
@@ -151,7 +151,7 @@ constexpr const char* kTrajectoryHelp =
 struct Commands {
   int verbose = 0;
   bool quiet = false;
-  PlanOptions plan;
+  PlanArguments plan;
   CLI::App* plan_cmd = nullptr;
   VerifyOptions validate;
   CLI::App* validate_cmd = nullptr;
@@ -159,9 +159,9 @@ struct Commands {
   CLI::App* simulate_cmd = nullptr;
   VerifyOptions export_options;
   CLI::App* export_cmd = nullptr;
-  PlanOptions path;
+  PlanArguments path;
   CLI::App* path_cmd = nullptr;
-  PlanOptions map;
+  PlanArguments map;
   CLI::App* map_cmd = nullptr;
   std::filesystem::path show_file;
   std::vector<std::string> show_overrides;
@@ -215,7 +215,7 @@ void addAppOptions(CLI::App& app, Commands& c) {
 }
 
 void addPlanCommand(CLI::App& app, Commands& c) {
-  PlanOptions& plan = c.plan;
+  PlanArguments& plan = c.plan;
   auto* cmd = c.plan_cmd =
       app.add_subcommand("plan",
                          "Run a job end to end: scan path, configuration maps, "
@@ -295,7 +295,7 @@ void addExportCommand(CLI::App& app, Commands& c) {
 CLI::App* addJobToFolderCommand(CLI::App& app,
                                 const char* name,
                                 const char* description,
-                                PlanOptions& options) {
+                                PlanArguments& options) {
   auto* cmd = app.add_subcommand(name, description);
   cmd->add_option("job", options.job_file, "Job file (YAML)")->required();
   cmd->add_option("-o,--out", options.out_dir, "Output folder (created)")->required();
@@ -437,7 +437,7 @@ void addRobotCommand(CLI::App& app, Commands& c) {
   auto* robot_cmd =
       app.add_subcommand("robot", "Robot files: import a URDF, survey the links' self-collisions");
   robot_cmd->require_subcommand(1);
-  UrdfRobotSource& s = c.robot_import.source;
+  config::UrdfRobotSource& s = c.robot_import.source;
   auto* cmd = c.robot_import_cmd = robot_cmd->add_subcommand(
       "import",
       "Write the robot file (YAML) of a URDF's 6-axis ortho-parallel arm: DH rows from the "
@@ -462,7 +462,7 @@ void addRobotCommand(CLI::App& app, Commands& c) {
   cmd->add_option("--controller", s.controller,
                   "The controller, for the programs plan writes: adept_vplus, kuka_krl, "
                   "abb_rapid, ur_script or none")
-      ->check(CLI::IsMember(kControllers))
+      ->check(CLI::IsMember(config::kControllers))
       ->capture_default_str();
   addRobotCheckCommand(*robot_cmd, c);
 }
@@ -592,7 +592,7 @@ std::string usageHint(CLI::App& app, int argc, char** argv) {
           std::find(options.begin(), options.end(), name) != options.end()) {
         continue;
       }
-      const std::string near = suggestKey(name, options);
+      const std::string near = config::suggestKey(name, options);
       return fmt::format("unknown option '{}' for '{}'{}", name,
                          at == &app ? std::string("scanplan") : at->get_name(),
                          near.empty() ? "" : "; did you mean '" + near + "'?");
@@ -604,7 +604,7 @@ std::string usageHint(CLI::App& app, int argc, char** argv) {
     }
     const std::vector<std::string> commands = subcommandNames(*at);
     if (commands.empty() || at->get_require_subcommand_min() == 0) continue;  // a positional
-    const std::string near = suggestKey(arg, commands);
+    const std::string near = config::suggestKey(arg, commands);
     const std::string where = at == &app ? "command" : at->get_name() + " command";
     return fmt::format("unknown {} '{}'{} (expected one of: {})", where, arg,
                        near.empty() ? "" : "; did you mean '" + near + "'?",
@@ -680,7 +680,7 @@ void requireInputs(const Commands& c) {
   }
   if (c.robot_check_cmd->parsed()) requireInput(c.robot_check.robot_file, "robot file");
   if (c.robot_import_cmd->parsed()) {
-    const UrdfRobotSource& s = c.robot_import.source;
+    const config::UrdfRobotSource& s = c.robot_import.source;
     requireInput(s.urdf, "URDF file");
     requireInput(s.opw_parameters, "opw_parameters file");
     for (const auto& dir : s.package_path) requireInput(dir, "package folder", true);

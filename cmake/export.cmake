@@ -3,12 +3,9 @@
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
-# Folder of each installed library; the target is scanplan_<last component>, exported as
-# scanplan::<last component>, its headers installed to include/<folder>/.
-set(scanplan_library_folders kinematics collision scanner planner cli/config cli/programs)
-if(TARGET scanplan_pipeline)
-  list(APPEND scanplan_library_folders pipeline)
-endif()
+# Each library of scanplan_libraries (CMakeLists.txt): the target scanplan_<name>, exported as
+# scanplan::<name>, its headers installed to include/scanplan/<name>/.
+
 # Headers that expose a third-party library the target links PRIVATE: used inside the target
 # (and by its tests), never installed.
 set(scanplan_private_headers collision/fcl_geometry.h)
@@ -19,8 +16,7 @@ set_target_properties(scanplan_umbrella PROPERTIES EXPORT_NAME scanplan)
 add_library(scanplan::scanplan ALIAS scanplan_umbrella)
 
 set(scanplan_exported scanplan_umbrella)
-foreach(folder IN LISTS scanplan_library_folders)
-  get_filename_component(name ${folder} NAME)
+foreach(name IN LISTS scanplan_libraries)
   set_target_properties(scanplan_${name} PROPERTIES EXPORT_NAME ${name})
   target_compile_features(scanplan_${name} PUBLIC cxx_std_20)  # its headers are C++20
   add_library(scanplan::${name} ALIAS scanplan_${name})
@@ -30,13 +26,13 @@ foreach(folder IN LISTS scanplan_library_folders)
   set(excludes)
   foreach(header IN LISTS scanplan_private_headers)
     get_filename_component(header_dir ${header} DIRECTORY)
-    if(header_dir STREQUAL folder)
+    if(header_dir STREQUAL name)
       get_filename_component(header_name ${header} NAME)
       list(APPEND excludes PATTERN ${header_name} EXCLUDE)
     endif()
   endforeach()
-  install(DIRECTORY ${PROJECT_SOURCE_DIR}/${folder}/
-          DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/${folder}
+  install(DIRECTORY ${PROJECT_SOURCE_DIR}/${name}/
+          DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/scanplan/${name}
           FILES_MATCHING PATTERN "*.h" PATTERN detail EXCLUDE ${excludes})
 endforeach()
 

@@ -1,4 +1,4 @@
-#include "collision/chain_levers.h"
+#include <scanplan/collision/chain_levers.h>
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "collision/fcl_geometry.h"
+#include <scanplan/collision/fcl_geometry.h>
 
 namespace scanplan::collision {
 namespace {

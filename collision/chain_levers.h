@@ -7,7 +7,7 @@
 #include <numbers>
 #include <utility>
 
-#include "collision/scene.h"
+#include <scanplan/collision/scene.h>
 
 namespace scanplan::collision {
 
@@ -26,7 +26,7 @@ inline double turn(double a, double b) {
 std::pair<Eigen::Vector3d, double> boundingSphere(const BodyGeometry& body);
 }  // namespace detail
 
-/// Joint-difference motion bounds for the pairs with a robot link (issue 20 item 2): how much
+/// Joint-difference motion bounds for the pairs with a robot link: how much
 /// their distance can change between two (table angle, joints) states, without placing them.
 ///
 /// When joint k turns by Δ, a point at distance ρ from its axis moves by 2ρ·sin(|Δ|/2) ≤ ρ·|Δ|.

@@ -1,10 +1,10 @@
-#include "collision/clearance.h"
+#include <scanplan/collision/clearance.h>
 
 #include <limits>
 #include <optional>
 
-#include "collision/fcl_geometry.h"
-#include "kinematics/ramp.h"
+#include <scanplan/collision/fcl_geometry.h>
+#include <scanplan/kinematics/ramp.h>
 
 namespace scanplan::collision {
 namespace {

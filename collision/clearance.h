@@ -4,7 +4,7 @@
 
 #include <Eigen/Geometry>
 
-#include "collision/scene.h"
+#include <scanplan/collision/scene.h>
 
 namespace scanplan::collision {
 

@@ -1,4 +1,4 @@
-#include "collision/convex_hull.h"
+#include <scanplan/collision/convex_hull.h>
 
 #include <algorithm>
 #include <array>
@@ -11,7 +11,7 @@
 
 #include <fcl/narrowphase/detail/primitive_shape_algorithm/sphere_triangle.h>
 
-#include "collision/fcl_geometry.h"
+#include <scanplan/collision/fcl_geometry.h>
 
 // Last: qhull's C API defines short macros (its C++ headers do not compile as C++20).
 extern "C" {

@@ -1,12 +1,12 @@
 #pragma once
-// Convex hulls of link meshes for the configuration maps (issue 18): a hull contains its mesh,
+// Convex hulls of link meshes for the configuration maps: a hull contains its mesh,
 // so a distance to the hull never exceeds the distance to the mesh, and exceeds it by at most
 // the hull's margin (below). The maps measure hulls; validation keeps the exact meshes.
 
 #include <cstddef>
 #include <optional>
 
-#include "kinematics/mesh.h"
+#include <scanplan/kinematics/mesh.h>
 
 namespace scanplan::collision {
 

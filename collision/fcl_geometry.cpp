@@ -1,4 +1,4 @@
-#include "collision/fcl_geometry.h"
+#include <scanplan/collision/fcl_geometry.h>
 
 #include <algorithm>
 #include <cmath>

@@ -14,10 +14,10 @@
 #include <fcl/math/bv/OBBRSS.h>
 #include <Eigen/Geometry>
 
-#include "collision/primitive_distance.h"
-#include "collision/scene.h"
-#include "kinematics/mesh.h"
-#include "kinematics/shape.h"
+#include <scanplan/collision/primitive_distance.h>
+#include <scanplan/collision/scene.h>
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/kinematics/shape.h>
 
 namespace scanplan::collision::detail {
 

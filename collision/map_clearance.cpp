@@ -1,12 +1,12 @@
-#include "collision/map_clearance.h"
+#include <scanplan/collision/map_clearance.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
-#include "collision/fcl_geometry.h"
-#include "kinematics/ramp.h"
+#include <scanplan/collision/fcl_geometry.h>
+#include <scanplan/kinematics/ramp.h>
 
 namespace scanplan::collision {
 namespace {

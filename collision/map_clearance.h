@@ -8,9 +8,9 @@
 
 #include <Eigen/Geometry>
 
-#include "collision/chain_levers.h"
-#include "collision/scene.h"
-#include "collision/self_pair_grid.h"
+#include <scanplan/collision/chain_levers.h>
+#include <scanplan/collision/scene.h>
+#include <scanplan/collision/self_pair_grid.h>
 
 namespace scanplan::collision {
 

@@ -1,4 +1,4 @@
-#include "collision/primitive_distance.h"
+#include <scanplan/collision/primitive_distance.h>
 
 #include <algorithm>
 #include <array>

@@ -1,4 +1,4 @@
-#include "collision/scene.h"
+#include <scanplan/collision/scene.h>
 
 #include <fnmatch.h>
 
@@ -11,10 +11,10 @@
 
 #include <fmt/format.h>
 
-#include "collision/convex_hull.h"
-#include "collision/fcl_geometry.h"
-#include "kinematics/error.h"
-#include "kinematics/units.h"
+#include <scanplan/collision/convex_hull.h>
+#include <scanplan/collision/fcl_geometry.h>
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/units.h>
 
 namespace scanplan::collision {
 namespace {

@@ -6,8 +6,8 @@
 
 #include <Eigen/Geometry>
 
-#include "kinematics/cell.h"
-#include "kinematics/robot_model.h"
+#include <scanplan/kinematics/cell.h>
+#include <scanplan/kinematics/robot_model.h>
 
 namespace scanplan::collision {
 

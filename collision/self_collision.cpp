@@ -1,4 +1,4 @@
-#include "collision/self_collision.h"
+#include <scanplan/collision/self_collision.h>
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 #include <random>
 #include <stdexcept>
 
-#include "collision/fcl_geometry.h"
+#include <scanplan/collision/fcl_geometry.h>
 
 namespace scanplan::collision {
 namespace {

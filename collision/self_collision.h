@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "kinematics/robot_model.h"
+#include <scanplan/kinematics/robot_model.h>
 
 namespace scanplan::collision {
 

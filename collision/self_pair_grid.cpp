@@ -1,11 +1,11 @@
-#include "collision/self_pair_grid.h"
+#include <scanplan/collision/self_pair_grid.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
-#include "collision/fcl_geometry.h"
+#include <scanplan/collision/fcl_geometry.h>
 
 namespace scanplan::collision {
 namespace {

@@ -5,8 +5,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "collision/chain_levers.h"
-#include "collision/scene.h"
+#include <scanplan/collision/chain_levers.h>
+#include <scanplan/collision/scene.h>
 
 namespace scanplan::collision {
 

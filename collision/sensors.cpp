@@ -1,4 +1,4 @@
-#include "collision/sensors.h"
+#include <scanplan/collision/sensors.h>
 
 #include <algorithm>
 #include <cmath>
@@ -14,9 +14,9 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
-#include "collision/fcl_geometry.h"
-#include "collision/primitive_distance.h"
-#include "kinematics/error.h"
+#include <scanplan/collision/fcl_geometry.h>
+#include <scanplan/collision/primitive_distance.h>
+#include <scanplan/kinematics/error.h>
 
 namespace scanplan::collision {
 namespace {

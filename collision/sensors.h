@@ -10,9 +10,9 @@
 
 #include <Eigen/Geometry>
 
-#include "collision/scene.h"
-#include "kinematics/cell.h"
-#include "kinematics/trajectory.h"
+#include <scanplan/collision/scene.h>
+#include <scanplan/kinematics/cell.h>
+#include <scanplan/kinematics/trajectory.h>
 
 namespace scanplan::collision {
 

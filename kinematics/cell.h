@@ -7,9 +7,9 @@
 
 #include <Eigen/Geometry>
 
-#include "kinematics/robot_model.h"
-#include "kinematics/rotary_table.h"
-#include "kinematics/shape.h"
+#include <scanplan/kinematics/robot_model.h>
+#include <scanplan/kinematics/rotary_table.h>
+#include <scanplan/kinematics/shape.h>
 
 namespace scanplan::kinematics {
 

@@ -1,4 +1,4 @@
-#include "kinematics/error.h"
+#include <scanplan/kinematics/error.h>
 
 #include <cstdint>
 #include <cstdio>

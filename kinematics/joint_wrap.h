@@ -3,11 +3,11 @@
 #include <cmath>
 #include <numbers>
 
-#include "kinematics/robot_model.h"
+#include <scanplan/kinematics/robot_model.h>
 
 namespace scanplan::kinematics {
 
-/// Joint wrap (issue 18 item 2). A revolute joint's value q and q ± 2π give the same pose; the
+/// Joint wrap. A revolute joint's value q and q ± 2π give the same pose; the
 /// IK returns each joint in (−π, π] plus the ±2π variants that lie inside the limits
 /// (RobotModel::ik()). A joint is continuous within its limits: a joint whose limits reach ±π or
 /// beyond crosses ±π like any other angle, and along a motion each sample takes the equivalent

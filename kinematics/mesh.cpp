@@ -1,8 +1,8 @@
-#include "kinematics/mesh.h"
+#include <scanplan/kinematics/mesh.h>
 
-#include "kinematics/error.h"
-#include "kinematics/mesh_file.h"
-#include "kinematics/units.h"
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/mesh_file.h>
+#include <scanplan/kinematics/units.h>
 
 #include <assimp/config.h>
 #include <assimp/postprocess.h>

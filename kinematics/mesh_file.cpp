@@ -1,8 +1,8 @@
-#include "kinematics/mesh_file.h"
+#include <scanplan/kinematics/mesh_file.h>
 
-#include "kinematics/error.h"
-#include "kinematics/mesh_file_formats.h"
-#include "kinematics/resources.h"
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/mesh_file_formats.h>
+#include <scanplan/kinematics/resources.h>
 
 #include <algorithm>
 #include <cctype>

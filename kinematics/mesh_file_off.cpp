@@ -9,9 +9,9 @@
 // kMaxOffLine characters; every vertex and face line present; and every face a vertex count from
 // 1 to 9 followed by as many indices of the file's vertices.
 
-#include "kinematics/error.h"
-#include "kinematics/mesh_file.h"
-#include "kinematics/mesh_file_formats.h"
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/mesh_file.h>
+#include <scanplan/kinematics/mesh_file_formats.h>
 
 #include <string>
 #include <vector>

@@ -16,9 +16,9 @@
 // as the PLY format writes it, its counts against the file's size, then its data element by
 // element, without keeping anything, counting the faces' triangles on the way.
 
-#include "kinematics/error.h"
-#include "kinematics/mesh_file.h"
-#include "kinematics/mesh_file_formats.h"
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/mesh_file.h>
+#include <scanplan/kinematics/mesh_file_formats.h>
 
 #include <algorithm>
 #include <array>

@@ -1,4 +1,4 @@
-#include "kinematics/motion_model.h"
+#include <scanplan/kinematics/motion_model.h>
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 
 #include <Eigen/SVD>
 
-#include "kinematics/joint_wrap.h"
+#include <scanplan/kinematics/joint_wrap.h>
 
 namespace scanplan::kinematics {
 namespace {

@@ -1,10 +1,10 @@
-#include "kinematics/opw.h"
+#include <scanplan/kinematics/opw.h>
 
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 
-#include "kinematics/pose.h"
+#include <scanplan/kinematics/pose.h>
 
 namespace scanplan::kinematics::detail {
 namespace {
@@ -15,7 +15,7 @@ constexpr double kPi = std::numbers::pi;
 constexpr double kAcosSlack = 1e-10;
 
 // atan2 through atan, the quadrant set by hand: glibc's atan2 costs 17 ns here and atan 10, and
-// the inverse takes 17 of them (issue 20). Within an ulp or two of atan2; NaN stays NaN. The
+// the inverse takes 17 of them. Within an ulp or two of atan2; NaN stays NaN. The
 // representative may differ by 2π at ±π (atan2(−0, −1)): every caller wraps the result.
 double atan2ViaAtan(double y, double x) {
   constexpr double kHalfPi = std::numbers::pi / 2;
@@ -33,7 +33,7 @@ double atan2ViaAtan(double y, double x) {
 // An angle with its cosine and sine. The inverse needs the sines and cosines of the angles
 // it solves for (to build the wrist rotation and the elbow); they follow algebraically from the
 // ratios the angles come from, and by the angle-sum rules from each other, so the inverse calls
-// no sin or cos at all (issue 20: it was 40 of its calls).
+// no sin or cos at all (it was 40 of its calls).
 struct Angle {
   double rad = 0.0, c = 1.0, s = 0.0;
 };

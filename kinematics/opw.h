@@ -5,7 +5,7 @@
 
 #include <Eigen/Geometry>
 
-#include "kinematics/robot_model.h"
+#include <scanplan/kinematics/robot_model.h>
 
 namespace scanplan::kinematics::detail {
 

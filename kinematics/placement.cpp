@@ -1,4 +1,4 @@
-#include "kinematics/placement.h"
+#include <scanplan/kinematics/placement.h>
 
 #include <algorithm>
 #include <cmath>
@@ -48,8 +48,9 @@ PartReach partReach(const CellModel& cell, const TriangleMesh& mesh, double leve
   const std::size_t stride = std::max<std::size_t>(1, (n + kMaxVertices - 1) / kMaxVertices);
   std::vector<Eigen::Isometry3d> X_BR(kAngles);
   for (int k = 0; k < kAngles; ++k) {
-    X_BR[static_cast<std::size_t>(k)] =
-        cell.X_WB.inverse() * cell.table.X_WR(2.0 * std::numbers::pi * k / kAngles) * cell.part.X_RP;
+    X_BR[static_cast<std::size_t>(k)] = cell.X_WB.inverse() *
+                                        cell.table.X_WR(2.0 * std::numbers::pi * k / kAngles) *
+                                        cell.part.X_RP;
   }
   std::size_t sampled = 0, beyond = 0;
   r.nearest_excess = std::numeric_limits<double>::infinity();

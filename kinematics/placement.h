@@ -4,8 +4,8 @@
 
 #include <Eigen/Geometry>
 
-#include "kinematics/cell.h"
-#include "kinematics/mesh.h"
+#include <scanplan/kinematics/cell.h>
+#include <scanplan/kinematics/mesh.h>
 
 namespace scanplan::kinematics {
 

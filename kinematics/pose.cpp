@@ -1,4 +1,4 @@
-#include "kinematics/pose.h"
+#include <scanplan/kinematics/pose.h>
 
 #include <algorithm>
 #include <cmath>

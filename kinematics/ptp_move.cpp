@@ -1,4 +1,4 @@
-#include "kinematics/ptp_move.h"
+#include <scanplan/kinematics/ptp_move.h>
 
 #include <algorithm>
 #include <cmath>

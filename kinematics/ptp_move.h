@@ -9,8 +9,8 @@
 
 #include <Eigen/Core>
 
-#include "kinematics/robot_model.h"
-#include "kinematics/rotary_table.h"
+#include <scanplan/kinematics/robot_model.h>
+#include <scanplan/kinematics/rotary_table.h>
 
 namespace scanplan::kinematics {
 

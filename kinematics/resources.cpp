@@ -1,4 +1,4 @@
-#include "kinematics/resources.h"
+#include <scanplan/kinematics/resources.h>
 
 #include <sys/resource.h>
 #include <unistd.h>

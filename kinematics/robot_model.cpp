@@ -1,14 +1,14 @@
-#include "kinematics/robot_model.h"
+#include <scanplan/kinematics/robot_model.h>
 
 #include <cmath>
 #include <numbers>
 #include <random>
 #include <sstream>
 
-#include "kinematics/error.h"
-#include "kinematics/opw.h"
-#include "kinematics/pose.h"
-#include "kinematics/units.h"
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/opw.h>
+#include <scanplan/kinematics/pose.h>
+#include <scanplan/kinematics/units.h>
 
 namespace scanplan::kinematics {
 namespace {

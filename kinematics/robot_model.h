@@ -6,7 +6,7 @@
 
 #include <Eigen/Geometry>
 
-#include "kinematics/shape.h"
+#include <scanplan/kinematics/shape.h>
 
 namespace scanplan::kinematics {
 

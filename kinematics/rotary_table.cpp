@@ -1,6 +1,6 @@
-#include "kinematics/rotary_table.h"
+#include <scanplan/kinematics/rotary_table.h>
 
-#include "kinematics/pose.h"
+#include <scanplan/kinematics/pose.h>
 
 namespace scanplan::kinematics {
 

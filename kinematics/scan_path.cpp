@@ -1,4 +1,4 @@
-#include "kinematics/scan_path.h"
+#include <scanplan/kinematics/scan_path.h>
 
 namespace scanplan::kinematics {
 

@@ -1,13 +1,13 @@
-#include "kinematics/serial_chain.h"
+#include <scanplan/kinematics/serial_chain.h>
 
 #include <cmath>
 #include <cstdio>
 #include <numbers>
 #include <vector>
 
-#include "kinematics/error.h"
-#include "kinematics/pose.h"
-#include "kinematics/units.h"
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/pose.h>
+#include <scanplan/kinematics/units.h>
 
 namespace scanplan::kinematics {
 namespace {

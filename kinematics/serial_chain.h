@@ -1,14 +1,14 @@
 #pragma once
 // A 6R serial chain as URDF describes it (joint origins and axes), and its conversion to the
 // robot model's standard DH rows and OPW parameters (docs/design.md §3, §12). Pure Eigen: the URDF
-// reader lives in cli/config.
+// reader lives in config/.
 
 #include <array>
 #include <string>
 
 #include <Eigen/Geometry>
 
-#include "kinematics/robot_model.h"
+#include <scanplan/kinematics/robot_model.h>
 
 namespace scanplan::kinematics {
 

@@ -1,4 +1,4 @@
-#include "kinematics/shape.h"
+#include <scanplan/kinematics/shape.h>
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "kinematics/trajectory.h"
+#include <scanplan/kinematics/trajectory.h>
 
 #include <charconv>
 #include <cmath>
@@ -8,8 +8,8 @@
 #include <map>
 #include <sstream>
 
-#include "kinematics/error.h"
-#include "kinematics/units.h"
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/units.h>
 
 namespace scanplan::kinematics {
 

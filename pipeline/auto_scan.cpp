@@ -1,4 +1,4 @@
-#include "pipeline/auto_scan.h"
+#include <scanplan/pipeline/auto_scan.h>
 
 #include <algorithm>
 #include <chrono>
@@ -9,17 +9,17 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
-#include "collision/clearance.h"
-#include "kinematics/error.h"
-#include "kinematics/ptp_move.h"
-#include "kinematics/units.h"
-#include "pipeline/program_moves.h"
-#include "planner/config_map.h"
-#include "scanner/pass_selection.h"
-#include "scanner/scan_passes.h"
-#include "scanner/scannability.h"
-#include "scanner/set_cover.h"
-#include "scanner/simulator.h"
+#include <scanplan/collision/clearance.h>
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/ptp_move.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/pipeline/program_moves.h>
+#include <scanplan/planner/config_map.h>
+#include <scanplan/scanner/pass_selection.h>
+#include <scanplan/scanner/scan_passes.h>
+#include <scanplan/scanner/scannability.h>
+#include <scanplan/scanner/set_cover.h>
+#include <scanplan/scanner/simulator.h>
 
 namespace scanplan::pipeline {
 

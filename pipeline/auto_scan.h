@@ -12,11 +12,11 @@
 #include <string>
 #include <vector>
 
-#include "collision/scene.h"
-#include "pipeline/problem.h"
-#include "scanner/area_coverage.h"
-#include "scanner/path_generators.h"
-#include "scanner/scannability.h"
+#include <scanplan/collision/scene.h>
+#include <scanplan/pipeline/problem.h>
+#include <scanplan/scanner/area_coverage.h>
+#include <scanplan/scanner/path_generators.h>
+#include <scanplan/scanner/scannability.h>
 
 namespace scanplan::pipeline {
 

@@ -1,9 +1,9 @@
-#include "pipeline/certificate.h"
+#include <scanplan/pipeline/certificate.h>
 
 #include <algorithm>
 #include <cmath>
 
-#include "scanner/scan_passes.h"
+#include <scanplan/scanner/scan_passes.h>
 
 namespace scanplan::pipeline {
 

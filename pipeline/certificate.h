@@ -11,8 +11,8 @@
 #include <optional>
 #include <vector>
 
-#include "pipeline/auto_scan.h"
-#include "scanner/area_coverage.h"
+#include <scanplan/pipeline/auto_scan.h>
+#include <scanplan/scanner/area_coverage.h>
 
 namespace scanplan::pipeline {
 

@@ -1,4 +1,4 @@
-#include "pipeline/plan_scan.h"
+#include <scanplan/pipeline/plan_scan.h>
 
 #include <algorithm>
 #include <chrono>
@@ -8,11 +8,11 @@
 
 #include <fmt/format.h>
 
-#include "kinematics/error.h"
-#include "kinematics/units.h"
-#include "pipeline/map_checks.h"
-#include "planner/dp_planner.h"
-#include "scanner/raycaster.h"
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/pipeline/map_checks.h>
+#include <scanplan/planner/dp_planner.h>
+#include <scanplan/scanner/raycaster.h>
 
 namespace scanplan::pipeline {
 
@@ -72,6 +72,25 @@ void planSheets(std::shared_ptr<const planner::WrapSheets> sheets,
   }
 }
 
+// Why the accepted path was chosen: `rejected` paths of lower J came first, out of `solved`
+// branches, or of `tried` paths once joint-wrap sheets were planned too.
+std::string whyChosen(std::size_t rejected,
+                      std::size_t solved,
+                      bool sheets_planned,
+                      std::size_t tried) {
+  if (rejected == 0)
+    return fmt::format("lowest J of {} solved branch(es), and the arm can follow it", solved);
+  if (!sheets_planned)
+    return fmt::format(
+        "lowest J the arm can follow: {} of {} solved branch(es) had a lower J but cannot be "
+        "executed (see rejected)",
+        rejected, solved);
+  return fmt::format(
+      "lowest J the arm can follow: {} of {} solved path(s) (branches and joint-wrap sheets) had "
+      "a lower J but cannot be executed (see rejected)",
+      rejected, tried);
+}
+
 // Refines (when asked) and checks the solved branches in order of J; the first the check
 // passes is chosen. A branch rejected because a joint would pass its limit (joint wrap) gets its
 // sheets planned as further candidates, in the same order of J. False when none passes.
@@ -119,20 +138,7 @@ bool acceptBest(const planner::ConfigMap& map,
       out.chosen.result = c.result;
       out.wrap_sheet = c.sheets ? c.sheets->describe(c.sheet) : std::string();
       if (c.sheets) out.sheet_map = std::make_shared<const planner::ConfigMap>(sheet_map);
-      out.why_chosen =
-          out.rejected.empty()
-              ? fmt::format("lowest J of {} solved branch(es), and the arm can follow it",
-                            order.size())
-          : !sheets_planned
-              ? fmt::format(
-                    "lowest J the arm can follow: {} of {} solved branch(es) had a lower "
-                    "J but cannot be executed (see rejected)",
-                    out.rejected.size(), order.size())
-              : fmt::format(
-                    "lowest J the arm can follow: {} of {} solved path(s) (branches and "
-                    "joint-wrap sheets) had a lower J but cannot be executed (see "
-                    "rejected)",
-                    out.rejected.size(), tried);
+      out.why_chosen = whyChosen(out.rejected.size(), order.size(), sheets_planned, tried);
       if (c.sheets) out.why_chosen += "; " + on_sheet;
       return true;
     }

@@ -1,11 +1,11 @@
-#include "pipeline/collision_watch.h"
+#include <scanplan/pipeline/collision_watch.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
-#include "kinematics/joint_wrap.h"
+#include <scanplan/kinematics/joint_wrap.h>
 
 namespace scanplan::pipeline {
 namespace {

@@ -10,9 +10,9 @@
 
 #include <Eigen/Geometry>
 
-#include "collision/clearance.h"
-#include "collision/scene.h"
-#include "kinematics/motion_model.h"
+#include <scanplan/collision/clearance.h>
+#include <scanplan/collision/scene.h>
+#include <scanplan/kinematics/motion_model.h>
 
 namespace scanplan::pipeline {
 

@@ -1,4 +1,4 @@
-#include "pipeline/map_checks.h"
+#include <scanplan/pipeline/map_checks.h>
 
 #include <algorithm>
 #include <array>

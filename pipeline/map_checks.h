@@ -4,7 +4,7 @@
 #include <optional>
 #include <string>
 
-#include "planner/config_map.h"
+#include <scanplan/planner/config_map.h>
 
 namespace scanplan::pipeline {
 

@@ -1,4 +1,4 @@
-#include "pipeline/no_path.h"
+#include <scanplan/pipeline/no_path.h>
 
 #include <algorithm>
 #include <array>
@@ -9,8 +9,8 @@
 
 #include <fmt/format.h>
 
-#include "kinematics/ramp.h"
-#include "kinematics/units.h"
+#include <scanplan/kinematics/ramp.h>
+#include <scanplan/kinematics/units.h>
 
 namespace scanplan::pipeline {
 namespace {

@@ -7,10 +7,10 @@
 #include <cstddef>
 #include <string>
 
-#include "collision/scene.h"
-#include "planner/config_map.h"
-#include "planner/constraints.h"
-#include "scanner/path_generators.h"
+#include <scanplan/collision/scene.h>
+#include <scanplan/planner/config_map.h>
+#include <scanplan/planner/constraints.h>
+#include <scanplan/scanner/path_generators.h>
 
 namespace scanplan::pipeline {
 

@@ -1,16 +1,16 @@
-#include "pipeline/plan_scan.h"
+#include <scanplan/pipeline/plan_scan.h>
 
 #include <chrono>
 #include <cmath>
 
 #include <fmt/format.h>
 
-#include "kinematics/error.h"
-#include "kinematics/units.h"
-#include "pipeline/auto_scan.h"
-#include "pipeline/no_path.h"
-#include "pipeline/segment_plan.h"
-#include "scanner/raycaster.h"
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/pipeline/auto_scan.h>
+#include <scanplan/pipeline/no_path.h>
+#include <scanplan/pipeline/segment_plan.h>
+#include <scanplan/scanner/raycaster.h>
 
 namespace scanplan::pipeline {
 

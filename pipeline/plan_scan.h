@@ -13,21 +13,21 @@
 #include <utility>
 #include <vector>
 
-#include "collision/scene.h"
-#include "kinematics/scan_path.h"
-#include "pipeline/auto_scan.h"
-#include "pipeline/certificate.h"
-#include "pipeline/problem.h"
-#include "pipeline/program_moves.h"
-#include "pipeline/simulation.h"
-#include "planner/config_map.h"
-#include "planner/joint_wrap.h"
-#include "planner/plan_result.h"
-#include "planner/refine.h"
-#include "planner/trajectory_builder.h"
-#include "planner/validation.h"
-#include "scanner/laser_model.h"
-#include "scanner/path_generators.h"
+#include <scanplan/collision/scene.h>
+#include <scanplan/kinematics/scan_path.h>
+#include <scanplan/pipeline/auto_scan.h>
+#include <scanplan/pipeline/certificate.h>
+#include <scanplan/pipeline/problem.h>
+#include <scanplan/pipeline/program_moves.h>
+#include <scanplan/pipeline/simulation.h>
+#include <scanplan/planner/config_map.h>
+#include <scanplan/planner/plan_result.h>
+#include <scanplan/planner/refine.h>
+#include <scanplan/planner/trajectory_builder.h>
+#include <scanplan/planner/validation.h>
+#include <scanplan/planner/wrap_sheets.h>
+#include <scanplan/scanner/laser_model.h>
+#include <scanplan/scanner/path_generators.h>
 
 namespace scanplan::pipeline {
 

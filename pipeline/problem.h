@@ -1,6 +1,6 @@
 #pragma once
 // The whole scan-planning problem in SI units: what planScan() needs, and nothing about files.
-// A front end (the job file reader in cli/config, or a C++ caller) fills it in; checkProblem()
+// A front end (the job file reader in config/, or a C++ caller) fills it in; checkProblem()
 // validates it before anything runs.
 
 #include <cstddef>
@@ -9,19 +9,19 @@
 #include <utility>
 #include <vector>
 
-#include "collision/scene.h"
-#include "kinematics/cell.h"
-#include "kinematics/mesh.h"
-#include "planner/config_map.h"
-#include "planner/constraints.h"
-#include "planner/objective.h"
-#include "planner/planner.h"
-#include "planner/refine.h"
-#include "planner/validation.h"
-#include "scanner/coverage.h"
-#include "scanner/laser_model.h"
-#include "scanner/path_generators.h"
-#include "scanner/simulator.h"
+#include <scanplan/collision/scene.h>
+#include <scanplan/kinematics/cell.h>
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/planner/config_map.h>
+#include <scanplan/planner/constraints.h>
+#include <scanplan/planner/objective.h>
+#include <scanplan/planner/refine.h>
+#include <scanplan/planner/registry.h>
+#include <scanplan/planner/validation.h>
+#include <scanplan/scanner/coverage.h>
+#include <scanplan/scanner/laser_model.h>
+#include <scanplan/scanner/path_generators.h>
+#include <scanplan/scanner/simulator.h>
 
 namespace scanplan::pipeline {
 
@@ -78,7 +78,7 @@ struct AutoScanSettings {
   double point_spacing = 0.0;
   double target_coverage = 0.98;  ///< of the scannable area
   std::size_t max_passes = 250;
-  double time_budget = 60.0;      ///< s of planning for choosing the passes
+  double time_budget = 60.0;  ///< s of planning for choosing the passes
   /// s, the program's time at most (passes chosen by the most new area per second until their
   /// estimated time fills it; the passes that would run past it are left out); 0: no limit.
   double max_program = 0.0;

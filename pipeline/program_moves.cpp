@@ -1,4 +1,4 @@
-#include "pipeline/program_moves.h"
+#include <scanplan/pipeline/program_moves.h>
 
 #include <algorithm>
 #include <array>
@@ -10,8 +10,8 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
-#include "collision/clearance.h"
-#include "kinematics/units.h"
+#include <scanplan/collision/clearance.h>
+#include <scanplan/kinematics/units.h>
 
 namespace scanplan::pipeline {
 

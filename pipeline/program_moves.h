@@ -12,10 +12,10 @@
 
 #include <Eigen/Geometry>
 
-#include "collision/scene.h"
-#include "kinematics/cell.h"
-#include "kinematics/ptp_move.h"
-#include "kinematics/trajectory.h"
+#include <scanplan/collision/scene.h>
+#include <scanplan/kinematics/cell.h>
+#include <scanplan/kinematics/ptp_move.h>
+#include <scanplan/kinematics/trajectory.h>
 
 namespace scanplan::pipeline {
 

@@ -1,11 +1,11 @@
-#include "pipeline/replay.h"
+#include <scanplan/pipeline/replay.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-#include "kinematics/shape.h"
-#include "scanner/coverage.h"
+#include <scanplan/kinematics/shape.h>
+#include <scanplan/scanner/coverage.h>
 
 namespace scanplan::pipeline {
 
@@ -38,7 +38,8 @@ void addBodies(const kinematics::CellModel& cell,
     scene.bodies.push_back(
         {link.name.empty() ? fallback : link.name, k, surfaces(link.shapes, tess), {}, {}});
   }
-  scene.bodies.push_back({"scanner", kReplayScannerFrame, surfaces(cell.scanner.body, tess), {}, {}});
+  scene.bodies.push_back(
+      {"scanner", kReplayScannerFrame, surfaces(cell.scanner.body, tess), {}, {}});
   kinematics::Shape table;
   table.geometry = kinematics::Cylinder{cell.table.radius, cell.table.height};
   table.X_BG.translation() << 0.0, 0.0, -0.5 * cell.table.height;

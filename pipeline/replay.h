@@ -12,9 +12,9 @@
 
 #include <Eigen/Geometry>
 
-#include "kinematics/cell.h"
-#include "kinematics/mesh.h"
-#include "pipeline/plan_scan.h"
+#include <scanplan/kinematics/cell.h>
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/pipeline/plan_scan.h>
 
 namespace scanplan::pipeline {
 

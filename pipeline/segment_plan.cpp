@@ -1,4 +1,4 @@
-#include "pipeline/segment_plan.h"
+#include <scanplan/pipeline/segment_plan.h>
 
 #include <algorithm>
 #include <chrono>
@@ -13,9 +13,9 @@
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
-#include "kinematics/units.h"
-#include "pipeline/certificate.h"
-#include "planner/joint_wrap.h"
+#include <scanplan/kinematics/units.h>
+#include <scanplan/pipeline/certificate.h>
+#include <scanplan/planner/wrap_sheets.h>
 
 namespace scanplan::pipeline {
 

@@ -7,9 +7,9 @@
 #include <cstddef>
 #include <string>
 
-#include "pipeline/plan_scan.h"
-#include "planner/config_map.h"
-#include "planner/trajectory_builder.h"
+#include <scanplan/pipeline/plan_scan.h>
+#include <scanplan/planner/config_map.h>
+#include <scanplan/planner/trajectory_builder.h>
 
 namespace scanplan::pipeline {
 

@@ -1,12 +1,12 @@
-#include "pipeline/setups.h"
+#include <scanplan/pipeline/setups.h>
 
 #include <stdexcept>
 #include <utility>
 #include <vector>
 
-#include "kinematics/placement.h"
-#include "scanner/area_coverage.h"
-#include "scanner/laser_model.h"
+#include <scanplan/kinematics/placement.h>
+#include <scanplan/scanner/area_coverage.h>
+#include <scanplan/scanner/laser_model.h>
 
 namespace scanplan::pipeline {
 
@@ -85,6 +85,26 @@ CombinedCoverage combineSetups(const ScanPlan& first, const ScanPlan& second) {
   c.scannable_fraction = static_cast<double>(can) / n;
   c.covered_of_scannable = can ? static_cast<double>(covered) / static_cast<double>(can) : 0.0;
   return c;
+}
+
+SecondSetupPlan planSecondSetup(const ScanProblem& problem,
+                                const ScanPlan& first,
+                                const PlanOptions& options,
+                                const ProgressFn& progress) {
+  SecondSetupPlan out;
+  if (!first.certificate) {
+    out.why_not = "it needs scan.auto and the simulation";
+    return out;
+  }
+  out.setup = chooseSecondSetup(problem, first);
+  if (!out.setup) {
+    out.why_not = "no other face the part rests on shows more of it";
+    return out;
+  }
+  out.problem = secondSetupProblem(problem, *out.setup);
+  out.plan = planScan(*out.problem, options, progress);
+  if (out.plan.planned()) out.combined = combineSetups(first, out.plan);
+  return out;
 }
 
 }  // namespace scanplan::pipeline

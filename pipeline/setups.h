@@ -10,8 +10,8 @@
 
 #include <Eigen/Geometry>
 
-#include "pipeline/plan_scan.h"
-#include "pipeline/problem.h"
+#include <scanplan/pipeline/plan_scan.h>
+#include <scanplan/pipeline/problem.h>
 
 namespace scanplan::pipeline {
 
@@ -41,5 +41,22 @@ struct CombinedCoverage {
 /// Precondition: both plans simulated with certificates on the same part, point spacing and
 /// sample cap (so the area samples are the same); throws std::invalid_argument otherwise.
 CombinedCoverage combineSetups(const ScanPlan& first, const ScanPlan& second);
+
+/// A second setup, planned.
+struct SecondSetupPlan {
+  std::optional<SecondSetup> setup;  ///< none: no second setup, `why_not` says why
+  std::string why_not;
+  std::optional<ScanProblem> problem;        ///< the second setup's problem (with `setup`)
+  ScanPlan plan;                             ///< its plan (with `setup`)
+  std::optional<CombinedCoverage> combined;  ///< both setups together, when it is planned
+};
+
+/// The second setup as one call (`plan --setups 2`): chooseSecondSetup() after `first`, the plan
+/// of `problem` (it needs the automatic scan and the simulation, for the certificate), then
+/// planScan() of secondSetupProblem() with `options`, and combineSetups() when it is planned.
+SecondSetupPlan planSecondSetup(const ScanProblem& problem,
+                                const ScanPlan& first,
+                                const PlanOptions& options = {},
+                                const ProgressFn& progress = {});
 
 }  // namespace scanplan::pipeline

@@ -1,10 +1,10 @@
-#include "pipeline/simulation.h"
+#include <scanplan/pipeline/simulation.h>
 
 #include <algorithm>
 #include <chrono>
 #include <vector>
 
-#include "planner/validation.h"
+#include <scanplan/planner/validation.h>
 
 namespace scanplan::pipeline {
 

@@ -5,14 +5,14 @@
 #include <utility>
 #include <vector>
 
-#include "kinematics/cell.h"
-#include "kinematics/mesh.h"
-#include "kinematics/trajectory.h"
-#include "pipeline/problem.h"
-#include "scanner/area_coverage.h"
-#include "scanner/coverage.h"
-#include "scanner/laser_model.h"
-#include "scanner/simulator.h"
+#include <scanplan/kinematics/cell.h>
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/kinematics/trajectory.h>
+#include <scanplan/pipeline/problem.h>
+#include <scanplan/scanner/area_coverage.h>
+#include <scanplan/scanner/coverage.h>
+#include <scanplan/scanner/laser_model.h>
+#include <scanplan/scanner/simulator.h>
 
 namespace scanplan::pipeline {
 

@@ -1,4 +1,4 @@
-#include "planner/config_map.h"
+#include <scanplan/planner/config_map.h>
 
 #include <algorithm>
 #include <atomic>
@@ -11,10 +11,10 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
-#include "kinematics/error.h"
-#include "kinematics/ramp.h"
-#include "kinematics/resources.h"
-#include "kinematics/units.h"
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/ramp.h>
+#include <scanplan/kinematics/resources.h>
+#include <scanplan/kinematics/units.h>
 
 namespace scanplan::planner {
 

@@ -5,11 +5,11 @@
 #include <functional>
 #include <vector>
 
-#include "collision/map_clearance.h"
-#include "collision/scene.h"
-#include "kinematics/robot_model.h"
-#include "kinematics/scan_path.h"
-#include "planner/constraints.h"
+#include <scanplan/collision/map_clearance.h>
+#include <scanplan/collision/scene.h>
+#include <scanplan/kinematics/robot_model.h>
+#include <scanplan/kinematics/scan_path.h>
+#include <scanplan/planner/constraints.h>
 
 namespace scanplan::planner {
 
@@ -94,7 +94,7 @@ CellScore scoreCell(const collision::Scene& scene,
                     const kinematics::IkBranch& branch);
 
 namespace detail {
-/// The map as scanplan built it before issue 20: FCL alone (no closed forms), every pair at
+/// The map as scanplan first built it: FCL alone (no closed forms), every pair at
 /// every branch-cell, the scanner placed by FK per branch, Eq. 7 with a pow per joint on every
 /// solution. Kept for the benchmark's old-path comparison; values differ from buildConfigMap's
 /// only by FCL's GJK tolerance (1e-6 m) against the closed forms.

@@ -1,6 +1,6 @@
-#include "planner/constraints.h"
+#include <scanplan/planner/constraints.h>
 
-#include "kinematics/ramp.h"
+#include <scanplan/kinematics/ramp.h>
 
 namespace scanplan::planner {
 

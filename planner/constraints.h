@@ -3,9 +3,9 @@
 #include <array>
 #include <string>
 
-#include "collision/clearance.h"
-#include "collision/scene.h"
-#include "kinematics/robot_model.h"
+#include <scanplan/collision/clearance.h>
+#include <scanplan/collision/scene.h>
+#include <scanplan/kinematics/robot_model.h>
 
 namespace scanplan::planner {
 

@@ -1,4 +1,4 @@
-#include "planner/dp_planner.h"
+#include <scanplan/planner/dp_planner.h>
 
 #include <algorithm>
 #include <atomic>
@@ -229,7 +229,7 @@ class ReferenceLayers {
   std::vector<std::uint16_t> back_;
 };
 
-// planDp's layers are step-major (issue 20): row j holds the value of every angle a with last
+// planDp's layers are step-major: row j holds the value of every angle a with last
 // step j − D. The states (a, j) of consecutive a then read their predecessors
 // (a − (j − D), j + o), o = −A … A, as one contiguous run of each previous row, so the
 // relaxation runs over angles in vector lanes with the reference's arithmetic and order per

@@ -5,9 +5,9 @@
 #include <string>
 #include <vector>
 
-#include "planner/config_map.h"
-#include "planner/objective.h"
-#include "planner/plan_result.h"
+#include <scanplan/planner/config_map.h>
+#include <scanplan/planner/objective.h>
+#include <scanplan/planner/plan_result.h>
 
 namespace scanplan::planner {
 
@@ -28,7 +28,7 @@ namespace scanplan::planner {
 /// to the nearest grid angle (for a continuous table on the same turn as start_theta). The
 /// returned terms are the DP's own and equal evaluate() of the path up to summation order.
 /// Deterministic (TBB over angles, each cell computed independently). The layers are held
-/// step-major and relaxed over angles in vector lanes (issue 20); path and J are those of
+/// step-major and relaxed over angles in vector lanes; path and J are those of
 /// detail::planDpReference bit for bit.
 PlanResult planDp(const ConfigMap& map,
                   std::size_t branch,

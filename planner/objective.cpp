@@ -1,4 +1,4 @@
-#include "planner/objective.h"
+#include <scanplan/planner/objective.h>
 
 #include <algorithm>
 #include <cmath>

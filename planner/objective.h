@@ -3,7 +3,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "planner/config_map.h"
+#include <scanplan/planner/config_map.h>
 
 namespace scanplan::planner {
 

@@ -1,4 +1,4 @@
-#include "planner/ompl_planner.h"
+#include <scanplan/planner/ompl_planner.h>
 
 #include <algorithm>
 #include <chrono>

@@ -1,55 +1,13 @@
-#include "planner/planner.h"
+#include <scanplan/planner/planner.h>
 
 #include <chrono>
 #include <cmath>
 
 #include <fmt/format.h>
 
-#include "planner/dp_planner.h"
-
 namespace scanplan::planner {
 
 namespace {
-
-class RayShootingPlanner final : public Planner {
- public:
-  explicit RayShootingPlanner(const RayShootingSettings& settings) : settings_(settings) {}
-  std::string name() const override { return "ray"; }
-
- private:
-  PlanResult solveChecked(const PlanningProblem& p, const Termination&) const override {
-    return planRayShooting(*p.map, p.branch, p.settings, p.continuous, settings_, p.start_theta);
-  }
-  RayShootingSettings settings_;
-};
-
-class DpPlanner final : public Planner {
- public:
-  explicit DpPlanner(const PlannerConfig& config) : config_(config) {}
-  std::string name() const override { return "dp"; }
-
- private:
-  PlanResult solveChecked(const PlanningProblem& p, const Termination&) const override {
-    return planDpRefined(*p.map, p.branch, p.settings, p.continuous, dpSubdivisions(p, config_),
-                         p.start_theta);
-  }
-  PlannerConfig config_;
-};
-
-class OmplSearch final : public Planner {
- public:
-  explicit OmplSearch(const OmplSettings& settings) : settings_(settings) {}
-  std::string name() const override { return "ompl"; }
-
- private:
-  PlanResult solveChecked(const PlanningProblem& p, const Termination& t) const override {
-    OmplSettings os = settings_;
-    os.time_limit_s = t.time_limit_s > 0.0 ? t.time_limit_s : 1e9;
-    os.max_iterations = t.max_iterations;
-    return planOmpl(*p.map, p.branch, p.settings, p.continuous, os, p.start_theta);
-  }
-  OmplSettings settings_;
-};
 
 PlanResult refused(const PlanningProblem& p, PlannerStatus status, std::string reason) {
   PlanResult r;
@@ -63,11 +21,16 @@ PlanResult refused(const PlanningProblem& p, PlannerStatus status, std::string r
 
 std::string_view statusName(PlannerStatus status) {
   switch (status) {
-    case PlannerStatus::kExact: return "exact";
-    case PlannerStatus::kApproximate: return "approximate";
-    case PlannerStatus::kNoPath: return "no_path";
-    case PlannerStatus::kTimeout: return "timeout";
-    case PlannerStatus::kInvalidInput: return "invalid_input";
+    case PlannerStatus::kExact:
+      return "exact";
+    case PlannerStatus::kApproximate:
+      return "approximate";
+    case PlannerStatus::kNoPath:
+      return "no_path";
+    case PlannerStatus::kTimeout:
+      return "timeout";
+    case PlannerStatus::kInvalidInput:
+      return "invalid_input";
   }
   return "unknown";
 }
@@ -86,9 +49,10 @@ std::string problemError(const PlanningProblem& p) {
   const PlannerSettings& s = p.settings;
   if (!(s.omega_max > 0.0) || !(s.alpha_max > 0.0) || !std::isfinite(s.omega_max) ||
       !std::isfinite(s.alpha_max)) {
-    return fmt::format("speed and acceleration bounds must be positive and finite (omega_max {}, "
-                       "alpha_max {})",
-                       s.omega_max, s.alpha_max);
+    return fmt::format(
+        "speed and acceleration bounds must be positive and finite (omega_max {}, "
+        "alpha_max {})",
+        s.omega_max, s.alpha_max);
   }
   if (!(s.k_omega >= 0.0) || !(s.k_alpha >= 0.0) || !std::isfinite(s.k_omega) ||
       !std::isfinite(s.k_alpha)) {
@@ -110,27 +74,8 @@ PlanResult Planner::solve(const PlanningProblem& problem, const Termination& ter
   const auto start = std::chrono::steady_clock::now();
   PlanResult result = solveChecked(problem, termination);
   result.branch = problem.branch;
-  result.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
-}
-
-const std::vector<std::string>& plannerNames() {
-  static const std::vector<std::string> names{"ray", "dp", "ompl"};
-  return names;
-}
-
-std::unique_ptr<Planner> makePlanner(std::string_view name, const PlannerConfig& config) {
-  if (name == "ray") return std::make_unique<RayShootingPlanner>(config.ray);
-  if (name == "dp") return std::make_unique<DpPlanner>(config);
-  if (name == "ompl") return std::make_unique<OmplSearch>(config.ompl);
-  return nullptr;
-}
-
-int dpSubdivisions(const PlanningProblem& problem, const PlannerConfig& config) {
-  if (config.dp_subdivisions > 0) return config.dp_subdivisions;
-  return autoAngleSubdivisions(*problem.map, problem.branch, problem.settings,
-                               problem.continuous);
 }
 
 }  // namespace scanplan::planner

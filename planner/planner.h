@@ -1,17 +1,15 @@
 #pragma once
+// The table-angle planner interface: a problem on one branch of a map, a termination, and a
+// Planner that solves it. The planners themselves are made by name in registry.h.
 
 #include <cstddef>
-#include <memory>
 #include <optional>
 #include <string>
-#include <string_view>
 #include <vector>
 
-#include "planner/config_map.h"
-#include "planner/objective.h"
-#include "planner/ompl_planner.h"
-#include "planner/plan_result.h"
-#include "planner/ray_shooting.h"
+#include <scanplan/planner/config_map.h>
+#include <scanplan/planner/objective.h>
+#include <scanplan/planner/plan_result.h>
 
 namespace scanplan::planner {
 
@@ -28,8 +26,8 @@ struct Termination {
 struct PlanningProblem {
   const ConfigMap* map = nullptr;
   std::size_t branch = 0;
-  PlannerSettings settings;  ///< weights and bounds, SI
-  bool continuous = true;    ///< the table turns without end (its grid wraps)
+  PlannerSettings settings;           ///< weights and bounds, SI
+  bool continuous = true;             ///< the table turns without end (its grid wraps)
   std::optional<double> start_theta;  ///< rad, a fixed first table angle; nullopt: searched
 };
 
@@ -49,24 +47,6 @@ class Planner {
   virtual PlanResult solveChecked(const PlanningProblem& problem,
                                   const Termination& termination) const = 0;
 };
-
-/// Each planner's own settings; the registry hands every planner its part.
-struct PlannerConfig {
-  RayShootingSettings ray;
-  /// DP's angle grid: map step / this; 0: autoAngleSubdivisions().
-  int dp_subdivisions = 0;
-  /// OMPL's search (its time_limit_s and max_iterations are replaced by the Termination).
-  OmplSettings ompl;
-};
-
-/// The names makePlanner() knows, in a fixed order: "ray", "dp", "ompl".
-const std::vector<std::string>& plannerNames();
-
-/// The planner called `name` with its settings from `config`; nullptr for an unknown name.
-std::unique_ptr<Planner> makePlanner(std::string_view name, const PlannerConfig& config);
-
-/// DP's angle-grid subdivision for `problem`: `config.dp_subdivisions`, or automatic when 0.
-int dpSubdivisions(const PlanningProblem& problem, const PlannerConfig& config);
 
 /// Why `problem` cannot be solved as given (empty when it is well formed): a missing map, a
 /// branch out of range, fewer than two time samples, non-positive bounds, a negative weight.

@@ -1,4 +1,4 @@
-#include "planner/ray_shooting.h"
+#include <scanplan/planner/ray_shooting.h>
 
 #include <algorithm>
 #include <chrono>

@@ -4,9 +4,9 @@
 #include <optional>
 #include <vector>
 
-#include "planner/config_map.h"
-#include "planner/dp_planner.h"
-#include "planner/objective.h"
+#include <scanplan/planner/config_map.h>
+#include <scanplan/planner/dp_planner.h>
+#include <scanplan/planner/objective.h>
 
 namespace scanplan::planner {
 
@@ -32,7 +32,7 @@ struct RayShootingSettings {
 /// not completed. The best ray's first step is applied (a ray blocked on its first step is never
 /// applied; ties go to the lowest |a|, then the lowest a), and so on to the last sample.
 ///
-/// What this adds to the seed (issue 20; `cost_to_go`, on by default): a ray's score also counts
+/// What this adds to the seed (`cost_to_go`, on by default): a ray's score also counts
 /// the rest of the scan. The cost-to-go — a DP over (grid angle, stage sample) relaxed to
 /// constant-speed stages without the α term, built once per call (detail::costToGo()) — is added
 /// at the ray's end, which is moved (by less than one stage) onto a stage sample; a blocked ray

@@ -1,4 +1,4 @@
-#include "planner/refine.h"
+#include <scanplan/planner/refine.h>
 
 #include <algorithm>
 #include <array>

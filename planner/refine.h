@@ -4,8 +4,8 @@
 #include <string>
 #include <vector>
 
-#include "planner/config_map.h"
-#include "planner/objective.h"
+#include <scanplan/planner/config_map.h>
+#include <scanplan/planner/objective.h>
 
 namespace scanplan::planner {
 

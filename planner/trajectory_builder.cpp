@@ -1,4 +1,4 @@
-#include "planner/trajectory_builder.h"
+#include <scanplan/planner/trajectory_builder.h>
 
 #include <algorithm>
 #include <cmath>
@@ -10,9 +10,9 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
-#include "kinematics/joint_wrap.h"
-#include "kinematics/ramp.h"
-#include "kinematics/units.h"
+#include <scanplan/kinematics/joint_wrap.h>
+#include <scanplan/kinematics/ramp.h>
+#include <scanplan/kinematics/units.h>
 
 namespace scanplan::planner {
 

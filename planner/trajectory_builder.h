@@ -4,11 +4,11 @@
 #include <string>
 #include <vector>
 
-#include "collision/scene.h"
-#include "kinematics/robot_model.h"
-#include "kinematics/scan_path.h"
-#include "kinematics/trajectory.h"
-#include "planner/constraints.h"
+#include <scanplan/collision/scene.h>
+#include <scanplan/kinematics/robot_model.h>
+#include <scanplan/kinematics/scan_path.h>
+#include <scanplan/kinematics/trajectory.h>
+#include <scanplan/planner/constraints.h>
 
 namespace scanplan::planner {
 

@@ -1,6 +1,6 @@
-#include "planner/validation.h"
+#include <scanplan/planner/validation.h>
 
-#include "kinematics/error.h"
+#include <scanplan/kinematics/error.h>
 
 #include <algorithm>
 #include <array>
@@ -22,9 +22,9 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
-#include "collision/clearance.h"
-#include "kinematics/mesh.h"
-#include "kinematics/units.h"
+#include <scanplan/collision/clearance.h>
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/kinematics/units.h>
 
 namespace scanplan::planner {
 namespace {

@@ -8,9 +8,9 @@
 
 #include <Eigen/Geometry>
 
-#include "collision/scene.h"
-#include "collision/sensors.h"
-#include "kinematics/trajectory.h"
+#include <scanplan/collision/scene.h>
+#include <scanplan/collision/sensors.h>
+#include <scanplan/kinematics/trajectory.h>
 
 namespace scanplan::planner {
 

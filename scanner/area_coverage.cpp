@@ -1,4 +1,4 @@
-#include "scanner/area_coverage.h"
+#include <scanplan/scanner/area_coverage.h>
 
 #include <algorithm>
 #include <cmath>

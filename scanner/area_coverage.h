@@ -11,7 +11,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "kinematics/mesh.h"
+#include <scanplan/kinematics/mesh.h>
 
 namespace scanplan::scanner {
 

@@ -1,6 +1,6 @@
-#include "scanner/camera_image.h"
+#include <scanplan/scanner/camera_image.h>
 
-#include "scanner/detail/random.h"
+#include <scanplan/scanner/detail/random.h>
 
 #include <algorithm>
 #include <cassert>
@@ -52,43 +52,38 @@ Eigen::Vector3d CameraModel::triangulate(double p_x, double p_y) const {
   return {0.0, y, z};
 }
 
-void renderProfileImage(const CameraModel& camera,
-                        const ImageSettings& settings,
-                        const ImageScene& scene,
-                        std::uint64_t noise_seed,
-                        ProfileImage& image,
-                        RenderScratch& scratch) {
+namespace {
+
+// One camera ray per pixel, row by row (neighbours in a packet are neighbouring pixels), each
+// reaching twice as far as the laser plane x = 0 (at t = |C_x| / |d_x|) to show the surfaces
+// around and behind the stripe.
+void cameraRays(const CameraModel& camera, std::vector<SceneRay>& rays) {
   const std::size_t rows = static_cast<std::size_t>(camera.rows);
   const std::size_t columns = static_cast<std::size_t>(camera.columns);
-  const std::size_t n = rows * columns;
-  image.rows = camera.rows;
-  image.columns = camera.columns;
-  image.grey.assign(n, 0.0f);
-  image.hit.resize(n);
-  image.lit = 0;
-  image.laser_rays = 0;
-
-  // Camera rays, row by row: neighbours in a packet are neighbouring pixels.
   const Eigen::Vector3d c = camera.centre();
-  scratch.rays.resize(n);
+  rays.resize(rows * columns);
   for (std::size_t r = 0; r < rows; ++r) {
     for (std::size_t k = 0; k < columns; ++k) {
       const Eigen::Vector2d p = camera.imagePlane(static_cast<double>(k), static_cast<double>(r));
-      SceneRay& ray = scratch.rays[r * columns + k];
+      SceneRay& ray = rays[r * columns + k];
       ray.origin = c;
       ray.direction = camera.rayDirection(p.x(), p.y());
-      // The ray meets the laser plane x = 0 at t = |C_x| / |d_x|; twice that shows the surfaces
-      // around and behind the stripe.
       ray.t_far = 2.0 * camera.optics.a / std::abs(ray.direction.x());
     }
   }
-  scene.nearest(scratch.rays, image.hit);
+}
 
-  // Shading; the pixels whose point is in the sheet wait for the laser-reach test.
+// Ambient shading of every pixel that sees the scene; the pixels whose point lies in the laser
+// sheet, on the side the laser lights, become candidates, their camera rays replaced by the
+// laser's ray to the point (for the reach test), compacted to the front of scratch.rays.
+void shadeAndCollectSheetPoints(const Eigen::Vector3d& c,
+                                const ImageSettings& settings,
+                                ProfileImage& image,
+                                RenderScratch& scratch) {
   const double w = 0.5 * settings.thickness;
   scratch.candidates.clear();
   scratch.points.clear();
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t i = 0; i < image.hit.size(); ++i) {
     SceneHit& h = image.hit[i];
     if (!h.hit) continue;
     const Eigen::Vector3d& d = scratch.rays[i].direction;
@@ -105,15 +100,20 @@ void renderProfileImage(const CameraModel& camera,
     reach.direction = p / range;
     reach.t_far = std::max(0.0, range - kReachOffset);
   }
-  const std::size_t m = scratch.candidates.size();
   // Compact the laser rays to the front (candidates are increasing: i ≥ j always).
-  for (std::size_t j = 0; j < m; ++j) scratch.rays[j] = scratch.rays[scratch.candidates[j]];
-  scratch.blocked.assign(m, 0);
-  scene.occluded(std::span<const SceneRay>(scratch.rays.data(), m), scratch.blocked);
-  image.laser_rays = m;
+  for (std::size_t j = 0; j < scratch.candidates.size(); ++j)
+    scratch.rays[j] = scratch.rays[scratch.candidates[j]];
+}
 
+// The laser's light on each candidate it reaches (not blocked): a Gaussian sheet across x,
+// Lambert plus Phong-like specular reflection towards the camera at c.
+void addLaserLight(const Eigen::Vector3d& c,
+                   const ImageSettings& settings,
+                   ProfileImage& image,
+                   const RenderScratch& scratch) {
+  const double w = 0.5 * settings.thickness;
   const Reflectance& refl = settings.reflectance;
-  for (std::size_t j = 0; j < m; ++j) {
+  for (std::size_t j = 0; j < scratch.candidates.size(); ++j) {
     if (scratch.blocked[j]) continue;
     const std::size_t i = scratch.candidates[j];
     const SceneHit& h = image.hit[i];
@@ -131,31 +131,63 @@ void renderProfileImage(const CameraModel& camera,
     image.grey[i] += static_cast<float>(kFullScale * irradiance * value);
     ++image.lit;
   }
+}
 
+// Sensor noise (Gaussian, seeded per profile) and quantisation to whole grey levels.
+void addNoiseAndQuantise(double noise, std::uint64_t noise_seed, std::vector<float>& grey) {
   std::optional<std::mt19937_64> rng;
-  if (settings.noise > 0.0) rng.emplace(detail::mix(noise_seed));
+  if (noise > 0.0) rng.emplace(detail::mix(noise_seed));
+  const std::size_t n = grey.size();
   for (std::size_t i = 0; i < n; i += 2) {
     double e0 = 0.0, e1 = 0.0;
     if (rng) {
       const auto [g0, g1] = detail::gaussianPair(*rng);
-      e0 = settings.noise * g0;
-      e1 = settings.noise * g1;
+      e0 = noise * g0;
+      e1 = noise * g1;
     }
-    image.grey[i] = static_cast<float>(
-        std::round(std::clamp(static_cast<double>(image.grey[i]) + e0, 0.0, kFullScale)));
+    grey[i] = static_cast<float>(
+        std::round(std::clamp(static_cast<double>(grey[i]) + e0, 0.0, kFullScale)));
     if (i + 1 < n) {
-      image.grey[i + 1] = static_cast<float>(
-          std::round(std::clamp(static_cast<double>(image.grey[i + 1]) + e1, 0.0, kFullScale)));
+      grey[i + 1] = static_cast<float>(
+          std::round(std::clamp(static_cast<double>(grey[i + 1]) + e1, 0.0, kFullScale)));
     }
   }
 }
 
-std::optional<double> detectPeak(const float* column,
-                                 int rows,
-                                 std::size_t stride,
-                                 double threshold,
-                                 StripeMethod method) {
-  const auto at = [&](int r) { return static_cast<double>(column[static_cast<std::size_t>(r) * stride]); };
+}  // namespace
+
+void renderProfileImage(const CameraModel& camera,
+                        const ImageSettings& settings,
+                        const ImageScene& scene,
+                        std::uint64_t noise_seed,
+                        ProfileImage& image,
+                        RenderScratch& scratch) {
+  const std::size_t n =
+      static_cast<std::size_t>(camera.rows) * static_cast<std::size_t>(camera.columns);
+  image.rows = camera.rows;
+  image.columns = camera.columns;
+  image.grey.assign(n, 0.0f);
+  image.hit.resize(n);
+  image.lit = 0;
+  image.laser_rays = 0;
+
+  cameraRays(camera, scratch.rays);
+  scene.nearest(scratch.rays, image.hit);
+  const Eigen::Vector3d c = camera.centre();
+  shadeAndCollectSheetPoints(c, settings, image, scratch);
+  const std::size_t m = scratch.candidates.size();
+  scratch.blocked.assign(m, 0);
+  scene.occluded(std::span<const SceneRay>(scratch.rays.data(), m), scratch.blocked);
+  image.laser_rays = m;
+  addLaserLight(c, settings, image, scratch);
+  addNoiseAndQuantise(settings.noise, noise_seed, image.grey);
+}
+
+std::optional<double> detectPeak(
+    const float* column, int rows, std::size_t stride, double threshold, StripeMethod method) {
+  const auto at = [&](int r) {
+    return static_cast<double>(column[static_cast<std::size_t>(r) * stride]);
+  };
   int peak = -1;
   double best = threshold;
   for (int r = 0; r < rows; ++r) {

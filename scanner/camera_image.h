@@ -8,7 +8,7 @@
 
 #include <Eigen/Geometry>
 
-#include "scanner/laser_model.h"
+#include <scanplan/scanner/laser_model.h>
 
 namespace scanplan::scanner {
 
@@ -80,16 +80,16 @@ struct ImageSettings {
   /// Ambient light from the camera's side, grey levels on a surface facing the camera (shows
   /// the part around the stripe; keep it below the threshold).
   double ambient = 12.0;
-  double noise = 0.0;        ///< σ of Gaussian sensor noise, grey levels (then clamped, rounded)
-  double threshold = 40.0;   ///< grey levels a stripe peak must exceed
+  double noise = 0.0;       ///< σ of Gaussian sensor noise, grey levels (then clamped, rounded)
+  double threshold = 40.0;  ///< grey levels a stripe peak must exceed
   StripeMethod method = StripeMethod::kCentreOfGravity;
 };
 
 /// The nearest surface a ray meets.
 struct SceneHit {
-  double t = 0.0;                                 ///< along the unit ray, m
+  double t = 0.0;                                  ///< along the unit ray, m
   Eigen::Vector3d n_S = Eigen::Vector3d::UnitZ();  ///< unit geometric normal, scanner frame
-  std::int32_t part_triangle = -1;                ///< part mesh triangle; −1 on another body
+  std::int32_t part_triangle = -1;                 ///< part mesh triangle; −1 on another body
   bool hit = false;
 };
 
@@ -116,9 +116,9 @@ class ImageScene {
 struct ProfileImage {
   int rows = 0;
   int columns = 0;
-  std::vector<float> grey;    ///< grey levels 0…255, rows × columns
-  std::vector<SceneHit> hit;  ///< per pixel, the surface its ray met
-  std::size_t lit = 0;        ///< pixels the laser lit (before noise)
+  std::vector<float> grey;     ///< grey levels 0…255, rows × columns
+  std::vector<SceneHit> hit;   ///< per pixel, the surface its ray met
+  std::size_t lit = 0;         ///< pixels the laser lit (before noise)
   std::size_t laser_rays = 0;  ///< laser-reach rays cast
 
   float at(int row, int column) const {
@@ -156,10 +156,7 @@ std::vector<std::optional<double>> detectStripe(const ProfileImage& image,
                                                 StripeMethod method);
 
 /// One column's stripe (see detectStripe) from `rows` samples spaced `stride` apart.
-std::optional<double> detectPeak(const float* column,
-                                 int rows,
-                                 std::size_t stride,
-                                 double threshold,
-                                 StripeMethod method);
+std::optional<double> detectPeak(
+    const float* column, int rows, std::size_t stride, double threshold, StripeMethod method);
 
 }  // namespace scanplan::scanner

@@ -1,4 +1,4 @@
-#include "scanner/cloud_io.h"
+#include <scanplan/scanner/cloud_io.h>
 
 #include <algorithm>
 #include <array>
@@ -9,8 +9,8 @@
 #include <sstream>
 #include <vector>
 
-#include "kinematics/error.h"
-#include "kinematics/units.h"
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/units.h>
 
 namespace scanplan::scanner {
 namespace {

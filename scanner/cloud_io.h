@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "kinematics/mesh.h"
-#include "scanner/coverage.h"
-#include "scanner/simulator.h"
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/scanner/coverage.h>
+#include <scanplan/scanner/simulator.h>
 
 namespace scanplan::scanner {
 

@@ -1,10 +1,10 @@
-#include "scanner/coverage.h"
+#include <scanplan/scanner/coverage.h>
 
 #include <algorithm>
 #include <cmath>
 #include <utility>
 
-#include "kinematics/units.h"
+#include <scanplan/kinematics/units.h>
 
 namespace scanplan::scanner {
 namespace {

@@ -5,8 +5,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "kinematics/mesh.h"
-#include "scanner/simulator.h"
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/scanner/simulator.h>
 
 namespace scanplan::scanner {
 
@@ -49,8 +49,9 @@ double triangleDensityPerMm2(const kinematics::TriangleMesh& part,
                              std::size_t triangle);
 
 /// The colour scale of coverage.ply: uncovered triangles (fewer than min_points) red-orange
-/// (220, 70, 40), clear against the ramp and a grey part; covered ones on a viridis ramp from dark violet (68, 1, 84) at density 0
-/// through blue, teal and green to yellow (253, 231, 37) at `max_per_mm2` and above.
+/// (220, 70, 40), clear against the ramp and a grey part; covered ones on a viridis ramp from dark
+/// violet (68, 1, 84) at density 0 through blue, teal and green to yellow (253, 231, 37) at
+/// `max_per_mm2` and above.
 std::array<std::uint8_t, 3> densityColour(double density_per_mm2, double max_per_mm2, bool covered);
 
 }  // namespace scanplan::scanner

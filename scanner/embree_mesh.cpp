@@ -1,4 +1,4 @@
-#include "scanner/embree_mesh.h"
+#include <scanplan/scanner/embree_mesh.h>
 
 #include <cstddef>
 

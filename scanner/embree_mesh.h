@@ -5,7 +5,7 @@
 
 #include <embree3/rtcore.h>
 
-#include "kinematics/mesh.h"
+#include <scanplan/kinematics/mesh.h>
 
 namespace scanplan::scanner {
 

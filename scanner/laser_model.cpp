@@ -1,4 +1,4 @@
-#include "scanner/laser_model.h"
+#include <scanplan/scanner/laser_model.h>
 
 #include <cmath>
 

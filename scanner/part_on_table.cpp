@@ -1,6 +1,6 @@
-#include "scanner/part_on_table.h"
+#include <scanplan/scanner/part_on_table.h>
 
-#include "kinematics/shape.h"
+#include <scanplan/kinematics/shape.h>
 
 namespace scanplan::scanner {
 

@@ -9,8 +9,8 @@
 
 #include <Eigen/Geometry>
 
-#include "kinematics/mesh.h"
-#include "scanner/raycaster.h"
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/scanner/raycaster.h>
 
 namespace scanplan::scanner {
 

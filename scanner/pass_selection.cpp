@@ -1,11 +1,11 @@
-#include "scanner/pass_selection.h"
+#include <scanplan/scanner/pass_selection.h>
 
 #include <algorithm>
 #include <cmath>
 #include <queue>
 
-#include "kinematics/pose.h"
-#include "kinematics/scan_path.h"
+#include <scanplan/kinematics/pose.h>
+#include <scanplan/kinematics/scan_path.h>
 
 namespace scanplan::scanner {
 

@@ -13,7 +13,7 @@
 
 #include <Eigen/Geometry>
 
-#include "scanner/scan_passes.h"
+#include <scanplan/scanner/scan_passes.h>
 
 namespace scanplan::scanner {
 

@@ -1,4 +1,4 @@
-#include "scanner/path_generators.h"
+#include <scanplan/scanner/path_generators.h>
 
 #include <algorithm>
 #include <cmath>
@@ -7,9 +7,9 @@
 
 #include <fmt/format.h>
 
-#include "kinematics/error.h"
-#include "kinematics/pose.h"
-#include "kinematics/units.h"
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/pose.h>
+#include <scanplan/kinematics/units.h>
 
 namespace scanplan::scanner {
 namespace {
@@ -24,7 +24,7 @@ struct Key {
 };
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kMaxStations = 2e6;                // probed raster stations of one element
+constexpr double kMaxStations = 2e6;  // probed raster stations of one element
 
 std::string where(std::size_t index) { return "scan.paths[" + std::to_string(index) + "]"; }
 

@@ -8,10 +8,10 @@
 
 #include <Eigen/Geometry>
 
-#include "kinematics/mesh.h"
-#include "kinematics/scan_path.h"
-#include "scanner/laser_model.h"
-#include "scanner/raycaster.h"
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/kinematics/scan_path.h>
+#include <scanplan/scanner/laser_model.h>
+#include <scanplan/scanner/raycaster.h>
 
 namespace scanplan::scanner {
 

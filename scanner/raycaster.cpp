@@ -1,6 +1,6 @@
-#include "scanner/raycaster.h"
+#include <scanplan/scanner/raycaster.h>
 
-#include "scanner/embree_mesh.h"
+#include <scanplan/scanner/embree_mesh.h>
 
 #include <embree3/rtcore.h>
 

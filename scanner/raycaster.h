@@ -6,7 +6,7 @@
 
 #include <Eigen/Geometry>
 
-#include "kinematics/mesh.h"
+#include <scanplan/kinematics/mesh.h>
 
 namespace scanplan::scanner {
 

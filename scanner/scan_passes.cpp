@@ -1,4 +1,4 @@
-#include "scanner/scan_passes.h"
+#include <scanplan/scanner/scan_passes.h>
 
 #include <algorithm>
 #include <array>
@@ -11,11 +11,11 @@
 #include <tbb/parallel_for.h>
 #include <nanoflann.hpp>
 
-#include "kinematics/pose.h"
-#include "kinematics/scan_path.h"
-#include "kinematics/units.h"
-#include "scanner/scannability.h"
-#include "scanner/simulator.h"
+#include <scanplan/kinematics/pose.h>
+#include <scanplan/kinematics/scan_path.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/scanner/scannability.h>
+#include <scanplan/scanner/simulator.h>
 
 namespace scanplan::scanner {
 

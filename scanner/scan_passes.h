@@ -36,9 +36,9 @@
 
 #include <Eigen/Geometry>
 
-#include "scanner/area_coverage.h"
-#include "scanner/laser_model.h"
-#include "scanner/part_on_table.h"
+#include <scanplan/scanner/area_coverage.h>
+#include <scanplan/scanner/laser_model.h>
+#include <scanplan/scanner/part_on_table.h>
 
 namespace scanplan::scanner {
 

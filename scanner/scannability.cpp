@@ -1,4 +1,4 @@
-#include "scanner/scannability.h"
+#include <scanplan/scanner/scannability.h>
 
 #include <algorithm>
 #include <cmath>

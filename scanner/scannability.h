@@ -1,5 +1,5 @@
 #pragma once
-// The scannability certificate (docs/design.md §11, issue 16): why each area sample of the part can
+// The scannability certificate (docs/design.md §11): why each area sample of the part can
 // or cannot be scanned on this setup, before any planning. A sample that no scanner pose could see
 // is not a planner's failure; the classes say which limit stands in the way.
 
@@ -10,9 +10,9 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "scanner/area_coverage.h"
-#include "scanner/laser_model.h"
-#include "scanner/part_on_table.h"
+#include <scanplan/scanner/area_coverage.h>
+#include <scanplan/scanner/laser_model.h>
+#include <scanplan/scanner/part_on_table.h>
 
 namespace scanplan::scanner {
 

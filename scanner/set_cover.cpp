@@ -1,4 +1,4 @@
-#include "scanner/set_cover.h"
+#include <scanplan/scanner/set_cover.h>
 
 #include <algorithm>
 #include <chrono>
@@ -363,82 +363,36 @@ double CoverSolution::gap() const {
   return std::clamp((cost - lower_bound) / cost, 0.0, 1.0);
 }
 
-CoverSolution solveCover(const CoverProblem& problem,
-                         const std::vector<std::size_t>& start,
-                         double time_budget_s,
-                         const CoverLimits& limits) {
-  const auto t0 = Clock::now();
-  const auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - t0).count(); };
-  if (!(time_budget_s >= 0.0))
-    throw std::invalid_argument("solveCover: time budget " + std::to_string(time_budget_s) +
-                                " s (expected ≥ 0)");
-  const OpenProblem open = openProblem(problem);
+namespace {
 
-  std::vector<std::size_t> start_sets = start;
-  std::sort(start_sets.begin(), start_sets.end());
-  start_sets.erase(std::unique(start_sets.begin(), start_sets.end()), start_sets.end());
-  for (std::size_t p : start_sets)
+// The start's sets, sorted and each once; throws when one is out of range or not allowed.
+std::vector<std::size_t> checkedStart(const CoverProblem& problem,
+                                      const std::vector<std::size_t>& start) {
+  std::vector<std::size_t> sets = start;
+  std::sort(sets.begin(), sets.end());
+  sets.erase(std::unique(sets.begin(), sets.end()), sets.end());
+  for (std::size_t p : sets)
     if (p >= problem.cost.size() || (!problem.allowed.empty() && !problem.allowed[p]))
       throw std::invalid_argument("solveCover: the start names set " + std::to_string(p) +
                                   (p >= problem.cost.size() ? ", out of range" : ", not allowed"));
+  return sets;
+}
 
-  CoverSolution s;
-  s.counted = open.counted;
-  s.required = open.required;
-  const auto finish = [&](Candidate&& c, std::string status) {
-    s.chosen = std::move(c.sets);
-    s.cost = c.cost;
-    s.covered_counted = open.precovered + c.covered_open;
-    s.reached = c.covered_open >= open.need;
-    s.status = std::move(status);
-    if (!s.reached && s.status != "infeasible target") s.status += ": no cover found";
-    s.lower_bound = std::min(s.lower_bound, s.cost);
-    s.seconds = elapsed();
-    return s;
-  };
-  const auto candidate = [&](std::vector<std::size_t> sets) {
-    Candidate c;
-    c.sets = prune(problem, open, std::move(sets));
-    c.covered_open = coveredOpen(open, c.sets);
-    c.cost = costOf(problem, c.sets);
-    return c;
-  };
+using GlpkProblem = std::unique_ptr<glp_prob, decltype(&glp_delete_prob)>;
 
-  if (open.need == 0) {
-    s.optimal = true;
-    return finish(Candidate{}, "target met before any set");
-  }
-  Candidate best = candidate(std::move(start_sets));
-  const bool start_reaches = best.covered_open >= open.need;
-
-  std::vector<std::size_t> all;
-  for (std::size_t p = 0; p < open.covers.size(); ++p)
-    if (!open.covers[p].empty()) all.push_back(p);
-  if (coveredOpen(open, all) < open.need) return finish(std::move(best), "infeasible target");
-
-  const Model m = reducedModel(open);
-  s.model_sets = m.set_of_column.size();
-  s.model_classes = m.columns_of_class.size();
-  if (m.nonzeros > std::min<std::size_t>(limits.max_nonzeros, INT_MAX - 1))
-    return finish(std::move(best), "start only: the reduced model has " +
-                                       std::to_string(m.nonzeros) + " nonzeros, more than " +
-                                       std::to_string(limits.max_nonzeros));
-
-  // Columns 1..P: x_p ∈ {0, 1}, set p chosen, cost c_p. Columns P+1..P+K: y_k ∈ [0, 1], class k
-  // counted as covered. Rows 1..K: y_k − Σ_{p covers k} x_p ≤ 0. Row K+1: Σ w_k y_k ≥ need.
-  // y may be continuous: it is not in the objective, and for a binary x each y_k may take any
-  // value in [0, min(1, Σ x_p)], i.e. in [0, 1] when x covers class k and 0 when not, so the
-  // count row holds for some y exactly when it holds for y_k = [x covers k], i.e. exactly when
-  // x covers the target. The x feasible for the MIP are the same as with binary y (and the LP
-  // relaxations are the same), while GLPK branches on x only. The bound y_k ≤ 1 is what makes
-  // this exact: without it an element covered twice would count twice.
-  // Declared before GLPK's objects: it outlives them.
-  const GlpkEnvironment environment;
-  if (!environment.ok())
-    return finish(std::move(best), "start only: GLPK's environment could not be set up");
+// The reduced model as GLPK's integer programme.
+// Columns 1..P: x_p ∈ {0, 1}, set p chosen, cost c_p. Columns P+1..P+K: y_k ∈ [0, 1], class k
+// counted as covered. Rows 1..K: y_k − Σ_{p covers k} x_p ≤ 0. Row K+1: Σ w_k y_k ≥ need.
+// y may be continuous: it is not in the objective, and for a binary x each y_k may take any
+// value in [0, min(1, Σ x_p)], i.e. in [0, 1] when x covers class k and 0 when not, so the
+// count row holds for some y exactly when it holds for y_k = [x covers k], i.e. exactly when
+// x covers the target. The x feasible for the MIP are the same as with binary y (and the LP
+// relaxations are the same), while GLPK branches on x only. The bound y_k ≤ 1 is what makes
+// this exact: without it an element covered twice would count twice.
+GlpkProblem glpkModel(const CoverProblem& problem, const OpenProblem& open, const Model& m) {
   const int P = static_cast<int>(m.set_of_column.size());
   const int K = static_cast<int>(m.columns_of_class.size());
-  std::unique_ptr<glp_prob, decltype(&glp_delete_prob)> lp(glp_create_prob(), &glp_delete_prob);
+  GlpkProblem lp(glp_create_prob(), &glp_delete_prob);
   glp_set_obj_dir(lp.get(), GLP_MIN);
   glp_add_cols(lp.get(), P + K);
   for (int j = 1; j <= P; ++j) {
@@ -462,6 +416,77 @@ CoverSolution solveCover(const CoverProblem& problem,
   }
   glp_set_row_bnds(lp.get(), K + 1, GLP_LO, static_cast<double>(open.need), 0.0);
   glp_load_matrix(lp.get(), static_cast<int>(ia.size() - 1), ia.data(), ja.data(), ar.data());
+  return lp;
+}
+
+// The sets of GLPK's integer solution.
+std::vector<std::size_t> chosenSets(glp_prob* lp, const Model& m) {
+  std::vector<std::size_t> sets;
+  for (std::size_t j = 0; j < m.set_of_column.size(); ++j)
+    if (glp_mip_col_val(lp, static_cast<int>(j) + 1) > 0.5) sets.push_back(m.set_of_column[j]);
+  return sets;
+}
+
+// How the search ended, in words ("optimal" when no cheaper cover exists).
+std::string searchStatus(int mip_ret,
+                         int mip_status,
+                         bool found_reaches,
+                         const SearchContext& ctx) {
+  if (mip_ret == 0 && mip_status == GLP_OPT && found_reaches) return "optimal";
+  if (mip_ret == 0 && mip_status == GLP_OPT)
+    return "GLPK's optimum misses the target (numerical tolerance)";
+  if (mip_ret == GLP_ETMLIM || (mip_ret == GLP_ESTOP && ctx.deadline_hit)) return "time limit";
+  if (mip_ret == GLP_ESTOP && ctx.node_limit_hit) return "node limit";
+  return "GLPK stopped (code " + std::to_string(mip_ret) + ")";
+}
+
+// The search's context: the problem, the reduced model's columns and the start handed to GLPK.
+SearchContext searchContext(const CoverProblem& problem,
+                            const OpenProblem& open,
+                            const Model& m,
+                            const CoverLimits& limits) {
+  SearchContext ctx;
+  ctx.problem = &problem;
+  ctx.open = &open;
+  ctx.model = &m;
+  ctx.column_of_set.assign(problem.cost.size(), SIZE_MAX);
+  for (std::size_t j = 0; j < m.set_of_column.size(); ++j)
+    ctx.column_of_set[m.set_of_column[j]] = j;
+  ctx.node_limit = limits.node_limit;
+  return ctx;
+}
+
+// `sets` pruned of sets the target does not need, with what they cover and cost.
+Candidate makeCandidate(const CoverProblem& problem,
+                        const OpenProblem& open,
+                        std::vector<std::size_t> sets) {
+  Candidate c;
+  c.sets = prune(problem, open, std::move(sets));
+  c.covered_open = coveredOpen(open, c.sets);
+  c.cost = costOf(problem, c.sets);
+  return c;
+}
+
+// The time left of a budget started at t0, in seconds.
+double secondsLeft(Clock::time_point t0, double budget_s) {
+  return budget_s - std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// GLPK's branch and bound on the reduced model, from `best` (the start, handed over when it
+// reaches the target): `best` becomes the cheapest cover found, `s` gets the proven lower bound,
+// the nodes and whether `best` is optimal. Returns how the search ended.
+std::string searchWithGlpk(const CoverProblem& problem,
+                           const OpenProblem& open,
+                           const Model& m,
+                           const CoverLimits& limits,
+                           Clock::time_point t0,
+                           double time_budget_s,
+                           Candidate& best,
+                           CoverSolution& s) {
+  // Declared before GLPK's objects: it outlives them.
+  const GlpkEnvironment environment;
+  if (!environment.ok()) return "start only: GLPK's environment could not be set up";
+  const GlpkProblem lp = glpkModel(problem, open, m);
 
   // GLPK's own presolver stays off: with it, the callback sees the presolved problem, whose
   // columns are not ours, so the start could not be handed over. The reduction above does what
@@ -472,34 +497,26 @@ CoverSolution solveCover(const CoverProblem& problem,
   glp_smcp smcp;
   glp_init_smcp(&smcp);
   smcp.msg_lev = GLP_MSG_OFF;
-  if (time_budget_s - elapsed() <= 0.0) return finish(std::move(best), "time limit");
-  smcp.tm_lim = milliseconds(time_budget_s - elapsed());
+  if (secondsLeft(t0, time_budget_s) <= 0.0) return "time limit";
+  smcp.tm_lim = milliseconds(secondsLeft(t0, time_budget_s));
   const int lp_ret = glp_simplex(lp.get(), &smcp);
-  if (lp_ret == GLP_ETMLIM) return finish(std::move(best), "time limit");
+  if (lp_ret == GLP_ETMLIM) return "time limit";
   if (lp_ret != 0 || glp_get_status(lp.get()) != GLP_OPT)
-    return finish(std::move(best),
-                  "start only: GLPK's LP relaxation failed (code " + std::to_string(lp_ret) + ")");
+    return "start only: GLPK's LP relaxation failed (code " + std::to_string(lp_ret) + ")";
   // The LP relaxation's optimum bounds the MIP's from below (the bound if the search makes no
   // progress); the tree's best bound replaces it when higher.
   s.lower_bound = glp_get_obj_val(lp.get());
 
-  SearchContext ctx;
-  ctx.problem = &problem;
-  ctx.open = &open;
-  ctx.model = &m;
-  ctx.column_of_set.assign(problem.cost.size(), SIZE_MAX);
-  for (std::size_t j = 0; j < m.set_of_column.size(); ++j)
-    ctx.column_of_set[m.set_of_column[j]] = j;
-  if (start_reaches) ctx.start = best.sets;
-  ctx.node_limit = limits.node_limit;
+  SearchContext ctx = searchContext(problem, open, m, limits);
+  if (best.covered_open >= open.need) ctx.start = best.sets;
   glp_iocp iocp;
   glp_init_iocp(&iocp);
   iocp.msg_lev = GLP_MSG_OFF;
   iocp.presolve = GLP_OFF;
   iocp.cb_func = searchCallback;
   iocp.cb_info = &ctx;
-  if (time_budget_s - elapsed() <= 0.0) return finish(std::move(best), "time limit");
-  iocp.tm_lim = milliseconds(time_budget_s - elapsed());
+  if (secondsLeft(t0, time_budget_s) <= 0.0) return "time limit";
+  iocp.tm_lim = milliseconds(secondsLeft(t0, time_budget_s));
   if (time_budget_s < kNoDeadline_s)
     ctx.deadline = t0 + std::chrono::duration_cast<Clock::duration>(
                             std::chrono::duration<double>(time_budget_s));
@@ -511,30 +528,67 @@ CoverSolution solveCover(const CoverProblem& problem,
   const int mip_status = glp_mip_status(lp.get());
   bool found_reaches = false;
   if (mip_status == GLP_OPT || mip_status == GLP_FEAS) {
-    std::vector<std::size_t> sets;
-    for (int j = 1; j <= P; ++j)
-      if (glp_mip_col_val(lp.get(), j) > 0.5)
-        sets.push_back(m.set_of_column[static_cast<std::size_t>(j - 1)]);
     // Checked on the original elements: the answer never rests on GLPK's tolerances.
-    Candidate found = candidate(std::move(sets));
+    Candidate found = makeCandidate(problem, open, chosenSets(lp.get(), m));
     found_reaches = found.covered_open >= open.need;
     if (better(found, best, open.need)) best = std::move(found);
   }
-  std::string status;
-  if (mip_ret == 0 && mip_status == GLP_OPT && found_reaches) {
+  std::string status = searchStatus(mip_ret, mip_status, found_reaches, ctx);
+  if (status == "optimal") {
     // No cheaper cover exists, and best costs no more than GLPK's optimum.
-    status = "optimal";
     s.optimal = true;
     s.lower_bound = best.cost;
-  } else if (mip_ret == 0 && mip_status == GLP_OPT) {
-    status = "GLPK's optimum misses the target (numerical tolerance)";
-  } else if (mip_ret == GLP_ETMLIM || (mip_ret == GLP_ESTOP && ctx.deadline_hit)) {
-    status = "time limit";
-  } else if (mip_ret == GLP_ESTOP && ctx.node_limit_hit) {
-    status = "node limit";
-  } else {
-    status = "GLPK stopped (code " + std::to_string(mip_ret) + ")";
   }
+  return status;
+}
+
+}  // namespace
+
+CoverSolution solveCover(const CoverProblem& problem,
+                         const std::vector<std::size_t>& start,
+                         double time_budget_s,
+                         const CoverLimits& limits) {
+  const auto t0 = Clock::now();
+  if (!(time_budget_s >= 0.0))
+    throw std::invalid_argument("solveCover: time budget " + std::to_string(time_budget_s) +
+                                " s (expected ≥ 0)");
+  const OpenProblem open = openProblem(problem);
+  std::vector<std::size_t> start_sets = checkedStart(problem, start);
+
+  CoverSolution s;
+  s.counted = open.counted;
+  s.required = open.required;
+  const auto finish = [&](Candidate&& c, std::string status) {
+    s.chosen = std::move(c.sets);
+    s.cost = c.cost;
+    s.covered_counted = open.precovered + c.covered_open;
+    s.reached = c.covered_open >= open.need;
+    s.status = std::move(status);
+    if (!s.reached && s.status != "infeasible target") s.status += ": no cover found";
+    s.lower_bound = std::min(s.lower_bound, s.cost);
+    s.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    return s;
+  };
+
+  if (open.need == 0) {
+    s.optimal = true;
+    return finish(Candidate{}, "target met before any set");
+  }
+  Candidate best = makeCandidate(problem, open, std::move(start_sets));
+
+  std::vector<std::size_t> all;
+  for (std::size_t p = 0; p < open.covers.size(); ++p)
+    if (!open.covers[p].empty()) all.push_back(p);
+  if (coveredOpen(open, all) < open.need) return finish(std::move(best), "infeasible target");
+
+  const Model m = reducedModel(open);
+  s.model_sets = m.set_of_column.size();
+  s.model_classes = m.columns_of_class.size();
+  if (m.nonzeros > std::min<std::size_t>(limits.max_nonzeros, INT_MAX - 1))
+    return finish(std::move(best), "start only: the reduced model has " +
+                                       std::to_string(m.nonzeros) + " nonzeros, more than " +
+                                       std::to_string(limits.max_nonzeros));
+  std::string status = searchWithGlpk(problem, open, m, limits, t0, time_budget_s, best, s);
   return finish(std::move(best), std::move(status));
 }
 

@@ -1,5 +1,5 @@
 #pragma once
-// Choosing scan passes by an integer programme (README.md, "Automatic scan"): the weighted partial set cover
+// Choosing scan passes by an integer programme (docs/automatic-scan.md): the weighted partial set cover
 // that greedyCover() (scanner/pass_selection.h) answers approximately, solved to optimality or
 // to a proven gap within a budget by GLPK's branch and cut, started from a feasible answer such
 // as greedy's. GLPK stays behind this header.

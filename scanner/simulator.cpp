@@ -1,7 +1,7 @@
-#include "scanner/simulator.h"
+#include <scanplan/scanner/simulator.h>
 
-#include "scanner/detail/random.h"
-#include "scanner/embree_mesh.h"
+#include <scanplan/scanner/detail/random.h>
+#include <scanplan/scanner/embree_mesh.h>
 
 #include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>
@@ -223,6 +223,12 @@ struct ScanSimulator::Impl {
                Scratch& s,
                std::vector<CloudPoint>& out,
                SimulationStats& stats) const;
+  // Every frame's profile into `cloud`, in batches (in parallel when there are threads), in
+  // profile order; `rays`: points per profile at most. Returns the stats summed over threads.
+  SimulationStats profiles(const std::vector<ScanFrame>& frames,
+                           const RunSetup& setup,
+                           std::size_t rays,
+                           SimulatedCloud& cloud) const;
   // Image mode (camera_image.h): the posed cell as an ImageScene, one profile's image, and
   // its points.
   struct GroupScene;
@@ -917,6 +923,82 @@ ProfileImage ScanSimulator::renderImage(const ScanFrame& frame,
   return s.image;
 }
 
+namespace {
+
+void addStats(SimulationStats& total, const SimulationStats& st) {
+  total.laser_rays += st.laser_rays;
+  total.occlusion_rays += st.occlusion_rays;
+  total.hits += st.hits;
+  total.outside_window += st.outside_window;
+  total.occluded += st.occluded;
+  total.points += st.points;
+  total.pixel_rays += st.pixel_rays;
+  total.lit_pixels += st.lit_pixels;
+}
+
+}  // namespace
+
+// The points reach fresh memory once. On one thread they go straight into the cloud; on more,
+// each thread appends its profiles' points to its own buffer, reused batch after batch, and
+// after each batch they move to the cloud in profile order. The cloud is sized for a point per
+// ray of the first batch, then once for the rest of the run at the points per profile so far
+// plus a quarter (it grows again only should a batch need more).
+SimulationStats ScanSimulator::Impl::profiles(const std::vector<ScanFrame>& frames,
+                                              const RunSetup& setup,
+                                              std::size_t rays,
+                                              SimulatedCloud& cloud) const {
+  struct Output {
+    std::vector<CloudPoint> points;
+    SimulationStats stats;
+  };
+  struct Span {
+    const std::vector<CloudPoint>* points = nullptr;
+    std::size_t begin = 0;
+    std::size_t end = 0;
+  };
+  const std::size_t n = frames.size();
+  const std::size_t batch = std::max<std::size_t>(1, kBatchRays / rays);
+  const bool serial = tbb::this_task_arena::max_concurrency() == 1;
+  tbb::enumerable_thread_specific<Output> outputs;
+  std::vector<Span> spans(serial ? 0 : std::min(n, batch));
+  for (std::size_t from = 0; from < n; from += batch) {
+    const std::size_t to = std::min(n, from + batch);
+    const std::size_t size = cloud.points.size();
+    if (size + (to - from) * rays > cloud.points.capacity()) {
+      const std::size_t projected = from == 0 ? 0 : size + (n - from) * size / from * 5 / 4;
+      cloud.points.reserve(std::max(size + (to - from) * rays, projected));
+    }
+    if (serial) {
+      Scratch& s = scratch.local();
+      SimulationStats& stats = outputs.local().stats;
+      for (std::size_t i = from; i < to; ++i) {
+        profile(frames[i], static_cast<std::uint32_t>(i), setup, s, cloud.points, stats);
+      }
+      continue;
+    }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(from, to),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        Scratch& s = scratch.local();
+                        Output& out = outputs.local();
+                        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                          const std::size_t begin = out.points.size();
+                          profile(frames[i], static_cast<std::uint32_t>(i), setup, s, out.points,
+                                  out.stats);
+                          spans[i - from] = {&out.points, begin, out.points.size()};
+                        }
+                      });
+    for (std::size_t i = from; i < to; ++i) {
+      const Span& span = spans[i - from];
+      cloud.points.insert(cloud.points.end(), span.points->data() + span.begin,
+                          span.points->data() + span.end);
+    }
+    for (Output& out : outputs) out.points.clear();
+  }
+  SimulationStats total;
+  for (const Output& out : outputs) addStats(total, out.stats);
+  return total;
+}
+
 SimulatedCloud ScanSimulator::simulate(const std::vector<ScanFrame>& frames,
                                        const LaserOptics& optics,
                                        const SimulationSettings& settings) const {
@@ -939,76 +1021,13 @@ SimulatedCloud ScanSimulator::simulate(const std::vector<ScanFrame>& frames,
     }
   }
   const RunSetup setup = makeRunSetup(impl_->cell.table, optics, settings);
-
-  // The points reach fresh memory once. On one thread they go straight into the cloud; on
-  // more, each thread appends its profiles' points to its own buffer, reused batch after
-  // batch, and after each batch they move to the cloud in profile order. The cloud is sized
-  // for a point per ray of the first batch, then once for the rest of the run at the points
-  // per profile so far plus a quarter (it grows again only should a batch need more).
-  struct Output {
-    std::vector<CloudPoint> points;
-    SimulationStats stats;
-  };
-  struct Span {
-    const std::vector<CloudPoint>* points = nullptr;
-    std::size_t begin = 0;
-    std::size_t end = 0;
-  };
-  const std::size_t n = frames.size();
   // Points per profile at most: one per fan ray, or per image column.
   const std::size_t rays = settings.mode == SimulationMode::kImage
                                ? static_cast<std::size_t>(settings.image.columns)
                                : setup.directions.size();
-  const std::size_t batch = std::max<std::size_t>(1, kBatchRays / rays);
-  const bool serial = tbb::this_task_arena::max_concurrency() == 1;
-  tbb::enumerable_thread_specific<Output> outputs;
-  std::vector<Span> spans(serial ? 0 : std::min(n, batch));
   SimulatedCloud cloud;
-  for (std::size_t from = 0; from < n; from += batch) {
-    const std::size_t to = std::min(n, from + batch);
-    const std::size_t size = cloud.points.size();
-    if (size + (to - from) * rays > cloud.points.capacity()) {
-      const std::size_t projected = from == 0 ? 0 : size + (n - from) * size / from * 5 / 4;
-      cloud.points.reserve(std::max(size + (to - from) * rays, projected));
-    }
-    if (serial) {
-      Scratch& s = impl_->scratch.local();
-      SimulationStats& stats = outputs.local().stats;
-      for (std::size_t i = from; i < to; ++i) {
-        impl_->profile(frames[i], static_cast<std::uint32_t>(i), setup, s, cloud.points, stats);
-      }
-      continue;
-    }
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(from, to),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-                        Scratch& s = impl_->scratch.local();
-                        Output& out = outputs.local();
-                        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                          const std::size_t begin = out.points.size();
-                          impl_->profile(frames[i], static_cast<std::uint32_t>(i), setup, s,
-                                         out.points, out.stats);
-                          spans[i - from] = {&out.points, begin, out.points.size()};
-                        }
-                      });
-    for (std::size_t i = from; i < to; ++i) {
-      const Span& span = spans[i - from];
-      cloud.points.insert(cloud.points.end(), span.points->data() + span.begin,
-                          span.points->data() + span.end);
-    }
-    for (Output& out : outputs) out.points.clear();
-  }
-  for (const Output& out : outputs) {
-    const SimulationStats& st = out.stats;
-    cloud.stats.laser_rays += st.laser_rays;
-    cloud.stats.occlusion_rays += st.occlusion_rays;
-    cloud.stats.hits += st.hits;
-    cloud.stats.outside_window += st.outside_window;
-    cloud.stats.occluded += st.occluded;
-    cloud.stats.points += st.points;
-    cloud.stats.pixel_rays += st.pixel_rays;
-    cloud.stats.lit_pixels += st.lit_pixels;
-  }
-  cloud.stats.profiles = n;
+  cloud.stats = impl_->profiles(frames, setup, rays, cloud);
+  cloud.stats.profiles = frames.size();
   return cloud;
 }
 

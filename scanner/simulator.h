@@ -8,13 +8,13 @@
 
 #include <Eigen/Geometry>
 
-#include "kinematics/cell.h"
-#include "kinematics/mesh.h"
-#include "kinematics/robot_model.h"
-#include "kinematics/rotary_table.h"
-#include "kinematics/shape.h"
-#include "scanner/camera_image.h"
-#include "scanner/laser_model.h"
+#include <scanplan/kinematics/cell.h>
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/kinematics/robot_model.h>
+#include <scanplan/kinematics/rotary_table.h>
+#include <scanplan/kinematics/shape.h>
+#include <scanplan/scanner/camera_image.h>
+#include <scanplan/scanner/laser_model.h>
 
 namespace scanplan::scanner {
 

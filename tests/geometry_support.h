@@ -4,7 +4,7 @@
 // test_cli_verify), and small meshes with known answers.
 #include <Eigen/Core>
 
-#include "kinematics/mesh.h"
+#include <scanplan/kinematics/mesh.h>
 
 namespace scanplan::test {
 

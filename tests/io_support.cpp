@@ -13,7 +13,7 @@
 #include <fmt/format.h>
 #include <png.h>
 
-#include "kinematics/error.h"
+#include <scanplan/kinematics/error.h>
 
 namespace scanplan::test {
 namespace {

@@ -13,9 +13,9 @@
 #include <random>
 #include <vector>
 
-#include "planner/config_map.h"
-#include "planner/dp_planner.h"
-#include "planner/objective.h"
+#include <scanplan/planner/config_map.h>
+#include <scanplan/planner/dp_planner.h>
+#include <scanplan/planner/objective.h>
 
 namespace scanplan::test {
 

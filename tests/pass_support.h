@@ -3,10 +3,10 @@
 // The demo's head and table for the candidate-pass tests (test_pass_speed, test_aimed_spin).
 #include <Eigen/Core>
 
-#include "kinematics/units.h"
-#include "scanner/laser_model.h"
-#include "scanner/part_on_table.h"
-#include "scanner/scan_passes.h"
+#include <scanplan/kinematics/units.h>
+#include <scanplan/scanner/laser_model.h>
+#include <scanplan/scanner/part_on_table.h>
+#include <scanplan/scanner/scan_passes.h>
 
 namespace scanplan::test {
 

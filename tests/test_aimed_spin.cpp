@@ -13,15 +13,15 @@
 #include "geometry_support.h"
 #include "pass_support.h"
 
-#include "kinematics/mesh.h"
-#include "kinematics/pose.h"
-#include "kinematics/units.h"
-#include "scanner/area_coverage.h"
-#include "scanner/laser_model.h"
-#include "scanner/part_on_table.h"
-#include "scanner/pass_selection.h"
-#include "scanner/scan_passes.h"
-#include "scanner/scannability.h"
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/kinematics/pose.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/scanner/area_coverage.h>
+#include <scanplan/scanner/laser_model.h>
+#include <scanplan/scanner/part_on_table.h>
+#include <scanplan/scanner/pass_selection.h>
+#include <scanplan/scanner/scan_passes.h>
+#include <scanplan/scanner/scannability.h>
 
 namespace {
 

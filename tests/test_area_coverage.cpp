@@ -10,7 +10,7 @@
 
 #include "geometry_support.h"
 
-#include "scanner/area_coverage.h"
+#include <scanplan/scanner/area_coverage.h>
 
 namespace {
 

@@ -13,19 +13,19 @@
 
 #include <tbb/task_arena.h>
 
-#include "cli/config/job.h"
-#include "cli/config/problem.h"
-#include "collision/scene.h"
-#include "kinematics/error.h"
-#include "kinematics/mesh.h"
-#include "kinematics/placement.h"
-#include "kinematics/pose.h"
-#include "kinematics/units.h"
-#include "pipeline/plan_scan.h"
-#include "pipeline/setups.h"
-#include "scanner/area_coverage.h"
-#include "scanner/pass_selection.h"
-#include "scanner/scan_passes.h"
+#include <scanplan/collision/scene.h>
+#include <scanplan/config/job.h>
+#include <scanplan/config/to_problem.h>
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/kinematics/placement.h>
+#include <scanplan/kinematics/pose.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/pipeline/plan_scan.h>
+#include <scanplan/pipeline/setups.h>
+#include <scanplan/scanner/area_coverage.h>
+#include <scanplan/scanner/pass_selection.h>
+#include <scanplan/scanner/scan_passes.h>
 #include "test_support.h"
 
 namespace {
@@ -198,7 +198,7 @@ std::filesystem::path writeBoxStl(const std::filesystem::path& file,
 // The demo cell with `mesh` placed on the table, scanned automatically at a 1 mm point spacing
 // on one branch (fast enough for a unit test).
 pipeline::ScanProblem autoProblem(const std::filesystem::path& mesh) {
-  return cli::toProblem(cli::loadJob(
+  return config::toProblem(config::loadJob(
       test::sourceDir() / "data/jobs/demo_rings.yaml",
       {"part.mesh=" + mesh.string(), "part.place=table", "scan.paths=[]",
        "scan.auto={point_spacing_mm: 1.0, sample_spacing_mm: 4}", "scan.dt_s=0.2",
@@ -295,12 +295,12 @@ TEST(AutoScan, ASecondSetupTurnsTheCubeOverAndBothCoverItAll) {
   std::filesystem::remove_all(dir);
 }
 
-// Work that scales with the input is estimated before it starts (issue 17): a ring at 1e-6 °/s,
+// Work that scales with the input is estimated before it starts: a ring at 1e-6 °/s,
 // a raster with a kilometre of lead, a part in mm declared in metres.
 TEST(AutoScan, OversizedWorkIsRefusedBeforeItStarts) {
   const auto error = [](const std::string& job, const std::vector<std::string>& set) {
     try {
-      pipeline::planScan(cli::toProblem(cli::loadJob(test::sourceDir() / job, set)));
+      pipeline::planScan(config::toProblem(config::loadJob(test::sourceDir() / job, set)));
     } catch (const InputError& e) {
       return std::string(e.what());
     }

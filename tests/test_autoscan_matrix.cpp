@@ -9,10 +9,10 @@
 
 #include <gtest/gtest.h>
 
-#include "cli/config/job.h"
-#include "cli/config/problem.h"
-#include "kinematics/trajectory.h"
-#include "pipeline/plan_scan.h"
+#include <scanplan/config/job.h>
+#include <scanplan/config/to_problem.h>
+#include <scanplan/kinematics/trajectory.h>
+#include <scanplan/pipeline/plan_scan.h>
 #include "test_support.h"
 #include "tests/part_support.h"
 
@@ -44,7 +44,7 @@ pipeline::ScanProblem problem(const fs::path& mesh, const std::vector<std::strin
                                "map.angle_step_deg=5",
                                "scanner.rays_per_profile=60"};
   set.insert(set.end(), extra.begin(), extra.end());
-  return cli::toProblem(cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", set));
+  return config::toProblem(config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", set));
 }
 
 std::string robot(const std::string& file) {

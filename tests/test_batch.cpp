@@ -1,5 +1,5 @@
 // `scanplan batch` end to end on the lightened demo (test::kLightDemo, simulation off, each case
-// a fraction of a second): the issue's small sweep with seeds, the planner's and the DP
+// a fraction of a second): a small sweep with seeds, the planner's and the DP
 // yardstick's times, resume after a batch killed mid-run, shards merged, failing cases as rows
 // and the exit code they give, labelled PNG plots read back, the OMPL benchmark log through
 // OMPL's own script (when installed), and sweep errors before anything runs.
@@ -27,8 +27,8 @@
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
+#include <scanplan/config/job.h>
 #include "cli/batch/batch.h"
-#include "cli/config/job.h"
 #include "cli/plot/image_io.h"
 #include "cli_support.h"
 #include "image_support.h"
@@ -56,7 +56,7 @@ std::string sweepHeader(const std::vector<std::string>& set = {}) {
   return text;
 }
 
-// The issue's small sweep: 2 planners x 3 horizons x 2 seeds, each twice (repeats) = 24 cases
+// A small sweep: 2 planners x 3 horizons x 2 seeds, each twice (repeats) = 24 cases
 // on one map. The horizon is ray's only: OMPL's runs at the three horizons are re-runs too.
 const std::string kSmallSweep =
     "vary:\n"
@@ -376,7 +376,7 @@ TEST_F(Batch, SmallSweepGivesOneRowPerCaseSeedAndRepeatWithTheDpGap) {
 // larger than dp_s.
 TEST_F(Batch, PlanTimeIsThePlannersOwnAndDpTimeTheYardsticks) {
   // DP on a grid fine enough to take several times Ray's time (~8× here; at 8 subdivisions the
-  // DP of issue 20 can finish before Ray), so that plan_s < dp_s tells the two apart.
+  // step-major DP can finish before Ray), so that plan_s < dp_s tells the two apart.
   const fs::path sweep = writeSweep(
       "cases:\n  - {planner.method: ray}\n  - {planner.method: ray, planner.dp_gap: false}\n"
       "  - {planner.method: dp}\n",
@@ -515,7 +515,7 @@ TEST_F(Batch, SeedsGoIntoEverySeedKeyOfTheJob) {
     EXPECT_EQ(c.seed, c.index / 2 % 2 == 0 ? 7 : 107) << "planner, then seed, then repeat";
     EXPECT_EQ(c.repeat, static_cast<int>(c.index % 2));
     ids.insert(c.id);
-    std::istringstream yaml(cli::jobToYaml(cli::loadJob(c.job_file, c.overrides)));
+    std::istringstream yaml(config::jobToYaml(config::loadJob(c.job_file, c.overrides)));
     int seeds = 0;
     for (std::string line; std::getline(yaml, line);) {
       const std::size_t colon = line.find(':');
@@ -528,11 +528,11 @@ TEST_F(Batch, SeedsGoIntoEverySeedKeyOfTheJob) {
   EXPECT_EQ(ids.size(), 8u) << "a distinct case id per planner, seed and repeat";
 }
 
-// The README's sweep example, as written there: it loads (every value checked on the demo job)
+// The sweep example of docs/commands.md, as written there: it loads (every value checked on the demo job)
 // and expands to (2 planners x 3 horizons + 1 explicit case) x 3 seeds.
-// The README's sweep example is the bundled data/sweeps/planners.yaml, word for word, and loads.
+// The sweep example of docs/commands.md is the bundled data/sweeps/planners.yaml, word for word, and loads.
 // A range whose step is tiny asks for more values than any integer holds: refused with the
-// count, before it is cast (issue 17: float-cast-overflow).
+// count, before it is cast (float-cast-overflow).
 TEST_F(Batch, ARangeOfTooManyValuesIsRefusedWithItsCount) {
   for (const char* range : {"{from: 0, to: 1, step: 1e-300}", "{from: -1e9, to: 1e9, step: 1}"}) {
     const fs::path file = writeSweep(std::string("vary:\n  planner.ray.horizon: ") + range + "\n");
@@ -547,8 +547,8 @@ TEST_F(Batch, ARangeOfTooManyValuesIsRefusedWithItsCount) {
   }
 }
 
-TEST_F(Batch, ReadmeSweepExampleIsTheBundledSweepAndLoads) {
-  const std::string readme = readFile(sourceDir() / "README.md");
+TEST_F(Batch, DocsSweepExampleIsTheBundledSweepAndLoads) {
+  const std::string readme = readFile(sourceDir() / "docs" / "commands.md");
   const std::size_t section = readme.find("### `scanplan batch");
   ASSERT_NE(section, std::string::npos);
   const std::size_t begin = readme.find("```yaml\n", section);
@@ -585,7 +585,7 @@ TEST_F(Batch, ShardsMergedEqualTheUnshardedRun) {
   EXPECT_TRUE(fs::exists(dir_ / "merged" / "summary.md"));
 }
 
-// The shards through GNU parallel, as across hosts (README), merged: the unsharded run.
+// The shards through GNU parallel, as across hosts (docs/commands.md), merged: the unsharded run.
 TEST_F(Batch, ShardsThroughGnuParallelEqualTheUnshardedRun) {
   if (std::system("command -v parallel >/dev/null 2>&1") != 0) {
     GTEST_SKIP() << "GNU parallel is not installed";
@@ -779,7 +779,7 @@ TEST_F(Batch, BadKeyInTheSweepFailsBeforeAnythingRuns) {
   EXPECT_TRUE(contains(value.err, "planner.ray.horizon")) << value.err;
   EXPECT_FALSE(fs::exists(out));
 
-  // A list as a key and a repeated key were "internal error" (issue 17).
+  // A list as a key and a repeated key were "internal error".
   const Result list_key = batch(writeSweep("vary:\n  [planner.method]: [ray]\n"), out);
   EXPECT_EQ(list_key.exit_code, 4) << describe(list_key);
   EXPECT_TRUE(contains(list_key.err, "vary: a list used as a key")) << list_key.err;
@@ -915,7 +915,7 @@ TEST_F(Batch, ReportSurvivesDegenerateValues) {
   ASSERT_EQ(none.exit_code, 0) << describe(none);
 }
 
-// Robustness catalogue (issue 17): `batch report` and `batch merge` skipped lines that are not
+// Robustness catalogue: `batch report` and `batch merge` skipped lines that are not
 // rows, and rows of the wrong types, without a word (exit 0): the report left cases out.
 TEST_F(Batch, ResultLinesThatAreNotRowsAreRefusedNamingTheLine) {
   const fs::path jsonl = dir_ / "results.jsonl";
@@ -956,7 +956,7 @@ TEST_F(Batch, ResultLinesThatAreNotRowsAreRefusedNamingTheLine) {
   EXPECT_TRUE(contains(report.err, "results.jsonl:2:")) << report.err;
 }
 
-// Robustness catalogue (issue 17): repeats: 1000000000 ran out of memory making the cases
+// Robustness catalogue: repeats: 1000000000 ran out of memory making the cases
 // (an internal error), and a range with a tiny step overflowed its count and ran one case.
 TEST_F(Batch, HugeSweepsAreRefusedBeforeTheCasesAreMade) {
   for (const auto& [body, expect] :

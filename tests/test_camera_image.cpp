@@ -1,11 +1,11 @@
 // The image-based scanner simulation's parts (scanner/camera_image.h, seed §5.3): the camera
 // model and Eq. 4, sub-pixel stripe detection, and rendering on scenes with a known answer.
-#include "scanner/camera_image.h"
+#include <scanplan/scanner/camera_image.h>
 
-#include "kinematics/mesh.h"
-#include "kinematics/shape.h"
-#include "scanner/laser_model.h"
-#include "scanner/raycaster.h"
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/kinematics/shape.h>
+#include <scanplan/scanner/laser_model.h>
+#include <scanplan/scanner/raycaster.h>
 
 #include <gtest/gtest.h>
 

@@ -4,10 +4,10 @@
 // query (shapeDistance) must match the reference below its bound and report "beyond" at or
 // above it.
 
-#include "collision/fcl_geometry.h"
+#include <scanplan/collision/fcl_geometry.h>
 
-#include "kinematics/mesh.h"
-#include "kinematics/shape.h"
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/kinematics/shape.h>
 
 #include <gtest/gtest.h>
 

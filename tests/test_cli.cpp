@@ -18,14 +18,14 @@
 
 #include <nlohmann/json.hpp>
 
+#include <scanplan/config/job.h>
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/trajectory.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/programs/programs.h>
 #include "cli/commands/commands.h"
-#include "cli/config/job.h"
 #include "cli/io/output.h"
-#include "cli/programs/programs.h"
 #include "cli_support.h"
-#include "kinematics/error.h"
-#include "kinematics/trajectory.h"
-#include "kinematics/units.h"
 #include "test_support.h"
 
 namespace {
@@ -537,7 +537,7 @@ TEST_F(Cli, PlanWritesTheResolvedJob) {
   EXPECT_EQ(body(again.out), body(shown.out));
 }
 
-// Issue 19's acceptance: the demo's programs, in every language, switch the trigger at each
+// The demo's programs, in every language, switch the trigger at each
 // scan pass's first and last sample, set the tool (the mount, T(0, 0, 110 mm)) and the payload
 // (0.9 kg at the housing's centre: its box centre (50, 0, -25) mm in the laser frame, 110 mm up
 // the flange), and last the plan's time within 1 % in their own timing model (read back).
@@ -555,19 +555,19 @@ TEST_F(Cli, PlanDemoWritesControllerReadyProgramsInEveryLanguage) {
   }
   ASSERT_GE(passes, 3u);
   for (const char* file : {"scan.v2", "scan.src", "scan.mod", "scan.script"}) {
-    const auto format = scanplan::cli::programFormatOfFile(file);
+    const auto format = scanplan::programs::programFormatOfFile(file);
     ASSERT_TRUE(format) << file;
-    const scanplan::cli::ProgramReading back =
-        scanplan::cli::readProgram(readFile(out / "programs" / file), *format, file);
+    const scanplan::programs::ProgramReading back =
+        scanplan::programs::readProgram(readFile(out / "programs" / file), *format, file);
     ASSERT_TRUE(back.tool) << file;
     EXPECT_LT((back.tool->translation() - Eigen::Vector3d(0, 0, 0.110)).norm(), 1e-6) << file;
     EXPECT_LT((back.tool->linear() - Eigen::Matrix3d::Identity()).norm(), 1e-7) << file;
-    if (*format != scanplan::cli::ProgramFormat::kVplus) {  // V+ states it in a comment only
+    if (*format != scanplan::programs::ProgramFormat::kVplus) {  // V+ states it in a comment only
       EXPECT_NEAR(back.payload_kg, 0.9, 1e-9) << file;
       EXPECT_LT((back.payload_cog - Eigen::Vector3d(0.050, 0.0, 0.085)).norm(), 1e-6) << file;
     }
     std::size_t on = 0, off = 0;
-    for (const scanplan::cli::TriggerSwitch& s : back.triggers) {
+    for (const scanplan::programs::TriggerSwitch& s : back.triggers) {
       EXPECT_EQ(s.output, 1) << file;
       (s.on ? on : off) += 1;
     }
@@ -651,8 +651,8 @@ TEST_F(Cli, CheckAtATimeSolvesTheScanPathSample) {
   const std::vector<double> joints = array(run.out, "joints_deg");
   ASSERT_EQ(joints.size(), 6u) << run.out;
   using namespace scanplan;
-  const cli::JobSpec job = cli::loadJob(kDemoJob);
-  const kinematics::CellModel cell = cli::buildCell(job);
+  const config::JobSpec job = config::loadJob(kDemoJob);
+  const kinematics::CellModel cell = config::buildCell(job);
   const kinematics::ScanPath path = cli::generateScanPath(job, cell).path;
   const auto k = static_cast<std::size_t>(std::llround(5.0 / path.dt));
   ASSERT_LT(k, path.samples.size());
@@ -814,7 +814,7 @@ TEST_F(Cli, MeshErrorsNameTheJobAsGiven) {
   EXPECT_FALSE(contains(run.err, "error: " + job.string())) << run.err;
 }
 
-// Robustness catalogue (issue 17): fk and check took --joints=1e300,… (fk printed a pose).
+// Robustness catalogue: fk and check took --joints=1e300,… (fk printed a pose).
 TEST(CliArguments, NumberListsRefuseNumbersBeyondTheLimit) {
   EXPECT_TRUE(throwsInputError(
       [] { scanplan::cli::parseNumberList("1e300,0,0,0,0,0", 6, "--joints", "joints"); },

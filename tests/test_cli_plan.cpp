@@ -19,12 +19,12 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
-#include "cli/config/job.h"
-#include "cli/config/problem.h"
+#include <scanplan/config/job.h>
+#include <scanplan/config/to_problem.h>
+#include <scanplan/kinematics/trajectory.h>
+#include <scanplan/kinematics/units.h>
 #include "cli/plot/image_io.h"
 #include "cli_support.h"
-#include "kinematics/trajectory.h"
-#include "kinematics/units.h"
 #include "test_support.h"
 #include "tests/io_support.h"
 
@@ -64,8 +64,8 @@ class CliPlan : public Cli {
 // Every sample's joints put the scanner where the path wants it: base ← flange ← sensor equals
 // table ← part ← sensor, within 1e-6 mm (the CSV carries 12 significant digits).
 void expectReachesTargets(const kinematics::Trajectory& trajectory) {
-  const cli::JobSpec job = cli::loadJob(kDemoJob);
-  const kinematics::CellModel cell = cli::buildCell(job);
+  const config::JobSpec job = config::loadJob(kDemoJob);
+  const kinematics::CellModel cell = config::buildCell(job);
   double worst_mm = 0.0, worst_rot = 0.0;
   for (const auto& s : trajectory.samples) {
     const Eigen::Isometry3d a = cell.X_WB * cell.robot.fk(s.q) * cell.scanner.X_FS;
@@ -78,7 +78,7 @@ void expectReachesTargets(const kinematics::Trajectory& trajectory) {
 }
 
 // A second run into a folder another run is writing is refused, naming the holder's pid; the
-// lock of a run that was killed is stale and taken over (issue 17).
+// lock of a run that was killed is stale and taken over.
 // An output folder that is, holds or lies inside an input is refused before anything is written,
 // naming the input: the job (plan into the job's own folder), the part mesh, the trajectory
 // (simulate), the URDF (robot import onto itself). The inputs are untouched.
@@ -456,27 +456,27 @@ namespace {
 // refused naming the key; rays farther apart than the coverage spacing are a warning that gives
 // the real pitch (the line's width at mid depth over the gaps between rays) and the rays needed.
 TEST(ScannerResolution, OneRayIsRefusedAndSparseRaysAreWarnedWithTheRealPitch) {
-  cli::JobSpec job = cli::loadJob(kDemoJob, {"scanner.rays_per_profile=1"});
+  config::JobSpec job = config::loadJob(kDemoJob, {"scanner.rays_per_profile=1"});
   try {
-    (void)cli::toProblem(job);
+    (void)config::toProblem(job);
     ADD_FAILURE() << "one ray per profile was accepted";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("scanner.rays_per_profile: 1"), std::string::npos)
         << e.what();
     EXPECT_NE(std::string(e.what()).find("demo_rings.yaml"), std::string::npos) << e.what();
   }
-  job = cli::loadJob(kDemoJob, {"scanner.rays_per_profile=11"});
-  const kinematics::CellModel cell = cli::buildCell(job);
-  pipeline::ScanProblem problem = cli::toProblem(job, cell, kinematics::TriangleMesh{});
+  job = config::loadJob(kDemoJob, {"scanner.rays_per_profile=11"});
+  const kinematics::CellModel cell = config::buildCell(job);
+  pipeline::ScanProblem problem = config::toProblem(job, cell, kinematics::TriangleMesh{});
   ASSERT_TRUE(problem.simulation);
   const scanner::LaserWindow w = scanner::laserWindow(problem.optics);
   const double pitch = 2.0 * w.halfWidth(0.5 * (w.z_min + w.z_max)) / 10.0;
   problem.simulation->point_spacing = 0.0;  // measured at the rays' own pitch: no warning
-  EXPECT_EQ(cli::checkScannerResolution(job, problem), "");
+  EXPECT_EQ(config::checkScannerResolution(job, problem), "");
   problem.simulation->point_spacing = 1.01 * pitch;
-  EXPECT_EQ(cli::checkScannerResolution(job, problem), "");
+  EXPECT_EQ(config::checkScannerResolution(job, problem), "");
   problem.simulation->point_spacing = 0.5 * pitch;
-  const std::string warning = cli::checkScannerResolution(job, problem);
+  const std::string warning = config::checkScannerResolution(job, problem);
   EXPECT_NE(warning.find(fmt::format("{:.2f} mm apart", toMm(pitch))), std::string::npos)
       << warning;
   EXPECT_NE(warning.find(" 21 rays match"), std::string::npos) << warning;

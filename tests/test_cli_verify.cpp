@@ -17,15 +17,15 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
-#include "cli/config/job.h"
-#include "cli/config/problem.h"
+#include <scanplan/config/job.h>
+#include <scanplan/config/to_problem.h>
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/kinematics/trajectory.h>
+#include <scanplan/kinematics/units.h>
 #include "cli/io/program_files.h"
 #include "cli/report/verify_report.h"
 #include "cli_support.h"
 #include "geometry_support.h"
-#include "kinematics/mesh.h"
-#include "kinematics/trajectory.h"
-#include "kinematics/units.h"
 #include "test_support.h"
 #include "tests/io_support.h"
 
@@ -84,8 +84,8 @@ TEST_F(CliVerify, ValidPlanValidatesAndWritesItsReport) {
 TEST_F(CliVerify, ObstacleInThePathIsACollisionWithTimeAndContactPoint) {
   const fs::path file = plannedTrajectory();
   const kinematics::Trajectory t = kinematics::parseTrajectoryCsv(readFile(file), file.string());
-  const cli::JobSpec job = cli::loadJob(kDemoJob, kLightDemo);
-  const kinematics::CellModel cell = cli::buildCell(job);
+  const config::JobSpec job = config::loadJob(kDemoJob, kLightDemo);
+  const kinematics::CellModel cell = config::buildCell(job);
   const auto& mid = t.samples[t.samples.size() / 2];
   // The scanner's origin in the world at that sample, 40 mm back along its axis (inside the
   // housing, clear of the part).
@@ -133,7 +133,7 @@ TEST_F(CliVerify, MalformedTrajectoryRowIsAnInputErrorNamingTheLine) {
   EXPECT_TRUE(tmpFiles(dir_).empty());
 }
 
-// Robustness catalogue (issue 17): a trajectory too long to densify at the frame rate was
+// Robustness catalogue: a trajectory too long to densify at the frame rate was
 // refused without naming the trajectory file.
 TEST_F(CliVerify, TrajectoryTooLongToCheckIsAnInputErrorNamingItsFile) {
   std::string text = readFile(plannedTrajectory());
@@ -164,8 +164,8 @@ TEST_F(CliVerify, SimulatedCloudLiesOnThePartAndCoverageIsReported) {
   EXPECT_EQ(cloud.format, "binary_little_endian");
   // Points in the part frame, mm: inside the part's box grown by a hair, or on the table top
   // (z ≈ 0) around it.
-  const cli::JobSpec job = cli::loadJob(kDemoJob);
-  const kinematics::CellModel cell = cli::buildCell(job);
+  const config::JobSpec job = config::loadJob(kDemoJob);
+  const kinematics::CellModel cell = config::buildCell(job);
   const auto part = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options).mesh;
   const Eigen::AlignedBox3d box = part.bounds();
   std::size_t on_part_box = 0, on_table = 0;
@@ -262,8 +262,8 @@ TEST_F(CliVerify, AreaCoverageRecomputedFromTheCloudFileMatchesTheReport) {
     if (std::abs(p.z()) >= 1e-3 && cloud.column("scalar_incidence_deg")[i] <= 60.0)
       voxels[key(p, 0, 0, 0)].push_back(p);
   }
-  const cli::JobSpec job = cli::loadJob(kDemoJob);
-  const kinematics::CellModel cell = cli::buildCell(job);
+  const config::JobSpec job = config::loadJob(kDemoJob);
+  const kinematics::CellModel cell = config::buildCell(job);
   const auto part = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options).mesh;
   std::vector<double> areas;
   for (const auto& t : part.triangles) {
@@ -331,8 +331,8 @@ TEST_F(CliVerify, PlannedCloudPointsLieOnThePartSurface) {
             0);
   std::ifstream in(out / "cloud.ply", std::ios::binary);
   const test::PlyVertices cloud = test::readPlyVertices(in, "cloud.ply");
-  const cli::JobSpec job = cli::loadJob(kDemoJob);
-  const kinematics::CellModel cell = cli::buildCell(job);
+  const config::JobSpec job = config::loadJob(kDemoJob);
+  const kinematics::CellModel cell = config::buildCell(job);
   const auto part = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options).mesh;
   std::size_t checked = 0;
   double worst_mm = 0.0;
@@ -393,8 +393,8 @@ TEST_F(CliVerify, ExportedProgramsReadBackAndValidate) {
 // A URScript program over the size a UR controller loads: `export` refuses it naming the limit
 // (exit 4, nothing written); `plan` writes the rest of its programs and says which it left out.
 TEST_F(CliVerify, AnOversizeUrscriptIsRefusedByExportAndLeftOutByPlan) {
-  const cli::JobSpec job = cli::loadJob(kDemoJob);
-  const pipeline::ScanProblem problem = cli::toProblem(job);
+  const config::JobSpec job = config::loadJob(kDemoJob);
+  const pipeline::ScanProblem problem = config::toProblem(job);
   kinematics::Trajectory long_run;
   for (int k = 0; k < 9000; ++k) {  // about 130 bytes a row: 1.2 MB
     kinematics::TrajectorySample s;

@@ -10,10 +10,10 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "cli/config/job.h"
+#include <scanplan/collision/clearance.h>
+#include <scanplan/collision/scene.h>
+#include <scanplan/config/job.h>
 #include "cli_support.h"
-#include "collision/clearance.h"
-#include "collision/scene.h"
 #include "test_support.h"
 
 namespace {
@@ -33,9 +33,9 @@ struct Move {
 
 // A constant-speed move of joint 2 or 3 from a folded pose that reaches a contact after 2–6 s.
 std::optional<Move> contactMove() {
-  const cli::JobSpec job = cli::loadJob(kJob, kLightDemo);
-  const kinematics::CellModel cell = cli::buildCell(job);
-  const collision::Scene scene(cell, cli::clearanceConfig(job));
+  const config::JobSpec job = config::loadJob(kJob, kLightDemo);
+  const kinematics::CellModel cell = config::buildCell(job);
+  const collision::Scene scene(cell, config::clearanceConfig(job));
   collision::ClearanceEvaluator evaluator(scene);
   JointVector start;
   start << 0.0, -60.0, 150.0, 0.0, 60.0, 0.0;

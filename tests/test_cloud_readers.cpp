@@ -1,6 +1,6 @@
 // The clouds in the tools their users open them with: CloudCompare's command line, MeshLab's
 // server mode, Open3D (both readers) and PCL each load cloud.ply, uncovered.ply and coverage.ply
-// written by scanner/cloud_io.h, and keep the per-point fields the README says they keep, with
+// written by scanner/cloud_io.h, and keep the per-point fields docs/outputs.md says they keep, with
 // the written values. Each test skips where its tool is not installed (Debian: cloudcompare,
 // meshlab with xvfb, python3-open3d, pcl-tools; ./bootstrap.sh installs them).
 #include <gtest/gtest.h>
@@ -17,9 +17,9 @@
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
-#include "kinematics/units.h"
-#include "scanner/cloud_io.h"
-#include "scanner/coverage.h"
+#include <scanplan/kinematics/units.h>
+#include <scanplan/scanner/cloud_io.h>
+#include <scanplan/scanner/coverage.h>
 #include "tests/io_support.h"
 #include "tests/test_support.h"
 
@@ -168,7 +168,7 @@ TEST_F(CloudReaders, MeshLabKeepsTheQualityAndTheNormals) {
 }
 
 // Open3D: the tensor reader keeps every property with its values; the usual o3d.io reader keeps
-// the points and normals only (the README says so and names the tensor reader).
+// the points and normals only (docs/outputs.md says so and names the tensor reader).
 TEST_F(CloudReaders, Open3dTensorReaderKeepsEveryFieldAndTheLegacyOneThePoints) {
   if (!test::runCommand("/usr/bin/python3 -c 'import open3d' 2>/dev/null && echo yes")
            .starts_with("yes")) {

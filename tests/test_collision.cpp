@@ -10,17 +10,17 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include "cli/config/job.h"
-#include "collision/chain_levers.h"
-#include "collision/clearance.h"
-#include "collision/fcl_geometry.h"
-#include "collision/scene.h"
-#include "collision/self_collision.h"
-#include "collision/self_pair_grid.h"
-#include "kinematics/error.h"
-#include "kinematics/pose.h"
-#include "kinematics/ramp.h"
-#include "kinematics/units.h"
+#include <scanplan/collision/chain_levers.h>
+#include <scanplan/collision/clearance.h>
+#include <scanplan/collision/fcl_geometry.h>
+#include <scanplan/collision/scene.h>
+#include <scanplan/collision/self_collision.h>
+#include <scanplan/collision/self_pair_grid.h>
+#include <scanplan/config/job.h>
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/pose.h>
+#include <scanplan/kinematics/ramp.h>
+#include <scanplan/kinematics/units.h>
 #include "tests/test_support.h"
 
 namespace scanplan::collision {
@@ -194,8 +194,8 @@ INSTANTIATE_TEST_SUITE_P(WorldFrames, AnalyticPrimitives, ::testing::Values(0, 1
 
 // The bundled demo cell, built through the job file as a user would.
 struct DemoCell {
-  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml");
-  Scene scene{cli::buildCell(job), cli::clearanceConfig(job)};
+  config::JobSpec job = config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml");
+  Scene scene{config::buildCell(job), config::clearanceConfig(job)};
 };
 
 // How far a factor may move when its distance moves by kSameTol (the ramp's slope there),
@@ -336,7 +336,7 @@ TEST(Clearance, DefaultPairsSkipRigidAndConsecutiveBodies) {
 
 TEST(Clearance, RulesExcludeIncludeAndSetThresholdsByGroup) {
   DemoCell demo;
-  ClearanceConfig config = cli::clearanceConfig(demo.job);
+  ClearanceConfig config = config::clearanceConfig(demo.job);
   config.rules.push_back({"scanner", "*", PairRule::Action::kSet, 0.001, 0.040, 2.0});
   config.rules.push_back({"link3", "robot", PairRule::Action::kExclude});
   config.rules.push_back({"link5", "link6", PairRule::Action::kInclude});  // consecutive: off
@@ -482,8 +482,9 @@ TEST(Clearance, ThreadsSharingOneSceneGetIdenticalResults) {
 // keys; one where it is clear of them (the demo, a post beside the table) is not.
 TEST(Scene, ATableOverlappingTheBaseOrAWorldObstacleIsRefused) {
   const auto scene = [](const std::vector<std::string>& set) {
-    const cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", set);
-    return Scene(cli::buildCell(job), cli::clearanceConfig(job));
+    const config::JobSpec job =
+        config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", set);
+    return Scene(config::buildCell(job), config::clearanceConfig(job));
   };
   EXPECT_NO_THROW(scene({}));
   const std::string post =
@@ -528,15 +529,15 @@ TEST(Scene, CornerBoxesWithNegativeSizesAreNormalised) {
          "  - {name: post, type: box, corner_mm: [300, 300, 0], size_mm: [-100, -50, 200]}\n"
          "  - {name: jig, carrier: table, type: sphere, radius_mm: 20, pose: {xyz_mm: [0, 150, "
          "0]}}\n";
-  const cli::JobSpec spec = cli::loadJob(job);
-  const kinematics::CellModel cell = cli::buildCell(spec);
+  const config::JobSpec spec = config::loadJob(job);
+  const kinematics::CellModel cell = config::buildCell(spec);
   ASSERT_EQ(cell.obstacles.size(), 2u);
   const auto& box = std::get<kinematics::Box>(cell.obstacles[0].shapes[0].geometry);
   EXPECT_TRUE(box.size.isApprox(Eigen::Vector3d(0.1, 0.05, 0.2), 1e-12));
   EXPECT_TRUE(cell.obstacles[0].shapes[0].X_BG.translation().isApprox(
       Eigen::Vector3d(0.25, 0.275, 0.1), 1e-12));
   EXPECT_EQ(cell.obstacles[1].carrier, kinematics::Carrier::kTable);
-  const Scene scene(cell, cli::clearanceConfig(spec));
+  const Scene scene(cell, config::clearanceConfig(spec));
   EXPECT_GE(scene.bodyIndex("post"), 0);
   EXPECT_GE(scene.bodyIndex("jig"), 0);
   fs::remove_all(dir);
@@ -579,7 +580,7 @@ TEST(Clearance, ObstaclesOnTheTableTurnWithItAndWorldOnesStayPut) {
   cell.obstacles.push_back(
       {"jig", kinematics::Carrier::kTable, {sphere(r_jig, X_WR(theta0).inverse() * jig_W)}});
   cell.obstacles.push_back({"pillar", kinematics::Carrier::kWorld, {sphere(r_pillar, pillar_W)}});
-  ClearanceConfig config = cli::clearanceConfig(demo.job);
+  ClearanceConfig config = config::clearanceConfig(demo.job);
   config.rules.push_back({"scanner", "obstacles", PairRule::Action::kSet, 0.002, 0.080, 1.0});
   const Scene scene(cell, config);
 
@@ -866,18 +867,20 @@ TEST(AllowedCollisions, ARobotsAllowedPairIsNotCheckedUnlessAJobIncludesIt) {
     }
     return false;
   };
-  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml");
-  ASSERT_TRUE(hasPair(Scene(cli::buildCell(job), cli::clearanceConfig(job)), "link4", "link6"));
+  config::JobSpec job = config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml");
+  ASSERT_TRUE(
+      hasPair(Scene(config::buildCell(job), config::clearanceConfig(job)), "link4", "link6"));
   job.robot.allowed_collisions = {{"link6", "link4"}};
-  const Scene allowed(cli::buildCell(job), cli::clearanceConfig(job));
+  const Scene allowed(config::buildCell(job), config::clearanceConfig(job));
   EXPECT_FALSE(hasPair(allowed, "link4", "link6"));
   EXPECT_TRUE(hasPair(allowed, "link3", "link6"));
-  cli::PairRuleSpec include;
+  config::PairRuleSpec include;
   include.a = "link4";
   include.b = "link6";
   include.include = true;
   job.constraints.clearance.pairs.push_back(include);
-  EXPECT_TRUE(hasPair(Scene(cli::buildCell(job), cli::clearanceConfig(job)), "link4", "link6"));
+  EXPECT_TRUE(
+      hasPair(Scene(config::buildCell(job), config::clearanceConfig(job)), "link4", "link6"));
 
   const fs::path dir = fs::temp_directory_path() / ("scanplan_allowed_" + std::to_string(getpid()));
   fs::create_directories(dir);
@@ -887,7 +890,7 @@ TEST(AllowedCollisions, ARobotsAllowedPairIsNotCheckedUnlessAJobIncludesIt) {
     out << in.rdbuf() << "allowed_collisions: [[link4, link9]]\n";
   }
   try {
-    cli::loadRobotFile(dir / "robot.yaml");
+    config::loadRobotFile(dir / "robot.yaml");
     FAIL() << "an unknown link was accepted";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("allowed_collisions"), std::string::npos) << e.what();
@@ -903,7 +906,7 @@ TEST(AllowedCollisions, ARobotsAllowedPairIsNotCheckedUnlessAJobIncludesIt) {
       out << in.rdbuf() << "allowed_collisions: " << bad << "\n";
     }
     try {
-      cli::loadRobotFile(dir / "robot.yaml");
+      config::loadRobotFile(dir / "robot.yaml");
       ADD_FAILURE() << bad << " was accepted";
     } catch (const InputError& e) {
       EXPECT_NE(std::string(e.what()).find("allowed_collisions"), std::string::npos) << e.what();
@@ -917,9 +920,9 @@ TEST(AllowedCollisions, ARobotsAllowedPairIsNotCheckedUnlessAJobIncludesIt) {
 // a 150 mm sphere around the wrist centre and link 4, which ends there, meets it in every
 // configuration; allowed in the robot, the pair is reported as allowed.
 TEST(SelfCollisionSurvey, APairThatOverlapsByDesignCollidesInEverySample) {
-  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml");
+  config::JobSpec job = config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml");
   const auto survey = [&] {
-    return surveySelfCollisions(cli::buildRobotModel(job.robot, "test"), 2000, 5);
+    return surveySelfCollisions(config::buildRobotModel(job.robot, "test"), 2000, 5);
   };
   const auto find = [](const SelfSurvey& s, const std::string& a, const std::string& b) {
     for (const SelfPairSurvey& p : s.pairs) {
@@ -937,7 +940,7 @@ TEST(SelfCollisionSurvey, APairThatOverlapsByDesignCollidesInEverySample) {
     }
     EXPECT_EQ(p.colliding > 0, p.min_distance == 0.0) << p.a << " - " << p.b;
   }
-  cli::ShapeSpec sphere;
+  config::ShapeSpec sphere;
   sphere.type = "sphere";
   sphere.radius_mm = 150;
   sphere.pose.xyz_mm = {0, 0, -80};  // the wrist centre, 80 mm behind the flange

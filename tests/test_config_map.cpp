@@ -24,19 +24,19 @@
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
-#include "cli/config/job.h"
-#include "cli/config/spec.h"
+#include <scanplan/collision/map_clearance.h>
+#include <scanplan/collision/scene.h>
+#include <scanplan/config/job.h>
+#include <scanplan/config/spec.h>
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/kinematics/shape.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/planner/config_map.h>
+#include <scanplan/planner/constraints.h>
+#include <scanplan/scanner/path_generators.h>
+#include <scanplan/scanner/raycaster.h>
 #include "cli/plot/image_io.h"
-#include "collision/map_clearance.h"
-#include "collision/scene.h"
-#include "kinematics/error.h"
-#include "kinematics/mesh.h"
-#include "kinematics/shape.h"
-#include "kinematics/units.h"
-#include "planner/config_map.h"
-#include "planner/constraints.h"
-#include "scanner/path_generators.h"
-#include "scanner/raycaster.h"
 #include "tests/image_support.h"
 #include "tests/io_support.h"
 #include "tests/test_support.h"
@@ -64,9 +64,9 @@ constexpr double kFloatRel = 1e-6;
 // The demo cell with a short path: one 90° ring at 40°/s sampled every 0.25 s (10 samples),
 // 10° angle steps (36 angles), every branch: 2 880 cells.
 
-cli::JobSpec shortDemoJob(const std::vector<std::string>& overrides = {}) {
-  cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", overrides);
-  cli::PathElementSpec ring;
+config::JobSpec shortDemoJob(const std::vector<std::string>& overrides = {}) {
+  config::JobSpec job = config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", overrides);
+  config::PathElementSpec ring;
   ring.type = "ring";
   ring.height_mm = 50.0;
   ring.tilt_deg = 20.0;
@@ -79,11 +79,11 @@ cli::JobSpec shortDemoJob(const std::vector<std::string>& overrides = {}) {
   return job;
 }
 
-kinematics::ScanPath jobPath(const cli::JobSpec& job, const kinematics::CellModel& cell) {
+kinematics::ScanPath jobPath(const config::JobSpec& job, const kinematics::CellModel& cell) {
   const auto part = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
   const scanner::Raycaster raycaster(part.mesh);
-  return scanner::generatePath(cli::pathRequest(job), part.mesh, raycaster,
-                               scanner::laserWindow(cli::laserOptics(job)))
+  return scanner::generatePath(config::pathRequest(job), part.mesh, raycaster,
+                               scanner::laserWindow(config::laserOptics(job)))
       .path;
 }
 
@@ -94,12 +94,12 @@ std::vector<kinematics::IkBranch> allBranches() {
 }
 
 struct DemoMap {
-  cli::JobSpec job = shortDemoJob();
-  kinematics::CellModel cell = cli::buildCell(job);
+  config::JobSpec job = shortDemoJob();
+  kinematics::CellModel cell = config::buildCell(job);
   kinematics::ScanPath path = jobPath(job, cell);
   std::unique_ptr<collision::Scene> scene =
-      std::make_unique<collision::Scene>(cell, cli::clearanceConfig(job));
-  planner::ConstraintSettings settings = cli::constraintSettings(job);
+      std::make_unique<collision::Scene>(cell, config::clearanceConfig(job));
+  planner::ConstraintSettings settings = config::constraintSettings(job);
   planner::MapRequest request = [] {
     planner::MapRequest r;
     r.angle_step = deg(10.0);
@@ -358,7 +358,7 @@ std::string yamlList(const Eigen::Vector3d& v) {
 }
 
 std::string yamlPose(const Eigen::Isometry3d& X) {
-  const cli::PoseSpec p = cli::toPoseSpec(X);
+  const config::PoseSpec p = config::toPoseSpec(X);
   return fmt::format(
       "{{xyz_mm: [{:.17g}, {:.17g}, {:.17g}], rpy_deg: [{:.17g}, {:.17g}, {:.17g}]}}", p.xyz_mm[0],
       p.xyz_mm[1], p.xyz_mm[2], p.rpy_deg[0], p.rpy_deg[1], p.rpy_deg[2]);
@@ -432,20 +432,21 @@ TEST_F(MapJob, ClearanceBandOfAWorldPostAndTheConstantOfATableLidAreAnalytic) {
                 "\n"
                 "        - {xyz_mm: " +
                 yamlList(X_PS2.translation() * 1e3) +
-                ", rpy_deg: " + yamlList(Eigen::Vector3d(cli::toPoseSpec(X_PS).rpy_deg.data())) +
+                ", rpy_deg: " + yamlList(Eigen::Vector3d(config::toPoseSpec(X_PS).rpy_deg.data())) +
                 ", speed_mm_s: 50}\n"
                 "map: {angle_step_deg: 1}\n");
-  const cli::JobSpec job = cli::loadJob(file);
-  const kinematics::CellModel cell = cli::buildCell(job);
+  const config::JobSpec job = config::loadJob(file);
+  const kinematics::CellModel cell = config::buildCell(job);
   const kinematics::ScanPath path = jobPath(job, cell);
   ASSERT_EQ(path.samples.size(), 5u);  // 20 mm at 50 mm/s = 0.4 s
   ASSERT_TRUE(path.samples.front().X_PS.isApprox(X_PS, 1e-9));
-  const collision::Scene scene(cell, cli::clearanceConfig(job));
+  const collision::Scene scene(cell, config::clearanceConfig(job));
   ASSERT_EQ(scene.pairs().size(), 2u);
   planner::MapRequest request;
   request.angle_step = deg(1.0);
   request.branches = allBranches();
-  const ConfigMap map = planner::buildConfigMap(scene, cli::constraintSettings(job), path, request);
+  const ConfigMap map =
+      planner::buildConfigMap(scene, config::constraintSettings(job), path, request);
   ASSERT_EQ(map.angles.size(), 360u);
 
   // FCL's sphere–sphere distance is exact; float storage and the ramp's slope (π/2 / 25 mm)
@@ -537,7 +538,7 @@ TEST(ConfigMap, RowZeroAndTheRowAfterTheLastAreTheSameTableAngle) {
   const double step = map.angles[1] - map.angles[0];
   kinematics::CellModel turned = demo.cell;
   turned.table.X_WA = turned.table.X_WA * Eigen::AngleAxisd(step, Eigen::Vector3d::UnitZ());
-  const collision::Scene scene(turned, cli::clearanceConfig(demo.job));
+  const collision::Scene scene(turned, config::clearanceConfig(demo.job));
   const ConfigMap shifted = planner::buildConfigMap(scene, demo.settings, demo.path, demo.request);
   const std::size_t na = map.angles.size();
   // Rounding of the composed transforms (~1e-16 m) can only move a bounded distance query by
@@ -576,7 +577,7 @@ bool sameBytes(const std::vector<T>& a, const std::vector<T>& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
 }
 
-// Issue 20: motion-bound skipping and the per-cell sharing leave every value as the plain
+// Motion-bound skipping and the per-cell sharing leave every value as the plain
 // query gives it, byte for byte: on the demo and on random variants of it (other rings and
 // angle steps), one and two threads.
 bool sameMap(const ConfigMap& a, const ConfigMap& b) {
@@ -662,14 +663,14 @@ TEST(ConfigMap, MotionBoundSkippingChangesNoValue) {
   std::uniform_real_distribution<double> height(20.0, 110.0), tilt(-10.0, 70.0), step(3.0, 12.0);
   int clearance_limited = 0;
   for (int job_index = 0; job_index < 4; ++job_index) {
-    cli::JobSpec job = shortDemoJob();
+    config::JobSpec job = shortDemoJob();
     job.scan.paths[0].height_mm = height(rng);
     job.scan.paths[0].tilt_deg = tilt(rng);
     job.scan.paths[0].extent_deg = 360.0;
     job.scan.dt_s = 0.1;
-    const kinematics::CellModel cell = cli::buildCell(job);
+    const kinematics::CellModel cell = config::buildCell(job);
     const kinematics::ScanPath path = jobPath(job, cell);
-    const collision::Scene scene(cell, cli::clearanceConfig(job));
+    const collision::Scene scene(cell, config::clearanceConfig(job));
     planner::MapRequest request = demo.request;
     request.angle_step = deg(step(rng));
     const ConfigMap skipped = planner::buildConfigMap(scene, demo.settings, path, request);
@@ -686,17 +687,17 @@ TEST(ConfigMap, MotionBoundSkippingChangesNoValue) {
   EXPECT_GT(clearance_limited, 100);  // the clearance layer is exercised, not all 1
 }
 
-// Issue 18 item 4: a robot whose links are meshes (each the union of the demo robot's shapes of
+// A robot whose links are meshes (each the union of the demo robot's shapes of
 // that link, tessellated: link1 and link2 are non-convex) maps with the hulls no higher than
 // with the exact meshes, cell by cell, and lower somewhere; motion-bound skipping still changes
 // no value.
 TEST_F(MapJob, MeshLinksMapAsHullsConservativelyAndSkippingStaysExact) {
-  const cli::JobSpec primitive = shortDemoJob();
+  const config::JobSpec primitive = shortDemoJob();
   std::ifstream viper(test::sourceDir() / "data/robots/viper_s650.yaml");
   std::string robot((std::istreambuf_iterator<char>(viper)), std::istreambuf_iterator<char>());
   robot = robot.substr(0, robot.find("\nlinks:") + 1);  // the kinematics, then mesh links
   robot += "links:\n";
-  const kinematics::CellModel primitive_cell = cli::buildCell(primitive);
+  const kinematics::CellModel primitive_cell = config::buildCell(primitive);
   for (const kinematics::Link& link : primitive_cell.robot.definition().links) {
     kinematics::TriangleMesh mesh;
     for (const kinematics::Shape& shape : link.shapes) {
@@ -717,10 +718,10 @@ TEST_F(MapJob, MeshLinksMapAsHullsConservativelyAndSkippingStaysExact) {
                          link.name, file.string());
   }
   const fs::path robot_file = write("mesh_robot.yaml", robot);
-  const cli::JobSpec job = shortDemoJob({"robot=" + robot_file.string()});
-  const kinematics::CellModel cell = cli::buildCell(job);
+  const config::JobSpec job = shortDemoJob({"robot=" + robot_file.string()});
+  const kinematics::CellModel cell = config::buildCell(job);
   const kinematics::ScanPath path = jobPath(job, cell);
-  collision::ClearanceConfig config = cli::clearanceConfig(job);
+  collision::ClearanceConfig config = config::clearanceConfig(job);
   EXPECT_EQ(config.link_meshes, collision::LinkMeshes::kAuto);  // the default
   const collision::Scene automatic(cell, config);
   config.link_meshes = collision::LinkMeshes::kHull;
@@ -744,7 +745,7 @@ TEST_F(MapJob, MeshLinksMapAsHullsConservativelyAndSkippingStaysExact) {
   EXPECT_GT(widest, 0.01) << "premise: a link with two shapes has a hull well outside them";
   EXPECT_LT(narrowest, 0.01) << "premise: a one-shape link's hull is close to it";
 
-  const planner::ConstraintSettings settings = cli::constraintSettings(job);
+  const planner::ConstraintSettings settings = config::constraintSettings(job);
   planner::MapRequest request;
   request.angle_step = deg(10.0);
   request.branches = allBranches();
@@ -814,19 +815,19 @@ TEST(ConfigMap, AMapOverTheMemoryLimitIsRefusedBeforeComputing) {
 // Branch words.
 
 TEST(ConfigMap, BranchWordsParseInAnyOrderAndBadWordsAreRejected) {
-  const auto parsed = cli::parseBranch("RIGHTY ABOVE NOFLIP");
+  const auto parsed = config::parseBranch("RIGHTY ABOVE NOFLIP");
   ASSERT_TRUE(parsed);
   EXPECT_EQ(*parsed, (kinematics::IkBranch{false, false, false}));
   EXPECT_EQ(parsed->words(), "RIGHTY ABOVE NOFLIP");
-  EXPECT_EQ(cli::parseBranch("FLIP  LEFTY\tBELOW"), (kinematics::IkBranch{true, true, true}));
+  EXPECT_EQ(config::parseBranch("FLIP  LEFTY\tBELOW"), (kinematics::IkBranch{true, true, true}));
   for (int i = 0; i < 8; ++i) {
     const kinematics::IkBranch b = kinematics::IkBranch::fromIndex(i);
-    EXPECT_EQ(cli::parseBranch(b.words()), b) << b.words();
+    EXPECT_EQ(config::parseBranch(b.words()), b) << b.words();
   }
   for (const char* bad :
        {"", "RIGHTY ABOVE", "RIGHTY ABOVE NOFLIP EXTRA", "FOO", "RIGHTY ABOVE NOFLIP,",
         "righty above noflip", "RIGHTY-ABOVE-NOFLIP", "auto"}) {
-    EXPECT_FALSE(cli::parseBranch(bad)) << "'" << bad << "'";
+    EXPECT_FALSE(config::parseBranch(bad)) << "'" << bad << "'";
   }
 }
 
@@ -834,7 +835,7 @@ TEST(ConfigMap, BranchWordsParseInAnyOrderAndBadWordsAreRejected) {
 TEST(ConfigMap, BranchWordsGivingBothWordsOfAPairAreRejected) {
   for (const char* bad : {"RIGHTY LEFTY ABOVE NOFLIP", "RIGHTY ABOVE BELOW NOFLIP",
                           "RIGHTY ABOVE FLIP NOFLIP", "RIGHTY RIGHTY ABOVE NOFLIP"}) {
-    EXPECT_FALSE(cli::parseBranch(bad)) << "'" << bad << "'";
+    EXPECT_FALSE(config::parseBranch(bad)) << "'" << bad << "'";
   }
 }
 
@@ -864,7 +865,7 @@ const char* kShortScan =
 TEST_F(MapJob, MapBranchMustBeAutoOrThreeWords) {
   const fs::path job = write("job.yaml", demoJobText() + kShortScan + "map: {branch: FOO}\n");
   try {
-    cli::loadJob(job);
+    config::loadJob(job);
     ADD_FAILURE() << "no exception";
   } catch (const InputError& e) {
     const std::string message = e.what();
@@ -872,7 +873,7 @@ TEST_F(MapJob, MapBranchMustBeAutoOrThreeWords) {
     EXPECT_NE(message.find("map.branch: 'FOO'"), std::string::npos) << message;
     EXPECT_NE(message.find("RIGHTY ABOVE NOFLIP"), std::string::npos) << message;
   }
-  const cli::JobSpec ok = cli::loadJob(
+  const config::JobSpec ok = config::loadJob(
       write("ok.yaml", demoJobText() + kShortScan + "map: {branch: LEFTY BELOW FLIP}\n"));
   EXPECT_EQ(ok.map.branch, "LEFTY BELOW FLIP");
 }
@@ -989,7 +990,7 @@ TEST_F(MapJob, MapCommandWritesLayersJsonAndImages) {
   }
 }
 
-// The error names the job file too (issue 17: `map` left it out, `plan` named it).
+// The error names the job file too (`map` left it out, `plan` named it).
 TEST_F(MapJob, MapCommandOverTheMemoryLimitIsAnInputError) {
   const fs::path job = write("job.yaml", demoJobText() + kShortScan +
                                              "map: {angle_step_deg: 10, memory_limit_mb: 0.001}\n");
@@ -1020,7 +1021,7 @@ TEST(ConfigMap, ManyObstaclesPairOnlyWithMovingBodiesAndAnOversizedMapIsRefused)
         0.05 * static_cast<double>(i / 100), 0.0;
     cell.obstacles.push_back({"crate" + std::to_string(i), kinematics::Carrier::kWorld, {crate}});
   }
-  const collision::Scene scene(cell, cli::clearanceConfig(demo.job));
+  const collision::Scene scene(cell, config::clearanceConfig(demo.job));
   std::size_t moving = 0;  // bodies that pass a world obstacle: arm links 1..6, scanner, cargo
   for (const collision::BodyInfo& b : scene.bodies()) {
     const bool cargo = b.motion == collision::BodyMotion::kTable && b.name != "table";

@@ -1,10 +1,10 @@
-// Convex hulls of link meshes for the configuration maps (issue 18 item 4): the hull contains the
+// Convex hulls of link meshes for the configuration maps: the hull contains the
 // mesh and is convex (checked face by face against every vertex), its margin is an upper bound
 // on how far the hull's surface reaches outside the mesh (checked against a brute-force distance
 // over sampled hull points, and against a part with a known answer), and distances to the hull
 // sit between the mesh's distance minus that margin and the mesh's distance.
 
-#include "collision/convex_hull.h"
+#include <scanplan/collision/convex_hull.h>
 
 #include <gtest/gtest.h>
 
@@ -16,11 +16,11 @@
 #include <random>
 #include <vector>
 
-#include "collision/fcl_geometry.h"
-#include "collision/scene.h"
+#include <scanplan/collision/fcl_geometry.h>
+#include <scanplan/collision/scene.h>
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/kinematics/shape.h>
 #include "geometry_support.h"
-#include "kinematics/mesh.h"
-#include "kinematics/shape.h"
 
 namespace scanplan::collision {
 namespace {

@@ -11,9 +11,9 @@
 
 #include <gtest/gtest.h>
 
-#include "cli/config/job.h"
-#include "cli/config/problem.h"
-#include "pipeline/plan_scan.h"
+#include <scanplan/config/job.h>
+#include <scanplan/config/to_problem.h>
+#include <scanplan/pipeline/plan_scan.h>
 #include "test_support.h"
 
 namespace {
@@ -46,7 +46,7 @@ TEST_P(EveryPlanner, PlansTheBundledJobValidlyWithAndWithoutRefinement) {
   if (c.job == "bunny_shared" &&
       !std::filesystem::exists(test::sourceDir() / "../shared/data/meshes/stlmodels_bunny.bin.stl"))
     GTEST_SKIP() << "the shared test data is not beside the repository";
-  const pipeline::ScanProblem base = cli::toProblem(cli::loadJob(file, c.set));
+  const pipeline::ScanProblem base = config::toProblem(config::loadJob(file, c.set));
   const auto prepared = pipeline::prepareScan(base);
   for (const std::string method : {"ray", "dp", "ompl"}) {
     for (const bool refine : {false, true}) {
@@ -83,8 +83,8 @@ INSTANTIATE_TEST_SUITE_P(Jobs,
 
 TEST(EveryPlannerCompare, TheAutomaticDemoShowsAllThreePlanners) {
   const auto file = test::sourceDir() / "data" / "jobs" / "demo.yaml";
-  const pipeline::ScanProblem problem =
-      cli::toProblem(cli::loadJob(file, {"simulation.enabled=false", "scan.auto.max_passes=8"}));
+  const pipeline::ScanProblem problem = config::toProblem(
+      config::loadJob(file, {"simulation.enabled=false", "scan.auto.max_passes=8"}));
   pipeline::PlanOptions options;
   options.compare = true;
   const pipeline::ScanPlan plan = pipeline::planScan(problem, options);

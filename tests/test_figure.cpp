@@ -11,8 +11,8 @@
 #include <utility>
 #include <vector>
 
+#include <scanplan/kinematics/error.h>
 #include "cli/plot/image_io.h"
-#include "kinematics/error.h"
 #include "tests/image_support.h"
 
 namespace {

@@ -1,11 +1,11 @@
 #include "cli/plot/image_io.h"
 #include "tests/io_support.h"
 
+#include <scanplan/config/job.h>
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/planner/config_map.h>
 #include "cli/commands/commands.h"
-#include "cli/config/job.h"
-#include "kinematics/error.h"
-#include "kinematics/units.h"
-#include "planner/config_map.h"
 #include "tests/image_support.h"
 
 #include <gtest/gtest.h>
@@ -483,7 +483,7 @@ bool hasPixel(const RgbImage& image, int x0, int y0, int x1, int y1, Rgb colour)
 
 TEST_F(ImageIoFiles, MapFiguresAreLabelledAndTheirRasterKeepsEveryCellsColour) {
   const planner::ConfigMap map = syntheticMap();
-  const JobSpec job;  // a named job: GCC 12 misreads a JobSpec{} temporary as uninitialised
+  const config::JobSpec job;  // a named job: GCC 12 misreads a JobSpec{} temporary as uninitialised
   writeMapOutputs(dir_, job, map);
 
   // configmap.png: the 10 × 36 map enlarged to 1000 × 432 (100 × 12 px per cell: ~1000 px wide,
@@ -585,7 +585,7 @@ TEST_F(ImageIoFiles, PathFigureHasALineLegendAndDegenerateMapsStillGiveFigures) 
   tiny.f = {std::numeric_limits<float>::quiet_NaN()};
   tiny.joint = tiny.singularity = tiny.clearance = tiny.f;
   tiny.limit = {0};
-  const JobSpec job;
+  const config::JobSpec job;
   ASSERT_NO_THROW(writeMapOutputs(dir_, job, tiny));
   const RgbImage one = decodePng(readBytes(dir_ / "configmap.png"));
   const Crop c1 = plotArea(one);

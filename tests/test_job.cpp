@@ -1,9 +1,9 @@
-#include "cli/config/job.h"
+#include <scanplan/config/job.h>
 
-#include "cli/config/robot_file.h"
-#include "cli/config/text.h"
-#include "kinematics/error.h"
-#include "kinematics/mesh.h"
+#include <scanplan/config/robot_file.h>
+#include <scanplan/config/text.h>
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/mesh.h>
 #include "tests/test_support.h"
 
 #include <gtest/gtest.h>
@@ -72,7 +72,7 @@ using test::throwsInputError;
 
 ::testing::AssertionResult loadFails(const fs::path& job,
                                      std::initializer_list<std::string> parts) {
-  return throwsInputError([&] { loadJob(job); }, parts);
+  return throwsInputError([&] { config::loadJob(job); }, parts);
 }
 
 class JobFile : public ::testing::Test {
@@ -110,29 +110,29 @@ class JobFile : public ::testing::Test {
 };
 
 TEST_F(JobFile, BundledDemoJobAndRobotsLoadAndBuild) {
-  const JobSpec demo = loadJob(kSource / "data/jobs/demo_rings.yaml");
+  const config::JobSpec demo = config::loadJob(kSource / "data/jobs/demo_rings.yaml");
   EXPECT_EQ(demo.name, "demo_rings");
   EXPECT_EQ(demo.robot_file.resolved, (kSource / "data/robots/viper_s650.yaml").lexically_normal());
   EXPECT_EQ(demo.part.mesh.resolved, (kSource / "data/parts/demo_housing.stl").lexically_normal());
-  const kinematics::CellModel cell = buildCell(demo);
+  const kinematics::CellModel cell = config::buildCell(demo);
   EXPECT_EQ(cell.robot.name(), "Adept Viper s650");
   EXPECT_DOUBLE_EQ(cell.table.radius, 0.2);
   ASSERT_EQ(cell.scanner.body.size(), 1u);
 
   const fs::path kuka = kSource / "data/robots/kuka_kr6_r900_sixx.yaml";
-  const RobotSpec spec = loadRobotFile(kuka);
+  const config::RobotSpec spec = config::loadRobotFile(kuka);
   EXPECT_EQ(spec.dh.size(), 6u);
   EXPECT_EQ(spec.links.size(), 7u);
-  EXPECT_EQ(buildRobotModel(spec, kuka.string()).name(), "KUKA KR6 R900 sixx");
+  EXPECT_EQ(config::buildRobotModel(spec, kuka.string()).name(), "KUKA KR6 R900 sixx");
 }
 
 // `part.up_axis` turns the file's up direction into +z at load: the part's extents permute.
 TEST_F(JobFile, PartUpAxisRotatesTheMeshAtLoad) {
-  const JobSpec z = loadJob(kSource / "data/jobs/demo_rings.yaml");
+  const config::JobSpec z = config::loadJob(kSource / "data/jobs/demo_rings.yaml");
   // `-> Eigen::Vector3d`: a deduced return type would be Eigen's expression for max − min of a
   // box that dies with the lambda (AddressSanitizer: stack-use-after-scope).
   const Eigen::Vector3d size_z = [&]() -> Eigen::Vector3d {
-    const kinematics::CellModel cell = buildCell(z);
+    const kinematics::CellModel cell = config::buildCell(z);
     return kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options).mesh.bounds().sizes();
   }();
   const std::vector<std::pair<const char*, Eigen::Vector3d>> cases{
@@ -141,35 +141,37 @@ TEST_F(JobFile, PartUpAxisRotatesTheMeshAtLoad) {
       {"-z", size_z}};
   for (const auto& [up, expect] : cases) {
     SCOPED_TRACE(up);
-    const JobSpec job =
-        loadJob(kSource / "data/jobs/demo_rings.yaml", {std::string("part.up_axis=") + up});
-    const kinematics::CellModel cell = buildCell(job);
+    const config::JobSpec job =
+        config::loadJob(kSource / "data/jobs/demo_rings.yaml", {std::string("part.up_axis=") + up});
+    const kinematics::CellModel cell = config::buildCell(job);
     const auto mesh = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options).mesh;
     EXPECT_LT((mesh.bounds().sizes() - expect).norm(), 1e-9);
     // The file's up direction becomes +z.
     const Eigen::Matrix3d& R = cell.part.mesh.options.rotation;
     EXPECT_NEAR(R.determinant(), 1.0, 1e-12);
   }
-  EXPECT_THROW(loadJob(kSource / "data/jobs/demo_rings.yaml", {"part.up_axis=w"}), InputError);
+  EXPECT_THROW(config::loadJob(kSource / "data/jobs/demo_rings.yaml", {"part.up_axis=w"}),
+               InputError);
 }
 
 // The comment line names the job the text was resolved from, so it differs between the two
 // files; everything after it must match byte for byte.
 TEST_F(JobFile, JobToYamlRoundTripsAndSpellsOutEveryDefault) {
-  const std::string first = jobToYaml(loadJob(kSource / "data/jobs/demo_rings.yaml"));
+  const std::string first =
+      config::jobToYaml(config::loadJob(kSource / "data/jobs/demo_rings.yaml"));
   for (const char* key : {"max_accel_deg_s2", "eccentricity_mm", "tilt_deg", "robot_base",
                           "dh:", "opw:", "theta_offset_deg", "direction", "signs",
                           "links:", "units: mm", "scale: 1", "continuous: true"}) {
     EXPECT_NE(first.find(key), std::string::npos) << key << " missing from:\n" << first;
   }
   const fs::path resolved = write("resolved.yaml", first);
-  const JobSpec again = loadJob(resolved);
+  const config::JobSpec again = config::loadJob(resolved);
   EXPECT_TRUE(again.robot_file.as_written.empty()) << "robot should be inline";
   EXPECT_EQ(again.robot.dh.size(), 6u);
-  const std::string second = jobToYaml(again);
+  const std::string second = config::jobToYaml(again);
   EXPECT_EQ(second.substr(second.find('\n')), first.substr(first.find('\n')));
   EXPECT_NE(second.find(resolved.string()), std::string::npos);
-  EXPECT_NO_THROW(buildCell(again));
+  EXPECT_NO_THROW(config::buildCell(again));
 }
 
 // Every writer branch: inline robot with mesh/sphere/box/length capsule shapes, odd names.
@@ -191,16 +193,16 @@ TEST_F(JobFile, JobToYamlRoundTripsNonDefaultValues) {
           " tilt_deg: [0.01, 0]}\n"
           "part: {mesh: part.stl, units: m, scale: 1000}\n"
           "scanner: {body: [{type: box, size_mm: [1, 2, 3]}]}\n");
-  const JobSpec loaded = loadJob(job);
+  const config::JobSpec loaded = config::loadJob(job);
   EXPECT_EQ(loaded.name, "yes");
   EXPECT_EQ(loaded.robot.name, "arm: #2");
-  const std::string first = jobToYaml(loaded);
-  const JobSpec again = loadJob(write("resolved.yaml", first));
+  const std::string first = config::jobToYaml(loaded);
+  const config::JobSpec again = config::loadJob(write("resolved.yaml", first));
   EXPECT_EQ(again.name, "yes");
   EXPECT_EQ(again.robot.name, "arm: #2");
   EXPECT_FALSE(again.table.continuous);
   EXPECT_EQ(again.table.eccentricity_mm[1], -1e-05);
-  const std::string second = jobToYaml(again);
+  const std::string second = config::jobToYaml(again);
   EXPECT_EQ(second.substr(second.find('\n')), first.substr(first.find('\n')));
 }
 
@@ -211,10 +213,10 @@ TEST_F(JobFile, PathsResolveAgainstTheFileThatNamesThem) {
   write("robots/x.yaml", kRobot + linksWith("      - {type: mesh, file: ../meshes/l1.stl}\n"));
   const fs::path job =
       write("jobs/job.yaml", "robot: ../robots/x.yaml\npart: {mesh: ../parts/p.stl}\n");
-  const JobSpec spec = loadJob(job);
+  const config::JobSpec spec = config::loadJob(job);
   EXPECT_EQ(spec.robot_file.as_written, "../robots/x.yaml");
   EXPECT_EQ(spec.robot_file.resolved, dir_ / "robots/x.yaml");
-  const kinematics::CellModel cell = buildCell(spec);
+  const kinematics::CellModel cell = config::buildCell(spec);
   EXPECT_EQ(cell.part.mesh.path, dir_ / "parts/p.stl");
   const auto& links = cell.robot.definition().links;
   EXPECT_EQ(std::get<kinematics::MeshFile>(links[1].shapes[0].geometry).path,
@@ -225,7 +227,7 @@ TEST_F(JobFile, PathsResolveAgainstTheFileThatNamesThem) {
       write("jobs/inline.yaml",
             "robot:\n" + indented(kRobot + linksWith("      - {type: mesh, file: l1.stl}\n")) +
                 "\npart: {mesh: p.stl}\n");
-  const kinematics::CellModel inline_cell = buildCell(loadJob(inline_job));
+  const kinematics::CellModel inline_cell = config::buildCell(config::loadJob(inline_job));
   const auto& inline_links = inline_cell.robot.definition().links;
   EXPECT_EQ(std::get<kinematics::MeshFile>(inline_links[1].shapes[0].geometry).path,
             dir_ / "jobs/l1.stl");
@@ -274,8 +276,8 @@ TEST_F(JobFile, ASecondYamlDocumentIsRefusedNamingWhereItStarts) {
                         {at("robot.yaml", std::to_string(robot_lines + 1) + ":1: " + second)}));
   std::ifstream plain(writeJob(""));
   const std::string text((std::istreambuf_iterator<char>(plain)), std::istreambuf_iterator<char>());
-  EXPECT_NO_THROW(cli::loadJob(write("lead.yaml", "---\n" + text)));
-  EXPECT_NO_THROW(cli::loadJob(write("end.yaml", "---\n" + text + "...\n")));
+  EXPECT_NO_THROW(config::loadJob(write("lead.yaml", "---\n" + text)));
+  EXPECT_NO_THROW(config::loadJob(write("end.yaml", "---\n" + text + "...\n")));
 }
 
 TEST_F(JobFile, UnknownKeysAreNamedWithLineAndSuggestion) {
@@ -322,12 +324,15 @@ TEST_F(JobFile, YamlThatParsesButIsAmbiguousIsRejected) {
                          "leave the key out to use the default"}));
   // A fraction where a whole number belongs is a number, just not a whole one.
   EXPECT_TRUE(throwsInputError(
-      [&] { loadRobotFile(write("r.yaml", replaced(kRobot, "signs: [1, 1,", "signs: [1, 1.5,"))); },
+      [&] {
+        config::loadRobotFile(
+            write("r.yaml", replaced(kRobot, "signs: [1, 1,", "signs: [1, 1.5,")));
+      },
       {"opw.signs[1]: '1.5' is not a whole number"}));
   // Too large is out of range, not a unit problem.
   EXPECT_TRUE(loadFails(writeJob("table: {radius_mm: 1e400}\n"), {"table.radius_mm"}));
   try {
-    loadJob(writeJob("table: {radius_mm: 1e400}\n"));
+    config::loadJob(writeJob("table: {radius_mm: 1e400}\n"));
   } catch (const InputError& e) {
     EXPECT_EQ(std::string(e.what()).find("unit"), std::string::npos) << e.what();
   }
@@ -380,7 +385,7 @@ TEST_F(JobFile, OutOfRangeValuesAreRejected) {
                         {at("job.yaml", "3:"),
                          "scanner.body[0].type: 'cone': expected one of box, sphere, cylinder, "
                          "capsule, mesh"}));
-  // How the maps measure link meshes (issue 18 item 4).
+  // How the maps measure link meshes.
   EXPECT_TRUE(loadFails(writeJob("constraints: {clearance: {link_meshes: convex}}\n"),
                         {at("job.yaml", "3:"),
                          "constraints.clearance.link_meshes: 'convex': expected one of auto, "
@@ -389,7 +394,7 @@ TEST_F(JobFile, OutOfRangeValuesAreRejected) {
                         {at("job.yaml", "3:"), "constraints.clearance.hull_vertices: 4"}));
   EXPECT_TRUE(loadFails(writeJob("constraints: {clearance: {hull_margin_mm: -1}}\n"),
                         {at("job.yaml", "3:"), "constraints.clearance.hull_margin_mm: -1"}));
-  // The programs' payload and trigger (issue 19).
+  // The programs' payload and trigger.
   EXPECT_TRUE(loadFails(writeJob("scanner: {mass_kg: -1}\n"),
                         {at("job.yaml", "3:"), "scanner.mass_kg: -1"}));
   EXPECT_TRUE(
@@ -417,7 +422,7 @@ TEST_F(JobFile, ObstacleNamesMustBeTheirOwn) {
                                  "{name: post, type: box, size_mm: [10, 10, 10]}]\n"),
                         {at("job.yaml", "3:"), "two obstacles named 'post'"}));
   // Names that only look alike are fine.
-  EXPECT_NO_THROW(cli::loadJob(writeJob(
+  EXPECT_NO_THROW(config::loadJob(writeJob(
       "obstacles: [{name: link_plate, type: sphere, radius_mm: 20}, {name: parts_bin, type: "
       "sphere, radius_mm: 20}, {name: link, type: sphere, radius_mm: 5}]\n")));
 }
@@ -427,38 +432,40 @@ TEST_F(JobFile, ObstacleNamesMustBeTheirOwn) {
 TEST_F(JobFile, RobotFilesWhoseOpwDisagreesWithDhOrWithFiveRowsAreRejected) {
   const std::string bad_opw = replaced(kRobot, "c2_mm: 270", "c2_mm: 300");
   const fs::path robot = write("robot.yaml", bad_opw);
-  const JobSpec job = loadJob(write("job.yaml", "robot: robot.yaml\npart: {mesh: part.stl}\n"));
+  const config::JobSpec job =
+      config::loadJob(write("job.yaml", "robot: robot.yaml\npart: {mesh: part.stl}\n"));
   EXPECT_TRUE(throwsInputError(
-      [&] { buildCell(job); },
+      [&] { config::buildCell(job); },
       {robot.string() + ": robot 'test arm'", "the OPW parameters disagree with the DH chain"}));
   // Inline, the job file is the source.
-  const JobSpec inline_job =
-      loadJob(write("inline.yaml", "robot:\n" + indented(bad_opw) + "\npart: {mesh: part.stl}\n"));
-  EXPECT_TRUE(throwsInputError([&] { buildCell(inline_job); },
+  const config::JobSpec inline_job = config::loadJob(
+      write("inline.yaml", "robot:\n" + indented(bad_opw) + "\npart: {mesh: part.stl}\n"));
+  EXPECT_TRUE(throwsInputError([&] { config::buildCell(inline_job); },
                                {at("inline.yaml", " robot 'test arm'"), "OPW", "disagree"}));
 
   const std::size_t row6 = kRobot.find("  - {a_mm: 0,   d_mm: 80");
   const std::string five_rows = kRobot.substr(0, row6) + kRobot.substr(kRobot.find('\n', row6) + 1);
   EXPECT_TRUE(
-      throwsInputError([&] { loadRobotFile(write("five.yaml", five_rows)); },
+      throwsInputError([&] { config::loadRobotFile(write("five.yaml", five_rows)); },
                        {at("five.yaml", "3:3: dh: a list of 5"), "expected exactly 6 entries"}));
 }
 
 // `controller:` says which program language the robot runs; `plan` writes that one and the CSV
 // unless outputs.programs says otherwise.
 TEST_F(JobFile, TheRobotsControllerChoosesTheDefaultPrograms) {
-  const JobSpec demo = loadJob(kSource / "data/jobs/demo_rings.yaml");
+  const config::JobSpec demo = config::loadJob(kSource / "data/jobs/demo_rings.yaml");
   EXPECT_EQ(demo.robot.controller, "adept_vplus");
   EXPECT_EQ(demo.outputs.programs, (std::vector<std::string>{"vplus", "csv"}));
-  const JobSpec kuka = loadJob(kSource / "data/jobs/kuka_demo.yaml");
+  const config::JobSpec kuka = config::loadJob(kSource / "data/jobs/kuka_demo.yaml");
   EXPECT_EQ(kuka.robot.controller, "kuka_krl");
   EXPECT_EQ(kuka.outputs.programs, (std::vector<std::string>{"krl", "csv"}));
 
   // No controller key: none, the CSV alone.
-  const JobSpec plain = loadJob(writeJob(""));
+  const config::JobSpec plain = config::loadJob(writeJob(""));
   EXPECT_EQ(plain.robot.controller, "none");
   EXPECT_EQ(plain.outputs.programs, std::vector<std::string>{"csv"});
-  EXPECT_TRUE(foreignPrograms(plain.robot, {"vplus", "krl"}).empty()) << "no vendor, none foreign";
+  EXPECT_TRUE(config::foreignPrograms(plain.robot, {"vplus", "krl"}).empty())
+      << "no vendor, none foreign";
 
   const std::vector<std::pair<std::string, std::string>> languages = {{"adept_vplus", "vplus"},
                                                                       {"kuka_krl", "krl"},
@@ -466,26 +473,27 @@ TEST_F(JobFile, TheRobotsControllerChoosesTheDefaultPrograms) {
                                                                       {"ur_script", "urscript"}};
   for (const auto& [controller, language] : languages) {
     SCOPED_TRACE(controller);
-    const JobSpec job = loadJob(writeJob("", "controller: " + controller + "\n" + kRobot));
+    const config::JobSpec job =
+        config::loadJob(writeJob("", "controller: " + controller + "\n" + kRobot));
     EXPECT_EQ(job.outputs.programs, (std::vector<std::string>{language, "csv"}));
-    EXPECT_EQ(controllerProgramFormat(controller), language);
+    EXPECT_EQ(config::controllerProgramFormat(controller), language);
   }
 
   // outputs.programs overrides; another vendor's language is found (the CSV is nobody's).
-  const JobSpec over =
-      loadJob(kSource / "data/jobs/demo_rings.yaml", {"outputs.programs=[krl, vplus, csv, rapid]"});
+  const config::JobSpec over = config::loadJob(kSource / "data/jobs/demo_rings.yaml",
+                                               {"outputs.programs=[krl, vplus, csv, rapid]"});
   EXPECT_EQ(over.outputs.programs, (std::vector<std::string>{"krl", "vplus", "csv", "rapid"}));
-  EXPECT_EQ(foreignPrograms(over.robot, over.outputs.programs),
+  EXPECT_EQ(config::foreignPrograms(over.robot, over.outputs.programs),
             (std::vector<std::string>{"krl", "rapid"}));
   // export's --format names are case-insensitive.
-  EXPECT_EQ(foreignPrograms(over.robot, {"VPLUS", "KRL"}), std::vector<std::string>{"KRL"});
-  EXPECT_TRUE(loadJob(kSource / "data/jobs/demo_rings.yaml", {"outputs.programs=[]"})
+  EXPECT_EQ(config::foreignPrograms(over.robot, {"VPLUS", "KRL"}), std::vector<std::string>{"KRL"});
+  EXPECT_TRUE(config::loadJob(kSource / "data/jobs/demo_rings.yaml", {"outputs.programs=[]"})
                   .outputs.programs.empty());
 
   // `job show` prints it, and the printed job loads back to the same programs.
-  const std::string shown = jobToYaml(kuka);
+  const std::string shown = config::jobToYaml(kuka);
   EXPECT_NE(shown.find("controller: kuka_krl"), std::string::npos) << shown;
-  EXPECT_EQ(loadJob(write("shown.yaml", shown)).outputs.programs, kuka.outputs.programs);
+  EXPECT_EQ(config::loadJob(write("shown.yaml", shown)).outputs.programs, kuka.outputs.programs);
 }
 
 TEST_F(JobFile, AnUnknownControllerIsRejectedWithASuggestion) {
@@ -512,7 +520,8 @@ TEST_F(JobFile, EndPointShapesGetTheirLengthAndFrame) {
   const std::string shapes =
       "      - {type: capsule, radius_mm: 5, from_mm: [0, 0, 0], to_mm: [30, 40, 0]}\n"
       "      - {type: cylinder, radius_mm: 7, from_mm: [0, 0, 10], to_mm: [0, 0, 130]}\n";
-  const kinematics::CellModel cell = buildCell(loadJob(writeJob("", kRobot + linksWith(shapes))));
+  const kinematics::CellModel cell =
+      config::buildCell(config::loadJob(writeJob("", kRobot + linksWith(shapes))));
   const auto& link = cell.robot.definition().links[1];
   EXPECT_EQ(link.name, "link1");
   ASSERT_EQ(link.shapes.size(), 2u);
@@ -574,17 +583,17 @@ TEST_F(JobFile, SuggestionsCoverAKeyWithoutItsUnitOrPluralEnding) {
       {at("job.yaml", "3:20: scanner.optics.phi: unknown key (did you mean 'phi_deg'?)")}));
   EXPECT_TRUE(loadFails(writeJob("table: {max_speed: 20}\n"),
                         {"table.max_speed: unknown key (did you mean 'max_speed_deg_s'?)"}));
-  EXPECT_EQ(suggestKey("repeat", {"jobs", "set", "vary", "cases", "repeats"}), "repeats");
-  EXPECT_EQ(suggestKey("radius", {"axis", "radius_mm", "height_mm"}), "radius_mm");
-  EXPECT_EQ(suggestKey("radius_m", {"axis", "radius_mm", "height_mm"}), "radius_mm");
-  EXPECT_EQ(suggestKey("colour", {"axis", "radius_mm", "height_mm"}), "");
+  EXPECT_EQ(config::suggestKey("repeat", {"jobs", "set", "vary", "cases", "repeats"}), "repeats");
+  EXPECT_EQ(config::suggestKey("radius", {"axis", "radius_mm", "height_mm"}), "radius_mm");
+  EXPECT_EQ(config::suggestKey("radius_m", {"axis", "radius_mm", "height_mm"}), "radius_mm");
+  EXPECT_EQ(config::suggestKey("colour", {"axis", "radius_mm", "height_mm"}), "");
 }
 
 // A bad value given with --set is blamed on the override, never on a made-up place in the file.
 TEST_F(JobFile, OverrideErrorsNameTheOverride) {
   const fs::path job = writeJob("scan: {paths: [{type: raster}]}\n");
   const auto fails = [&](const std::string& override, std::initializer_list<std::string> parts) {
-    return throwsInputError([&] { loadJob(job, {override}); }, parts);
+    return throwsInputError([&] { config::loadJob(job, {override}); }, parts);
   };
   EXPECT_TRUE(fails("table.radius_m=5", {"--set table.radius_m=5: table.radius_m: unknown key "
                                          "(did you mean 'radius_mm'?)"}));
@@ -604,17 +613,17 @@ TEST_F(JobFile, OverrideErrorsNameTheOverride) {
   // A second YAML document inside a value would be dropped: refused, naming its line.
   EXPECT_TRUE(fails("table.axis.xyz_mm=[600,0,0]\n---\n[1,2,3]",
                     {"the value holds a second YAML document at its line 2"}));
-  EXPECT_NO_THROW(loadJob(job, {"table.axis.xyz_mm=[600,0,0]\n...\n"}));
+  EXPECT_NO_THROW(config::loadJob(job, {"table.axis.xyz_mm=[600,0,0]\n...\n"}));
   for (const std::string o : {"table.radius_m=5", "table.axis.xyz_mm=[600,0]"}) {
     try {
-      loadJob(job, {o});
+      config::loadJob(job, {o});
     } catch (const InputError& e) {
       EXPECT_EQ(std::string(e.what()).find("job.yaml"), std::string::npos) << e.what();
     }
   }
   // Errors in the file itself keep their place, overrides or not.
   EXPECT_TRUE(throwsInputError(
-      [&] { loadJob(writeJob("table: {radius_mm: -5}\n"), {"table.height_mm=100"}); },
+      [&] { config::loadJob(writeJob("table: {radius_mm: -5}\n"), {"table.height_mm=100"}); },
       {at("job.yaml", "3:20: table.radius_mm: -5")}));
 }
 
@@ -623,20 +632,20 @@ TEST_F(JobFile, SourceIsThePathAsGiven) {
   const fs::path job = writeJob("");
   const fs::path relative = fs::relative(job);
   ASSERT_TRUE(relative.is_relative());
-  EXPECT_EQ(loadJob(relative).source, relative);
-  EXPECT_NE(jobToYaml(loadJob(relative)).find(job.string()), std::string::npos)
+  EXPECT_EQ(config::loadJob(relative).source, relative);
+  EXPECT_NE(config::jobToYaml(config::loadJob(relative)).find(job.string()), std::string::npos)
       << "job show names the resolved file";
 }
 
 // Numbers no cell can mean stop at the reader, before they reach Embree or FCL (a ring height of
 // 1e300 mm aborted inside Embree): lengths within a kilometre, everything within 1e9.
-// Image mode's keys (README "Job file"): each bad value is refused naming its key; image mode
+// Image mode's keys (docs/job-file.md): each bad value is refused naming its key; image mode
 // with two cameras or with point noise names the scanner key it conflicts with.
 TEST(JobImageMode, BadKeysAreRefusedNamingTheKey) {
   const fs::path demo = kSource / "data/jobs/demo_rings.yaml";
   const auto fails = [&](std::vector<std::string> overrides,
                          std::initializer_list<std::string> parts) {
-    return throwsInputError([&] { loadJob(demo, overrides); }, parts);
+    return throwsInputError([&] { config::loadJob(demo, overrides); }, parts);
   };
   EXPECT_TRUE(fails({"simulation.mode=raytrace"}, {"simulation.mode", "raytrace", "image"}));
   EXPECT_TRUE(fails({"scanner.camera.rows=1"}, {"scanner.camera.rows", "1"}));
@@ -666,12 +675,12 @@ TEST(JobImageMode, BadKeysAreRefusedNamingTheKey) {
   EXPECT_TRUE(fails({"simulation.mode=image", "scanner.camera={ambient_grey: 50}"},
                     {"scanner.camera.threshold_grey", "40", "ambient_grey (50)"}));
   // The same keys with good values load.
-  const JobSpec job =
-      loadJob(demo, {"simulation.mode=image",
-                     "scanner.camera={rows: 300, columns: 150, noise_grey: 2, "
-                     "detection: gauss}",
-                     "scanner.laser.thickness_mm=0.8",
-                     "simulation.reflectance={lambert: 0.5, specular: 0.3, shininess: 40}"});
+  const config::JobSpec job = config::loadJob(
+      demo, {"simulation.mode=image",
+             "scanner.camera={rows: 300, columns: 150, noise_grey: 2, "
+             "detection: gauss}",
+             "scanner.laser.thickness_mm=0.8",
+             "simulation.reflectance={lambert: 0.5, specular: 0.3, shininess: 40}"});
   EXPECT_EQ(job.simulation.mode, "image");
   EXPECT_EQ(job.scanner.camera.rows, 300);
   EXPECT_EQ(job.scanner.camera.columns, 150);
@@ -683,7 +692,7 @@ TEST(JobImageMode, BadKeysAreRefusedNamingTheKey) {
 TEST(JobLimits, HugeNumbersAreRefusedNamingTheKey) {
   const auto error = [](const std::string& set) {
     try {
-      loadJob(kSource / "data/jobs/demo_rings.yaml", {set});
+      config::loadJob(kSource / "data/jobs/demo_rings.yaml", {set});
     } catch (const InputError& e) {
       return std::string(e.what());
     }
@@ -715,7 +724,7 @@ TEST(JobLimits, AliasBombsAndDeepNestingAreRefused) {
   }
   bomb += "}";
   try {
-    loadJob(kSource / "data/jobs/demo_rings.yaml", {"name=" + bomb});
+    config::loadJob(kSource / "data/jobs/demo_rings.yaml", {"name=" + bomb});
     ADD_FAILURE() << "no error";
   } catch (const InputError& e) {
     const std::string what = e.what();
@@ -725,7 +734,7 @@ TEST(JobLimits, AliasBombsAndDeepNestingAreRefused) {
   const fs::path deep = fs::temp_directory_path() / "scanplan_test_deep.yaml";
   std::ofstream(deep) << "name: " << std::string(200, '[') << std::string(200, ']') << "\n";
   try {
-    loadJob(deep);
+    config::loadJob(deep);
     ADD_FAILURE() << "no error";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("nests deeper than 64 levels"), std::string::npos)
@@ -734,7 +743,7 @@ TEST(JobLimits, AliasBombsAndDeepNestingAreRefused) {
   fs::remove(deep);
 }
 
-// Robustness catalogue (issue 17): part.scale = 1e7 was accepted and refused only later, by a
+// Robustness catalogue: part.scale = 1e7 was accepted and refused only later, by a
 // ring that never saw the part, without naming the scale. The part's size is checked at load.
 TEST_F(JobFile, APartLargerThanTheLengthLimitIsRefusedNamingTheScale) {
   write("tri.off", "OFF\n3 1 0\n0 0 0\n100 0 0\n0 100 0\n3 0 1 2\n");  // 100 mm across
@@ -744,23 +753,24 @@ TEST_F(JobFile, APartLargerThanTheLengthLimitIsRefusedNamingTheScale) {
         write("big.yaml", std::string("robot: robot.yaml\npart: {mesh: tri.off, scale: 1e7, ") +
                               "place: " + place + "}\n");
     write("robot.yaml", kRobot);
-    const JobSpec job = loadJob(file);
+    const config::JobSpec job = config::loadJob(file);
     EXPECT_TRUE(
-        throwsInputError([&] { loadPartMesh(job, buildCell(job).part); },
+        throwsInputError([&] { config::loadPartMesh(job, config::buildCell(job).part); },
                          {file.string() + ": part.scale: 1e+07: the part is 1e+09 mm across",
                           "expected a part at most 1000000 mm across"}));
   }
   write("fine.yaml", "robot: robot.yaml\npart: {mesh: tri.off, scale: 1e4}\n");  // 1 km: within
-  const JobSpec fine = loadJob(dir_ / "fine.yaml");
-  EXPECT_NO_THROW(loadPartMesh(fine, buildCell(fine).part));
+  const config::JobSpec fine = config::loadJob(dir_ / "fine.yaml");
+  EXPECT_NO_THROW(config::loadPartMesh(fine, config::buildCell(fine).part));
 }
 
-// Robustness catalogue (issue 17): a FIFO as the job file was read until a writer came, forever.
+// Robustness catalogue: a FIFO as the job file was read until a writer came, forever.
 TEST_F(JobFile, FifoAsJobOrRobotFileIsRefusedNotReadForever) {
   const fs::path fifo = dir_ / "job.yaml";
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
   EXPECT_TRUE(loadFails(fifo, {"job.yaml", "not a regular file"}));
-  EXPECT_TRUE(throwsInputError([&] { loadRobotFile(fifo); }, {"job.yaml", "not a regular file"}));
+  EXPECT_TRUE(
+      throwsInputError([&] { config::loadRobotFile(fifo); }, {"job.yaml", "not a regular file"}));
 }
 
 // What a terminal would not show is shown: a byte-order mark, zero-width and no-break spaces,
@@ -785,4 +795,3 @@ TEST(VisibleText, InvisibleCharactersAreNamedAndPrintableTextKept) {
 
 }  // namespace
 }  // namespace scanplan::cli
-

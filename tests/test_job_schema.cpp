@@ -15,8 +15,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cli/config/job.h"
-#include "kinematics/error.h"
+#include <scanplan/config/job.h>
+#include <scanplan/kinematics/error.h>
 #include "test_support.h"
 
 namespace {
@@ -37,7 +37,7 @@ void expectClosedObjects(const Json& s, const std::string& where) {
 }
 
 TEST(JobSchema, NamesEverySectionAndRefusesUnknownKeysEverywhere) {
-  const Json schema = Json::parse(cli::jobSchema());
+  const Json schema = Json::parse(config::jobSchema());
   EXPECT_EQ(schema["$schema"], "http://json-schema.org/draft-07/schema#");
   for (const char* section :
        {"name", "robot", "robot_base", "table", "part", "scanner", "obstacles", "constraints",
@@ -67,21 +67,21 @@ TEST(JobSchema, AjvValidatesEveryBundledJobAndRejectsMisspeltKeys) {
   }
   const fs::path dir = fs::temp_directory_path() / ("scanplan_schema_" + std::to_string(getpid()));
   fs::create_directories(dir);
-  writeFile(dir / "job.schema.json", cli::jobSchema());
+  writeFile(dir / "job.schema.json", config::jobSchema());
   // file → whether it must be valid
   std::vector<std::pair<fs::path, bool>> cases;
   for (const auto& entry : fs::directory_iterator(test::sourceDir() / "data/jobs")) {
     cases.emplace_back(entry.path(), true);
     // Its resolved form too, where it loads (bunny_shared.yaml needs ../shared).
-    cli::JobSpec job;
+    config::JobSpec job;
     try {
-      job = cli::loadJob(entry.path());
+      job = config::loadJob(entry.path());
     } catch (const InputError& e) {
       if (fs::exists(test::sharedDataDir())) ADD_FAILURE() << e.what();
       continue;
     }
     const fs::path shown = dir / ("shown_" + entry.path().filename().string());
-    writeFile(shown, cli::jobToYaml(job));
+    writeFile(shown, config::jobToYaml(job));
     cases.emplace_back(shown, true);
   }
   const std::string base = "robot: r.yaml\npart: {mesh: p.stl}\n";

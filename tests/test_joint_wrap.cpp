@@ -1,4 +1,4 @@
-// Joint wrap (issue 18 item 2): the nearest whole-turn equivalent, continuous joints through
+// Joint wrap: the nearest whole-turn equivalent, continuous joints through
 // ±180° in the trajectory, its validation and its programs, the maps' joint-wrap sheets, a long
 // pass on which J6 turns more than a whole turn, and Ray Shooting executable wherever DP is.
 
@@ -10,16 +10,16 @@
 #include <string>
 #include <vector>
 
-#include "cli/config/job.h"
-#include "cli/config/problem.h"
-#include "cli/programs/programs.h"
+#include <scanplan/config/job.h>
+#include <scanplan/config/to_problem.h>
+#include <scanplan/kinematics/joint_wrap.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/pipeline/plan_scan.h>
+#include <scanplan/planner/trajectory_builder.h>
+#include <scanplan/planner/validation.h>
+#include <scanplan/planner/wrap_sheets.h>
+#include <scanplan/programs/programs.h>
 #include "cli_support.h"
-#include "kinematics/joint_wrap.h"
-#include "kinematics/units.h"
-#include "pipeline/plan_scan.h"
-#include "planner/joint_wrap.h"
-#include "planner/trajectory_builder.h"
-#include "planner/validation.h"
 #include "test_support.h"
 
 namespace scanplan {
@@ -86,13 +86,13 @@ TEST(TurnsMoreThanOnce, OnlyRangesBeyondAWholeTurn) {
 
 // The demo cell's Viper (J4 ±190°), scanner spinning clear of everything: J4 from 170° to 188°.
 struct Cell {
-  cli::JobSpec job;
+  config::JobSpec job;
   kinematics::CellModel cell;
 };
 Cell demoCell() {
-  cli::JobSpec job =
-      cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", test::kLightDemo);
-  kinematics::CellModel cell = cli::buildCell(job);
+  config::JobSpec job =
+      config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", test::kLightDemo);
+  kinematics::CellModel cell = config::buildCell(job);
   return {std::move(job), std::move(cell)};
 }
 
@@ -114,7 +114,7 @@ Trajectory j4Through180(bool wrapped) {
 // whole-turn jump in 0.1 s, far over J4's speed.
 TEST(JointWrapValidation, UnwrappedCrossingIsValidAWrappedOneIsAJump) {
   const Cell d = demoCell();
-  const collision::Scene scene(d.cell, cli::clearanceConfig(d.job));
+  const collision::Scene scene(d.cell, config::clearanceConfig(d.job));
   const planner::ValidationReport ok =
       planner::validateTrajectory(scene, j4Through180(false), {.sample_dt = 0.01});
   EXPECT_TRUE(ok.valid) << (ok.violations.empty() ? "" : planner::describe(ok.violations[0]));
@@ -131,7 +131,7 @@ TEST(JointWrapValidation, UnwrappedCrossingIsValidAWrappedOneIsAJump) {
 // continuously to 188°, inside the Viper's ±190°, and reproduces every pose.
 TEST(JointWrapTrajectory, FollowsJ4Through180) {
   const Cell d = demoCell();
-  const collision::Scene scene(d.cell, cli::clearanceConfig(d.job));
+  const collision::Scene scene(d.cell, config::clearanceConfig(d.job));
   const Trajectory want = j4Through180(false);
   kinematics::ScanPath path;
   path.dt = 0.1;
@@ -143,7 +143,7 @@ TEST(JointWrapTrajectory, FollowsJ4Through180) {
   }
   const std::vector<double> thetas(path.samples.size(), theta);
   const planner::TrajectoryBuild built =
-      planner::buildTrajectory(scene, cli::constraintSettings(d.job), path, thetas,
+      planner::buildTrajectory(scene, config::constraintSettings(d.job), path, thetas,
                                d.cell.robot.branchOf(want.samples.front().q));
   ASSERT_TRUE(built.ok) << built.reason;
   ASSERT_EQ(built.trajectory.samples.size(), want.samples.size());
@@ -161,7 +161,7 @@ TEST(JointWrapTrajectory, FollowsJ4Through180) {
                           X_PW * d.cell.X_WB * d.cell.robot.fk(q) * d.cell.scanner.X_FS, true});
   }
   const planner::TrajectoryBuild other = planner::buildTrajectory(
-      scene, cli::constraintSettings(d.job), on, std::vector<double>(on.samples.size(), theta),
+      scene, config::constraintSettings(d.job), on, std::vector<double>(on.samples.size(), theta),
       d.cell.robot.branchOf(want.samples.front().q));
   ASSERT_TRUE(other.ok) << other.reason;
   EXPECT_NEAR(other.trajectory.samples.front().q(3), deg(-190.0), 1e-9);
@@ -172,9 +172,9 @@ TEST(JointWrapTrajectory, FollowsJ4Through180) {
 TEST(JointWrapPrograms, WriteTheUnwrappedValues) {
   const Cell d = demoCell();
   const Trajectory tr = j4Through180(false);
-  for (const std::string& name : cli::programFormatNames()) {
-    const cli::ProgramFiles files =
-        cli::writeProgram(tr, d.cell.robot, *cli::parseProgramFormat(name), {});
+  for (const std::string& name : programs::programFormatNames()) {
+    const programs::ProgramFiles files =
+        programs::writeProgram(tr, d.cell.robot, *programs::parseProgramFormat(name), {});
     const std::string& text = files.files.front().second;
     const std::string want = name == "urscript" ? "3.281218994" : "188";  // 188° in rad, 9 dp
     EXPECT_NE(text.find(want), std::string::npos) << name << "\n" << text;
@@ -187,8 +187,8 @@ pipeline::ScanPlan plan(const std::string& job_file,
                         const std::string& method = "") {
   std::vector<std::string> all = {"simulation.enabled=false"};
   all.insert(all.end(), overrides.begin(), overrides.end());
-  const cli::JobSpec job = cli::loadJob(test::sourceDir() / job_file, all);
-  return pipeline::planScan(cli::toProblem(job), {.method = method});
+  const config::JobSpec job = config::loadJob(test::sourceDir() / job_file, all);
+  return pipeline::planScan(config::toProblem(job), {.method = method});
 }
 
 // The largest step of joint j between samples, and its range, rad.
@@ -253,7 +253,7 @@ TEST(JointWrapPlan, RayShootingIsExecutableWhereverDpIs) {
                                     "map.angle_step_deg=4"};
     all.insert(all.end(), sets.begin(), sets.end());
     const pipeline::ScanProblem problem =
-        cli::toProblem(cli::loadJob(test::sourceDir() / file, all));
+        config::toProblem(config::loadJob(test::sourceDir() / file, all));
     const auto prepared = pipeline::prepareScan(problem);
     const pipeline::ScanPlan dp = pipeline::planPrepared(problem, prepared, {.method = "dp"});
     const pipeline::ScanPlan ray = pipeline::planPrepared(problem, prepared, {.method = "ray"});

@@ -4,9 +4,9 @@
 
 #include <gtest/gtest.h>
 
-#include "kinematics/error.h"
-#include "kinematics/pose.h"
-#include "kinematics/units.h"
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/pose.h>
+#include <scanplan/kinematics/units.h>
 #include "tests/test_support.h"
 
 namespace scanplan::kinematics {
@@ -15,7 +15,7 @@ namespace {
 using test::bundledRobot;
 using test::randomJoints;
 
-// Issue 2's acceptance bounds for FK(IK(X)) = X.
+// Acceptance bounds for FK(IK(X)) = X.
 constexpr double kPositionTol = 1e-9;  // m (1e-6 mm)
 constexpr double kRotationTol = 1e-9;  // rad
 // Joint-space agreement for IK(FK(q)) ∋ q; looser than the pose bound because joint error

@@ -1,6 +1,6 @@
-#include "kinematics/mesh.h"
+#include <scanplan/kinematics/mesh.h>
 
-#include "kinematics/error.h"
+#include <scanplan/kinematics/error.h>
 
 #include <gtest/gtest.h>
 #include <sys/stat.h>
@@ -649,7 +649,7 @@ TEST(SharedRobotMeshes, ViperLinksLoadInMetres) {
 }
 
 }  // namespace
-// Inputs that made the loader loop, allocate without end or wait forever (issue 17): each is
+// Inputs that made the loader loop, allocate without end or wait forever: each is
 // refused by the pre-check, quickly, naming the file.
 TEST_F(MeshLoadTest, TruncatedHeadersHugeCountsAndPipesAreRefusedBeforeTheLoader) {
   const auto header_only = write("header.ply", "ply\nformat ascii 1.0\n");
@@ -704,7 +704,7 @@ TEST_F(MeshLoadTest, PlyEndHeaderWithMoreOnItsLineIsAnInputErrorNotAHang) {
   EXPECT_EQ(loadError(write("blank.ply", header + "end_header \t\r\n" + body)), "<no exception>");
 }
 
-// Robustness catalogue (issue 17): assimp's OFF reader clamps a face index past the last vertex
+// Robustness catalogue: assimp's OFF reader clamps a face index past the last vertex
 // to the last vertex (and reads a negative one as 0), without a word. The pre-check reads the
 // faces itself and refuses them naming the face, the index and the vertex count.
 TEST_F(MeshLoadTest, OffFaceIndicesOutOfRangeOrNotNumbersAreRefusedNamingTheFace) {
@@ -734,7 +734,7 @@ TEST_F(MeshLoadTest, OffFaceIndicesOutOfRangeOrNotNumbersAreRefusedNamingTheFace
                   {"comment.off", "line 7 ('# a comment'), OFF face 2 of 2", "vertex count"}));
 }
 
-// Robustness catalogue (issue 17): an ASCII PLY with fewer elements than its header gives, or
+// Robustness catalogue: an ASCII PLY with fewer elements than its header gives, or
 // an element cut short, was read with the rest made up (0) by assimp.
 TEST_F(MeshLoadTest, AsciiPlyBodyMustHoldWhatItsHeaderGives) {
   const Soup soup = tetrahedron();

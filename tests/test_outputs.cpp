@@ -1,4 +1,4 @@
-// The output writers of issue 20 item 6 against the ones they replaced (WriteSettings::reference):
+// The fast output writers against the ones they replaced (WriteSettings::reference):
 // the same files — byte for byte, or pixel for pixel where only PNG compression differs —, the
 // streamed and pieced atomic writes, and the views drawn together as each is drawn alone.
 #include <unistd.h>
@@ -18,14 +18,14 @@
 
 #include <gtest/gtest.h>
 
+#include <scanplan/config/job.h>
+#include <scanplan/config/to_problem.h>
+#include <scanplan/kinematics/error.h>
+#include <scanplan/pipeline/plan_scan.h>
 #include "cli/commands/commands.h"
-#include "cli/config/job.h"
-#include "cli/config/problem.h"
 #include "cli/io/output.h"
 #include "cli/plot/image_io.h"
 #include "io_support.h"
-#include "kinematics/error.h"
-#include "pipeline/plan_scan.h"
 #include "test_support.h"
 
 namespace {
@@ -115,8 +115,9 @@ TEST_F(Outputs, TodaysWritersGiveTheReferencesFilesByteForByteOrPixelForPixel) {
   std::vector<std::string> overrides = test::kLightDemo;
   overrides.push_back("map.branch=RIGHTY ABOVE NOFLIP");
   overrides.push_back("map.angle_step_deg=2");
-  const cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", overrides);
-  const pipeline::ScanProblem problem = cli::toProblem(job);
+  const config::JobSpec job =
+      config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", overrides);
+  const pipeline::ScanProblem problem = config::toProblem(job);
   const pipeline::ScanPlan plan = pipeline::planScan(problem);
   ASSERT_TRUE(plan.planned() && plan.simulation) << plan.reason;
   cli::writePlanOutputs(dir_ / "today", job, problem, plan);

@@ -10,14 +10,14 @@
 
 #include <gtest/gtest.h>
 
-#include "cli/config/job.h"
-#include "cli/config/problem.h"
-#include "kinematics/placement.h"
-#include "kinematics/units.h"
+#include <scanplan/config/job.h>
+#include <scanplan/config/to_problem.h>
+#include <scanplan/kinematics/placement.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/pipeline/plan_scan.h>
+#include <scanplan/planner/dp_planner.h>
+#include <scanplan/planner/registry.h>
 #include "map_support.h"
-#include "pipeline/plan_scan.h"
-#include "planner/dp_planner.h"
-#include "planner/planner.h"
 #include "test_support.h"
 
 namespace {
@@ -32,7 +32,8 @@ pipeline::ScanProblem lightDemo(std::vector<std::string> extra = {}) {
   overrides.push_back("map.angle_step_deg=2");
   overrides.push_back("simulation.enabled=false");
   for (auto& e : extra) overrides.push_back(std::move(e));
-  return cli::toProblem(cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", overrides));
+  return config::toProblem(
+      config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", overrides));
 }
 
 // Positions agree to 1 µm and orientations to 1 µrad: IK solutions reproduce FK to ~1e-12 m,
@@ -104,11 +105,11 @@ TEST(PlanScan, BadProblemsAreInputErrorsNamingTheField) {
 // `part.place: table`: the part's lowest point on the table top and its box centred on the axis,
 // whatever the mesh's own origin (here the housing turned y-up and yawed 30°).
 TEST(PartPlacement, TableRestsTheLowestPointOnTheTopCentredOnTheAxis) {
-  const cli::JobSpec job = cli::loadJob(
+  const config::JobSpec job = config::loadJob(
       test::sourceDir() / "data/jobs/demo_rings.yaml",
       {"part.up_axis=y", "part.place=table", "part.pose={xyz_mm: [0, 0, 0], rpy_deg: [0, 0, 30]}"});
-  const kinematics::CellModel cell = cli::buildCell(job);
-  const kinematics::LoadedMesh part = cli::loadPart(job, cell);
+  const kinematics::CellModel cell = config::buildCell(job);
+  const kinematics::LoadedMesh part = config::loadPart(job, cell);
   Eigen::AlignedBox3d box_R;
   for (const Eigen::Vector3d& v : part.mesh.vertices) box_R.extend(cell.part.X_RP * v);
   EXPECT_NEAR(box_R.min().z(), 0.0, 1e-12);
@@ -119,19 +120,19 @@ TEST(PartPlacement, TableRestsTheLowestPointOnTheTopCentredOnTheAxis) {
 }
 
 TEST(PartPlacement, APartBelowTheTableTopIsAnErrorNamingThePose) {
-  const cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml",
-                                        {"part.pose.xyz_mm=[0, 0, -5]"});
-  const kinematics::CellModel cell = cli::buildCell(job);
+  const config::JobSpec job = config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml",
+                                              {"part.pose.xyz_mm=[0, 0, -5]"});
+  const kinematics::CellModel cell = config::buildCell(job);
   EXPECT_TRUE(test::throwsInputError(
-      [&] { cli::loadPart(job, cell); },
+      [&] { config::loadPart(job, cell); },
       {"demo_rings.yaml", "part.pose", "5.00 mm below the table top", "part.place: table"}));
 }
 
 TEST(PartPlacement, APartBeyondTheArmsReachIsAnErrorNamingTheTable) {
-  const cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml",
-                                        {"table.axis.xyz_mm=[3000, 0, 0]"});
-  const kinematics::CellModel cell = cli::buildCell(job);
-  EXPECT_TRUE(test::throwsInputError([&] { cli::loadPart(job, cell); },
+  const config::JobSpec job = config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml",
+                                              {"table.axis.xyz_mm=[3000, 0, 0]"});
+  const kinematics::CellModel cell = config::buildCell(job);
+  EXPECT_TRUE(test::throwsInputError([&] { config::loadPart(job, cell); },
                                      {"demo_rings.yaml", "within the arm's reach", "table.axis"}));
 }
 
@@ -139,8 +140,8 @@ TEST(PartPlacement, APartBeyondTheArmsReachIsAnErrorNamingTheTable) {
 // vertex here lies within `lever` of the wrist centre of an in-limit pose with the table at 0,
 // since the flange is c4 from the wrist centre; so none may be reported beyond reach.
 TEST(PartPlacement, PartReachNeverCallsAReachablePointBeyond) {
-  const cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml");
-  kinematics::CellModel cell = cli::buildCell(job);
+  const config::JobSpec job = config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml");
+  kinematics::CellModel cell = config::buildCell(job);
   cell.part.X_RP = Eigen::Isometry3d::Identity();
   const double c4 = cell.robot.definition().opw.c4, lever = 0.2;
   const Eigen::Isometry3d X_RB = cell.table.X_WR(0.0).inverse() * cell.X_WB;
@@ -169,9 +170,9 @@ TEST(PartPlacement, PartReachNeverCallsAReachablePointBeyond) {
 TEST(PartPlacement, PlacedRingHeightsCountFromTheTableTop) {
   const auto path = [](std::vector<std::string> overrides) {
     overrides.insert(overrides.begin(), test::kLightDemo.begin(), test::kLightDemo.end());
-    const cli::JobSpec job =
-        cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", overrides);
-    return cli::toProblem(job).path;
+    const config::JobSpec job =
+        config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", overrides);
+    return config::toProblem(job).path;
   };
   const scanplan::scanner::PathRequest on_table = path({});
   const scanplan::scanner::PathRequest lifted =
@@ -206,7 +207,9 @@ TEST(PartPlacement, PlacedOnTableAndPartExtentOnAKnownCube) {
 
 TEST(PartPlacement, AnUnknownPlacementNamesTheKeyAndTheChoices) {
   EXPECT_TRUE(test::throwsInputError(
-      [] { cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", {"part.place=floor"}); },
+      [] {
+        config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", {"part.place=floor"});
+      },
       {"part.place", "floor", "none", "table"}));
 }
 
@@ -262,10 +265,10 @@ TEST(NoPath, TheReasonNamesTheTimeTheConstraintAndTheBodiesOrJoint) {
   const auto reason = [](std::vector<std::string> set, double j5_limit_deg = 120.0) {
     set.insert(set.end(), test::kLightDemo.begin(), test::kLightDemo.end());
     set.push_back("simulation.enabled=false");
-    cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", set);
+    config::JobSpec job = config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", set);
     job.robot.dh[4].min_deg = -j5_limit_deg;
     job.robot.dh[4].max_deg = j5_limit_deg;
-    const pipeline::ScanPlan plan = pipeline::planScan(cli::toProblem(job));
+    const pipeline::ScanPlan plan = pipeline::planScan(config::toProblem(job));
     EXPECT_EQ(plan.status, pipeline::ScanStatus::kNoPath);
     return plan.reason;
   };

@@ -14,9 +14,9 @@
 
 #include <tbb/global_control.h>
 
-#include "planner/config_map.h"
-#include "planner/dp_planner.h"
-#include "planner/objective.h"
+#include <scanplan/planner/config_map.h>
+#include <scanplan/planner/dp_planner.h>
+#include <scanplan/planner/objective.h>
 
 #include "map_support.h"
 
@@ -363,7 +363,7 @@ void expectSamePlan(const PlanResult& fast, const PlanResult& ref) {
   EXPECT_EQ(fast.terms.min_f_sample, ref.terms.min_f_sample);
 }
 
-// planDp holds its layers step-major and relaxes them over angles in vector lanes (issue 20);
+// planDp holds its layers step-major and relaxes them over angles in vector lanes;
 // every kernel (portable, AVX2, AVX-512, as far as this CPU runs them) must find the
 // reference's path, values and terms bit for bit, on continuous and limited tables, with and
 // without a fixed start, with wide and narrow acceleration windows (A from 0 to several

@@ -13,10 +13,10 @@
 #include <string>
 #include <vector>
 
-#include "planner/config_map.h"
-#include "planner/dp_planner.h"
-#include "planner/objective.h"
-#include "planner/ompl_planner.h"
+#include <scanplan/planner/config_map.h>
+#include <scanplan/planner/dp_planner.h>
+#include <scanplan/planner/objective.h>
+#include <scanplan/planner/ompl_planner.h>
 
 #include "map_support.h"
 

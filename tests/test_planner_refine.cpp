@@ -15,11 +15,11 @@
 #include <utility>
 #include <vector>
 
-#include "planner/config_map.h"
-#include "planner/dp_planner.h"
-#include "planner/objective.h"
-#include "planner/ray_shooting.h"
-#include "planner/refine.h"
+#include <scanplan/planner/config_map.h>
+#include <scanplan/planner/dp_planner.h>
+#include <scanplan/planner/objective.h>
+#include <scanplan/planner/ray_shooting.h>
+#include <scanplan/planner/refine.h>
 
 #include "map_support.h"
 

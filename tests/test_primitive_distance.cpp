@@ -1,7 +1,7 @@
 // The closed-form primitive distances (collision/primitive_distance) against plain
 // fcl::distance on randomized pairs: every pair kind, separated, close and overlapping. Exact
 // forms agree to 1e-9 m; the cylinder pairs that are only bounded never exceed FCL's distance.
-#include "collision/primitive_distance.h"
+#include <scanplan/collision/primitive_distance.h>
 
 #include <gtest/gtest.h>
 
@@ -21,7 +21,7 @@ namespace {
 using Kind = Primitive::Kind;
 
 // FCL's GJK runs here to 1e-12 m (its default, 1e-6 m, is what the clearance query uses); its
-// closed forms (capsule–capsule) are exact. 1e-9 m is the agreement bound.
+// closed forms (capsule–capsule) are exact. 1e-9 m is the agreement bound.
 constexpr double kAgree = 1e-9;
 
 std::shared_ptr<fcl::CollisionGeometryd> fclShape(const Primitive& p) {

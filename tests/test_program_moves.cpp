@@ -12,13 +12,13 @@
 
 #include <gtest/gtest.h>
 
-#include "cli/config/job.h"
-#include "cli/config/problem.h"
-#include "collision/clearance.h"
-#include "kinematics/ptp_move.h"
-#include "kinematics/units.h"
-#include "pipeline/plan_scan.h"
-#include "pipeline/program_moves.h"
+#include <scanplan/collision/clearance.h>
+#include <scanplan/config/job.h>
+#include <scanplan/config/to_problem.h>
+#include <scanplan/kinematics/ptp_move.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/pipeline/plan_scan.h>
+#include <scanplan/pipeline/program_moves.h>
 #include "test_support.h"
 #include "tests/part_support.h"
 
@@ -44,7 +44,7 @@ pipeline::ScanProblem boxProblem(const std::filesystem::path& mesh,
                                "map.angle_step_deg=4",
                                "scanner.rays_per_profile=80"};
   set.insert(set.end(), extra.begin(), extra.end());
-  return cli::toProblem(cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", set));
+  return config::toProblem(config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", set));
 }
 
 class ProgramMoves : public ::testing::Test {

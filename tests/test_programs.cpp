@@ -17,26 +17,26 @@
 #include <string>
 #include <vector>
 
-#include "cli/config/job.h"
-#include "cli/programs/detail/program_text.h"
-#include "cli/programs/programs.h"
-#include "collision/scene.h"
-#include "kinematics/error.h"
-#include "kinematics/trajectory.h"
-#include "kinematics/units.h"
-#include "planner/validation.h"
+#include <scanplan/collision/scene.h>
+#include <scanplan/config/job.h>
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/trajectory.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/planner/validation.h>
+#include <scanplan/programs/detail/program_text.h>
+#include <scanplan/programs/programs.h>
 #include "test_support.h"
 
 namespace {
 
 using namespace scanplan;
-using cli::ProgramFiles;
-using cli::ProgramFormat;
-using cli::ProgramOptions;
 using kinematics::JointVector;
 using kinematics::RobotModel;
 using kinematics::Trajectory;
 using kinematics::TrajectorySample;
+using programs::ProgramFiles;
+using programs::ProgramFormat;
+using programs::ProgramOptions;
 namespace fs = std::filesystem;
 
 // The programs print degrees, times and table angles with 6 decimals: a value read back is
@@ -128,7 +128,7 @@ Trajectory randomTrajectory(const RobotModel& robot, std::mt19937& rng, std::siz
   return tr;
 }
 
-const std::string& content(const ProgramFiles& files, const std::string& name) {
+const std::string& content(const programs::ProgramFiles& files, const std::string& name) {
   for (const auto& [file, text] : files.files) {
     if (file == name) return text;
   }
@@ -190,18 +190,18 @@ class Programs : public ::testing::Test {
 };
 
 TEST(ProgramFormatNames, ParseEveryNameAndRejectOthers) {
-  for (const std::string& name : cli::programFormatNames()) {
-    const auto format = cli::parseProgramFormat(name);
+  for (const std::string& name : programs::programFormatNames()) {
+    const auto format = programs::parseProgramFormat(name);
     ASSERT_TRUE(format) << name;
-    EXPECT_EQ(cli::programFormatName(*format), name);
+    EXPECT_EQ(programs::programFormatName(*format), name);
   }
-  EXPECT_EQ(cli::parseProgramFormat("VPlus"), ProgramFormat::kVplus);
-  EXPECT_FALSE(cli::parseProgramFormat("v+"));
-  EXPECT_FALSE(cli::parseProgramFormat(""));
+  EXPECT_EQ(programs::parseProgramFormat("VPlus"), programs::ProgramFormat::kVplus);
+  EXPECT_FALSE(programs::parseProgramFormat("v+"));
+  EXPECT_FALSE(programs::parseProgramFormat(""));
 }
 
 TEST_F(Programs, EveryFormatMatchesItsGoldenFiles) {
-  ProgramOptions options;
+  programs::ProgramOptions options;
   options.name = "scan";
   options.job = "golden";
   options.table_max_speed = deg(30.0);
@@ -213,9 +213,9 @@ TEST_F(Programs, EveryFormatMatchesItsGoldenFiles) {
   options.table_endless = true;
   options.servo_period = 0.05;  // a short golden file
   const Trajectory tr = smallTrajectory();
-  for (const std::string& name : cli::programFormatNames()) {
-    const ProgramFiles files =
-        cli::writeProgram(tr, viper_, *cli::parseProgramFormat(name), options);
+  for (const std::string& name : programs::programFormatNames()) {
+    const programs::ProgramFiles files =
+        programs::writeProgram(tr, viper_, *programs::parseProgramFormat(name), options);
     ASSERT_FALSE(files.files.empty()) << name;
     EXPECT_EQ(files.over_speed_segments, 1u) << name;
     // J6: 70° in 0.1 s of 600°/s.
@@ -230,10 +230,11 @@ TEST_F(Programs, EachLanguageBeginsEndsAndMovesOncePerSample) {
   std::mt19937 rng(11);
   const Trajectory tr = randomTrajectory(viper_, rng, 40);
   const std::size_t n = tr.samples.size();
-  ProgramOptions options;
+  programs::ProgramOptions options;
   options.name = "3D part #1";
 
-  const ProgramFiles vplus = cli::writeProgram(tr, viper_, ProgramFormat::kVplus, options);
+  const programs::ProgramFiles vplus =
+      programs::writeProgram(tr, viper_, programs::ProgramFormat::kVplus, options);
   ASSERT_EQ(vplus.files.size(), 2u);
   EXPECT_EQ(vplus.files[0].first, "p3d_part__1.v2");
   EXPECT_EQ(vplus.files[1].first, "p3d_part__1_table.csv");
@@ -250,7 +251,8 @@ TEST_F(Programs, EachLanguageBeginsEndsAndMovesOncePerSample) {
             std::string::npos);
   EXPECT_EQ(lines(vplus.files[1].second).size(), 1 + n);  // the header row, then the rows
 
-  const ProgramFiles krl = cli::writeProgram(tr, viper_, ProgramFormat::kKrl, options);
+  const programs::ProgramFiles krl =
+      programs::writeProgram(tr, viper_, programs::ProgramFormat::kKrl, options);
   const std::string& src = content(krl, "p3D_part__1.src");
   EXPECT_EQ(src.rfind("DEF p3D_part__1( )\n", 0), 0u);
   EXPECT_EQ(count(src, "\n  PTP {A1 "), 1u);  // the approach, then one SPTP per step
@@ -263,7 +265,8 @@ TEST_F(Programs, EachLanguageBeginsEndsAndMovesOncePerSample) {
   EXPECT_EQ(count(src, "\nEND\n"), 2u);  // the program and its velocity subroutine
   EXPECT_TRUE(src.ends_with("END\n"));
 
-  const ProgramFiles rapid = cli::writeProgram(tr, viper_, ProgramFormat::kRapid, options);
+  const programs::ProgramFiles rapid =
+      programs::writeProgram(tr, viper_, programs::ProgramFormat::kRapid, options);
   const std::string& mod = content(rapid, "p3D_part__1.mod");
   EXPECT_EQ(mod.rfind("MODULE MOD_p3D_part__1\n", 0), 0u);
   EXPECT_NE(mod.find("\n  PROC p3D_part__1()\n"), std::string::npos);
@@ -274,7 +277,8 @@ TEST_F(Programs, EachLanguageBeginsEndsAndMovesOncePerSample) {
   EXPECT_EQ(count(mod, "v1000\\T:=0.100000, "), n - 1);
   EXPECT_EQ(count(mod, ", fine, tool0;\n"), 2u);
 
-  const ProgramFiles ur = cli::writeProgram(tr, viper_, ProgramFormat::kUrscript, options);
+  const programs::ProgramFiles ur =
+      programs::writeProgram(tr, viper_, programs::ProgramFormat::kUrscript, options);
   const std::string& script = content(ur, "p3D_part__1.script");
   EXPECT_EQ(script.rfind("def p3D_part__1():\n", 0), 0u);
   EXPECT_TRUE(script.ends_with("\nend\np3D_part__1()\n"));  // defined, then run
@@ -282,13 +286,15 @@ TEST_F(Programs, EachLanguageBeginsEndsAndMovesOncePerSample) {
   EXPECT_EQ(count(script, "\n  a = [0, "), 1u);                    // the start's row
   EXPECT_EQ(count(script, "\n  a = seg(a, ["), n - 1);             // a row per later sample
   EXPECT_EQ(count(script, "\n    table_move(d[1], d[0])\n"), 1u);  // in seg(), once per row
-  EXPECT_EQ(cli::readProgram(script, ProgramFormat::kUrscript, "p").trajectory.samples.size(),
+  EXPECT_EQ(programs::readProgram(script, programs::ProgramFormat::kUrscript, "p")
+                .trajectory.samples.size(),
             static_cast<std::size_t>(std::round(tr.duration() / 0.008)) + 1);
   EXPECT_EQ(count(script, "\n  table_start("), 1u);
   EXPECT_EQ(count(script, "\n  set_tcp(p["), 1u);
   EXPECT_EQ(count(script, "\n  stopj("), 1u);
 
-  const ProgramFiles csv = cli::writeProgram(tr, viper_, ProgramFormat::kCsv, options);
+  const programs::ProgramFiles csv =
+      programs::writeProgram(tr, viper_, programs::ProgramFormat::kCsv, options);
   ASSERT_EQ(csv.files.size(), 1u);
   EXPECT_EQ(csv.files[0].first, "p3D_part__1.csv");
   EXPECT_EQ(csv.files[0].second, kinematics::trajectoryToCsv(tr));
@@ -299,12 +305,14 @@ TEST_F(Programs, CsvAndVplusReadBackEqualToThePrintedPrecision) {
   const Trajectory tr = randomTrajectory(viper_, rng, 200);
   ASSERT_GT(toDeg(tr.samples.back().theta), 360.0 + 180.0);
 
-  const ProgramFiles csv = cli::writeProgram(tr, viper_, ProgramFormat::kCsv, {});
+  const programs::ProgramFiles csv =
+      programs::writeProgram(tr, viper_, programs::ProgramFormat::kCsv, {});
   const Trajectory from_csv = kinematics::parseTrajectoryCsv(csv.files[0].second, "scan.csv");
   EXPECT_TRUE(sameToPrintedPrecision(from_csv, tr));
 
-  const ProgramFiles vplus = cli::writeProgram(tr, viper_, ProgramFormat::kVplus, {});
-  const Trajectory from_vplus = cli::readVplusProgram(vplus.files[0].second, "scan.v2");
+  const programs::ProgramFiles vplus =
+      programs::writeProgram(tr, viper_, programs::ProgramFormat::kVplus, {});
+  const Trajectory from_vplus = programs::readVplusProgram(vplus.files[0].second, "scan.v2");
   EXPECT_TRUE(sameToPrintedPrecision(from_vplus, tr));
   for (const TrajectorySample& s : from_vplus.samples) {
     EXPECT_TRUE(std::isnan(s.f));
@@ -357,7 +365,8 @@ TEST_F(Programs, CsvAndVplusReadBackEqualToThePrintedPrecision) {
 TEST_F(Programs, VplusSpeedsReproduceThePlannedTiming) {
   std::mt19937 rng(3);
   const Trajectory tr = randomTrajectory(viper_, rng, 200);
-  const ProgramFiles files = cli::writeProgram(tr, viper_, ProgramFormat::kVplus, {});
+  const programs::ProgramFiles files =
+      programs::writeProgram(tr, viper_, programs::ProgramFormat::kVplus, {});
   EXPECT_EQ(files.over_speed_segments, 4u);  // k = 25, 75, 125, 175
   const std::string& text = files.files[0].second;
   EXPECT_EQ(count(text, "\n; WARNING: step "), files.over_speed_segments);
@@ -385,14 +394,16 @@ TEST_F(Programs, VplusSpeedsReproduceThePlannedTiming) {
 TEST_F(Programs, KrlTimeBlocksReproduceThePlannedTiming) {
   std::mt19937 rng(4);
   const Trajectory tr = randomTrajectory(viper_, rng, 200);
-  const ProgramFiles files = cli::writeProgram(tr, viper_, ProgramFormat::kKrl, {});
+  const programs::ProgramFiles files =
+      programs::writeProgram(tr, viper_, programs::ProgramFormat::kKrl, {});
   EXPECT_EQ(files.over_speed_segments, 4u);
   const std::string& text = files.files[0].second;
   EXPECT_EQ(count(text, "\n; WARNING: step "), files.over_speed_segments);
   EXPECT_EQ(count(text, "\n  PTP {"), 1u);
   EXPECT_EQ(count(text, "\n    SPTP {"), tr.samples.size() - 1);
   EXPECT_EQ(count(text, "\n    TIME_BLOCK PART="), tr.samples.size() - 1);
-  const cli::ProgramReading back = cli::readProgram(text, ProgramFormat::kKrl, "scan.src");
+  const programs::ProgramReading back =
+      programs::readProgram(text, programs::ProgramFormat::kKrl, "scan.src");
   EXPECT_TRUE(sameToPrintedPrecision(back.trajectory, tr, kKrlTimeTol));
 }
 
@@ -400,8 +411,9 @@ TEST_F(Programs, KrlTimeBlocksReproduceThePlannedTiming) {
 // the scanner is not scanning (between passes), each timed on its own.
 TEST_F(Programs, KrlSplitsLongMotionsIntoBlocksBetweenPasses) {
   std::mt19937 rng(5);
-  const Trajectory tr = randomTrajectory(viper_, rng, 2 * cli::kKrlMaxSegments + 300);
-  const std::string text = cli::writeProgram(tr, viper_, ProgramFormat::kKrl, {}).files[0].second;
+  const Trajectory tr = randomTrajectory(viper_, rng, 2 * programs::kKrlMaxSegments + 300);
+  const std::string text =
+      programs::writeProgram(tr, viper_, programs::ProgramFormat::kKrl, {}).files[0].second;
   const std::vector<std::string> all = lines(text);
   std::size_t segments = 0, blocks = 0;
   std::vector<std::size_t> ends;  // the sample each block ends at
@@ -412,7 +424,7 @@ TEST_F(Programs, KrlSplitsLongMotionsIntoBlocksBetweenPasses) {
     }
     if (line.rfind("    SPTP {", 0) == 0) ++segments;
     if (line == "  ENDSPLINE") {
-      EXPECT_LE(segments, cli::kKrlMaxSegments);
+      EXPECT_LE(segments, programs::kKrlMaxSegments);
       ends.push_back(ends.empty() ? segments : ends.back() + segments);
     }
   }
@@ -422,7 +434,8 @@ TEST_F(Programs, KrlSplitsLongMotionsIntoBlocksBetweenPasses) {
   for (std::size_t b = 0; b + 1 < ends.size(); ++b) {
     EXPECT_FALSE(tr.samples[ends[b]].scanning) << "block " << b << " ends at " << ends[b];
   }
-  const cli::ProgramReading back = cli::readProgram(text, ProgramFormat::kKrl, "scan.src");
+  const programs::ProgramReading back =
+      programs::readProgram(text, programs::ProgramFormat::kKrl, "scan.src");
   EXPECT_TRUE(sameToPrintedPrecision(back.trajectory, tr, kKrlTimeTol));
 }
 
@@ -444,20 +457,21 @@ JointVector plannedJoints(const Trajectory& tr, double t) {
 TEST_F(Programs, EveryFileIsAsciiWhateverTheJobIsCalled) {
   std::mt19937 rng(12);
   const Trajectory tr = randomTrajectory(viper_, rng, 20);
-  ProgramOptions options;
+  programs::ProgramOptions options;
   options.job = "Gehäuse · 3°";
   options.trigger.output = 1;
   options.payload_kg = 0.5;
-  for (const ProgramFormat format :
-       {ProgramFormat::kVplus, ProgramFormat::kKrl, ProgramFormat::kRapid, ProgramFormat::kUrscript,
-        ProgramFormat::kCsv}) {
-    const ProgramFiles files = cli::writeProgram(tr, viper_, format, options);
+  for (const programs::ProgramFormat format :
+       {programs::ProgramFormat::kVplus, programs::ProgramFormat::kKrl,
+        programs::ProgramFormat::kRapid, programs::ProgramFormat::kUrscript,
+        programs::ProgramFormat::kCsv}) {
+    const programs::ProgramFiles files = programs::writeProgram(tr, viper_, format, options);
     for (const auto& [name, content] : files.files) {
       const auto bad =
           std::find_if(content.begin(), content.end(), [](char ch) { return (ch & 0x80) != 0; });
       EXPECT_EQ(bad, content.end()) << name << " at byte " << (bad - content.begin());
     }
-    if (format == ProgramFormat::kKrl) {
+    if (format == programs::ProgramFormat::kKrl) {
       const std::string& src = files.files[0].second;
       EXPECT_NE(src.find("(A, B, C: Rz*Ry*Rx)"), std::string::npos);
       // The helper's declaration section holds its declarations only (no comment before them).
@@ -466,11 +480,11 @@ TEST_F(Programs, EveryFileIsAsciiWhateverTheJobIsCalled) {
       EXPECT_NE(src.find("Geh?use * 3 deg"), std::string::npos);
     }
     // Read back, the same motion (the readers need no more than ASCII).
-    if (format != ProgramFormat::kCsv) {
-      EXPECT_NO_THROW(cli::readProgram(files.files[0].second, format, "p"));
+    if (format != programs::ProgramFormat::kCsv) {
+      EXPECT_NO_THROW(programs::readProgram(files.files[0].second, format, "p"));
     }
   }
-  EXPECT_EQ(cli::detail::asciiText("a\u2264b \u2192 c\u00b2 \u4e2d"), "a<=b -> c^2 ?");
+  EXPECT_EQ(programs::detail::asciiText("a\u2264b \u2192 c\u00b2 \u4e2d"), "a<=b -> c^2 ?");
 }
 
 // URScript: the program is defined, then run; it uses the current function names (UR's script
@@ -478,11 +492,13 @@ TEST_F(Programs, EveryFileIsAsciiWhateverTheJobIsCalled) {
 TEST_F(Programs, UrscriptRunsWhatItDefinesWithCurrentFunctionNames) {
   std::mt19937 rng(9);
   const Trajectory tr = randomTrajectory(viper_, rng, 20);
-  ProgramOptions options;
+  programs::ProgramOptions options;
   options.trigger.output = 2;
   options.payload_kg = 0.9;
   const std::string text =
-      cli::writeProgram(tr, viper_, ProgramFormat::kUrscript, options).files[0].second;
+      programs::writeProgram(tr, viper_, programs::ProgramFormat::kUrscript, options)
+          .files[0]
+          .second;
   ASSERT_EQ(text.rfind("def scan():\n", 0), 0u);
   const std::string tail = "\nend\nscan()\n";
   ASSERT_GE(text.size(), tail.size());
@@ -491,7 +507,8 @@ TEST_F(Programs, UrscriptRunsWhatItDefinesWithCurrentFunctionNames) {
   EXPECT_EQ(count(text, "\n  set_target_payload(0.900, ["), 1u);
   EXPECT_EQ(count(text, "set_digital_out("), 0u);
   EXPECT_EQ(count(text, "set_payload("), 0u);
-  const cli::ProgramReading back = cli::readProgram(text, ProgramFormat::kUrscript, "p");
+  const programs::ProgramReading back =
+      programs::readProgram(text, programs::ProgramFormat::kUrscript, "p");
   EXPECT_NEAR(back.payload_kg, 0.9, 1e-12);
   EXPECT_FALSE(back.trajectory.samples.empty());
 }
@@ -502,14 +519,17 @@ TEST_F(Programs, UrscriptOfADemoLongScanFitsAndReadsBackToThePlan) {
   std::mt19937 rng(21);
   Trajectory tr = randomTrajectory(viper_, rng, 2800);
   for (TrajectorySample& s : tr.samples) s.t *= 1.6;
-  ProgramOptions options;
+  programs::ProgramOptions options;
   options.trigger.output = 1;
   const std::string text =
-      cli::writeProgram(tr, viper_, ProgramFormat::kUrscript, options).files[0].second;
-  EXPECT_LE(text.size(), cli::kUrscriptMaxBytes);
+      programs::writeProgram(tr, viper_, programs::ProgramFormat::kUrscript, options)
+          .files[0]
+          .second;
+  EXPECT_LE(text.size(), programs::kUrscriptMaxBytes);
   EXPECT_TRUE(text.ends_with("\nend\nscan()\n"));
-  const cli::ProgramReading back = cli::readProgram(text, ProgramFormat::kUrscript, "scan.script");
-  const Trajectory at = cli::atStepTimes(back);
+  const programs::ProgramReading back =
+      programs::readProgram(text, programs::ProgramFormat::kUrscript, "scan.script");
+  const Trajectory at = programs::atStepTimes(back);
   ASSERT_EQ(at.samples.size(), tr.samples.size());
   double worst = 0.0;
   for (std::size_t k = 0; k < tr.samples.size(); ++k) {
@@ -527,10 +547,12 @@ TEST_F(Programs, UrscriptServoStepsFollowThePlannedPath) {
   std::mt19937 rng(6);
   const Trajectory tr = randomTrajectory(viper_, rng, 60);
   for (const double period : {0.008, 0.002, 0.03}) {
-    ProgramOptions options;
+    programs::ProgramOptions options;
     options.servo_period = period;
     const std::string text =
-        cli::writeProgram(tr, viper_, ProgramFormat::kUrscript, options).files[0].second;
+        programs::writeProgram(tr, viper_, programs::ProgramFormat::kUrscript, options)
+            .files[0]
+            .second;
     const std::size_t steps =
         static_cast<std::size_t>(std::ceil((tr.duration() - tr.samples[0].t) / period - 1e-9));
     EXPECT_EQ(count(text, "\n  a = seg(a, ["), tr.samples.size() - 1) << period;
@@ -538,8 +560,8 @@ TEST_F(Programs, UrscriptServoStepsFollowThePlannedPath) {
     std::ostringstream t;
     t << std::fixed << std::setprecision(4) << period;
     EXPECT_EQ(count(text, "], t=" + t.str() + ", lookahead_time=0.03, gain=300)"), 2u);
-    const cli::ProgramReading back =
-        cli::readProgram(text, ProgramFormat::kUrscript, "scan.script");
+    const programs::ProgramReading back =
+        programs::readProgram(text, programs::ProgramFormat::kUrscript, "scan.script");
     ASSERT_EQ(back.trajectory.samples.size(), steps + 1);
     for (std::size_t i = 0; i < back.trajectory.samples.size(); ++i) {
       const TrajectorySample& b = back.trajectory.samples[i];
@@ -556,10 +578,10 @@ TEST_F(Programs, UrscriptServoStepsFollowThePlannedPath) {
 // The seed's point (§7.3): a program is checked before it is sent. A smooth motion in the demo
 // cell, written in every format and read back, passes validation like the plan itself.
 TEST(ProgramsValidate, ReadBackProgramsPassValidation) {
-  const cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml",
-                                        {"scan.dt_s=0.2", "map.angle_step_deg=2"});
-  const kinematics::CellModel cell = cli::buildCell(job);
-  const collision::Scene scene(cell, cli::clearanceConfig(job));
+  const config::JobSpec job = config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml",
+                                              {"scan.dt_s=0.2", "map.angle_step_deg=2"});
+  const kinematics::CellModel cell = config::buildCell(job);
+  const collision::Scene scene(cell, config::clearanceConfig(job));
   Trajectory tr;
   for (int k = 0; k <= 20; ++k) {
     const double t = 0.1 * k;
@@ -571,19 +593,19 @@ TEST(ProgramsValidate, ReadBackProgramsPassValidation) {
   const planner::ValidationSettings settings{.sample_dt = 0.01};
   ASSERT_TRUE(planner::validateTrajectory(scene, tr, settings).valid);
 
-  ProgramOptions options;
+  programs::ProgramOptions options;
   options.table_max_speed = cell.table.max_speed;
-  for (const std::string& name : cli::programFormatNames()) {
-    const ProgramFormat format = *cli::parseProgramFormat(name);
-    const ProgramFiles files = cli::writeProgram(tr, cell.robot, format, options);
+  for (const std::string& name : programs::programFormatNames()) {
+    const programs::ProgramFormat format = *programs::parseProgramFormat(name);
+    const programs::ProgramFiles files = programs::writeProgram(tr, cell.robot, format, options);
     EXPECT_EQ(files.over_speed_segments, 0u);
     // URScript's servo steps lie between the samples: checked at the step comments' times, where
     // the servo path cuts the table's corners by a fraction of its speed change times a period.
     // Read as `scanplan validate` reads it: with the cell's robot, whose joint speeds time V+
     // SPEED.
-    const Trajectory back =
-        cli::atStepTimes(cli::readProgram(files.files[0].second, format, name, &cell.robot));
-    if (format != ProgramFormat::kUrscript) {
+    const Trajectory back = programs::atStepTimes(
+        programs::readProgram(files.files[0].second, format, name, &cell.robot));
+    if (format != programs::ProgramFormat::kUrscript) {
       EXPECT_TRUE(sameToPrintedPrecision(back, tr)) << name;
     } else {
       ASSERT_EQ(back.samples.size(), tr.samples.size());
@@ -594,7 +616,7 @@ TEST(ProgramsValidate, ReadBackProgramsPassValidation) {
       }
     }
     const planner::ValidationReport report = planner::validateTrajectory(scene, back, settings);
-    EXPECT_TRUE(report.valid) << cli::programFormatName(format) << ": "
+    EXPECT_TRUE(report.valid) << programs::programFormatName(format) << ": "
                               << (report.violations.empty()
                                       ? std::string()
                                       : planner::describe(report.violations.front()));
@@ -602,8 +624,10 @@ TEST(ProgramsValidate, ReadBackProgramsPassValidation) {
 }
 
 // The switches a trigger must make: on at each pass's first sample, off at its last.
-std::vector<cli::TriggerSwitch> passSwitches(const Trajectory& tr, int output, bool on_at_start) {
-  std::vector<cli::TriggerSwitch> out;
+std::vector<programs::TriggerSwitch> passSwitches(const Trajectory& tr,
+                                                  int output,
+                                                  bool on_at_start) {
+  std::vector<programs::TriggerSwitch> out;
   const auto& s = tr.samples;
   for (std::size_t k = 0; k < s.size(); ++k) {
     if (!s[k].scanning || (k > 0 && s[k - 1].scanning)) continue;
@@ -643,7 +667,7 @@ TEST_F(Programs, EveryLanguageSetsToolPayloadAndTriggerAtThePasses) {
   }
   int case_number = 0;
   for (const Eigen::Matrix3d& R : rotations) {
-    ProgramOptions options;
+    programs::ProgramOptions options;
     options.tool.linear() = R;
     options.tool.translation() = Vector3d(0.0123, -0.0456, 0.1105);
     options.payload_kg = 1.25;
@@ -651,18 +675,20 @@ TEST_F(Programs, EveryLanguageSetsToolPayloadAndTriggerAtThePasses) {
     options.trigger.output = 7;
     options.trigger.on_at_scan_start = case_number % 2 == 0;
     const Trajectory& tr = case_number++ % 3 == 0 ? ends_scanning : ends_idle;
-    const std::vector<cli::TriggerSwitch> want =
+    const std::vector<programs::TriggerSwitch> want =
         passSwitches(tr, 7, options.trigger.on_at_scan_start);
     ASSERT_GE(want.size(), 30u);
-    for (const ProgramFormat format : {ProgramFormat::kVplus, ProgramFormat::kKrl,
-                                       ProgramFormat::kRapid, ProgramFormat::kUrscript}) {
-      const std::string name = cli::programFormatName(format);
-      const ProgramFiles files = cli::writeProgram(tr, viper_, format, options);
-      const cli::ProgramReading back = cli::readProgram(files.files[0].second, format, name);
+    for (const programs::ProgramFormat format :
+         {programs::ProgramFormat::kVplus, programs::ProgramFormat::kKrl,
+          programs::ProgramFormat::kRapid, programs::ProgramFormat::kUrscript}) {
+      const std::string name = programs::programFormatName(format);
+      const programs::ProgramFiles files = programs::writeProgram(tr, viper_, format, options);
+      const programs::ProgramReading back =
+          programs::readProgram(files.files[0].second, format, name);
       ASSERT_TRUE(back.tool) << name;
       EXPECT_LT((back.tool->linear() - R).cwiseAbs().maxCoeff(), 1e-7) << name << "\n" << R;
       EXPECT_LT((back.tool->translation() - options.tool.translation()).norm(), 1e-6) << name;
-      if (format == ProgramFormat::kVplus) {
+      if (format == programs::ProgramFormat::kVplus) {
         EXPECT_EQ(back.payload_kg, 0.0);  // V+ has no payload in kg: a comment
         EXPECT_NE(files.files[0].second.find("1.250 kg, centre of gravity (10.0, -20.0, 75.0) mm"),
                   std::string::npos);
@@ -682,11 +708,11 @@ TEST_F(Programs, EveryLanguageSetsToolPayloadAndTriggerAtThePasses) {
       }
       if (runs_on) {
         EXPECT_NEAR(back.triggers.back().t, tr.duration(),
-                    format == ProgramFormat::kUrscript ? options.servo_period : 1e-6);
+                    format == programs::ProgramFormat::kUrscript ? options.servo_period : 1e-6);
       }
-      const double tol = format == ProgramFormat::kUrscript ? options.servo_period : 1e-4;
+      const double tol = format == programs::ProgramFormat::kUrscript ? options.servo_period : 1e-4;
       for (std::size_t i = 0; i < want.size(); ++i) {
-        const cli::TriggerSwitch& got = back.triggers[i + 1];
+        const programs::TriggerSwitch& got = back.triggers[i + 1];
         EXPECT_EQ(got.output, 7) << name;
         EXPECT_EQ(got.on, want[i].on) << name << " switch " << i;
         EXPECT_LE(got.t, want[i].t + 1e-6) << name << " switch " << i;
@@ -702,13 +728,15 @@ TEST_F(Programs, AnEndlessTableIsWrittenWrappedAndReadsBackTheSameMotion) {
   std::mt19937 rng(9);
   const Trajectory tr = randomTrajectory(viper_, rng, 400);
   ASSERT_GT(toDeg(tr.samples.back().theta - tr.samples.front().theta), 360.0);
-  ProgramOptions options;
+  programs::ProgramOptions options;
   options.table_endless = true;
-  for (const ProgramFormat format : {ProgramFormat::kVplus, ProgramFormat::kKrl,
-                                     ProgramFormat::kRapid, ProgramFormat::kUrscript}) {
-    const std::string name = cli::programFormatName(format);
-    const ProgramFiles files = cli::writeProgram(tr, viper_, format, options);
-    if (format == ProgramFormat::kVplus) {  // the table list: every angle within (-180, 180]
+  for (const programs::ProgramFormat format :
+       {programs::ProgramFormat::kVplus, programs::ProgramFormat::kKrl,
+        programs::ProgramFormat::kRapid, programs::ProgramFormat::kUrscript}) {
+    const std::string name = programs::programFormatName(format);
+    const programs::ProgramFiles files = programs::writeProgram(tr, viper_, format, options);
+    if (format ==
+        programs::ProgramFormat::kVplus) {  // the table list: every angle within (-180, 180]
       std::size_t rows = 0;
       for (const std::string& line : lines(files.files[1].second)) {
         if (line.empty() || line[0] == '#' || line[0] == 't') continue;
@@ -719,7 +747,8 @@ TEST_F(Programs, AnEndlessTableIsWrittenWrappedAndReadsBackTheSameMotion) {
       }
       EXPECT_EQ(rows, tr.samples.size());
     }
-    const cli::ProgramReading back = cli::readProgram(files.files[0].second, format, name);
+    const programs::ProgramReading back =
+        programs::readProgram(files.files[0].second, format, name);
     const double offset = back.trajectory.samples[0].theta - tr.samples[0].theta;
     EXPECT_NEAR(std::remainder(offset, 2.0 * M_PI), 0.0, 1e-8) << name;
     EXPECT_LT(std::abs(toDeg(back.trajectory.samples[0].theta)), 180.0 + 1e-9) << name;
@@ -741,17 +770,18 @@ TEST_F(Programs, AnEndlessTableIsWrittenWrappedAndReadsBackTheSameMotion) {
   }
   Trajectory jump = smallTrajectory();
   jump.samples[2].theta += deg(200.0);
-  EXPECT_THROW(cli::writeProgram(jump, viper_, ProgramFormat::kKrl, options), InputError);
+  EXPECT_THROW(programs::writeProgram(jump, viper_, programs::ProgramFormat::kKrl, options),
+               InputError);
 }
 
 TEST_F(Programs, EmptyOrBackwardsTrajectoryIsAnInputError) {
-  for (const std::string& name : cli::programFormatNames()) {
-    const ProgramFormat format = *cli::parseProgramFormat(name);
-    EXPECT_THROW(cli::writeProgram(Trajectory{}, viper_, format, {}), InputError) << name;
+  for (const std::string& name : programs::programFormatNames()) {
+    const programs::ProgramFormat format = *programs::parseProgramFormat(name);
+    EXPECT_THROW(programs::writeProgram(Trajectory{}, viper_, format, {}), InputError) << name;
     Trajectory backwards = smallTrajectory();
     backwards.samples[2].t = backwards.samples[1].t;
     try {
-      cli::writeProgram(backwards, viper_, format, {});
+      programs::writeProgram(backwards, viper_, format, {});
       ADD_FAILURE() << name << ": no error";
     } catch (const InputError& e) {
       EXPECT_NE(std::string(e.what()).find("sample 2"), std::string::npos) << e.what();
@@ -760,22 +790,26 @@ TEST_F(Programs, EmptyOrBackwardsTrajectoryIsAnInputError) {
   // URScript over the size a controller loads is refused, naming the limit, not written.
   std::mt19937 rng(3);
   try {
-    cli::writeProgram(randomTrajectory(viper_, rng, 9000), viper_, ProgramFormat::kUrscript, {});
+    programs::writeProgram(randomTrajectory(viper_, rng, 9000), viper_,
+                           programs::ProgramFormat::kUrscript, {});
     ADD_FAILURE() << "no error";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("expected at most 1000000 bytes"), std::string::npos)
         << e.what();
   }
-  ProgramOptions bad;
+  programs::ProgramOptions bad;
   bad.approach_speed_percent = 0.0;
-  EXPECT_THROW(cli::writeProgram(smallTrajectory(), viper_, ProgramFormat::kVplus, bad),
-               InputError);
+  EXPECT_THROW(
+      programs::writeProgram(smallTrajectory(), viper_, programs::ProgramFormat::kVplus, bad),
+      InputError);
 }
 
 TEST_F(Programs, MalformedVplusNamesTheLine) {
   const std::string good =
-      cli::writeProgram(smallTrajectory(), viper_, ProgramFormat::kVplus, {}).files[0].second;
-  ASSERT_NO_THROW(cli::readVplusProgram(good, "scan.v2"));
+      programs::writeProgram(smallTrajectory(), viper_, programs::ProgramFormat::kVplus, {})
+          .files[0]
+          .second;
+  ASSERT_NO_THROW(programs::readVplusProgram(good, "scan.v2"));
   const std::vector<std::string> original = lines(good);
   // The line of the n-th occurrence of `prefix` (1-based line numbers).
   const auto lineOf = [&](const std::string& prefix, int n) {
@@ -826,7 +860,7 @@ TEST_F(Programs, MalformedVplusNamesTheLine) {
     std::string text;
     for (const std::string& line : edited) text += line + "\n";
     try {
-      cli::readVplusProgram(text, "scan.v2");
+      programs::readVplusProgram(text, "scan.v2");
       ADD_FAILURE() << c.what << ": no error";
     } catch (const InputError& e) {
       const std::string message = e.what();
@@ -845,7 +879,7 @@ TEST_F(Programs, MalformedVplusNamesTheLine) {
   // Whole-file errors.
   const auto error = [](const std::string& text) {
     try {
-      cli::readVplusProgram(text, "x.v2");
+      programs::readVplusProgram(text, "x.v2");
     } catch (const InputError& e) {
       return std::string(e.what());
     }
@@ -879,16 +913,16 @@ TEST(ProgramsGrammar, KrlAndRapidParseWithAPublicGrammarWhereOneIsInstalled) {
   const RobotModel viper = test::bundledRobot("viper_s650");
   std::mt19937 rng(12);
   const Trajectory tr = randomTrajectory(viper, rng, 300);
-  ProgramOptions options;
+  programs::ProgramOptions options;
   options.trigger.output = 1;
   options.payload_kg = 0.9;
   options.table_endless = true;
   const fs::path dir = fs::temp_directory_path() / ("scanplan_grammar_" + std::to_string(getpid()));
   fs::create_directories(dir);
-  for (const auto& [parser, format] :
-       {std::pair{krl, ProgramFormat::kKrl}, std::pair{rapid, ProgramFormat::kRapid}}) {
+  for (const auto& [parser, format] : {std::pair{krl, programs::ProgramFormat::kKrl},
+                                       std::pair{rapid, programs::ProgramFormat::kRapid}}) {
     if (parser == nullptr) continue;
-    const ProgramFiles files = cli::writeProgram(tr, viper, format, options);
+    const programs::ProgramFiles files = programs::writeProgram(tr, viper, format, options);
     const fs::path file = dir / files.files[0].first;
     std::ofstream(file, std::ios::binary) << files.files[0].second;
     const std::string command = std::string(parser) + " '" + file.string() + "'";
@@ -913,94 +947,103 @@ TEST(ProgramReaders, RefuseWhatTheyDoNotModel) {
   const RobotModel viper = test::bundledRobot("viper_s650");
   std::mt19937 rng(13);
   const Trajectory tr = randomTrajectory(viper, rng, 30);
-  ProgramOptions options;
+  programs::ProgramOptions options;
   options.servo_period = 0.05;
-  const auto text = [&](ProgramFormat f) {
-    return cli::writeProgram(tr, viper, f, options).files[0].second;
+  const auto text = [&](programs::ProgramFormat f) {
+    return programs::writeProgram(tr, viper, f, options).files[0].second;
   };
   struct Case {
-    ProgramFormat format;
+    programs::ProgramFormat format;
     std::string edited;
     std::string message;
   };
-  const std::string v2 = text(ProgramFormat::kVplus), src = text(ProgramFormat::kKrl),
-                    mod = text(ProgramFormat::kRapid), script = text(ProgramFormat::kUrscript);
+  const std::string v2 = text(programs::ProgramFormat::kVplus),
+                    src = text(programs::ProgramFormat::kKrl),
+                    mod = text(programs::ProgramFormat::kRapid),
+                    script = text(programs::ProgramFormat::kUrscript);
   // The random trajectory at a fifth of its pace keeps to the joints' top speeds: no V+ SPEED is
   // capped at 100 short of its step's time.
   Trajectory slow = tr;
   for (auto& sample : slow.samples) sample.t *= 5.0;
   const std::string slow_v2 =
-      cli::writeProgram(slow, viper, ProgramFormat::kVplus, options).files[0].second;
+      programs::writeProgram(slow, viper, programs::ProgramFormat::kVplus, options).files[0].second;
   const std::vector<Case> cases = {
-      {ProgramFormat::kVplus, replaceFirst(v2, "    DURATION 0.100000\n", ""),
+      {programs::ProgramFormat::kVplus, replaceFirst(v2, "    DURATION 0.100000\n", ""),
        "MOVE without DURATION"},
-      {ProgramFormat::kVplus,
+      {programs::ProgramFormat::kVplus,
        replaceFirst(v2, "    DURATION 0.100000\n", "    DURATION 0.1 ALWAYS\n"),
        "DURATION ... ALWAYS is not read"},
-      {ProgramFormat::kKrl,
+      {programs::ProgramFormat::kKrl,
        replaceFirst(src, "  ENDSPLINE\n",
                     "    SPTP {A1 1, A2 2, A3 3, A4 4, A5 5, A6 6, E1 7}\n  ENDSPLINE\n"),
        "SPTP outside a timed PTP_SPLINE block"},
-      {ProgramFormat::kKrl, replaceFirst(src, "    SPTP {", "    SPTP_REL {"),
+      {programs::ProgramFormat::kKrl, replaceFirst(src, "    SPTP {", "    SPTP_REL {"),
        "not an instruction this reader knows"},
-      {ProgramFormat::kRapid, replaceFirst(mod, "v1000\\T:=0.100000, z0", "v1000, z0"),
+      {programs::ProgramFormat::kRapid, replaceFirst(mod, "v1000\\T:=0.100000, z0", "v1000, z0"),
        "without \\T"},
-      {ProgramFormat::kRapid, replaceFirst(mod, "  PROC scan()\n", "  PROC scan()\n    Stop;\n"),
+      {programs::ProgramFormat::kRapid,
+       replaceFirst(mod, "  PROC scan()\n", "  PROC scan()\n    Stop;\n"),
        "a call outside PROC main()"},
-      {ProgramFormat::kRapid, replaceFirst(mod, "    scan;\n", "    other;\n"),
+      {programs::ProgramFormat::kRapid, replaceFirst(mod, "    scan;\n", "    other;\n"),
        "'OTHER;': expected 'SCAN;'"},
-      {ProgramFormat::kRapid, replaceFirst(mod, "    scan;\n", "    scan;\n    scan;\n"),
+      {programs::ProgramFormat::kRapid, replaceFirst(mod, "    scan;\n", "    scan;\n    scan;\n"),
        "a second call in main() (the first is on line"},
-      {ProgramFormat::kRapid, replaceFirst(mod, "    scan;\n", ""), "PROC main() calls nothing"},
-      {ProgramFormat::kRapid, replaceFirst(mod, "  PROC main()\n", "  PROC start()\n"),
+      {programs::ProgramFormat::kRapid, replaceFirst(mod, "    scan;\n", ""),
+       "PROC main() calls nothing"},
+      {programs::ProgramFormat::kRapid, replaceFirst(mod, "  PROC main()\n", "  PROC start()\n"),
        "a call outside PROC main()"},
-      {ProgramFormat::kRapid, replaceFirst(mod, "  PROC main()\n    scan;\n  ENDPROC\n", ""),
-       "no PROC main()"},
-      {ProgramFormat::kRapid,
+      {programs::ProgramFormat::kRapid,
+       replaceFirst(mod, "  PROC main()\n    scan;\n  ENDPROC\n", ""), "no PROC main()"},
+      {programs::ProgramFormat::kRapid,
        replaceFirst(mod, "    scan;\n", "    scan;\n  ENDPROC\n  PROC extra()\n"),
        "3 procedures: expected two"},
-      {ProgramFormat::kRapid,
+      {programs::ProgramFormat::kRapid,
        replaceFirst(mod, "    scan;\n",
                     "    scan;\n    MoveAbsJ [[0,0,90,0,0,0],[0,9E9,9E9,9E9,9E9,9E9]]\\NoEOffs, "
                     "v100\\T:=1, fine, tool0;\n"),
        "outside the scan procedure"},
-      {ProgramFormat::kVplus,
+      {programs::ProgramFormat::kVplus,
        replaceFirst(v2, "    DURATION 0.100000\n", "    SPEED 0.01\n    DURATION 0.100000\n"),
        "SPEED 0.01 (line "},
-      {ProgramFormat::kVplus,
+      {programs::ProgramFormat::kVplus,
        replaceFirst(v2, "    DURATION 0.100000\n", "    SPEED 50 MMPS\n    DURATION 0.100000\n"),
        "SPEED in mm/s applies to straight-line moves"},
-      {ProgramFormat::kVplus,
+      {programs::ProgramFormat::kVplus,
        replaceFirst(v2, "    DURATION 0.100000\n", "    SPEED 120\n    DURATION 0.100000\n"),
        "expected SPEED in (0, 100] percent"},
-      {ProgramFormat::kVplus, slow_v2 + ".PROGRAM other()\n.END\n", "after .END: expected nothing"},
-      {ProgramFormat::kKrl, replaceFirst(src, "SCANPLAN_VEL(100, 100)", "SCANPLAN_VEL(50, 50)"),
+      {programs::ProgramFormat::kVplus, slow_v2 + ".PROGRAM other()\n.END\n",
+       "after .END: expected nothing"},
+      {programs::ProgramFormat::kKrl,
+       replaceFirst(src, "SCANPLAN_VEL(100, 100)", "SCANPLAN_VEL(50, 50)"),
        "a timed PTP_SPLINE block after SCANPLAN_VEL(50, 50)"},
-      {ProgramFormat::kKrl, replaceFirst(src, "$VEL_AXIS[AXIS]=ARM_PCT", "$VEL_AXIS[AXIS]=5"),
+      {programs::ProgramFormat::kKrl,
+       replaceFirst(src, "$VEL_AXIS[AXIS]=ARM_PCT", "$VEL_AXIS[AXIS]=5"),
        "'$VEL_AXIS[AXIS]=5' after the program's END: expected '$VEL_AXIS[AXIS]=ARM_PCT'"},
-      {ProgramFormat::kKrl,
+      {programs::ProgramFormat::kKrl,
        replaceFirst(src, "  PTP_SPLINE\n", "  BAS(#VEL_PTP,20)\n  PTP_SPLINE\n"),
        "expected BAS(#INITMOV,0) alone, before the first motion"},
-      {ProgramFormat::kUrscript,
+      {programs::ProgramFormat::kUrscript,
        replaceFirst(script, "      i = i + 1\n", "      sleep(0.1)\n      i = i + 1\n"),
        "seg() function: 'sleep(0.1)' where scanplan writes 'i = i + 1'"},
-      {ProgramFormat::kUrscript, replaceFirst(script, "i * 0.0500 <=", "i * 0.0500 <"),
+      {programs::ProgramFormat::kUrscript, replaceFirst(script, "i * 0.0500 <=", "i * 0.0500 <"),
        "the reader models only the seg() function scanplan writes"},
-      {ProgramFormat::kUrscript, replaceFirst(script, "  a = seg(a, [", "  a = seg(a, [1, "),
+      {programs::ProgramFormat::kUrscript,
+       replaceFirst(script, "  a = seg(a, [", "  a = seg(a, [1, "),
        "the data row: 11 values: expected 10"},
-      {ProgramFormat::kUrscript, replaceFirst(script, "  stopj(2.0)\n", "  a = [0, 1]\n"),
+      {programs::ProgramFormat::kUrscript, replaceFirst(script, "  stopj(2.0)\n", "  a = [0, 1]\n"),
        "after the last step"},
-      {ProgramFormat::kUrscript, replaceFirst(script, "\nscan()\n", "\n"),
+      {programs::ProgramFormat::kUrscript, replaceFirst(script, "\nscan()\n", "\n"),
        "defined but never run: expected a line 'scan()' after its end"},
-      {ProgramFormat::kUrscript, script + "scan()\n", "expected only 'scan()' after"},
-      {ProgramFormat::kUrscript, replaceFirst(script, "\nscan()\n", "\nmovej([0,0,0,0,0,0])\n"),
+      {programs::ProgramFormat::kUrscript, script + "scan()\n", "expected only 'scan()' after"},
+      {programs::ProgramFormat::kUrscript,
+       replaceFirst(script, "\nscan()\n", "\nmovej([0,0,0,0,0,0])\n"),
        "expected only 'scan()' after"},
   };
   for (const Case& c : cases) {
-    const std::string name = cli::programFormatName(c.format);
+    const std::string name = programs::programFormatName(c.format);
     ASSERT_NE(c.edited, text(c.format)) << name << ": the edit did not apply: " << c.message;
     try {
-      cli::readProgram(c.edited, c.format, "p", &viper);
+      programs::readProgram(c.edited, c.format, "p", &viper);
       ADD_FAILURE() << name << ": no error for " << c.message;
     } catch (const InputError& e) {
       EXPECT_NE(std::string(e.what()).find(c.message), std::string::npos) << e.what();
@@ -1009,17 +1052,18 @@ TEST(ProgramReaders, RefuseWhatTheyDoNotModel) {
   }
   // Written programs read back with the robot's speeds: every V+ SPEED covers its step where the
   // trajectory keeps to the joints' top speeds.
-  for (const ProgramFormat f :
-       {ProgramFormat::kVplus, ProgramFormat::kKrl, ProgramFormat::kRapid}) {
-    EXPECT_NO_THROW(cli::readProgram(cli::writeProgram(slow, viper, f, options).files[0].second, f,
-                                     "p", &viper))
-        << cli::programFormatName(f);
+  for (const programs::ProgramFormat f :
+       {programs::ProgramFormat::kVplus, programs::ProgramFormat::kKrl,
+        programs::ProgramFormat::kRapid}) {
+    EXPECT_NO_THROW(programs::readProgram(
+        programs::writeProgram(slow, viper, f, options).files[0].second, f, "p", &viper))
+        << programs::programFormatName(f);
   }
   // A program without its last step: the motion would end short of the last sample.
   std::string cut = script;
   const auto last = cut.find("\n  if a[0] * ");
   cut.erase(last, cut.find("  stopj") - last - 1);
-  EXPECT_THROW(cli::readProgram(cut, ProgramFormat::kUrscript, "p"), InputError);
+  EXPECT_THROW(programs::readProgram(cut, programs::ProgramFormat::kUrscript, "p"), InputError);
 }
 
 }  // namespace
@@ -1055,9 +1099,11 @@ std::string withLine(const std::string& text, int line, const std::vector<std::s
 }
 
 // The error reading `text`, or "no error".
-std::string readError(const std::string& text, ProgramFormat format, const RobotModel* robot) {
+std::string readError(const std::string& text,
+                      programs::ProgramFormat format,
+                      const RobotModel* robot) {
   try {
-    cli::readProgram(text, format, "p", robot);
+    programs::readProgram(text, format, "p", robot);
   } catch (const InputError& e) {
     return e.what();
   }
@@ -1073,7 +1119,7 @@ struct EditCase {
 };
 
 void expectRefused(const std::vector<EditCase>& cases,
-                   ProgramFormat format,
+                   programs::ProgramFormat format,
                    const std::string& original,
                    const RobotModel& robot) {
   ASSERT_EQ(readError(original, format, &robot), "no error");
@@ -1099,22 +1145,25 @@ Trajectory slowTrajectory(const RobotModel& robot) {
 TEST(ProgramReaders, WrittenProgramsReadBackWithTheRobotsSpeedsAtThePlannedTimes) {
   const RobotModel viper = test::bundledRobot("viper_s650");
   const Trajectory slow = slowTrajectory(viper);
-  for (const ProgramFormat f :
-       {ProgramFormat::kVplus, ProgramFormat::kKrl, ProgramFormat::kRapid}) {
-    const ProgramFiles files = cli::writeProgram(slow, viper, f, {});
+  for (const programs::ProgramFormat f :
+       {programs::ProgramFormat::kVplus, programs::ProgramFormat::kKrl,
+        programs::ProgramFormat::kRapid}) {
+    const programs::ProgramFiles files = programs::writeProgram(slow, viper, f, {});
     EXPECT_EQ(files.over_speed_segments, 0u);
-    const cli::ProgramReading back = cli::readProgram(files.files[0].second, f, "p", &viper);
-    EXPECT_TRUE(sameToPrintedPrecision(back.trajectory, slow,
-                                       f == ProgramFormat::kKrl ? kKrlTimeTol : kPrintedTol))
-        << cli::programFormatName(f);
+    const programs::ProgramReading back =
+        programs::readProgram(files.files[0].second, f, "p", &viper);
+    EXPECT_TRUE(sameToPrintedPrecision(
+        back.trajectory, slow, f == programs::ProgramFormat::kKrl ? kKrlTimeTol : kPrintedTol))
+        << programs::programFormatName(f);
   }
   std::mt19937 rng(13);
   const Trajectory fast = randomTrajectory(viper, rng, 30);  // step 25 needs some 130 %
-  const ProgramFiles files = cli::writeProgram(fast, viper, ProgramFormat::kVplus, {});
+  const programs::ProgramFiles files =
+      programs::writeProgram(fast, viper, programs::ProgramFormat::kVplus, {});
   const std::string& v2 = files.files[0].second;
   ASSERT_EQ(files.over_speed_segments, 1u);
   ASSERT_NE(v2.find("; WARNING: step 25 needs"), std::string::npos);
-  const std::string error = readError(v2, ProgramFormat::kVplus, &viper);
+  const std::string error = readError(v2, programs::ProgramFormat::kVplus, &viper);
   EXPECT_EQ(
       error.rfind("p:" + std::to_string(lineOf(v2, "    MOVE", 26)) + ": SPEED 100.00 (line " +
                       std::to_string(lineOf(v2, "    SPEED", 26)) + ") makes this MOVE take",
@@ -1122,7 +1171,7 @@ TEST(ProgramReaders, WrittenProgramsReadBackWithTheRobotsSpeedsAtThePlannedTimes
       0u)
       << error;
   EXPECT_NE(error.find("of joint 2's top speed: re-plan it slower"), std::string::npos) << error;
-  EXPECT_EQ(readError(v2, ProgramFormat::kVplus, nullptr), "no error");
+  EXPECT_EQ(readError(v2, programs::ProgramFormat::kVplus, nullptr), "no error");
 }
 
 // V+ SPEED: the next MOVE's, or every later one's with ALWAYS; a move it makes outlast its
@@ -1130,7 +1179,9 @@ TEST(ProgramReaders, WrittenProgramsReadBackWithTheRobotsSpeedsAtThePlannedTimes
 TEST(ProgramReaders, VplusSpeedTimesEachMoveAndNamesTheLines) {
   const RobotModel viper = test::bundledRobot("viper_s650");
   const std::string v2 =
-      cli::writeProgram(slowTrajectory(viper), viper, ProgramFormat::kVplus, {}).files[0].second;
+      programs::writeProgram(slowTrajectory(viper), viper, programs::ProgramFormat::kVplus, {})
+          .files[0]
+          .second;
   const auto speedLine = [&](int n) { return lineOf(v2, "    SPEED", n); };  // the n-th MOVE's
   // A timed move that SPEED 0.2 cannot cover.
   int n = 2;
@@ -1138,7 +1189,7 @@ TEST(ProgramReaders, VplusSpeedTimesEachMoveAndNamesTheLines) {
   ASSERT_LT(n, 30);
   const double written = std::stod(lineText(v2, speedLine(n)).substr(10));
   const std::string one = withLine(v2, speedLine(n), {"    SPEED 0.2"});
-  const std::string error = readError(one, ProgramFormat::kVplus, &viper);
+  const std::string error = readError(one, programs::ProgramFormat::kVplus, &viper);
   EXPECT_EQ(error.rfind("p:" + std::to_string(lineOf(v2, "    MOVE", n)) + ": SPEED 0.20 (line " +
                             std::to_string(speedLine(n)) + ") makes this MOVE take",
                         0),
@@ -1147,20 +1198,20 @@ TEST(ProgramReaders, VplusSpeedTimesEachMoveAndNamesTheLines) {
   std::smatch m;
   ASSERT_TRUE(std::regex_search(error, m, std::regex("expected SPEED ≥ ([0-9.]+)\\)"))) << error;
   EXPECT_NEAR(std::stod(m[1].str()), written, 0.011) << error;  // the writer's, rounded up
-  EXPECT_EQ(readError(one, ProgramFormat::kVplus, nullptr), "no error");
+  EXPECT_EQ(readError(one, programs::ProgramFormat::kVplus, nullptr), "no error");
   // SPEED ... ALWAYS before the approach holds for a later move without a SPEED of its own
   // (the moves between have theirs); SPEED without ALWAYS holds for the next move only.
   const std::string always =
       withLine(withLine(v2, speedLine(n), {}), speedLine(1), {"    SPEED 0.2 ALWAYS"});
-  EXPECT_EQ(readError(always, ProgramFormat::kVplus, &viper)
+  EXPECT_EQ(readError(always, programs::ProgramFormat::kVplus, &viper)
                 .rfind("p:" + std::to_string(lineOf(always, "    MOVE", n)) +
                            ": SPEED 0.20 ALWAYS (line " + std::to_string(speedLine(1)) + ")",
                        0),
             0u)
-      << readError(always, ProgramFormat::kVplus, &viper);
+      << readError(always, programs::ProgramFormat::kVplus, &viper);
   const std::string once =
       withLine(withLine(v2, speedLine(n), {}), speedLine(1), {"    SPEED 0.2"});
-  EXPECT_EQ(readError(once, ProgramFormat::kVplus, &viper), "no error");
+  EXPECT_EQ(readError(once, programs::ProgramFormat::kVplus, &viper), "no error");
   const int s3 = speedLine(3), m3 = lineOf(v2, "    MOVE", 3), end = lineOf(v2, ".END");
   expectRefused(
       {{"SPEED 0", withLine(v2, s3, {"    SPEED 0"}), s3, "expected SPEED in (0, 100] percent"},
@@ -1174,8 +1225,9 @@ TEST(ProgramReaders, VplusSpeedTimesEachMoveAndNamesTheLines) {
         end + 1, "'.PROGRAM other()' after .END: expected nothing after the program"},
        {"an instruction after .END", withLine(v2, end, {".END", "", "    SPEED 5 ALWAYS"}), end + 2,
         "after .END"}},
-      ProgramFormat::kVplus, v2, viper);
-  EXPECT_EQ(readError(v2 + "\n; a comment\n\n", ProgramFormat::kVplus, &viper), "no error");
+      programs::ProgramFormat::kVplus, v2, viper);
+  EXPECT_EQ(readError(v2 + "\n; a comment\n\n", programs::ProgramFormat::kVplus, &viper),
+            "no error");
 }
 
 // KRL: the timed blocks at full axis velocity, the SCANPLAN_VEL routine as written, BAS only to
@@ -1183,7 +1235,9 @@ TEST(ProgramReaders, VplusSpeedTimesEachMoveAndNamesTheLines) {
 TEST(ProgramReaders, KrlTimeBlocksRunAtFullVelocityUnderTheWrittenRoutine) {
   const RobotModel viper = test::bundledRobot("viper_s650");
   const std::string src =
-      cli::writeProgram(slowTrajectory(viper), viper, ProgramFormat::kKrl, {}).files[0].second;
+      programs::writeProgram(slowTrajectory(viper), viper, programs::ProgramFormat::kKrl, {})
+          .files[0]
+          .second;
   const int vel = lineOf(src, "  SCANPLAN_VEL(100, 100)"), block = lineOf(src, "  PTP_SPLINE"),
             start = lineOf(src, "    TIME_BLOCK START"), end = lineOf(src, "  ENDSPLINE"),
             axis = lineOf(src, "    $VEL_AXIS[AXIS]=ARM_PCT"),
@@ -1222,7 +1276,7 @@ TEST(ProgramReaders, KrlTimeBlocksRunAtFullVelocityUnderTheWrittenRoutine) {
        {"override", before(block, "  $OV_PRO=10"), block, other},
        {"axis velocity", before(block, "  $VEL_AXIS[1]=10"), block, other},
        {"another call", before(block, "  OTHER()"), block, other}},
-      ProgramFormat::kKrl, src, viper);
+      programs::ProgramFormat::kKrl, src, viper);
 }
 
 // RAPID: main() calls the scan procedure once; the moves are there alone, passing through their
@@ -1230,7 +1284,9 @@ TEST(ProgramReaders, KrlTimeBlocksRunAtFullVelocityUnderTheWrittenRoutine) {
 TEST(ProgramReaders, RapidMainCallsTheScanProcedureOnce) {
   const RobotModel viper = test::bundledRobot("viper_s650");
   const std::string mod =
-      cli::writeProgram(slowTrajectory(viper), viper, ProgramFormat::kRapid, {}).files[0].second;
+      programs::writeProgram(slowTrajectory(viper), viper, programs::ProgramFormat::kRapid, {})
+          .files[0]
+          .second;
   const int call = lineOf(mod, "    scan;"), main_proc = lineOf(mod, "  PROC main()"),
             scan = lineOf(mod, "  PROC scan()"), second = lineOf(mod, "    MoveAbsJ", 2);
   const std::string move =
@@ -1261,7 +1317,7 @@ TEST(ProgramReaders, RapidMainCallsTheScanProcedureOnce) {
         "zone fine between timed moves: the arm would stop here"},
        {"VelSet", withLine(mod, call, {"    VelSet 10, 100;", "    scan;"}), call, other},
        {"WaitTime", withLine(mod, scan, {"  PROC scan()", "    WaitTime 5;"}), scan + 1, other}},
-      ProgramFormat::kRapid, mod, viper);
+      programs::ProgramFormat::kRapid, mod, viper);
 }
 
 }  // namespace

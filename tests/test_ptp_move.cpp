@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-#include "kinematics/ptp_move.h"
+#include <scanplan/kinematics/ptp_move.h>
 
 namespace scanplan::kinematics {
 namespace {

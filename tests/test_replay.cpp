@@ -14,9 +14,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cli/config/job.h"
+#include <scanplan/config/job.h>
+#include <scanplan/kinematics/trajectory.h>
 #include "cli_support.h"
-#include "kinematics/trajectory.h"
 #include "test_support.h"
 
 namespace {
@@ -94,8 +94,9 @@ TEST_F(Replay, ItsPosesAreTheTrajectorysThroughTheRobotsOwnKinematics) {
   // Written member by member: the text is the one compact line nlohmann::json writes for it.
   const std::string text = replayDataText(html);
   EXPECT_TRUE(nlohmann::ordered_json::parse(text).dump() + "\n" == text);
-  const cli::JobSpec job = cli::loadJob(sourceDir() / "data/jobs/demo_rings.yaml", kLightDemo);
-  const kinematics::CellModel cell = cli::buildCell(job);
+  const config::JobSpec job =
+      config::loadJob(sourceDir() / "data/jobs/demo_rings.yaml", kLightDemo);
+  const kinematics::CellModel cell = config::buildCell(job);
   const kinematics::Trajectory tr =
       kinematics::parseTrajectoryCsv(readFile(dir_ / "out/trajectory.csv"), "trajectory.csv");
   const std::vector<float> t = floats(data["frames"]["t"]);

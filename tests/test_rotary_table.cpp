@@ -4,10 +4,10 @@
 
 #include <gtest/gtest.h>
 
-#include "kinematics/cell.h"
-#include "kinematics/pose.h"
-#include "kinematics/rotary_table.h"
-#include "kinematics/units.h"
+#include <scanplan/kinematics/cell.h>
+#include <scanplan/kinematics/pose.h>
+#include <scanplan/kinematics/rotary_table.h>
+#include <scanplan/kinematics/units.h>
 #include "tests/test_support.h"
 
 namespace scanplan::kinematics {

@@ -23,14 +23,14 @@
 
 #include <Eigen/Geometry>
 
-#include "cli/config/job.h"
-#include "kinematics/error.h"
-#include "kinematics/mesh.h"
-#include "kinematics/scan_path.h"
-#include "kinematics/units.h"
-#include "scanner/laser_model.h"
-#include "scanner/path_generators.h"
-#include "scanner/raycaster.h"
+#include <scanplan/config/job.h>
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/kinematics/scan_path.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/scanner/laser_model.h>
+#include <scanplan/scanner/path_generators.h>
+#include <scanplan/scanner/raycaster.h>
 #include "tests/test_support.h"
 
 extern char** environ;
@@ -401,7 +401,7 @@ TEST(Raycaster, DistancesDoNotDependOnTheMeshFrame) {
 // Ring on the demo part.
 
 struct DemoPath {
-  cli::JobSpec job;
+  config::JobSpec job;
   kinematics::LoadedMesh part;
   scanner::LaserWindow window;
   scanner::GeneratedPath generated;
@@ -411,16 +411,17 @@ const DemoPath& demoPath() {
   static const DemoPath demo = [] {
     DemoPath d;
     // The two rings and the head these tests were written for, whatever the demo uses today.
-    d.job = cli::loadJob(
+    d.job = config::loadJob(
         test::sourceDir() / "data/jobs/demo_rings.yaml",
         {"scanner.optics={a_mm: 100, b_mm: 100, phi_deg: 60, gamma_deg: 10}",
          "scan.paths=[{type: ring, height_mm: 50, tilt_deg: 20, speed_deg_s: 20}, {type: ring, "
          "height_mm: 100, tilt_deg: 50, speed_deg_s: 20}]"});
-    const kinematics::CellModel cell = cli::buildCell(d.job);
+    const kinematics::CellModel cell = config::buildCell(d.job);
     d.part = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
-    d.window = scanner::laserWindow(cli::laserOptics(d.job));
+    d.window = scanner::laserWindow(config::laserOptics(d.job));
     const scanner::Raycaster raycaster(d.part.mesh);
-    d.generated = scanner::generatePath(cli::pathRequest(d.job), d.part.mesh, raycaster, d.window);
+    d.generated =
+        scanner::generatePath(config::pathRequest(d.job), d.part.mesh, raycaster, d.window);
     return d;
   }();
   return demo;
@@ -916,7 +917,7 @@ TEST(PathFile, BadRowsNameTheSourceAndTheLine) {
 // Job-level errors of `scan`.
 
 TEST_F(ScanJob, BadScanDefinitionsAreRejectedWithTheFieldPath) {
-  const auto load = [](const fs::path& job) { return [job] { cli::loadJob(job); }; };
+  const auto load = [](const fs::path& job) { return [job] { config::loadJob(job); }; };
   EXPECT_TRUE(
       throwsInputError(load(writeJob("scan:\n  paths:\n    - {type: spiral}\n")),
                        {"scan.paths[0].type", "'spiral'", "ring, raster, waypoints, file"}));
@@ -947,9 +948,9 @@ TEST_F(ScanJob, BadScanDefinitionsAreRejectedWithTheFieldPath) {
 
 TEST_F(ScanJob, ABadPathFileIsReportedWithItsNameAndLine) {
   write("path.csv", "t_s,x_mm,y_mm,z_mm,qw,qx,qy,qz\n0,0,0,300,1,0,0,0\n0,0,0,300,1,0,0,0\n");
-  const cli::JobSpec job =
-      cli::loadJob(writeJob("scan:\n  paths:\n    - {type: file, file: path.csv}\n"));
-  EXPECT_TRUE(throwsInputError([&] { cli::pathRequest(job); },
+  const config::JobSpec job =
+      config::loadJob(writeJob("scan:\n  paths:\n    - {type: file, file: path.csv}\n"));
+  EXPECT_TRUE(throwsInputError([&] { config::pathRequest(job); },
                                {(dir_ / "path.csv").string() + ":3", "does not increase"}));
 }
 
@@ -958,15 +959,15 @@ TEST_F(ScanJob, ARingThatNeverSeesThePartNamesItsElement) {
   const fs::path file = writeJob(
       "scan:\n  paths:\n    - {type: ring, height_mm: 50, tilt_deg: 20}\n"
       "    - {type: ring, height_mm: 2000, tilt_deg: 0}\n");
-  const cli::JobSpec job = cli::loadJob(file);
-  const kinematics::CellModel cell = cli::buildCell(job);
+  const config::JobSpec job = config::loadJob(file);
+  const kinematics::CellModel cell = config::buildCell(job);
   const auto part = kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
   const scanner::Raycaster raycaster(part.mesh);
-  const scanner::PathRequest request = cli::pathRequest(job);
+  const scanner::PathRequest request = config::pathRequest(job);
   EXPECT_TRUE(throwsInputError(
       [&] {
         scanner::generatePath(request, part.mesh, raycaster,
-                              scanner::laserWindow(cli::laserOptics(job)));
+                              scanner::laserWindow(config::laserOptics(job)));
       },
       {"scan.paths[1]", "never sees the part", "2000"}));
 

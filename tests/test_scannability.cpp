@@ -10,7 +10,7 @@
 
 #include "geometry_support.h"
 
-#include "scanner/scannability.h"
+#include <scanplan/scanner/scannability.h>
 
 namespace {
 

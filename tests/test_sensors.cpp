@@ -24,15 +24,15 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "cli/config/job.h"
-#include "cli/config/problem.h"
+#include <scanplan/collision/scene.h>
+#include <scanplan/collision/sensors.h>
+#include <scanplan/config/job.h>
+#include <scanplan/config/to_problem.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/planner/validation.h>
+#include <scanplan/scanner/raycaster.h>
 #include "cli/report/sensor_report.h"
 #include "cli_support.h"
-#include "collision/scene.h"
-#include "collision/sensors.h"
-#include "kinematics/units.h"
-#include "planner/validation.h"
-#include "scanner/raycaster.h"
 #include "test_support.h"
 
 namespace {
@@ -49,19 +49,19 @@ constexpr double kRangeTol = 1e-9;  // m
 constexpr double kBoundaryTol = 1e-7;  // m
 
 struct Demo {
-  cli::JobSpec job;
+  config::JobSpec job;
   kinematics::CellModel cell;
 };
 
 Demo demo() {
-  cli::JobSpec job =
-      cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", test::kLightDemo);
-  kinematics::CellModel cell = cli::buildCell(job);
+  config::JobSpec job =
+      config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", test::kLightDemo);
+  kinematics::CellModel cell = config::buildCell(job);
   return {std::move(job), std::move(cell)};
 }
 
 collision::Scene sceneOf(const Demo& d) {
-  return collision::Scene(d.cell, cli::clearanceConfig(d.job));
+  return collision::Scene(d.cell, config::clearanceConfig(d.job));
 }
 
 JointVector jointsDeg(double q1, double q2, double q3, double q4, double q5, double q6) {
@@ -441,7 +441,7 @@ TEST(Sensors, AReceiverBehindAnOccluderGetsNoReading) {
 
 TEST(Sensors, BeamsOnThePartMeshAgreeWithEmbree) {
   Demo d = demo();
-  const kinematics::LoadedMesh part = cli::loadPartMesh(d.job, d.cell.part);
+  const kinematics::LoadedMesh part = config::loadPartMesh(d.job, d.cell.part);
   const scanner::Raycaster embree(part.mesh);
   const double theta = deg(30.0);
   const Eigen::Isometry3d X_WP = d.cell.table.X_WR(theta) * d.cell.part.X_RP;
@@ -485,7 +485,7 @@ TEST(Sensors, ABeamCarriedWithThePartReadsTheSameAtEveryTableAngle) {
   Demo d = demo();
   Sensor s = beam("part_present", Eigen::Isometry3d::Identity(), 0.02, 0.3);
   s.carrier = "table";
-  s.X_CS = cli::toIsometry({{190.0, 0.0, 10.0}, {0.0, -90.0, 0.0}});  // as the job writes it
+  s.X_CS = config::toIsometry({{190.0, 0.0, 10.0}, {0.0, -90.0, 0.0}});  // as the job writes it
   s.p_SR = Eigen::Vector3d(0.0, 0.03, 0.0);
   d.cell.sensors = {s};
   const collision::Scene scene = sceneOf(d);
@@ -507,12 +507,13 @@ TEST(Sensors, ABeamCarriedWithThePartReadsTheSameAtEveryTableAngle) {
 
 TEST(Sensors, ReadingsAreBoundedBeforeAllocating) {
   Demo d = demo();
-  for (std::size_t i = 0; i < cli::kMaxSensors; ++i) {
+  for (std::size_t i = 0; i < config::kMaxSensors; ++i) {
     d.cell.sensors.push_back(presence("s" + std::to_string(i), "world",
                                       Eigen::Isometry3d::Identity(), kinematics::Sphere{0.01}));
   }
   const collision::Scene scene = sceneOf(d);
-  const std::vector<TrajectorySample> samples(collision::kMaxSensorReadings / cli::kMaxSensors + 1);
+  const std::vector<TrajectorySample> samples(collision::kMaxSensorReadings / config::kMaxSensors +
+                                              1);
   EXPECT_TRUE(test::throwsInputError(
       [&] { collision::evaluateSensors(scene, samples); },
       {"64 sensors at 156251 poses", "more than 10000000", "scanner.frame_rate_hz"}));
@@ -568,19 +569,21 @@ std::vector<std::string> withSensors(const std::string& sensors) {
 ::testing::AssertionResult refused(const std::string& sensors,
                                    std::initializer_list<std::string> parts) {
   return test::throwsInputError(
-      [&] { cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", withSensors(sensors)); },
+      [&] {
+        config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", withSensors(sensors));
+      },
       parts);
 }
 
 TEST(SensorJob, KeysBecomeTheCellsSensors) {
-  const cli::JobSpec job = cli::loadJob(
+  const config::JobSpec job = config::loadJob(
       test::sourceDir() / "data/jobs/demo_rings.yaml",
       withSensors("[{name: curtain, kind: presence, carrier: world, shape: cylinder, "
                   "radius_mm: 20, length_mm: 300, pose: {xyz_mm: [0, 500, 100]}, expect: never},"
                   " {name: part_present, kind: distance, carrier: table, min_range_mm: 10, "
                   "max_range_mm: 400, receiver_mm: [30, 0, 0], expect: during, "
                   "window_s: [0, 5]}]"));
-  const kinematics::CellModel cell = cli::buildCell(job);
+  const kinematics::CellModel cell = config::buildCell(job);
   ASSERT_EQ(cell.sensors.size(), 2u);
   const Sensor& a = cell.sensors[0];
   EXPECT_EQ(a.kind, Sensor::Kind::kPresence);
@@ -600,12 +603,12 @@ TEST(SensorJob, KeysBecomeTheCellsSensors) {
   EXPECT_EQ(b.expect.kind, SensorExpectation::Kind::kDuring);
   EXPECT_EQ(b.expect.t1, 5.0);
   // Written back and read again: the same job.
-  EXPECT_NE(cli::jobToYaml(job).find("part_present"), std::string::npos);
+  EXPECT_NE(config::jobToYaml(job).find("part_present"), std::string::npos);
 }
 
 TEST(SensorJob, TheDemosSensorsRoundTripThroughJobShow) {
   const std::string first =
-      cli::jobToYaml(cli::loadJob(test::sourceDir() / "data/jobs/demo_sensors.yaml"));
+      config::jobToYaml(config::loadJob(test::sourceDir() / "data/jobs/demo_sensors.yaml"));
   for (const char* key : {"light_curtain", "expect: never", "receiver_mm", "max_range_mm: 300",
                           "carrier: table", "shape: cylinder"}) {
     EXPECT_NE(first.find(key), std::string::npos) << key;
@@ -613,18 +616,18 @@ TEST(SensorJob, TheDemosSensorsRoundTripThroughJobShow) {
   const auto file = std::filesystem::temp_directory_path() /
                     ("scanplan_test_sensors_shown_" + std::to_string(::getpid()) + ".yaml");
   std::ofstream(file) << first;
-  const cli::JobSpec again = cli::loadJob(file);
+  const config::JobSpec again = config::loadJob(file);
   std::filesystem::remove(file);
-  const std::string second = cli::jobToYaml(again);
+  const std::string second = config::jobToYaml(again);
   EXPECT_EQ(second.substr(second.find('\n')), first.substr(first.find('\n')));
-  EXPECT_EQ(cli::buildCell(again).sensors.size(), 3u);
+  EXPECT_EQ(config::buildCell(again).sensors.size(), 3u);
 }
 
 TEST(SensorJob, EveryBodyOfTheSceneMayCarryASensor) {
   const Demo d = demo();
   const collision::Scene scene = sceneOf(d);
   for (const collision::BodyInfo& body : scene.bodies()) {
-    EXPECT_NO_THROW(cli::loadJob(
+    EXPECT_NO_THROW(config::loadJob(
         test::sourceDir() / "data/jobs/demo_rings.yaml",
         withSensors("[{name: s, kind: presence, shape: sphere, radius_mm: 5, carrier: " +
                     body.name + "}]")))
@@ -646,7 +649,7 @@ TEST(SensorJob, AnUnknownCarrierNamesTheFileTheKeyAndTheBodies) {
                     ("scanplan_test_sensors_" + std::to_string(::getpid()) + ".yaml");
   std::ofstream(file) << text;
   EXPECT_TRUE(
-      test::throwsInputError([&] { cli::loadJob(file); },
+      test::throwsInputError([&] { config::loadJob(file); },
                              {file.string() + ":", "sensors[2].carrier", "'link9'",
                               "world or a body of the cell", "link6", "scanner", "table", "part"}));
   std::filesystem::remove(file);
@@ -687,7 +690,7 @@ TEST(SensorJob, BadKeysAreRefusedNamingTheKey) {
               "{name: x_mm, kind: presence, shape: sphere, radius_mm: 5}]",
               {"sensors", "second column 'x_mm'"}));
   std::string many = "[";
-  for (std::size_t i = 0; i <= cli::kMaxSensors; ++i) {
+  for (std::size_t i = 0; i <= config::kMaxSensors; ++i) {
     many += fmt::format("{}{{name: s{}, kind: presence, shape: sphere, radius_mm: 5}}",
                         i ? ", " : "", i);
   }

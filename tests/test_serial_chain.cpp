@@ -10,9 +10,9 @@
 #include <numbers>
 #include <random>
 
-#include "kinematics/pose.h"
-#include "kinematics/serial_chain.h"
-#include "kinematics/units.h"
+#include <scanplan/kinematics/pose.h>
+#include <scanplan/kinematics/serial_chain.h>
+#include <scanplan/kinematics/units.h>
 #include "test_support.h"
 
 namespace scanplan::kinematics {

@@ -16,8 +16,8 @@
 
 #include <gtest/gtest.h>
 
-#include "scanner/pass_selection.h"
-#include "scanner/set_cover.h"
+#include <scanplan/scanner/pass_selection.h>
+#include <scanplan/scanner/set_cover.h>
 
 namespace {
 

@@ -13,10 +13,10 @@
 #include <string>
 #include <vector>
 
-#include "cli/config/robot_file.h"
-#include "kinematics/error.h"
-#include "kinematics/pose.h"
-#include "kinematics/robot_model.h"
+#include <scanplan/config/robot_file.h>
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/pose.h>
+#include <scanplan/kinematics/robot_model.h>
 
 namespace scanplan::test {
 
@@ -79,7 +79,7 @@ inline std::string runCommand(const std::string& command) {
 /// A bundled robot file, e.g. "viper_s650".
 inline kinematics::RobotModel bundledRobot(const std::string& name) {
   const auto file = sourceDir() / "data" / "robots" / (name + ".yaml");
-  return cli::buildRobotModel(cli::loadRobotFile(file), file.string());
+  return config::buildRobotModel(config::loadRobotFile(file), file.string());
 }
 
 inline kinematics::JointVector randomJoints(const kinematics::RobotModel& robot,

@@ -13,18 +13,18 @@
 #include <utility>
 #include <vector>
 
+#include <scanplan/collision/scene.h>
+#include <scanplan/config/job.h>
+#include <scanplan/config/to_problem.h>
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/joint_wrap.h>
+#include <scanplan/kinematics/trajectory.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/pipeline/plan_scan.h>
+#include <scanplan/planner/config_map.h>
+#include <scanplan/planner/trajectory_builder.h>
 #include "cli/commands/commands.h"
-#include "cli/config/job.h"
-#include "cli/config/problem.h"
 #include "cli/io/axis_stream.h"
-#include "collision/scene.h"
-#include "kinematics/error.h"
-#include "kinematics/joint_wrap.h"
-#include "kinematics/trajectory.h"
-#include "kinematics/units.h"
-#include "pipeline/plan_scan.h"
-#include "planner/config_map.h"
-#include "planner/trajectory_builder.h"
 #include "test_support.h"
 
 namespace {
@@ -150,7 +150,7 @@ TEST(TrajectoryCsv, MalformedInputNamesFileLineAndColumn) {
       {header + good + "0.1,0,0,0,0,0,0,0,1,2,0,0,0,1,0,0,0\n", "expected 0 or 1"},
       {header + good + "0.1,0,0,0,0,0,0,0,1,1,0,0,0,1,1,0,0\n", "unit quaternion"},
       {header + good + "0.1,0,0,0,0,0,0,0,1e999,1,0,0,0,1,0,0,0\n", "column f"},
-      // Finite but absurd (issue 17: a joint at 1e300° made validation split its interval
+      // Finite but absurd (a joint at 1e300° made validation split its interval
       // without end, until the memory ran out).
       {header + good + "0.1,0,0,1e300,0,0,0,0,1,1,0,0,0,1,0,0,0\n",
        "t.csv:3: column j2_deg: 1e+300: expected an angle within ±1000000 deg"},
@@ -214,30 +214,30 @@ TEST(AxisStream, AColumnNamedTwiceIsRefusedNamingBothPositions) {
 
 // The demo cell on a coarse map (2° × 0.2 s) so the test stays quick.
 struct DemoPlan {
-  cli::JobSpec job;
+  config::JobSpec job;
   kinematics::CellModel cell;
   scanner::GeneratedPath path;
 };
 
 DemoPlan demo() {
-  cli::JobSpec job =
-      cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", test::kLightDemo);
-  kinematics::CellModel cell = cli::buildCell(job);
+  config::JobSpec job =
+      config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", test::kLightDemo);
+  kinematics::CellModel cell = config::buildCell(job);
   scanner::GeneratedPath path = cli::generateScanPath(job, cell);
   return {std::move(job), std::move(cell), std::move(path)};
 }
 
 TEST(BuildTrajectory, JointsReproduceTheTargetPosesAndStayContinuous) {
   const DemoPlan d = demo();
-  const collision::Scene scene(d.cell, cli::clearanceConfig(d.job));
+  const collision::Scene scene(d.cell, config::clearanceConfig(d.job));
   const cli::MapRun run = cli::computeMap(d.job, scene, d.path.path);
   // As `plan` does: a branch's path is accepted only when it can be followed continuously.
   planner::TrajectoryBuild built;
   const pipeline::PathChoice plan = pipeline::choosePath(
-      run.map, cli::planSettings(d.job), {.method = "ray"},
+      run.map, config::planSettings(d.job), {.method = "ray"},
       [&](std::size_t b, const std::vector<double>& theta) {
-        built = planner::buildTrajectory(scene, cli::constraintSettings(d.job), d.path.path, theta,
-                                         run.map.branches[b]);
+        built = planner::buildTrajectory(scene, config::constraintSettings(d.job), d.path.path,
+                                         theta, run.map.branches[b]);
         return built.ok && built.min_f > 0.0 ? std::string() : "not ok: " + built.reason;
       });
   ASSERT_TRUE(plan.solved()) << plan.chosen.result.reason;
@@ -273,13 +273,13 @@ TEST(BuildTrajectory, JointsReproduceTheTargetPosesAndStayContinuous) {
 
 TEST(BuildTrajectory, UnreachableSampleIsNotOkAndNamed) {
   const DemoPlan d = demo();
-  const collision::Scene scene(d.cell, cli::clearanceConfig(d.job));
+  const collision::Scene scene(d.cell, config::clearanceConfig(d.job));
   // Every target 3 m above the part: out of the Viper's reach.
   kinematics::ScanPath far = d.path.path;
   for (auto& s : far.samples) s.X_PS.translation() += Eigen::Vector3d(0.0, 0.0, 3.0);
   const std::vector<double> theta(far.samples.size(), 0.0);
   const planner::TrajectoryBuild built = planner::buildTrajectory(
-      scene, cli::constraintSettings(d.job), far, theta, kinematics::IkBranch{});
+      scene, config::constraintSettings(d.job), far, theta, kinematics::IkBranch{});
   EXPECT_FALSE(built.ok);
   EXPECT_NE(built.reason.find("time sample 0 "), std::string::npos) << built.reason;
   EXPECT_NE(built.reason.find("unreachable"), std::string::npos) << built.reason;
@@ -302,10 +302,10 @@ std::pair<double, kinematics::JointVector> reachableOn(const DemoPlan& d,
 // instead (the flange rolls off the planned pose there); while it scans, the track breaks.
 TEST(BuildTrajectory, WristUnwindsAWholeTurnOnlyWhereThePathDoesNotScan) {
   const DemoPlan d = demo();
-  const collision::Scene scene(d.cell, cli::clearanceConfig(d.job));
+  const collision::Scene scene(d.cell, config::clearanceConfig(d.job));
   const Eigen::Isometry3d X0 = d.path.path.samples.front().X_PS;
   // A table angle where the first pose is reachable on the demo's usual branch.
-  const kinematics::IkBranch branch = *cli::parseBranch("RIGHTY ABOVE NOFLIP");
+  const kinematics::IkBranch branch = *config::parseBranch("RIGHTY ABOVE NOFLIP");
   const double theta = reachableOn(d, X0, branch).first;
   ASSERT_GE(theta, 0.0);
   kinematics::ScanPath roll;
@@ -319,7 +319,7 @@ TEST(BuildTrajectory, WristUnwindsAWholeTurnOnlyWhereThePathDoesNotScan) {
   }
   const std::vector<double> thetas(roll.samples.size(), theta);
   const planner::TrajectoryBuild moving =
-      planner::buildTrajectory(scene, cli::constraintSettings(d.job), roll, thetas, branch);
+      planner::buildTrajectory(scene, config::constraintSettings(d.job), roll, thetas, branch);
   ASSERT_TRUE(moving.ok) << moving.reason;
   const auto& q = moving.trajectory.samples;
   for (std::size_t k = 0; k < q.size(); ++k) {
@@ -337,7 +337,7 @@ TEST(BuildTrajectory, WristUnwindsAWholeTurnOnlyWhereThePathDoesNotScan) {
   }
   for (auto& s : roll.samples) s.scanning = true;
   const planner::TrajectoryBuild scanning =
-      planner::buildTrajectory(scene, cli::constraintSettings(d.job), roll, thetas, branch);
+      planner::buildTrajectory(scene, config::constraintSettings(d.job), roll, thetas, branch);
   EXPECT_FALSE(scanning.ok);
   EXPECT_NE(scanning.reason.find("joint 6 would have to pass its limit"), std::string::npos)
       << scanning.reason;
@@ -348,9 +348,9 @@ TEST(BuildTrajectory, WristUnwindsAWholeTurnOnlyWhereThePathDoesNotScan) {
 // instead (before, it was kept with those samples outside the limits).
 TEST(BuildTrajectory, UnwindingThatWouldLeaveTheLimitsBreaksTheTrack) {
   const DemoPlan d = demo();
-  const collision::Scene scene(d.cell, cli::clearanceConfig(d.job));
+  const collision::Scene scene(d.cell, config::clearanceConfig(d.job));
   const Eigen::Isometry3d X0 = d.path.path.samples.front().X_PS;
-  const kinematics::IkBranch branch = *cli::parseBranch("RIGHTY ABOVE NOFLIP");
+  const kinematics::IkBranch branch = *config::parseBranch("RIGHTY ABOVE NOFLIP");
   const auto [theta, q0] = reachableOn(d, X0, branch);
   ASSERT_GE(theta, 0.0);
   // Which way joint 6 turns as the head rolls about z_S.
@@ -381,7 +381,7 @@ TEST(BuildTrajectory, UnwindingThatWouldLeaveTheLimitsBreaksTheTrack) {
   }
   const std::vector<double> thetas(roll.samples.size(), theta);
   const planner::TrajectoryBuild built =
-      planner::buildTrajectory(scene, cli::constraintSettings(d.job), roll, thetas, branch);
+      planner::buildTrajectory(scene, config::constraintSettings(d.job), roll, thetas, branch);
   for (const auto& s : built.trajectory.samples) {
     EXPECT_TRUE(d.cell.robot.withinLimits(s.q)) << s.t;
   }
@@ -390,7 +390,7 @@ TEST(BuildTrajectory, UnwindingThatWouldLeaveTheLimitsBreaksTheTrack) {
       << built.reason;
 }
 
-// Robustness catalogue (issue 17): a 5 MB first line was quoted whole in the message.
+// Robustness catalogue: a 5 MB first line was quoted whole in the message.
 TEST(TrajectoryCsv, LongLinesAreClippedInMessages) {
   try {
     kinematics::parseTrajectoryCsv(std::string(5 << 20, '1') + "\n", "t.csv");

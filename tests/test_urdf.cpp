@@ -1,4 +1,4 @@
-// Robots from URDF (cli/config/robot_urdf.h, `scanplan robot import`). The yardstick is the URDF
+// Robots from URDF (config/robot_urdf.h, `scanplan robot import`). The yardstick is the URDF
 // itself: its forward kinematics composed here straight from urdfdom's joints (origin, then the
 // rotation about the axis), independent of the DH and OPW derivation under test.
 
@@ -12,13 +12,13 @@
 #include <fmt/format.h>
 #include <urdf_parser/urdf_parser.h>
 
-#include "cli/config/job.h"
-#include "cli/config/problem.h"
-#include "cli/config/robot_urdf.h"
+#include <scanplan/config/job.h>
+#include <scanplan/config/robot_urdf.h>
+#include <scanplan/config/to_problem.h>
+#include <scanplan/kinematics/pose.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/pipeline/plan_scan.h>
 #include "cli_support.h"
-#include "kinematics/pose.h"
-#include "kinematics/units.h"
-#include "pipeline/plan_scan.h"
 #include "test_support.h"
 
 namespace scanplan {
@@ -97,28 +97,28 @@ struct Shipped {
   std::string opw_file;    // in data/robots/urdf, or ""
 };
 
-cli::UrdfRobotSource source(const Shipped& s) {
-  cli::UrdfRobotSource src;
+config::UrdfRobotSource source(const Shipped& s) {
+  config::UrdfRobotSource src;
   src.urdf = urdfDir() / (s.urdf + ".urdf");
   if (!s.opw_file.empty()) src.opw_parameters = urdfDir() / s.opw_file;
   return src;
 }
 
-kinematics::RobotModel build(const cli::RobotSpec& spec) {
-  return cli::buildRobotModel(spec, spec.name);
+kinematics::RobotModel build(const config::RobotSpec& spec) {
+  return config::buildRobotModel(spec, spec.name);
 }
 
 class ShippedUrdf : public ::testing::TestWithParam<Shipped> {};
 
 TEST_P(ShippedUrdf, ModelHasTheUrdfsForwardKinematicsAndItsRobotFilesAndIkInvertsIt) {
   const Shipped& s = GetParam();
-  const cli::UrdfRobotSource src = source(s);
-  const kinematics::RobotModel model = build(cli::importUrdf(src).spec);
+  const config::UrdfRobotSource src = source(s);
+  const kinematics::RobotModel model = build(config::importUrdf(src).spec);
   const UrdfTree tree(src.urdf, "base_link", "tool0");
   std::optional<kinematics::RobotModel> file;
   if (!s.robot_file.empty()) {
     const fs::path f = test::sourceDir() / "data/robots" / s.robot_file;
-    file.emplace(cli::buildRobotModel(cli::loadRobotFile(f), f.string()));
+    file.emplace(config::buildRobotModel(config::loadRobotFile(f), f.string()));
   }
   std::mt19937 rng(2024);
   double max_error = 0.0, max_file_error = 0.0;
@@ -153,8 +153,8 @@ INSTANTIATE_TEST_SUITE_P(
 
 TEST(Urdf, AJointAgainstItsAxisIsDirectionMinusOne) {
   // FANUC's J3, J4, J5, J6 turn about negative axes; the KR6's A1, A4, A6.
-  const cli::RobotSpec fanuc = cli::importUrdf(source({"fanuc_lrmate200id", "", ""})).spec;
-  const cli::RobotSpec kuka = cli::importUrdf(source({"kuka_kr6_r700_sixx", "", ""})).spec;
+  const config::RobotSpec fanuc = config::importUrdf(source({"fanuc_lrmate200id", "", ""})).spec;
+  const config::RobotSpec kuka = config::importUrdf(source({"kuka_kr6_r700_sixx", "", ""})).spec;
   const int fanuc_dirs[] = {1, 1, -1, -1, -1, -1}, kuka_dirs[] = {-1, 1, 1, -1, 1, -1};
   for (std::size_t i = 0; i < 6; ++i) {
     EXPECT_EQ(fanuc.dh[i].direction, fanuc_dirs[i]) << "J" << i + 1;
@@ -163,24 +163,24 @@ TEST(Urdf, AJointAgainstItsAxisIsDirectionMinusOne) {
 }
 
 TEST(Urdf, ANonOrthoParallelArmIsRefusedNamingTheConditions) {
-  cli::UrdfRobotSource src;
+  config::UrdfRobotSource src;
   src.urdf = test::sourceDir() / "tests/urdf/ur5.urdf";
   EXPECT_TRUE(test::throwsInputError(
-      [&] { cli::importUrdf(src); },
+      [&] { config::importUrdf(src); },
       {"ur5.urdf", "not an ortho-parallel arm",
        "J4 (wrist_1_joint) is not perpendicular to J3 (elbow_joint): the axes are 0 deg apart",
        "J4, J5 and J6 axes do not meet in one point"}));
 }
 
 TEST(Urdf, BadLinksJointsAndOpwFilesAreClearErrors) {
-  cli::UrdfRobotSource src = source({"abb_irb2400", "", ""});
+  config::UrdfRobotSource src = source({"abb_irb2400", "", ""});
   src.tip_link = "tool1";
   EXPECT_TRUE(test::throwsInputError(
-      [&] { cli::importUrdf(src); },
+      [&] { config::importUrdf(src); },
       {"abb_irb2400.urdf", "tip_link 'tool1': no such link", "base_link, link_1"}));
   src.tip_link = "link_4";
   EXPECT_TRUE(test::throwsInputError(
-      [&] { cli::importUrdf(src); },
+      [&] { config::importUrdf(src); },
       {"4 revolute joints between base_link 'base_link' and tip_link 'link_4'", "expected 6"}));
   // An opw file whose upper arm is 15 mm too long.
   const fs::path dir =
@@ -192,7 +192,7 @@ TEST(Urdf, BadLinksJointsAndOpwFilesAreClearErrors) {
   src = source({"abb_irb2400", "", ""});
   src.opw_parameters = dir / "bad_opw.yaml";
   EXPECT_TRUE(test::throwsInputError(
-      [&] { cli::importUrdf(src); },
+      [&] { config::importUrdf(src); },
       {"bad_opw.yaml", "c2 0.72", "disagree with the URDF chain base_link → tool0",
        "the chain's own are a1 0.1, a2 -0.135, b 0, c1 0.615, c2 0.705"}));
   fs::remove_all(dir);
@@ -212,9 +212,9 @@ TEST(Urdf, AMimicJointOnTheChainAndAClosedChainAreRefused) {
     const auto at = edited.find(from);
     EXPECT_NE(at, std::string::npos) << from;
     test::writeFile(dir / name, edited.replace(at, from.size(), to));
-    cli::UrdfRobotSource src = source({"viper_s650", "", ""});
+    config::UrdfRobotSource src = source({"viper_s650", "", ""});
     src.urdf = dir / name;
-    return [src] { cli::importUrdf(src); };
+    return [src] { config::importUrdf(src); };
   };
   const std::string chain = "<parent link=\"link_2\"/><child link=\"link_3\"/>";
   EXPECT_TRUE(
@@ -249,9 +249,9 @@ TEST(Urdf, ALinkThatIsItsOwnAncestorIsRefusedNamingTheLoop) {
   const auto withLinks = [&](const std::string& name, const std::string& extra) {
     std::string edited = text;
     test::writeFile(dir / name, edited.replace(edited.find("</robot>"), 8, extra + "</robot>"));
-    cli::UrdfRobotSource src = source({"viper_s650", "", ""});
+    config::UrdfRobotSource src = source({"viper_s650", "", ""});
     src.urdf = dir / name;
-    return [src] { cli::importUrdf(src); };
+    return [src] { config::importUrdf(src); };
   };
   const auto fixed = [](const std::string& name, const std::string& parent,
                         const std::string& child) {
@@ -313,8 +313,8 @@ class UrdfPackages : public test::Cli {
     }
     test::writeFile(file, stl + "endsolid cube\n");
   }
-  cli::UrdfRobotSource robot() const {
-    cli::UrdfRobotSource src;
+  config::UrdfRobotSource robot() const {
+    config::UrdfRobotSource src;
     src.urdf = dir_ / "robot.urdf";
     src.package_path = {dir_ / "ws"};
     return src;
@@ -322,24 +322,24 @@ class UrdfPackages : public test::Cli {
 };
 
 TEST_F(UrdfPackages, PackageUrisResolveAgainstThePackagePathOrTheEnvironment) {
-  const cli::RobotSpec spec = cli::importUrdf(robot()).spec;
+  const config::RobotSpec spec = config::importUrdf(robot()).spec;
   ASSERT_EQ(spec.links[3].shapes.size(), 2u);
   EXPECT_EQ(spec.links[3].shapes[0].file.resolved,
             dir_ / "ws/my_robot_description/meshes/cover.stl");
-  cli::UrdfRobotSource src = robot();
+  config::UrdfRobotSource src = robot();
   src.package_path = {dir_ / "elsewhere", dir_ / "ws/my_robot_description"};  // the package itself
-  EXPECT_NO_THROW(cli::importUrdf(src));
+  EXPECT_NO_THROW(config::importUrdf(src));
   src.package_path = {dir_ / "elsewhere"};
   EXPECT_TRUE(test::throwsInputError(
-      [&] { cli::importUrdf(src); },
+      [&] { config::importUrdf(src); },
       {"robot.urdf", "link 'link_3'", "package://my_robot_description/meshes/cover.stl",
        "package 'my_robot_description' not found", (dir_ / "elsewhere").string()}));
   ::setenv("SCANPLAN_PACKAGE_PATH", ("/nonexistent:" + (dir_ / "ws").string()).c_str(), 1);
-  EXPECT_NO_THROW(cli::importUrdf(src));
+  EXPECT_NO_THROW(config::importUrdf(src));
   ::unsetenv("SCANPLAN_PACKAGE_PATH");
   fs::remove(dir_ / "ws/my_robot_description/meshes/cover.stl");
   EXPECT_TRUE(test::throwsInputError(
-      [&] { cli::importUrdf(robot()); },
+      [&] { config::importUrdf(robot()); },
       {"package 'my_robot_description' is", "but it has no file", "meshes/cover.stl"}));
 }
 
@@ -354,9 +354,9 @@ TEST_F(UrdfPackages, AMeshPathLeavingItsPackageIsRefused) {
   const auto importWith = [&](const std::string& mesh, const fs::path& file) {
     std::string edited = text;
     test::writeFile(file, edited.replace(edited.find(uri), uri.size(), mesh));
-    cli::UrdfRobotSource src = robot();
+    config::UrdfRobotSource src = robot();
     src.urdf = file;
-    return [src] { cli::importUrdf(src); };
+    return [src] { config::importUrdf(src); };
   };
   const fs::path leaves = dir_ / "leaves.urdf";
   EXPECT_TRUE(test::throwsInputError(
@@ -380,7 +380,7 @@ TEST_F(UrdfPackages, AMeshPathLeavingItsPackageIsRefused) {
 }
 
 TEST_F(UrdfPackages, EveryCollisionElementSitsWhereTheUrdfPutsItAtAnyPose) {
-  const cli::RobotSpec spec = cli::importUrdf(robot()).spec;
+  const config::RobotSpec spec = config::importUrdf(robot()).spec;
   const kinematics::RobotModel model = build(spec);
   const UrdfTree tree(dir_ / "robot.urdf", "base_link", "tool0");
   std::mt19937 rng(11);
@@ -395,8 +395,8 @@ TEST_F(UrdfPackages, EveryCollisionElementSitsWhereTheUrdfPutsItAtAnyPose) {
         ++elements;
         const Eigen::Isometry3d want = X_BL * pose(c->origin);
         for (std::size_t b = 0; b < spec.links.size(); ++b) {
-          for (const cli::ShapeSpec& shape : spec.links[b].shapes) {
-            if (sameFrame(frames[b] * cli::toIsometry(shape.pose), want)) ++matched;
+          for (const config::ShapeSpec& shape : spec.links[b].shapes) {
+            if (sameFrame(frames[b] * config::toIsometry(shape.pose), want)) ++matched;
           }
         }
       }
@@ -434,13 +434,13 @@ TEST_F(UrdfPackages, HostileUrdfsAreInputErrorsNamingWhatIsWrong) {
     ASSERT_NE(k, std::string::npos) << edit.first;
     text.replace(k, edit.first.size(), edit.second);
     test::writeFile(dir_ / "hostile.urdf", text);
-    cli::UrdfRobotSource src;
+    config::UrdfRobotSource src;
     src.urdf = dir_ / "hostile.urdf";
     EXPECT_TRUE(
-        test::throwsInputError([&] { cli::importUrdf(src); }, {"hostile.urdf", expected.first}))
+        test::throwsInputError([&] { config::importUrdf(src); }, {"hostile.urdf", expected.first}))
         << edit.second;
     if (!expected.second.empty()) {
-      EXPECT_TRUE(test::throwsInputError([&] { cli::importUrdf(src); }, {expected.second}));
+      EXPECT_TRUE(test::throwsInputError([&] { config::importUrdf(src); }, {expected.second}));
     }
   }
 }
@@ -455,13 +455,13 @@ TEST_F(UrdfPackages, RobotImportWritesARobotFileWithTheSameModel) {
                   (dir_ / "ws").string(), "--controller", "abb_rapid"});
     ASSERT_EQ(run.exit_code, 0) << test::describe(run);
     EXPECT_TRUE(test::contains(run.out, "wrote")) << run.out;
-    const cli::RobotSpec file = cli::loadRobotFile(out);
+    const config::RobotSpec file = config::loadRobotFile(out);
     EXPECT_EQ(file.controller, "abb_rapid");
     const kinematics::RobotModel a = build(file);
-    cli::UrdfRobotSource src;
+    config::UrdfRobotSource src;
     src.urdf = urdf;
     src.package_path = {dir_ / "ws"};
-    const cli::RobotSpec direct = cli::importUrdf(src).spec;
+    const config::RobotSpec direct = config::importUrdf(src).spec;
     const kinematics::RobotModel b = build(direct);
     std::mt19937 rng(4);
     for (int k = 0; k < 200; ++k) {
@@ -471,8 +471,8 @@ TEST_F(UrdfPackages, RobotImportWritesARobotFileWithTheSameModel) {
       for (std::size_t i = 0; i < file.links.size(); ++i) {
         ASSERT_EQ(file.links[i].shapes.size(), direct.links[i].shapes.size());
         for (std::size_t j = 0; j < file.links[i].shapes.size(); ++j) {
-          ASSERT_TRUE(sameFrame(fa[i] * cli::toIsometry(file.links[i].shapes[j].pose),
-                                fa[i] * cli::toIsometry(direct.links[i].shapes[j].pose)));
+          ASSERT_TRUE(sameFrame(fa[i] * config::toIsometry(file.links[i].shapes[j].pose),
+                                fa[i] * config::toIsometry(direct.links[i].shapes[j].pose)));
         }
       }
     }
@@ -496,8 +496,9 @@ pipeline::ScanPlan planDemo(const std::vector<std::string>& robot_overrides, boo
       whole ? std::vector<std::string>{"scan.dt_s=0.2"} : test::kLightDemo;
   overrides.push_back("simulation.enabled=false");
   overrides.insert(overrides.end(), robot_overrides.begin(), robot_overrides.end());
-  const cli::JobSpec job = cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", overrides);
-  return pipeline::planScan(cli::toProblem(job));
+  const config::JobSpec job =
+      config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", overrides);
+  return pipeline::planScan(config::toProblem(job));
 }
 
 struct DemoCase {
@@ -528,7 +529,7 @@ INSTANTIATE_TEST_SUITE_P(
                   "table.axis.xyz_mm=[1100,0,500]"}}),
     [](const auto& param_info) { return param_info.param.name; });
 
-// Issue 18 item 2 (joint wrap): with its table 0.9 m out at floor level, the whole hand-written
+// Joint wrap: with its table 0.9 m out at floor level, the whole hand-written
 // demo (three rings and the raster) needs the IRB 2400's J4 past ±180° (it turns ±200°). Before
 // joint wrap no branch could be executed ("joint 4 would have to pass its limit (-200 … 200
 // deg)"); now J4 is followed continuously, the planner replans the branches whose J4 would leave

@@ -14,18 +14,18 @@
 
 #include <tbb/global_control.h>
 
+#include <scanplan/collision/clearance.h>
+#include <scanplan/collision/scene.h>
+#include <scanplan/config/job.h>
+#include <scanplan/config/to_problem.h>
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/shape.h>
+#include <scanplan/kinematics/trajectory.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/pipeline/plan_scan.h>
+#include <scanplan/planner/trajectory_builder.h>
+#include <scanplan/planner/validation.h>
 #include "cli/commands/commands.h"
-#include "cli/config/job.h"
-#include "cli/config/problem.h"
-#include "collision/clearance.h"
-#include "collision/scene.h"
-#include "kinematics/error.h"
-#include "kinematics/shape.h"
-#include "kinematics/trajectory.h"
-#include "kinematics/units.h"
-#include "pipeline/plan_scan.h"
-#include "planner/trajectory_builder.h"
-#include "planner/validation.h"
 #include "test_support.h"
 
 namespace {
@@ -68,14 +68,14 @@ TrajectorySample sample(double t, double theta, const JointVector& q) {
 }
 
 struct DemoCell {
-  cli::JobSpec job;
+  config::JobSpec job;
   kinematics::CellModel cell;
 };
 
 DemoCell demoCell() {
-  cli::JobSpec job =
-      cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", test::kLightDemo);
-  kinematics::CellModel cell = cli::buildCell(job);
+  config::JobSpec job =
+      config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", test::kLightDemo);
+  kinematics::CellModel cell = config::buildCell(job);
   return {std::move(job), std::move(cell)};
 }
 
@@ -213,7 +213,7 @@ TEST(Densify, RejectsABadStepAndTimesThatDoNotIncrease) {
 // A joint faster than its max_speed is one kJointSpeed run with its joint, value and limit.
 TEST(Validate, JointSpeedViolationIsOneRunWithJointValueAndLimit) {
   const DemoCell d = demoCell();
-  const collision::Scene scene(d.cell, cli::clearanceConfig(d.job));
+  const collision::Scene scene(d.cell, config::clearanceConfig(d.job));
   // J6 (max 600°/s) turns at 20 rad/s ≈ 1146°/s from t = 0.2 to 0.6 s; still otherwise. The
   // scanner spins about its own axis away from the table: nothing else can fail.
   Trajectory tr;
@@ -242,12 +242,12 @@ TEST(Validate, JointSpeedViolationIsOneRunWithJointValueAndLimit) {
       << planner::describe(v);
 }
 
-// Robustness catalogue (issue 17): a joint thousands of degrees away between two samples gave
+// Robustness catalogue: a joint thousands of degrees away between two samples gave
 // the continuous collision check an interval it splits without end (bad_alloc after minutes).
 // Its worst case is estimated first, from the motion bounds, and refused over the limit.
 TEST(Validate, ARefinementWithoutEndIsRefusedBeforeItRuns) {
   const DemoCell d = demoCell();
-  const collision::Scene scene(d.cell, cli::clearanceConfig(d.job));
+  const collision::Scene scene(d.cell, config::clearanceConfig(d.job));
   // J2 through 100 000° in 0.1 s: bounds of about 100 m per 10 ms step, 2^20 halvings of
   // 0.1 mm each on every step whose ends do not prove the pairs apart.
   Trajectory tr;
@@ -269,7 +269,7 @@ TEST(Validate, ARefinementWithoutEndIsRefusedBeforeItRuns) {
 // 0.6 s; ω > ω_max on [0.4, 0.6].
 TEST(Validate, TableSpeedAndAccelerationAreJudgedOnTheirOwnSamples) {
   const DemoCell d = demoCell();
-  const collision::Scene scene(d.cell, cli::clearanceConfig(d.job));
+  const collision::Scene scene(d.cell, config::clearanceConfig(d.job));
   const std::vector<double> omega{0.0, 0.5, 0.5, 0.5, 1.0, 1.0, 0.5};
   Trajectory tr;
   double theta = 0.0;
@@ -307,7 +307,7 @@ TEST(Validate, TableSpeedAndAccelerationAreJudgedOnTheirOwnSamples) {
 // ω ≤ 0.5 rad/s < 30°/s pass.
 TEST(Validate, SmoothTableMotionWithinBoundsPasses) {
   const DemoCell d = demoCell();
-  const collision::Scene scene(d.cell, cli::clearanceConfig(d.job));
+  const collision::Scene scene(d.cell, config::clearanceConfig(d.job));
   Trajectory tr;
   for (int k = 0; k <= 5; ++k) {
     const double t = 0.1 * k;
@@ -321,7 +321,7 @@ TEST(Validate, SmoothTableMotionWithinBoundsPasses) {
 // J6 (±360°) passes +360° at 20°/s: one kJointLimit run from the first densified pose beyond it.
 TEST(Validate, JointLimitViolationIsOneRunWithTheWorstValue) {
   const DemoCell d = demoCell();
-  const collision::Scene scene(d.cell, cli::clearanceConfig(d.job));
+  const collision::Scene scene(d.cell, config::clearanceConfig(d.job));
   Trajectory tr;
   for (int k = 0; k <= 10; ++k) {
     JointVector q = home(-90.0);
@@ -396,7 +396,7 @@ TEST(MotionBound, BoundsTheRelativeMotionOfEveryPair) {
                                  Eigen::Vector3d(0.0, -0.6, 0.5), Eigen::Vector3d(1.0, 0.02, 1.0)));
   d.cell.table.tilt = Eigen::Vector2d(0.02, -0.01);  // an imperfect table: the bound must hold
   d.cell.table.eccentricity = Eigen::Vector2d(0.003, 0.001);
-  const collision::Scene scene(d.cell, cli::clearanceConfig(d.job));
+  const collision::Scene scene(d.cell, config::clearanceConfig(d.job));
   const auto bounds = planner::detail::bodyBounds(scene);
   const auto points = bodyPoints(scene);
   ASSERT_EQ(bounds.size(), scene.bodies().size());
@@ -454,7 +454,7 @@ TEST(Validate, LimitedTableTravelIsChecked) {
   d.cell.table.continuous = false;
   d.cell.table.min = deg(-90.0);
   d.cell.table.max = deg(90.0);
-  const collision::Scene scene(d.cell, cli::clearanceConfig(d.job));
+  const collision::Scene scene(d.cell, config::clearanceConfig(d.job));
   Trajectory tr;
   tr.samples = {sample(0.0, deg(60.0), home(-90.0)), sample(2.0, deg(100.0), home(-90.0))};
   const ValidationReport r = planner::validateTrajectory(scene, tr, {.sample_dt = 0.1});
@@ -486,7 +486,7 @@ struct Sweep {
 
 TEST(Validate, MotionThroughAnObstacleBetweenClearSamplesIsCaught) {
   const Sweep sweep;
-  const collision::Scene scene(sweep.demo.cell, cli::clearanceConfig(sweep.demo.job));
+  const collision::Scene scene(sweep.demo.cell, config::clearanceConfig(sweep.demo.job));
   // Step 0.34 s: poses at J1 = 30, 70, 110, 150° — all clear of the post (checked), which sits
   // between the 2nd and the 3rd.
   const ValidationSettings settings{.sample_dt = 0.34};
@@ -540,7 +540,7 @@ TEST(Validate, TableCarriedObstacleBetweenSamplesIsCaught) {
   const Eigen::Vector3d centre(radius * std::cos(at), radius * std::sin(at), p_AS.z());
   const Eigen::Vector3d size(0.03, 0.03, 0.06);
   d.cell.obstacles.push_back(box("spike", kinematics::Carrier::kTable, centre, size));
-  const collision::Scene scene(d.cell, cli::clearanceConfig(d.job));
+  const collision::Scene scene(d.cell, config::clearanceConfig(d.job));
 
   Trajectory tr;
   tr.samples = {sample(0.0, 0.0, home(0.0)), sample(4.0, deg(120.0), home(0.0))};
@@ -568,7 +568,7 @@ TEST(Validate, TableCarriedObstacleBetweenSamplesIsCaught) {
 // clear, no sample penetrates.
 TEST(Validate, NeverCallsAPenetratingMotionClear) {
   const Sweep sweep;
-  const collision::Scene scene(sweep.demo.cell, cli::clearanceConfig(sweep.demo.job));
+  const collision::Scene scene(sweep.demo.cell, config::clearanceConfig(sweep.demo.job));
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   int hits = 0, misses = 0;
@@ -599,7 +599,7 @@ TEST(Validate, NeverCallsAPenetratingMotionClear) {
 // The demo job planned on a coarse map (2° × 0.2 s), as `plan` does it.
 struct DemoPlan {
   DemoCell demo = demoCell();
-  collision::Scene scene{demo.cell, cli::clearanceConfig(demo.job)};
+  collision::Scene scene{demo.cell, config::clearanceConfig(demo.job)};
   planner::TrajectoryBuild built;
 };
 
@@ -609,9 +609,9 @@ const DemoPlan& demoPlan() {
     const scanner::GeneratedPath path = cli::generateScanPath(p.demo.job, p.demo.cell);
     const cli::MapRun run = cli::computeMap(p.demo.job, p.scene, path.path);
     const pipeline::PathChoice outcome = pipeline::choosePath(
-        run.map, cli::planSettings(p.demo.job), {.method = "ray"},
+        run.map, config::planSettings(p.demo.job), {.method = "ray"},
         [&](std::size_t b, const std::vector<double>& theta) {
-          p.built = planner::buildTrajectory(p.scene, cli::constraintSettings(p.demo.job),
+          p.built = planner::buildTrajectory(p.scene, config::constraintSettings(p.demo.job),
                                              path.path, theta, run.map.branches[b]);
           return p.built.ok && p.built.min_f > 0.0 ? std::string() : "not ok: " + p.built.reason;
         });
@@ -695,7 +695,7 @@ TEST(Validate, PlannedDemoTrajectoryPasses) {
 
 TEST(Validate, ReportDoesNotDependOnTheThreadCount) {
   const Sweep sweep;
-  const collision::Scene scene(sweep.demo.cell, cli::clearanceConfig(sweep.demo.job));
+  const collision::Scene scene(sweep.demo.cell, config::clearanceConfig(sweep.demo.job));
   const DemoPlan& plan = demoPlan();
   ASSERT_TRUE(plan.built.ok) << plan.built.reason;
   const auto run = [&](int threads) {

@@ -11,14 +11,14 @@
 
 #include <gtest/gtest.h>
 
-#include "cli/config/job.h"
-#include "cli/config/problem.h"
-#include "collision/clearance.h"
-#include "collision/scene.h"
-#include "kinematics/joint_wrap.h"
-#include "kinematics/motion_model.h"
-#include "pipeline/collision_watch.h"
-#include "pipeline/plan_scan.h"
+#include <scanplan/collision/clearance.h>
+#include <scanplan/collision/scene.h>
+#include <scanplan/config/job.h>
+#include <scanplan/config/to_problem.h>
+#include <scanplan/kinematics/joint_wrap.h>
+#include <scanplan/kinematics/motion_model.h>
+#include <scanplan/pipeline/collision_watch.h>
+#include <scanplan/pipeline/plan_scan.h>
 #include "test_support.h"
 
 namespace {
@@ -28,19 +28,19 @@ using kinematics::AxisSample;
 using kinematics::JointVector;
 using kinematics::MotionKind;
 
-constexpr double kRate = 250.0;  // Hz, the stream the issue asks to keep up with
+constexpr double kRate = 250.0;  // Hz, the stream to keep up with
 constexpr double kDt = 1.0 / kRate;
 
 struct Cell {
-  cli::JobSpec job;
+  config::JobSpec job;
   kinematics::CellModel cell;
 };
 
 const Cell& demoCell() {
   static const Cell cell = [] {
-    cli::JobSpec job =
-        cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", test::kLightDemo);
-    kinematics::CellModel model = cli::buildCell(job);
+    config::JobSpec job =
+        config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", test::kLightDemo);
+    kinematics::CellModel model = config::buildCell(job);
     return Cell{std::move(job), std::move(model)};
   }();
   return cell;
@@ -235,7 +235,7 @@ Approach jointApproach(const collision::Scene& scene) {
 }
 
 TEST(CollisionWatch, AJointMoveTowardsTheCellWarnsAHorizonAheadWithTheContactTime) {
-  const collision::Scene scene(demoCell().cell, cli::clearanceConfig(demoCell().job));
+  const collision::Scene scene(demoCell().cell, config::clearanceConfig(demoCell().job));
   const Approach a = jointApproach(scene);
   ASSERT_TRUE(a.towards);
   pipeline::WatchOptions options;
@@ -261,7 +261,7 @@ TEST(CollisionWatch, AJointMoveTowardsTheCellWarnsAHorizonAheadWithTheContactTim
 }
 
 TEST(CollisionWatch, MovingAwayFromTheContactIsSilent) {
-  const collision::Scene scene(demoCell().cell, cli::clearanceConfig(demoCell().job));
+  const collision::Scene scene(demoCell().cell, config::clearanceConfig(demoCell().job));
   const Approach a = jointApproach(scene);
   ASSERT_TRUE(a.away);
   pipeline::CollisionWatch watch(scene, toolFrame());
@@ -270,7 +270,7 @@ TEST(CollisionWatch, MovingAwayFromTheContactIsSilent) {
 }
 
 TEST(CollisionWatch, StandingStillNearTheCellIsSilent) {
-  const collision::Scene scene(demoCell().cell, cli::clearanceConfig(demoCell().job));
+  const collision::Scene scene(demoCell().cell, config::clearanceConfig(demoCell().job));
   const Approach a = jointApproach(scene);
   ASSERT_TRUE(a.away);
   const auto near = a.away(0.0);
@@ -286,7 +286,7 @@ TEST(CollisionWatch, StandingStillNearTheCellIsSilent) {
 }
 
 TEST(CollisionWatch, ALinearToolMoveTowardsTheTableWarnsAndAwayIsSilent) {
-  const collision::Scene scene(demoCell().cell, cli::clearanceConfig(demoCell().job));
+  const collision::Scene scene(demoCell().cell, config::clearanceConfig(demoCell().job));
   const Motion down = linearMove(kStart, Eigen::Vector3d(0, 0, -0.05));
   const auto c = trueContact(scene, down, 8.0);
   ASSERT_TRUE(c) << "the tool going down never touches";
@@ -305,7 +305,7 @@ TEST(CollisionWatch, ALinearToolMoveTowardsTheTableWarnsAndAwayIsSilent) {
 }
 
 TEST(CollisionWatch, AStopComesWhenTheStopDistanceIsWithinTheStopTime) {
-  const collision::Scene scene(demoCell().cell, cli::clearanceConfig(demoCell().job));
+  const collision::Scene scene(demoCell().cell, config::clearanceConfig(demoCell().job));
   const Approach a = jointApproach(scene);
   ASSERT_TRUE(a.towards);
   pipeline::WatchOptions options;
@@ -325,8 +325,8 @@ TEST(CollisionWatch, TheDemoTrajectoryWithAJointOffsetIsWarnedBeforeItsContact) 
   std::vector<std::string> overrides = test::kLightDemo;
   overrides.push_back("map.branch=RIGHTY ABOVE NOFLIP");
   overrides.push_back("simulation.enabled=false");
-  const pipeline::ScanProblem problem =
-      cli::toProblem(cli::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", overrides));
+  const pipeline::ScanProblem problem = config::toProblem(
+      config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", overrides));
   const pipeline::ScanPlan plan = pipeline::planScan(problem);
   ASSERT_TRUE(plan.planned()) << plan.reason;
   const auto& samples = plan.trajectory->trajectory.samples;
@@ -355,7 +355,7 @@ TEST(CollisionWatch, TheDemoTrajectoryWithAJointOffsetIsWarnedBeforeItsContact) 
 // Bounded queries measure a pair only below the distances that matter: every warning is the same
 // as with every pair's exact distance at every predicted pose.
 TEST(CollisionWatch, BoundedQueriesChangeNoWarning) {
-  const collision::Scene scene(demoCell().cell, cli::clearanceConfig(demoCell().job));
+  const collision::Scene scene(demoCell().cell, config::clearanceConfig(demoCell().job));
   const Approach a = jointApproach(scene);
   ASSERT_TRUE(a.towards);
   pipeline::WatchOptions skip, every;
@@ -385,7 +385,7 @@ TEST(CollisionWatch, BoundedQueriesChangeNoWarning) {
 // In contact now: still going in (or standing in it) is a warning with contact now and a stop;
 // backing out of it is not warned.
 TEST(CollisionWatch, InContactGoingOnIsAStopBackingOutIsSilent) {
-  const collision::Scene scene(demoCell().cell, cli::clearanceConfig(demoCell().job));
+  const collision::Scene scene(demoCell().cell, config::clearanceConfig(demoCell().job));
   const Approach a = jointApproach(scene);
   ASSERT_TRUE(a.towards);
   const auto inside = a.towards(a.contact.t + 0.01);
@@ -407,7 +407,7 @@ TEST(CollisionWatch, InContactGoingOnIsAStopBackingOutIsSilent) {
 // An endless table reported within ±180° (and joints wrapped as some controllers report them) is
 // the same motion: the same warnings as the continuous stream.
 TEST(CollisionWatch, WrappedAnglesAreTheSameMotion) {
-  const collision::Scene scene(demoCell().cell, cli::clearanceConfig(demoCell().job));
+  const collision::Scene scene(demoCell().cell, config::clearanceConfig(demoCell().job));
   const Approach a = jointApproach(scene);
   ASSERT_TRUE(a.towards);
   pipeline::CollisionWatch plain(scene, toolFrame()), wrapped(scene, toolFrame());
@@ -431,7 +431,7 @@ TEST(CollisionWatch, WrappedAnglesAreTheSameMotion) {
 }
 
 TEST(CollisionWatch, RefusesBadSamplesAndOptions) {
-  const collision::Scene scene(demoCell().cell, cli::clearanceConfig(demoCell().job));
+  const collision::Scene scene(demoCell().cell, config::clearanceConfig(demoCell().job));
   pipeline::CollisionWatch watch(scene, toolFrame());
   watch.push({0.0, 0.0, kStart});
   EXPECT_THROW(watch.push({0.0, 0.0, kStart}), std::invalid_argument);

@@ -11,7 +11,7 @@
 #include <utility>
 #include <vector>
 
-#include "cli/app.h"
+#include "cli/io/exit_code.h"
 #include "cli/plot/image_io.h"
 
 namespace scanplan::cli {

@@ -18,13 +18,13 @@
 
 #include <fmt/format.h>
 
+#include <scanplan/collision/scene.h>
+#include <scanplan/config/job.h>
+#include <scanplan/kinematics/error.h>
+#include <scanplan/pipeline/plan_scan.h>
+#include <scanplan/planner/config_map.h>
 #include "cli/batch/batch.h"
 #include "cli/commands/commands.h"
-#include "cli/config/job.h"
-#include "collision/scene.h"
-#include "kinematics/error.h"
-#include "pipeline/plan_scan.h"
-#include "planner/config_map.h"
 
 namespace scanplan::cli::detail {
 
@@ -87,19 +87,19 @@ class RowSink {
 /// What the cases with the same map key share: the cell, the part mesh, the scan path and the
 /// maps (pipeline::prepareScan()).
 struct MapBundle {
-  explicit MapBundle(const JobSpec& job) : cell(buildCell(job)) {}
+  explicit MapBundle(const config::JobSpec& job) : cell(config::buildCell(job)) {}
   kinematics::CellModel cell;
   kinematics::TriangleMesh part;
   std::shared_ptr<const pipeline::PreparedScan> prepared;
   double map_seconds = 0.0;
 };
 
-std::unique_ptr<MapBundle> buildBundle(const JobSpec& job);
+std::unique_ptr<MapBundle> buildBundle(const config::JobSpec& job);
 /// Cases with the same key share one map.
-std::string mapKey(const JobSpec& job);
+std::string mapKey(const config::JobSpec& job);
 BatchRow rowFor(const SweepCase& c);
 /// The `plan` pipeline after the map, without its files: fills the row's status and metrics.
-void planCase(const JobSpec& job, const MapBundle& bundle, BatchRow& row);
+void planCase(const config::JobSpec& job, const MapBundle& bundle, BatchRow& row);
 
 // The reason of an error row: an InputError's message as it is; anything else is a bug, marked
 // as `scanplan` marks it (the batch's exit code tells the two apart, also after --resume).

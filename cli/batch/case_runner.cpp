@@ -9,19 +9,19 @@
 
 #include <fmt/format.h>
 
+#include <scanplan/collision/scene.h>
+#include <scanplan/config/job.h>
+#include <scanplan/kinematics/units.h>
 #include "cli/batch/batch_internal.h"
 #include "cli/commands/commands.h"
-#include "cli/config/job.h"
-#include "collision/scene.h"
-#include "kinematics/units.h"
 
 namespace scanplan::cli::detail {
 
-std::unique_ptr<MapBundle> buildBundle(const JobSpec& job) {
+std::unique_ptr<MapBundle> buildBundle(const config::JobSpec& job) {
   auto bundle = std::make_unique<MapBundle>(job);
-  bundle->part = loadPart(job, bundle->cell).mesh;
+  bundle->part = config::loadPart(job, bundle->cell).mesh;
   try {
-    bundle->prepared = pipeline::prepareScan(toProblem(job, bundle->cell, bundle->part));
+    bundle->prepared = pipeline::prepareScan(config::toProblem(job, bundle->cell, bundle->part));
   } catch (const InputError& e) {
     throw InputError(job.source.string() + ": " + e.what());
   }
@@ -33,17 +33,17 @@ std::unique_ptr<MapBundle> buildBundle(const JobSpec& job) {
 // output sections, the scanner's measurement noise (simulation only; `seeds:` sets its seed), its
 // image-mode camera and laser sheet (simulation only) and the name. Cases with the same key share
 // one map.
-std::string mapKey(const JobSpec& job) {
-  JobSpec copy = job;
+std::string mapKey(const config::JobSpec& job) {
+  config::JobSpec copy = job;
   copy.name.clear();
-  copy.scanner.noise = NoiseSpec{};
-  copy.scanner.camera = CameraSpec{};
-  copy.scanner.laser = LaserSpec{};
-  copy.planner = PlannerSpec{};
-  copy.validation = ValidationSpec{};
-  copy.simulation = SimulationSpec{};
-  copy.outputs = OutputsSpec{};
-  return job.source.string() + "#" + jobHash(copy);
+  copy.scanner.noise = config::NoiseSpec{};
+  copy.scanner.camera = config::CameraSpec{};
+  copy.scanner.laser = config::LaserSpec{};
+  copy.planner = config::PlannerSpec{};
+  copy.validation = config::ValidationSpec{};
+  copy.simulation = config::SimulationSpec{};
+  copy.outputs = config::OutputsSpec{};
+  return job.source.string() + "#" + config::jobHash(copy);
 }
 
 BatchRow rowFor(const SweepCase& c) {
@@ -82,11 +82,11 @@ void choiceMetrics(const pipeline::ScanPlan& plan, BatchRow& row) {
 }  // namespace
 
 // The `plan` pipeline after the map (pipeline::planPrepared), without its files.
-void planCase(const JobSpec& job, const MapBundle& bundle, BatchRow& row) {
+void planCase(const config::JobSpec& job, const MapBundle& bundle, BatchRow& row) {
   auto& m = row.metrics;
   m[kMapS] = bundle.map_seconds;
   const pipeline::ScanPlan plan =
-      pipeline::planPrepared(toProblem(job, bundle.cell, bundle.part), bundle.prepared);
+      pipeline::planPrepared(config::toProblem(job, bundle.cell, bundle.part), bundle.prepared);
   row.method = plan.choice.chosen.method;
   choiceMetrics(plan, row);
   row.status = std::string(pipeline::scanStatusName(plan.status));

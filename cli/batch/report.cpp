@@ -11,10 +11,10 @@
 
 #include <fmt/format.h>
 
+#include <scanplan/kinematics/error.h>
 #include "cli/batch/batch.h"
 #include "cli/batch/batch_internal.h"
 #include "cli/io/output.h"
-#include "kinematics/error.h"
 
 namespace scanplan::cli {
 

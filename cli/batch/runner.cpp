@@ -18,12 +18,12 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <scanplan/config/job.h>
+#include <scanplan/kinematics/error.h>
 #include "cli/batch/batch.h"
 #include "cli/batch/batch_internal.h"
 #include "cli/commands/commands.h"
-#include "cli/config/job.h"
 #include "cli/io/output.h"
-#include "kinematics/error.h"
 
 namespace scanplan::cli {
 
@@ -112,7 +112,7 @@ struct MapTally {
 template <typename Finish>
 void runGroup(const std::vector<std::size_t>& group,
               const std::vector<const SweepCase*>& todo,
-              const std::vector<std::optional<JobSpec>>& jobs,
+              const std::vector<std::optional<config::JobSpec>>& jobs,
               const Finish& finish,
               MapTally& maps) {
   std::unique_ptr<MapBundle> bundle;
@@ -149,11 +149,11 @@ void runCases(const std::vector<const SweepCase*>& todo,
               bool reuse_maps,
               const Finish& finish,
               MapTally& maps) {
-  std::vector<std::optional<JobSpec>> jobs(todo.size());
+  std::vector<std::optional<config::JobSpec>> jobs(todo.size());
   std::vector<std::string> errors(todo.size());
   tbb::parallel_for(std::size_t{0}, todo.size(), [&](std::size_t i) {
     try {
-      jobs[i] = loadJob(todo[i]->job_file, todo[i]->overrides);
+      jobs[i] = config::loadJob(todo[i]->job_file, todo[i]->overrides);
     } catch (const std::exception& e) {
       errors[i] = errorReason(e);
     }
@@ -181,7 +181,7 @@ void checkOut(const fs::path& out, const Sweep& sweep) {
   std::set<fs::path> jobs;
   for (const SweepCase& c : sweep.cases) {
     if (!jobs.insert(c.job_file).second) continue;
-    const std::vector<fs::path> files = jobInputFiles(loadJob(c.job_file));
+    const std::vector<fs::path> files = config::jobInputFiles(config::loadJob(c.job_file));
     inputs.insert(inputs.end(), files.begin(), files.end());
   }
   checkOutputApartFromInputs(out, inputs);

@@ -13,12 +13,12 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include <scanplan/config/detail/yaml_reader.h>
+#include <scanplan/config/job.h>
+#include <scanplan/kinematics/error.h>
 #include "cli/batch/batch.h"
 #include "cli/batch/batch_internal.h"
-#include "cli/config/detail/yaml_reader.h"
-#include "cli/config/job.h"
 #include "cli/io/output.h"
-#include "kinematics/error.h"
 
 namespace scanplan::cli {
 
@@ -137,14 +137,14 @@ std::string caseId(const std::string& job, const std::vector<std::string>& overr
 
 using Setting = std::vector<std::pair<std::string, std::string>>;
 
-// README "Limits and failure behaviour".
+// docs/limits.md.
 constexpr double kMaxSweepCases = 100000;
 constexpr double kMaxSweepChecks = 300;
 
 YAML::Node loadRoot(const fs::path& file) {
-  requireYamlFile(file);
-  const YAML::Node root = loadOneDocument(file);
-  checkYamlSize(root, file.string());
+  config::requireYamlFile(file);
+  const YAML::Node root = config::loadOneDocument(file);
+  config::checkYamlSize(root, file.string());
   if (!root.IsMap()) throw InputError(file.string() + ": expected a mapping (jobs, vary, …)");
   std::set<std::string> top;
   for (const auto& kv : root) {
@@ -311,7 +311,7 @@ void checkJob(const fs::path& file,
               const std::vector<std::string>& overrides,
               const std::string& what) {
   try {
-    loadJob(job, overrides);
+    config::loadJob(job, overrides);
   } catch (const InputError& e) {
     throw InputError(fmt::format("{}: {}: {}", file.string(), what, e.what()));
   }

@@ -8,15 +8,15 @@
 
 #include <fmt/format.h>
 
+#include <scanplan/collision/scene.h>
+#include <scanplan/collision/sensors.h>
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/planner/constraints.h>
 #include "cli/commands/commands.h"
 #include "cli/io/json.h"
 #include "cli/io/output.h"
 #include "cli/report/sensor_report.h"
-#include "collision/scene.h"
-#include "collision/sensors.h"
-#include "kinematics/error.h"
-#include "kinematics/units.h"
-#include "planner/constraints.h"
 
 namespace scanplan::cli {
 namespace {
@@ -29,7 +29,7 @@ std::vector<double> mmVector(const Eigen::Vector3d& p) {
 // the words that say where the pose came from; nullopt (after a message) when it is out of
 // reach.
 std::optional<std::pair<kinematics::JointVector, std::string>> poseAtTime(
-    const JobSpec& job,
+    const config::JobSpec& job,
     const collision::Scene& scene,
     planner::PoseEvaluator& evaluator,
     const CheckOptions& options,
@@ -46,7 +46,7 @@ std::optional<std::pair<kinematics::JointVector, std::string>> poseAtTime(
   const auto& sample = path.samples[k];
   const auto solutions = robot.ik(scene.cell().flangeTarget(theta, sample.X_PS));
   const std::optional<kinematics::IkBranch> wanted =
-      job.map.branch == "auto" ? std::nullopt : parseBranch(job.map.branch);
+      job.map.branch == "auto" ? std::nullopt : config::parseBranch(job.map.branch);
   double best = -1.0;
   for (const auto& solution : solutions) {
     if (wanted && !(solution.branch == *wanted)) continue;
@@ -98,7 +98,7 @@ Json pairsJson(const collision::Scene& scene, const planner::PoseScore& s) {
 }
 
 // `check --json`: the pose, every factor and every pair.
-std::string checkJson(const JobSpec& job,
+std::string checkJson(const config::JobSpec& job,
                       const collision::Scene& scene,
                       const CheckOptions& options,
                       const kinematics::JointVector& q,
@@ -191,10 +191,10 @@ ExitCode runCheck(const CheckOptions& options) {
     throw InputError(fmt::format(
         "--table: {}: expected a finite table angle in degrees (within ±1e9)", options.table_deg));
   }
-  const JobSpec job = loadJob(options.job_file, options.overrides);
-  const collision::Scene scene(buildCell(job), clearanceConfig(job));
+  const config::JobSpec job = config::loadJob(options.job_file, options.overrides);
+  const collision::Scene scene(config::buildCell(job), config::clearanceConfig(job));
   const double theta = deg(options.table_deg);
-  planner::PoseEvaluator evaluator(scene, constraintSettings(job));
+  planner::PoseEvaluator evaluator(scene, config::constraintSettings(job));
   kinematics::JointVector q = kinematics::JointVector::Zero();
   std::string origin;
   if (!options.joints_deg.empty()) {

@@ -9,15 +9,15 @@
 
 #include <mutex>
 
-#include "cli/app.h"
-#include "cli/config/job.h"
-#include "cli/config/problem.h"
-#include "cli/config/robot_urdf.h"
+#include <scanplan/config/job.h>
+#include <scanplan/config/robot_urdf.h>
+#include <scanplan/config/to_problem.h>
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/pipeline/plan_scan.h>
+#include <scanplan/planner/config_map.h>
+#include "cli/io/exit_code.h"
 #include "cli/plot/figure.h"
 #include "cli/plot/map_figures.h"
-#include "kinematics/mesh.h"
-#include "pipeline/plan_scan.h"
-#include "planner/config_map.h"
 
 namespace scanplan::cli {
 
@@ -41,7 +41,7 @@ struct IkOptions {
   bool within_limits_only = false;
 };
 
-struct PlanOptions {
+struct PlanArguments {
   std::filesystem::path job_file;
   std::filesystem::path out_dir;
   std::vector<std::string> overrides;  ///< --set key.path=value
@@ -77,13 +77,13 @@ struct PathContext {
   std::optional<pipeline::AutoScanReport> auto_scan;  ///< with scan.auto
 };
 /// Loads the part and generates the scan path; errors name the job.
-PathContext buildPath(const JobSpec& job, const kinematics::CellModel& cell);
+PathContext buildPath(const config::JobSpec& job, const kinematics::CellModel& cell);
 
 /// Link meshes over this many triangles in all make a map measured exactly slow.
 inline constexpr std::size_t kHeavyLinkTriangles = 1000;
 /// Warns (stderr) when the maps are to measure heavy link meshes exactly
 /// (constraints.clearance.link_meshes: exact), naming the job and each link's triangles.
-void warnSlowLinkMeshes(const JobSpec& job, const kinematics::CellModel& cell);
+void warnSlowLinkMeshes(const config::JobSpec& job, const kinematics::CellModel& cell);
 /// `validate` / `simulate`: a job and a trajectory file.
 struct VerifyOptions {
   std::filesystem::path job_file;
@@ -122,17 +122,18 @@ struct WatchCommandOptions {
   double repeat_s = 0.5;  ///< a lasting warning is printed again after this long
 };
 ExitCode runWatch(const WatchCommandOptions& options);
-ExitCode runPath(const PlanOptions& options);
-ExitCode runMap(const PlanOptions& options);
+ExitCode runPath(const PlanArguments& options);
+ExitCode runMap(const PlanArguments& options);
 /// The job's scan path (loads the part, casts rays for the standoff); errors name the job.
-scanner::GeneratedPath generateScanPath(const JobSpec& job, const kinematics::CellModel& cell);
+scanner::GeneratedPath generateScanPath(const config::JobSpec& job,
+                                        const kinematics::CellModel& cell);
 /// A configuration map and how long it took.
 struct MapRun {
   planner::ConfigMap map;
   double seconds = 0.0;
 };
 /// The job's maps (every branch the job asks for) over the scan path, progress on a terminal.
-MapRun computeMap(const JobSpec& job,
+MapRun computeMap(const config::JobSpec& job,
                   const collision::Scene& scene,
                   const kinematics::ScanPath& path);
 /// path.csv and path.png into `dir`.
@@ -144,17 +145,17 @@ void writePathOutputs(const std::filesystem::path& dir,
 /// The file list of writePathOutputs() + writeMapOutputs(), for summaries.
 extern const char* const kMapFilesNote;
 /// Path, maps and their files into `out`; returns the summary lines.
-std::string buildAndWriteMaps(const JobSpec& job,
+std::string buildAndWriteMaps(const config::JobSpec& job,
                               const kinematics::CellModel& cell,
                               const std::filesystem::path& out);
 /// The map files of `scanplan map` (npy layers, json, images) into `dir`.
 void writeMapOutputs(const std::filesystem::path& dir,
-                     const JobSpec& job,
+                     const config::JobSpec& job,
                      const planner::ConfigMap& map,
                      const WriteSettings& settings = {});
 /// `robot import`: a URDF in, the equivalent robot file out.
 struct RobotImportOptions {
-  UrdfRobotSource source;
+  config::UrdfRobotSource source;
   std::filesystem::path out_file;
 };
 ExitCode runRobotImport(const RobotImportOptions& options);
@@ -172,16 +173,16 @@ ExitCode runJobSchema();
 ExitCode runJobShow(const std::filesystem::path& job_file,
                     const std::vector<std::string>& overrides);
 /// Without a scan path: can the sensor reach a pose above the part as the table turns?
-std::string reachCheck(const JobSpec& job,
+std::string reachCheck(const config::JobSpec& job,
                        const kinematics::CellModel& cell,
                        const kinematics::LoadedMesh& part);
-ExitCode runPlan(const PlanOptions& options);
+ExitCode runPlan(const PlanArguments& options);
 /// Every file `plan` writes for `plan` into `dir` but job.yaml and report.json: the path and map
 /// files; with a trajectory configmap_path.png/.svg; a valid one's trajectory.csv, programs,
 /// simulation and certificate files (an invalid one's trajectory_invalid.csv). Returns the
 /// summary lines of a valid plan's files (choice, validation, programs, simulation, certificate).
 std::string writePlanOutputs(const std::filesystem::path& dir,
-                             const JobSpec& job,
+                             const config::JobSpec& job,
                              const pipeline::ScanProblem& problem,
                              const pipeline::ScanPlan& plan,
                              const WriteSettings& settings = {});

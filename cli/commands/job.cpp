@@ -4,19 +4,19 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <scanplan/collision/scene.h>
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/planner/constraints.h>
 #include "cli/commands/commands.h"
 #include "cli/io/output.h"
-#include "collision/scene.h"
-#include "kinematics/error.h"
-#include "kinematics/mesh.h"
-#include "kinematics/units.h"
-#include "planner/constraints.h"
 
 namespace scanplan::cli {
 
 // Without a scan path: can the sensor reach 150 mm above the part top, looking down, as the
 // table turns? A first look at whether the cell is laid out sensibly.
-std::string reachCheck(const JobSpec& job,
+std::string reachCheck(const config::JobSpec& job,
                        const kinematics::CellModel& cell,
                        const kinematics::LoadedMesh& part) {
   const Eigen::AlignedBox3d box = part.mesh.bounds();
@@ -26,8 +26,8 @@ std::string reachCheck(const JobSpec& job,
   Eigen::Isometry3d X_PS = Eigen::Isometry3d::Identity();
   X_PS.linear() = Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal();  // z_S points down
   X_PS.translation() = top_centre_P + Eigen::Vector3d(0, 0, kStandoff);
-  const collision::Scene scene(cell, clearanceConfig(job));
-  planner::PoseEvaluator evaluator(scene, constraintSettings(job));
+  const collision::Scene scene(cell, config::clearanceConfig(job));
+  planner::PoseEvaluator evaluator(scene, config::constraintSettings(job));
   int reachable = 0, feasible = 0;
   double best_f = 0.0;
   std::string best_limit;
@@ -63,14 +63,14 @@ std::string reachCheck(const JobSpec& job,
 
 ExitCode runJobShow(const std::filesystem::path& job_file,
                     const std::vector<std::string>& overrides) {
-  const JobSpec job = loadJob(job_file, overrides);
-  buildCell(job);  // the robot model checks (OPW against DH) belong to "valid"
-  std::fputs(jobToYaml(job).c_str(), stdout);
+  const config::JobSpec job = config::loadJob(job_file, overrides);
+  config::buildCell(job);  // the robot model checks (OPW against DH) belong to "valid"
+  std::fputs(config::jobToYaml(job).c_str(), stdout);
   return ExitCode::kOk;
 }
 
 ExitCode runJobSchema() {
-  std::fputs(jobSchema().c_str(), stdout);
+  std::fputs(config::jobSchema().c_str(), stdout);
   return ExitCode::kOk;
 }
 

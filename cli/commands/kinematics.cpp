@@ -4,14 +4,14 @@
 
 #include <fmt/format.h>
 
+#include <scanplan/config/robot_file.h>
+#include <scanplan/config/robot_urdf.h>
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/pose.h>
+#include <scanplan/kinematics/units.h>
 #include "cli/commands/commands.h"
-#include "cli/config/robot_file.h"
-#include "cli/config/robot_urdf.h"
 #include "cli/io/json.h"
 #include "cli/io/output.h"
-#include "kinematics/error.h"
-#include "kinematics/pose.h"
-#include "kinematics/units.h"
 
 namespace scanplan::cli {
 namespace {
@@ -25,11 +25,12 @@ struct LoadedRobot {
 
 LoadedRobot loadRobot(const RobotSource& source) {
   if (!source.job_file.empty()) {
-    const JobSpec job = loadJob(source.job_file);
-    const kinematics::CellModel cell = buildCell(job);
+    const config::JobSpec job = config::loadJob(source.job_file);
+    const kinematics::CellModel cell = config::buildCell(job);
     return {cell.robot, cell.scanner.X_FS};
   }
-  return {buildRobotModel(loadRobotOrUrdf(source.robot_file), source.robot_file.string()),
+  return {config::buildRobotModel(config::loadRobotOrUrdf(source.robot_file),
+                                  source.robot_file.string()),
           std::nullopt};
 }
 
@@ -90,7 +91,7 @@ std::vector<double> parseNumberList(const std::string& text,
       used = 0;
     }
     while (used < item.size() && std::isspace(static_cast<unsigned char>(item[used]))) ++used;
-    // ±1e9, the bound of every number in the job files (README "Limits"): 1e300 mm or degrees
+    // ±1e9, the bound of every number in the job files (docs/limits.md): 1e300 mm or degrees
     // is no pose, and its products overflow.
     if (used == 0 || used != item.size() || !std::isfinite(v) || std::abs(v) > 1e9) {
       throw InputError(

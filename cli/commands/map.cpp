@@ -10,20 +10,20 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <scanplan/collision/scene.h>
+#include <scanplan/config/text.h>
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/planner/config_map.h>
+#include <scanplan/scanner/path_generators.h>
+#include <scanplan/scanner/raycaster.h>
 #include "cli/commands/commands.h"
-#include "cli/config/text.h"
 #include "cli/io/json.h"
 #include "cli/io/output.h"
 #include "cli/plot/image_io.h"
 #include "cli/plot/map_figures.h"
 #include "cli/report/plan_summary.h"
-#include "collision/scene.h"
-#include "kinematics/error.h"
-#include "kinematics/mesh.h"
-#include "kinematics/units.h"
-#include "planner/config_map.h"
-#include "scanner/path_generators.h"
-#include "scanner/raycaster.h"
 
 namespace scanplan::cli {
 
@@ -50,7 +50,7 @@ void Progress::operator()(std::size_t done, std::size_t total) {
   std::fflush(stderr);
 }
 
-void warnSlowLinkMeshes(const JobSpec& job, const kinematics::CellModel& cell) {
+void warnSlowLinkMeshes(const config::JobSpec& job, const kinematics::CellModel& cell) {
   const auto& clearance = job.constraints.clearance;
   if (clearance.link_meshes == "hull") return;
   bool meshes = false;
@@ -60,7 +60,7 @@ void warnSlowLinkMeshes(const JobSpec& job, const kinematics::CellModel& cell) {
     }
   }
   if (!meshes) return;
-  const collision::Scene scene(cell, clearanceConfig(job));
+  const collision::Scene scene(cell, config::clearanceConfig(job));
   std::size_t total = 0;
   std::string each;
   for (std::size_t i = 0; i < scene.bodies().size(); ++i) {
@@ -82,47 +82,56 @@ void warnSlowLinkMeshes(const JobSpec& job, const kinematics::CellModel& cell) {
       "own link meshes: 105 s against 0.5 s with its primitive links); link_meshes: hull measures "
       "the convex hulls in seconds but sees each link up to its margin closer than it is",
       job.source.string(), total, each, clearance.link_meshes,
-      formatNumber(clearance.hull_margin_mm));
+      config::formatNumber(clearance.hull_margin_mm));
 }
 
-PathContext buildPath(const JobSpec& job, const kinematics::CellModel& cell) {
+namespace {
+
+void requireScanPath(const config::JobSpec& job) {
   if (job.scan.paths.empty() && !job.scan.auto_scan.enabled) {
     throw InputError(job.source.string() +
                      ": scan.paths: empty: expected at least one path element (ring, raster, "
                      "waypoints or file) or scan.auto");
   }
+}
+
+// The pipeline's progress as terminal lines, one per stage ("auto", "map").
+pipeline::ProgressFn stageProgress(Progress& passes, Progress& map) {
+  return [&](std::string_view stage, std::size_t d, std::size_t n) {
+    (stage == "auto" ? passes : map)(d, n);
+  };
+}
+
+}  // namespace
+
+PathContext buildPath(const config::JobSpec& job, const kinematics::CellModel& cell) {
+  requireScanPath(job);
   PathContext context;
-  context.part = loadPart(job, cell);
-  context.window = scanner::laserWindow(laserOptics(job));
+  context.part = config::loadPart(job, cell);
   try {
-    if (job.scan.auto_scan.enabled) {
-      // The automatic passes depend on the whole cell (reach): the pipeline's path stage.
-      const collision::Scene scene(cell, clearanceConfig(job));
-      Progress progress("auto");
-      pipeline::ScanPathResult path = pipeline::scanPath(
-          toProblem(job, cell, context.part.mesh), scene,
-          [&progress](std::string_view, std::size_t d, std::size_t n) { progress(d, n); });
-      context.generated = std::move(path.path);
-      context.auto_scan = std::move(path.auto_scan);
-    } else {
-      const scanner::Raycaster raycaster(context.part.mesh);
-      context.generated = scanner::generatePath(placedPathRequest(job, cell), context.part.mesh,
-                                                raycaster, context.window);
-    }
+    // The pipeline's path stage: the automatic passes depend on the whole cell (reach).
+    const pipeline::ScanProblem problem = config::toProblem(job, cell, context.part.mesh);
+    const collision::Scene scene(problem.cell, problem.clearance);
+    Progress passes("auto"), map("map");
+    pipeline::ScanPathResult path = pipeline::scanPath(problem, scene, stageProgress(passes, map));
+    context.window = path.window;
+    context.generated = std::move(path.path);
+    context.auto_scan = std::move(path.auto_scan);
   } catch (const InputError& e) {
     throw InputError(job.source.string() + ": " + e.what());
   }
   return context;
 }
 
-scanner::GeneratedPath generateScanPath(const JobSpec& job, const kinematics::CellModel& cell) {
+scanner::GeneratedPath generateScanPath(const config::JobSpec& job,
+                                        const kinematics::CellModel& cell) {
   return buildPath(job, cell).generated;
 }
 
-ExitCode runPath(const PlanOptions& options) {
-  const JobSpec job = loadJob(options.job_file, options.overrides);
-  checkOutputApartFromInputs(options.out_dir, jobInputFiles(job));
-  const kinematics::CellModel cell = buildCell(job);
+ExitCode runPath(const PlanArguments& options) {
+  const config::JobSpec job = config::loadJob(options.job_file, options.overrides);
+  checkOutputApartFromInputs(options.out_dir, config::jobInputFiles(job));
+  const kinematics::CellModel cell = config::buildCell(job);
   OutputStage stage(options.out_dir, {"path.csv", "path.png"});
   const PathContext context = buildPath(job, cell);
   writePathOutputs(stage.dir(), cell, context.part.mesh, context.generated.path);
@@ -136,16 +145,16 @@ ExitCode runPath(const PlanOptions& options) {
   return ExitCode::kOk;
 }
 
-MapRun computeMap(const JobSpec& job,
+MapRun computeMap(const config::JobSpec& job,
                   const collision::Scene& scene,
                   const kinematics::ScanPath& path) {
-  const planner::MapRequest request = pipeline::mapRequest(mapSettings(job));
+  const planner::MapRequest request = pipeline::mapRequest(config::mapSettings(job));
   Progress progress("map");
   const auto start = std::chrono::steady_clock::now();
   MapRun run;
   try {
     run.map =
-        planner::buildConfigMap(scene, constraintSettings(job), path, request,
+        planner::buildConfigMap(scene, config::constraintSettings(job), path, request,
                                 [&progress](std::size_t d, std::size_t t) { progress(d, t); });
   } catch (const InputError& e) {  // the map's size, over map.memory_limit_mb
     throw InputError(job.source.string() + ": " + e.what());
@@ -168,27 +177,35 @@ const char* const kMapFilesNote =
     "path.csv, path.png, configmap.npy (+ _joint, _singularity, _clearance, _limit), "
     "configmap.json, configmap.png/.svg, configmap_why.png/.svg, configmap_cylinder.png";
 
-std::string buildAndWriteMaps(const JobSpec& job,
+std::string buildAndWriteMaps(const config::JobSpec& job,
                               const kinematics::CellModel& cell,
                               const std::filesystem::path& out) {
+  requireScanPath(job);
   OutputStage stage(out, {"path.csv", "path.png", "configmap*"});
-  const PathContext context = buildPath(job, cell);
+  const kinematics::LoadedMesh part = config::loadPart(job, cell);
   warnSlowLinkMeshes(job, cell);
-  const collision::Scene scene(cell, clearanceConfig(job));
-  const MapRun run = computeMap(job, scene, context.generated.path);
-  writePathOutputs(stage.dir(), cell, context.part.mesh, context.generated.path);
-  writeMapOutputs(stage.dir(), job, run.map);
+  std::shared_ptr<const pipeline::PreparedScan> prepared;
+  try {
+    // The pipeline's path and map stages, as `plan` runs them.
+    Progress passes("auto"), map("map");
+    prepared =
+        pipeline::prepareScan(config::toProblem(job, cell, part.mesh), stageProgress(passes, map));
+  } catch (const InputError& e) {
+    throw InputError(job.source.string() + ": " + e.what());
+  }
+  writePathOutputs(stage.dir(), cell, part.mesh, prepared->path.path);
+  writeMapOutputs(stage.dir(), job, prepared->map);
   stage.commit();
-  return pathSummary(context.window, context.generated) +
-         (context.auto_scan ? autoScanSummary(*context.auto_scan) : std::string()) +
-         linkMeshSummary(scene) + mapSummary(run.map, run.seconds) +
+  return pathSummary(prepared->window, prepared->path) +
+         (prepared->auto_scan ? autoScanSummary(*prepared->auto_scan) : std::string()) +
+         linkMeshSummary(*prepared->scene) + mapSummary(prepared->map, prepared->map_seconds) +
          fmt::format("wrote      {}: {}\n", out.string(), kMapFilesNote);
 }
 
-ExitCode runMap(const PlanOptions& options) {
-  const JobSpec job = loadJob(options.job_file, options.overrides);
-  checkOutputApartFromInputs(options.out_dir, jobInputFiles(job));
-  const kinematics::CellModel cell = buildCell(job);
+ExitCode runMap(const PlanArguments& options) {
+  const config::JobSpec job = config::loadJob(options.job_file, options.overrides);
+  checkOutputApartFromInputs(options.out_dir, config::jobInputFiles(job));
+  const kinematics::CellModel cell = config::buildCell(job);
   std::fputs(buildAndWriteMaps(job, cell, options.out_dir).c_str(), stdout);
   return ExitCode::kOk;
 }
@@ -212,14 +229,14 @@ std::size_t bestBranch(const planner::ConfigMap& map) {
 namespace {
 
 // configmap.json: what the layers are, their axes and the branch the images show.
-Json mapJson(const JobSpec& job,
+Json mapJson(const config::JobSpec& job,
              const planner::ConfigMap& map,
              const std::vector<std::size_t>& shape,
              std::size_t shown) {
   Json json;
   json["format"] = "scanplan configuration map 1";
   json["job"] = job.name;
-  json["job_hash"] = jobHash(job);
+  json["job_hash"] = config::jobHash(job);
   json["shape"] = shape;
   json["axes"] = {"branch", "angle_deg", "time_s"};
   Json branches = Json::array();
@@ -245,7 +262,7 @@ Json mapJson(const JobSpec& job,
 }  // namespace
 
 void writeMapOutputs(const std::filesystem::path& dir,
-                     const JobSpec& job,
+                     const config::JobSpec& job,
                      const planner::ConfigMap& map,
                      const WriteSettings& settings) {
   const std::vector<std::size_t> shape{map.branches.size(), map.angles.size(), map.times.size()};

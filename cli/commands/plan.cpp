@@ -12,24 +12,24 @@
 
 #include <fmt/format.h>
 
+#include <scanplan/collision/scene.h>
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/pipeline/plan_scan.h>
+#include <scanplan/pipeline/setups.h>
+#include <scanplan/planner/trajectory_builder.h>
+#include <scanplan/programs/programs.h>
 #include "cli/commands/commands.h"
 #include "cli/io/output.h"
 #include "cli/io/program_files.h"
 #include "cli/io/replay_html.h"
-#include "cli/io/simulation_files.h"
 #include "cli/plot/cell_figure.h"
 #include "cli/plot/image_io.h"
-#include "cli/programs/programs.h"
 #include "cli/report/plan_report.h"
 #include "cli/report/plan_summary.h"
 #include "cli/report/sensor_report.h"
+#include "cli/report/simulation_files.h"
 #include "cli/report/verify_report.h"
-#include "collision/scene.h"
-#include "kinematics/error.h"
-#include "kinematics/units.h"
-#include "pipeline/plan_scan.h"
-#include "pipeline/setups.h"
-#include "planner/trajectory_builder.h"
 
 namespace scanplan::cli {
 
@@ -87,20 +87,19 @@ void writePathFigure(const std::filesystem::path& dir,
               std::move(lines), settings);
 }
 
-// planScan() with a progress line on a terminal; its input errors name the job file.
-pipeline::ScanPlan runPipeline(const JobSpec& job,
-                               const pipeline::ScanProblem& problem,
-                               const PlanOptions& options) {
+// `run` (a pipeline call) with the options of the command line and a progress line on a
+// terminal; its input errors name the job file.
+template <class Run>
+auto runPipeline(const config::JobSpec& job, const PlanArguments& options, Run&& run) {
   Progress map("map"), passes("auto (candidate passes)");
   pipeline::PlanOptions po;
   po.method = options.planner;
   po.compare = options.compare;
   po.refine = options.refine;
   try {
-    return pipeline::planScan(problem, po,
-                              [&](std::string_view stage, std::size_t d, std::size_t n) {
-                                (stage == "auto" ? passes : map)(d, n);
-                              });
+    return run(po, [&](std::string_view stage, std::size_t d, std::size_t n) {
+      (stage == "auto" ? passes : map)(d, n);
+    });
   } catch (const InputError& e) {
     throw InputError(job.source.string() + ": " + e.what());
   }
@@ -145,7 +144,7 @@ RgbImage cellFigure(const pipeline::ReplayScene& scene, const std::string& job_n
 
 // OUT/replay.html and cell.png, and the summary line.
 std::string writeReplay(const std::filesystem::path& out,
-                        const JobSpec& job,
+                        const config::JobSpec& job,
                         const pipeline::ScanProblem& problem,
                         const pipeline::ScanPlan& plan,
                         const WriteSettings& settings) {
@@ -176,7 +175,7 @@ std::string writeSensorOutputs(const std::filesystem::path& out, const pipeline:
 // certificate's files; returns their summary lines (`second`: of the second setup, which does
 // not suggest another).
 std::string writePlannedOutputs(const std::filesystem::path& out,
-                                const JobSpec& job,
+                                const config::JobSpec& job,
                                 const pipeline::ScanProblem& problem,
                                 const pipeline::ScanPlan& plan,
                                 bool second = false,
@@ -213,35 +212,35 @@ struct SecondSetupRun {
 };
 
 SecondSetupRun planSecondSetup(const std::filesystem::path& out,
-                               const JobSpec& job,
+                               const config::JobSpec& job,
                                const pipeline::ScanProblem& problem,
                                const pipeline::ScanPlan& first,
-                               const PlanOptions& options) {
+                               const PlanArguments& options) {
   SecondSetupRun r;
-  const auto setup = first.certificate ? pipeline::chooseSecondSetup(problem, first) : std::nullopt;
-  if (!setup) {
-    const char* why = first.certificate ? "no other face the part rests on shows more of it"
-                                        : "it needs scan.auto and the simulation";
-    r.summary = fmt::format("setup 2    not planned: {}\n", why);
-    r.json["setups"] = {{"second", {{"status", "not_planned"}, {"reason", why}}}};
+  const pipeline::SecondSetupPlan second = runPipeline(
+      job, options, [&](const pipeline::PlanOptions& po, const pipeline::ProgressFn& progress) {
+        return pipeline::planSecondSetup(problem, first, po, progress);
+      });
+  if (!second.setup) {
+    r.summary = fmt::format("setup 2    not planned: {}\n", second.why_not);
+    r.json["setups"] = {{"second", {{"status", "not_planned"}, {"reason", second.why_not}}}};
     return r;
   }
-  const pipeline::ScanProblem second = pipeline::secondSetupProblem(problem, *setup);
-  const pipeline::ScanPlan plan = runPipeline(job, second, options);
+  const pipeline::ScanPlan& plan = second.plan;
   const std::filesystem::path dir = out / "setup2";
   std::filesystem::create_directories(dir);
-  Json json = {{"turn", setup->turn},
-               {"gain", setup->gain},
+  Json json = {{"turn", second.setup->turn},
+               {"gain", second.setup->gain},
                {"status", std::string(pipeline::scanStatusName(plan.status))},
                {"folder", "setup2"}};
   r.summary = fmt::format(
       "setup 2    the part {}: {:.1f}% of its area faced the table and comes into view\n",
-      setup->turn, 100.0 * setup->gain);
+      second.setup->turn, 100.0 * second.setup->gain);
   if (plan.prepared->auto_scan) r.summary += autoScanSummary(*plan.prepared->auto_scan);
-  if (plan.planned()) {
+  if (second.combined) {
     writeChoiceFigure(dir, plan);
-    r.summary += writePlannedOutputs(dir, job, second, plan, true);
-    const pipeline::CombinedCoverage c = pipeline::combineSetups(first, plan);
+    r.summary += writePlannedOutputs(dir, job, *second.problem, plan, true);
+    const pipeline::CombinedCoverage& c = *second.combined;
     r.summary += fmt::format(
         "setups     both: {:.1f}% of the part's area covered; {:.1f}% scannable in one setup or "
         "the other, {:.1f}% of that covered (setup 2's files in {})\n",
@@ -255,7 +254,8 @@ SecondSetupRun planSecondSetup(const std::filesystem::path& out,
     r.summary += fmt::format("setup 2    NOT PLANNED ({}): {}\n",
                              pipeline::scanStatusName(plan.status), plan.reason);
   }
-  writeFileAtomically(dir / "report.json", planReportJson(job, second.cell, plan, plan.times));
+  writeFileAtomically(dir / "report.json",
+                      planReportJson(job, second.problem->cell, plan, plan.times));
   r.json["setups"] = {{"second", json}};
   return r;
 }
@@ -263,7 +263,7 @@ SecondSetupRun planSecondSetup(const std::filesystem::path& out,
 }  // namespace
 
 std::string writePlanOutputs(const std::filesystem::path& dir,
-                             const JobSpec& job,
+                             const config::JobSpec& job,
                              const pipeline::ScanProblem& problem,
                              const pipeline::ScanPlan& plan,
                              const WriteSettings& settings) {
@@ -286,14 +286,14 @@ std::string writePlanOutputs(const std::filesystem::path& dir,
 // is removed (no trajectory.csv or program of an earlier run beside a new report).
 // What `plan` writes into OUT, relative to it (OutputStage's `owned`): its files, the programs
 // of any language under the job's program name, the profile images, and the same in setup2/.
-std::vector<std::string> planOutputs(const JobSpec& job) {
+std::vector<std::string> planOutputs(const config::JobSpec& job) {
   std::vector<std::string> top{
       "job.yaml",     "report.json",       "trajectory.csv",    "trajectory_invalid.csv",
       "path.csv",     "path.png",          "configmap*",        "cloud.ply",
       "coverage.ply", "cloud.png",         "uncovered.ply",     "certificate.png",
       "replay.html",  "cell.png",          "coverage_time.png", "coverage_time.svg",
       "sensors.csv",  "profiles/profile_*"};
-  for (const std::string& file : programFileNames(job.outputs.program_name))
+  for (const std::string& file : programs::programFileNames(job.outputs.program_name))
     top.push_back("programs/" + file);
   std::vector<std::string> owned = top;
   for (const std::string& name : top) owned.push_back("setup2/" + name);
@@ -302,7 +302,7 @@ std::vector<std::string> planOutputs(const JobSpec& job) {
 
 // The command's result on stdout: the text summary, or with --json one JSON document (the
 // report, the output folder and the summary's lines).
-ExitCode printPlanResult(const PlanOptions& options,
+ExitCode printPlanResult(const PlanArguments& options,
                          const std::string& summary,
                          Json report,
                          ExitCode code) {
@@ -321,16 +321,37 @@ ExitCode printPlanResult(const PlanOptions& options,
   return code;
 }
 
-ExitCode runPlan(const PlanOptions& options) {
+namespace {
+
+// The summary's "wrote" line of a planned, valid run.
+std::string wroteLine(const std::filesystem::path& out_dir,
+                      const pipeline::ScanPlan& plan,
+                      bool second_setup) {
+  return fmt::format(
+      "wrote      {}: job.yaml, trajectory.csv, programs/, report.json, configmap_path.png/.svg, "
+      "{}{}\n",
+      out_dir.string(),
+      std::string(plan.simulation ? "cloud.ply, coverage.ply, cloud.png, " : "") +
+          (plan.simulation && !plan.simulation->profile_images.empty() ? "profiles/, " : "") +
+          (std::filesystem::exists(out_dir / "replay.html") ? "replay.html, " : "") + "cell.png, " +
+          (plan.certificate ? "uncovered.ply, certificate.png, coverage_time.png/.svg, " : "") +
+          (plan.validation && plan.validation->sensors ? "sensors.csv, " : "") +
+          (second_setup ? "setup2/, " : ""),
+      kMapFilesNote);
+}
+
+}  // namespace
+
+ExitCode runPlan(const PlanArguments& options) {
   const auto start = Clock::now();
-  const JobSpec job = loadJob(options.job_file, options.overrides);
-  checkOutputApartFromInputs(options.out_dir, jobInputFiles(job));
-  const kinematics::CellModel cell = buildCell(job);
-  const kinematics::LoadedMesh part = loadPart(job, cell);
+  const config::JobSpec job = config::loadJob(options.job_file, options.overrides);
+  checkOutputApartFromInputs(options.out_dir, config::jobInputFiles(job));
+  const kinematics::CellModel cell = config::buildCell(job);
+  const kinematics::LoadedMesh part = config::loadPart(job, cell);
   std::string summary = cellSummary(job, cell, part);
   OutputStage stage(options.out_dir, planOutputs(job));
   const std::filesystem::path& out = stage.dir();
-  writeFileAtomically(out / "job.yaml", jobToYaml(job));
+  writeFileAtomically(out / "job.yaml", config::jobToYaml(job));
   if (job.scan.paths.empty() && !job.scan.auto_scan.enabled) {
     stage.commit();
     summary += reachCheck(job, cell, part);
@@ -339,8 +360,11 @@ ExitCode runPlan(const PlanOptions& options) {
     return printPlanResult(options, summary, {{"status", "no_scan_path"}}, ExitCode::kOk);
   }
   warnSlowLinkMeshes(job, cell);
-  const pipeline::ScanProblem problem = toProblem(job, cell, part.mesh);
-  const pipeline::ScanPlan plan = runPipeline(job, problem, options);
+  const pipeline::ScanProblem problem = config::toProblem(job, cell, part.mesh);
+  const pipeline::ScanPlan plan = runPipeline(
+      job, options, [&](const pipeline::PlanOptions& po, const pipeline::ProgressFn& progress) {
+        return pipeline::planScan(problem, po, progress);
+      });
   const pipeline::PreparedScan& prepared = *plan.prepared;
   const std::string planned = writePlanOutputs(out, job, problem, plan);
   summary += pathSummary(prepared.window, prepared.path);
@@ -388,18 +412,7 @@ ExitCode runPlan(const PlanOptions& options) {
     all_planned = second.ok;
   }
   finish();
-  summary += fmt::format(
-      "wrote      {}: job.yaml, trajectory.csv, programs/, report.json, configmap_path.png/.svg, "
-      "{}{}\n",
-      options.out_dir.string(),
-      std::string(plan.simulation ? "cloud.ply, coverage.ply, cloud.png, " : "") +
-          (plan.simulation && !plan.simulation->profile_images.empty() ? "profiles/, " : "") +
-          (std::filesystem::exists(options.out_dir / "replay.html") ? "replay.html, " : "") +
-          "cell.png, " +
-          (plan.certificate ? "uncovered.ply, certificate.png, coverage_time.png/.svg, " : "") +
-          (plan.validation && plan.validation->sensors ? "sensors.csv, " : "") +
-          (setups.contains("setups") ? "setup2/, " : ""),
-      kMapFilesNote);
+  summary += wroteLine(options.out_dir, plan, setups.contains("setups"));
   summary += fmt::format(
       "time       {:.1f} s (path {:.1f}, map {:.1f}, plan {:.1f}, trajectory {:.1f}, validation "
       "{:.1f}, simulation {:.1f})\n",

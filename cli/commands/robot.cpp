@@ -2,21 +2,21 @@
 
 #include <fmt/format.h>
 
+#include <scanplan/collision/self_collision.h>
+#include <scanplan/config/robot_urdf.h>
+#include <scanplan/kinematics/units.h>
 #include "cli/commands/commands.h"
-#include "cli/config/robot_urdf.h"
 #include "cli/io/json.h"
 #include "cli/io/output.h"
-#include "collision/self_collision.h"
-#include "kinematics/units.h"
 
 namespace scanplan::cli {
 namespace {
 
 // Mesh paths as the robot file will hold them: relative to its folder (the pair moves together).
-void relativeMeshPaths(RobotSpec& spec, const std::filesystem::path& out_file) {
+void relativeMeshPaths(config::RobotSpec& spec, const std::filesystem::path& out_file) {
   const std::filesystem::path dir = std::filesystem::absolute(out_file).parent_path();
-  for (LinkSpec& link : spec.links) {
-    for (ShapeSpec& shape : link.shapes) {
+  for (config::LinkSpec& link : spec.links) {
+    for (config::ShapeSpec& shape : link.shapes) {
       if (shape.type != "mesh") continue;
       std::error_code ec;
       const std::filesystem::path rel = std::filesystem::relative(shape.file.resolved, dir, ec);
@@ -25,8 +25,8 @@ void relativeMeshPaths(RobotSpec& spec, const std::filesystem::path& out_file) {
   }
 }
 
-std::string importHeader(const RobotImportOptions& options, const UrdfRobot& robot) {
-  const UrdfRobotSource& s = options.source;
+std::string importHeader(const RobotImportOptions& options, const config::UrdfRobot& robot) {
+  const config::UrdfRobotSource& s = options.source;
   std::string text = fmt::format(
       "{}: imported by `scanplan robot import` from {} (chain {} → {}).\n"
       "DH rows and OPW parameters {} the URDF's joints; limits and speeds are its <limit>s.\n"
@@ -113,8 +113,8 @@ std::string surveyText(const std::string& name,
 }  // namespace
 
 ExitCode runRobotCheck(const RobotCheckOptions& options) {
-  const RobotSpec spec = loadRobotOrUrdf(options.robot_file);
-  const kinematics::RobotModel robot = buildRobotModel(spec, options.robot_file.string());
+  const config::RobotSpec spec = config::loadRobotOrUrdf(options.robot_file);
+  const kinematics::RobotModel robot = config::buildRobotModel(spec, options.robot_file.string());
   const collision::SelfSurvey survey =
       collision::surveySelfCollisions(robot, options.samples, options.seed);
   const std::string out = options.json ? jsonDocument(surveyJson(spec.name, options, survey))
@@ -124,10 +124,10 @@ ExitCode runRobotCheck(const RobotCheckOptions& options) {
 }
 
 ExitCode runRobotImport(const RobotImportOptions& options) {
-  UrdfRobot robot = importUrdf(options.source);
+  config::UrdfRobot robot = config::importUrdf(options.source);
   std::vector<std::filesystem::path> inputs{options.source.urdf};
-  for (const LinkSpec& link : robot.spec.links) {
-    for (const ShapeSpec& shape : link.shapes) {
+  for (const config::LinkSpec& link : robot.spec.links) {
+    for (const config::ShapeSpec& shape : link.shapes) {
       if (!shape.file.resolved.empty()) inputs.push_back(shape.file.resolved);
     }
   }
@@ -135,10 +135,11 @@ ExitCode runRobotImport(const RobotImportOptions& options) {
   // The same checks as a job's robot: OPW against DH over the workspace.
   buildRobotModel(robot.spec, options.source.urdf.string());
   relativeMeshPaths(robot.spec, options.out_file);
-  writeFileAtomically(options.out_file, robotToYaml(robot.spec, importHeader(options, robot)));
+  writeFileAtomically(options.out_file,
+                      config::robotToYaml(robot.spec, importHeader(options, robot)));
   std::size_t shapes = 0;
-  for (const LinkSpec& link : robot.spec.links) shapes += link.shapes.size();
-  const OpwSpec& o = robot.spec.opw;
+  for (const config::LinkSpec& link : robot.spec.links) shapes += link.shapes.size();
+  const config::OpwSpec& o = robot.spec.opw;
   std::printf(
       "robot      %s: 6 revolute joints %s → %s\n"
       "opw        a1 %g, a2 %g, b %g, c1 %g, c2 %g, c3 %g, c4 %g mm; offsets [%s] deg; signs "

@@ -7,20 +7,20 @@
 #include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
+#include <scanplan/collision/scene.h>
+#include <scanplan/config/to_problem.h>
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/pipeline/simulation.h>
+#include <scanplan/planner/validation.h>
+#include <scanplan/programs/programs.h>
 #include "cli/commands/commands.h"
-#include "cli/config/problem.h"
 #include "cli/io/output.h"
 #include "cli/io/program_files.h"
-#include "cli/io/simulation_files.h"
 #include "cli/io/trajectory_file.h"
-#include "cli/programs/programs.h"
 #include "cli/report/sensor_report.h"
+#include "cli/report/simulation_files.h"
 #include "cli/report/verify_report.h"
-#include "collision/scene.h"
-#include "kinematics/error.h"
-#include "kinematics/units.h"
-#include "pipeline/simulation.h"
-#include "planner/validation.h"
 
 namespace scanplan::cli {
 
@@ -52,9 +52,9 @@ auto onTrajectory(const std::filesystem::path& file, const Run& run) {
 }
 
 // OUT (when given) apart from every input: the job's files and the trajectory.
-void checkOut(const VerifyOptions& options, const JobSpec& job) {
+void checkOut(const VerifyOptions& options, const config::JobSpec& job) {
   if (options.out_dir.empty()) return;
-  std::vector<std::filesystem::path> inputs = jobInputFiles(job);
+  std::vector<std::filesystem::path> inputs = config::jobInputFiles(job);
   inputs.push_back(options.trajectory_file);
   checkOutputApartFromInputs(options.out_dir, inputs);
 }
@@ -62,17 +62,17 @@ void checkOut(const VerifyOptions& options, const JobSpec& job) {
 }  // namespace
 
 ExitCode runValidate(const VerifyOptions& options) {
-  const JobSpec job = loadJob(options.job_file, options.overrides);
+  const config::JobSpec job = config::loadJob(options.job_file, options.overrides);
   checkOut(options, job);
-  const kinematics::CellModel cell = buildCell(job);
+  const kinematics::CellModel cell = config::buildCell(job);
   const kinematics::Trajectory trajectory = loadTrajectory(options.trajectory_file, cell);
-  const collision::Scene scene(cell, clearanceConfig(job));
+  const collision::Scene scene(cell, config::clearanceConfig(job));
   const planner::ValidationReport report = onTrajectory(options.trajectory_file, [&] {
-    return planner::validateTrajectory(scene, trajectory, validationSettings(job));
+    return planner::validateTrajectory(scene, trajectory, config::validationSettings(job));
   });
   Json doc = {{"format", "scanplan validation report 1"},
               {"job", job.name},
-              {"job_hash", jobHash(job)},
+              {"job_hash", config::jobHash(job)},
               {"trajectory", options.trajectory_file.string()},
               {"frame_rate_hz", job.scanner.frame_rate_hz},
               {"validation", validationJson(report)}};
@@ -97,30 +97,30 @@ ExitCode runValidate(const VerifyOptions& options) {
 }
 
 ExitCode runSimulate(const VerifyOptions& options) {
-  const JobSpec job = loadJob(options.job_file, options.overrides);
+  const config::JobSpec job = config::loadJob(options.job_file, options.overrides);
   checkOut(options, job);
-  const kinematics::CellModel cell = buildCell(job);
-  const kinematics::LoadedMesh part = loadPart(job, cell);
+  const kinematics::CellModel cell = config::buildCell(job);
+  const kinematics::LoadedMesh part = config::loadPart(job, cell);
   const kinematics::Trajectory trajectory = loadTrajectory(options.trajectory_file, cell);
   OutputStage stage(options.out_dir, {"cloud.ply", "coverage.ply", "cloud.png", "simulation.json",
                                       "profiles/profile_*", "sensors.csv"});
   const pipeline::SimulationRun run = onTrajectory(options.trajectory_file, [&] {
-    return pipeline::simulateTrajectory(cell, part.mesh, laserOptics(job),
-                                        simulationSettings(job, cell), trajectory);
+    return pipeline::simulateTrajectory(cell, part.mesh, config::laserOptics(job),
+                                        config::simulationSettings(job, cell), trajectory);
   });
   writeSimulationOutputs(stage.dir(), job, part.mesh, run);
   Json json = {{"format", "scanplan simulation report 1"},
                {"job", job.name},
-               {"job_hash", jobHash(job)},
+               {"job_hash", config::jobHash(job)},
                {"trajectory", options.trajectory_file.string()},
                {"simulation", simulationJson(run)}};
   std::string sensor_lines;
   if (!cell.sensors.empty()) {
     // The sensors at the validation's poses: the trajectory every frame period.
-    const collision::Scene scene(cell, clearanceConfig(job));
+    const collision::Scene scene(cell, config::clearanceConfig(job));
     const collision::SensorEvaluation sensors = onTrajectory(options.trajectory_file, [&] {
       const kinematics::Trajectory dense =
-          planner::densify(trajectory, validationSettings(job).sample_dt);
+          planner::densify(trajectory, config::validationSettings(job).sample_dt);
       return collision::evaluateSensors(scene, dense.samples);
     });
     writeFileAtomically(stage.dir() / "sensors.csv", sensorsCsv(scene, sensors));
@@ -138,9 +138,9 @@ ExitCode runSimulate(const VerifyOptions& options) {
 }
 
 ExitCode runExport(const VerifyOptions& options) {
-  const JobSpec job = loadJob(options.job_file, options.overrides);
+  const config::JobSpec job = config::loadJob(options.job_file, options.overrides);
   checkOut(options, job);
-  const kinematics::CellModel cell = buildCell(job);
+  const kinematics::CellModel cell = config::buildCell(job);
   const kinematics::Trajectory trajectory = loadTrajectory(options.trajectory_file, cell);
   std::vector<std::string> formats = job.outputs.programs;
   if (!options.formats.empty()) {
@@ -148,9 +148,9 @@ ExitCode runExport(const VerifyOptions& options) {
     std::stringstream list(options.formats);
     std::string name;
     while (std::getline(list, name, ',')) {
-      if (!parseProgramFormat(name)) {
+      if (!programs::parseProgramFormat(name)) {
         throw InputError(fmt::format("--format '{}': expected a comma-separated list of {}", name,
-                                     fmt::join(programFormatNames(), ", ")));
+                                     fmt::join(programs::programFormatNames(), ", ")));
       }
       formats.push_back(name);
     }

@@ -12,12 +12,12 @@
 
 #include <fmt/format.h>
 
+#include <scanplan/collision/scene.h>
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/pipeline/collision_watch.h>
 #include "cli/commands/commands.h"
 #include "cli/io/axis_stream.h"
-#include "collision/scene.h"
-#include "kinematics/error.h"
-#include "kinematics/units.h"
-#include "pipeline/collision_watch.h"
 
 namespace scanplan::cli {
 namespace {
@@ -168,10 +168,10 @@ void printSummary(const collision::Scene& scene, Tally& tally) {
 }  // namespace
 
 ExitCode runWatch(const WatchCommandOptions& options) {
-  const JobSpec job = loadJob(options.job_file, options.overrides);
+  const config::JobSpec job = config::loadJob(options.job_file, options.overrides);
   const pipeline::WatchOptions watch_options = watchOptions(options);
-  const kinematics::CellModel cell = buildCell(job);
-  const collision::Scene scene(cell, clearanceConfig(job));
+  const kinematics::CellModel cell = config::buildCell(job);
+  const collision::Scene scene(cell, config::clearanceConfig(job));
   pipeline::CollisionWatch watch(scene, cell.scanner.X_FS, watch_options);
 
   std::ifstream file;

@@ -6,9 +6,9 @@
 
 #include <fmt/format.h>
 
-#include "kinematics/error.h"
-#include "kinematics/trajectory.h"
-#include "kinematics/units.h"
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/trajectory.h>
+#include <scanplan/kinematics/units.h>
 
 namespace scanplan::cli {
 namespace {

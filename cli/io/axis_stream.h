@@ -5,7 +5,7 @@
 #include <optional>
 #include <string>
 
-#include "kinematics/motion_model.h"
+#include <scanplan/kinematics/motion_model.h>
 
 namespace scanplan::cli {
 

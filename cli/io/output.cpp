@@ -23,7 +23,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include "kinematics/error.h"
+#include <scanplan/kinematics/error.h>
 
 namespace scanplan::cli {
 namespace {

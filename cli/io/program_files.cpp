@@ -6,11 +6,11 @@
 #include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
+#include <scanplan/kinematics/error.h>
+#include <scanplan/kinematics/shape.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/programs/programs.h>
 #include "cli/io/output.h"
-#include "cli/programs/programs.h"
-#include "kinematics/error.h"
-#include "kinematics/shape.h"
-#include "kinematics/units.h"
 
 namespace scanplan::cli {
 
@@ -19,17 +19,18 @@ namespace {
 // The summary's word on the formats against the robot's controller: a warning for another
 // vendor's language (its joint values are this robot's, not that vendor's), a note when the
 // robot file names no controller.
-std::string controllerNote(const RobotSpec& robot, const std::vector<std::string>& formats) {
-  const std::vector<std::string> foreign = foreignPrograms(robot, formats);
+std::string controllerNote(const config::RobotSpec& robot,
+                           const std::vector<std::string>& formats) {
+  const std::vector<std::string> foreign = config::foreignPrograms(robot, formats);
   if (!foreign.empty()) {
     const std::string warning =
         fmt::format("{} {} not the language of robot '{}' (controller {}, writes {})",
                     fmt::join(foreign, ", "), foreign.size() == 1 ? "is" : "are", robot.name,
-                    robot.controller, controllerProgramFormat(robot.controller));
+                    robot.controller, config::controllerProgramFormat(robot.controller));
     spdlog::warn("programs: {}", warning);
     return "; WARNING: " + warning;
   }
-  if (controllerProgramFormat(robot.controller).empty()) {
+  if (config::controllerProgramFormat(robot.controller).empty()) {
     return fmt::format("; robot '{}' names no controller (controller: none)", robot.name);
   }
   return "";
@@ -49,8 +50,9 @@ Eigen::Vector3d defaultCog(const kinematics::CellModel& cell) {
 
 }  // namespace
 
-ProgramOptions programOptions(const JobSpec& job, const kinematics::CellModel& cell) {
-  ProgramOptions options;
+programs::ProgramOptions programOptions(const config::JobSpec& job,
+                                        const kinematics::CellModel& cell) {
+  programs::ProgramOptions options;
   options.name = job.outputs.program_name;
   options.job = job.name;
   options.table_max_speed = deg(job.table.max_speed_deg_s);
@@ -71,23 +73,23 @@ ProgramOptions programOptions(const JobSpec& job, const kinematics::CellModel& c
 
 std::string writePrograms(const std::filesystem::path& dir,
                           const std::string& shown_as,
-                          const JobSpec& job,
+                          const config::JobSpec& job,
                           const kinematics::CellModel& cell,
                           const kinematics::Trajectory& trajectory,
                           const std::vector<std::string>& formats,
                           bool skip_refused) {
-  const ProgramOptions options = programOptions(job, cell);
+  const programs::ProgramOptions options = programOptions(job, cell);
   std::vector<std::string> written, refused;
   double max_percent = 0.0;
   std::size_t over = 0;
   for (const std::string& name : formats) {
-    const auto format = parseProgramFormat(name);
+    const auto format = programs::parseProgramFormat(name);
     if (!format)
       throw InputError(fmt::format("program format '{}': expected one of {}", name,
-                                   fmt::join(programFormatNames(), ", ")));
-    ProgramFiles files;
+                                   fmt::join(programs::programFormatNames(), ", ")));
+    programs::ProgramFiles files;
     try {
-      files = writeProgram(trajectory, cell.robot, *format, options);
+      files = programs::writeProgram(trajectory, cell.robot, *format, options);
     } catch (const InputError& e) {
       if (!skip_refused) throw;
       spdlog::warn("programs: {} not written: {}", name, e.what());

@@ -4,17 +4,17 @@
 #include <string>
 #include <vector>
 
-#include "cli/config/job.h"
-#include "cli/programs/programs.h"
-#include "kinematics/cell.h"
-#include "kinematics/trajectory.h"
+#include <scanplan/config/job.h>
+#include <scanplan/kinematics/cell.h>
+#include <scanplan/kinematics/trajectory.h>
+#include <scanplan/programs/programs.h>
 
 namespace scanplan::cli {
 
 /// The job's program options: name, table speed and endlessness (table.continuous), the tool
 /// (the scanner's mount X_FS), the payload (scanner.mass_kg, cog_mm or the housing's centre),
 /// the trigger (outputs.trigger) and URScript's servo period (outputs.servo_period_s).
-ProgramOptions programOptions(const JobSpec& job, const kinematics::CellModel& cell);
+programs::ProgramOptions programOptions(const config::JobSpec& job, const kinematics::CellModel& cell);
 
 /// The robot programs of `formats` (names as in programFormatNames()) for the trajectory, into
 /// `dir`; returns one summary line (the folder as `shown_as`, the files, the fastest step as % of
@@ -24,7 +24,7 @@ ProgramOptions programOptions(const JobSpec& job, const kinematics::CellModel& c
 /// the summary line repeats (`plan`: the rest of the plan is still written).
 std::string writePrograms(const std::filesystem::path& dir,
                           const std::string& shown_as,
-                          const JobSpec& job,
+                          const config::JobSpec& job,
                           const kinematics::CellModel& cell,
                           const kinematics::Trajectory& trajectory,
                           const std::vector<std::string>& formats,

@@ -10,9 +10,9 @@
 #include <fmt/format.h>
 #include <Eigen/Geometry>
 
+#include <scanplan/pipeline/certificate.h>
 #include "cli/io/json.h"
 #include "cli/io/replay_viewer_js.h"  // generated: kReplayViewerJs
-#include "pipeline/certificate.h"
 
 namespace scanplan::cli {
 

@@ -6,7 +6,7 @@
 #include <optional>
 #include <string>
 
-#include "pipeline/replay.h"
+#include <scanplan/pipeline/replay.h>
 
 namespace scanplan::cli {
 

@@ -6,8 +6,8 @@
 
 #include <fmt/format.h>
 
-#include "cli/programs/programs.h"
-#include "kinematics/error.h"
+#include <scanplan/kinematics/error.h>
+#include <scanplan/programs/programs.h>
 
 namespace scanplan::cli {
 
@@ -44,12 +44,12 @@ std::string readWhole(const std::filesystem::path& file) {
 kinematics::Trajectory loadTrajectoryFile(const std::filesystem::path& file,
                                           const kinematics::RobotModel* robot) {
   const std::string text = readWhole(file);
-  const auto format = programFormatOfFile(file.filename().string());
-  if (format && *format != ProgramFormat::kCsv) {
-    return atStepTimes(readProgram(text, *format, file.string(), robot));
+  const auto format = programs::programFormatOfFile(file.filename().string());
+  if (format && *format != programs::ProgramFormat::kCsv) {
+    return programs::atStepTimes(programs::readProgram(text, *format, file.string(), robot));
   }
   const bool vplus = text.rfind(".PROGRAM", 0) == 0 || text.find("\n.PROGRAM") != std::string::npos;
-  return vplus ? readVplusProgram(text, file.string(), robot)
+  return vplus ? programs::readVplusProgram(text, file.string(), robot)
                : kinematics::parseTrajectoryCsv(text, file.string());
 }
 

@@ -2,8 +2,8 @@
 
 #include <filesystem>
 
-#include "kinematics/robot_model.h"
-#include "kinematics/trajectory.h"
+#include <scanplan/kinematics/robot_model.h>
+#include <scanplan/kinematics/trajectory.h>
 
 namespace scanplan::cli {
 

@@ -1,6 +1,6 @@
 #pragma once
 // How the output files are encoded. The defaults are what every command writes; reference() is
-// how they were written before issue 20 item 6, kept so that bench_outputs can measure the
+// how they were first written (plain writers), kept so that bench_outputs can measure the
 // writers against it in one run. Both give files with the same content (the same pixels, the
 // same values); only PNG and SVG bytes differ between them.
 

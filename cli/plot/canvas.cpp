@@ -14,7 +14,7 @@
 #include <cairo-svg.h>
 #include <fmt/format.h>
 
-#include "kinematics/error.h"
+#include <scanplan/kinematics/error.h>
 
 namespace scanplan::cli::detail {
 namespace {

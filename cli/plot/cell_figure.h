@@ -4,8 +4,8 @@
 #include <cstddef>
 #include <string>
 
+#include <scanplan/pipeline/replay.h>
 #include "cli/plot/image_io.h"
-#include "pipeline/replay.h"
 
 namespace scanplan::cli {
 

@@ -5,9 +5,9 @@
 
 #include <fmt/format.h>
 
+#include <scanplan/kinematics/error.h>
 #include "cli/io/output.h"
 #include "cli/plot/canvas.h"
-#include "kinematics/error.h"
 
 namespace scanplan::cli {
 namespace {

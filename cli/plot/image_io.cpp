@@ -16,8 +16,8 @@
 #include <png.h>
 #include <Eigen/Geometry>
 
+#include <scanplan/kinematics/error.h>
 #include "cli/io/output.h"
-#include "kinematics/error.h"
 
 namespace scanplan::cli {
 namespace {

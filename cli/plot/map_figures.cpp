@@ -10,8 +10,8 @@
 
 #include <fmt/format.h>
 
+#include <scanplan/kinematics/units.h>
 #include "cli/plot/image_io.h"
-#include "kinematics/units.h"
 
 namespace scanplan::cli {
 namespace {

@@ -8,11 +8,11 @@
 #include <utility>
 #include <vector>
 
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/kinematics/scan_path.h>
+#include <scanplan/planner/config_map.h>
 #include "cli/plot/figure.h"
 #include "cli/plot/image_io.h"
-#include "kinematics/mesh.h"
-#include "kinematics/scan_path.h"
-#include "planner/config_map.h"
 
 namespace scanplan::cli {
 

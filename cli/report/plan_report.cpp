@@ -8,10 +8,10 @@
 
 #include <fmt/format.h>
 
+#include <scanplan/kinematics/units.h>
 #include "cli/io/json.h"
 #include "cli/report/sensor_report.h"
 #include "cli/report/verify_report.h"
-#include "kinematics/units.h"
 
 namespace scanplan::cli {
 
@@ -55,16 +55,16 @@ Json refineJson(const planner::RefineResult& refine) {
           {"stop_reason", refine.stop_reason}};
 }
 
-Json pathJson(const JobSpec& job,
+Json pathJson(const config::JobSpec& job,
               const planner::ConfigMap& map,
               const pipeline::PathChoice& planning,
               const planner::TrajectoryBuild* trajectory) {
   // The program's time: the trajectory's when there is one (with the moves between passes),
   // else the map's time axis.
-  const double cycle = trajectory && !trajectory->trajectory.samples.empty()
-                           ? trajectory->trajectory.duration() -
-                                 trajectory->trajectory.samples.front().t
-                           : map.times.back() - map.times.front();
+  const double cycle =
+      trajectory && !trajectory->trajectory.samples.empty()
+          ? trajectory->trajectory.duration() - trajectory->trajectory.samples.front().t
+          : map.times.back() - map.times.front();
   Json json = {{"samples", planning.theta.size()},
                {"cycle_time_s", cycle},
                {"map_min_f", planning.terms.min_f},
@@ -130,7 +130,7 @@ void addBranches(Json& json, const planner::ConfigMap& map, const pipeline::Path
 
 // The run's times, the map's size and the cell's frames.
 void addSetup(Json& json,
-              const JobSpec& job,
+              const config::JobSpec& job,
               const kinematics::CellModel& cell,
               const planner::ConfigMap& map,
               const pipeline::StageTimes& times) {
@@ -183,7 +183,7 @@ Json autoScanJson(const pipeline::AutoScanReport& r) {
 
 }  // namespace
 
-std::string planReportJson(const JobSpec& job,
+std::string planReportJson(const config::JobSpec& job,
                            const kinematics::CellModel& cell,
                            const pipeline::ScanPlan& plan,
                            const pipeline::StageTimes& times,
@@ -193,7 +193,7 @@ std::string planReportJson(const JobSpec& job,
   Json json;
   json["format"] = "scanplan plan report 1";
   json["job"] = job.name;
-  json["job_hash"] = jobHash(job);
+  json["job_hash"] = config::jobHash(job);
   json["status"] = std::string(pipeline::scanStatusName(plan.status));
   if (!plan.reason.empty()) json["reason"] = plan.reason;
   json["planner"] = plannerJson(map, planning);

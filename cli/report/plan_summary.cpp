@@ -6,12 +6,12 @@
 
 #include <fmt/format.h>
 
-#include "kinematics/units.h"
+#include <scanplan/kinematics/units.h>
 
 namespace scanplan::cli {
 
 // The cell, as the first lines of the summary.
-std::string cellSummary(const JobSpec& job,
+std::string cellSummary(const config::JobSpec& job,
                         const kinematics::CellModel& cell,
                         const kinematics::LoadedMesh& part) {
   std::string s = fmt::format("job        {} ({})\n", job.name, job.source.string());

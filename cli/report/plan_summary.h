@@ -2,19 +2,19 @@
 
 #include <string>
 
-#include "cli/config/job.h"
-#include "collision/scene.h"
-#include "kinematics/cell.h"
-#include "kinematics/mesh.h"
-#include "pipeline/plan_scan.h"
-#include "planner/config_map.h"
-#include "scanner/laser_model.h"
-#include "scanner/path_generators.h"
+#include <scanplan/collision/scene.h>
+#include <scanplan/config/job.h>
+#include <scanplan/kinematics/cell.h>
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/pipeline/plan_scan.h>
+#include <scanplan/planner/config_map.h>
+#include <scanplan/scanner/laser_model.h>
+#include <scanplan/scanner/path_generators.h>
 
 namespace scanplan::cli {
 
 /// The job, robot, table and part lines.
-std::string cellSummary(const JobSpec& job,
+std::string cellSummary(const config::JobSpec& job,
                         const kinematics::CellModel& cell,
                         const kinematics::LoadedMesh& part);
 /// The scanner window and one line per path element, then the samples.

@@ -7,7 +7,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include "kinematics/units.h"
+#include <scanplan/kinematics/units.h>
 
 namespace scanplan::cli {
 namespace {

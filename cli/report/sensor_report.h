@@ -5,9 +5,9 @@
 #include <string>
 #include <vector>
 
+#include <scanplan/collision/scene.h>
+#include <scanplan/collision/sensors.h>
 #include "cli/io/json.h"
-#include "collision/scene.h"
-#include "collision/sensors.h"
 
 namespace scanplan::cli {
 

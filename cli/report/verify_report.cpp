@@ -6,7 +6,7 @@
 
 #include <fmt/format.h>
 
-#include "kinematics/units.h"
+#include <scanplan/kinematics/units.h>
 
 namespace scanplan::cli {
 

@@ -5,10 +5,10 @@
 #include <cstddef>
 #include <string>
 
+#include <scanplan/pipeline/certificate.h>
+#include <scanplan/pipeline/simulation.h>
+#include <scanplan/planner/validation.h>
 #include "cli/io/json.h"
-#include "pipeline/certificate.h"
-#include "pipeline/simulation.h"
-#include "planner/validation.h"
 
 namespace scanplan::cli {
 

@@ -28,13 +28,13 @@
 
 #include <tbb/global_control.h>
 
-#include "cli/config/job.h"
-#include "cli/config/problem.h"
-#include "kinematics/mesh.h"
-#include "kinematics/units.h"
-#include "pipeline/auto_scan.h"
-#include "pipeline/plan_scan.h"
-#include "scanner/area_coverage.h"
+#include <scanplan/config/job.h>
+#include <scanplan/config/to_problem.h>
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/pipeline/auto_scan.h>
+#include <scanplan/pipeline/plan_scan.h>
+#include <scanplan/scanner/area_coverage.h>
 #include "tests/bench/bench_timing.h"
 #include "tests/part_support.h"
 
@@ -150,7 +150,7 @@ Row run(const fs::path& job, const Part& part, const std::vector<std::string>& e
   r.name = part.name;
   r.note = part.note;
   try {
-    const pipeline::ScanProblem problem = cli::toProblem(cli::loadJob(job, overrides));
+    const pipeline::ScanProblem problem = config::toProblem(config::loadJob(job, overrides));
     r.area_m2 = problem.part.area();
     const pipeline::ScanPlan plan = pipeline::planScan(problem);
     r.cpu_s = bench::processCpuSeconds() - cpu;

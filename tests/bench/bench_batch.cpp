@@ -1,4 +1,4 @@
-// `scanplan batch` throughput: the small sweep (2 planners x 3 horizons x 2 seeds on the
+// `scanplan batch` throughput: a small sweep (2 planners x 3 horizons x 2 seeds on the
 // lightened demo) run in process with --jobs 1 and --jobs 2, and with map reuse off, side by
 // side. Each configuration runs `repeats` times; the fastest run counts (a shared machine only
 // ever slows a run down).

@@ -13,12 +13,12 @@
 #include <string>
 #include <vector>
 
-#include "cli/config/job.h"
-#include "collision/clearance.h"
-#include "collision/scene.h"
-#include "kinematics/mesh.h"
-#include "kinematics/pose.h"
-#include "kinematics/units.h"
+#include <scanplan/collision/clearance.h>
+#include <scanplan/collision/scene.h>
+#include <scanplan/config/job.h>
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/kinematics/pose.h>
+#include <scanplan/kinematics/units.h>
 #include "tests/bench/bench_timing.h"
 
 using namespace scanplan;
@@ -99,12 +99,12 @@ double mean(const std::vector<double>& v) {
 int main(int argc, char** argv) {
   const std::string job_file = argc > 1 ? argv[1] : "data/jobs/demo_rings.yaml";
   const int paths = argc > 2 ? std::max(1, std::atoi(argv[2])) : 80;
-  const cli::JobSpec job = cli::loadJob(job_file);
-  const kinematics::CellModel cell = cli::buildCell(job);
+  const config::JobSpec job = config::loadJob(job_file);
+  const kinematics::CellModel cell = config::buildCell(job);
   const kinematics::LoadedMesh part =
       kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
   const auto build_start = Clock::now();
-  const collision::Scene scene(cell, cli::clearanceConfig(job));
+  const collision::Scene scene(cell, config::clearanceConfig(job));
   const double build_ms =
       std::chrono::duration<double, std::milli>(Clock::now() - build_start).count();
 
@@ -136,7 +136,7 @@ int main(int argc, char** argv) {
     exact_us.push_back(1e6 * (t1 - t0));
     bounded_us.push_back(1e6 * (t2 - t1));
     factor_us.push_back(1e6 * (t3 - t2));
-    // The contract: every pair below d_high has the exact distance within 1e-9 m,
+    // The contract: every pair below d_high has the exact distance within 1e-9 m,
     // every pair at or beyond it is reported beyond; the factors then agree to rounding.
     bool same = true;
     for (std::size_t i = 0; i < exact.pairs.size(); ++i) {
@@ -177,7 +177,7 @@ int main(int argc, char** argv) {
   std::vector<std::pair<double, std::string>> per_pair;
   for (std::size_t i = 0; i < scene.pairs().size(); ++i) {
     const auto& p = scene.pairs()[i];
-    collision::ClearanceConfig one = cli::clearanceConfig(job);
+    collision::ClearanceConfig one = config::clearanceConfig(job);
     one.rules.push_back({"*", "*", collision::PairRule::Action::kExclude});
     one.rules.push_back({scene.bodies()[static_cast<std::size_t>(p.a)].name,
                          scene.bodies()[static_cast<std::size_t>(p.b)].name,

@@ -2,7 +2,7 @@
 // (planner::detail::planDpReference), on the fine grid `plan` uses, in the same run. CPU time,
 // best of N: one thread (thread CPU time) and two threads (process CPU time: the work of both);
 // on one thread also each relaxation kernel this CPU runs (portable, AVX2, AVX-512), planDp
-// being the widest. All must give the reference's optimum and path bit for bit. Issue 20: ≥ 3×
+// being the widest. All must give the reference's optimum and path bit for bit. Target: ≥ 3×
 // on the demo map.
 // Usage (from the repository root): build/tests/bench/bench_dp [runs] [JOB]
 #include <algorithm>
@@ -14,7 +14,7 @@
 
 #include <tbb/global_control.h>
 
-#include "planner/dp_planner.h"
+#include <scanplan/planner/dp_planner.h>
 #include "tests/bench/bench_maps.h"
 #include "tests/bench/bench_timing.h"
 

@@ -1,4 +1,4 @@
-// Image-mode scanner simulation against the geometric mode (issue 21 part 1; seed §5.3) on a
+// Image-mode scanner simulation against the geometric mode (seed §5.3) on a
 // demo's planned motion, side by side in one run:
 //  - process CPU time per profile of both modes over the whole scan, and their ratio;
 //  - the image mode's point-to-surface error: each point on the part (as the simulator labels
@@ -23,11 +23,11 @@
 
 #include <tbb/info.h>
 
-#include "cli/config/job.h"
-#include "cli/config/problem.h"
-#include "pipeline/plan_scan.h"
-#include "planner/validation.h"
-#include "scanner/simulator.h"
+#include <scanplan/config/job.h>
+#include <scanplan/config/to_problem.h>
+#include <scanplan/pipeline/plan_scan.h>
+#include <scanplan/planner/validation.h>
+#include <scanplan/scanner/simulator.h>
 #include "tests/bench/bench_timing.h"
 #include "tests/geometry_support.h"
 
@@ -59,8 +59,8 @@ class MeshDistance {
           const auto it = cells_.find(hash(c + Eigen::Vector3i(x, y, z)));
           if (it == cells_.end()) continue;
           for (const std::size_t t : it->second)
-            best = std::min(best, test::pointTriangleDistance(p, vertex(t, 0), vertex(t, 1),
-                                                              vertex(t, 2)));
+            best = std::min(
+                best, test::pointTriangleDistance(p, vertex(t, 0), vertex(t, 1), vertex(t, 2)));
         }
     return best;
   }
@@ -144,15 +144,15 @@ Run simulate(const scanner::ScanSimulator& sim,
 
 int main(int argc, char** argv) {
   const std::filesystem::path job_file = argc > 1 ? argv[1] : "data/jobs/demo_rings.yaml";
-  const std::size_t stride = argc > 2 ? static_cast<std::size_t>(std::max(1, std::atoi(argv[2])))
-                                      : 20;
+  const std::size_t stride =
+      argc > 2 ? static_cast<std::size_t>(std::max(1, std::atoi(argv[2]))) : 20;
   // Plan the job as `plan` does, without its simulation; the frames as simulateTrajectory
   // takes them.
-  const cli::JobSpec job = cli::loadJob(job_file, {"simulation.mode=image"});
-  kinematics::CellModel cell = cli::buildCell(job);
-  kinematics::LoadedMesh part = cli::loadPart(job, cell);
-  const pipeline::SimulationSettings settings = cli::simulationSettings(job, cell);
-  pipeline::ScanProblem problem = cli::toProblem(job, cell, part.mesh);
+  const config::JobSpec job = config::loadJob(job_file, {"simulation.mode=image"});
+  kinematics::CellModel cell = config::buildCell(job);
+  kinematics::LoadedMesh part = config::loadPart(job, cell);
+  const pipeline::SimulationSettings settings = config::simulationSettings(job, cell);
+  pipeline::ScanProblem problem = config::toProblem(job, cell, part.mesh);
   problem.simulation.reset();
   const pipeline::ScanPlan plan = pipeline::planScan(problem, {});
   if (!plan.trajectory || !plan.trajectory->ok) {
@@ -166,18 +166,18 @@ int main(int argc, char** argv) {
     if (s.scanning) frames.push_back({s.t, s.theta, s.q});
   }
   for (std::size_t i = 0; i < frames.size(); i += stride) sweep_frames.push_back(frames[i]);
-  const scanner::LaserOptics optics = cli::laserOptics(job);
+  const scanner::LaserOptics optics = config::laserOptics(job);
   const scanner::ScanSimulator sim(cell, part.mesh);
   const MeshDistance distance(part.mesh, 2e-3);
 
   scanner::SimulationSettings geometric = settings.scanner;
   geometric.mode = scanner::SimulationMode::kGeometric;
   const scanner::SimulationSettings image = settings.scanner;
-  std::printf("job %s: %zu profiles, %d fan rays / %d x %d pixels (rows x columns), sheet %.2f mm, "
-              "%d threads\n",
-              job_file.c_str(), frames.size(), geometric.rays_per_profile, image.image.rows,
-              image.image.columns, image.image.thickness * 1e3,
-              tbb::info::default_concurrency());
+  std::printf(
+      "job %s: %zu profiles, %d fan rays / %d x %d pixels (rows x columns), sheet %.2f mm, "
+      "%d threads\n",
+      job_file.c_str(), frames.size(), geometric.rays_per_profile, image.image.rows,
+      image.image.columns, image.image.thickness * 1e3, tbb::info::default_concurrency());
 
   const Run g = simulate(sim, frames, optics, geometric);
   const Run i = simulate(sim, frames, optics, image);
@@ -197,9 +197,10 @@ int main(int argc, char** argv) {
               1e3 * eg.mean, 1e3 * eg.p99, 1e3 * eg.max);
   std::printf("image     (%8zu points)                     %8.5f  %8.5f  %8.4f\n", ei.points,
               1e3 * ei.mean, 1e3 * ei.p99, 1e3 * ei.max);
-  std::printf("dropouts: image mode loses %.2f points/profile against the geometric mode and "
-              "gains %.2f (net %+.2f)\n",
-              d.lost, d.gained, d.gained - d.lost);
+  std::printf(
+      "dropouts: image mode loses %.2f points/profile against the geometric mode and "
+      "gains %.2f (net %+.2f)\n",
+      d.lost, d.gained, d.gained - d.lost);
 
   // The sweep: one setting changed at a time from the job's, every STRIDE-th profile.
   std::printf("\nsweep over %zu profiles (every %zu-th):\n", sweep_frames.size(), stride);
@@ -217,11 +218,10 @@ int main(int argc, char** argv) {
   };
   {
     const ErrorStats e = surfaceError(gs.cloud, distance);
-    std::printf("%-24s %10.5f %10.5f %10.1f %12s %12.3f\n", "geometric", 1e3 * e.mean,
-                1e3 * e.p99,
-                static_cast<double>(gs.cloud.points.size()) /
-                    static_cast<double>(sweep_frames.size()),
-                "-", 1e3 * gs.cpu / static_cast<double>(sweep_frames.size()));
+    std::printf(
+        "%-24s %10.5f %10.5f %10.1f %12s %12.3f\n", "geometric", 1e3 * e.mean, 1e3 * e.p99,
+        static_cast<double>(gs.cloud.points.size()) / static_cast<double>(sweep_frames.size()), "-",
+        1e3 * gs.cpu / static_cast<double>(sweep_frames.size()));
   }
   row("image (job's settings)", image);
   for (const int rows : {128, 512, 1024}) {

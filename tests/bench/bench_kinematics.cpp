@@ -2,7 +2,7 @@
 // bundled robots. The raw OPW inverse (all 8 solutions) is timed side by side with a
 // straightforward implementation of the OPW equations written here from the paper
 // (Brandstötter et al. 2014: each angle's own sin/cos, full rotation matrices, ZYZ wrist), and
-// both solution sets are compared. Issue 20's target: the raw inverse ≤ 400 ns per pose.
+// both solution sets are compared. Target: the raw inverse ≤ 400 ns per pose.
 // Usage: build/tests/bench/bench_kinematics [runs]   (run from the repository root)
 #include <algorithm>
 #include <array>
@@ -13,9 +13,9 @@
 #include <random>
 #include <vector>
 
-#include "cli/config/robot_file.h"
-#include "kinematics/opw.h"
-#include "kinematics/robot_model.h"
+#include <scanplan/config/robot_file.h>
+#include <scanplan/kinematics/opw.h>
+#include <scanplan/kinematics/robot_model.h>
 #include "tests/bench/bench_timing.h"
 
 using namespace scanplan;
@@ -25,7 +25,7 @@ using kinematics::detail::OpwSolution;
 
 namespace {
 
-constexpr double kTargetOpwNs = 400.0;  // issue 20
+constexpr double kTargetOpwNs = 400.0;  // the target for the raw inverse
 constexpr double kPi = std::numbers::pi;
 
 // The reference: the OPW equations as the paper writes them, nothing shared or reused.
@@ -98,7 +98,7 @@ double largestDifference(const OpwParameters& p, const std::vector<Eigen::Isomet
 }
 
 void benchRobot(const char* file, int runs) {
-  const auto robot = cli::buildRobotModel(cli::loadRobotFile(file), file);
+  const auto robot = config::buildRobotModel(config::loadRobotFile(file), file);
   const OpwParameters& p = robot.definition().opw;
   std::mt19937 rng(1);
   std::vector<JointVector> qs(10000);

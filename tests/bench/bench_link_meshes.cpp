@@ -1,4 +1,4 @@
-// Mesh links at speed (issue 18 item 4): the demo map with the Adept Viper s650's own link
+// Mesh links at speed: the demo map with the Adept Viper s650's own link
 // meshes (../shared/data/robots/viper_s650, 2 000 triangles a link) against the same map with
 // the bundled robot file's primitive links. Target: mesh links at most 3x the primitive links'
 // map CPU time. Side by side from one run, process CPU time (2 threads) per cell, best of RUNS,
@@ -32,14 +32,14 @@
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
-#include "cli/config/job.h"
-#include "collision/scene.h"
-#include "collision/self_collision.h"
-#include "kinematics/mesh.h"
-#include "kinematics/units.h"
-#include "planner/config_map.h"
-#include "scanner/path_generators.h"
-#include "scanner/raycaster.h"
+#include <scanplan/collision/scene.h>
+#include <scanplan/collision/self_collision.h>
+#include <scanplan/config/job.h>
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/planner/config_map.h>
+#include <scanplan/scanner/path_generators.h>
+#include <scanplan/scanner/raycaster.h>
 #include "tests/bench/bench_timing.h"
 
 using namespace scanplan;
@@ -68,19 +68,19 @@ fs::path writeMeshRobot(const fs::path& dir) {
 }
 
 struct Cell {
-  cli::JobSpec job;
+  config::JobSpec job;
   kinematics::CellModel cell;
   kinematics::ScanPath path;
 };
 
 Cell loadCell(const std::string& job_file, const std::vector<std::string>& overrides) {
-  cli::JobSpec job = cli::loadJob(job_file, overrides);
-  kinematics::CellModel cell = cli::buildCell(job);
+  config::JobSpec job = config::loadJob(job_file, overrides);
+  kinematics::CellModel cell = config::buildCell(job);
   const kinematics::LoadedMesh part =
       kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
   const scanner::Raycaster raycaster(part.mesh);
-  kinematics::ScanPath path = scanner::generatePath(cli::pathRequest(job), part.mesh, raycaster,
-                                                    scanner::laserWindow(cli::laserOptics(job)))
+  kinematics::ScanPath path = scanner::generatePath(config::pathRequest(job), part.mesh, raycaster,
+                                                    scanner::laserWindow(config::laserOptics(job)))
                                   .path;
   return {std::move(job), std::move(cell), std::move(path)};
 }
@@ -118,7 +118,7 @@ void mapOnce(const collision::Scene& scene,
   planner::MapRequest request;
   request.angle_step = c.job.map.angle_step_deg * kDegToRad;
   for (int i = 0; i < 8; ++i) request.branches.push_back(kinematics::IkBranch::fromIndex(i));
-  const planner::ConstraintSettings settings = cli::constraintSettings(c.job);
+  const planner::ConstraintSettings settings = config::constraintSettings(c.job);
   const double start = bench::processCpuSeconds();
   t.map = planner::buildConfigMap(scene, settings, path, request);
   t.cpu = std::min(t.cpu, bench::processCpuSeconds() - start);
@@ -185,10 +185,10 @@ int run(int argc, char** argv) {
   const Cell meshes = loadCell(job_file, {"robot=" + writeMeshRobot(dir).string()});
   fs::remove_all(dir);
 
-  collision::ClearanceConfig config = cli::clearanceConfig(meshes.job);
+  collision::ClearanceConfig config = config::clearanceConfig(meshes.job);
   config.link_meshes = collision::LinkMeshes::kHull;  // every link as its hull
   double start = bench::processCpuSeconds();
-  const collision::Scene prim_scene(primitive.cell, cli::clearanceConfig(primitive.job));
+  const collision::Scene prim_scene(primitive.cell, config::clearanceConfig(primitive.job));
   const double prim_load = bench::processCpuSeconds() - start;
   start = bench::processCpuSeconds();
   const collision::Scene hull_scene(meshes.cell, config);
@@ -212,7 +212,7 @@ int run(int argc, char** argv) {
 
   std::string never;
   const auto rules = neverPairs(meshes.cell.robot, never);
-  collision::ClearanceConfig prim_config = cli::clearanceConfig(primitive.job);
+  collision::ClearanceConfig prim_config = config::clearanceConfig(primitive.job);
   prim_config.rules.insert(prim_config.rules.end(), rules.begin(), rules.end());
   collision::ClearanceConfig hull_config = config;
   hull_config.rules.insert(hull_config.rules.end(), rules.begin(), rules.end());

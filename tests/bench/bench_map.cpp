@@ -4,7 +4,7 @@
 // then a time-subsampled map with the bounded clearance query and with plain fcl::distance,
 // compared cell by cell. CPU time of the process (both threads' work) per cell and per
 // branch-cell, best of RUNS, the three paths timed in turn round after round; wall time beside
-// it for the cells/s target of issue 4.
+// it for the cells/s target.
 // Usage (from the repository root):
 //   build/tests/bench/bench_map [JOB] [SUBSAMPLE (0: none)] [RUNS] [THREADS (default 2)]
 #include <algorithm>
@@ -21,13 +21,13 @@
 
 #include <tbb/global_control.h>
 
-#include "cli/config/job.h"
-#include "collision/scene.h"
-#include "kinematics/mesh.h"
-#include "kinematics/units.h"
-#include "planner/config_map.h"
-#include "scanner/path_generators.h"
-#include "scanner/raycaster.h"
+#include <scanplan/collision/scene.h>
+#include <scanplan/config/job.h>
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/planner/config_map.h>
+#include <scanplan/scanner/path_generators.h>
+#include <scanplan/scanner/raycaster.h>
 #include "tests/bench/bench_timing.h"
 
 using namespace scanplan;
@@ -83,26 +83,26 @@ int main(int argc, char** argv) {
   const tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
                                         static_cast<std::size_t>(threads));
 
-  const cli::JobSpec job = cli::loadJob(job_file);
-  const kinematics::CellModel cell = cli::buildCell(job);
+  const config::JobSpec job = config::loadJob(job_file);
+  const kinematics::CellModel cell = config::buildCell(job);
   const kinematics::LoadedMesh part =
       kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
   const scanner::Raycaster raycaster(part.mesh);
   const kinematics::ScanPath path =
-      scanner::generatePath(cli::pathRequest(job), part.mesh, raycaster,
-                            scanner::laserWindow(cli::laserOptics(job)))
+      scanner::generatePath(config::pathRequest(job), part.mesh, raycaster,
+                            scanner::laserWindow(config::laserOptics(job)))
           .path;
-  const collision::Scene scene(cell, cli::clearanceConfig(job));
-  const planner::ConstraintSettings settings = cli::constraintSettings(job);
+  const collision::Scene scene(cell, config::clearanceConfig(job));
+  const planner::ConstraintSettings settings = config::constraintSettings(job);
 
   planner::MapRequest request;
   request.angle_step = job.map.angle_step_deg * kDegToRad;
   if (job.map.branch == "auto") {
     for (int i = 0; i < 8; ++i) request.branches.push_back(kinematics::IkBranch::fromIndex(i));
   } else {
-    request.branches = {*cli::parseBranch(job.map.branch)};
+    request.branches = {*config::parseBranch(job.map.branch)};
   }
-  // Issue 20: the map as built now (closed forms, motion-bound skipping, per-cell sharing)
+  // The map as built now (closed forms, motion-bound skipping, per-cell sharing)
   // beside the same without skipping (must be identical) and the old path it replaced (FCL
   // alone, every pair at every branch-cell), best of `runs` by the process's CPU time.
   // The three in turn, round after round: a slow spell of the machine (another process, the

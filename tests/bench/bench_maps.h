@@ -8,12 +8,12 @@
 #include <string>
 #include <vector>
 
+#include <scanplan/collision/scene.h>
+#include <scanplan/config/job.h>
+#include <scanplan/config/to_problem.h>
+#include <scanplan/planner/config_map.h>
+#include <scanplan/planner/objective.h>
 #include "cli/commands/commands.h"
-#include "cli/config/job.h"
-#include "cli/config/problem.h"
-#include "collision/scene.h"
-#include "planner/config_map.h"
-#include "planner/objective.h"
 
 namespace scanplan::bench {
 
@@ -55,15 +55,15 @@ inline planner::ConfigMap syntheticMap(std::size_t na, std::size_t nt, double dt
 
 // The demo job's map on its best branch, the scan path sampled so it has `samples` samples.
 inline planner::ConfigMap demoMap(const std::string& job_file, std::size_t samples, double& dt) {
-  cli::JobSpec job = cli::loadJob(job_file, {"map.branch=RIGHTY ABOVE NOFLIP"});
-  const kinematics::CellModel cell0 = cli::buildCell(job);
+  config::JobSpec job = config::loadJob(job_file, {"map.branch=RIGHTY ABOVE NOFLIP"});
+  const kinematics::CellModel cell0 = config::buildCell(job);
   const double duration = cli::generateScanPath(job, cell0).path.duration();
   dt = duration / static_cast<double>(samples - 1);
-  job =
-      cli::loadJob(job_file, {"map.branch=RIGHTY ABOVE NOFLIP", "scan.dt_s=" + std::to_string(dt)});
-  const kinematics::CellModel cell = cli::buildCell(job);
+  job = config::loadJob(job_file,
+                        {"map.branch=RIGHTY ABOVE NOFLIP", "scan.dt_s=" + std::to_string(dt)});
+  const kinematics::CellModel cell = config::buildCell(job);
   const kinematics::ScanPath path = cli::generateScanPath(job, cell).path;
-  const collision::Scene scene(cell, cli::clearanceConfig(job));
+  const collision::Scene scene(cell, config::clearanceConfig(job));
   return cli::computeMap(job, scene, path).map;
 }
 
@@ -81,15 +81,15 @@ inline JobMap jobMap(const std::string& job_file,
                      std::vector<std::string> overrides,
                      std::size_t samples) {
   if (samples > 1) {
-    const cli::JobSpec job0 = cli::loadJob(job_file, overrides);
-    const double duration = cli::generateScanPath(job0, cli::buildCell(job0)).path.duration();
+    const config::JobSpec job0 = config::loadJob(job_file, overrides);
+    const double duration = cli::generateScanPath(job0, config::buildCell(job0)).path.duration();
     overrides.push_back("scan.dt_s=" + std::to_string(duration / static_cast<double>(samples - 1)));
   }
-  const cli::JobSpec job = cli::loadJob(job_file, overrides);
-  const kinematics::CellModel cell = cli::buildCell(job);
+  const config::JobSpec job = config::loadJob(job_file, overrides);
+  const kinematics::CellModel cell = config::buildCell(job);
   const kinematics::ScanPath path = cli::generateScanPath(job, cell).path;
-  const collision::Scene scene(cell, cli::clearanceConfig(job));
-  const pipeline::PlanSettings plan = cli::planSettings(job);
+  const collision::Scene scene(cell, config::clearanceConfig(job));
+  const pipeline::PlanSettings plan = config::planSettings(job);
   return {cli::computeMap(job, scene, path).map, plan.objective, plan.continuous};
 }
 

@@ -1,4 +1,4 @@
-// Output writing against the whole plan (issue 20 item 6: writing ≤ 5 % of the demo's CPU time).
+// Output writing against the whole plan (writing ≤ 5 % of the demo's CPU time).
 // Plans the job once through the library as `plan` does (job, cell, part, pipeline::planScan),
 // then writes every file `plan` writes (cli::writePlanOutputs, job.yaml, report.json) into a fresh
 // folder, best of N in process CPU time (user + system: the kernel's copy into the page cache
@@ -14,13 +14,13 @@
 #include <filesystem>
 #include <string>
 
+#include <scanplan/config/job.h>
+#include <scanplan/config/to_problem.h>
+#include <scanplan/pipeline/plan_scan.h>
 #include "cli/commands/commands.h"
-#include "cli/config/job.h"
-#include "cli/config/problem.h"
 #include "cli/io/output.h"
-#include "cli/io/simulation_files.h"
 #include "cli/report/plan_report.h"
-#include "pipeline/plan_scan.h"
+#include "cli/report/simulation_files.h"
 #include "tests/bench/bench_timing.h"
 
 using namespace scanplan;
@@ -30,24 +30,24 @@ namespace {
 constexpr double kTargetShare = 0.05;
 
 struct Planned {
-  cli::JobSpec job;
+  config::JobSpec job;
   pipeline::ScanProblem problem;
   pipeline::ScanPlan plan;
 };
 
 // What `plan` does before it writes anything.
 Planned planJob(const std::filesystem::path& file) {
-  cli::JobSpec job = cli::loadJob(file);
-  kinematics::CellModel cell = cli::buildCell(job);
-  kinematics::LoadedMesh part = cli::loadPart(job, cell);
-  pipeline::ScanProblem problem = cli::toProblem(job, std::move(cell), std::move(part.mesh));
+  config::JobSpec job = config::loadJob(file);
+  kinematics::CellModel cell = config::buildCell(job);
+  kinematics::LoadedMesh part = config::loadPart(job, cell);
+  pipeline::ScanProblem problem = config::toProblem(job, std::move(cell), std::move(part.mesh));
   pipeline::ScanPlan plan = pipeline::planScan(problem, {});
   return {std::move(job), std::move(problem), std::move(plan)};
 }
 
 // Every file `plan` writes for a planned job, into `dir`.
 void writeAll(const std::filesystem::path& dir, const Planned& p, const cli::WriteSettings& s) {
-  cli::writeFileAtomically(dir / "job.yaml", cli::jobToYaml(p.job));
+  cli::writeFileAtomically(dir / "job.yaml", config::jobToYaml(p.job));
   cli::writePlanOutputs(dir, p.job, p.problem, p.plan, s);
   cli::writeFileAtomically(dir / "report.json",
                            cli::planReportJson(p.job, p.problem.cell, p.plan, p.plan.times));

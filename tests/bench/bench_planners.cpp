@@ -1,7 +1,7 @@
 // Planner quality and speed side by side on the same maps, in one run: Ray Shooting as the seed
 // describes it (plain horizon cost, H 15) and as `plan` runs it (with the cost-to-go), each
 // before and after NLopt refinement, against the exact DP optimum on the fine grid `plan` uses
-// (issue 20 item 5: Ray within 10 % of DP before refinement and 2 % after, on every job; never
+// (target: Ray within 10 % of DP before refinement and 2 % after, on every job; never
 // "no path" where DP has one). Then, on the first three maps, OMPL and Ray Shooting's parameters.
 // Jobs: two (four) seeded synthetic 360 × 1000 maps and bundled jobs with --set variants, each on
 // one branch with its scan path resampled to 1000 samples (the automatic demo on its own Δt).
@@ -19,18 +19,18 @@
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
-#include "cli/config/job.h"
-#include "cli/config/problem.h"
-#include "kinematics/scan_path.h"
-#include "pipeline/plan_scan.h"
-#include "pipeline/segment_plan.h"
-#include "planner/config_map.h"
-#include "planner/dp_planner.h"
-#include "planner/objective.h"
-#include "planner/ompl_planner.h"
-#include "planner/planner.h"
-#include "planner/ray_shooting.h"
-#include "planner/refine.h"
+#include <scanplan/config/job.h>
+#include <scanplan/config/to_problem.h>
+#include <scanplan/kinematics/scan_path.h>
+#include <scanplan/pipeline/plan_scan.h>
+#include <scanplan/pipeline/segment_plan.h>
+#include <scanplan/planner/config_map.h>
+#include <scanplan/planner/dp_planner.h>
+#include <scanplan/planner/objective.h>
+#include <scanplan/planner/ompl_planner.h>
+#include <scanplan/planner/ray_shooting.h>
+#include <scanplan/planner/refine.h>
+#include <scanplan/planner/registry.h>
 #include "tests/bench/bench_maps.h"
 #include "tests/bench/bench_timing.h"
 
@@ -54,7 +54,7 @@ PlanResult cpuTimed(int runs, F&& f) {
   return r;
 }
 
-// The seed's Ray Shooting as it was before issue 20: plain horizon cost, H 15, no fallback.
+// The seed's Ray Shooting as the paper gives it: plain horizon cost, H 15, no fallback.
 planner::RayShootingSettings seedRay() {
   planner::RayShootingSettings rs;
   rs.horizon = 15;
@@ -225,7 +225,7 @@ Tries omplAsPlanned(const planner::ConfigMap& slice,
 // budget, as one problem.
 void autoDemo() {
   const pipeline::ScanProblem problem =
-      cli::toProblem(cli::loadJob("data/jobs/demo.yaml", {"simulation.enabled=false"}));
+      config::toProblem(config::loadJob("data/jobs/demo.yaml", {"simulation.enabled=false"}));
   const auto prepared = pipeline::prepareScan(problem);
   const planner::ConfigMap& map = prepared->map;
   const pipeline::PlanSettings& plan = problem.planning;

@@ -25,14 +25,14 @@
 #include <tbb/task_arena.h>
 #include <time.h>
 
-#include "cli/config/job.h"
-#include "kinematics/mesh.h"
-#include "kinematics/pose.h"
-#include "kinematics/shape.h"
-#include "kinematics/units.h"
-#include "scanner/laser_model.h"
-#include "scanner/raycaster.h"
-#include "scanner/simulator.h"
+#include <scanplan/config/job.h>
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/kinematics/pose.h>
+#include <scanplan/kinematics/shape.h>
+#include <scanplan/kinematics/units.h>
+#include <scanplan/scanner/laser_model.h>
+#include <scanplan/scanner/raycaster.h>
+#include <scanplan/scanner/simulator.h>
 
 using namespace scanplan;
 using Clock = std::chrono::steady_clock;
@@ -207,9 +207,9 @@ int main(int argc, char** argv) {
   const bool single = mode == "single";
   const bool with_brute_force = mode.empty();
 
-  const cli::JobSpec job = cli::loadJob("data/jobs/demo_rings.yaml");
-  kinematics::CellModel cell = cli::buildCell(job);
-  const scanner::LaserOptics optics = cli::laserOptics(job);
+  const config::JobSpec job = config::loadJob("data/jobs/demo_rings.yaml");
+  kinematics::CellModel cell = config::buildCell(job);
+  const scanner::LaserOptics optics = config::laserOptics(job);
 
   const std::filesystem::path bunny_file =
       std::filesystem::path(SCANPLAN_SHARED_DATA_DIR) / "meshes/stlmodels_bunny.bin.stl";

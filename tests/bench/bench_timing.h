@@ -1,5 +1,5 @@
 #pragma once
-// CPU-time measurement shared by the benchmarks (issue 20: CPU time per unit of work, best of
+// CPU-time measurement shared by the benchmarks (CPU time per unit of work, best of
 // N). On a shared machine wall time counts other processes' work; a thread's CPU time does not.
 
 #include <time.h>

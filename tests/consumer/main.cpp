@@ -5,15 +5,15 @@
 #include <cstdio>
 #include <exception>
 
-#include "cli/config/problem.h"
-#include "pipeline/plan_scan.h"
+#include <scanplan/config/to_problem.h>
+#include <scanplan/pipeline/plan_scan.h>
 
 int main(int argc, char** argv) {
   if (argc != 2) return std::fprintf(stderr, "usage: consumer JOB\n"), 2;
   try {
     using namespace scanplan;
-    const cli::JobSpec job = cli::loadJob(argv[1], {"simulation.enabled=false"});
-    const pipeline::ScanProblem problem = cli::toProblem(job);
+    const config::JobSpec job = config::loadJob(argv[1], {"simulation.enabled=false"});
+    const pipeline::ScanProblem problem = config::toProblem(job);
     const pipeline::ScanPlan plan = pipeline::planScan(problem);
     if (!plan.planned()) return std::fprintf(stderr, "no plan: %s\n", plan.reason.c_str()), 1;
     const auto& samples = plan.trajectory->trajectory.samples;

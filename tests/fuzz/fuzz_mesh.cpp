@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <string>
 
-#include "kinematics/mesh.h"
+#include <scanplan/kinematics/mesh.h>
 #include "tests/fuzz/fuzz_support.h"
 
 // Debian's libassimp 5.2 leaks an importer structure (about 1.3 kB) when it gives up on some

@@ -1,9 +1,9 @@
 // Scan path files (`scan.paths[].type: file`): parsePathCsv, which the job's path request
-// (cli::pathRequest) calls with the file's text.
+// (config::pathRequest) calls with the file's text.
 #include <cstddef>
 #include <cstdint>
 
-#include "scanner/path_generators.h"
+#include <scanplan/scanner/path_generators.h>
 #include "tests/fuzz/fuzz_support.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

@@ -14,7 +14,7 @@
 #include <string>
 #include <system_error>
 
-#include "kinematics/error.h"
+#include <scanplan/kinematics/error.h>
 
 namespace scanplan::fuzz {
 

@@ -3,11 +3,11 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "cli/programs/programs.h"
+#include <scanplan/programs/programs.h>
 #include "tests/fuzz/fuzz_support.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace scanplan;
   return fuzz::expectInputErrors(
-      [&] { (void)cli::readVplusProgram(fuzz::text(data, size), "fuzz.v2"); });
+      [&] { (void)programs::readVplusProgram(fuzz::text(data, size), "fuzz.v2"); });
 }

@@ -3,15 +3,15 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "cli/config/job.h"
+#include <scanplan/config/job.h>
 #include "tests/fuzz/fuzz_support.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace scanplan;
   const auto file = fuzz::writeInput("jobs/fuzz_input.yaml", data, size);
   return fuzz::expectInputErrors([&] {
-    const cli::JobSpec job = cli::loadJob(file);
-    (void)cli::jobToYaml(job);
-    (void)cli::jobHash(job);
+    const config::JobSpec job = config::loadJob(file);
+    (void)config::jobToYaml(job);
+    (void)config::jobHash(job);
   });
 }

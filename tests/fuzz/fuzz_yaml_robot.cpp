@@ -3,14 +3,14 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "cli/config/robot_file.h"
+#include <scanplan/config/robot_file.h>
 #include "tests/fuzz/fuzz_support.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace scanplan;
   const auto file = fuzz::writeInput("robots_input.yaml", data, size);
   return fuzz::expectInputErrors([&] {
-    const cli::RobotSpec robot = cli::loadRobotFile(file);
-    (void)cli::buildRobotModel(robot, file.string());
+    const config::RobotSpec robot = config::loadRobotFile(file);
+    (void)config::buildRobotModel(robot, file.string());
   });
 }

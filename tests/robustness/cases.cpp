@@ -10,7 +10,6 @@
 namespace scanplan::robustness {
 namespace {
 
-
 // A YAML alias bomb ("billion laughs"): 9 levels of 9 aliases, 9^9 nodes when expanded.
 std::string aliasBomb() {
   std::string text = "[&a0 [1, 1, 1, 1, 1, 1, 1, 1, 1]";
@@ -77,12 +76,12 @@ std::string cell(const std::string& csv, int column, const std::string& value) {
   return csv.substr(0, at) + value + csv.substr(end);
 }
 
-std::vector<Case> issueJobCases() {
+std::vector<Case> reportedJobCases() {
   std::vector<Case> cases;
   const auto set = [&cases](const std::string& name, const std::string& command,
                             const std::string& override_text, const std::string& key) {
     cases.push_back(Case{.name = name,
-                         .group = "issue 17 classes",
+                         .group = "reported classes",
                          .args = {command, kLight, "-o", "out", "--set", override_text},
                          .names = {key},
                          .out = OutState::kExisting});
@@ -113,7 +112,7 @@ std::vector<Case> issueJobCases() {
   return cases;
 }
 
-std::vector<Case> issueFileCases() {
+std::vector<Case> reportedFileCases() {
   std::vector<Case> cases;
   cases.push_back(
       meshCase("off_2pow31_vertices", text("m.off", "OFF\n2147483648 1 0\n0 0 0\n3 0 1 2\n")));
@@ -138,7 +137,7 @@ std::vector<Case> issueFileCases() {
   cases.back().names = {"part"};
   cases.push_back(Case{
       .name = "part_sunk_into_table",
-      .group = "issue 17 classes",
+      .group = "reported classes",
       .args = {"path", "job.yaml", "-o", "out"},
       .files = {jobWith("job.yaml", {{"part.place", "none"}, {"part.pose.xyz_mm", "[0, 0, -40]"}})},
       .names = {"job.yaml", "part.pose"},
@@ -146,7 +145,7 @@ std::vector<Case> issueFileCases() {
   return cases;
 }
 
-std::vector<Case> issueTrajectoryCases() {
+std::vector<Case> reportedTrajectoryCases() {
   std::vector<Case> cases;
   cases.push_back(
       trajectoryCase("vplus_30kb_move_line", transformed("p.v2", kProgram, [](std::string s) {
@@ -176,7 +175,7 @@ std::vector<Case> issueTrajectoryCases() {
   return cases;
 }
 
-std::vector<Case> issueSweepCases() {
+std::vector<Case> reportedSweepCases() {
   std::vector<Case> cases;
   const auto sweep = [&cases](const std::string& name, const std::string& body,
                               std::vector<std::string> names, std::vector<int> exits = {4}) {
@@ -215,7 +214,7 @@ std::vector<Case> issueSweepCases() {
   cases.back().names = {"nope.yaml"};
   cases.push_back(
       Case{.name = "batch_jobs_100000000",
-           .group = "issue 17 classes",
+           .group = "reported classes",
            .args = {"batch", "@src/data/sweeps/planners.yaml", "-o", "out", "--jobs", "100000000"},
            .exits = {2},
            .names = {"--jobs"},
@@ -223,31 +222,31 @@ std::vector<Case> issueSweepCases() {
   return cases;
 }
 
-std::vector<Case> issueMiscCases() {
+std::vector<Case> reportedMiscCases() {
   std::vector<Case> cases;
   std::string unknown;
   for (int i = 0; i < 5000; ++i) unknown += "unknown_key_" + std::to_string(i) + ": 1\n";
   cases.push_back(Case{.name = "job_5000_unknown_keys",
-                       .group = "issue 17 classes",
+                       .group = "reported classes",
                        .args = {"plan", "job.yaml", "-o", "out"},
                        .files = {jobAppended("job.yaml", unknown)},
                        .names = {"job.yaml", "unknown_key_0"},
                        .out = OutState::kExisting});
   cases.push_back(Case{.name = "job_alias_bomb",
-                       .group = "issue 17 classes",
+                       .group = "reported classes",
                        .args = {"plan", "job.yaml", "-o", "out"},
                        .files = {jobAppended("job.yaml", "bomb: " + aliasBomb() + "\n")},
                        .names = {"job.yaml"},
                        .out = OutState::kExisting});
   cases.push_back(Case{.name = "job_duplicate_key",
-                       .group = "issue 17 classes",
+                       .group = "reported classes",
                        .args = {"plan", "job.yaml", "-o", "out"},
                        .files = {jobAppended("job.yaml", "name: again\n")},
                        .names = {"job.yaml", "name"},
                        .out = OutState::kExisting});
   cases.push_back(Case{
       .name = "job_duplicate_nested_key",
-      .group = "issue 17 classes",
+      .group = "reported classes",
       .args = {"path", "job.yaml", "-o", "out"},
       .files = {text("job.yaml", "name: x\nrobot: " + expand(kRobot) +
                                      "\npart: {mesh: " + expand(kStl) + ", scale: 1, scale: 2}\n")},
@@ -274,9 +273,9 @@ std::vector<Case> concat(std::initializer_list<std::vector<Case>> parts) {
   return all;
 }
 
-std::vector<Case> issueCases() {
-  return concat({issueJobCases(), issueFileCases(), issueTrajectoryCases(), issueSweepCases(),
-                 issueMiscCases()});
+std::vector<Case> reportedCases() {
+  return concat({reportedJobCases(), reportedFileCases(), reportedTrajectoryCases(),
+                 reportedSweepCases(), reportedMiscCases()});
 }
 
 // Shared with files.cpp and paths.cpp.

@@ -10,7 +10,7 @@
 
 namespace scanplan::robustness {
 
-std::vector<Case> issueCases();       // the problems reported in issue 17
+std::vector<Case> reportedCases();    // the problems first reported against the CLI
 std::vector<Case> fileCases();        // truncated, garbage, special and misplaced files
 std::vector<Case> pathCases();        // unicode and odd paths, output folders
 std::vector<Case> commandCases();     // every command's own arguments

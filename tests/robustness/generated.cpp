@@ -108,7 +108,7 @@ std::vector<Case> generatedCases() {
 
 std::vector<Case> allCases() {
   std::vector<Case> all;
-  for (auto part : {issueCases(), fileCases(), pathCases(), commandCases(), modelLimitCases(),
+  for (auto part : {reportedCases(), fileCases(), pathCases(), commandCases(), modelLimitCases(),
                     generatedCases()}) {
     all.insert(all.end(), part.begin(), part.end());
   }

@@ -52,7 +52,7 @@ struct Outcome {
   std::string err;
 };
 
-/// Limits of every run (the issue's `ulimit -v 4194304` and `timeout 20`).
+/// Limits of every run (`ulimit -v 4194304` and `timeout 20`).
 inline constexpr long kAddressSpaceBytes = 4L << 30;
 inline constexpr int kTimeoutS = 20;
 

@@ -1,4 +1,4 @@
-// Kills during writes (issue 17): `plan` into an OUT that holds a complete earlier plan, stopped
+// Kills during writes: `plan` into an OUT that holds a complete earlier plan, stopped
 // at several moments. The contract: OUT is then the old complete output or the new one, never a
 // mix (hidden `.scanplan-*` entries of the killed run aside); SIGINT exits 130 and SIGTERM 143
 // leaving OUT as it was and nothing `.scanplan-*` behind; after a SIGKILL the next run cleans up

@@ -1,4 +1,4 @@
-// The robustness catalogue (issue 17): every case of cases.h run through the scanplan binary
+// The robustness catalogue: every case of cases.h run through the scanplan binary
 // under a 4 GB address-space limit and a 20 s watchdog. A case passes when scanplan was not
 // killed by a signal or the watchdog, never printed "internal error", exited with one of the
 // case's codes, named the file (and key) in its error, and left OUT as it was when it failed.
@@ -165,7 +165,7 @@ TEST_P(Catalogue, Case) {
   if (!std::getenv("SCANPLAN_ROBUSTNESS_KEEP")) removeCase(dir);
 }
 
-// The issue asks for at least 200 cases; names must be unique (they name the scratch folders).
+// At least 200 cases; names must be unique (they name the scratch folders).
 TEST(CatalogueSize, AtLeast200CasesWithUniqueNames) {
   std::map<std::string, int> per_group;
   std::set<std::string> names;
