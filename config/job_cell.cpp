@@ -19,6 +19,7 @@
 #include <scanplan/config/detail/job_sections.h>
 #include <scanplan/config/robot_urdf.h>
 #include <scanplan/config/text.h>
+#include <scanplan/config/to_problem.h>
 #include <scanplan/kinematics/error.h>
 #include <scanplan/kinematics/placement.h>
 #include <scanplan/kinematics/units.h>
@@ -305,6 +306,62 @@ kinematics::Sensor toSensor(const SensorSpec& spec) {
   return sensor;
 }
 
+// The arm can reach the part at some table angle: an error when none of it is within reach, a
+// warning when some of it is not (kinematics::partReach is a necessary condition only).
+void checkInReach(const JobSpec& job,
+                  const kinematics::CellModel& cell,
+                  const kinematics::TriangleMesh& mesh) {
+  const scanner::LaserWindow window = scanner::laserWindow(laserOptics(job));
+  const double lever = cell.robot.definition().opw.c4 + cell.scanner.X_FS.translation().norm() +
+                       std::hypot(window.z_max, window.y_far);
+  const kinematics::PartReach reach = kinematics::partReach(cell, mesh, lever);
+  const double mount = cell.scanner.X_FS.translation().norm();
+  if (mount > reach.arm_reach - lever) {  // the arm's own stretch, shoulder to flange
+    throw InputError(fmt::format(
+        "{}: scanner.mount: the laser frame sits {:.0f} mm from the flange, more than the arm's "
+        "whole stretch of {:.0f} mm: expected the scanner's offset on the flange (xyz_mm, mm)",
+        job.source.string(), toMm(mount), toMm(reach.arm_reach - lever)));
+  }
+  if (reach.nearest_excess > 0.0) {
+    throw InputError(fmt::format(
+        "{}: part: no point of the part ({:.0f} mm across) is within the arm's reach at any "
+        "table angle: the nearest stays {:.0f} mm beyond the {:.0f} mm the arm, the scanner "
+        "and its depth window can stretch from the shoulder; expected the table (table.axis) "
+        "within reach of the robot and the part's size as meant (part.units, part.scale)",
+        job.source.string(), toMm(mesh.bounds().diagonal().norm()), toMm(reach.nearest_excess),
+        toMm(reach.arm_reach)));
+  }
+  if (reach.beyond_fraction > 0.0) {
+    spdlog::warn(
+        "{}: part: {:.1f} % of the part's vertices are beyond the arm's reach at every "
+        "table angle; they cannot be scanned",
+        job.source.filename().string(), 100.0 * reach.beyond_fraction);
+  }
+}
+
+// The part on the table top: none of it below (beyond a rounding hair), and a warning when it
+// overhangs the table.
+void checkOnTable(const JobSpec& job,
+                  const kinematics::CellModel& cell,
+                  const kinematics::TriangleMesh& mesh) {
+  constexpr double kSunkTolerance = 1e-5;  // m: 0.01 mm, far above the float rounding of a mesh
+  const auto [lowest, widest] = kinematics::partExtent(mesh, cell.part.X_RP);
+  if (lowest < -kSunkTolerance) {
+    throw InputError(fmt::format(
+        "{}: part.pose: the part reaches {:.2f} mm below the table top (its lowest point is at "
+        "z = {:.2f} mm on the table): expected it to rest on the table; raise pose.xyz_mm z by "
+        "{:.2f}, or set part.place: table",
+        job.source.string(), toMm(-lowest), toMm(lowest), toMm(-lowest)));
+  }
+  if (widest > cell.table.radius) {
+    spdlog::warn(
+        "{}: part: the part reaches {:.1f} mm from the table axis, beyond the table's "
+        "radius of {:.1f} mm",
+        job.source.filename().string(), toMm(widest), toMm(cell.table.radius));
+  }
+  checkInReach(job, cell, mesh);
+}
+
 }  // namespace
 
 void describe(YamlIn& a, TableSpec& s) { describeTable(a, s); }
@@ -469,6 +526,23 @@ planner::ConstraintSettings constraintSettings(const JobSpec& job) {
   s.elbow = {c.elbow.low, c.elbow.high, c.elbow.gamma};
   s.shoulder = {mm(c.shoulder.low_mm), mm(c.shoulder.high_mm), c.shoulder.gamma};
   return s;
+}
+
+kinematics::LoadedMesh loadPart(const JobSpec& job, const kinematics::CellModel& cell) {
+  kinematics::LoadedMesh part = loadPartMesh(job, cell.part);
+  for (const std::string& w : part.report.warnings) {
+    spdlog::warn("{}: part.mesh: {}", job.source.filename().string(), w);
+  }
+  // Inside out, every surface would face away from the scanner: say so, not "nothing seen".
+  if (part.mesh.isClosed() && part.mesh.signedVolume() < 0.0) {
+    throw InputError(fmt::format(
+        "{}: part.mesh: {} is closed but inside out: its triangles' winding puts their normals "
+        "into the part (volume {:.0f} mm³ by the winding): expected outward normals; reverse "
+        "the winding of every face in a mesh tool",
+        job.source.string(), job.part.mesh.as_written, part.mesh.signedVolume() * 1e9));
+  }
+  checkOnTable(job, cell, part.mesh);
+  return part;
 }
 
 }  // namespace scanplan::config

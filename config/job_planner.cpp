@@ -18,6 +18,7 @@
 #include <scanplan/config/detail/job_sections.h>
 #include <scanplan/config/robot_urdf.h>
 #include <scanplan/config/text.h>
+#include <scanplan/config/to_problem.h>
 #include <scanplan/kinematics/error.h>
 #include <scanplan/kinematics/placement.h>
 #include <scanplan/kinematics/units.h>
@@ -148,6 +149,36 @@ planner::PlannerSettings plannerSettings(const JobSpec& job) {
 std::optional<double> startAngle(const JobSpec& job) {
   if (job.planner.start_deg == "auto") return std::nullopt;
   return deg(*parseFiniteNumber(job.planner.start_deg));
+}
+
+pipeline::MapSettings mapSettings(const JobSpec& job) {
+  pipeline::MapSettings s;
+  s.angle_step = deg(job.map.angle_step_deg);
+  if (job.map.branch != "auto") s.branches = {*parseBranch(job.map.branch)};
+  s.memory_limit_bytes = static_cast<std::size_t>(job.map.memory_limit_mb * 1024.0 * 1024.0);
+  return s;
+}
+
+pipeline::PlanSettings planSettings(const JobSpec& job) {
+  pipeline::PlanSettings s;
+  s.method = job.planner.method;
+  s.objective = plannerSettings(job);
+  s.continuous = job.table.continuous;
+  s.start_theta = startAngle(job);
+  s.planners.ray.rays = job.planner.ray.rays;
+  s.planners.ray.horizon = job.planner.ray.horizon;
+  s.planners.ray.starts = job.planner.ray.starts;
+  s.planners.ray.blocked_penalty = job.planner.ray.blocked_penalty_s;
+  s.planners.ray.cost_to_go = job.planner.ray.cost_to_go;
+  s.planners.ray.dp_fallback = job.planner.ray.dp_fallback;
+  s.planners.dp_subdivisions = job.planner.dp.angle_subdivisions;
+  s.planners.ompl.seed = static_cast<std::uint32_t>(job.planner.ompl.seed);
+  s.termination.time_limit_s = job.planner.ompl.time_limit_s;
+  s.termination.max_iterations = static_cast<std::size_t>(job.planner.ompl.max_iterations);
+  s.refine = job.planner.refine.enabled;
+  s.refine_settings.time_limit_s = job.planner.refine.time_limit_s;
+  s.dp_gap = job.planner.dp_gap;
+  return s;
 }
 
 }  // namespace scanplan::config

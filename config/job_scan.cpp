@@ -18,6 +18,7 @@
 #include <scanplan/config/detail/job_sections.h>
 #include <scanplan/config/robot_urdf.h>
 #include <scanplan/config/text.h>
+#include <scanplan/config/to_problem.h>
 #include <scanplan/kinematics/error.h>
 #include <scanplan/kinematics/placement.h>
 #include <scanplan/kinematics/units.h>
@@ -177,6 +178,29 @@ scanner::PathRequest pathRequest(const JobSpec& job) {
     }
   }
   return request;
+}
+
+scanner::PathRequest placedPathRequest(const JobSpec& job, const kinematics::CellModel& cell) {
+  scanner::PathRequest request = pathRequest(job);
+  if (job.part.place != "table") return request;
+  const double table_top_P = -cell.part.X_RP.translation().z();  // for a part turned about z
+  for (scanner::PathElement& e : request.elements) {
+    if (auto* ring = std::get_if<scanner::RingSpec>(&e)) ring->height += table_top_P;
+  }
+  return request;
+}
+
+pipeline::AutoScanSettings autoScanSettings(const JobSpec& job) {
+  const AutoSpec& a = job.scan.auto_scan;
+  pipeline::AutoScanSettings s;
+  s.max_incidence = deg(a.max_incidence_deg);
+  s.point_spacing = a.point_spacing_mm * kMmToM;
+  s.target_coverage = a.target_coverage;
+  s.max_passes = static_cast<std::size_t>(a.max_passes);
+  s.time_budget = a.time_budget_s;
+  s.max_program = a.max_program_s;
+  s.sample_spacing = a.sample_spacing_mm * kMmToM;
+  return s;
 }
 
 }  // namespace scanplan::config

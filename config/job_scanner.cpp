@@ -19,6 +19,7 @@
 #include <scanplan/config/detail/job_sections.h>
 #include <scanplan/config/robot_urdf.h>
 #include <scanplan/config/text.h>
+#include <scanplan/config/to_problem.h>
 #include <scanplan/kinematics/error.h>
 #include <scanplan/kinematics/placement.h>
 #include <scanplan/kinematics/units.h>
@@ -119,6 +120,13 @@ void describeReflectance(A& a, SimulationSpec::Reflectance& s) {
   a.field("shininess", s.shininess, Expect::range(0.0, 10000.0));
 }
 
+scanner::CameraRule cameraRule(const std::string& name) {
+  if (name == "negative") return scanner::CameraRule::kNegative;
+  if (name == "both") return scanner::CameraRule::kBoth;
+  if (name == "either") return scanner::CameraRule::kEither;
+  return scanner::CameraRule::kPositive;
+}
+
 }  // namespace
 
 void describe(YamlIn& a, OpticsSpec& s) { describeOptics(a, s); }
@@ -210,6 +218,52 @@ void checkImageMode(const YamlIn& a, const JobSpec& s) {
 scanner::LaserOptics laserOptics(const JobSpec& job) {
   const OpticsSpec& o = job.scanner.optics;
   return {mm(o.a_mm), mm(o.b_mm), deg(o.phi_deg), deg(o.gamma_deg)};
+}
+
+planner::ValidationSettings validationSettings(const JobSpec& job) {
+  planner::ValidationSettings s;
+  s.sample_dt = 1.0 / job.scanner.frame_rate_hz;
+  s.table_omega_max = deg(job.table.max_speed_deg_s);
+  s.table_alpha_max = deg(job.table.max_accel_deg_s2);
+  s.collision_resolution = job.validation.collision_resolution_mm * kMmToM;
+  return s;
+}
+
+pipeline::SimulationSettings simulationSettings(const JobSpec& job,
+                                                const kinematics::CellModel& cell) {
+  pipeline::SimulationSettings s;
+  s.frame_rate_hz = job.scanner.frame_rate_hz;
+  s.scanner.rays_per_profile = job.scanner.rays_per_profile;
+  s.scanner.cameras = cameraRule(job.scanner.cameras);
+  s.scanner.sigma_longitudinal = job.scanner.noise.longitudinal_mm * kMmToM;
+  s.scanner.sigma_orthogonal = job.scanner.noise.orthogonal_mm * kMmToM;
+  s.scanner.seed = static_cast<std::uint64_t>(job.scanner.noise.seed);
+  s.scanner.mode = job.simulation.mode == "image" ? scanner::SimulationMode::kImage
+                                                  : scanner::SimulationMode::kGeometric;
+  const CameraSpec& camera = job.scanner.camera;
+  scanner::ImageSettings& image = s.scanner.image;
+  image.rows = camera.rows;
+  image.columns = camera.columns > 0 ? camera.columns : job.scanner.rays_per_profile;
+  image.thickness = job.scanner.laser.thickness_mm * kMmToM;
+  image.reflectance = {job.simulation.reflectance.lambert, job.simulation.reflectance.specular,
+                       job.simulation.reflectance.shininess};
+  image.ambient = camera.ambient_grey;
+  image.noise = camera.noise_grey;
+  image.threshold = camera.threshold_grey;
+  image.method = camera.detection == "gauss" ? scanner::StripeMethod::kGaussian
+                                             : scanner::StripeMethod::kCentreOfGravity;
+  if (s.scanner.mode == scanner::SimulationMode::kImage)
+    s.profile_images = static_cast<std::size_t>(job.simulation.profile_images);
+  const auto& e = job.simulation.extra_eccentricity_mm;
+  const auto& t = job.simulation.extra_tilt_deg;
+  if (e[0] != 0.0 || e[1] != 0.0 || t[0] != 0.0 || t[1] != 0.0) {
+    kinematics::RotaryTableModel real = cell.table;
+    real.eccentricity += Eigen::Vector2d(e[0], e[1]) * kMmToM;
+    real.tilt += Eigen::Vector2d(deg(t[0]), deg(t[1]));
+    s.scanner.simulated_table = real;
+  }
+  s.coverage.min_points = static_cast<std::uint32_t>(job.simulation.coverage_min_points);
+  return s;
 }
 
 }  // namespace scanplan::config

@@ -1,5 +1,6 @@
 #include <scanplan/pipeline/plan_scan.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 
@@ -173,10 +174,30 @@ void checkProblem(const ScanProblem& p) {
   }
 }
 
+namespace {
+
+void throwIfCancelled(const ScanProblem& problem) {
+  if (problem.planning.termination.cancelled()) throw Cancelled();
+}
+
+// `progress` that first polls the problem's cancel flag (throws Cancelled once it is set).
+ProgressFn polling(const ScanProblem& problem, const ProgressFn& progress) {
+  const std::atomic<bool>* cancel = problem.planning.termination.cancel;
+  if (cancel == nullptr) return progress;
+  return [cancel, progress](std::string_view stage, std::size_t done, std::size_t total) {
+    if (cancel->load(std::memory_order_relaxed)) throw Cancelled();
+    if (progress) progress(stage, done, total);
+  };
+}
+
+}  // namespace
+
 ScanPathResult scanPath(const ScanProblem& problem,
                         const collision::Scene& scene,
-                        const ProgressFn& progress) {
+                        const ProgressFn& report) {
   checkProblem(problem);
+  throwIfCancelled(problem);
+  const ProgressFn progress = polling(problem, report);
   ScanPathResult out;
   out.window = scanner::laserWindow(problem.optics);
   const scanner::Raycaster raycaster(problem.part);
@@ -189,8 +210,9 @@ ScanPathResult scanPath(const ScanProblem& problem,
 }
 
 std::shared_ptr<const PreparedScan> prepareScan(const ScanProblem& problem,
-                                                const ProgressFn& progress) {
+                                                const ProgressFn& report) {
   checkProblem(problem);
+  const ProgressFn progress = polling(problem, report);
   auto prepared = std::make_shared<PreparedScan>();
   auto t = Clock::now();
   prepared->window = scanner::laserWindow(problem.optics);
@@ -199,6 +221,7 @@ std::shared_ptr<const PreparedScan> prepareScan(const ScanProblem& problem,
   prepared->path = std::move(path.path);
   prepared->auto_scan = std::move(path.auto_scan);
   prepared->path_seconds = since(t);
+  throwIfCancelled(problem);
   const planner::MapRequest request = mapRequest(problem.map);
   t = Clock::now();
   planner::ProgressFn map_progress;
@@ -237,8 +260,10 @@ ScanPlan planPrepared(const ScanProblem& problem,
   const PreparedScan& p = *plan.prepared;
   plan.times.path = p.path_seconds;
   plan.times.map = p.map_seconds;
+  throwIfCancelled(problem);
   if (!p.path.path.breaks.empty()) {
     planSegments(problem, options, plan);
+    throwIfCancelled(problem);
     if (plan.trajectory) proveAndSimulate(problem, p, plan);
     return plan;
   }
@@ -257,6 +282,7 @@ ScanPlan planPrepared(const ScanProblem& problem,
   };
   const auto t = Clock::now();
   plan.choice = choosePath(p.map, problem.planning, options, accept, wrap_sheets);
+  throwIfCancelled(problem);
   plan.times.plan = since(t) - plan.times.trajectory;
   if (plan.choice.dp && plan.choice.chosen.method != "dp") plan.times.dp = plan.choice.dp->seconds;
   if (!plan.choice.solved()) {

@@ -370,11 +370,13 @@ SolveOutcome solveWithin(ob::Planner& planner, const OmplSettings& os) {
   // The planners test the condition once per iteration: counting its calls caps iterations.
   std::size_t& iterations = out.iterations;
   const std::size_t cap = os.max_iterations;
-  const ob::PlannerTerminationCondition ptc =
-      ob::plannerOrTerminationCondition(ob::timedPlannerTerminationCondition(os.time_limit_s),
-                                        ob::PlannerTerminationCondition([&iterations, cap] {
-                                          return ++iterations > cap && cap != 0;
-                                        }));
+  const std::atomic<bool>* cancel = os.cancel;
+  const ob::PlannerTerminationCondition ptc = ob::plannerOrTerminationCondition(
+      ob::timedPlannerTerminationCondition(os.time_limit_s),
+      ob::PlannerTerminationCondition([&iterations, cap, cancel] {
+        return (++iterations > cap && cap != 0) ||
+               (cancel != nullptr && cancel->load(std::memory_order_relaxed));
+      }));
   const auto solve_start = std::chrono::steady_clock::now();
   out.status = planner.solve(ptc);
   out.seconds =

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -26,6 +27,8 @@ struct OmplSettings {
   /// Cap on planner iterations, 0 = none. With a cap reached before the clock the result is a
   /// function of (map, settings, seed) only; a run cut by the clock depends on machine speed.
   std::size_t max_iterations = 0;
+  /// Polled at every iteration: true ends the search (planner::Termination::cancel).
+  const std::atomic<bool>* cancel = nullptr;
   OmplPlanner planner = OmplPlanner::kSst;
   int max_steps = 50;             ///< a control (target speed) is held for 1..max_steps samples
   std::size_t starts = 36;        ///< start cells spread over the first column's f > 0 (0 = all)

@@ -67,6 +67,9 @@ PlanResult Planner::solve(const PlanningProblem& problem, const Termination& ter
   if (std::string why = problemError(problem); !why.empty()) {
     return refused(problem, PlannerStatus::kInvalidInput, name() + ": " + why);
   }
+  if (termination.cancelled()) {
+    return refused(problem, PlannerStatus::kTimeout, name() + ": cancelled");
+  }
   if (termination.time_limit_s < 0.0 || !std::isfinite(termination.time_limit_s)) {
     return refused(problem, PlannerStatus::kTimeout,
                    fmt::format("{}: no time left ({} s)", name(), termination.time_limit_s));

@@ -2,6 +2,7 @@
 // The table-angle planner interface: a problem on one branch of a map, a termination, and a
 // Planner that solves it. The planners themselves are made by name in registry.h.
 
+#include <atomic>
 #include <cstddef>
 #include <optional>
 #include <string>
@@ -14,11 +15,17 @@
 namespace scanplan::planner {
 
 /// When a search must end, set by the caller (OMPL's PlannerTerminationCondition). Searches that
-/// iterate (OMPL) stop at whichever comes first; DP and Ray Shooting run in bounded time and check
-/// the clock only before they start (an expired budget gives kTimeout).
+/// iterate (OMPL) stop at whichever comes first, and poll `cancel` at every iteration; DP and Ray
+/// Shooting run in bounded time and check the clock and `cancel` only before they start (an
+/// expired budget or a cancelled solve gives kTimeout).
 struct Termination {
   std::size_t max_iterations = 0;  ///< iterations of an iterative search, 0: no cap
   double time_limit_s = 0.0;       ///< s, wall clock of one solve(), 0: no limit
+  /// Set to true from any thread to end the solves that use this termination (and, through
+  /// ScanProblem::planning, a whole pipeline::planScan()); nullptr: never cancelled. The flag
+  /// must outlive them.
+  const std::atomic<bool>* cancel = nullptr;
+  bool cancelled() const { return cancel != nullptr && cancel->load(std::memory_order_relaxed); }
 };
 
 /// The table-angle problem on one branch of a configuration map (docs/design.md §5). `map` must

@@ -41,6 +41,7 @@ class OmplSearch final : public Planner {
     OmplSettings os = settings_;
     os.time_limit_s = t.time_limit_s > 0.0 ? t.time_limit_s : 1e9;
     os.max_iterations = t.max_iterations;
+    os.cancel = t.cancel;
     return planOmpl(*p.map, p.branch, p.settings, p.continuous, os, p.start_theta);
   }
   OmplSettings settings_;

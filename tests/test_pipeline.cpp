@@ -1,10 +1,14 @@
 // planScan() and the planner interface, through the C++ API (no files written, no CLI): the
 // pipeline's trajectory follows the scan path through the 7-DOF chain, is what the planners and
 // evaluate() say it is, and bad problems are refused with the field named.
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <mutex>
 #include <numbers>
 #include <random>
 #include <string>
+#include <thread>
 #include <variant>
 #include <vector>
 
@@ -255,6 +259,51 @@ TEST(PlannerInterface, OmplTerminationIsPassedInAndAnIterationCapRepeats) {
   EXPECT_NE(a.detail.find("3000 iterations"), std::string::npos) << a.detail;
   const planner::PlanResult c = ompl->solve(problem, {500, 30.0});
   EXPECT_NE(c.detail.find("500 iterations"), std::string::npos) << c.detail;
+}
+
+// A cancel flag ends a running OMPL search at its next iteration: with a minute of budget and no
+// iteration cap, a flag set after 0.2 s from another thread ends the solve within seconds; a flag
+// set before any solve refuses every planner at once.
+TEST(PlannerInterface, ACancelFlagEndsARunningSearch) {
+  std::mt19937 rng(11);
+  const planner::ConfigMap map = test::randomMap(rng, 72, 60, true);
+  const planner::PlanningProblem problem{&map, 0, {}, true, {}};
+  std::atomic<bool> cancel{false};
+  planner::Termination t{0, 60.0};
+  t.cancel = &cancel;
+  std::thread stopper([&cancel] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    cancel = true;
+  });
+  const planner::PlanResult r = planner::makePlanner("ompl", {})->solve(problem, t);
+  stopper.join();
+  EXPECT_LT(r.seconds, 20.0) << r.reason << " " << r.detail;  // not the minute of budget
+  for (const std::string& name : planner::plannerNames()) {
+    const planner::PlanResult refused = planner::makePlanner(name, {})->solve(problem, t);
+    EXPECT_EQ(refused.status, PlannerStatus::kTimeout) << name;
+    EXPECT_NE(refused.reason.find("cancelled"), std::string::npos) << refused.reason;
+  }
+}
+
+// The pipeline polls the flag in every progress report and between stages: set before the call
+// it throws Cancelled before any work; set from the map's progress it throws during the map.
+TEST(PlanScan, ACancelFlagEndsThePipelineWithCancelled) {
+  std::atomic<bool> cancel{true};
+  pipeline::ScanProblem problem = lightDemo();
+  problem.planning.termination.cancel = &cancel;
+  EXPECT_THROW(pipeline::planScan(problem), pipeline::Cancelled);
+  cancel = false;
+  std::mutex mutex;  // the map reports from its worker threads
+  std::size_t reports = 0, after = 0;
+  EXPECT_THROW(pipeline::planScan(problem, {},
+                                  [&](std::string_view stage, std::size_t, std::size_t) {
+                                    const std::lock_guard<std::mutex> lock(mutex);
+                                    if (cancel) ++after;
+                                    if (stage == "map" && ++reports == 3) cancel = true;
+                                  }),
+               pipeline::Cancelled);
+  EXPECT_EQ(reports, 3u);
+  EXPECT_LE(after, 2u);  // at most the reports already past the poll on the other threads
 }
 
 // A plan with no path says, per branch, when (the time span and the pass), what (the
