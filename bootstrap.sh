@@ -14,6 +14,8 @@ packages=(
   # for tests: the function-length check reads the sources with Universal Ctags
   universal-ctags
   libgtest-dev libgmock-dev libcairo2-dev fonts-dejavu-core
+  # the Python module and its tests
+  python3-dev pybind11-dev python3-numpy python3-pytest
   # for tests: OMPL's ompl_benchmark_statistics reads `batch`'s log, GNU parallel runs shards
   ompl-demos parallel
 )

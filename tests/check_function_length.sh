@@ -8,7 +8,7 @@
 # Universal Ctags finds the functions (with their end lines); without it the check cannot run.
 set -euo pipefail
 
-folders=(kinematics collision scanner planner pipeline programs config cli)
+folders=(kinematics collision scanner planner pipeline programs config cli python)
 
 check() {
   local root=$1 max=$2

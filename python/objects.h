@@ -1,0 +1,31 @@
+#pragma once
+// The objects the module hands to Python: each holds the library's data by shared_ptr, so NumPy
+// views of it outlive neither it nor one another.
+
+#include <memory>
+
+#include <scanplan/config/job.h>
+#include <scanplan/kinematics/robot_model.h>
+#include <scanplan/pipeline/plan_scan.h>
+
+namespace scanplan::python {
+
+struct Job {
+  std::shared_ptr<const config::JobSpec> spec;
+};
+
+struct Problem {
+  std::shared_ptr<pipeline::ScanProblem> problem;
+  std::shared_ptr<const config::JobSpec> job;  ///< the job it came from
+};
+
+struct Plan {
+  std::shared_ptr<const pipeline::ScanPlan> plan;
+  std::shared_ptr<const pipeline::ScanProblem> problem;  ///< a copy, as planned
+};
+
+struct Robot {
+  std::shared_ptr<const kinematics::RobotModel> model;
+};
+
+}  // namespace scanplan::python

@@ -1,0 +1,170 @@
+"""The Python module against the command line and against known answers (python/*.cpp).
+
+Run by ctest (tests/CMakeLists.txt) with PYTHONPATH=build/python; SCANPLAN_BINARY and
+SCANPLAN_SOURCE_DIR name the scanplan executable and the source tree.
+"""
+import os
+import pathlib
+import signal
+import subprocess
+import threading
+import time
+
+import numpy as np
+import pytest
+
+scanplan = pytest.importorskip(
+    "scanplan", reason="the scanplan module is not built (it needs python3-dev and pybind11-dev)")
+
+SOURCE = pathlib.Path(os.environ.get("SCANPLAN_SOURCE_DIR", pathlib.Path(__file__).parents[2]))
+BINARY = os.environ.get("SCANPLAN_BINARY", str(SOURCE / "build" / "scanplan"))
+RINGS = SOURCE / "data" / "jobs" / "demo_rings.yaml"
+# The light demo: two rings every 0.2 s (a few seconds with the simulation).
+LIGHT = {
+    "scan.dt_s": 0.2,
+    "scan.paths": "[{type: ring, height_mm: 35, tilt_deg: 25}, {type: ring, height_mm: 105, "
+                  "tilt_deg: 60}]",
+}
+
+
+def set_args(overrides):
+    args = []
+    for key, value in overrides.items():
+        args += ["--set", f"{key}={value if isinstance(value, str) else repr(value)}"]
+    return args
+
+
+@pytest.fixture(scope="module")
+def light_runs(tmp_path_factory):
+    """The light demo planned by the command line (into a folder) and through Python."""
+    out = tmp_path_factory.mktemp("cli") / "light"
+    run = subprocess.run([BINARY, "plan", str(RINGS), "-o", str(out)] + set_args(LIGHT),
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    plan = scanplan.plan(scanplan.load_job(RINGS, overrides=LIGHT).problem())
+    return out, plan
+
+
+def test_trajectory_equals_the_command_lines_csv(light_runs):
+    out, plan = light_runs
+    assert plan.status == "planned" and plan.reason == ""
+    csv = np.genfromtxt(out / "trajectory.csv", delimiter=",", names=True, dtype=None,
+                        encoding="utf-8")
+    traj = plan.trajectory
+    assert traj.shape == (len(csv), 8)
+    # trajectory.csv holds 12 significant digits: 5e-10 at most on values below 1000.
+    assert np.allclose(traj[:, 0], csv["t_s"], rtol=0, atol=1e-9)
+    assert np.allclose(np.degrees(traj[:, 1]), csv["table_deg"], rtol=0, atol=1e-9)
+    for j in range(6):
+        assert np.allclose(np.degrees(traj[:, 2 + j]), csv[f"j{j + 1}_deg"], rtol=0, atol=1e-9)
+
+
+def test_the_cloud_has_the_points_of_cloud_ply_and_lies_on_the_part(light_runs):
+    out, plan = light_runs
+    with open(out / "cloud.ply", "rb") as f:
+        header = f.read(2000).split(b"end_header")[0].decode()
+    count = int(next(line.split()[2] for line in header.splitlines()
+                     if line.startswith("element vertex")))
+    cloud = plan.cloud
+    assert cloud.shape == (count, 3) and count > 0
+    assert plan.coverage["points"] == count
+    # A view of the plan's own buffer, not a copy, and read-only.
+    assert not cloud.flags.owndata and not cloud.flags.writeable
+    # Every point within the part's bounding box (m), normals unit, incidence in [0, pi/2].
+    v = scanplan.load_job(RINGS, overrides=LIGHT).problem().part_vertices
+    assert np.all(cloud >= v.min(axis=0) - 1e-3) and np.all(cloud <= v.max(axis=0) + 1e-3)
+    assert np.allclose(np.linalg.norm(plan.cloud_normals, axis=1), 1.0, atol=1e-9)
+    assert np.all((plan.cloud_incidence >= 0) & (plan.cloud_incidence <= np.pi / 2 + 1e-12))
+
+
+def test_maps_are_the_plans_buffer_with_their_axes(light_runs):
+    _, plan = light_runs
+    maps = plan.maps
+    assert maps.dtype == np.float32 and not maps.flags.owndata
+    assert maps.shape == (len(plan.map_branches), len(plan.map_angles), len(plan.map_times))
+    assert np.all((maps >= 0) & (maps <= 1))
+    assert plan.branch in plan.map_branches
+    assert plan.objective["J"] == pytest.approx(
+        plan.objective["f"] + plan.objective["omega"] + plan.objective["alpha"])
+    assert plan.validation["valid"] and plan.validation["violations"] == []
+    assert plan.scanner_poses.shape == (len(plan.trajectory), 4, 4)
+
+
+def test_fk_of_every_ik_solution_is_the_pose():
+    robot = scanplan.load_robot(SOURCE / "data" / "robots" / "viper_s650.yaml")
+    rng = np.random.default_rng(7)
+    for _ in range(50):
+        q = rng.uniform(robot.lower, robot.upper)
+        T = robot.fk(q)
+        solutions = robot.ik(T)
+        assert solutions.shape[1] == 6 and len(solutions) >= 1
+        for s in solutions:
+            assert np.allclose(robot.fk(s), T, rtol=0, atol=1e-9)
+        # q itself is among them, up to whole turns.
+        wrapped = np.angle(np.exp(1j * (solutions - q)))
+        assert np.min(np.abs(wrapped).max(axis=1)) < 1e-6
+    far = np.eye(4)
+    far[:3, 3] = [10.0, 0.0, 0.0]  # 10 m out: no solution
+    assert robot.ik(far).shape == (0, 6)
+
+
+def test_an_input_error_carries_the_command_lines_message(tmp_path):
+    bad = {"table.radius_mm": -5}
+    run = subprocess.run([BINARY, "path", str(RINGS), "-o", str(tmp_path / "o")] + set_args(bad),
+                         capture_output=True, text=True)
+    assert run.returncode == 4
+    with pytest.raises(scanplan.InputError) as error:
+        scanplan.load_job(RINGS, overrides=bad)
+    assert run.stderr.strip() == "scanplan: error: " + str(error.value)
+    assert isinstance(error.value, ValueError)
+
+
+def test_bad_input_raises_and_never_crashes(tmp_path):
+    garbage = tmp_path / "garbage.yaml"
+    garbage.write_bytes(b"\xff\xfe: [\x00")
+    for call in (lambda: scanplan.load_job(tmp_path / "missing.yaml"),
+                 lambda: scanplan.load_job(garbage),
+                 lambda: scanplan.load_job(RINGS, overrides={"planner.method": "nope"}),
+                 lambda: scanplan.load_robot(garbage)):
+        with pytest.raises(scanplan.InputError):
+            call()
+    robot = scanplan.load_robot(SOURCE / "data" / "robots" / "viper_s650.yaml")
+    for q in ([0.0] * 5, [np.nan] * 6):
+        with pytest.raises(scanplan.InputError):
+            robot.fk(q)
+    with pytest.raises(scanplan.InputError):
+        robot.ik(np.full((4, 4), 2.0))  # not a rigid transform
+    with pytest.raises((TypeError, RuntimeError)):
+        scanplan.load_job(RINGS, overrides=[1, 2])
+    problem = scanplan.load_job(RINGS, overrides=dict(LIGHT, **{"simulation.enabled": False}))
+    with pytest.raises(scanplan.InputError):
+        problem.problem().simulate = True  # the job turned it off
+
+
+def test_progress_reaches_the_callable_on_this_thread():
+    seen = []
+    problem = scanplan.load_job(RINGS, overrides=dict(LIGHT, **{"simulation.enabled": False}))
+    problem = problem.problem()
+    plan = scanplan.plan(problem, planner="dp",
+                         progress=lambda stage, f: seen.append((stage, f, threading.get_ident())))
+    assert plan.status == "planned"
+    assert seen and all(0.0 <= f <= 1.0 for _, f, _ in seen)
+    assert {stage for stage, _, _ in seen} <= {"auto", "map"}
+    assert all(ident == threading.get_ident() for _, _, ident in seen)
+
+
+def test_ctrl_c_during_a_long_plan_raises_keyboard_interrupt_within_a_second():
+    problem = scanplan.load_job(SOURCE / "data" / "jobs" / "demo.yaml").problem()
+    sent = []
+
+    def interrupt():
+        sent.append(time.monotonic())
+        os.kill(os.getpid(), signal.SIGINT)
+
+    timer = threading.Timer(1.5, interrupt)
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        scanplan.plan(problem)
+    raised = time.monotonic()
+    timer.join()
+    assert sent and raised - sent[0] < 1.0
