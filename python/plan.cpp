@@ -1,5 +1,7 @@
 // plan() and Plan: pipeline::planScan() with its results as NumPy arrays and dicts, SI.
+#include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -9,10 +11,14 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
 
+#include <scanplan/kinematics/error.h>
 #include <scanplan/pipeline/certificate.h>
 #include <scanplan/pipeline/plan_scan.h>
 #include <scanplan/planner/validation.h>
+
+#include "cli/commands/plan_folder.h"
 
 #include "python/arrays.h"
 #include "python/bindings.h"
@@ -25,30 +31,102 @@ namespace scanplan::python {
 
 namespace {
 
+// Runs `call(problem, options, report)` on a worker thread with `problem` carrying the run's
+// cancel flag (the caller's copy of the problem, for this run only).
+template <class Call>
+auto runPipeline(pipeline::ScanProblem& problem,
+                 const pipeline::PlanOptions& options,
+                 const py::object& progress,
+                 Call&& call) {
+  decltype(call(problem, options, ReportFn{})) result;
+  try {
+    runInterruptibly(
+        [&](const std::atomic<bool>& cancel, const ReportFn& report) {
+          problem.planning.termination.cancel = &cancel;
+          result = call(problem, options, report);
+        },
+        progress);
+  } catch (...) {
+    problem.planning.termination.cancel = nullptr;
+    throw;
+  }
+  problem.planning.termination.cancel = nullptr;
+  return result;
+}
+
 Plan plan(const Problem& problem,
           const std::optional<std::string>& planner,
           const py::object& progress,
-          bool compare) {
-  // The run's own copy of the problem: it carries the run's cancel flag while it plans.
+          bool compare,
+          int setups) {
+  if (setups != 1 && setups != 2) {
+    throw InputError("setups: " + std::to_string(setups) + " is not 1 or 2");
+  }
+  Plan out;
+  out.start = std::chrono::steady_clock::now();
+  out.job = problem.job;
   auto planned = std::make_shared<pipeline::ScanProblem>(*problem.problem);
   pipeline::PlanOptions options;
   if (planner) options.method = *planner;
   options.compare = compare;
-  std::shared_ptr<const pipeline::ScanPlan> result;
-  try {
-    runInterruptibly(
-        [&](const std::atomic<bool>& cancel, const ReportFn& report) {
-          planned->planning.termination.cancel = &cancel;
-          result = std::make_shared<const pipeline::ScanPlan>(
-              pipeline::planScan(*planned, options, report));
-        },
-        progress);
-  } catch (...) {
-    planned->planning.termination.cancel = nullptr;
-    throw;
+  auto result = std::make_shared<const pipeline::ScanPlan>(
+      runPipeline(*planned, options, progress,
+                  [](const pipeline::ScanProblem& p, const pipeline::PlanOptions& o,
+                     const ReportFn& report) { return pipeline::planScan(p, o, report); }));
+  if (setups == 2 && result->trajectory &&
+      result->status != pipeline::ScanStatus::kInvalidTrajectory) {
+    out.second = std::make_shared<const pipeline::SecondSetupPlan>(runPipeline(
+        *planned, options, progress,
+        [&](const pipeline::ScanProblem& p, const pipeline::PlanOptions& o,
+            const ReportFn& report) { return pipeline::planSecondSetup(p, *result, o, report); }));
   }
-  planned->planning.termination.cancel = nullptr;
-  return Plan{result, planned};
+  out.plan = std::move(result);
+  out.problem = std::move(planned);
+  return out;
+}
+
+// The second setup's plan as a Plan of its own (sharing the first's), None without one.
+py::object secondSetupOf(const Plan& p) {
+  if (!p.second || !p.second->setup) return py::none();
+  Plan second;
+  second.plan = std::shared_ptr<const pipeline::ScanPlan>(p.second, &p.second->plan);
+  second.problem = std::shared_ptr<const pipeline::ScanProblem>(p.second, &*p.second->problem);
+  second.job = p.job;
+  second.start = p.start;
+  return py::cast(second);
+}
+
+// The setups: None with one; else the second setup's turn, gain, status and the coverage of both.
+py::object setupsOf(const Plan& p) {
+  if (!p.second) return py::none();
+  const pipeline::SecondSetupPlan& s = *p.second;
+  py::dict d;
+  if (!s.setup) {
+    d["status"] = "not_planned";
+    d["reason"] = s.why_not;
+    return d;
+  }
+  d["turn"] = s.setup->turn;
+  d["gain"] = s.setup->gain;
+  d["status"] = pipeline::scanStatusName(s.plan.status);
+  if (s.combined) {
+    py::dict c;
+    c["area_fraction"] = s.combined->area_fraction;
+    c["scannable_fraction"] = s.combined->scannable_fraction;
+    c["covered_of_scannable"] = s.combined->covered_of_scannable;
+    d["combined"] = c;
+  }
+  return d;
+}
+
+// Plan.write(dir): the files `scanplan plan -o DIR` writes, published atomically; returns the
+// summary lines from the plan on.
+std::string writePlan(const Plan& p, const std::filesystem::path& dir) {
+  if (!p.job) throw InputError("write: this plan has no job to write (plan the job's problem)");
+  const py::gil_scoped_release release;
+  return cli::publishPlanFolder(dir, {*p.job, *p.problem, *p.plan, p.second.get(), p.start},
+                                "write(dir)")
+      .summary;
 }
 
 // (N, 8): t, table angle, j1..j6 of every trajectory sample (s, rad); None without one.
@@ -273,15 +351,29 @@ void bindPlan(py::module_& m) {
             d["moves"] = p.plan->program.moves;
             return d;
           },
-          "The program's time (s): total, scanning and moving between passes.");
+          "The program's time (s): total, scanning and moving between passes.")
+      .def_property_readonly("setups", &setupsOf,
+                             "With setups=2: the second setup's turn, gain (share of the area "
+                             "that faced the table), status and the coverage of both; else None.")
+      .def_property_readonly("second_setup", &secondSetupOf,
+                             "With setups=2: the second setup's Plan (the part turned over), or "
+                             "None when there is none.")
+      .def("write", &writePlan, py::arg("dir"),
+           "Writes the files `scanplan plan -o DIR` writes (trajectory, programs, report.json, "
+           "figures, cloud, replay; setup2/ with two setups), published atomically: DIR holds "
+           "the old files or the new, never a mix. Refused when DIR is, holds or lies inside an "
+           "input of the job. job.yaml is the job as loaded, with its overrides. Returns the "
+           "summary lines the command prints from the plan on.");
   bindPlanArrays(c);
   m.def("plan", &plan, py::arg("problem"), py::arg("planner") = py::none(),
-        py::arg("progress") = py::none(), py::arg("compare") = false,
+        py::arg("progress") = py::none(), py::arg("compare") = false, py::arg("setups") = 1,
         "Plans `problem` (pipeline::planScan: path, maps, table path, trajectory, validation, "
         "simulation). `planner`: 'ray', 'dp' or 'ompl' (default: the problem's). `progress`: "
         "None or a callable(stage, fraction), called on this thread. Releases the GIL; Ctrl-C "
-        "cancels it and raises KeyboardInterrupt. 'No plan' is a status, not an exception; bad "
-        "input raises InputError.");
+        "cancels it and raises KeyboardInterrupt. `setups`: 2 also plans a second setup, the "
+        "part turned onto another face it rests on (needs the automatic scan and the "
+        "simulation; see Plan.setups, Plan.second_setup). 'No plan' is a status, not an "
+        "exception; bad input raises InputError.");
 }
 
 }  // namespace scanplan::python

@@ -43,6 +43,9 @@ class Plan:
     cloud_normals: Optional[npt.NDArray[np.float64]]  # (M, 3)
     cloud_incidence: Optional[npt.NDArray[np.float64]]  # (M,), rad
     cloud_times: Optional[npt.NDArray[np.float64]]  # (M,), s
+    setups: Optional[dict]  # with setups=2: turn, gain, status, combined
+    second_setup: Optional[Plan]  # with setups=2: the second setup's plan
+    def write(self, dir: Union[str, PathLike]) -> str: ...  # the files of `plan -o DIR`
 
 class Robot:
     name: str
@@ -58,4 +61,4 @@ def load_job(path: Union[str, PathLike],
 def load_robot(path: Union[str, PathLike]) -> Robot: ...
 def plan(problem: Problem, planner: Optional[str] = None,
          progress: Optional[Callable[[str, float], None]] = None,
-         compare: bool = False) -> Plan: ...
+         compare: bool = False, setups: int = 1) -> Plan: ...

@@ -20,8 +20,10 @@ module_rules=(
   "programs:   kinematics programs"
   "config:     kinematics collision scanner planner pipeline programs config"
   "cli:        kinematics collision scanner planner pipeline programs config cli"
-  "python:     kinematics collision scanner planner pipeline programs config python"
+  "python:     kinematics collision scanner planner pipeline programs config cli python"
 )
+# Of cli/, python/ includes only the plan folder's writer (Plan.write() writes what `plan` writes).
+python_from_cli="cli/commands/plan_folder.h"
 # The folders inside cli/ and what each may include of cli/, in order: files, figures, reports,
 # commands, batch runs. cli/'s own top-level files (app, completion, main) may include any.
 cli_rules=(
@@ -90,6 +92,11 @@ check_file() {
     [ -n "${allowed[$target]+x}" ] || continue  # not a project module
     if ! allowed_include "$file" "$target"; then
       echo "$file:$line: $top/ includes $path ($top/ may include: ${allowed[$top]})"
+      failed=1
+      continue
+    fi
+    if [ "$top" = python ] && [ "$target" = cli ] && [ "$path" != "$python_from_cli" ]; then
+      echo "$file:$line: python/ includes $path (of cli/ only $python_from_cli)"
       failed=1
       continue
     fi
@@ -170,7 +177,7 @@ self_test() {
   local tmp
   tmp=$(mktemp -d)
   trap 'rm -rf "$tmp"' RETURN
-  mkdir -p "$tmp"/{kinematics,collision,planner,config,cli/io,cli/plot,cli/batch,tests}
+  mkdir -p "$tmp"/{kinematics,collision,planner,config,cli/io,cli/plot,cli/batch,python,tests}
   printf '#pragma once\n#include <vector>\n#include <scanplan/kinematics/pose.h>\n' \
     >"$tmp/kinematics/pose.h"
   printf '#include <scanplan/kinematics/pose.h>\n#include <fcl/fcl.h>\n' >"$tmp/collision/scene.cpp"
@@ -178,6 +185,7 @@ self_test() {
   printf '#include <yaml-cpp/yaml.h>\n#include <CLI/CLI.hpp>\n' >"$tmp/cli/batch/sweep.cpp"
   printf '#include <yaml-cpp/yaml.h>\n#include <scanplan/planner/x.h>\n' >"$tmp/config/job.cpp"
   printf '#include "cli/io/output.h"\n#include <scanplan/config/job.h>\n' >"$tmp/cli/plot/figure.cpp"
+  printf '#include "cli/commands/plan_folder.h"\n#include "python/run.h"\n' >"$tmp/python/plan.cpp"
   if ! check "$tmp" >"$tmp/out"; then
     cat "$tmp/out"; echo "self-test: a clean tree failed"; return 1
   fi
@@ -189,6 +197,7 @@ self_test() {
   printf '#include <yaml-cpp/yaml.h>\n' >"$tmp/cli/bad.h"
   printf '#include <yaml-cpp/yaml.h>\n' >"$tmp/cli/plot/bad.cpp"
   printf '#include "cli/plot/figure.h"\n' >"$tmp/cli/io/bad.cpp"
+  printf '#include "cli/io/output.h"\n' >"$tmp/python/bad.cpp"
   printf 'int x;\n' >"$tmp/stray.cpp"
   if check "$tmp" >"$tmp/out"; then
     cat "$tmp/out"; echo "self-test: a tree with bad includes passed"; return 1
@@ -203,12 +212,13 @@ self_test() {
                   'cli/bad.h:1: <yaml-cpp/…> may be included only in config/' \
                   'cli/plot/bad.cpp:1: <yaml-cpp/…> may be included only in config/ and cli/batch/' \
                   'cli/io/bad.cpp:1: cli/io/ includes cli/plot/figure.h' \
+                  'python/bad.cpp:1: python/ includes cli/io/output.h' \
                   'stray.cpp: in no module'; do
     grep -qF "$expected" "$tmp/out" || {
       cat "$tmp/out"; echo "self-test: missing: $expected"; return 1
     }
   done
-  [ "$(wc -l <"$tmp/out")" -eq 12 ] || { cat "$tmp/out"; echo "self-test: extra lines"; return 1; }
+  [ "$(wc -l <"$tmp/out")" -eq 13 ] || { cat "$tmp/out"; echo "self-test: extra lines"; return 1; }
   echo "check_deps self-test: the bad includes were reported, the good ones were not"
 }
 

@@ -20,6 +20,7 @@
 #include <scanplan/planner/trajectory_builder.h>
 #include <scanplan/programs/programs.h>
 #include "cli/commands/commands.h"
+#include "cli/commands/plan_folder.h"
 #include "cli/io/output.h"
 #include "cli/io/program_files.h"
 #include "cli/io/replay_html.h"
@@ -203,24 +204,19 @@ std::string writePlannedOutputs(const std::filesystem::path& out,
   return summary;
 }
 
-// --setups 2: the part turned onto another face it rests on, a second program into OUT/setup2,
-// and the coverage of both setups together.
+// --setups 2: the second setup's files in DIR/setup2 (its program and report) and the coverage of
+// both setups together.
 struct SecondSetupRun {
   Json json = Json::object();  // report.json's `setups`
   std::string summary;
   bool ok = true;
 };
 
-SecondSetupRun planSecondSetup(const std::filesystem::path& out,
-                               const config::JobSpec& job,
-                               const pipeline::ScanProblem& problem,
-                               const pipeline::ScanPlan& first,
-                               const PlanArguments& options) {
+SecondSetupRun writeSecondSetup(const std::filesystem::path& out,
+                                const std::filesystem::path& shown,
+                                const config::JobSpec& job,
+                                const pipeline::SecondSetupPlan& second) {
   SecondSetupRun r;
-  const pipeline::SecondSetupPlan second = runPipeline(
-      job, options, [&](const pipeline::PlanOptions& po, const pipeline::ProgressFn& progress) {
-        return pipeline::planSecondSetup(problem, first, po, progress);
-      });
   if (!second.setup) {
     r.summary = fmt::format("setup 2    not planned: {}\n", second.why_not);
     r.json["setups"] = {{"second", {{"status", "not_planned"}, {"reason", second.why_not}}}};
@@ -245,7 +241,7 @@ SecondSetupRun planSecondSetup(const std::filesystem::path& out,
         "setups     both: {:.1f}% of the part's area covered; {:.1f}% scannable in one setup or "
         "the other, {:.1f}% of that covered (setup 2's files in {})\n",
         100.0 * c.area_fraction, 100.0 * c.scannable_fraction, 100.0 * c.covered_of_scannable,
-        (options.out_dir / "setup2").string());
+        (shown / "setup2").string());
     json["combined"] = {{"area_fraction", c.area_fraction},
                         {"scannable_fraction", c.scannable_fraction},
                         {"covered_of_scannable", c.covered_of_scannable}};
@@ -258,6 +254,11 @@ SecondSetupRun planSecondSetup(const std::filesystem::path& out,
                       planReportJson(job, second.problem->cell, plan, plan.times));
   r.json["setups"] = {{"second", json}};
   return r;
+}
+
+// A plan with a trajectory the validation did not refuse: the one that gets programs.
+bool hasValidTrajectory(const pipeline::ScanPlan& plan) {
+  return plan.trajectory && plan.status != pipeline::ScanStatus::kInvalidTrajectory;
 }
 
 }  // namespace
@@ -323,24 +324,83 @@ ExitCode printPlanResult(const PlanArguments& options,
 
 namespace {
 
-// The summary's "wrote" line of a planned, valid run.
-std::string wroteLine(const std::filesystem::path& out_dir,
+// The summary's "wrote" line of a planned, valid run (`dir`: the staged folder, `shown`: OUT).
+std::string wroteLine(const std::filesystem::path& dir,
+                      const std::filesystem::path& shown,
                       const pipeline::ScanPlan& plan,
                       bool second_setup) {
   return fmt::format(
       "wrote      {}: job.yaml, trajectory.csv, programs/, report.json, configmap_path.png/.svg, "
       "{}{}\n",
-      out_dir.string(),
+      shown.string(),
       std::string(plan.simulation ? "cloud.ply, coverage.ply, cloud.png, " : "") +
           (plan.simulation && !plan.simulation->profile_images.empty() ? "profiles/, " : "") +
-          (std::filesystem::exists(out_dir / "replay.html") ? "replay.html, " : "") + "cell.png, " +
+          (std::filesystem::exists(dir / "replay.html") ? "replay.html, " : "") + "cell.png, " +
           (plan.certificate ? "uncovered.ply, certificate.png, coverage_time.png/.svg, " : "") +
           (plan.validation && plan.validation->sensors ? "sensors.csv, " : "") +
           (second_setup ? "setup2/, " : ""),
       kMapFilesNote);
 }
 
+// The summary lines of a plan without a valid trajectory: why, and what was written.
+std::string notPlannedSummary(const std::filesystem::path& shown, const pipeline::ScanPlan& plan) {
+  if (!plan.trajectory) {
+    return fmt::format("plan       {} ({}): {}\n",
+                       plan.choice.chosen.budget_ended ? "NOT SOLVED IN THE BUDGET" : "NO PATH",
+                       plan.choice.chosen.method, plan.reason) +
+           fmt::format("wrote      {}: job.yaml, report.json, {}\n", shown.string(), kMapFilesNote);
+  }
+  std::string summary = validationSummary(*plan.validation);
+  const bool sensors = plan.validation->sensors.has_value();
+  if (sensors) summary += sensorsSummary(*plan.prepared->scene, *plan.validation->sensors);
+  summary += fmt::format(
+      "plan       NOT VALID: the planned motion breaks the {} above\n"
+      "wrote      {}: job.yaml, trajectory_invalid.csv, {}report.json, "
+      "configmap_path.png/.svg, {}\n",
+      sensors ? "limits or sensor rules" : "limits", shown.string(), sensors ? "sensors.csv, " : "",
+      kMapFilesNote);
+  return summary;
+}
+
 }  // namespace
+
+PlanFolder writePlanFolder(const std::filesystem::path& dir,
+                           const std::filesystem::path& shown,
+                           const PlannedJob& planned) {
+  const pipeline::ScanPlan& plan = planned.plan;
+  PlanFolder r;
+  const std::string written = writePlanOutputs(dir, planned.job, planned.problem, plan);
+  Json setups = Json::object();
+  if (!hasValidTrajectory(plan)) {
+    r.summary = notPlannedSummary(shown, plan);
+    r.code = ExitCode::kNoPlan;
+  } else {
+    r.summary = written;
+    if (planned.second) {
+      SecondSetupRun second = writeSecondSetup(dir, shown, planned.job, *planned.second);
+      r.summary += second.summary;
+      setups = std::move(second.json);
+      if (!second.ok) r.code = ExitCode::kNoPlan;
+    }
+  }
+  pipeline::StageTimes times = plan.times;
+  times.total = since(planned.start);
+  r.report = planReportJson(planned.job, planned.problem.cell, plan, times, setups);
+  writeFileAtomically(dir / "report.json", r.report);
+  if (hasValidTrajectory(plan)) r.summary += wroteLine(dir, shown, plan, setups.contains("setups"));
+  return r;
+}
+
+PlanFolder publishPlanFolder(const std::filesystem::path& out_dir,
+                             const PlannedJob& planned,
+                             const std::string& option) {
+  checkOutputApartFromInputs(out_dir, config::jobInputFiles(planned.job), option);
+  OutputStage stage(out_dir, planOutputs(planned.job));
+  writeFileAtomically(stage.dir() / "job.yaml", config::jobToYaml(planned.job));
+  PlanFolder folder = writePlanFolder(stage.dir(), out_dir, planned);
+  stage.commit();
+  return folder;
+}
 
 ExitCode runPlan(const PlanArguments& options) {
   const auto start = Clock::now();
@@ -350,8 +410,7 @@ ExitCode runPlan(const PlanArguments& options) {
   const kinematics::LoadedMesh part = config::loadPart(job, cell);
   std::string summary = cellSummary(job, cell, part);
   OutputStage stage(options.out_dir, planOutputs(job));
-  const std::filesystem::path& out = stage.dir();
-  writeFileAtomically(out / "job.yaml", config::jobToYaml(job));
+  writeFileAtomically(stage.dir() / "job.yaml", config::jobToYaml(job));
   if (job.scan.paths.empty() && !job.scan.auto_scan.enabled) {
     stage.commit();
     summary += reachCheck(job, cell, part);
@@ -365,60 +424,31 @@ ExitCode runPlan(const PlanArguments& options) {
       job, options, [&](const pipeline::PlanOptions& po, const pipeline::ProgressFn& progress) {
         return pipeline::planScan(problem, po, progress);
       });
+  std::optional<pipeline::SecondSetupPlan> second;
+  if (options.setups == 2 && hasValidTrajectory(plan)) {
+    second = runPipeline(
+        job, options, [&](const pipeline::PlanOptions& po, const pipeline::ProgressFn& progress) {
+          return pipeline::planSecondSetup(problem, plan, po, progress);
+        });
+  }
   const pipeline::PreparedScan& prepared = *plan.prepared;
-  const std::string planned = writePlanOutputs(out, job, problem, plan);
   summary += pathSummary(prepared.window, prepared.path);
   if (prepared.auto_scan) summary += autoScanSummary(*prepared.auto_scan);
   summary += linkMeshSummary(*prepared.scene) + mapSummary(prepared.map, prepared.map_seconds);
-  pipeline::StageTimes times = plan.times;
-  Json setups = Json::object();
-  Json report;
-  const auto finish = [&] {
-    times.total = since(start);
-    const std::string text = planReportJson(job, cell, plan, times, setups);
-    writeFileAtomically(out / "report.json", text);
-    if (options.json) report = Json::parse(text);
-    stage.commit();
-  };
-  const std::string method = plan.choice.chosen.method;
-  if (!plan.trajectory) {
-    finish();
-    summary += fmt::format("plan       {} ({}): {}\n",
-                           plan.choice.chosen.budget_ended ? "NOT SOLVED IN THE BUDGET" : "NO PATH",
-                           method, plan.reason);
-    summary += fmt::format("wrote      {}: job.yaml, report.json, {}\n", options.out_dir.string(),
-                           kMapFilesNote);
-    return printPlanResult(options, summary, report, ExitCode::kNoPlan);
-  }
-  if (plan.status == pipeline::ScanStatus::kInvalidTrajectory) {
-    finish();
-    summary += validationSummary(*plan.validation);
-    const bool sensors = plan.validation->sensors.has_value();
-    if (sensors) summary += sensorsSummary(*prepared.scene, *plan.validation->sensors);
+  const PlanFolder folder = writePlanFolder(
+      stage.dir(), options.out_dir, {job, problem, plan, second ? &*second : nullptr, start});
+  stage.commit();
+  summary += folder.summary;
+  if (hasValidTrajectory(plan)) {
+    const pipeline::StageTimes& times = plan.times;
     summary += fmt::format(
-        "plan       NOT VALID: the planned motion breaks the {} above\n"
-        "wrote      {}: job.yaml, trajectory_invalid.csv, {}report.json, "
-        "configmap_path.png/.svg, {}\n",
-        sensors ? "limits or sensor rules" : "limits", options.out_dir.string(),
-        sensors ? "sensors.csv, " : "", kMapFilesNote);
-    return printPlanResult(options, summary, report, ExitCode::kNoPlan);
+        "time       {:.1f} s (path {:.1f}, map {:.1f}, plan {:.1f}, trajectory {:.1f}, "
+        "validation {:.1f}, simulation {:.1f})\n",
+        since(start), times.path, times.map, times.plan, times.trajectory, times.validation,
+        times.simulation);
   }
-  summary += planned;
-  bool all_planned = true;
-  if (options.setups == 2) {
-    SecondSetupRun second = planSecondSetup(out, job, problem, plan, options);
-    summary += second.summary;
-    setups = std::move(second.json);
-    all_planned = second.ok;
-  }
-  finish();
-  summary += wroteLine(options.out_dir, plan, setups.contains("setups"));
-  summary += fmt::format(
-      "time       {:.1f} s (path {:.1f}, map {:.1f}, plan {:.1f}, trajectory {:.1f}, validation "
-      "{:.1f}, simulation {:.1f})\n",
-      since(start), times.path, times.map, times.plan, times.trajectory, times.validation,
-      times.simulation);
-  return printPlanResult(options, summary, report, all_planned ? ExitCode::kOk : ExitCode::kNoPlan);
+  return printPlanResult(options, summary, options.json ? Json::parse(folder.report) : Json(),
+                         folder.code);
 }
 
 }  // namespace scanplan::cli

@@ -3,6 +3,7 @@
 Run by ctest (tests/CMakeLists.txt) with PYTHONPATH=build/python; SCANPLAN_BINARY and
 SCANPLAN_SOURCE_DIR name the scanplan executable and the source tree.
 """
+import json
 import os
 import pathlib
 import signal
@@ -168,3 +169,92 @@ def test_ctrl_c_during_a_long_plan_raises_keyboard_interrupt_within_a_second():
     raised = time.monotonic()
     timer.join()
     assert sent and raised - sent[0] < 1.0
+
+
+def report_without_timing(path):
+    """report.json without its timing fields (every "seconds" and times_s)."""
+    def strip(value):
+        if isinstance(value, dict):
+            return {k: strip(v) for k, v in value.items() if k not in ("seconds", "times_s")}
+        if isinstance(value, list):
+            return [strip(v) for v in value]
+        return value
+    return strip(json.loads(path.read_text()))
+
+
+def files_under(folder):
+    return sorted(p.relative_to(folder) for p in folder.rglob("*") if p.is_file())
+
+
+def test_write_gives_the_command_lines_folder(light_runs, tmp_path):
+    out, plan = light_runs
+    written = tmp_path / "py"
+    summary = plan.write(written)
+    assert "wrote      " + str(written) in summary
+    assert files_under(written) == files_under(out)
+    for name in files_under(out):
+        if name.name == "report.json":
+            assert report_without_timing(written / name) == report_without_timing(out / name)
+        else:
+            assert (written / name).read_bytes() == (out / name).read_bytes(), name
+    # A folder holding the job's own files is refused, and nothing is written into it.
+    before = files_under(RINGS.parent)
+    with pytest.raises(scanplan.InputError, match="write\\(dir\\)"):
+        plan.write(RINGS.parent)
+    assert files_under(RINGS.parent) == before
+
+
+def write_cube_stl(path, size_mm):
+    """An ASCII STL of a cube with its corner at the origin, outward normals."""
+    s = size_mm
+    corners = np.array([[x, y, z] for x in (0, s) for y in (0, s) for z in (0, s)], float)
+    faces = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    lines = ["solid cube"]
+    for a, b, c, d in faces:
+        for tri in ((a, b, c), (a, c, d)):
+            p = corners[list(tri)]
+            n = np.cross(p[1] - p[0], p[2] - p[0])
+            n /= np.linalg.norm(n)
+            if np.dot(n, p.mean(axis=0) - s / 2) < 0:  # outward
+                p, n = p[::-1], -n
+            lines.append("facet normal {} {} {}".format(*n))
+            lines.append("outer loop")
+            lines += ["vertex {} {} {}".format(*v) for v in p]
+            lines += ["endloop", "endfacet"]
+    lines.append("endsolid cube")
+    path.write_text("\n".join(lines) + "\n")
+
+
+def test_a_second_setup_turns_the_cube_over_as_the_command_line_does(tmp_path):
+    write_cube_stl(tmp_path / "cube.stl", 60)
+    cube = {"part.mesh": str(tmp_path / "cube.stl"), "part.place": "table", "scan.paths": "[]",
+            "scan.auto": "{point_spacing_mm: 1.0, sample_spacing_mm: 4}", "scan.dt_s": 0.2,
+            "map.branch": "RIGHTY ABOVE NOFLIP", "map.angle_step_deg": 4,
+            "scanner.rays_per_profile": 80}
+    out = tmp_path / "cli"
+    run = subprocess.run([BINARY, "plan", str(RINGS), "-o", str(out), "--setups", "2"]
+                         + set_args(cube), capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    plan = scanplan.plan(scanplan.load_job(RINGS, overrides=cube).problem(), setups=2)
+    assert plan.status == "planned"
+    setups = plan.setups
+    assert setups["status"] == "planned" and setups["gain"] > 0.1  # the bottom, a sixth
+    both = setups["combined"]
+    assert both["area_fraction"] >= 0.98
+    assert both["area_fraction"] >= plan.coverage["area_fraction"] + 0.1
+    second = plan.second_setup
+    assert second.status == "planned" and second.validation["valid"]
+    assert second.trajectory.shape[1] == 8 and len(second.cloud) > 0
+    # The same trajectory as the command line's setup2/trajectory.csv.
+    csv = np.genfromtxt(out / "setup2" / "trajectory.csv", delimiter=",", names=True)
+    assert np.allclose(second.trajectory[:, 0], csv["t_s"], rtol=0, atol=1e-9)
+    assert np.allclose(np.degrees(second.trajectory[:, 2]), csv["j1_deg"], rtol=0, atol=1e-9)
+    written = tmp_path / "py"
+    plan.write(written)
+    assert files_under(written) == files_under(out)
+    assert ((written / "setup2" / "trajectory.csv").read_bytes()
+            == (out / "setup2" / "trajectory.csv").read_bytes())
+    assert report_without_timing(written / "report.json") == report_without_timing(
+        out / "report.json")
+    with pytest.raises(scanplan.InputError):
+        scanplan.plan(scanplan.load_job(RINGS, overrides=cube).problem(), setups=3)
