@@ -28,7 +28,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 constexpr std::size_t kMaxSamples = 400'000;  // evaluation samples at most (memory, time)
-constexpr std::size_t kMaxAimed = 600;        // aimed candidate passes at most
+constexpr std::size_t kMaxAimed = 600;        // witnesses aimed at, at most
 constexpr double kTargetMargin = 0.01;        // planned coverage over the target (see below)
 constexpr double kMaxStations = 5e6;          // probed strip stations of the candidates
 // The set-cover programme's search (improveCover): nodes, model size, and a time limit that is
@@ -256,7 +256,10 @@ std::vector<scanner::SampleClass> certify(const scanner::PartOnTable& part,
 }
 
 // Aimed passes for the scannable samples no general candidate covers, each from its witness;
-// a sample an aimed pass already covers gets none of its own. At most `limit`.
+// a sample an aimed pass already covers gets none of its own. At most `limit` witnesses. Each
+// witness gives a strip of ±30 mm and one of ±12 mm, and arcs of the table of at most 35°, 90°
+// and a whole turn: the set cover takes the shortest that covers what is needed (a small pocket
+// wants a glance, a bore on the axis a whole turn).
 std::vector<scanner::ScanPass> aimedPasses(const scanner::PartOnTable& part,
                                            const scanner::PassSettings& pass,
                                            const scanner::SampleIndex& index,
@@ -267,26 +270,33 @@ std::vector<scanner::ScanPass> aimedPasses(const scanner::PartOnTable& part,
   std::vector<std::uint8_t> reached(classes.size(), 0);
   for (const auto& p : general)
     for (std::uint32_t i : p.covers) reached[i] = 1;
-  std::vector<scanner::ScanPass> out, spins;
-  for (std::size_t i = 0; i < classes.size() && out.size() < limit; ++i) {
+  std::vector<scanner::ScanPass> out, more;
+  std::size_t aimed = 0;
+  for (std::size_t i = 0; i < classes.size() && aimed < limit; ++i) {
     if (classes[i] != scanner::SampleClass::kScannable || reached[i]) continue;
-    scanner::ScanPass aimed = scanner::aimedPass(part, pass, witnesses[i]);
+    scanner::ScanPass strip = scanner::aimedPass(part, pass, witnesses[i], 0.03);
     reached[i] = 1;
-    if (aimed.X_RS.empty()) continue;
-    scanner::evaluatePass(aimed, part, pass, index);
-    for (std::uint32_t k : aimed.covers) reached[k] = 1;
-    if (aimed.covers.empty()) continue;
-    out.push_back(std::move(aimed));
+    if (strip.X_RS.empty()) continue;
+    scanner::evaluatePass(strip, part, pass, index);
+    for (std::uint32_t k : strip.covers) reached[k] = 1;
+    if (strip.covers.empty()) continue;
+    out.push_back(std::move(strip));
+    ++aimed;
+    scanner::ScanPass glance = scanner::aimedPass(part, pass, witnesses[i], 0.012);
+    if (!glance.X_RS.empty()) more.push_back(std::move(glance));
     // The same view held while the table turns: one pass for a band of such samples (a bore on
     // the axis, features repeated around it) where the strips would take one each.
-    for (double arc : {1.5707963267948966, 6.283185307179586}) {
+    std::size_t stations = 0;  // of the last arc: a longer cap that fits no more adds nothing
+    for (double arc : {0.6108652381980153, 1.5707963267948966, 6.283185307179586}) {
       scanner::ScanPass spin = scanner::aimedSpin(part, pass, witnesses[i], 0.35, arc);
-      if (!spin.X_RS.empty()) spins.push_back(std::move(spin));
+      if (spin.X_RS.size() <= stations) break;
+      stations = spin.X_RS.size();
+      more.push_back(std::move(spin));
     }
   }
-  scanner::evaluatePasses(spins, part, pass, index);
-  for (auto& spin : spins)
-    if (!spin.covers.empty()) out.push_back(std::move(spin));
+  scanner::evaluatePasses(more, part, pass, index);
+  for (auto& p : more)
+    if (!p.covers.empty()) out.push_back(std::move(p));
   return out;
 }
 

@@ -159,13 +159,25 @@ void checkProblem(const ScanProblem& p) {
           "auto_scan");
   if (p.auto_scan) checkAutoScan(*p.auto_scan);
   require(positive(p.path.dt), "path.dt", fmt::format("{}: expected a time step > 0 s", p.path.dt));
-  require(positive(p.map.angle_step), "map.angle_step",
-          fmt::format("{}: expected an angle step > 0 rad", p.map.angle_step));
+  require(positive(p.map.angle_step) && p.map.angle_step <= deg(90.0), "map.angle_step",
+          fmt::format("{}: expected an angle step in (0, pi/2] rad", p.map.angle_step));
   const auto& names = planner::plannerNames();
   require(std::find(names.begin(), names.end(), p.planning.method) != names.end(),
           "planning.method", p.planning.method + ": expected ray, dp or ompl");
   require(positive(p.planning.objective.omega_max) && positive(p.planning.objective.alpha_max),
           "planning.objective", "table speed and acceleration bounds must be > 0");
+  for (const auto& [name, k] :
+       {std::pair{"planning.objective.k_omega", p.planning.objective.k_omega},
+        std::pair{"planning.objective.k_alpha", p.planning.objective.k_alpha}})
+    require(std::isfinite(k) && k >= 0.0, name, fmt::format("{}: expected a weight >= 0", k));
+  const planner::RayShootingSettings& ray = p.planning.planners.ray;
+  require(ray.horizon >= 1 && ray.horizon <= 1000, "planning.planners.ray.horizon",
+          fmt::format("{}: expected 1 to 1000 samples", ray.horizon));
+  require(ray.rays >= 1 && ray.starts >= 1, "planning.planners.ray",
+          fmt::format("{} rays, {} starts: expected at least 1 of each", ray.rays, ray.starts));
+  const double limit = p.planning.termination.time_limit_s;
+  require(std::isfinite(limit) && limit >= 0.0, "planning.termination.time_limit_s",
+          fmt::format("{}: expected a time >= 0 s (0: no limit)", limit));
   if (p.validation) {
     require(positive(p.validation->sample_dt), "validation.sample_dt", "expected > 0 s");
   }

@@ -62,7 +62,8 @@ void setStage(std::optional<T>& stage, bool on, const char* name) {
 void bindProblem(py::module_& m) {
   py::class_<Problem>(m, "Problem",
                       "The pipeline's problem (pipeline::ScanProblem), SI: the cell, the part, "
-                      "the scan path request, the constraints and every stage's settings.")
+                      "the scan path request, the constraints and every stage's settings. "
+                      "Values set here are checked when it is planned (InputError).")
       .def_property(
           "name", [](const Problem& p) { return p.problem->name; },
           [](Problem& p, const std::string& name) { p.problem->name = name; })
@@ -82,6 +83,32 @@ void bindProblem(py::module_& m) {
           "simulate", [](const Problem& p) { return p.problem->simulation.has_value(); },
           [](Problem& p, bool on) { setStage(p.problem->simulation, on, "simulate"); },
           "Simulate the scanner along the motion (cloud, coverage).")
+      .def_property(
+          "map_angle_step", [](const Problem& p) { return p.problem->map.angle_step; },
+          [](Problem& p, double v) { p.problem->map.angle_step = v; },
+          "rad: the configuration maps' table-angle step (map.angle_step_deg).")
+      .def_property(
+          "ray_horizon", [](const Problem& p) { return p.problem->planning.planners.ray.horizon; },
+          [](Problem& p, int v) { p.problem->planning.planners.ray.horizon = v; },
+          "Samples each ray holds its acceleration (planner.ray.horizon).")
+      .def_property(
+          "ray_cost_to_go",
+          [](const Problem& p) { return p.problem->planning.planners.ray.cost_to_go; },
+          [](Problem& p, bool v) { p.problem->planning.planners.ray.cost_to_go = v; },
+          "Score each ray's end by a cost-to-go; False: the paper's plain rays.")
+      .def_property(
+          "k_omega", [](const Problem& p) { return p.problem->planning.objective.k_omega; },
+          [](Problem& p, double v) { p.problem->planning.objective.k_omega = v; },
+          "s²/rad²: the weight of the table's speed in J (Eq. 9).")
+      .def_property(
+          "k_alpha", [](const Problem& p) { return p.problem->planning.objective.k_alpha; },
+          [](Problem& p, double v) { p.problem->planning.objective.k_alpha = v; },
+          "s⁴/rad²: the weight of the table's acceleration in J (Eq. 9).")
+      .def_property(
+          "time_limit",
+          [](const Problem& p) { return p.problem->planning.termination.time_limit_s; },
+          [](Problem& p, double v) { p.problem->planning.termination.time_limit_s = v; },
+          "s: each planner run's wall-clock budget (per branch); 0: none.")
       .def_property_readonly(
           "auto_scan", [](const Problem& p) { return p.problem->auto_scan.has_value(); },
           "The passes are planned by the automatic scan (scan.auto).")

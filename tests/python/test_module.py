@@ -258,3 +258,25 @@ def test_a_second_setup_turns_the_cube_over_as_the_command_line_does(tmp_path):
         out / "report.json")
     with pytest.raises(scanplan.InputError):
         scanplan.plan(scanplan.load_job(RINGS, overrides=cube).problem(), setups=3)
+
+
+def test_problem_settings_reach_the_plan_and_bad_ones_raise():
+    problem = scanplan.load_job(RINGS, overrides=dict(LIGHT, **{"simulation.enabled": False}))
+    problem = problem.problem()
+    problem.map_angle_step = np.radians(4.0)
+    problem.ray_horizon, problem.ray_cost_to_go = 12, False
+    problem.k_omega, problem.k_alpha, problem.time_limit = 2.0, 0.0, 30.0
+    assert (problem.ray_horizon, problem.ray_cost_to_go, problem.k_omega) == (12, False, 2.0)
+    plan = scanplan.plan(problem, planner="ray")
+    assert plan.status == "planned"
+    assert np.allclose(np.diff(plan.map_angles), np.radians(4.0), rtol=0, atol=1e-12)
+    o = plan.objective  # k_alpha = 0: no acceleration term
+    assert o["alpha"] == 0.0 and o["J"] == pytest.approx(o["f"] + o["omega"] + o["alpha"])
+    for name, value, key in (("ray_horizon", 0, "planning.planners.ray.horizon"),
+                             ("k_omega", -1.0, "planning.objective.k_omega"),
+                             ("time_limit", float("nan"), "planning.termination.time_limit_s"),
+                             ("map_angle_step", 0.0, "map.angle_step")):
+        bad = scanplan.load_job(RINGS, overrides=LIGHT).problem()
+        setattr(bad, name, value)
+        with pytest.raises(scanplan.InputError, match=key.replace(".", "\\.")):
+            scanplan.plan(bad)
