@@ -255,6 +255,44 @@ std::vector<scanner::SampleClass> certify(const scanner::PartOnTable& part,
   return scanner::classifyScannability(sampling, part, s, &witnesses);
 }
 
+// The ±30 mm strips aimed at the scannable samples `reached` leaves out, in sample order, a
+// sample an earlier strip covers getting none of its own; each appends its witness's sample to
+// `aimed_at`. At most `limit`. The strips are made and evaluated in parallel batches, ahead of
+// knowing whether an earlier strip of the batch covers their sample (then one is dropped): the
+// result is the same as one by one.
+std::vector<scanner::ScanPass> aimedStrips(const scanner::PartOnTable& part,
+                                           const scanner::PassSettings& pass,
+                                           const scanner::SampleIndex& index,
+                                           const std::vector<scanner::SampleClass>& classes,
+                                           const std::vector<Eigen::Isometry3d>& witnesses,
+                                           std::vector<std::uint8_t>& reached,
+                                           std::size_t limit,
+                                           std::vector<std::size_t>& aimed_at) {
+  constexpr std::size_t kBatch = 16;
+  std::vector<scanner::ScanPass> out;
+  std::vector<std::size_t> batch;
+  for (std::size_t i = 0; i < classes.size() && out.size() < limit;) {
+    batch.clear();
+    for (; i < classes.size() && batch.size() < kBatch; ++i)
+      if (classes[i] == scanner::SampleClass::kScannable && !reached[i]) batch.push_back(i);
+    std::vector<scanner::ScanPass> strips(batch.size());
+    tbb::parallel_for(std::size_t{0}, batch.size(), [&](std::size_t k) {
+      strips[k] = scanner::aimedPass(part, pass, witnesses[batch[k]], 0.03);
+      if (!strips[k].X_RS.empty()) scanner::evaluatePass(strips[k], part, pass, index);
+    });
+    for (std::size_t k = 0; k < batch.size() && out.size() < limit; ++k) {
+      if (reached[batch[k]]) continue;  // an earlier strip of this batch covers it
+      reached[batch[k]] = 1;
+      if (strips[k].X_RS.empty()) continue;
+      for (std::uint32_t j : strips[k].covers) reached[j] = 1;
+      if (strips[k].covers.empty()) continue;
+      out.push_back(std::move(strips[k]));
+      aimed_at.push_back(batch[k]);
+    }
+  }
+  return out;
+}
+
 // Aimed passes for the scannable samples no general candidate covers, each from its witness;
 // a sample an aimed pass already covers gets none of its own. At most `limit` witnesses. Each
 // witness gives a strip of ±30 mm and one of ±12 mm, and arcs of the table of at most 35°, 90°
@@ -270,18 +308,11 @@ std::vector<scanner::ScanPass> aimedPasses(const scanner::PartOnTable& part,
   std::vector<std::uint8_t> reached(classes.size(), 0);
   for (const auto& p : general)
     for (std::uint32_t i : p.covers) reached[i] = 1;
-  std::vector<scanner::ScanPass> out, more;
-  std::size_t aimed = 0;
-  for (std::size_t i = 0; i < classes.size() && aimed < limit; ++i) {
-    if (classes[i] != scanner::SampleClass::kScannable || reached[i]) continue;
-    scanner::ScanPass strip = scanner::aimedPass(part, pass, witnesses[i], 0.03);
-    reached[i] = 1;
-    if (strip.X_RS.empty()) continue;
-    scanner::evaluatePass(strip, part, pass, index);
-    for (std::uint32_t k : strip.covers) reached[k] = 1;
-    if (strip.covers.empty()) continue;
-    out.push_back(std::move(strip));
-    ++aimed;
+  std::vector<std::size_t> aimed_at;
+  std::vector<scanner::ScanPass> out =
+      aimedStrips(part, pass, index, classes, witnesses, reached, limit, aimed_at);
+  std::vector<scanner::ScanPass> more;
+  for (const std::size_t i : aimed_at) {
     scanner::ScanPass glance = scanner::aimedPass(part, pass, witnesses[i], 0.012);
     if (!glance.X_RS.empty()) more.push_back(std::move(glance));
     // The same view held while the table turns: one pass for a band of such samples (a bore on
