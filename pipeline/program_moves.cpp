@@ -89,13 +89,15 @@ TrajectorySample moveSample(const kinematics::CellModel& cell, double t, const A
 // at poses along the move. The poses advance by how far the nearest pair is from its d_low: a
 // point moves at most levers(j) metres per radian of axis j, so the next pose is at most 0.8 of
 // that margin (and at least kMinMotion) of motion further; at least every `check_step` rad on
-// the fastest axis when nothing is near. The validation proves the motion between them.
+// the fastest axis when nothing is near. The validation proves the motion between them. When
+// blocked, `blocked_at` (if given) gets how far along the move's samples (0 to 1).
 constexpr double kMinMotion = 1.5e-3;  // m
 bool moveClear(const collision::Scene& scene,
                collision::ClearanceEvaluator& clearance,
                const kinematics::PtpMove& move,
                const AxisVector& levers,
-               double check_step) {
+               double check_step,
+               double* blocked_at = nullptr) {
   const kinematics::CellModel& cell = scene.cell();
   const auto& pairs = scene.pairs();
   for (std::size_t k = 0; k < move.axes.size(); ++k) {
@@ -108,9 +110,14 @@ bool moveClear(const collision::Scene& scene,
       u = std::min(u, 1.0);
       const AxisVector x = a + (b - a) * u;
       const JointVector q = x.tail<kinematics::kNumJoints>();
-      if (!cell.robot.withinLimits(q)) return false;
+      const auto blocked = [&] {
+        if (blocked_at && move.axes.size() > 1)
+          *blocked_at = static_cast<double>(k) / static_cast<double>(move.axes.size() - 1);
+        return false;
+      };
+      if (!cell.robot.withinLimits(q)) return blocked();
       const collision::ClearanceResult r = clearance.evaluate(x(0), q);
-      if (!(r.factor > 0.0)) return false;
+      if (!(r.factor > 0.0)) return blocked();
       if (u >= 1.0) break;
       double margin = std::numeric_limits<double>::infinity();
       for (std::size_t p = 0; p < pairs.size(); ++p)
@@ -185,21 +192,70 @@ AxisVector withJoints(const AxisVector& x, const JointVector& q) {
   return out;
 }
 
-// The move backed off by `r` along −z_S at both ends; empty when an end has no IK there.
+// Which ends of a move back off.
+enum class Ends { kStart, kEnd, kBoth };
+
+// The move backed off by `r` along −z_S at its start, its end or both; empty when a backed-off
+// end has no IK there.
 Way backedOff(const kinematics::CellModel& cell,
               const TrajectorySample& a,
               const TrajectorySample& b,
               const AxisVector& v_a,
               const AxisVector& v_b,
-              double r) {
+              double r,
+              Ends ends = Ends::kBoth) {
   const Eigen::Isometry3d back(Eigen::Translation3d(0.0, 0.0, -r));
-  const auto qa = nearestIk(cell, a.theta, a.X_PS * back, a.q);
+  const bool at_a = ends != Ends::kEnd, at_b = ends != Ends::kStart;
+  const AxisVector xa = axesOf(a), xb = axesOf(b), zero = AxisVector::Zero();
+  Way way;
+  AxisVector from = xa, v_from = v_a;
+  if (at_a) {
+    const auto qa = nearestIk(cell, a.theta, a.X_PS * back, a.q);
+    if (!qa) return {};
+    from = withJoints(xa, *qa);
+    v_from = zero;
+    way.push_back({xa, from, v_a, zero});
+  }
+  if (!at_b) {
+    way.push_back({from, xb, v_from, v_b});
+    return way;
+  }
   const auto qb = nearestIk(cell, b.theta, b.X_PS * back, b.q);
-  if (!qa || !qb) return {};
-  const AxisVector xa = axesOf(a), xb = axesOf(b);
-  const AxisVector xa2 = withJoints(xa, *qa), xb2 = withJoints(xb, *qb);
-  const AxisVector zero = AxisVector::Zero();
-  return {{xa, xa2, v_a, zero}, {xa2, xb2, zero, zero}, {xb2, xb, zero, v_b}};
+  if (!qb) return {};
+  const AxisVector xb2 = withJoints(xb, *qb);
+  way.push_back({from, xb2, v_from, zero});
+  way.push_back({xb2, xb, zero, v_b});
+  return way;
+}
+
+// The ways backed off by each retreat at the end `side` (the one the direct move was blocked
+// nearer) or at both, fastest first (ties in that order): the first clear one is the fastest
+// detour of them.
+std::vector<Way> backedOffWays(const kinematics::CellModel& cell,
+                               const kinematics::AxisLimits& limits,
+                               const TrajectorySample& a,
+                               const TrajectorySample& b,
+                               const AxisVector& v_a,
+                               const AxisVector& v_b,
+                               const MoveSettings& settings,
+                               Ends side) {
+  std::vector<std::pair<double, Way>> timed;
+  for (const double r : settings.retreats) {
+    for (const Ends ends : {side, Ends::kBoth}) {
+      if (ends != Ends::kBoth && !settings.one_sided) continue;
+      Way way = backedOff(cell, a, b, v_a, v_b, r, ends);
+      if (way.empty()) continue;
+      double t = 0.0;
+      for (const Leg& leg : way)
+        t += kinematics::ptpDuration(leg.from, leg.to, leg.v_from, leg.v_to, limits);
+      timed.push_back({t, std::move(way)});
+    }
+  }
+  std::stable_sort(timed.begin(), timed.end(),
+                   [](const auto& x, const auto& y) { return x.first < y.first; });
+  std::vector<Way> out;
+  for (auto& [t, way] : timed) out.push_back(std::move(way));
+  return out;
 }
 
 // The head above the part: laser straight down at `above` (part frame), turned about the
@@ -245,12 +301,14 @@ std::optional<std::vector<TrajectorySample>> runWay(const collision::Scene& scen
                                                     const AxisVector& levers,
                                                     const Way& way,
                                                     double t_a,
-                                                    const MoveSettings& settings) {
+                                                    const MoveSettings& settings,
+                                                    double* blocked_at = nullptr) {
   std::vector<TrajectorySample> out;
   for (const Leg& leg : way) {
     const kinematics::PtpMove move =
         kinematics::ptpMove(leg.from, leg.to, leg.v_from, leg.v_to, limits, settings.max_step);
-    if (!moveClear(scene, clearance, move, levers, settings.check_step)) return std::nullopt;
+    if (!moveClear(scene, clearance, move, levers, settings.check_step, blocked_at))
+      return std::nullopt;
     const double t0 = out.empty() ? t_a : out.back().t;
     for (std::size_t k = 1; k < move.t.size(); ++k)
       out.push_back(moveSample(scene.cell(), t0 + move.t[k], move.axes[k]));
@@ -259,7 +317,7 @@ std::optional<std::vector<TrajectorySample>> runWay(const collision::Scene& scen
 }
 
 // A checked move from `a` (the end of one segment, moving at v_a) to `b` (the start of the
-// next, moving at v_b): direct, else backed off, else via above the part.
+// next, moving at v_b): direct, else the fastest clear back-off, else via above the part.
 struct Move {
   std::optional<std::vector<TrajectorySample>> samples;  // times from `from`
   double from = 0.0;                                     // s, the time of `a` they count from
@@ -277,13 +335,13 @@ Move planMove(const collision::Scene& scene,
   const kinematics::CellModel& cell = scene.cell();
   Move m;
   m.from = a.t;
-  m.samples =
-      runWay(scene, clearance, limits, levers, {{axesOf(a), axesOf(b), v_a, v_b}}, a.t, settings);
+  double blocked_at = 0.5;
+  m.samples = runWay(scene, clearance, limits, levers, {{axesOf(a), axesOf(b), v_a, v_b}}, a.t,
+                     settings, &blocked_at);
   if (m.samples) return m;
   m.detour = true;
-  for (const double r : settings.retreats) {
-    const Way way = backedOff(cell, a, b, v_a, v_b, r);
-    if (way.empty()) continue;
+  const Ends side = blocked_at < 0.5 ? Ends::kStart : Ends::kEnd;
+  for (const Way& way : backedOffWays(cell, limits, a, b, v_a, v_b, settings, side)) {
     m.samples = runWay(scene, clearance, limits, levers, way, a.t, settings);
     if (m.samples) return m;
   }

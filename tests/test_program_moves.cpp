@@ -19,6 +19,7 @@
 #include <scanplan/kinematics/units.h>
 #include <scanplan/pipeline/plan_scan.h>
 #include <scanplan/pipeline/program_moves.h>
+#include <scanplan/planner/validation.h>
 #include "test_support.h"
 #include "tests/part_support.h"
 
@@ -203,6 +204,27 @@ TEST_F(ProgramMoves, APassNoMoveEntersIsRunLastAndBackwardsWhereItsOtherEndIsCle
   EXPECT_NE(dropped.dropped[0].second.find("either way round"), std::string::npos);
   EXPECT_TRUE(std::isnan(dropped.start_times[1]));
   EXPECT_EQ(dropped.times.moves, 1u);
+}
+
+// A blocked move backs off at one end alone where that clears it: the program's moves are never
+// slower than backing off at both ends, and the program stays valid.
+TEST_F(ProgramMoves, BackingOffAtOneEndIsNeverSlowerThanAtBoth) {
+  const pipeline::ScanPlan& plan = *plan_;
+  ASSERT_TRUE(plan.trajectory);
+  const std::vector<kinematics::Trajectory> runs = scanningRuns(plan.trajectory->trajectory);
+  const collision::Scene& scene = *plan.prepared->scene;
+  pipeline::MoveSettings both;
+  both.one_sided = false;
+  const pipeline::JoinedProgram one = pipeline::joinSegments(scene, runs, {});
+  const pipeline::JoinedProgram two = pipeline::joinSegments(scene, runs, both);
+  ASSERT_TRUE(one.dropped.empty() && two.dropped.empty());
+  ASSERT_GT(two.times.detours, 0u) << "no move of this program backs off: nothing to compare";
+  EXPECT_EQ(one.times.moves, two.times.moves);
+  EXPECT_LE(one.times.moving, two.times.moving + 1e-9);
+  planner::ValidationSettings settings;
+  const planner::ValidationReport report =
+      planner::validateTrajectory(scene, one.trajectory, settings);
+  EXPECT_TRUE(report.valid) << (report.violations.empty() ? "" : report.violations[0].what);
 }
 
 TEST_F(ProgramMoves, AProgramTimeLimitKeepsTheBestCoverageThatFitsIt) {
