@@ -81,6 +81,34 @@ SyncProfile syncProfile(const AxisVector& delta, const AxisLimits& limits) {
   return p;
 }
 
+AxisVector ptpTimeByAxis(const AxisVector& from,
+                         const AxisVector& to,
+                         const AxisVector& v_from,
+                         const AxisVector& v_to,
+                         const AxisLimits& limits) {
+  const Brake out = brake(v_from, limits), in = brake(v_to, limits);
+  const AxisVector delta = ((to - in.travel) - (from + out.travel)).cwiseAbs();
+  AxisVector by_axis = AxisVector::Zero();
+  int j = 0;
+  out.time.maxCoeff(&j);
+  by_axis(j) += out.duration();
+  in.time.maxCoeff(&j);
+  by_axis(j) += in.duration();
+  // syncProfile(): T = R + Q / R, the cruise R to the axis of R and the ramps Q / R to the axis
+  // of Q; a triangle, T = 2 √Q, to the axis of Q alone.
+  int jr = 0, jq = 0;
+  const double r = (delta.array() / limits.speed.array()).maxCoeff(&jr);
+  const double q = (delta.array() / limits.accel.array()).maxCoeff(&jq);
+  if (!(r > 0.0)) return by_axis;
+  if (q < r * r) {
+    by_axis(jr) += r;
+    by_axis(jq) += q / r;
+  } else {
+    by_axis(jq) += 2.0 * std::sqrt(q);
+  }
+  return by_axis;
+}
+
 double ptpDuration(const AxisVector& from,
                    const AxisVector& to,
                    const AxisVector& v_from,

@@ -60,6 +60,17 @@ PtpMove ptpMove(const AxisVector& from,
                 const AxisLimits& limits,
                 double max_step);
 
+/// ptpMove()'s duration split by the axis that sets each phase's length (s per axis, summing to
+/// the duration): the brake out of `v_from` and the one into `v_to` to the axis that brakes
+/// longest; of the synchronised trapezoid, the cruise to the axis whose speed bound sets it and
+/// the ramps to the axis whose acceleration bound sets them (a triangle, to the latter alone).
+/// An axis with a share is one whose faster limits give a shorter move.
+AxisVector ptpTimeByAxis(const AxisVector& from,
+                         const AxisVector& to,
+                         const AxisVector& v_from,
+                         const AxisVector& v_to,
+                         const AxisLimits& limits);
+
 /// ptpMove()'s duration without sampling it, s.
 double ptpDuration(const AxisVector& from,
                    const AxisVector& to,

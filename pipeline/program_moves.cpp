@@ -302,13 +302,16 @@ std::optional<std::vector<TrajectorySample>> runWay(const collision::Scene& scen
                                                     const Way& way,
                                                     double t_a,
                                                     const MoveSettings& settings,
-                                                    double* blocked_at = nullptr) {
+                                                    double* blocked_at = nullptr,
+                                                    AxisVector* by_axis = nullptr) {
   std::vector<TrajectorySample> out;
   for (const Leg& leg : way) {
     const kinematics::PtpMove move =
         kinematics::ptpMove(leg.from, leg.to, leg.v_from, leg.v_to, limits, settings.max_step);
     if (!moveClear(scene, clearance, move, levers, settings.check_step, blocked_at))
       return std::nullopt;
+    if (by_axis)
+      *by_axis += kinematics::ptpTimeByAxis(leg.from, leg.to, leg.v_from, leg.v_to, limits);
     const double t0 = out.empty() ? t_a : out.back().t;
     for (std::size_t k = 1; k < move.t.size(); ++k)
       out.push_back(moveSample(scene.cell(), t0 + move.t[k], move.axes[k]));
@@ -322,6 +325,7 @@ struct Move {
   std::optional<std::vector<TrajectorySample>> samples;  // times from `from`
   double from = 0.0;                                     // s, the time of `a` they count from
   bool detour = false;
+  AxisVector by_axis = AxisVector::Zero();  // s of it by the axis that set it
 };
 Move planMove(const collision::Scene& scene,
               collision::ClearanceEvaluator& clearance,
@@ -337,19 +341,21 @@ Move planMove(const collision::Scene& scene,
   m.from = a.t;
   double blocked_at = 0.5;
   m.samples = runWay(scene, clearance, limits, levers, {{axesOf(a), axesOf(b), v_a, v_b}}, a.t,
-                     settings, &blocked_at);
+                     settings, &blocked_at, &m.by_axis);
   if (m.samples) return m;
   m.detour = true;
   const Ends side = blocked_at < 0.5 ? Ends::kStart : Ends::kEnd;
   for (const Way& way : backedOffWays(cell, limits, a, b, v_a, v_b, settings, side)) {
-    m.samples = runWay(scene, clearance, limits, levers, way, a.t, settings);
+    m.by_axis.setZero();
+    m.samples = runWay(scene, clearance, limits, levers, way, a.t, settings, nullptr, &m.by_axis);
     if (m.samples) return m;
   }
   if (settings.above) {
     for (const double r : {0.05, 0.12, 0.2, 0.0}) {
       const Way way = viaAbove(cell, *settings.above, a, b, v_a, v_b, r);
       if (way.empty()) continue;
-      m.samples = runWay(scene, clearance, limits, levers, way, a.t, settings);
+      m.by_axis.setZero();
+      m.samples = runWay(scene, clearance, limits, levers, way, a.t, settings, nullptr, &m.by_axis);
       if (m.samples) return m;
     }
   }
@@ -373,6 +379,7 @@ void appendRun(
   auto& samples = out.trajectory.samples;
   ++out.times.moves;
   out.times.detours += move.detour ? 1u : 0u;
+  out.times.moving_by_axis += move.by_axis;
   auto& m = *move.samples;
   for (auto& x : m) x.t += samples.back().t - move.from;
   const double t0 = m.empty() ? samples.back().t + max_step : m.back().t;

@@ -52,6 +52,9 @@ struct ProgramTimes {
   double moving = 0.0;      ///< s, the rest: moves between passes (and stretches that do not scan)
   std::size_t moves = 0;    ///< moves between segments
   std::size_t detours = 0;  ///< of them, backed off because the direct move was blocked
+  /// s of the moves' time by the axis that set it (kinematics::ptpTimeByAxis(): 0 the table,
+  /// 1…6 joints 1…6); sums to the moves' time. Set by joinSegments().
+  kinematics::AxisVector moving_by_axis = kinematics::AxisVector::Zero();
 };
 
 /// The segments joined into one program.

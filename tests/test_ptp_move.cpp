@@ -132,6 +132,44 @@ TEST(PtpMove, AFasterRobotMovesFaster) {
   EXPECT_NEAR(t_fast, 0.5 * t_slow, 1e-12);
 }
 
+// The move's time split by the axes that set it: the parts sum to the duration, and the axes
+// named are those whose limits matter — speeding one up shortens the move, speeding up any
+// other does not.
+TEST(PtpMove, TheTimeByAxisNamesTheAxesWhoseLimitsSetTheMove) {
+  const AxisLimits l = someLimits();
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-2.0, 2.0);
+  for (int trial = 0; trial < 200; ++trial) {
+    AxisVector a, b, va = AxisVector::Zero(), vb = AxisVector::Zero();
+    for (int j = 0; j < kNumAxes; ++j) {
+      a(j) = u(rng);
+      b(j) = u(rng);
+    }
+    const AxisVector by = ptpTimeByAxis(a, b, va, vb, l);
+    const double t = ptpDuration(a, b, va, vb, l);
+    EXPECT_NEAR(by.sum(), t, 1e-12);
+    EXPECT_LE((by.array() > 0.0).count(), 2);  // the cruise's axis and the ramps'
+    for (int j = 0; j < kNumAxes; ++j) {
+      AxisLimits faster = l;
+      faster.speed(j) *= 1.5;
+      faster.accel(j) *= 1.5;
+      const double t_j = ptpDuration(a, b, va, vb, faster);
+      if (by(j) > 0.0) {
+        EXPECT_LT(t_j, t - 1e-9) << "trial " << trial << " axis " << j;
+      } else {
+        EXPECT_NEAR(t_j, t, 1e-12) << "trial " << trial << " axis " << j;
+      }
+    }
+  }
+  // Braking out of a table still turning: that brake is the table's.
+  AxisVector va = AxisVector::Zero();
+  va(0) = 0.4;
+  const AxisVector by =
+      ptpTimeByAxis(AxisVector::Zero(), AxisVector::Zero(), va, AxisVector::Zero(), l);
+  EXPECT_NEAR(by(0), ptpDuration(AxisVector::Zero(), AxisVector::Zero(), va, AxisVector::Zero(), l),
+              1e-12);
+}
+
 TEST(PtpMove, NothingToDoIsOneSample) {
   const AxisVector a = AxisVector::Constant(0.2);
   const PtpMove m = ptpMove(a, a, AxisVector::Zero(), AxisVector::Zero(), someLimits(), 0.1);

@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include <scanplan/kinematics/ptp_move.h>
 #include <scanplan/kinematics/units.h>
 #include "cli/io/json.h"
 #include "cli/report/sensor_report.h"
@@ -214,6 +215,13 @@ std::string planReportJson(const config::JobSpec& job,
                        {"moves", plan.program.moves},
                        {"backed_off_moves", plan.program.detours},
                        {"dropped_passes", dropped}};
+    if (plan.program.moves > 0) {
+      Json by_axis = Json::object();
+      for (int j = 0; j < kinematics::kNumAxes; ++j)
+        by_axis[j == 0 ? std::string("table") : "j" + std::to_string(j)] =
+            plan.program.moving_by_axis(j);
+      json["program"]["moves_set_by_axis_s"] = by_axis;
+    }
   }
   if (!plan.coverage_curve.t.empty()) {
     const pipeline::CoverageCurve& c = plan.coverage_curve;

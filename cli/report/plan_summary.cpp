@@ -2,10 +2,14 @@
 // degrees and seconds.
 #include "cli/report/plan_summary.h"
 
+#include <algorithm>
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include <fmt/format.h>
 
+#include <scanplan/kinematics/ptp_move.h>
 #include <scanplan/kinematics/units.h>
 
 namespace scanplan::cli {
@@ -132,6 +136,25 @@ std::string mapSummary(const planner::ConfigMap& map, double seconds) {
   return text;
 }
 
+namespace {
+
+// Which axes set the moves' time, the largest share first: the axes a faster robot or table
+// would have to beat.
+std::string movesByAxisSummary(const pipeline::ProgramTimes& p) {
+  std::vector<std::pair<double, int>> order;
+  for (int j = 0; j < kinematics::kNumAxes; ++j)
+    if (p.moving_by_axis(j) >= 0.05) order.push_back({-p.moving_by_axis(j), j});
+  std::sort(order.begin(), order.end());
+  std::string s = "           the moves' time set by";
+  for (const auto& [minus, j] : order)
+    s += fmt::format(" {} {:.1f} s,", j == 0 ? std::string("the table") : fmt::format("j{}", j),
+                     -minus);
+  if (!order.empty()) s.pop_back();
+  return s + " (its speed or acceleration limit)\n";
+}
+
+}  // namespace
+
 // The program's time: scanning, the moves between passes, and passes left out.
 std::string programSummary(const pipeline::ScanPlan& plan) {
   const pipeline::ProgramTimes& p = plan.program;
@@ -141,6 +164,7 @@ std::string programSummary(const pipeline::ScanPlan& plan) {
     s += fmt::format(" in {} point-to-point moves between passes ({} backed off)", p.moves,
                      p.detours);
   s += "\n";
+  if (p.moves > 0) s += movesByAxisSummary(p);
   for (const auto& [segment, why] : plan.dropped)
     s += fmt::format("  dropped pass {}: {}\n", segment + 1, why);
   return s;

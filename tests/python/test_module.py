@@ -242,6 +242,9 @@ def test_a_second_setup_turns_the_cube_over_as_the_command_line_does(tmp_path):
     both = setups["combined"]
     assert both["area_fraction"] >= 0.98
     assert both["area_fraction"] >= plan.coverage["area_fraction"] + 0.1
+    p = plan.program  # the moves' time split by the axes whose limits set it
+    assert p["moves"] > 0 and p["moves_set_by_axis"].shape == (7,)
+    assert 0 < p["moves_set_by_axis"].sum() <= p["moving"] + 1e-9
     second = plan.second_setup
     assert second.status == "planned" and second.validation["valid"]
     assert second.trajectory.shape[1] == 8 and len(second.cloud) > 0
