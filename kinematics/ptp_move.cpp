@@ -67,11 +67,14 @@ double SyncProfile::at(double t) const {
 // With R = max |Δ_j| / v_j and Q = max |Δ_j| / a_j the shortest feasible T is R + Q / R with
 // τ = Q / R when Q < R² (the slowest axis reaches its speed), else 2√Q with τ = √Q (a triangle).
 SyncProfile syncProfile(const AxisVector& delta, const AxisLimits& limits) {
-  const double r = (delta.array().abs() / limits.speed.array()).maxCoeff();
-  const double q = (delta.array().abs() / limits.accel.array()).maxCoeff();
+  int jr = 0, jq = 0;
+  const double r = (delta.array().abs() / limits.speed.array()).maxCoeff(&jr);
+  const double q = (delta.array().abs() / limits.accel.array()).maxCoeff(&jq);
   SyncProfile p;
   if (!(r > 0.0)) return p;
+  p.accel_axis = jq;
   if (q < r * r) {
+    p.speed_axis = jr;
     p.accel_time = q / r;
     p.duration = r + q / r;
   } else {
@@ -81,30 +84,44 @@ SyncProfile syncProfile(const AxisVector& delta, const AxisLimits& limits) {
   return p;
 }
 
+namespace {
+
+// A move's three phases: each axis's brake out of its start speed, the synchronised trapezoid
+// between, each axis's brake into its end speed (run backwards).
+struct Phases {
+  Brake out, in;
+  SyncProfile mid;
+};
+
+Phases phases(const AxisVector& from,
+              const AxisVector& to,
+              const AxisVector& v_from,
+              const AxisVector& v_to,
+              const AxisLimits& limits) {
+  Phases m{brake(v_from, limits), brake(v_to, limits), {}};
+  m.mid = syncProfile((to - m.in.travel) - (from + m.out.travel), limits);
+  return m;
+}
+
+}  // namespace
+
 AxisVector ptpTimeByAxis(const AxisVector& from,
                          const AxisVector& to,
                          const AxisVector& v_from,
                          const AxisVector& v_to,
                          const AxisLimits& limits) {
-  const Brake out = brake(v_from, limits), in = brake(v_to, limits);
-  const AxisVector delta = ((to - in.travel) - (from + out.travel)).cwiseAbs();
+  const Phases m = phases(from, to, v_from, v_to, limits);
   AxisVector by_axis = AxisVector::Zero();
   int j = 0;
-  out.time.maxCoeff(&j);
-  by_axis(j) += out.duration();
-  in.time.maxCoeff(&j);
-  by_axis(j) += in.duration();
-  // syncProfile(): T = R + Q / R, the cruise R to the axis of R and the ramps Q / R to the axis
-  // of Q; a triangle, T = 2 √Q, to the axis of Q alone.
-  int jr = 0, jq = 0;
-  const double r = (delta.array() / limits.speed.array()).maxCoeff(&jr);
-  const double q = (delta.array() / limits.accel.array()).maxCoeff(&jq);
-  if (!(r > 0.0)) return by_axis;
-  if (q < r * r) {
-    by_axis(jr) += r;
-    by_axis(jq) += q / r;
-  } else {
-    by_axis(jq) += 2.0 * std::sqrt(q);
+  m.out.time.maxCoeff(&j);
+  by_axis(j) += m.out.duration();
+  m.in.time.maxCoeff(&j);
+  by_axis(j) += m.in.duration();
+  if (m.mid.speed_axis >= 0) {
+    by_axis(m.mid.speed_axis) += m.mid.duration - m.mid.accel_time;
+    by_axis(m.mid.accel_axis) += m.mid.accel_time;
+  } else if (m.mid.accel_axis >= 0) {
+    by_axis(m.mid.accel_axis) += m.mid.duration;
   }
   return by_axis;
 }
@@ -114,9 +131,8 @@ double ptpDuration(const AxisVector& from,
                    const AxisVector& v_from,
                    const AxisVector& v_to,
                    const AxisLimits& limits) {
-  const Brake out = brake(v_from, limits), in = brake(v_to, limits);
-  const AxisVector delta = (to - in.travel) - (from + out.travel);
-  return out.duration() + syncProfile(delta, limits).duration + in.duration();
+  const Phases m = phases(from, to, v_from, v_to, limits);
+  return m.out.duration() + m.mid.duration + m.in.duration();
 }
 
 PtpMove ptpMove(const AxisVector& from,
@@ -125,9 +141,10 @@ PtpMove ptpMove(const AxisVector& from,
                 const AxisVector& v_to,
                 const AxisLimits& limits,
                 double max_step) {
-  const Brake out = brake(v_from, limits), in = brake(v_to, limits);
+  const Phases m = phases(from, to, v_from, v_to, limits);
+  const Brake &out = m.out, &in = m.in;
   const AxisVector start = from + out.travel, end = to - in.travel;
-  const SyncProfile mid = syncProfile(end - start, limits);
+  const SyncProfile& mid = m.mid;
   const double t1 = out.duration(), t2 = t1 + mid.duration, total = t2 + in.duration();
   PtpMove move;
   if (!(total > 0.0)) {

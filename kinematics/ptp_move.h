@@ -38,6 +38,11 @@ AxisLimits axisLimits(const RobotModel& robot,
 struct SyncProfile {
   double duration = 0.0;
   double accel_time = 0.0;
+  /// The axis whose speed bound sets the cruise (duration − accel_time); −1 for a triangle (no
+  /// axis reaches its speed) or no motion.
+  int speed_axis = -1;
+  /// The axis whose acceleration bound sets the ramps (the whole of a triangle); −1: no motion.
+  int accel_axis = -1;
   /// The share of the way (0 … 1) at time t ∈ [0, duration].
   double at(double t) const;
 };

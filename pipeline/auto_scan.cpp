@@ -311,20 +311,25 @@ std::vector<scanner::ScanPass> aimedPasses(const scanner::PartOnTable& part,
   std::vector<std::size_t> aimed_at;
   std::vector<scanner::ScanPass> out =
       aimedStrips(part, pass, index, classes, witnesses, reached, limit, aimed_at);
-  std::vector<scanner::ScanPass> more;
-  for (const std::size_t i : aimed_at) {
-    scanner::ScanPass glance = scanner::aimedPass(part, pass, witnesses[i], 0.012);
-    if (!glance.X_RS.empty()) more.push_back(std::move(glance));
+  // Per witness, in parallel (then in witness order): the short strip and the arcs.
+  std::vector<std::vector<scanner::ScanPass>> per_witness(aimed_at.size());
+  tbb::parallel_for(std::size_t{0}, aimed_at.size(), [&](std::size_t k) {
+    const Eigen::Isometry3d& witness = witnesses[aimed_at[k]];
+    scanner::ScanPass glance = scanner::aimedPass(part, pass, witness, 0.012);
+    if (!glance.X_RS.empty()) per_witness[k].push_back(std::move(glance));
     // The same view held while the table turns: one pass for a band of such samples (a bore on
     // the axis, features repeated around it) where the strips would take one each.
     std::size_t stations = 0;  // of the last arc: a longer cap that fits no more adds nothing
     for (double arc : {0.6108652381980153, 1.5707963267948966, 6.283185307179586}) {
-      scanner::ScanPass spin = scanner::aimedSpin(part, pass, witnesses[i], 0.35, arc);
+      scanner::ScanPass spin = scanner::aimedSpin(part, pass, witness, 0.35, arc);
       if (spin.X_RS.size() <= stations) break;
       stations = spin.X_RS.size();
-      more.push_back(std::move(spin));
+      per_witness[k].push_back(std::move(spin));
     }
-  }
+  });
+  std::vector<scanner::ScanPass> more;
+  for (auto& passes : per_witness)
+    for (auto& p : passes) more.push_back(std::move(p));
   scanner::evaluatePasses(more, part, pass, index);
   for (auto& p : more)
     if (!p.covers.empty()) out.push_back(std::move(p));
