@@ -19,22 +19,24 @@ double bound(const PairInfo& pair, const ClearanceRequest& request) {
 
 namespace detail {
 
-// Minimum over the shape pairs of two bodies. Bounded: each shape pair is asked only for
+namespace {
+
+// Minimum over the pairs of two shape lists. Bounded: each shape pair is asked only for
 // distances below the best found so far (initially d_high), and a bounding-sphere test skips
 // shape pairs that cannot come closer than that.
-ShapeDistance bodyDistance(const BodyGeometry& a,
-                           const Eigen::Isometry3d& X_Wa,
-                           const BodyGeometry& b,
-                           const Eigen::Isometry3d& X_Wb,
-                           double bound,
-                           bool exact,
-                           bool witness,
-                           bool closed_forms) {
+ShapeDistance shapesDistance(const std::vector<CollisionShape>& a_shapes,
+                             const Eigen::Isometry3d& X_Wa,
+                             const std::vector<CollisionShape>& b_shapes,
+                             const Eigen::Isometry3d& X_Wb,
+                             double bound,
+                             bool exact,
+                             bool witness,
+                             bool closed_forms) {
   ShapeDistance best;
   best.distance = bound;
   best.beyond = true;
   double lower = kInf;  // over the shape pairs found beyond
-  for (const CollisionShape& sa : a.shapes) {
+  for (const CollisionShape& sa : a_shapes) {
     // The shapes' poses only for the pairs that pass the broad phase (bounding spheres).
     std::optional<Eigen::Isometry3d> X_Wsa;
     const auto shape_a = [&]() -> const Eigen::Isometry3d& {
@@ -42,7 +44,7 @@ ShapeDistance bodyDistance(const BodyGeometry& a,
       return *X_Wsa;
     };
     const Eigen::Vector3d c_a = X_Wa * (sa.X_BG * sa.centre_G);
-    for (const CollisionShape& sb : b.shapes) {
+    for (const CollisionShape& sb : b_shapes) {
       if (exact) {
         const ShapeDistance d = exactShapeDistance(sa, shape_a(), sb, X_Wb * sb.X_BG);
         if (best.beyond || d.distance < best.distance) best = d;
@@ -62,6 +64,27 @@ ShapeDistance bodyDistance(const BodyGeometry& a,
   }
   best.lower = best.beyond ? std::max(bound, lower) : best.distance;
   return best;
+}
+
+}  // namespace
+
+// A body with a gate (convex pieces inside their hulls) is measured at its gate first: beyond
+// the bound there, beyond it here too.
+ShapeDistance bodyDistance(const BodyGeometry& a,
+                           const Eigen::Isometry3d& X_Wa,
+                           const BodyGeometry& b,
+                           const Eigen::Isometry3d& X_Wb,
+                           double bound,
+                           bool exact,
+                           bool witness,
+                           bool closed_forms) {
+  if (!exact && (!a.gate.empty() || !b.gate.empty())) {
+    const ShapeDistance gate =
+        shapesDistance(a.gate.empty() ? a.shapes : a.gate, X_Wa, b.gate.empty() ? b.shapes : b.gate,
+                       X_Wb, bound, false, false, closed_forms);
+    if (gate.beyond) return gate;
+  }
+  return shapesDistance(a.shapes, X_Wa, b.shapes, X_Wb, bound, exact, witness, closed_forms);
 }
 
 }  // namespace detail

@@ -5,13 +5,11 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <queue>
 #include <sstream>
 #include <vector>
 
-#include <fcl/narrowphase/detail/primitive_shape_algorithm/sphere_triangle.h>
-
 #include <scanplan/collision/fcl_geometry.h>
+#include <scanplan/collision/mesh_distance.h>
 
 // Last: qhull's C API defines short macros (its C++ headers do not compile as C++20).
 extern "C" {
@@ -35,85 +33,6 @@ std::vector<Eigen::Vector3d> usedVertices(const kinematics::TriangleMesh& mesh) 
     }
   }
   return out;
-}
-
-// Distance from a point to a mesh's surface: a depth-first walk of FCL's BVH of the mesh, the
-// nearer child first, nodes pruned by the gap to their OBB, leaves by FCL's point–triangle
-// distance (its sphere–triangle distance with radius 0).
-class PointMeshDistance {
- public:
-  explicit PointMeshDistance(const detail::MeshModel& mesh) : mesh_(mesh) {}
-
-  double operator()(const Eigen::Vector3d& p) {
-    double best = std::numeric_limits<double>::infinity();
-    stack_.clear();
-    stack_.push_back({0, gap(0, p)});
-    while (!stack_.empty()) {
-      const Entry e = stack_.back();
-      stack_.pop_back();
-      if (e.gap >= best) continue;
-      const auto& node = mesh_.getBV(e.node);
-      if (node.isLeaf()) {
-        best = std::min(best, triangle(node.primitiveId(), p));
-        if (best <= 0.0) return 0.0;
-        continue;
-      }
-      const int l = node.leftChild(), r = node.rightChild();
-      const double gl = gap(l, p), gr = gap(r, p);
-      stack_.push_back(gl <= gr ? Entry{r, gr} : Entry{l, gl});
-      stack_.push_back(gl <= gr ? Entry{l, gl} : Entry{r, gr});
-    }
-    return best;
-  }
-
- private:
-  struct Entry {
-    int node;
-    double gap;
-  };
-
-  double gap(int id, const Eigen::Vector3d& p) const {
-    const fcl::OBBd& obb = mesh_.getBV(id).bv.obb;
-    const Eigen::Vector3d local = obb.axis.transpose() * (p - obb.To);
-    return (local.cwiseAbs() - obb.extent).cwiseMax(0.0).norm();
-  }
-
-  double triangle(int primitive, const Eigen::Vector3d& p) const {
-    static const fcl::Sphered point(0.0);
-    const fcl::Triangle& t = mesh_.tri_indices[primitive];
-    fcl::Transform3d at = fcl::Transform3d::Identity();
-    at.translation() = p;
-    double d = 0.0;
-    // false: the point lies on the triangle (within its radius 0).
-    if (!fcl::detail::sphereTriangleDistance(point, at, mesh_.vertices[t[0]], mesh_.vertices[t[1]],
-                                             mesh_.vertices[t[2]], &d)) {
-      return 0.0;
-    }
-    return std::max(d, 0.0);
-  }
-
-  const detail::MeshModel& mesh_;
-  std::vector<Entry> stack_;
-};
-
-// A piece of a hull triangle in the branch and bound: its corners, the distance at its
-// centroid and an upper bound over the piece (that plus the farthest corner's distance from
-// the centroid: the distance to a surface is 1-Lipschitz).
-struct Piece {
-  Eigen::Vector3d a, b, c;
-  double upper = 0.0;
-};
-
-Piece makePiece(const Eigen::Vector3d& a,
-                const Eigen::Vector3d& b,
-                const Eigen::Vector3d& c,
-                PointMeshDistance& distance,
-                double& found) {
-  const Eigen::Vector3d g = (a + b + c) / 3.0;
-  const double d = distance(g);
-  found = std::max(found, d);
-  const double reach = std::max({(a - g).norm(), (b - g).norm(), (c - g).norm()});
-  return {a, b, c, d + reach};
 }
 
 // One qhull run (reentrant C API), freed on every path. Messages go to a memory stream, not the
@@ -244,6 +163,10 @@ std::optional<kinematics::TriangleMesh> convexHull(const kinematics::TriangleMes
   return hullOf(usedVertices(mesh));
 }
 
+std::optional<kinematics::TriangleMesh> convexHullOf(const std::vector<Eigen::Vector3d>& points) {
+  return hullOf(points);
+}
+
 std::optional<kinematics::TriangleMesh> simplifiedHull(const kinematics::TriangleMesh& hull,
                                                        std::size_t max_vertices) {
   if (hull.vertices.size() <= max_vertices) return hull;
@@ -294,32 +217,10 @@ HullMargin hullMargin(const kinematics::TriangleMesh& hull,
                       const kinematics::TriangleMesh& mesh,
                       double tolerance,
                       std::size_t max_queries) {
-  HullMargin out;
-  if (hull.triangles.empty() || mesh.triangles.empty()) return out;
+  if (hull.triangles.empty() || mesh.triangles.empty()) return {};
   const auto model = detail::makeMeshModel(mesh);
-  PointMeshDistance distance(*model);
-  const auto lower = [](const Piece& x, const Piece& y) { return x.upper < y.upper; };
-  std::priority_queue<Piece, std::vector<Piece>, decltype(lower)> pieces(lower);
-  for (const Eigen::Vector3i& t : hull.triangles) {
-    pieces.push(makePiece(hull.vertices[static_cast<std::size_t>(t[0])],
-                          hull.vertices[static_cast<std::size_t>(t[1])],
-                          hull.vertices[static_cast<std::size_t>(t[2])], distance, out.found));
-    ++out.queries;
-  }
-  // The piece with the largest bound is split in four until that bound is within the
-  // tolerance of the largest distance found (or the queries run out): then it bounds them all.
-  while (pieces.top().upper > out.found + tolerance && out.queries + 4 <= max_queries) {
-    const Piece p = pieces.top();
-    pieces.pop();
-    const Eigen::Vector3d ab = 0.5 * (p.a + p.b), bc = 0.5 * (p.b + p.c), ca = 0.5 * (p.c + p.a);
-    pieces.push(makePiece(p.a, ab, ca, distance, out.found));
-    pieces.push(makePiece(ab, p.b, bc, distance, out.found));
-    pieces.push(makePiece(ca, bc, p.c, distance, out.found));
-    pieces.push(makePiece(ab, bc, ca, distance, out.found));
-    out.queries += 4;
-  }
-  out.margin = std::max(pieces.top().upper, out.found);
-  return out;
+  detail::PointMeshDistance distance(*model);
+  return detail::surfaceBound(hull, distance, tolerance, max_queries);
 }
 
 }  // namespace scanplan::collision

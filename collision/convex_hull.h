@@ -5,6 +5,9 @@
 
 #include <cstddef>
 #include <optional>
+#include <vector>
+
+#include <Eigen/Core>
 
 #include <scanplan/kinematics/mesh.h>
 
@@ -13,6 +16,9 @@ namespace scanplan::collision {
 /// The convex hull of the vertices the mesh's triangles use (qhull), as a closed triangle mesh,
 /// counter-clockwise seen from outside. std::nullopt when they span no volume (a flat mesh).
 std::optional<kinematics::TriangleMesh> convexHull(const kinematics::TriangleMesh& mesh);
+
+/// The convex hull of points, as convexHull gives it; std::nullopt when they span no volume.
+std::optional<kinematics::TriangleMesh> convexHullOf(const std::vector<Eigen::Vector3d>& points);
 
 /// A convex polytope of at most `max_vertices` vertices (≥ 8) that contains `hull` (a convex
 /// hull, as convexHull gives): the hull itself when it has no more vertices; else the bounding
@@ -33,7 +39,8 @@ struct HullMargin {
   double margin = 0.0;  ///< m, the upper bound h
   double found = 0.0;   ///< m, the largest distance actually measured (h − found ≤ tolerance
                         ///< unless the queries ran out)
-  std::size_t queries = 0;  ///< point–mesh distances measured
+  std::size_t queries = 0;                          ///< point–mesh distances measured
+  Eigen::Vector3d where = Eigen::Vector3d::Zero();  ///< m, where `found` was measured
 };
 HullMargin hullMargin(const kinematics::TriangleMesh& hull,
                       const kinematics::TriangleMesh& mesh,

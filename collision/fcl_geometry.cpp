@@ -345,6 +345,19 @@ ShapeDistance shapeShape(const A& a,
   Eigen::Vector3d pa = Eigen::Vector3d::Zero(), pb = Eigen::Vector3d::Zero();
   const SolverFor<A, B> solver = makeSolver<SolverFor<A, B>>();
   if (!solver.shapeDistance(a, X_a, b, X_b, &d, &pa, &pb)) d = 0.0;  // false: in contact
+  if constexpr (!std::is_same_v<SolverFor<A, B>, Solver>) {
+    // FCL's GJK can stop short on a polytope whose face lies parallel to a box's (0.3 mm long
+    // on an L block's pieces, test_link_standin); libccd then meets it. Both give the distance
+    // between two points of the shapes, never less than the truth: the smaller is kept.
+    double d_ccd = 0.0;
+    Eigen::Vector3d qa = Eigen::Vector3d::Zero(), qb = Eigen::Vector3d::Zero();
+    if (!makeSolver<Solver>().shapeDistance(a, X_a, b, X_b, &d_ccd, &qa, &qb)) d_ccd = 0.0;
+    if (d_ccd < d) {
+      d = d_ccd;
+      pa = qa;
+      pb = qb;
+    }
+  }
   ShapeDistance out = finish(d, bound, witness, pa, pb);
   // FCL's GJK measured the whole distance (to 2e-14 relative, libccd's only to 1e-6 m and
   // wrong on some curved pairs): beyond the bound, it is the lower bound the maps carry on.

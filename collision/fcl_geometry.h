@@ -44,6 +44,10 @@ struct CollisionShape {
 
 struct BodyGeometry {
   std::vector<CollisionShape> shapes;
+  /// Convex shapes that hold every shape (a link's hulls around its convex pieces), or none: a
+  /// bounded query measures them first, and when they lie at or beyond the bound so does the
+  /// body.
+  std::vector<CollisionShape> gate;
 };
 
 struct SceneGeometry {

@@ -3,6 +3,7 @@
 #include <fnmatch.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <optional>
 #include <set>
@@ -13,6 +14,7 @@
 
 #include <scanplan/collision/convex_hull.h>
 #include <scanplan/collision/fcl_geometry.h>
+#include <scanplan/collision/link_standin.h>
 #include <scanplan/kinematics/error.h>
 #include <scanplan/kinematics/units.h>
 
@@ -180,10 +182,83 @@ detail::BodyGeometry hullBody(const detail::BodyGeometry& body,
     }
     info.mesh_triangles += mesh.triangles.size();
     info.hull_vertices += hull->vertices.size();
-    info.margin = std::max(info.margin, hullMargin(*hull, mesh).margin);
+    info.hull_margin = std::max(info.hull_margin, hullMargin(*hull, mesh).margin);
     out.shapes.push_back(detail::makeHullShape(shape, *hull));
   }
   return out;
+}
+
+// A mesh's convex pieces: from the cache when it holds them for this mesh and these settings,
+// else fitted (and written there).
+StandIn piecesOf(const kinematics::TriangleMesh& mesh,
+                 const ClearanceConfig& config,
+                 MapHull& info) {
+  StandInOptions options;
+  options.margin = config.piece_margin;
+  options.max_pieces = config.max_pieces;
+  const std::string key = standInKey(mesh, options);
+  const std::filesystem::path file =
+      config.piece_cache.empty() ? std::filesystem::path() : config.piece_cache / (key + ".pieces");
+  if (!file.empty()) {
+    if (auto cached = loadStandIn(file, key)) {
+      info.from_cache = true;
+      return std::move(*cached);
+    }
+  }
+  StandIn fitted = fitStandIn(mesh, options);
+  if (!file.empty()) saveStandIn(file, key, fitted);
+  return fitted;
+}
+
+// A robot link as convex pieces: each mesh shape's pieces, and its hulls (`hulls`, which hold
+// every piece) as the gate a query passes first. Shapes that are not meshes stay.
+detail::BodyGeometry piecesBody(const detail::BodyGeometry& body,
+                                const detail::BodyGeometry& hulls,
+                                const ClearanceConfig& config,
+                                MapHull& info) {
+  const auto start = std::chrono::steady_clock::now();
+  detail::BodyGeometry out;
+  info.pieces_fit = true;
+  info.margin = 0.0;
+  for (const detail::CollisionShape& shape : body.shapes) {
+    const auto* model = dynamic_cast<const detail::MeshModel*>(shape.geometry.get());
+    if (!model) {
+      out.shapes.push_back(shape);
+      continue;
+    }
+    const StandIn standin = piecesOf(detail::meshOf(*model), config, info);
+    for (const kinematics::TriangleMesh& piece : standin.pieces)
+      out.shapes.push_back(detail::makeHullShape(shape, piece));
+    info.pieces += standin.pieces.size();
+    info.piece_vertices += standin.vertices;
+    info.pieces_fit = info.pieces_fit && standin.fits;
+    info.margin = std::max(info.margin, standin.margin);
+  }
+  out.gate = hulls.shapes;
+  info.fit_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+// What the maps measure for robot link `i` under the config: its hull, its pieces or its mesh.
+void chooseMapBody(const ClearanceConfig& config, detail::SceneGeometry& geometry, MapHull& info) {
+  const auto i = static_cast<std::size_t>(info.body);
+  detail::BodyGeometry hulls = hullBody(geometry.bodies[i], config.hull_vertices, info);
+  if (info.mesh_triangles == 0) return;
+  info.margin = info.hull_margin;
+  if (config.link_meshes == LinkMeshes::kHull ||
+      (config.link_meshes == LinkMeshes::kAuto && info.hull_margin <= config.max_hull_margin)) {
+    info.used = true;
+    geometry.map_bodies[i] = std::move(hulls);
+    return;
+  }
+  detail::BodyGeometry pieces = piecesBody(geometry.bodies[i], hulls, config, info);
+  info.used = config.link_meshes == LinkMeshes::kPieces || info.pieces_fit;
+  if (info.used) {
+    geometry.map_bodies[i] = std::move(pieces);
+  } else {
+    info.margin = 0.0;  // the mesh itself
+  }
 }
 
 }  // namespace
@@ -239,11 +314,8 @@ Scene::Scene(const kinematics::CellModel& cell, const ClearanceConfig& config)
     if (bodies_[i].motion != BodyMotion::kRobotLink) continue;
     MapHull info;
     info.body = static_cast<int>(i);
-    detail::BodyGeometry hulls = hullBody(geometry_->bodies[i], config.hull_vertices, info);
-    if (info.mesh_triangles == 0) continue;
-    info.used = config.link_meshes == LinkMeshes::kHull || info.margin <= config.max_hull_margin;
-    if (info.used) geometry_->map_bodies[i] = std::move(hulls);
-    map_hulls_.push_back(info);
+    chooseMapBody(config, *geometry_, info);
+    if (info.mesh_triangles > 0) map_hulls_.push_back(info);
   }
 }
 

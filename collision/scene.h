@@ -1,5 +1,6 @@
 #pragma once
 
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -33,9 +34,11 @@ struct PairRule {
 
 /// How the configuration maps see robot link meshes.
 enum class LinkMeshes {
-  kAuto,   ///< a link's hull where its margin is within max_hull_margin, else its mesh
-  kHull,   ///< as their convex hulls: fast, conservative by each hull's margin (MapHull)
-  kExact,  ///< as the meshes themselves: exact, slow for heavy meshes
+  kAuto,    ///< per link: its hull where that stands within max_hull_margin of the mesh, else
+            ///< its convex pieces where they fit piece_margin and max_pieces, else its mesh
+  kPieces,  ///< as their convex pieces (collision/link_standin.h), whatever their margin
+  kHull,    ///< as their convex hulls: fast, conservative by each hull's margin (MapHull)
+  kExact,   ///< as the meshes themselves: exact, slow for heavy meshes
 };
 
 struct ClearanceConfig {
@@ -43,7 +46,14 @@ struct ClearanceConfig {
   std::vector<PairRule> rules;
   LinkMeshes link_meshes = LinkMeshes::kAuto;
   /// kAuto: the largest margin (m) a link's hull may have to stand in for its mesh.
-  double max_hull_margin = 0.010;
+  double max_hull_margin = 0.002;
+  /// kAuto, kPieces: the most (m) a link's convex pieces may stand outside its mesh, and how
+  /// many pieces a mesh may take (collision/link_standin.h).
+  double piece_margin = 0.002;
+  std::size_t max_pieces = 128;
+  /// A folder for the fitted pieces, one file per mesh keyed by its hash (standInKey): reused
+  /// while the mesh and the settings stay, fitted again when they change. Empty: no cache.
+  std::filesystem::path piece_cache;
   /// kHull: each hull simplified to at most this many vertices (collision/convex_hull.h
   /// simplifiedHull): GJK's cost grows with them, the margin shrinks.
   std::size_t hull_vertices = 32;
@@ -56,15 +66,24 @@ enum class Geometry {
            ///< ClearanceConfig::link_meshes says so, everything else as given
 };
 
-/// A robot link with meshes and its (simplified) convex hull. For any body B outside the mesh,
-/// d(B, hull) ≤ d(B, mesh) ≤ d(B, hull) + margin: where the maps measure the hull (`used`) they
-/// may see a pair up to `margin` closer than it is, never farther.
+/// A robot link with meshes and what stands in for them in the maps: its (simplified) convex
+/// hull, or its convex pieces. For any body B outside the mesh, d(B, stand-in) ≤ d(B, mesh) ≤
+/// d(B, stand-in) + margin: where the maps measure the stand-in (`used`) they may see a pair up
+/// to `margin` closer than it is, never farther.
 struct MapHull {
   int body = 0;  ///< index into Scene::bodies()
   std::size_t mesh_triangles = 0;
   std::size_t hull_vertices = 0;
-  double margin = 0.0;  ///< m, an upper bound (collision/convex_hull.h hullMargin)
-  bool used = false;    ///< the maps measure the hull (else the mesh)
+  double hull_margin = 0.0;  ///< m, the hull's (collision/convex_hull.h hullMargin)
+  /// The convex pieces, when the maps measure them (0: the hull or the mesh): how many, their
+  /// vertices, and whether they were fitted within piece_margin and max_pieces.
+  std::size_t pieces = 0;
+  std::size_t piece_vertices = 0;
+  bool pieces_fit = false;
+  bool from_cache = false;   ///< the pieces came from ClearanceConfig::piece_cache
+  double fit_seconds = 0.0;  ///< wall time fitting (or loading) the pieces
+  double margin = 0.0;       ///< m, an upper bound for what the maps measure (0 for the mesh)
+  bool used = false;         ///< the maps measure the hull or the pieces (else the mesh)
 };
 
 /// What moves a body.

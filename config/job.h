@@ -292,10 +292,13 @@ struct ClearanceSpec {
   double gamma = 1.0;
   std::vector<PairRuleSpec> pairs;
   /// How the maps measure robot link meshes: "auto" (a link's simplified convex hull where it
-  /// lies within hull_margin_mm of the mesh, else the mesh), "hull" or "exact".
+  /// lies within hull_margin_mm of the mesh, else its convex pieces where they fit
+  /// piece_margin_mm and max_pieces, else the mesh), "pieces", "hull" or "exact".
   std::string link_meshes = "auto";
   int hull_vertices = 32;        ///< at most this many vertices per hull
-  double hull_margin_mm = 10.0;  ///< "auto": the largest margin a hull may have
+  double hull_margin_mm = 2.0;   ///< "auto": the largest margin a hull may have
+  double piece_margin_mm = 2.0;  ///< "auto", "pieces": the most the pieces may stand outside
+  int max_pieces = 128;          ///< "auto": at most this many pieces per link mesh
 };
 
 /// `constraints`: the static constraints of a pose (Eq. 6–8).

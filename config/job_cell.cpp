@@ -236,9 +236,11 @@ void describeClearance(A& a, ClearanceSpec& s) {
   a.field("d_high_mm", s.d_high_mm, Expect::positive());
   a.field("gamma", s.gamma, Expect::positive());
   a.list("pairs", s.pairs, 0, 1000);
-  a.field("link_meshes", s.link_meshes, Expect::oneOf({"auto", "hull", "exact"}));
+  a.field("link_meshes", s.link_meshes, Expect::oneOf({"auto", "pieces", "hull", "exact"}));
   a.field("hull_vertices", s.hull_vertices, Expect::range(8, 1000));
   a.field("hull_margin_mm", s.hull_margin_mm, Expect::nonNegative());
+  a.field("piece_margin_mm", s.piece_margin_mm, Expect::range(0.5, 50.0));
+  a.field("max_pieces", s.max_pieces, Expect::range(1, 1000));
   if constexpr (A::kReading) {
     if (!(s.d_low_mm < s.d_high_mm)) {
       a.fail("d_high_mm", formatNumber(s.d_high_mm),
@@ -494,15 +496,32 @@ kinematics::CellModel buildCell(const JobSpec& job) {
   return cell;
 }
 
+namespace {
+
+// Where a robot's fitted link pieces are kept: beside its robot file (beside the job for a
+// robot given inline), in a folder named after it.
+std::filesystem::path pieceCacheFolder(const JobSpec& job) {
+  const std::filesystem::path& owner =
+      job.robot_file.resolved.empty() ? job.source : job.robot_file.resolved;
+  if (owner.empty()) return {};
+  return owner.parent_path() / (owner.stem().string() + ".pieces");
+}
+
+}  // namespace
+
 collision::ClearanceConfig clearanceConfig(const JobSpec& job) {
   const ClearanceSpec& c = job.constraints.clearance;
   collision::ClearanceConfig config;
   config.defaults = {mm(c.d_low_mm), mm(c.d_high_mm), c.gamma};
-  config.link_meshes = c.link_meshes == "exact"  ? collision::LinkMeshes::kExact
-                       : c.link_meshes == "hull" ? collision::LinkMeshes::kHull
-                                                 : collision::LinkMeshes::kAuto;
+  config.link_meshes = c.link_meshes == "exact"    ? collision::LinkMeshes::kExact
+                       : c.link_meshes == "hull"   ? collision::LinkMeshes::kHull
+                       : c.link_meshes == "pieces" ? collision::LinkMeshes::kPieces
+                                                   : collision::LinkMeshes::kAuto;
   config.max_hull_margin = mm(c.hull_margin_mm);
   config.hull_vertices = static_cast<std::size_t>(c.hull_vertices);
+  config.piece_margin = mm(c.piece_margin_mm);
+  config.max_pieces = static_cast<std::size_t>(c.max_pieces);
+  config.piece_cache = pieceCacheFolder(job);
   for (const PairRuleSpec& r : c.pairs) {
     collision::PairRule rule;
     rule.a = r.a;

@@ -37,6 +37,7 @@
 #include <scanplan/scanner/path_generators.h>
 #include <scanplan/scanner/raycaster.h>
 #include "cli/plot/image_io.h"
+#include "cli/report/plan_summary.h"
 #include "tests/image_support.h"
 #include "tests/io_support.h"
 #include "tests/test_support.h"
@@ -723,6 +724,9 @@ TEST_F(MapJob, MeshLinksMapAsHullsConservativelyAndSkippingStaysExact) {
   const kinematics::ScanPath path = jobPath(job, cell);
   collision::ClearanceConfig config = config::clearanceConfig(job);
   EXPECT_EQ(config.link_meshes, collision::LinkMeshes::kAuto);  // the default
+  EXPECT_EQ(config.max_hull_margin, 0.002);
+  EXPECT_EQ(config.piece_margin, 0.002);
+  config.piece_margin = 0.008;  // fits these tessellated links in seconds
   const collision::Scene automatic(cell, config);
   config.link_meshes = collision::LinkMeshes::kHull;
   const collision::Scene hulls(cell, config);
@@ -732,18 +736,48 @@ TEST_F(MapJob, MeshLinksMapAsHullsConservativelyAndSkippingStaysExact) {
   ASSERT_EQ(automatic.mapHulls().size(), 7u);
   EXPECT_TRUE(exact.mapHulls().empty());
   double widest = 0.0, narrowest = 1.0;
+  std::size_t with_pieces = 0;
   for (std::size_t k = 0; k < 7; ++k) {
     const collision::MapHull& h = hulls.mapHulls()[k];
     EXPECT_LE(h.hull_vertices, 32u);
     EXPECT_GE(h.margin, 0.0);
     EXPECT_TRUE(h.used);
-    // auto: the hull where its margin is within hull_margin_mm (10 mm), else the mesh
-    EXPECT_EQ(automatic.mapHulls()[k].used, h.margin <= 0.010) << "link " << k;
+    // auto: the hull where its margin is within hull_margin_mm (2 mm), else the convex pieces
+    // where they fit piece_margin_mm and max_pieces, else the mesh
+    const collision::MapHull& a = automatic.mapHulls()[k];
+    EXPECT_EQ(a.hull_margin, h.margin) << "link " << k;
+    EXPECT_EQ(a.used, h.margin <= 0.002 || a.pieces_fit) << "link " << k;
+    if (a.pieces > 0 && a.used) {
+      EXPECT_LE(a.margin, config.piece_margin) << "link " << k;
+    }
+    with_pieces += a.pieces > 0 && a.used ? 1u : 0u;
     widest = std::max(widest, h.margin);
     narrowest = std::min(narrowest, h.margin);
   }
   EXPECT_GT(widest, 0.01) << "premise: a link with two shapes has a hull well outside them";
   EXPECT_LT(narrowest, 0.01) << "premise: a one-shape link's hull is close to it";
+  EXPECT_GT(with_pieces, 0u) << "premise: convex pieces stand in for a non-convex link";
+  {
+    // Pieces over the limit: the maps measure the mesh, and the summary says which link and
+    // what to change.
+    collision::ClearanceConfig tight = config::clearanceConfig(job);
+    tight.piece_margin = 0.008;
+    tight.max_pieces = 1;
+    tight.piece_cache.clear();
+    const collision::Scene over(cell, tight);
+    const std::string text = cli::linkMeshSummary(over);
+    EXPECT_NE(text.find("max_pieces"), std::string::npos) << text;
+    EXPECT_NE(text.find("the maps measure the mesh"), std::string::npos) << text;
+    EXPECT_NE(text.find("link2 "), std::string::npos) << text;
+  }
+  // The pieces were kept beside the robot file: a second scene reads them.
+  collision::ClearanceConfig same = config::clearanceConfig(job);
+  same.piece_margin = config.piece_margin;
+  const collision::Scene again(cell, same);
+  for (std::size_t k = 0; k < 7; ++k) {
+    EXPECT_EQ(again.mapHulls()[k].from_cache, automatic.mapHulls()[k].pieces > 0) << "link " << k;
+    EXPECT_EQ(again.mapHulls()[k].pieces, automatic.mapHulls()[k].pieces) << "link " << k;
+  }
 
   const planner::ConstraintSettings settings = config::constraintSettings(job);
   planner::MapRequest request;
@@ -761,6 +795,19 @@ TEST_F(MapJob, MeshLinksMapAsHullsConservativelyAndSkippingStaysExact) {
   EXPECT_LT(lower, hull_map.f.size());
   request.motion_bounds = false;
   EXPECT_TRUE(sameMap(hull_map, planner::buildConfigMap(hulls, settings, path, request)));
+
+  // The default map (convex pieces where the hull is loose) is no higher than the exact one
+  // anywhere, and no lower than the hull map: each link's clearance within its margin.
+  request.motion_bounds = true;
+  const ConfigMap auto_map = planner::buildConfigMap(automatic, settings, path, request);
+  std::size_t above_hull = 0;
+  for (std::size_t i = 0; i < auto_map.f.size(); ++i) {
+    ASSERT_LE(auto_map.clearance[i], exact_map.clearance[i] + 1e-6) << "cell " << i;
+    ASSERT_LE(auto_map.f[i], exact_map.f[i] + 1e-6) << "cell " << i;
+    ASSERT_GE(auto_map.clearance[i], hull_map.clearance[i] - 1e-6) << "cell " << i;
+    above_hull += auto_map.clearance[i] > hull_map.clearance[i] + 1e-3f ? 1u : 0u;
+  }
+  EXPECT_GT(above_hull, 0u) << "premise: the pieces are tighter than the hulls somewhere";
 }
 
 TEST(ConfigMap, LayersAreByteIdenticalForOneAndTwoThreads) {

@@ -389,11 +389,15 @@ TEST_F(JobFile, OutOfRangeValuesAreRejected) {
   EXPECT_TRUE(loadFails(writeJob("constraints: {clearance: {link_meshes: convex}}\n"),
                         {at("job.yaml", "3:"),
                          "constraints.clearance.link_meshes: 'convex': expected one of auto, "
-                         "hull, exact"}));
+                         "pieces, hull, exact"}));
   EXPECT_TRUE(loadFails(writeJob("constraints: {clearance: {hull_vertices: 4}}\n"),
                         {at("job.yaml", "3:"), "constraints.clearance.hull_vertices: 4"}));
   EXPECT_TRUE(loadFails(writeJob("constraints: {clearance: {hull_margin_mm: -1}}\n"),
                         {at("job.yaml", "3:"), "constraints.clearance.hull_margin_mm: -1"}));
+  EXPECT_TRUE(loadFails(writeJob("constraints: {clearance: {piece_margin_mm: 0.1}}\n"),
+                        {at("job.yaml", "3:"), "constraints.clearance.piece_margin_mm: 0.1"}));
+  EXPECT_TRUE(loadFails(writeJob("constraints: {clearance: {max_pieces: 0}}\n"),
+                        {at("job.yaml", "3:"), "constraints.clearance.max_pieces: 0"}));
   // The programs' payload and trigger.
   EXPECT_TRUE(loadFails(writeJob("scanner: {mass_kg: -1}\n"),
                         {at("job.yaml", "3:"), "scanner.mass_kg: -1"}));

@@ -73,16 +73,21 @@ void warnSlowLinkMeshes(const config::JobSpec& job, const kinematics::CellModel&
     if (hull != hulls.end() && hull->used) continue;
     total += body.triangles;
     each += fmt::format("{}{} {}", each.empty() ? "" : ", ", body.name, body.triangles);
-    if (hull != hulls.end()) each += fmt::format(" (hull {:.1f} mm out)", toMm(hull->margin));
+    if (hull != hulls.end()) {
+      each += hull->pieces > 0
+                  ? fmt::format(" ({} pieces {:.1f} mm out)", hull->pieces, toMm(hull->margin))
+                  : fmt::format(" (hull {:.1f} mm out)", toMm(hull->hull_margin));
+    }
   }
   if (total <= kHeavyLinkTriangles) return;
   spdlog::warn(
       "{}: the maps measure {} link mesh triangles exactly ({}; constraints.clearance."
-      "link_meshes: {}, hull_margin_mm: {}): a map may take minutes (the demo's with the Viper's "
-      "own link meshes: 105 s against 0.5 s with its primitive links); link_meshes: hull measures "
-      "the convex hulls in seconds but sees each link up to its margin closer than it is",
+      "link_meshes: {}, piece_margin_mm: {}, max_pieces: {}): a map may take minutes (the demo's "
+      "with the Viper's own link meshes: 105 s against 0.5 s with its primitive links); a larger "
+      "piece_margin_mm or max_pieces lets convex pieces stand in, and link_meshes: hull measures "
+      "the convex hulls in seconds; both see a link up to their margin closer than it is",
       job.source.string(), total, each, clearance.link_meshes,
-      config::formatNumber(clearance.hull_margin_mm));
+      config::formatNumber(clearance.piece_margin_mm), clearance.max_pieces);
 }
 
 namespace {

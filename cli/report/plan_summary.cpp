@@ -90,19 +90,38 @@ std::string autoScanSummary(const pipeline::AutoScanReport& r) {
   return s;
 }
 
+namespace {
+
+// One mesh link: what stands in for it in the maps, and why.
+std::string linkMeshLine(const std::string& name, const collision::MapHull& h) {
+  std::string text = fmt::format("  {:<8} mesh {} triangles, hull of {} vertices {:.1f} mm out",
+                                 name, h.mesh_triangles, h.hull_vertices, toMm(h.hull_margin));
+  if (h.pieces > 0) {
+    text += fmt::format("; {} convex pieces ({} vertices) at most {:.1f} mm out, {} in {:.1f} s",
+                        h.pieces, h.piece_vertices, toMm(h.margin),
+                        h.from_cache ? "read from the cache" : "fitted", h.fit_seconds);
+  }
+  if (h.used)
+    return text + fmt::format(": the maps measure the {}\n", h.pieces > 0 ? "pieces" : "hull");
+  if (h.pieces > 0) {
+    return text +
+           ": they do not fit the limits (constraints.clearance.piece_margin_mm, "
+           "max_pieces), so the maps measure the mesh; raise those, or give the link "
+           "primitive shapes\n";
+  }
+  return text + ": the maps measure the mesh\n";
+}
+
+}  // namespace
+
 std::string linkMeshSummary(const collision::Scene& scene) {
   std::string text;
-  for (const collision::MapHull& h : scene.mapHulls()) {
-    text += fmt::format(
-        "  {:<8} mesh {} triangles, hull of {} vertices at most {:.1f} mm outside it: the maps "
-        "measure the {}\n",
-        scene.bodies()[static_cast<std::size_t>(h.body)].name, h.mesh_triangles, h.hull_vertices,
-        toMm(h.margin), h.used ? "hull" : "mesh");
-  }
+  for (const collision::MapHull& h : scene.mapHulls())
+    text += linkMeshLine(scene.bodies()[static_cast<std::size_t>(h.body)].name, h);
   if (!text.empty()) {
-    return "link mesh  a link's convex hull stands in for its mesh in the maps where it is close "
-           "enough (constraints.clearance.link_meshes, hull_margin_mm); validation measures the "
-           "meshes\n" +
+    return "link mesh  convex stand-ins hold each mesh link in the maps, never farther than the "
+           "mesh and at most the stated margin nearer (constraints.clearance.link_meshes); "
+           "validation measures the meshes\n" +
            text;
   }
   std::size_t triangles = 0;

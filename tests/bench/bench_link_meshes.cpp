@@ -12,7 +12,10 @@
 // - mesh links measured exactly (link_meshes: exact, the path before), on every SUBSAMPLE-th
 //   time sample: it is ~100x slower. On those cells the hull map must never exceed the exact
 //   map (the hulls are conservative); how much lower it is is printed.
-// Usage (from the repository root): build/tests/bench/bench_link_meshes [JOB] [RUNS] [SUBSAMPLE]
+// - mesh links as convex pieces within PIECE_MARGIN_MM (link_meshes: pieces; 2 mm unless given),
+//   fitted once and kept in $TMPDIR/scanplan_bench_pieces.
+// Usage (from the repository root):
+//   build/tests/bench/bench_link_meshes [JOB] [RUNS] [SUBSAMPLE] [PIECE_MARGIN_MM]
 // (JOB: a job with hand-written scan.paths; the automatic demo's path comes from the coverage
 // planner, which this bench does not run.)
 #include <unistd.h>
@@ -173,6 +176,7 @@ int run(int argc, char** argv) {
   const std::string job_file = argc > 1 ? argv[1] : "data/jobs/demo_rings.yaml";
   const int runs = argc > 2 ? std::max(1, std::atoi(argv[2])) : 2;
   const auto every = static_cast<std::size_t>(argc > 3 ? std::max(1, std::atoi(argv[3])) : 25);
+  const double piece_margin = argc > 4 ? mm(std::atof(argv[4])) : 0.002;
   if (!fs::exists(kSharedData / "robots/viper_s650/link0.stl")) {
     std::printf("bench_link_meshes: skipped: the Viper link meshes (%s) are absent\n",
                 (kSharedData / "robots/viper_s650").c_str());
@@ -226,21 +230,51 @@ int run(int argc, char** argv) {
   std::printf("  mesh links (hulls)           %s   %.2fx primitive   target <= 3x: %s\n",
               perCell(hull2).c_str(), ratio2, ratio2 <= 3.0 ? "met" : "MISSED");
 
+  // Convex pieces within the margin (collision/link_standin.h), kept in a cache folder so that
+  // a second run skips the fitting.
+  collision::ClearanceConfig piece_config = config;
+  piece_config.link_meshes = collision::LinkMeshes::kPieces;
+  piece_config.piece_margin = piece_margin;
+  piece_config.max_pieces = 256;
+  piece_config.piece_cache = fs::temp_directory_path() / "scanplan_bench_pieces";
+  start = bench::processCpuSeconds();
+  const collision::Scene piece_scene(meshes.cell, piece_config);
+  std::printf("convex pieces within %.1f mm (cache %s), scene build CPU %.1f s:\n",
+              toMm(piece_margin), piece_config.piece_cache.c_str(),
+              bench::processCpuSeconds() - start);
+  for (const collision::MapHull& h : piece_scene.mapHulls()) {
+    std::printf(
+        "  %-6s mesh %5zu triangles -> %3zu pieces, %4zu vertices, margin %4.2f mm%s, %s %.1f s\n",
+        piece_scene.bodies()[static_cast<std::size_t>(h.body)].name.c_str(), h.mesh_triangles,
+        h.pieces, h.piece_vertices, toMm(h.margin), h.pieces_fit ? "" : " (over the limits)",
+        h.from_cache ? "read" : "fitted", h.fit_seconds);
+  }
+  const auto [prim3, pieces] = timeMaps(prim_scene, primitive, piece_scene, meshes, runs);
+  const double ratio3 = pieces.cpu / prim3.cpu;
+  std::printf("  primitive links              %s\n", perCell(prim3).c_str());
+  std::printf("  mesh links (pieces)          %s   %.2fx primitive   target <= 3x: %s\n",
+              perCell(pieces).c_str(), ratio3, ratio3 <= 3.0 ? "met" : "MISSED");
+
   config.link_meshes = collision::LinkMeshes::kExact;
   const collision::Scene exact_scene(meshes.cell, config);
   const kinematics::ScanPath sub = subsampled(meshes.path, every);
-  Timed hull_sub, exact_sub;
+  Timed hull_sub, exact_sub, piece_sub;
   mapOnce(hull_scene, meshes, sub, hull_sub);
+  mapOnce(piece_scene, meshes, sub, piece_sub);
   mapOnce(exact_scene, meshes, sub, exact_sub);
   std::printf("every %zu-th sample, %zu cells x 8 branches, CPU time:\n", every,
               hull_sub.map.cellsPerBranch());
   std::printf("  mesh links (hulls)           %s\n", perCell(hull_sub).c_str());
   std::printf("  mesh links exactly (before)  %s   %.1fx the hulls\n", perCell(exact_sub).c_str(),
               exact_sub.cpu / hull_sub.cpu);
-  bool ok = false;
+  std::printf("  mesh links (pieces)          %s   %.1fx the hulls\n", perCell(piece_sub).c_str(),
+              piece_sub.cpu / hull_sub.cpu);
+  bool ok = false, ok_pieces = false;
   std::printf("  hull map vs exact map: %s\n",
               conservative(hull_sub.map, exact_sub.map, ok).c_str());
-  return ok ? 0 : 1;
+  std::printf("  piece map vs exact map: %s\n",
+              conservative(piece_sub.map, exact_sub.map, ok_pieces).c_str());
+  return ok && ok_pieces ? 0 : 1;
 }
 
 }  // namespace

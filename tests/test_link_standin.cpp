@@ -1,0 +1,241 @@
+// Convex pieces standing in for a link mesh: on an L-shaped block, whose distance is known in
+// closed form (the nearer of two boxes), the pieces hold the block, points of their surfaces lie
+// within the certified margin of it, and distances to them sit between the block's distance
+// minus that margin and the block's distance; the cache gives back the same pieces to the bit,
+// and refuses another mesh's or a damaged file.
+
+#include <scanplan/collision/link_standin.h>
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include <scanplan/collision/fcl_geometry.h>
+#include <scanplan/kinematics/mesh.h>
+#include <scanplan/kinematics/shape.h>
+#include "geometry_support.h"
+
+namespace scanplan::collision {
+namespace {
+
+namespace fs = std::filesystem;
+using Eigen::Isometry3d;
+using Eigen::Vector3d;
+using kinematics::TriangleMesh;
+
+constexpr double kArm = 0.10, kThick = 0.03, kHeight = 0.05;  // m
+
+// The L profile (arms kArm long, kThick thick) extruded kHeight up: closed, outward.
+TriangleMesh lBlock() {
+  const std::vector<Eigen::Vector2d> profile = {{0, 0},           {kArm, 0},      {kArm, kThick},
+                                                {kThick, kThick}, {kThick, kArm}, {0, kArm}};
+  TriangleMesh mesh;
+  const int n = static_cast<int>(profile.size());
+  for (double z : {0.0, kHeight}) {
+    for (const auto& p : profile) mesh.vertices.emplace_back(p.x(), p.y(), z);
+  }
+  for (int i = 1; i + 1 < n; ++i) {  // a fan from the corner at the origin sees every vertex
+    mesh.triangles.emplace_back(0, i + 1, i);          // bottom, facing down
+    mesh.triangles.emplace_back(n, n + i, n + i + 1);  // top, facing up
+  }
+  for (int i = 0; i < n; ++i) {
+    const int j = (i + 1) % n;
+    mesh.triangles.emplace_back(i, j, n + j);
+    mesh.triangles.emplace_back(i, n + j, n + i);
+  }
+  return mesh;
+}
+
+double boxDistance(const Vector3d& p, const Vector3d& lo, const Vector3d& hi) {
+  return (lo - p).cwiseMax(p - hi).cwiseMax(0.0).norm();
+}
+
+// Distance from a point to the L block's solid, in closed form (0 inside).
+double lDistance(const Vector3d& p) {
+  return std::min(boxDistance(p, Vector3d::Zero(), Vector3d(kArm, kThick, kHeight)),
+                  boxDistance(p, Vector3d::Zero(), Vector3d(kThick, kArm, kHeight)));
+}
+
+// A uniformly random point of a random triangle of the mesh.
+Vector3d randomSurfacePoint(const TriangleMesh& mesh, std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const Eigen::Vector3i& t = mesh.triangles[rng() % mesh.triangles.size()];
+  double a = u(rng), b = u(rng);
+  if (a + b > 1.0) a = 1.0 - a, b = 1.0 - b;
+  const Vector3d& p = mesh.vertices[static_cast<std::size_t>(t[0])];
+  return p + a * (mesh.vertices[static_cast<std::size_t>(t[1])] - p) +
+         b * (mesh.vertices[static_cast<std::size_t>(t[2])] - p);
+}
+
+TEST(LinkStandIn, ALooseMarginTakesTheHullAndNeverUnderstatesIt) {
+  const TriangleMesh mesh = lBlock();
+  EXPECT_TRUE(mesh.isClosed());
+  EXPECT_NEAR(mesh.signedVolume(), (2 * kArm * kThick - kThick * kThick) * kHeight, 1e-15);
+  // The hull's margin is known: the midpoint of its face across the inner corner lies
+  // (kArm - kThick) / 2 from both arms. A 50 mm margin takes the hull, its bound at or above that.
+  StandInOptions loose;
+  loose.margin = 0.05;
+  const StandIn hull = fitStandIn(mesh, loose);
+  EXPECT_TRUE(hull.fits);
+  EXPECT_EQ(hull.pieces.size(), 1u);
+  EXPECT_GE(hull.margin, 0.5 * (kArm - kThick) - 1e-9);
+  EXPECT_LE(hull.margin, loose.margin);
+}
+
+TEST(LinkStandIn, OverTheBudgetItSaysSo) {
+  StandInOptions one;
+  one.max_pieces = 1;
+  const StandIn s = fitStandIn(lBlock(), one);
+  EXPECT_FALSE(s.fits);
+  EXPECT_GT(s.pieces.size(), 1u) << "an L needs two";
+}
+
+TEST(LinkStandIn, PiecesHoldTheBlockWithinTheMargin) {
+  const TriangleMesh mesh = lBlock();
+  StandInOptions options;
+  const StandIn s = fitStandIn(mesh, options);
+  ASSERT_TRUE(s.fits);
+  EXPECT_GE(s.pieces.size(), 2u);
+  EXPECT_LE(s.pieces.size(), 8u) << "an L is two boxes";
+  EXPECT_LE(s.margin, options.margin);
+  std::mt19937 rng(3);
+  double worst = 0.0;
+  for (const TriangleMesh& piece : s.pieces) {
+    EXPECT_TRUE(piece.isClosed());
+    EXPECT_GT(piece.signedVolume(), 0.0) << "outward";
+    for (int k = 0; k < 200; ++k) {
+      const Vector3d p = randomSurfacePoint(piece, rng);
+      worst = std::max(worst, lDistance(p));
+    }
+  }
+  EXPECT_LE(worst, s.margin + 1e-12);
+  // Points all over the block's surface lie in some piece (the pieces hold its surface).
+  const auto held = [&](const Vector3d& v) {
+    for (const TriangleMesh& piece : s.pieces) {
+      bool inside = true;
+      for (const Eigen::Vector3i& t : piece.triangles) {
+        const Vector3d& a = piece.vertices[static_cast<std::size_t>(t[0])];
+        const Vector3d n = (piece.vertices[static_cast<std::size_t>(t[1])] - a)
+                               .cross(piece.vertices[static_cast<std::size_t>(t[2])] - a);
+        inside = inside && n.dot(v - a) <= 1e-9 * n.norm();
+      }
+      if (inside) return true;
+    }
+    return false;
+  };
+  for (int k = 0; k < 2000; ++k) {
+    const Vector3d p = randomSurfacePoint(mesh, rng);
+    ASSERT_TRUE(held(p)) << p.transpose();
+  }
+}
+
+// The distance sandwich against boxes and capsules placed at random around the block:
+// d(B, pieces) ≤ d(B, block) ≤ d(B, pieces) + margin.
+TEST(LinkStandIn, DistancesSitWithinTheMarginBelowTheBlocks) {
+  const TriangleMesh mesh = lBlock();
+  const StandIn s = fitStandIn(mesh, {});
+  ASSERT_TRUE(s.fits);
+  detail::CollisionShape exact;
+  exact.geometry = detail::makeMeshModel(mesh);
+  std::vector<detail::CollisionShape> pieces;
+  for (const TriangleMesh& piece : s.pieces) pieces.push_back(detail::makeHullShape(exact, piece));
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int near = 0;
+  for (int i = 0; i < 300; ++i) {
+    kinematics::Shape probe;
+    if (i % 2 == 0) {
+      probe.geometry = kinematics::Box{Vector3d(0.01 + 0.02 * std::abs(u(rng)), 0.015, 0.02)};
+    } else {
+      probe.geometry = kinematics::Capsule{0.004 + 0.01 * std::abs(u(rng)), 0.02};
+    }
+    const detail::CollisionShape other = detail::makeCollisionShape(probe);
+    Isometry3d X = Isometry3d::Identity();
+    X.linear() = Eigen::Quaterniond::UnitRandom().toRotationMatrix();
+    X.translation() =
+        Vector3d(0.05, 0.05, 0.025) + Vector3d(0.09 * u(rng), 0.09 * u(rng), 0.06 * u(rng));
+    const double d_mesh =
+        detail::exactShapeDistance(exact, Isometry3d::Identity(), other, X).distance;
+    double d_pieces = std::numeric_limits<double>::infinity();
+    for (const auto& p : pieces) {
+      d_pieces =
+          std::min(d_pieces,
+                   detail::shapeDistance(p, Isometry3d::Identity(), other, X, 1e9, false).distance);
+    }
+    EXPECT_LE(d_pieces, d_mesh + 1e-6) << "probe " << i;
+    if (d_mesh > 0.0) {
+      EXPECT_LE(d_mesh, d_pieces + s.margin + 1e-6) << "probe " << i;
+    }
+    if (d_mesh > 0.0 && d_mesh < 0.02) ++near;
+  }
+  EXPECT_GT(near, 20) << "premise: probes near the block, outside it";
+}
+
+TEST(LinkStandIn, ConvexMeshIsOnePiece) {
+  const StandIn s = fitStandIn(test::centredCube(0.1), {});
+  EXPECT_TRUE(s.fits);
+  EXPECT_EQ(s.pieces.size(), 1u);
+  EXPECT_EQ(s.vertices, 8u);
+}
+
+TEST(LinkStandIn, TheCacheGivesBackTheSamePiecesAndRefusesOthers) {
+  const TriangleMesh mesh = lBlock();
+  const StandInOptions options;
+  const StandIn fitted = fitStandIn(mesh, options);
+  const std::string key = standInKey(mesh, options);
+  const fs::path dir = fs::temp_directory_path() / ("scanplan_standin_" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  const fs::path file = dir / "cache" / (key + ".pieces");
+  EXPECT_FALSE(loadStandIn(file, key)) << "absent";
+  ASSERT_TRUE(saveStandIn(file, key, fitted));
+  const auto loaded = loadStandIn(file, key);
+  ASSERT_TRUE(loaded);
+  EXPECT_EQ(loaded->margin, fitted.margin);
+  EXPECT_EQ(loaded->fits, fitted.fits);
+  ASSERT_EQ(loaded->pieces.size(), fitted.pieces.size());
+  for (std::size_t i = 0; i < fitted.pieces.size(); ++i) {
+    EXPECT_EQ(loaded->pieces[i].vertices, fitted.pieces[i].vertices) << "piece " << i;
+    EXPECT_EQ(loaded->pieces[i].triangles, fitted.pieces[i].triangles) << "piece " << i;
+  }
+  // Another mesh (one vertex moved), other settings: other keys, so the file is not theirs.
+  TriangleMesh changed = mesh;
+  changed.vertices[1].x() += 1e-6;
+  EXPECT_NE(standInKey(changed, options), key);
+  StandInOptions looser;
+  looser.margin = 0.005;
+  EXPECT_NE(standInKey(mesh, looser), key);
+  EXPECT_FALSE(loadStandIn(file, standInKey(changed, options)));
+  // A damaged file is refused, whatever the damage.
+  std::string text;
+  {
+    std::ifstream in(file);
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  for (const std::string& damaged :
+       {text.substr(0, text.size() / 2), text + "1 2 3\n", std::string("garbage"),
+        text.substr(0, text.find('\n') + 1) + "nan 1 1\n"}) {
+    std::ofstream(file, std::ios::trunc) << damaged;
+    EXPECT_FALSE(loadStandIn(file, key)) << damaged.substr(0, 60);
+  }
+  fs::remove_all(dir);
+}
+
+TEST(LinkStandIn, FittingIsDeterministic) {
+  const StandIn a = fitStandIn(lBlock(), {});
+  const StandIn b = fitStandIn(lBlock(), {});
+  ASSERT_EQ(a.pieces.size(), b.pieces.size());
+  for (std::size_t i = 0; i < a.pieces.size(); ++i)
+    EXPECT_EQ(a.pieces[i].vertices, b.pieces[i].vertices);
+  EXPECT_EQ(a.margin, b.margin);
+}
+
+}  // namespace
+}  // namespace scanplan::collision
