@@ -295,7 +295,10 @@ StandIn fitStandIn(const kinematics::TriangleMesh& mesh, const StandInOptions& o
   const double diagonal = mesh.bounds().diagonal().norm();
   const std::vector<Fine> fine =
       fineTriangles(mesh, std::max(5.0 * options.margin, diagonal / 50.0));
-  std::vector<Part> parts = splitPhase(fine, *solid, options, 8 * options.max_pieces);
+  // The split may overshoot the budget for the merge to win back, within a bound: the merge
+  // ranks every touching pair.
+  std::vector<Part> parts =
+      splitPhase(fine, *solid, options, std::min<std::size_t>(8 * options.max_pieces, 4096));
   mergePhase(fine, *solid, options, parts);
   for (Part& p : parts) {
     out.margin = std::max(out.margin, p.margin);

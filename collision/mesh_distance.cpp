@@ -6,6 +6,8 @@
 
 #include <fcl/narrowphase/detail/primitive_shape_algorithm/sphere_triangle.h>
 
+#include <scanplan/collision/primitive_distance.h>
+
 namespace scanplan::collision::detail {
 
 double PointMeshDistance::operator()(const Eigen::Vector3d& p) {
@@ -52,23 +54,6 @@ double PointMeshDistance::triangle(int primitive, const Eigen::Vector3d& p) cons
 
 namespace {
 
-// Whether the ray p + s·u (s ≥ 0) meets the box, in the box frame (slabs).
-bool rayMeetsBox(const Eigen::Vector3d& p, const Eigen::Vector3d& u, const Eigen::Vector3d& half) {
-  double s0 = 0.0, s1 = std::numeric_limits<double>::infinity();
-  for (int i = 0; i < 3; ++i) {
-    if (std::abs(u[i]) < 1e-300) {
-      if (std::abs(p[i]) > half[i]) return false;
-      continue;
-    }
-    double a = (-half[i] - p[i]) / u[i], b = (half[i] - p[i]) / u[i];
-    if (a > b) std::swap(a, b);
-    s0 = std::max(s0, a);
-    s1 = std::min(s1, b);
-    if (s0 > s1) return false;
-  }
-  return true;
-}
-
 // Whether the ray p + s·u (s > 0) crosses the triangle abc (Möller–Trumbore).
 bool rayCrossesTriangle(const Eigen::Vector3d& p,
                         const Eigen::Vector3d& u,
@@ -97,7 +82,9 @@ int PointInside::crossings(const Eigen::Vector3d& p, const Eigen::Vector3d& u) {
     stack_.pop_back();
     const auto& node = mesh_.getBV(id);
     const fcl::OBBd& obb = node.bv.obb;
-    if (!rayMeetsBox(obb.axis.transpose() * (p - obb.To), obb.axis.transpose() * u, obb.extent)) {
+    double enter = 0.0;
+    if (!lineMeetsBox(obb.axis.transpose() * (p - obb.To), obb.axis.transpose() * u, obb.extent,
+                      std::numeric_limits<double>::infinity(), enter)) {
       continue;
     }
     if (node.isLeaf()) {

@@ -31,21 +31,7 @@ bool segmentMeetsBox(const Eigen::Vector3d& a,
                      const Eigen::Vector3d& b,
                      const Eigen::Vector3d& h,
                      double& enter) {
-  const Eigen::Vector3d d = b - a;
-  double lo = 0.0, hi = 1.0;
-  for (int i = 0; i < 3; ++i) {
-    if (std::abs(d[i]) < kTiny) {
-      if (std::abs(a[i]) > h[i]) return false;
-      continue;
-    }
-    double t1 = (-h[i] - a[i]) / d[i], t2 = (h[i] - a[i]) / d[i];
-    if (t1 > t2) std::swap(t1, t2);
-    lo = std::max(lo, t1);
-    hi = std::min(hi, t2);
-    if (lo > hi) return false;
-  }
-  enter = lo;
-  return true;
+  return lineMeetsBox(a, b - a, h, 1.0, enter);
 }
 
 // The 12 edges of a box-local box: along axis i, at the four sign combinations of the others.
@@ -157,6 +143,27 @@ PrimitiveDistance ordered(const Primitive& a, const Primitive& b) {
 }
 
 }  // namespace
+
+bool lineMeetsBox(const Eigen::Vector3d& p,
+                  const Eigen::Vector3d& d,
+                  const Eigen::Vector3d& h,
+                  double s_max,
+                  double& enter) {
+  double lo = 0.0, hi = s_max;
+  for (int i = 0; i < 3; ++i) {
+    if (std::abs(d[i]) < kTiny) {
+      if (std::abs(p[i]) > h[i]) return false;
+      continue;
+    }
+    double t1 = (-h[i] - p[i]) / d[i], t2 = (h[i] - p[i]) / d[i];
+    if (t1 > t2) std::swap(t1, t2);
+    lo = std::max(lo, t1);
+    hi = std::min(hi, t2);
+    if (lo > hi) return false;
+  }
+  enter = lo;
+  return true;
+}
 
 Closest segmentSegment(const Eigen::Vector3d& p0,
                        const Eigen::Vector3d& p1,

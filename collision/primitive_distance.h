@@ -53,6 +53,14 @@ double segmentSegmentSq(const Eigen::Vector3d& p0,
 
 /// Distance from a point to a solid box (0 inside).
 double pointBox(const Eigen::Vector3d& p, const Primitive& box);
+
+/// Does the line p + s·d, s ∈ [0, s_max] (s_max may be +∞: a ray), meet the axis-aligned box of
+/// half sides h centred at the origin? (Slab clipping.) `enter`: the first s where it does.
+bool lineMeetsBox(const Eigen::Vector3d& p,
+                  const Eigen::Vector3d& d,
+                  const Eigen::Vector3d& h,
+                  double s_max,
+                  double& enter);
 /// Distance from a segment to a solid box (0 when it meets the box).
 double segmentBox(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Primitive& box);
 /// The widest gap between two boxes along any of the 15 separating axes: a lower bound on their
