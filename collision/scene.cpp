@@ -15,6 +15,7 @@
 #include <scanplan/collision/convex_hull.h>
 #include <scanplan/collision/fcl_geometry.h>
 #include <scanplan/collision/link_standin.h>
+#include <scanplan/collision/map_links.h>
 #include <scanplan/kinematics/error.h>
 #include <scanplan/kinematics/units.h>
 
@@ -317,6 +318,29 @@ Scene::Scene(const kinematics::CellModel& cell, const ClearanceConfig& config)
     chooseMapBody(config, *geometry_, info);
     if (info.mesh_triangles > 0) map_hulls_.push_back(info);
   }
+}
+
+std::vector<MapHull> robotMapLinks(const kinematics::RobotModel& robot,
+                                   const ClearanceConfig& config,
+                                   const std::function<void(std::size_t, std::size_t)>& progress) {
+  std::vector<MapHull> out;
+  if (config.link_meshes == LinkMeshes::kExact) return out;
+  detail::SceneGeometry geometry;
+  for (const kinematics::Link& link : robot.definition().links) {
+    detail::BodyGeometry body;
+    for (const kinematics::Shape& shape : link.shapes)
+      body.shapes.push_back(detail::makeCollisionShape(shape));
+    geometry.bodies.push_back(std::move(body));
+  }
+  geometry.map_bodies = geometry.bodies;
+  for (std::size_t i = 0; i < geometry.bodies.size(); ++i) {
+    MapHull info;
+    info.body = static_cast<int>(i);
+    chooseMapBody(config, geometry, info);
+    if (info.mesh_triangles > 0) out.push_back(info);
+    if (progress) progress(i + 1, geometry.bodies.size());
+  }
+  return out;
 }
 
 Scene::~Scene() = default;

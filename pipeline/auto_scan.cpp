@@ -385,14 +385,14 @@ void buildPasses(const ScanProblem& problem,
   }
 }
 
-// Each chosen pass's share of the counted samples, in the order chosen.
+// Each pass's share of the counted samples (`counted` of them), the passes taken in order.
 std::vector<double> gains(const std::vector<scanner::ScanPass>& passes,
-                          const scanner::CoverResult& chosen,
+                          std::size_t counted_samples,
                           const std::vector<std::uint8_t>& counts,
                           std::vector<std::uint8_t> seen) {
   std::vector<double> gain(passes.size(), 0.0);
-  const double counted = std::max<double>(1.0, static_cast<double>(chosen.counted));
-  for (std::size_t p : chosen.chosen) {
+  const double counted = std::max<double>(1.0, static_cast<double>(counted_samples));
+  for (std::size_t p = 0; p < passes.size(); ++p) {
     std::size_t n = 0;
     for (std::uint32_t i : passes[p].covers) {
       if (counts[i] && !seen[i]) ++n;
@@ -531,6 +531,31 @@ std::vector<std::uint8_t> givenCoverage(const kinematics::ScanPath& given,
   return covered;
 }
 
+// How long a cut pass runs on past the stretch whose profiles covered a sample (s): the line
+// crosses the rest of the area the sample stands for (half a sample spacing) and the reach of
+// an evaluated point (eval_radius) at the pass's fastest line speed.
+double cutPad(const scanner::PassSettings& s, const AutoScanReport& report) {
+  const double line_speed = s.speed_safety * s.point_spacing * s.frame_rate;
+  return (0.5 * report.sample_spacing + s.eval_radius) / line_speed;
+}
+
+// The chosen passes cut to what the others do not cover (scanner::cutToCover), split where a
+// move skipping a stretch that adds nothing saves more than a typical move costs.
+scanner::CutPasses cutChosen(const std::vector<scanner::ScanPass>& passes,
+                             const std::vector<std::uint8_t>& counts,
+                             const std::vector<std::uint8_t>& covered,
+                             const scanner::CoverSettings& cover,
+                             double pad,
+                             const scanner::CoverResult& chosen,
+                             AutoScanReport& report) {
+  scanner::CutPasses cut =
+      scanner::cutToCover(passes, chosen.chosen, counts, covered, cover.pass_overhead, pad);
+  report.cut_time = cut.cut_time;
+  report.cut_dropped = cut.dropped;
+  report.cut_split = cut.split;
+  return cut;
+}
+
 void reportCover(const scanner::CoverResult& chosen,
                  const std::vector<std::uint8_t>& counts,
                  const std::vector<std::uint8_t>& given,
@@ -611,12 +636,17 @@ AutoScanPlan planAutoScan(const ScanProblem& problem,
     report.seconds = since(start);
     return plan;
   }
+  // Each pass cut to what the others do not cover; split where a move skipping a stretch that
+  // adds nothing saves more than a typical move costs.
+  const scanner::CutPasses cut =
+      cutChosen(passes, counts, covered, cover, cutPad(pass_settings, report), chosen, report);
+  std::vector<std::size_t> pieces(cut.passes.size());
+  for (std::size_t k = 0; k < pieces.size(); ++k) pieces[k] = k;
   std::optional<Eigen::Isometry3d> at;
   if (!given.samples.empty()) at = X_RP * given.samples.back().X_PS;
-  const std::vector<scanner::TourStep> tour =
-      scanner::orderPasses(passes, chosen.chosen, at, sphere);
-  report.transfer_time = scanner::tourTransferTime(passes, tour, at, sphere);
-  buildPasses(problem, passes, tour, gains(passes, chosen, counts, covered), plan);
+  const std::vector<scanner::TourStep> tour = scanner::orderPasses(cut.passes, pieces, at, sphere);
+  report.transfer_time = scanner::tourTransferTime(cut.passes, tour, at, sphere);
+  buildPasses(problem, cut.passes, tour, gains(cut.passes, chosen.counted, counts, covered), plan);
   report.seconds = since(start);
   return plan;
 }

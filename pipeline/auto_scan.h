@@ -54,6 +54,11 @@ struct AutoScanReport {
   double cover_bound = 0.0;
   std::string cover_status;
   double cover_seconds = 0.0;
+  /// The chosen passes cut to what the others do not cover (scanner::cutToCover): the scanning
+  /// time left out, s; the passes left out whole; the extra pieces of passes split in two.
+  double cut_time = 0.0;
+  std::size_t cut_dropped = 0;
+  std::size_t cut_split = 0;
   std::size_t aimed = 0;  ///< of the candidates, aimed at surfaces the others miss
   /// The certificate before simulation: the evaluation samples (part frame P) and why each can
   /// or cannot be scanned (kOutOfReach: every pass that sees it was refused by the reach check).

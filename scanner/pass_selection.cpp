@@ -4,6 +4,8 @@
 #include <cmath>
 #include <queue>
 
+#include <fmt/format.h>
+
 #include <scanplan/kinematics/pose.h>
 #include <scanplan/kinematics/scan_path.h>
 
@@ -20,7 +22,124 @@ std::size_t newlyCovered(const ScanPass& pass,
   return n;
 }
 
+// A counting sample only one chosen pass covers, by its first and last covering stretches.
+struct Need {
+  std::uint32_t first = 0, last = 0;
+};
+
+// The shortest run of stretches [a, b] of `pass` (by time, t[b + 1] − t[a]) that holds the first
+// or the last stretch of every need: a sliding window over the stretches in order.
+std::pair<std::size_t, std::size_t> shortestRun(const ScanPass& pass,
+                                                const std::vector<Need>& needs) {
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> at;  // (stretch, need)
+  for (std::uint32_t j = 0; j < needs.size(); ++j) {
+    at.push_back({needs[j].first, j});
+    if (needs[j].last != needs[j].first) at.push_back({needs[j].last, j});
+  }
+  std::sort(at.begin(), at.end());
+  const auto time = [&](std::size_t a, std::size_t b) { return pass.t[b + 1] - pass.t[a]; };
+  std::pair<std::size_t, std::size_t> best{at.front().first, at.back().first};
+  std::vector<std::uint32_t> held(needs.size(), 0);
+  std::size_t holding = 0;
+  for (std::size_t lo = 0, hi = 0; hi < at.size(); ++hi) {
+    if (held[at[hi].second]++ == 0) ++holding;
+    for (; holding == needs.size(); ++lo) {
+      if (time(at[lo].first, at[hi].first) < time(best.first, best.second))
+        best = {at[lo].first, at[hi].first};
+      if (--held[at[lo].second] == 0) --holding;
+    }
+  }
+  return best;
+}
+
+// The needs split into groups wherever `gap` s or more of the pass lies between two needs'
+// first stretches.
+std::vector<std::vector<Need>> splitNeeds(const ScanPass& pass,
+                                          std::vector<Need> needs,
+                                          double gap) {
+  std::sort(needs.begin(), needs.end(),
+            [](const Need& a, const Need& b) { return a.first < b.first; });
+  std::vector<std::vector<Need>> groups(1);
+  for (std::size_t j = 0; j < needs.size(); ++j) {
+    if (j > 0 && needs[j].first > needs[j - 1].first + 1 &&
+        pass.t[needs[j].first] - pass.t[needs[j - 1].first + 1] >= gap)
+      groups.emplace_back();
+    groups.back().push_back(needs[j]);
+  }
+  return groups;
+}
+
+// The pieces of one pass: its needs (samples `mult` says only it covers) cut and split.
+std::vector<ScanPass> cutPass(const ScanPass& pass,
+                              const std::function<bool(std::uint32_t)>& counting,
+                              const std::vector<std::uint32_t>& mult,
+                              double split_gap,
+                              double pad) {
+  std::vector<Need> needs;
+  for (std::size_t j = 0; j < pass.covers.size(); ++j)
+    if (counting(pass.covers[j]) && mult[pass.covers[j]] == 1)
+      needs.push_back({pass.cover_first[j], pass.cover_last[j]});
+  std::vector<ScanPass> pieces;
+  if (needs.empty()) return pieces;
+  for (const std::vector<Need>& group : splitNeeds(pass, std::move(needs), split_gap)) {
+    const auto [a, b] = shortestRun(pass, group);
+    pieces.push_back(trimmedPass(pass, a, b, pad));
+    if (a > 0 || b + 2 < pass.X_RS.size())
+      pieces.back().label += fmt::format(" ({:.1f} s of it, from {:.1f} s)",
+                                         pieces.back().duration(), pass.t[a] - pass.t.front());
+  }
+  return pieces;
+}
+
 }  // namespace
+
+CutPasses cutToCover(const std::vector<ScanPass>& passes,
+                     const std::vector<std::size_t>& chosen,
+                     const std::vector<std::uint8_t>& counts,
+                     const std::vector<std::uint8_t>& covered,
+                     double split_gap,
+                     double pad) {
+  const auto counting = [&](std::uint32_t i) {
+    return i < counts.size() && counts[i] && !(i < covered.size() && covered[i]);
+  };
+  std::vector<std::uint32_t> mult(counts.size(), 0);  // chosen passes (as cut) covering each
+  for (const std::size_t p : chosen)
+    for (const std::uint32_t i : passes[p].covers) mult[i] += counting(i) ? 1u : 0u;
+  std::vector<std::size_t> order(chosen.size());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return passes[chosen[a]].duration() > passes[chosen[b]].duration();
+  });
+  CutPasses out;
+  std::vector<std::vector<ScanPass>> pieces(chosen.size());
+  std::vector<std::uint8_t> kept(counts.size(), 0);
+  for (const std::size_t k : order) {
+    const ScanPass& pass = passes[chosen[k]];
+    if (pass.cover_first.size() != pass.covers.size() || pass.X_RS.size() < 2) {
+      pieces[k] = {pass};
+      continue;
+    }
+    pieces[k] = cutPass(pass, counting, mult, split_gap, pad);
+    double left = 0.0;
+    for (const ScanPass& piece : pieces[k]) {
+      left += piece.duration();
+      for (const std::uint32_t i : piece.covers) kept[i] = 1;
+    }
+    for (const std::uint32_t i : pass.covers) {
+      if (counting(i) && !kept[i]) --mult[i];
+      kept[i] = 0;
+    }
+    out.cut_time += pass.duration() - left;
+    out.dropped += pieces[k].empty() ? 1u : 0u;
+    out.split += pieces[k].size() > 1 ? pieces[k].size() - 1 : 0u;
+  }
+  for (std::size_t k = 0; k < chosen.size(); ++k)
+    for (ScanPass& piece : pieces[k]) {
+      out.passes.push_back(std::move(piece));
+      out.from.push_back(chosen[k]);
+    }
+  return out;
+}
 
 CoverResult greedyCover(const std::vector<ScanPass>& passes,
                         const std::vector<std::uint8_t>& counts,
@@ -420,6 +539,13 @@ ScanPass stepPass(const std::vector<ScanPass>& passes, const TourStep& step) {
     const double end = p.t.back();
     std::reverse(p.t.begin(), p.t.end());
     for (double& t : p.t) t = end - t;
+    // Stretch k of the pass run backwards is stretch n − 2 − k of the pass as evaluated.
+    const std::size_t top = p.X_RS.size() >= 2 ? p.X_RS.size() - 2 : 0;
+    for (std::size_t j = 0; j < p.cover_first.size() && j < p.cover_last.size(); ++j) {
+      const std::uint32_t f = p.cover_first[j];
+      p.cover_first[j] = static_cast<std::uint32_t>(top - p.cover_last[j]);
+      p.cover_last[j] = static_cast<std::uint32_t>(top - f);
+    }
   }
   return p;
 }

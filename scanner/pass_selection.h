@@ -45,6 +45,31 @@ CoverResult greedyCover(const std::vector<ScanPass>& passes,
                         const std::function<bool(std::size_t)>& accept = {},
                         const std::function<bool()>& keep_going = {});
 
+/// The chosen passes cut down to what the cover needs of them (cutToCover()).
+struct CutPasses {
+  std::vector<ScanPass> passes;   ///< the pieces, in the order of `chosen`
+  std::vector<std::size_t> from;  ///< per piece, the chosen pass it was cut from
+  double cut_time = 0.0;          ///< s of scanning left out
+  std::size_t dropped = 0;        ///< chosen passes that added nothing the others lack
+  std::size_t split = 0;          ///< extra pieces (passes split where a stretch adds nothing)
+};
+
+/// Cuts each chosen pass (longest first) to the stretches that cover a counting sample no other
+/// chosen pass (as cut so far) covers: the shortest run of stretches holding, for each such
+/// sample, its first or last covering stretch (ScanPass::cover_first); a pass that covers no
+/// such sample is left out; a pass is split in two where a run of `split_gap` s or more between
+/// those samples adds nothing (a move then skips it). The counting samples the chosen passes
+/// cover, and that `covered` does not already hold, stay covered (as far as those stretches
+/// tell). Each piece runs `pad` s longer at either end where the pass does: a sample stands for
+/// the area around it, which the profiles after the one that found it finish. Passes without
+/// stretch records are kept whole. Deterministic.
+CutPasses cutToCover(const std::vector<ScanPass>& passes,
+                     const std::vector<std::size_t>& chosen,
+                     const std::vector<std::uint8_t>& counts,
+                     const std::vector<std::uint8_t>& covered,
+                     double split_gap,
+                     double pad = 0.0);
+
 /// The safe sphere the connecting moves run on (R frame): no part of the head inside it can
 /// touch the part.
 struct TransferSphere {

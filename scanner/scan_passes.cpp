@@ -673,7 +673,10 @@ void evaluatePass(ScanPass& pass,
                   const PassSettings& settings,
                   const SampleIndex& index) {
   const std::vector<double> fan = fanAngles(settings.window, settings.eval_rays);
-  std::vector<std::uint8_t> hit(index.sampling().samples.size(), 0);
+  // Per sample, the first and last stretch whose profiles cover it (kNone: none).
+  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> first(index.sampling().samples.size(), kNone);
+  std::vector<std::uint32_t> last(first.size(), 0);
   std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> points;
   std::vector<std::uint32_t> near;
   // line_travel[k]: how far the profile lines move over the surface from key k to key k + 1, the
@@ -706,7 +709,11 @@ void evaluatePass(ScanPass& pass,
       for (const auto& [p, n] : points) {
         near.clear();
         index.near(p, n, settings.eval_radius, near);
-        for (std::uint32_t i : near) hit[i] = 1;
+        const auto stretch = static_cast<std::uint32_t>(k);
+        for (std::uint32_t i : near) {
+          first[i] = std::min(first[i], stretch);
+          last[i] = std::max(last[i], stretch);
+        }
         if (!timed) continue;
         const double x_n = X.linear().col(0).dot(n);
         const double root = std::max(std::sqrt(std::max(0.0, 1.0 - x_n * x_n)), min_root);
@@ -719,8 +726,14 @@ void evaluatePass(ScanPass& pass,
     before_inv = a_inv;
   }
   pass.covers.clear();
-  for (std::size_t i = 0; i < hit.size(); ++i)
-    if (hit[i]) pass.covers.push_back(static_cast<std::uint32_t>(i));
+  pass.cover_first.clear();
+  pass.cover_last.clear();
+  for (std::size_t i = 0; i < first.size(); ++i) {
+    if (first[i] == kNone) continue;
+    pass.covers.push_back(static_cast<std::uint32_t>(i));
+    pass.cover_first.push_back(first[i]);
+    pass.cover_last.push_back(last[i]);
+  }
   if (timed) timePass(pass, settings, line_travel);
 }
 
@@ -742,6 +755,45 @@ ScanPass rotatedPass(const ScanPass& pass, double angle) {
   const Eigen::Isometry3d R(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ()));
   for (Eigen::Isometry3d& X : out.X_RS) X = R * X;
   for (double& a : out.azimuth) a += angle;
+  return out;
+}
+
+ScanPass trimmedPass(const ScanPass& pass, std::size_t first, std::size_t last, double pad) {
+  ScanPass out;
+  out.kind = pass.kind;
+  out.label = pass.label;
+  const bool spin = pass.azimuth.size() == pass.X_RS.size();
+  // The pass at time t (keys interpolated linearly in time, as it runs) into out's keys.
+  const auto add = [&](double t) {
+    std::size_t k = 0;
+    while (k + 2 < pass.t.size() && pass.t[k + 1] < t) ++k;
+    const double span = pass.t[k + 1] - pass.t[k];
+    const double s = span > 0.0 ? std::clamp((t - pass.t[k]) / span, 0.0, 1.0) : 0.0;
+    out.X_RS.push_back(kinematics::interpolatePose(pass.X_RS[k], pass.X_RS[k + 1], s));
+    if (spin) out.azimuth.push_back(pass.azimuth[k] + s * (pass.azimuth[k + 1] - pass.azimuth[k]));
+    out.t.push_back(t);
+  };
+  const double from = std::max(pass.t.front(), pass.t[first] - std::max(pad, 0.0));
+  const double to = std::min(pass.t.back(), pass.t[last + 1] + std::max(pad, 0.0));
+  if (from < pass.t[first]) add(from);
+  for (std::size_t k = first; k <= last + 1; ++k) {
+    out.X_RS.push_back(pass.X_RS[k]);
+    if (spin) out.azimuth.push_back(pass.azimuth[k]);
+    out.t.push_back(pass.t[k]);
+  }
+  if (to > pass.t[last + 1]) add(to);
+  for (double& t : out.t) t -= from;
+  // A sample stays when a stretch known to cover it (its first or its last) is kept; stretches
+  // are renumbered from the first key kept (one more with the padding before it).
+  const std::size_t shift = first - (from < pass.t[first] ? 1u : 0u);
+  const auto kept = [&](std::size_t k) { return first <= k && k <= last; };
+  for (std::size_t j = 0; j < pass.covers.size() && j < pass.cover_first.size(); ++j) {
+    const std::size_t f = pass.cover_first[j], l = pass.cover_last[j];
+    if (!kept(f) && !kept(l)) continue;
+    out.covers.push_back(pass.covers[j]);
+    out.cover_first.push_back(static_cast<std::uint32_t>((kept(f) ? f : l) - shift));
+    out.cover_last.push_back(static_cast<std::uint32_t>((kept(l) ? l : f) - shift));
+  }
   return out;
 }
 

@@ -87,6 +87,10 @@ struct ScanPass {
   /// 2π for a helix); the pass can start at any azimuth (rotate every pose about z).
   std::vector<double> azimuth;
   std::vector<std::uint32_t> covers;  ///< evaluation samples it covers, ascending
+  /// Per entry of `covers`: the first and the last stretch (k: from key k to key k + 1) whose
+  /// evaluated profiles cover that sample (a profile at key k counts for stretch k, the one at
+  /// the last key for the last stretch). What a part of the pass covers (trimmedPass()).
+  std::vector<std::uint32_t> cover_first, cover_last;
   /// s, the scanning time (once evaluated, see evaluatePass()).
   double duration() const { return t.empty() ? 0.0 : t.back() - t.front(); }
   /// A spin over a whole turn or more: it sees the same whatever azimuth it starts at, so a
@@ -190,5 +194,13 @@ void evaluatePasses(std::vector<ScanPass>& passes,
 
 /// The pass turned about R's z by `angle` (rad): a spin started at another azimuth.
 ScanPass rotatedPass(const ScanPass& pass, double angle);
+
+/// The stretches `first`…`last` of an evaluated pass (keys first…last + 1, times from 0). It
+/// covers the samples whose first or last covering stretch it keeps (the stretches between may
+/// not see a sample: a spin's seam, a helix's neighbouring turns), renumbered. A spin cut to
+/// less than a whole turn is no longer turnable(). With `pad` (s) it runs that much longer at
+/// either end where the pass does (keys interpolated linearly in time, as the pass runs).
+/// Precondition: first ≤ last < X_RS.size() − 1, a timed pass.
+ScanPass trimmedPass(const ScanPass& pass, std::size_t first, std::size_t last, double pad = 0.0);
 
 }  // namespace scanplan::scanner

@@ -546,4 +546,44 @@ TEST(Helix, AHelixCoversWhatTheLevelSpinsCoverInLessTimeThanThemAndTheMovesBetwe
   EXPECT_LT(helix.duration(), spin_time * (1.0 + 1.0 / static_cast<double>(spins.size())));
 }
 
+// The stretches a pass records for each sample it covers (the first and the last that see it,
+// what trimmedPass() keeps) do see it: each cut out alone and evaluated again covers the sample.
+// Around a cylinder a whole turn ends where it starts, so the samples under the seam are seen by
+// the first and the last stretch and by none between.
+TEST(PassCut, TheFirstAndLastStretchRecordedForASampleSeeIt) {
+  const PartOnTable scene(cylinder(0.04, 0.06, 128), Isometry3d::Identity(), kTable);
+  const PassSettings s = demoHead();
+  const auto sampling = scanplan::scanner::sampleArea(scene.part(), 0.003);
+  const SampleIndex index(sampling);
+  ScanPass pass = levelSpin(scene, s);
+  scanplan::scanner::evaluatePass(pass, scene, s, index);
+  ASSERT_EQ(pass.cover_first.size(), pass.covers.size());
+  ASSERT_EQ(pass.cover_last.size(), pass.covers.size());
+  ASSERT_GE(pass.covers.size(), 200u);
+  const std::size_t top = pass.X_RS.size() - 2;
+  std::size_t seam = 0;
+  for (std::size_t j = 0; j < pass.covers.size(); ++j) {
+    ASSERT_LE(pass.cover_first[j], pass.cover_last[j]);
+    ASSERT_LE(pass.cover_last[j], top);
+    seam += pass.cover_first[j] == 0 && pass.cover_last[j] == top ? 1u : 0u;
+  }
+  EXPECT_GT(seam, 5u);
+  for (std::size_t j = 0; j < pass.covers.size(); j += pass.covers.size() / 25) {
+    for (const std::size_t k : {pass.cover_first[j], pass.cover_last[j]}) {
+      ScanPass piece = scanplan::scanner::trimmedPass(pass, k, k);
+      ASSERT_EQ(piece.X_RS.size(), 2u);
+      EXPECT_TRUE(piece.X_RS[0].isApprox(pass.X_RS[k]));
+      scanplan::scanner::evaluatePass(piece, scene, s, index);
+      EXPECT_TRUE(std::binary_search(piece.covers.begin(), piece.covers.end(), pass.covers[j]))
+          << "sample " << pass.covers[j] << ", stretch " << k;
+    }
+  }
+  // Cut to its middle third, the pass is no longer a whole turn, and keeps fewer samples.
+  const ScanPass third = scanplan::scanner::trimmedPass(pass, top / 3, 2 * top / 3);
+  EXPECT_FALSE(third.turnable());
+  EXPECT_TRUE(pass.turnable());
+  EXPECT_LT(third.covers.size(), pass.covers.size());
+  EXPECT_NEAR(third.duration(), pass.t[2 * top / 3 + 1] - pass.t[top / 3], 1e-12);
+}
+
 }  // namespace

@@ -2,12 +2,15 @@
 
 #include <fmt/format.h>
 
+#include <scanplan/collision/map_links.h>
 #include <scanplan/collision/self_collision.h>
+#include <scanplan/config/job.h>
 #include <scanplan/config/robot_urdf.h>
 #include <scanplan/kinematics/units.h>
 #include "cli/commands/commands.h"
 #include "cli/io/json.h"
 #include "cli/io/output.h"
+#include "cli/report/plan_summary.h"
 
 namespace scanplan::cli {
 namespace {
@@ -110,6 +113,47 @@ std::string surveyText(const std::string& name,
          allow;
 }
 
+// What the maps of a job with this robot file would measure for its mesh links, under the
+// job's defaults (constraints.clearance): the pieces are fitted into, or read from, the cache
+// beside the file, where the job finds them.
+std::vector<collision::MapHull> mapLinks(const kinematics::RobotModel& robot,
+                                         const std::filesystem::path& robot_file) {
+  config::JobSpec job;
+  job.robot_file.resolved = std::filesystem::absolute(robot_file);
+  Progress progress("fitting link stand-ins");
+  return collision::robotMapLinks(robot, config::clearanceConfig(job), std::ref(progress));
+}
+
+std::vector<std::string> linkNames(const kinematics::RobotModel& robot) {
+  std::vector<std::string> names;
+  for (std::size_t k = 0; k < robot.definition().links.size(); ++k) {
+    const std::string& name = robot.definition().links[k].name;
+    names.push_back(!name.empty() ? name : k == 0 ? std::string("base") : fmt::format("link{}", k));
+  }
+  return names;
+}
+
+Json mapLinksJson(const std::vector<std::string>& names,
+                  const std::vector<collision::MapHull>& hulls) {
+  Json out = Json::array();
+  for (const collision::MapHull& h : hulls) {
+    Json link;
+    link["link"] = names[static_cast<std::size_t>(h.body)];
+    link["mesh_triangles"] = h.mesh_triangles;
+    link["hull_vertices"] = h.hull_vertices;
+    link["hull_margin_mm"] = toMm(h.hull_margin);
+    link["pieces"] = h.pieces;
+    link["piece_vertices"] = h.piece_vertices;
+    link["pieces_fit"] = h.pieces_fit;
+    link["pieces_from_cache"] = h.from_cache;
+    link["fit_seconds"] = h.fit_seconds;
+    link["maps_measure"] = !h.used ? "mesh" : h.pieces > 0 ? "pieces" : "hull";
+    link["margin_mm"] = toMm(h.margin);
+    out.push_back(std::move(link));
+  }
+  return out;
+}
+
 }  // namespace
 
 ExitCode runRobotCheck(const RobotCheckOptions& options) {
@@ -117,8 +161,16 @@ ExitCode runRobotCheck(const RobotCheckOptions& options) {
   const kinematics::RobotModel robot = config::buildRobotModel(spec, options.robot_file.string());
   const collision::SelfSurvey survey =
       collision::surveySelfCollisions(robot, options.samples, options.seed);
-  const std::string out = options.json ? jsonDocument(surveyJson(spec.name, options, survey))
-                                       : surveyText(spec.name, options, survey);
+  const std::vector<collision::MapHull> links = mapLinks(robot, options.robot_file);
+  std::string out;
+  if (options.json) {
+    Json json = surveyJson(spec.name, options, survey);
+    json["link_meshes"] = mapLinksJson(linkNames(robot), links);
+    out = jsonDocument(json);
+  } else {
+    out = surveyText(spec.name, options, survey);
+    if (!links.empty()) out += "\n" + linkMeshLines(linkNames(robot), links);
+  }
   std::fputs(out.c_str(), stdout);
   return ExitCode::kOk;
 }
@@ -133,10 +185,11 @@ ExitCode runRobotImport(const RobotImportOptions& options) {
   }
   checkOutputApartFromInputs(options.out_file, inputs);
   // The same checks as a job's robot: OPW against DH over the workspace.
-  buildRobotModel(robot.spec, options.source.urdf.string());
+  const kinematics::RobotModel model = buildRobotModel(robot.spec, options.source.urdf.string());
   relativeMeshPaths(robot.spec, options.out_file);
   writeFileAtomically(options.out_file,
                       config::robotToYaml(robot.spec, importHeader(options, robot)));
+  const std::string links = linkMeshLines(linkNames(model), mapLinks(model, options.out_file));
   std::size_t shapes = 0;
   for (const config::LinkSpec& link : robot.spec.links) shapes += link.shapes.size();
   const config::OpwSpec& o = robot.spec.opw;
@@ -145,6 +198,7 @@ ExitCode runRobotImport(const RobotImportOptions& options) {
       "opw        a1 %g, a2 %g, b %g, c1 %g, c2 %g, c3 %g, c4 %g mm; offsets [%s] deg; signs "
       "[%s]%s\n"
       "links      %zu collision shapes on 7 bodies (base, link1 … link6)\n"
+      "%s"
       "wrote      %s\n",
       robot.spec.name.c_str(), options.source.base_link.c_str(), options.source.tip_link.c_str(),
       o.a1_mm, o.a2_mm, o.b_mm, o.c1_mm, o.c2_mm, o.c3_mm, o.c4_mm,
@@ -153,7 +207,7 @@ ExitCode runRobotImport(const RobotImportOptions& options) {
       options.source.opw_parameters.empty()
           ? " (derived from the chain)"
           : " (from the opw_parameters file, checked against the chain)",
-      shapes, options.out_file.string().c_str());
+      shapes, links.c_str(), options.out_file.string().c_str());
   return ExitCode::kOk;
 }
 

@@ -162,24 +162,27 @@ Json autoScanJson(const pipeline::AutoScanReport& r) {
                       {"duration_s", p.duration},
                       {"gain", p.gain}});
   }
-  return {{"candidates", r.candidates},
-          {"aimed_candidates", r.aimed},
-          {"unreachable_candidates", r.unreachable.size()},
-          {"evaluation_samples", r.samples},
-          {"sample_spacing_mm", toMm(r.sample_spacing)},
-          {"planned_fraction", r.planned_fraction},
-          {"given_fraction", r.given_fraction},
-          {"stop", r.stop},
-          {"scan_s", r.scan_time},
-          {"transfer_estimate_s", r.transfer_time},
-          {"seconds", r.seconds},
-          {"set_cover",
-           {{"greedy_s", r.greedy_cost},
-            {"optimised_s", r.cover_cost},
-            {"lower_bound_s", r.cover_bound},
-            {"status", r.cover_status},
-            {"seconds", r.cover_seconds}}},
-          {"passes", passes}};
+  return {
+      {"candidates", r.candidates},
+      {"aimed_candidates", r.aimed},
+      {"unreachable_candidates", r.unreachable.size()},
+      {"evaluation_samples", r.samples},
+      {"sample_spacing_mm", toMm(r.sample_spacing)},
+      {"planned_fraction", r.planned_fraction},
+      {"given_fraction", r.given_fraction},
+      {"stop", r.stop},
+      {"scan_s", r.scan_time},
+      {"transfer_estimate_s", r.transfer_time},
+      {"cut",
+       {{"scan_s", r.cut_time}, {"passes_left_out", r.cut_dropped}, {"passes_split", r.cut_split}}},
+      {"seconds", r.seconds},
+      {"set_cover",
+       {{"greedy_s", r.greedy_cost},
+        {"optimised_s", r.cover_cost},
+        {"lower_bound_s", r.cover_bound},
+        {"status", r.cover_status},
+        {"seconds", r.cover_seconds}}},
+      {"passes", passes}};
 }
 
 }  // namespace

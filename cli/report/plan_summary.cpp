@@ -64,10 +64,13 @@ std::string autoScanSummary(const pipeline::AutoScanReport& r) {
       "scannable area planned ({} samples every {:.1f} mm); stopped: {}\n",
       r.passes.size(), spins, r.passes.size() - spins, r.candidates, r.seconds,
       100.0 * r.planned_fraction, r.counted, toMm(r.sample_spacing), r.stop);
-  s += fmt::format("           {:.1f} s scanning in the passes chosen{}\n", r.scan_time,
-                   r.unreachable.empty() ? std::string()
-                                         : fmt::format("; {} candidates out of the arm's reach",
-                                                       r.unreachable.size()));
+  s += fmt::format(
+      "           {:.1f} s scanning in the passes chosen, {:.1f} s cut from them ({} left out, {} "
+      "split){}\n",
+      r.scan_time, r.cut_time, r.cut_dropped, r.cut_split,
+      r.unreachable.empty()
+          ? std::string()
+          : fmt::format("; {} candidates out of the arm's reach", r.unreachable.size()));
   if (!r.cover_status.empty()) {
     s += fmt::format(
         "           set cover: {:.1f} s of passes and moves by greedy, {:.1f} s by the integer "
@@ -114,16 +117,25 @@ std::string linkMeshLine(const std::string& name, const collision::MapHull& h) {
 
 }  // namespace
 
-std::string linkMeshSummary(const collision::Scene& scene) {
+std::string linkMeshLines(const std::vector<std::string>& names,
+                          const std::vector<collision::MapHull>& hulls) {
   std::string text;
-  for (const collision::MapHull& h : scene.mapHulls())
-    text += linkMeshLine(scene.bodies()[static_cast<std::size_t>(h.body)].name, h);
-  if (!text.empty()) {
-    return "link mesh  convex stand-ins hold each mesh link in the maps, never farther than the "
-           "mesh and at most the stated margin nearer (constraints.clearance.link_meshes); "
-           "validation measures the meshes\n" +
-           text;
+  for (const collision::MapHull& h : hulls) {
+    const auto i = static_cast<std::size_t>(h.body);
+    text += linkMeshLine(i < names.size() ? names[i] : fmt::format("body {}", i), h);
   }
+  if (text.empty()) return text;
+  return "link mesh  convex stand-ins hold each mesh link in the maps, never farther than the "
+         "mesh and at most the stated margin nearer (constraints.clearance.link_meshes); "
+         "validation measures the meshes\n" +
+         text;
+}
+
+std::string linkMeshSummary(const collision::Scene& scene) {
+  std::vector<std::string> names;
+  for (const collision::BodyInfo& b : scene.bodies()) names.push_back(b.name);
+  std::string text = linkMeshLines(names, scene.mapHulls());
+  if (!text.empty()) return text;
   std::size_t triangles = 0;
   for (const collision::BodyInfo& b : scene.bodies()) {
     if (b.motion == collision::BodyMotion::kRobotLink) triangles += b.triangles;

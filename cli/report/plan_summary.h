@@ -26,6 +26,9 @@ std::string pathSummary(const scanner::LaserWindow& window,
 /// How the maps measured robot link meshes: one line per link meshed as a hull (triangles,
 /// hull vertices, margin), or one line for exact meshes; empty without link meshes.
 std::string linkMeshSummary(const collision::Scene& scene);
+/// The per-link lines of linkMeshSummary() for links named `names[h.body]`, and their heading.
+std::string linkMeshLines(const std::vector<std::string>& names,
+                          const std::vector<collision::MapHull>& hulls);
 /// One line for the map (`seconds` to build it), one per branch.
 std::string mapSummary(const planner::ConfigMap& map, double seconds);
 /// The plan's lines after the map: the chosen path, rejected branches, refinement, the DP gap,
