@@ -100,9 +100,11 @@ std::string linkMeshLine(const std::string& name, const collision::MapHull& h) {
   std::string text = fmt::format("  {:<8} mesh {} triangles, hull of {} vertices {:.1f} mm out",
                                  name, h.mesh_triangles, h.hull_vertices, toMm(h.hull_margin));
   if (h.pieces > 0) {
-    text += fmt::format("; {} convex pieces ({} vertices) at most {:.1f} mm out, {} in {:.1f} s",
-                        h.pieces, h.piece_vertices, toMm(h.margin),
-                        h.from_cache ? "read from the cache" : "fitted", h.fit_seconds);
+    const std::string margin =
+        h.used ? fmt::format(" at most {:.1f} mm out", toMm(h.margin)) : std::string();
+    text += fmt::format("; {} convex pieces ({} vertices){}, {} in {:.1f} s", h.pieces,
+                        h.piece_vertices, margin, h.from_cache ? "read from the cache" : "fitted",
+                        h.fit_seconds);
   }
   if (h.used)
     return text + fmt::format(": the maps measure the {}\n", h.pieces > 0 ? "pieces" : "hull");
