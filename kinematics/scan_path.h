@@ -23,6 +23,11 @@ struct ScanPath {
   /// planned per segment, and the program joins segments with point-to-point moves of every
   /// axis (kinematics/ptp_move.h). The automatic scan makes each pass a segment.
   std::vector<std::size_t> breaks;
+  /// Per segment (segmentRanges() order), the time it takes at its own speed, s. Its samples
+  /// stand a whole number of dt apart, so they span that time rounded up; the program runs each
+  /// segment in its own time where the axes allow (pipeline::retimeSegment()). Empty, or of
+  /// another size: the samples' span.
+  std::vector<double> own_durations;
 
   double duration() const { return samples.empty() ? 0.0 : samples.back().t; }
 };

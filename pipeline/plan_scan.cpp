@@ -73,13 +73,15 @@ void checkAutoScan(const AutoScanSettings& a) {
 
 // Appends a pass (part-frame keys, times from 0) to `path` as a segment of its own, sampled every
 // path.dt: n steps over its duration rounded up to whole steps (a little slower, never faster),
-// the first sample one step after the path's last.
+// the first sample one step after the path's last. Its own duration is kept beside the path:
+// the program runs it in that time where the axes allow.
 void appendSegment(kinematics::ScanPath& path, const scanner::FileSpec& pass) {
   const auto& keys = pass.samples;
   const double duration = keys.back().t - keys.front().t;
   const auto n = static_cast<std::size_t>(std::max(1.0, std::ceil(duration / path.dt - 1e-9)));
   const double t0 = path.samples.empty() ? 0.0 : path.samples.back().t + path.dt;
   if (!path.samples.empty()) path.breaks.push_back(path.samples.size());
+  path.own_durations.push_back(duration);
   std::size_t k = 0;
   for (std::size_t i = 0; i <= n; ++i) {
     const double t = duration * static_cast<double>(i) / static_cast<double>(n);
@@ -110,6 +112,9 @@ void autoPath(const ScanProblem& problem,
   if (plan.passes.empty()) return;
   kinematics::ScanPath& path = out.path.path;
   const double start = path.samples.empty() ? 0.0 : path.samples.back().t + path.dt;
+  path.own_durations.clear();  // the hand-written path's segments run at their samples' times
+  for (const auto& [begin, end] : kinematics::segmentRanges(path))
+    path.own_durations.push_back(path.samples[end - 1].t - path.samples[begin].t);
   double samples = static_cast<double>(path.samples.size());
   for (const scanner::FileSpec& pass : plan.passes)
     samples += std::ceil((pass.samples.back().t - pass.samples.front().t) / path.dt) + 1.0;
@@ -128,10 +133,13 @@ void autoPath(const ScanProblem& problem,
   report.kind = "auto";
   report.start_time = start;
   report.duration = path.samples.back().t - start;
+  double own = 0.0;
+  for (const scanner::FileSpec& pass : plan.passes)
+    own += pass.samples.back().t - pass.samples.front().t;
   report.note = fmt::format(
-      "{} passes (scanning time; the moves between them come after "
-      "planning)",
-      plan.passes.size());
+      "{} passes, {:.1f} s of scanning at their own speed (the path's samples stand whole "
+      "steps apart; the moves between the passes come after planning)",
+      plan.passes.size(), own);
   out.path.elements.push_back(report);
 }
 

@@ -661,22 +661,74 @@ kinematics::Trajectory reversedSegment(const kinematics::Trajectory& segment) {
 
 namespace scanplan::pipeline {
 
-double slowToLimits(const kinematics::CellModel& cell,
-                    kinematics::Trajectory& segment,
-                    double speed_scale) {
-  const kinematics::AxisLimits limits = kinematics::axisLimits(cell.robot, cell.table);
-  auto& s = segment.samples;
-  double ratio = 1.0;
+namespace {
+
+// The largest share of its speed limit (scaled) any axis reaches between two samples.
+double speedRatio(const kinematics::AxisLimits& limits,
+                  const std::vector<TrajectorySample>& s,
+                  double speed_scale) {
+  double ratio = 0.0;
   for (std::size_t k = 1; k < s.size(); ++k) {
     const double dt = s[k].t - s[k - 1].t;
     const AxisVector speed = (axesOf(s[k]) - axesOf(s[k - 1])).cwiseAbs() / dt;
     ratio = std::max(ratio, (speed.array() / (speed_scale * limits.speed.array())).maxCoeff());
   }
-  if (ratio > 1.0) {
-    const double t0 = s.front().t;
-    for (auto& x : s) x.t = t0 + ratio * (x.t - t0);
+  return ratio;
+}
+
+// Per axis, the largest share of its acceleration limit (scaled) it reaches: the change of the
+// speeds between neighbouring intervals over the mean interval, as validation measures it.
+AxisVector accelRatios(const kinematics::AxisLimits& limits,
+                       const std::vector<TrajectorySample>& s,
+                       double speed_scale) {
+  AxisVector ratio = AxisVector::Zero();
+  for (std::size_t k = 2; k < s.size(); ++k) {
+    const double dt1 = s[k].t - s[k - 1].t, dt0 = s[k - 1].t - s[k - 2].t;
+    const AxisVector v1 = (axesOf(s[k]) - axesOf(s[k - 1])) / dt1;
+    const AxisVector v0 = (axesOf(s[k - 1]) - axesOf(s[k - 2])) / dt0;
+    const AxisVector a = (v1 - v0).cwiseAbs() / (0.5 * (dt0 + dt1));
+    ratio = ratio.cwiseMax((a.array() / (speed_scale * limits.accel.array())).matrix());
   }
   return ratio;
+}
+
+void stretchTimes(std::vector<TrajectorySample>& s, double factor) {
+  if (s.empty() || factor == 1.0) return;
+  const double t0 = s.front().t;
+  for (auto& x : s) x.t = t0 + factor * (x.t - t0);
+}
+
+}  // namespace
+
+double slowToLimits(const kinematics::CellModel& cell,
+                    kinematics::Trajectory& segment,
+                    double speed_scale) {
+  const kinematics::AxisLimits limits = kinematics::axisLimits(cell.robot, cell.table);
+  const double ratio = std::max(1.0, speedRatio(limits, segment.samples, speed_scale));
+  stretchTimes(segment.samples, ratio);
+  return ratio;
+}
+
+double retimeSegment(const kinematics::CellModel& cell,
+                     kinematics::Trajectory& segment,
+                     double duration,
+                     double speed_scale) {
+  constexpr double kLeast = 0.1;  // of its span at most: times stay well apart
+  auto& s = segment.samples;
+  if (s.size() < 2) return 1.0;
+  const double span = s.back().t - s.front().t;
+  if (!(span > 0.0)) return 1.0;
+  const kinematics::AxisLimits limits = kinematics::axisLimits(cell.robot, cell.table);
+  // Times scaled by c scale speeds by 1/c and accelerations by 1/c².
+  const AxisVector accel = accelRatios(limits, s, speed_scale);
+  double joints = 0.0;  // a joint's acceleration is held to its limit only where it was within
+  for (int j = 1; j < accel.size(); ++j) joints = std::max(joints, std::min(1.0, accel(j)));
+  const double table = cell.table.max_accel > 0.0 ? accel(0) : 0.0;
+  const double factor =
+      std::max({std::clamp(duration / span, kLeast, 1.0), speedRatio(limits, s, speed_scale),
+                std::sqrt(joints), std::sqrt(table)});
+  stretchTimes(s, factor);
+  return factor;
 }
 
 }  // namespace scanplan::pipeline

@@ -114,6 +114,17 @@ double slowToLimits(const kinematics::CellModel& cell,
                     kinematics::Trajectory& segment,
                     double speed_scale = 0.98);
 
+/// The segment run in `duration` s (it spans that or more: the path's samples stand whole time
+/// steps apart), evenly, where each joint's and the table's speed and the table's acceleration
+/// stay within `speed_scale` of their limits (and each joint's acceleration within its limit
+/// where it was before); else as near that time as they allow; else slowed to them, as
+/// slowToLimits(). A pass then runs at the speed it was planned for. Returns the factor its
+/// duration changed by (< 1: faster).
+double retimeSegment(const kinematics::CellModel& cell,
+                     kinematics::Trajectory& segment,
+                     double duration,
+                     double speed_scale = 0.98);
+
 /// The program's time split of a trajectory.
 ProgramTimes programTimes(const kinematics::Trajectory& trajectory);
 

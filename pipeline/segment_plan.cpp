@@ -285,33 +285,83 @@ MoveSettings moveSettings(const ScanProblem& problem) {
   return m;
 }
 
-// The kept segments slowed to the axes' speed limits where needed, put in the order of the
-// shortest moves (the hand-written path, when there is one, first) and joined. The program's
-// start times and the dropped segments are mapped back to the segments' own indices.
+// The kept segments in the order of the shortest moves, each run in its own time (retimeSegment():
+// as fast as planned, within the axes' limits) and, to fall back on, at its samples' times.
+struct OrderedRuns {
+  std::vector<std::size_t> index;                  // the kept segments' indices
+  SegmentOrder order;                              // into index
+  std::vector<kinematics::Trajectory> fast, slow;  // in the order they run, reversed as they run
+};
+
+OrderedRuns orderedRuns(const kinematics::CellModel& cell,
+                        std::vector<kinematics::Trajectory>& trajectories,
+                        const std::vector<double>& own_durations,
+                        const std::vector<std::uint8_t>& kept,
+                        std::size_t fixed) {
+  OrderedRuns out;
+  std::vector<kinematics::Trajectory> fast, slow;
+  for (std::size_t s = 0; s < trajectories.size(); ++s) {
+    if (!kept[s]) continue;
+    slowToLimits(cell, trajectories[s]);
+    slow.push_back(trajectories[s]);
+    const auto& samples = trajectories[s].samples;
+    const double span = samples.back().t - samples.front().t;
+    retimeSegment(cell, trajectories[s],
+                  own_durations.size() == trajectories.size() ? own_durations[s] : span);
+    out.index.push_back(s);
+    fast.push_back(std::move(trajectories[s]));
+  }
+  out.order = orderSegments(cell, fast, fixed);
+  for (std::size_t k = 0; k < out.order.order.size(); ++k) {
+    const std::size_t i = out.order.order[k];
+    out.fast.push_back(out.order.reversed[k] ? reversedSegment(fast[i]) : fast[i]);
+    out.slow.push_back(out.order.reversed[k] ? reversedSegment(slow[i]) : slow[i]);
+  }
+  return out;
+}
+
+// The runs joined at their own speed. A run no move reaches at that speed (its ends run fastest
+// then) is tried once more at its samples' times, with the runs either side of it: the join that
+// drops fewer runs is kept, then the shorter. `ordered` returns the runs as joined.
+JoinedProgram joinFastest(const collision::Scene& scene,
+                          const OrderedRuns& runs,
+                          const MoveSettings& moves,
+                          std::vector<kinematics::Trajectory>& ordered) {
+  ordered = runs.fast;
+  JoinedProgram joined = joinSegments(scene, ordered, moves);
+  if (joined.dropped.empty()) return joined;
+  std::vector<kinematics::Trajectory> again = ordered;
+  for (const auto& [k, why] : joined.dropped)
+    for (std::size_t j = k == 0 ? 0 : k - 1; j <= k + 1 && j < again.size(); ++j)
+      again[j] = runs.slow[j];
+  JoinedProgram other = joinSegments(scene, again, moves);
+  const auto worse = [](const JoinedProgram& a, const JoinedProgram& b) {
+    return a.dropped.size() != b.dropped.size() ? a.dropped.size() > b.dropped.size()
+                                                : a.times.total > b.times.total;
+  };
+  if (!worse(joined, other)) return joined;
+  ordered = std::move(again);
+  return other;
+}
+
+// The kept segments joined in the order of the shortest moves (the hand-written path, when there
+// is one, first), each as fast as planned where a move reaches it so (joinFastest()). The
+// program's start times and the dropped segments are mapped back to the segments' own indices.
 JoinedProgram joinInOrder(const collision::Scene& scene,
                           std::vector<kinematics::Trajectory>& trajectories,
+                          const std::vector<double>& own_durations,
                           const std::vector<std::uint8_t>& kept,
                           bool automatic,
                           std::size_t given_segments,
                           double max_program,
                           const MoveSettings& moves,
                           ScanPlan& plan) {
-  std::vector<std::size_t> index;
-  std::vector<kinematics::Trajectory> run;
-  for (std::size_t s = 0; s < trajectories.size(); ++s) {
-    if (!kept[s]) continue;
-    slowToLimits(scene.cell(), trajectories[s]);
-    index.push_back(s);
-    run.push_back(std::move(trajectories[s]));
-  }
   const std::size_t fixed = automatic && kept[0] && given_segments > 0 ? 1 : 0;
-  const SegmentOrder order = orderSegments(scene.cell(), run, fixed);
+  const OrderedRuns runs = orderedRuns(scene.cell(), trajectories, own_durations, kept, fixed);
+  const std::vector<std::size_t>& index = runs.index;
+  const SegmentOrder& order = runs.order;
   std::vector<kinematics::Trajectory> ordered;
-  for (std::size_t k = 0; k < order.order.size(); ++k) {
-    const auto& seg = run[order.order[k]];
-    ordered.push_back(order.reversed[k] ? reversedSegment(seg) : seg);
-  }
-  JoinedProgram joined = joinSegments(scene, ordered, moves);
+  JoinedProgram joined = joinFastest(scene, runs, moves, ordered);
   if (max_program > 0.0) cutAt(max_program, ordered, joined);
   JoinedProgram out;
   out.trajectory = std::move(joined.trajectory);
@@ -424,9 +474,10 @@ void planSegments(const ScanProblem& problem, const PlanOptions& options, ScanPl
   plan.choice = joinChoices(segs, kept);
   if (plan.choice.dp && plan.choice.chosen.method != "dp") plan.times.dp = plan.choice.dp->seconds;
   const auto tj = Clock::now();
-  JoinedProgram joined = joinInOrder(
-      *p.scene, trajectories, kept, p.auto_scan.has_value(), problem.path.elements.empty() ? 0 : 1,
-      problem.auto_scan ? problem.auto_scan->max_program : 0.0, moveSettings(problem), plan);
+  JoinedProgram joined = joinInOrder(*p.scene, trajectories, p.path.path.own_durations, kept,
+                                     p.auto_scan.has_value(), problem.path.elements.empty() ? 0 : 1,
+                                     problem.auto_scan ? problem.auto_scan->max_program : 0.0,
+                                     moveSettings(problem), plan);
   std::sort(plan.dropped.begin(), plan.dropped.end());
   planner::TrajectoryBuild build;
   build.ok = true;

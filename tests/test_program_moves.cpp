@@ -252,3 +252,109 @@ TEST_F(ProgramMoves, AProgramTimeLimitKeepsTheBestCoverageThatFitsIt) {
 }
 
 }  // namespace
+
+namespace {
+
+// A segment of `n` steps `dt` apart: joint 1 and the table turn evenly at `speed` (a share of
+// each one's limit), the table's rate changing by `accel` (a share of its limit) over the middle.
+kinematics::Trajectory evenSegment(
+    const kinematics::CellModel& cell, int n, double dt, double speed, double accel) {
+  kinematics::Trajectory seg;
+  const double w1 = speed * cell.robot.joint(0).max_speed, w0 = speed * cell.table.max_speed;
+  const double a0 = accel * cell.table.max_accel;
+  for (int k = 0; k <= n; ++k) {
+    kinematics::TrajectorySample s;
+    s.t = 1.0 + dt * k;
+    s.q(0) = w1 * dt * k;
+    const double t = dt * k, mid = 0.5 * dt * n;
+    s.theta = w0 * t + (t > mid ? 0.5 * a0 * (t - mid) * (t - mid) : 0.0);
+    s.scanning = true;
+    seg.samples.push_back(s);
+  }
+  return seg;
+}
+
+double largestSpeed(const kinematics::Trajectory& seg, int axis) {
+  double v = 0.0;
+  for (std::size_t k = 1; k < seg.samples.size(); ++k) {
+    const auto &a = seg.samples[k - 1], &b = seg.samples[k];
+    const double d = axis < 0 ? b.theta - a.theta : b.q(axis) - a.q(axis);
+    v = std::max(v, std::abs(d) / (b.t - a.t));
+  }
+  return v;
+}
+
+}  // namespace
+
+TEST_F(ProgramMoves, ARetimedSegmentRunsInItsOwnTimeWhereTheAxesAllowIt) {
+  const kinematics::CellModel& cell = problem_->cell;
+  // 5 steps of 0.2 s, the axes at 40 % of their speed: the segment's own 0.5 s doubles the
+  // speeds to 80 %, within the limits: it runs in 0.5 s, evenly, starting where it did.
+  kinematics::Trajectory seg = evenSegment(cell, 5, 0.2, 0.4, 0.0);
+  EXPECT_NEAR(pipeline::retimeSegment(cell, seg, 0.5), 0.5, 1e-12);
+  EXPECT_NEAR(seg.samples.front().t, 1.0, 1e-12);
+  EXPECT_NEAR(seg.samples.back().t - seg.samples.front().t, 0.5, 1e-12);
+  for (std::size_t k = 1; k < seg.samples.size(); ++k)
+    EXPECT_NEAR(seg.samples[k].t - seg.samples[k - 1].t, 0.1, 1e-12);
+  // Its own 0.3 s would take joint 1 past its limit: it runs as fast as 98 % of the limit allows.
+  seg = evenSegment(cell, 5, 0.2, 0.4, 0.0);
+  const double f = pipeline::retimeSegment(cell, seg, 0.3);
+  EXPECT_GT(f, 0.3);
+  EXPECT_NEAR(largestSpeed(seg, 0), 0.98 * cell.robot.joint(0).max_speed, 1e-9);
+  EXPECT_LE(largestSpeed(seg, -1), 0.98 * cell.table.max_speed * (1.0 + 1e-9));
+  // Already too fast: slowed as slowToLimits() does, never sped up.
+  seg = evenSegment(cell, 5, 0.2, 1.5, 0.0);
+  EXPECT_GT(pipeline::retimeSegment(cell, seg, 0.5), 1.0);
+  EXPECT_NEAR(largestSpeed(seg, 0), 0.98 * cell.robot.joint(0).max_speed, 1e-9);
+}
+
+TEST_F(ProgramMoves, ARetimedSegmentKeepsTheTableWithinItsAcceleration) {
+  // The table speeds up at 60 % of its acceleration limit: halving the time would quadruple it,
+  // so the segment shortens only to sqrt(0.6 / 0.98) of its span, where it reaches 98 %.
+  const kinematics::CellModel& cell = problem_->cell;
+  ASSERT_GT(cell.table.max_accel, 0.0);
+  kinematics::Trajectory seg = evenSegment(cell, 10, 0.05, 0.05, 0.6);
+  const kinematics::Trajectory before = seg;
+  const double f = pipeline::retimeSegment(cell, seg, 0.25);
+  EXPECT_NEAR(f, std::sqrt(0.6 / 0.98), 1e-9);
+  EXPECT_GT(f, 0.5);
+  EXPECT_LT(f, 1.0);
+  // The table's rate changes by the most at the knot where the acceleration starts: measured
+  // as validation does, on the retimed samples.
+  double a = 0.0;
+  const auto& s = seg.samples;
+  for (std::size_t k = 2; k < s.size(); ++k) {
+    const double w1 = (s[k].theta - s[k - 1].theta) / (s[k].t - s[k - 1].t);
+    const double w0 = (s[k - 1].theta - s[k - 2].theta) / (s[k - 1].t - s[k - 2].t);
+    a = std::max(a, std::abs(w1 - w0) / (0.5 * (s[k].t - s[k - 2].t)));
+  }
+  EXPECT_NEAR(a, 0.98 * cell.table.max_accel, 1e-9);
+  EXPECT_NEAR(s.back().t - s.front().t, f * (before.samples.back().t - before.samples.front().t),
+              1e-12);
+}
+
+TEST_F(ProgramMoves, EachPassRunsNoFasterThanPlannedAndMostInTheirOwnTime) {
+  // The passes' own durations are what their point spacing needs; the path's samples stand
+  // whole steps apart and span more. In the program each run lasts its own time (or longer
+  // where an axis needs it), never less.
+  const pipeline::ScanPlan& plan = *plan_;
+  ASSERT_TRUE(plan.planned());
+  ASSERT_TRUE(plan.prepared && plan.prepared->auto_scan);
+  const auto& passes = plan.prepared->auto_scan->passes;
+  const auto runs = scanningRuns(plan.trajectory->trajectory);
+  ASSERT_EQ(runs.size(), plan.order.size() - plan.dropped.size());
+  std::size_t own = 0;
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const auto& run = plan.order[k];
+    ASSERT_LT(run.segment, passes.size());
+    const double wanted = passes[run.segment].duration;
+    EXPECT_NEAR(runs[k].samples.front().t, run.start, 1e-9);
+    EXPECT_GE(runs[k].duration() - runs[k].samples.front().t, wanted - 1e-9);
+    if (runs[k].duration() - runs[k].samples.front().t < wanted + 1e-6) ++own;
+  }
+  EXPECT_GE(own, runs.size() / 2) << "most passes run in their own time";
+  // Altogether: no less than the passes' own time, and less than whole steps would take.
+  const double planned = plan.prepared->auto_scan->scan_time;
+  EXPECT_GE(plan.program.scanning, planned - 1e-6);
+  EXPECT_LT(plan.program.scanning, planned + 0.2 * static_cast<double>(runs.size()));
+}
