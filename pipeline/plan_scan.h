@@ -67,10 +67,13 @@ struct PathChoice {
   PlannerOutcome chosen;
   std::optional<planner::RefineResult> refine;  ///< of the chosen branch, when refinement ran
   std::vector<double> theta;                    ///< the final path (refined when that helped)
-  planner::ObjectiveTerms terms;                ///< evaluate() of `theta`
-  std::optional<planner::PlanResult> dp;        ///< DP on the chosen branch (the yardstick)
-  int dp_subdivisions = 1;                      ///< DP's angle grid: map step / this
-  std::vector<PlannerOutcome> others;           ///< PlanOptions::compare: the other planners
+  /// rad, the even shift `theta` got after planning to start where the table stood after the
+  /// segment before it in the program (0: none; see ProgramTimes::held).
+  double table_shift = 0.0;
+  planner::ObjectiveTerms terms;          ///< evaluate() of `theta`
+  std::optional<planner::PlanResult> dp;  ///< DP on the chosen branch (the yardstick)
+  int dp_subdivisions = 1;                ///< DP's angle grid: map step / this
+  std::vector<PlannerOutcome> others;     ///< PlanOptions::compare: the other planners
   /// Branches whose path could not be executed, best J first, with the reason.
   std::vector<std::pair<std::size_t, std::string>> rejected;
   /// Why the chosen branch won (e.g. "lowest J of 6 solved branches").

@@ -644,6 +644,14 @@ SegmentOrder orderSegments(const kinematics::CellModel& cell,
   return best;
 }
 
+double moveCost(const kinematics::CellModel& cell,
+                const kinematics::Trajectory& from,
+                const kinematics::Trajectory& to,
+                const MoveSettings& settings) {
+  const MoveCosts cost(cell, {from, to}, settings);
+  return cost(0, false, 1, false);
+}
+
 kinematics::Trajectory reversedSegment(const kinematics::Trajectory& segment) {
   kinematics::Trajectory out;
   const auto& s = segment.samples;

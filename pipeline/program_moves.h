@@ -52,6 +52,9 @@ struct ProgramTimes {
   double moving = 0.0;      ///< s, the rest: moves between passes (and stretches that do not scan)
   std::size_t moves = 0;    ///< moves between segments
   std::size_t detours = 0;  ///< of them, backed off because the direct move was blocked
+  /// Passes whose table path was shifted to start where the table stood after the pass before
+  /// (the moves into and out of them then shorter). Set by planScan().
+  std::size_t held = 0;
   /// s of the moves' time by the axis that set it (kinematics::ptpTimeByAxis(): 0 the table,
   /// 1…6 joints 1…6); sums to the moves' time. Set by joinSegments().
   kinematics::AxisVector moving_by_axis = kinematics::AxisVector::Zero();
@@ -86,6 +89,14 @@ SegmentOrder orderSegments(const kinematics::CellModel& cell,
                            const std::vector<kinematics::Trajectory>& segments,
                            std::size_t fixed,
                            const MoveSettings& settings = {});
+
+/// The time orderSegments() costs the move from the end of `from` (at its end speed) to the start
+/// of `to` (at its start speed) at: ptpDuration() under the moves' limits, the table the shorter
+/// way round when it turns without end. Both non-empty.
+double moveCost(const kinematics::CellModel& cell,
+                const kinematics::Trajectory& from,
+                const kinematics::Trajectory& to,
+                const MoveSettings& settings = {});
 
 /// A segment run backwards: the same poses in reverse order over the same times.
 kinematics::Trajectory reversedSegment(const kinematics::Trajectory& segment);

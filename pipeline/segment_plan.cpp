@@ -6,6 +6,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <numbers>
 #include <optional>
 #include <set>
 #include <tuple>
@@ -33,6 +34,7 @@ struct Segment {
   planner::ConfigMap map;
   PathChoice choice;
   std::optional<planner::TrajectoryBuild> build;
+  std::size_t build_branch = 0;  // the map branch `build` followed
   double trajectory_seconds = 0.0;
 };
 
@@ -50,6 +52,7 @@ void planSegment(const ScanProblem& problem,
     const auto t = Clock::now();
     seg.build = planner::buildTrajectory(*p.scene, problem.constraints, seg.path, theta,
                                          seg.map.branches[b]);
+    seg.build_branch = b;
     seg.trajectory_seconds += since(t);
     return executableReason(*seg.build);
   };
@@ -293,31 +296,112 @@ struct OrderedRuns {
   std::vector<kinematics::Trajectory> fast, slow;  // in the order they run, reversed as they run
 };
 
+// A segment's own duration: as planned, or its samples' span.
+double ownDuration(const std::vector<double>& own, std::size_t s, const kinematics::Trajectory& t) {
+  return s < own.size() ? own[s] : t.samples.back().t - t.samples.front().t;
+}
+
+// A segment as it may run, `reversed` or not: at its samples' times slowed to the axes' limits,
+// and in its own time.
+std::pair<kinematics::Trajectory, kinematics::Trajectory> runVersions(
+    const kinematics::CellModel& cell, kinematics::Trajectory t, double own, bool reversed) {
+  slowToLimits(cell, t);
+  kinematics::Trajectory fast = t;
+  retimeSegment(cell, fast, own);
+  if (!reversed) return {std::move(t), std::move(fast)};
+  return {reversedSegment(t), reversedSegment(fast)};
+}
+
 OrderedRuns orderedRuns(const kinematics::CellModel& cell,
-                        std::vector<kinematics::Trajectory>& trajectories,
+                        const std::vector<kinematics::Trajectory>& trajectories,
                         const std::vector<double>& own_durations,
                         const std::vector<std::uint8_t>& kept,
                         std::size_t fixed) {
   OrderedRuns out;
-  std::vector<kinematics::Trajectory> fast, slow;
+  std::vector<kinematics::Trajectory> fast;
   for (std::size_t s = 0; s < trajectories.size(); ++s) {
     if (!kept[s]) continue;
-    slowToLimits(cell, trajectories[s]);
-    slow.push_back(trajectories[s]);
-    const auto& samples = trajectories[s].samples;
-    const double span = samples.back().t - samples.front().t;
-    retimeSegment(cell, trajectories[s],
-                  own_durations.size() == trajectories.size() ? own_durations[s] : span);
     out.index.push_back(s);
-    fast.push_back(std::move(trajectories[s]));
+    const double own = ownDuration(own_durations, s, trajectories[s]);
+    fast.push_back(runVersions(cell, trajectories[s], own, false).second);
   }
   out.order = orderSegments(cell, fast, fixed);
   for (std::size_t k = 0; k < out.order.order.size(); ++k) {
-    const std::size_t i = out.order.order[k];
-    out.fast.push_back(out.order.reversed[k] ? reversedSegment(fast[i]) : fast[i]);
-    out.slow.push_back(out.order.reversed[k] ? reversedSegment(slow[i]) : slow[i]);
+    const std::size_t s = out.index[out.order.order[k]];
+    auto [slow, run] =
+        runVersions(cell, trajectories[s], ownDuration(own_durations, s, trajectories[s]),
+                    out.order.reversed[k] != 0);
+    out.slow.push_back(std::move(slow));
+    out.fast.push_back(std::move(run));
   }
   return out;
+}
+
+// Segment s's table path shifted evenly by `delta` (rad) and its trajectory built again on the
+// branch it followed: the build when the arm follows it there (executable, its least f at least
+// half of what it was), else nullopt.
+std::optional<planner::TrajectoryBuild> shiftedBuild(const ScanProblem& problem,
+                                                     const PreparedScan& p,
+                                                     const Segment& seg,
+                                                     double delta,
+                                                     std::vector<double>& theta) {
+  theta = seg.choice.theta;
+  for (double& x : theta) x += delta;
+  if (!problem.cell.table.continuous) {
+    const auto [lo, hi] = std::minmax_element(theta.begin(), theta.end());
+    if (*lo < p.map.angles.front() || *hi > p.map.angles.back()) return std::nullopt;
+  }
+  planner::TrajectoryBuild build = planner::buildTrajectory(
+      *p.scene, problem.constraints, seg.path, theta, seg.map.branches[seg.build_branch]);
+  if (!executableReason(build).empty() || build.min_f < 0.5 * seg.build->min_f) return std::nullopt;
+  return build;
+}
+
+// The table held across the moves: in the order the program runs them, each segment's table
+// path shifted evenly to start where the run before ends (the shorter way round on a table that
+// turns without end), where the arm follows it there and the move into it gets shorter (the
+// table, slow to start and stop, often sets a move's time). In order: each shift depends on
+// where the run before ends. A segment planned on a joint-wrap sheet keeps its path. Returns the
+// segments shifted.
+std::size_t holdTable(const ScanProblem& problem,
+                      const PreparedScan& p,
+                      const std::vector<double>& own_durations,
+                      std::vector<Segment>& segs,
+                      OrderedRuns& runs) {
+  constexpr double kLeastShift = 0.0035;  // rad (0.2°): a smaller shift gains nothing
+  const kinematics::CellModel& cell = p.scene->cell();
+  std::size_t shifted = 0;
+  for (std::size_t k = 1; k < runs.fast.size(); ++k) {
+    const std::size_t s = runs.index[runs.order.order[k]];
+    Segment& seg = segs[s];
+    if (!seg.build || seg.choice.sheet_map || seg.choice.theta.size() != seg.path.samples.size())
+      continue;
+    const kinematics::Trajectory& before = runs.fast[k - 1];
+    double delta = before.samples.back().theta - runs.fast[k].samples.front().theta;
+    if (cell.table.continuous) delta = std::remainder(delta, 2.0 * std::numbers::pi);
+    if (std::abs(delta) < kLeastShift) continue;
+    // The moves into it and out of it (to the next run as it stands) together.
+    const auto around = [&](const kinematics::Trajectory& run) {
+      return moveCost(cell, before, run) +
+             (k + 1 < runs.fast.size() ? moveCost(cell, run, runs.fast[k + 1]) : 0.0);
+    };
+    std::vector<double> theta;
+    std::optional<planner::TrajectoryBuild> build = shiftedBuild(problem, p, seg, delta, theta);
+    if (!build) continue;
+    auto [slow, fast] =
+        runVersions(cell, build->trajectory, ownDuration(own_durations, s, build->trajectory),
+                    runs.order.reversed[k] != 0);
+    if (!(around(fast) < around(runs.fast[k]) - 1e-3)) continue;
+    runs.fast[k] = std::move(fast);
+    runs.slow[k] = std::move(slow);
+    seg.choice.terms = planner::evaluate(seg.map, seg.build_branch, theta,
+                                         problem.planning.objective, problem.planning.continuous);
+    seg.choice.theta = std::move(theta);
+    seg.choice.table_shift = delta;
+    seg.build = std::move(build);
+    ++shifted;
+  }
+  return shifted;
 }
 
 // The runs joined at their own speed. A run no move reaches at that speed (its ends run fastest
@@ -344,20 +428,15 @@ JoinedProgram joinFastest(const collision::Scene& scene,
   return other;
 }
 
-// The kept segments joined in the order of the shortest moves (the hand-written path, when there
-// is one, first), each as fast as planned where a move reaches it so (joinFastest()). The
-// program's start times and the dropped segments are mapped back to the segments' own indices.
+// The runs joined in their order (the hand-written path, when there is one, first), each as fast
+// as planned where a move reaches it so (joinFastest()). The program's start times and the
+// dropped segments are mapped back to the segments' own indices (`segments` of them).
 JoinedProgram joinInOrder(const collision::Scene& scene,
-                          std::vector<kinematics::Trajectory>& trajectories,
-                          const std::vector<double>& own_durations,
-                          const std::vector<std::uint8_t>& kept,
-                          bool automatic,
-                          std::size_t given_segments,
+                          const OrderedRuns& runs,
+                          std::size_t segments,
                           double max_program,
                           const MoveSettings& moves,
                           ScanPlan& plan) {
-  const std::size_t fixed = automatic && kept[0] && given_segments > 0 ? 1 : 0;
-  const OrderedRuns runs = orderedRuns(scene.cell(), trajectories, own_durations, kept, fixed);
   const std::vector<std::size_t>& index = runs.index;
   const SegmentOrder& order = runs.order;
   std::vector<kinematics::Trajectory> ordered;
@@ -366,7 +445,7 @@ JoinedProgram joinInOrder(const collision::Scene& scene,
   JoinedProgram out;
   out.trajectory = std::move(joined.trajectory);
   out.times = joined.times;
-  out.start_times.assign(trajectories.size(), std::numeric_limits<double>::quiet_NaN());
+  out.start_times.assign(segments, std::numeric_limits<double>::quiet_NaN());
   for (std::size_t k = 0; k < order.order.size(); ++k)
     out.start_times[index[order.order[k]]] = joined.start_times[k];
   for (const auto& [k, why] : joined.dropped) {
@@ -471,11 +550,15 @@ void planSegments(const ScanProblem& problem, const PlanOptions& options, ScanPl
     if (plan.reason.empty()) plan.reason = "no segment of the path can be planned";
     return;
   }
+  const auto tj = Clock::now();
+  // The hand-written path, when there is one, runs first.
+  const std::size_t fixed = p.auto_scan && kept[0] && !problem.path.elements.empty() ? 1 : 0;
+  const std::vector<double>& own = p.path.path.own_durations;
+  OrderedRuns runs = orderedRuns(p.scene->cell(), trajectories, own, kept, fixed);
+  const std::size_t held = holdTable(problem, p, own, segs, runs);
   plan.choice = joinChoices(segs, kept);
   if (plan.choice.dp && plan.choice.chosen.method != "dp") plan.times.dp = plan.choice.dp->seconds;
-  const auto tj = Clock::now();
-  JoinedProgram joined = joinInOrder(*p.scene, trajectories, p.path.path.own_durations, kept,
-                                     p.auto_scan.has_value(), problem.path.elements.empty() ? 0 : 1,
+  JoinedProgram joined = joinInOrder(*p.scene, runs, segs.size(),
                                      problem.auto_scan ? problem.auto_scan->max_program : 0.0,
                                      moveSettings(problem), plan);
   std::sort(plan.dropped.begin(), plan.dropped.end());
@@ -497,6 +580,7 @@ void planSegments(const ScanProblem& problem, const PlanOptions& options, ScanPl
   }
   plan.trajectory = std::move(build);
   plan.program = joined.times;
+  plan.program.held = held;
   plan.times.trajectory += since(tj);
 }
 

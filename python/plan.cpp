@@ -350,12 +350,14 @@ void bindPlan(py::module_& m) {
             d["moving"] = p.plan->program.moving;
             d["moves"] = p.plan->program.moves;
             d["backed_off_moves"] = p.plan->program.detours;
+            d["passes_table_held"] = p.plan->program.held;
             const auto& by = p.plan->program.moving_by_axis;
             d["moves_set_by_axis"] = py::array_t<double>(by.size(), by.data());
             return d;
           },
           "The program's time (s): total, scanning and moving between passes; moves, "
-          "backed_off_moves; moves_set_by_axis (7,): s of the moves set by each axis's limit "
+          "backed_off_moves, passes_table_held; moves_set_by_axis (7,): s of the moves set by each "
+          "axis's limit "
           "(table, j1..j6).")
       .def_property_readonly("setups", &setupsOf,
                              "With setups=2: the second setup's turn, gain (share of the area "

@@ -358,3 +358,28 @@ TEST_F(ProgramMoves, EachPassRunsNoFasterThanPlannedAndMostInTheirOwnTime) {
   EXPECT_GE(plan.program.scanning, planned - 1e-6);
   EXPECT_LT(plan.program.scanning, planned + 0.2 * static_cast<double>(runs.size()));
 }
+
+TEST_F(ProgramMoves, AHeldPassStartsWhereTheTableStoodAfterThePassBefore) {
+  // A pass whose table path was shifted (table_shift ≠ 0) starts, in the program, at the table
+  // angle the run before it ended at (a continuous table: up to whole turns). As many passes
+  // were shifted as the program says.
+  const pipeline::ScanPlan& plan = *plan_;
+  ASSERT_TRUE(plan.planned());
+  const auto& segments = plan.choice.segments;
+  ASSERT_EQ(segments.size(), plan.order.size());
+  std::size_t shifted = 0;
+  for (const auto& c : segments) shifted += c.table_shift != 0.0 ? 1u : 0u;
+  EXPECT_EQ(shifted, plan.program.held);
+  EXPECT_GT(plan.program.held, 0u) << "the box's passes: some moves would turn the table";
+  const auto runs = scanningRuns(plan.trajectory->trajectory);
+  ASSERT_EQ(runs.size(), plan.order.size() - plan.dropped.size());
+  std::size_t checked = 0;
+  for (std::size_t k = 1; k < runs.size(); ++k) {
+    if (segments[plan.order[k].segment].table_shift == 0.0) continue;
+    const double gap = runs[k].samples.front().theta - runs[k - 1].samples.back().theta;
+    EXPECT_NEAR(std::remainder(gap, 2.0 * 3.141592653589793), 0.0, 1e-9)
+        << "run " << k << " (pass " << plan.order[k].segment + 1 << ")";
+    ++checked;
+  }
+  EXPECT_GT(checked, 0u);
+}

@@ -217,6 +217,7 @@ std::string planReportJson(const config::JobSpec& job,
                        {"moving_s", plan.program.moving},
                        {"moves", plan.program.moves},
                        {"backed_off_moves", plan.program.detours},
+                       {"passes_table_held", plan.program.held},
                        {"dropped_passes", dropped}};
     if (plan.program.moves > 0) {
       Json by_axis = Json::object();
