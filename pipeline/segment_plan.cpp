@@ -361,19 +361,26 @@ std::optional<planner::TrajectoryBuild> shiftedBuild(const ScanProblem& problem,
 // path shifted evenly to start where the run before ends (the shorter way round on a table that
 // turns without end), where the arm follows it there and the move into it gets shorter (the
 // table, slow to start and stop, often sets a move's time). In order: each shift depends on
-// where the run before ends. A segment planned on a joint-wrap sheet keeps its path. Returns the
-// segments shifted.
-std::size_t holdTable(const ScanProblem& problem,
-                      const PreparedScan& p,
-                      const std::vector<double>& own_durations,
-                      std::vector<Segment>& segs,
-                      OrderedRuns& runs) {
+// where the run before ends. A segment planned on a joint-wrap sheet keeps its path. `runs` then
+// hold the shifted segments; returns them (applyHeld() makes them the segments' own).
+struct HeldPass {
+  std::size_t segment = 0;
+  double shift = 0.0;  // rad
+  std::vector<double> theta;
+  planner::TrajectoryBuild build;
+};
+
+std::vector<HeldPass> holdTable(const ScanProblem& problem,
+                                const PreparedScan& p,
+                                const std::vector<double>& own_durations,
+                                const std::vector<Segment>& segs,
+                                OrderedRuns& runs) {
   constexpr double kLeastShift = 0.0035;  // rad (0.2°): a smaller shift gains nothing
   const kinematics::CellModel& cell = p.scene->cell();
-  std::size_t shifted = 0;
+  std::vector<HeldPass> held;
   for (std::size_t k = 1; k < runs.fast.size(); ++k) {
     const std::size_t s = runs.index[runs.order.order[k]];
-    Segment& seg = segs[s];
+    const Segment& seg = segs[s];
     if (!seg.build || seg.choice.sheet_map || seg.choice.theta.size() != seg.path.samples.size())
       continue;
     const kinematics::Trajectory& before = runs.fast[k - 1];
@@ -394,14 +401,23 @@ std::size_t holdTable(const ScanProblem& problem,
     if (!(around(fast) < around(runs.fast[k]) - 1e-3)) continue;
     runs.fast[k] = std::move(fast);
     runs.slow[k] = std::move(slow);
-    seg.choice.terms = planner::evaluate(seg.map, seg.build_branch, theta,
-                                         problem.planning.objective, problem.planning.continuous);
-    seg.choice.theta = std::move(theta);
-    seg.choice.table_shift = delta;
-    seg.build = std::move(build);
-    ++shifted;
+    held.push_back({s, delta, std::move(theta), std::move(*build)});
   }
-  return shifted;
+  return held;
+}
+
+// The shifted table paths made the segments' own: their trajectories and objective terms.
+void applyHeld(const ScanProblem& problem,
+               std::vector<HeldPass>& held,
+               std::vector<Segment>& segs) {
+  for (HeldPass& h : held) {
+    Segment& seg = segs[h.segment];
+    seg.choice.terms = planner::evaluate(seg.map, seg.build_branch, h.theta,
+                                         problem.planning.objective, problem.planning.continuous);
+    seg.choice.theta = std::move(h.theta);
+    seg.choice.table_shift = h.shift;
+    seg.build = std::move(h.build);
+  }
 }
 
 // The runs joined at their own speed. A run no move reaches at that speed (its ends run fastest
@@ -436,7 +452,7 @@ JoinedProgram joinInOrder(const collision::Scene& scene,
                           std::size_t segments,
                           double max_program,
                           const MoveSettings& moves,
-                          ScanPlan& plan) {
+                          std::vector<ScanPlan::Run>& run_order) {
   const std::vector<std::size_t>& index = runs.index;
   const SegmentOrder& order = runs.order;
   std::vector<kinematics::Trajectory> ordered;
@@ -448,21 +464,45 @@ JoinedProgram joinInOrder(const collision::Scene& scene,
   out.start_times.assign(segments, std::numeric_limits<double>::quiet_NaN());
   for (std::size_t k = 0; k < order.order.size(); ++k)
     out.start_times[index[order.order[k]]] = joined.start_times[k];
-  for (const auto& [k, why] : joined.dropped) {
-    plan.dropped.emplace_back(index[order.order[k]], why);
-    out.dropped.emplace_back(index[order.order[k]], why);
-  }
-  plan.order.clear();
+  for (const auto& [k, why] : joined.dropped) out.dropped.emplace_back(index[order.order[k]], why);
+  run_order.clear();
   for (std::size_t k = 0; k < order.order.size(); ++k)
-    plan.order.push_back(
+    run_order.push_back(
         {index[order.order[k]], (order.reversed[k] != joined.flipped[k]), joined.start_times[k]});
   // In the order they run (a segment put off to the end runs last), the dropped ones after.
-  std::stable_sort(plan.order.begin(), plan.order.end(), [](const auto& a, const auto& b) {
+  std::stable_sort(run_order.begin(), run_order.end(), [](const auto& a, const auto& b) {
     if (std::isnan(a.start) || std::isnan(b.start))
       return !std::isnan(a.start) && std::isnan(b.start);
     return a.start < b.start;
   });
   return out;
+}
+
+// The program joined as planned and with the table held (holdTable()): the held one when it
+// drops no more passes and is shorter (the moves' estimate can miss a move that must back off).
+// Applies the held paths to `segs` when it is kept; `run_order` gets the kept program's order.
+JoinedProgram joinBest(const ScanProblem& problem,
+                       const PreparedScan& p,
+                       const OrderedRuns& runs,
+                       std::vector<Segment>& segs,
+                       std::vector<ScanPlan::Run>& run_order,
+                       std::size_t& held_count) {
+  const MoveSettings moves = moveSettings(problem);
+  const double max_program = problem.auto_scan ? problem.auto_scan->max_program : 0.0;
+  JoinedProgram joined = joinInOrder(*p.scene, runs, segs.size(), max_program, moves, run_order);
+  held_count = 0;
+  OrderedRuns held_runs = runs;
+  std::vector<HeldPass> held = holdTable(problem, p, p.path.path.own_durations, segs, held_runs);
+  if (held.empty()) return joined;
+  std::vector<ScanPlan::Run> held_order;
+  JoinedProgram other =
+      joinInOrder(*p.scene, held_runs, segs.size(), max_program, moves, held_order);
+  if (other.dropped.size() > joined.dropped.size() || !(other.times.total < joined.times.total))
+    return joined;
+  held_count = held.size();
+  applyHeld(problem, held, segs);
+  run_order = std::move(held_order);
+  return other;
 }
 
 }  // namespace
@@ -554,13 +594,12 @@ void planSegments(const ScanProblem& problem, const PlanOptions& options, ScanPl
   // The hand-written path, when there is one, runs first.
   const std::size_t fixed = p.auto_scan && kept[0] && !problem.path.elements.empty() ? 1 : 0;
   const std::vector<double>& own = p.path.path.own_durations;
-  OrderedRuns runs = orderedRuns(p.scene->cell(), trajectories, own, kept, fixed);
-  const std::size_t held = holdTable(problem, p, own, segs, runs);
+  const OrderedRuns runs = orderedRuns(p.scene->cell(), trajectories, own, kept, fixed);
+  std::size_t held = 0;
+  JoinedProgram joined = joinBest(problem, p, runs, segs, plan.order, held);
+  plan.dropped.insert(plan.dropped.end(), joined.dropped.begin(), joined.dropped.end());
   plan.choice = joinChoices(segs, kept);
   if (plan.choice.dp && plan.choice.chosen.method != "dp") plan.times.dp = plan.choice.dp->seconds;
-  JoinedProgram joined = joinInOrder(*p.scene, runs, segs.size(),
-                                     problem.auto_scan ? problem.auto_scan->max_program : 0.0,
-                                     moveSettings(problem), plan);
   std::sort(plan.dropped.begin(), plan.dropped.end());
   planner::TrajectoryBuild build;
   build.ok = true;
