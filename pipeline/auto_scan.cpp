@@ -85,8 +85,8 @@ scanner::PassSettings passSettings(const ScanProblem& p, const collision::Scene&
   s.point_spacing = autoPointSpacing(a, p.optics, raysPerProfile(p));
   s.frame_rate = p.simulation ? p.simulation->frame_rate_hz : 100.0;
   const kinematics::RotaryTableModel& table = p.cell.table;
-  // A spin turns the table a whole revolution; leave a tenth of its speed for the planner.
-  s.max_spin_rate = table.continuous ? 0.9 * (table.max_speed > 0.0 ? table.max_speed : 0.5) : 0.0;
+  // A spin turns the table a whole revolution; leave a fifth of its speed for the planner.
+  s.max_spin_rate = table.continuous ? 0.8 * (table.max_speed > 0.0 ? table.max_speed : 0.5) : 0.0;
   // A spin's rate changes only as fast as half the table's acceleration limit: the planner keeps
   // the other half.
   if (table.max_accel > 0.0) s.max_spin_accel = 0.5 * table.max_accel;
