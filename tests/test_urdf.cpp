@@ -11,6 +11,7 @@
 
 #include <fmt/format.h>
 #include <urdf_parser/urdf_parser.h>
+#include <nlohmann/json.hpp>
 
 #include <scanplan/config/job.h>
 #include <scanplan/config/robot_urdf.h>
@@ -487,6 +488,36 @@ TEST_F(UrdfPackages, RobotImportWritesARobotFileWithTheSameModel) {
   EXPECT_EQ(bad.exit_code, 4) << test::describe(bad);
   EXPECT_TRUE(test::contains(bad.err, "is not perpendicular to J3")) << bad.err;
   EXPECT_FALSE(fs::exists(dir_ / "ur5.yaml"));
+}
+
+// A mesh link's stand-in, reported by `robot import` and `robot check`: link 3 carries a 20 mm
+// cube as a mesh. A cube is convex: its hull is the cube itself, so the maps measure the hull,
+// at most the branch and bound's 0.5 mm out, with the cube's 8 corners at most.
+TEST_F(UrdfPackages, RobotImportAndCheckReportWhatTheMapsMeasureForAMeshLink) {
+  const fs::path out = dir_ / "out" / "robot.yaml";
+  fs::create_directories(out.parent_path());
+  const test::Result run = scanplan({"robot", "import", (dir_ / "robot.urdf").string(), "-o",
+                                     out.string(), "--package-path", (dir_ / "ws").string()});
+  ASSERT_EQ(run.exit_code, 0) << test::describe(run);
+  EXPECT_TRUE(test::contains(run.out, "link mesh  convex stand-ins")) << run.out;
+  EXPECT_TRUE(test::contains(run.out, "mesh 12 triangles")) << run.out;
+  EXPECT_TRUE(test::contains(run.out, "the maps measure the hull")) << run.out;
+  const test::Result check =
+      scanplan({"robot", "check", out.string(), "--samples", "20", "--json"});
+  ASSERT_EQ(check.exit_code, 0) << test::describe(check);
+  const nlohmann::json doc = nlohmann::json::parse(check.out);
+  ASSERT_TRUE(doc.contains("link_meshes")) << check.out;
+  ASSERT_EQ(doc["link_meshes"].size(), 1u) << check.out;
+  const nlohmann::json& link = doc["link_meshes"][0];
+  EXPECT_EQ(link["mesh_triangles"], 12);
+  EXPECT_EQ(link["maps_measure"], "hull");
+  EXPECT_LE(link["hull_vertices"].get<int>(), 8);
+  EXPECT_GE(link["hull_margin_mm"].get<double>(), 0.0);
+  EXPECT_LE(link["hull_margin_mm"].get<double>(), 0.5);
+  // The text form says the same, after the survey.
+  const test::Result text = scanplan({"robot", "check", out.string(), "--samples", "20"});
+  ASSERT_EQ(text.exit_code, 0) << test::describe(text);
+  EXPECT_TRUE(test::contains(text.out, "the maps measure the hull")) << text.out;
 }
 
 // The hand-written demo (two of its rings, or `whole`: its three rings and the raster; every
