@@ -55,6 +55,7 @@ struct ProgramTimes {
   /// Passes whose table path was shifted to start where the table stood after the pass before
   /// (the moves into and out of them then shorter). Set by planScan().
   std::size_t held = 0;
+  double held_cost = 0.0;  ///< s, what holding them added to the objective J (summed)
   /// s of the moves' time by the axis that set it (kinematics::ptpTimeByAxis(): 0 the table,
   /// 1…6 joints 1…6); sums to the moves' time. Set by joinSegments().
   kinematics::AxisVector moving_by_axis = kinematics::AxisVector::Zero();

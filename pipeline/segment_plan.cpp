@@ -407,17 +407,22 @@ std::vector<HeldPass> holdTable(const ScanProblem& problem,
 }
 
 // The shifted table paths made the segments' own: their trajectories and objective terms.
-void applyHeld(const ScanProblem& problem,
-               std::vector<HeldPass>& held,
-               std::vector<Segment>& segs) {
+// Returns what they added to J, s.
+double applyHeld(const ScanProblem& problem,
+                 std::vector<HeldPass>& held,
+                 std::vector<Segment>& segs) {
+  double added = 0.0;
   for (HeldPass& h : held) {
     Segment& seg = segs[h.segment];
+    const double before = seg.choice.terms.total;
     seg.choice.terms = planner::evaluate(seg.map, seg.build_branch, h.theta,
                                          problem.planning.objective, problem.planning.continuous);
+    added += seg.choice.terms.total - before;
     seg.choice.theta = std::move(h.theta);
     seg.choice.table_shift = h.shift;
     seg.build = std::move(h.build);
   }
+  return added;
 }
 
 // The runs joined at their own speed. A run no move reaches at that speed (its ends run fastest
@@ -486,11 +491,10 @@ JoinedProgram joinBest(const ScanProblem& problem,
                        const OrderedRuns& runs,
                        std::vector<Segment>& segs,
                        std::vector<ScanPlan::Run>& run_order,
-                       std::size_t& held_count) {
+                       ProgramTimes& held_times) {
   const MoveSettings moves = moveSettings(problem);
   const double max_program = problem.auto_scan ? problem.auto_scan->max_program : 0.0;
   JoinedProgram joined = joinInOrder(*p.scene, runs, segs.size(), max_program, moves, run_order);
-  held_count = 0;
   OrderedRuns held_runs = runs;
   std::vector<HeldPass> held = holdTable(problem, p, p.path.path.own_durations, segs, held_runs);
   if (held.empty()) return joined;
@@ -499,8 +503,8 @@ JoinedProgram joinBest(const ScanProblem& problem,
       joinInOrder(*p.scene, held_runs, segs.size(), max_program, moves, held_order);
   if (other.dropped.size() > joined.dropped.size() || !(other.times.total < joined.times.total))
     return joined;
-  held_count = held.size();
-  applyHeld(problem, held, segs);
+  held_times.held = held.size();
+  held_times.held_cost = applyHeld(problem, held, segs);
   run_order = std::move(held_order);
   return other;
 }
@@ -595,7 +599,7 @@ void planSegments(const ScanProblem& problem, const PlanOptions& options, ScanPl
   const std::size_t fixed = p.auto_scan && kept[0] && !problem.path.elements.empty() ? 1 : 0;
   const std::vector<double>& own = p.path.path.own_durations;
   const OrderedRuns runs = orderedRuns(p.scene->cell(), trajectories, own, kept, fixed);
-  std::size_t held = 0;
+  ProgramTimes held;
   JoinedProgram joined = joinBest(problem, p, runs, segs, plan.order, held);
   plan.dropped.insert(plan.dropped.end(), joined.dropped.begin(), joined.dropped.end());
   plan.choice = joinChoices(segs, kept);
@@ -619,7 +623,8 @@ void planSegments(const ScanProblem& problem, const PlanOptions& options, ScanPl
   }
   plan.trajectory = std::move(build);
   plan.program = joined.times;
-  plan.program.held = held;
+  plan.program.held = held.held;
+  plan.program.held_cost = held.held_cost;
   plan.times.trajectory += since(tj);
 }
 

@@ -351,12 +351,14 @@ void bindPlan(py::module_& m) {
             d["moves"] = p.plan->program.moves;
             d["backed_off_moves"] = p.plan->program.detours;
             d["passes_table_held"] = p.plan->program.held;
+            d["table_held_J"] = p.plan->program.held_cost;
             const auto& by = p.plan->program.moving_by_axis;
             d["moves_set_by_axis"] = py::array_t<double>(by.size(), by.data());
             return d;
           },
           "The program's time (s): total, scanning and moving between passes; moves, "
-          "backed_off_moves, passes_table_held; moves_set_by_axis (7,): s of the moves set by each "
+          "backed_off_moves, passes_table_held, table_held_J (s); moves_set_by_axis (7,): s of the "
+          "moves set by each "
           "axis's limit "
           "(table, j1..j6).")
       .def_property_readonly("setups", &setupsOf,

@@ -32,7 +32,7 @@ class Plan:
     dp_gap: Optional[float]
     validation: Optional[dict]
     coverage: Optional[dict]
-    program: dict  # total, scanning, moving (s), moves, backed_off_moves, passes_table_held, moves_set_by_axis (7,) s
+    program: dict  # total, scanning, moving (s), moves, backed_off_moves, passes_table_held, table_held_J (s), moves_set_by_axis (7,) s
     trajectory: Optional[npt.NDArray[np.float64]]  # (N, 8): t, table, j1..j6 (s, rad)
     scanner_poses: Optional[npt.NDArray[np.float64]]  # (N, 4, 4), part frame, m
     maps: npt.NDArray[np.float32]  # (branches, angles, samples)

@@ -218,6 +218,7 @@ std::string planReportJson(const config::JobSpec& job,
                        {"moves", plan.program.moves},
                        {"backed_off_moves", plan.program.detours},
                        {"passes_table_held", plan.program.held},
+                       {"table_held_J_s", plan.program.held_cost},
                        {"dropped_passes", dropped}};
     if (plan.program.moves > 0) {
       Json by_axis = Json::object();

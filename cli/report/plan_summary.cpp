@@ -197,7 +197,8 @@ std::string programSummary(const pipeline::ScanPlan& plan) {
     s += fmt::format(" in {} point-to-point moves between passes ({} backed off)", p.moves,
                      p.detours);
   if (p.held > 0)
-    s += fmt::format("; {} passes start where the table stands after the pass before", p.held);
+    s += fmt::format("; {} passes start where the table stands after the pass before (J {:+.3f} s)",
+                     p.held, p.held_cost);
   s += "\n";
   if (p.moves > 0) s += movesByAxisSummary(p);
   for (const auto& [segment, why] : plan.dropped)
