@@ -357,12 +357,7 @@ std::optional<planner::TrajectoryBuild> shiftedBuild(const ScanProblem& problem,
   return build;
 }
 
-// The table held across the moves: in the order the program runs them, each segment's table
-// path shifted evenly to start where the run before ends (the shorter way round on a table that
-// turns without end), where the arm follows it there and the move into it gets shorter (the
-// table, slow to start and stop, often sets a move's time). In order: each shift depends on
-// where the run before ends. A segment planned on a joint-wrap sheet keeps its path. `runs` then
-// hold the shifted segments; returns them (applyHeld() makes them the segments' own).
+// A segment whose table path holdTable() shifted: by how much, the path and its trajectory.
 struct HeldPass {
   std::size_t segment = 0;
   double shift = 0.0;  // rad
@@ -370,6 +365,12 @@ struct HeldPass {
   planner::TrajectoryBuild build;
 };
 
+// The table held across the moves: in the order the program runs them, each segment's table
+// path shifted evenly to start where the run before ends (the shorter way round on a table that
+// turns without end), where the arm follows it there and the move into it gets shorter (the
+// table, slow to start and stop, often sets a move's time). In order: each shift depends on
+// where the run before ends. A segment planned on a joint-wrap sheet keeps its path. `runs` then
+// hold the shifted segments; returns them (applyHeld() makes them the segments' own).
 std::vector<HeldPass> holdTable(const ScanProblem& problem,
                                 const PreparedScan& p,
                                 const std::vector<double>& own_durations,
