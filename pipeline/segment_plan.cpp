@@ -338,8 +338,8 @@ OrderedRuns orderedRuns(const kinematics::CellModel& cell,
 }
 
 // Segment s's table path shifted evenly by `delta` (rad) and its trajectory built again on the
-// branch it followed: the build when the arm follows it there (executable, its least f at least
-// half of what it was), else nullopt.
+// branch it followed: the build when the map and the arm follow it there (f > 0 on the map all
+// along it, the trajectory executable, its least f at least half of what it was), else nullopt.
 std::optional<planner::TrajectoryBuild> shiftedBuild(const ScanProblem& problem,
                                                      const PreparedScan& p,
                                                      const Segment& seg,
@@ -351,6 +351,9 @@ std::optional<planner::TrajectoryBuild> shiftedBuild(const ScanProblem& problem,
     const auto [lo, hi] = std::minmax_element(theta.begin(), theta.end());
     if (*lo < p.map.angles.front() || *hi > p.map.angles.back()) return std::nullopt;
   }
+  const planner::ObjectiveTerms terms = planner::evaluate(
+      seg.map, seg.build_branch, theta, problem.planning.objective, problem.planning.continuous);
+  if (!(terms.min_f > 0.0) || !std::isfinite(terms.total)) return std::nullopt;
   planner::TrajectoryBuild build = planner::buildTrajectory(
       *p.scene, problem.constraints, seg.path, theta, seg.map.branches[seg.build_branch]);
   if (!executableReason(build).empty() || build.min_f < 0.5 * seg.build->min_f) return std::nullopt;

@@ -370,6 +370,10 @@ TEST_F(ProgramMoves, AHeldPassStartsWhereTheTableStoodAfterThePassBefore) {
   std::size_t shifted = 0;
   for (const auto& c : segments) shifted += c.table_shift != 0.0 ? 1u : 0u;
   EXPECT_EQ(shifted, plan.program.held);
+  // Held only where the map says f > 0 all along the shifted path: J stays finite.
+  EXPECT_TRUE(std::isfinite(plan.program.held_cost));
+  EXPECT_TRUE(std::isfinite(plan.choice.terms.total));
+  for (const auto& c : segments) EXPECT_GT(c.terms.min_f, 0.0);
   EXPECT_GT(plan.program.held, 0u) << "the box's passes: some moves would turn the table";
   const auto runs = scanningRuns(plan.trajectory->trajectory);
   ASSERT_EQ(runs.size(), plan.order.size() - plan.dropped.size());
