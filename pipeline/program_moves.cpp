@@ -731,7 +731,9 @@ double retimeSegment(const kinematics::CellModel& cell,
   const AxisVector accel = accelRatios(limits, s, speed_scale);
   double joints = 0.0;  // a joint's acceleration is held to its limit only where it was within
   for (int j = 1; j < accel.size(); ++j) joints = std::max(joints, std::min(1.0, accel(j)));
-  const double table = cell.table.max_accel > 0.0 ? accel(0) : 0.0;
+  // The accelerations only limit how far it shrinks: at its samples' times the planner's bounds
+  // hold them (validation checks the table's).
+  const double table = cell.table.max_accel > 0.0 ? std::min(1.0, accel(0)) : 0.0;
   const double factor =
       std::max({std::clamp(duration / span, kLeast, 1.0), speedRatio(limits, s, speed_scale),
                 std::sqrt(joints), std::sqrt(table)});

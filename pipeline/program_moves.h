@@ -129,9 +129,9 @@ double slowToLimits(const kinematics::CellModel& cell,
 /// The segment run in `duration` s (it spans that or more: the path's samples stand whole time
 /// steps apart), evenly, where each joint's and the table's speed and the table's acceleration
 /// stay within `speed_scale` of their limits (and each joint's acceleration within its limit
-/// where it was before); else as near that time as they allow; else slowed to them, as
-/// slowToLimits(). A pass then runs at the speed it was planned for. Returns the factor its
-/// duration changed by (< 1: faster).
+/// where it was before); else as near that time as they allow. A segment already faster than
+/// `speed_scale` of a speed limit is slowed to it as slowToLimits() does. A pass then runs at
+/// the speed it was planned for. Returns the factor its duration changed by (< 1: faster).
 double retimeSegment(const kinematics::CellModel& cell,
                      kinematics::Trajectory& segment,
                      double duration,
