@@ -524,6 +524,15 @@ class MoveCosts {
             cell.robot, cell.table, settings.speed_scale, settings.accel_time)) {
     for (const auto& s : segments) ends_.push_back({endsOf(s, false), endsOf(s, true)});
   }
+  // Just the move from the end of `from` to the start of `to` (segments 0 and 1).
+  MoveCosts(const kinematics::CellModel& cell,
+            const kinematics::Trajectory& from,
+            const kinematics::Trajectory& to,
+            const MoveSettings& settings)
+      : MoveCosts(cell, {}, settings) {
+    ends_.push_back({endsOf(from, false), endsOf(from, true)});
+    ends_.push_back({endsOf(to, false), endsOf(to, true)});
+  }
   // From the end of (i, ri) to the start of (j, rj), s.
   double operator()(std::size_t i, bool ri, std::size_t j, bool rj) const {
     const SegmentEnds& a = ends_[i][ri ? 1 : 0];
@@ -648,7 +657,7 @@ double moveCost(const kinematics::CellModel& cell,
                 const kinematics::Trajectory& from,
                 const kinematics::Trajectory& to,
                 const MoveSettings& settings) {
-  const MoveCosts cost(cell, {from, to}, settings);
+  const MoveCosts cost(cell, from, to, settings);
   return cost(0, false, 1, false);
 }
 
