@@ -81,18 +81,10 @@ SimulationRun simulateTrajectory(const kinematics::CellModel& cell,
   run.sampling = scanner::sampleArea(part, 2.0 * run.point_spacing, settings.max_area_samples);
   const scanner::AreaSampling& sampling = run.sampling;
   // A point counts when it lies on the part and the laser met the surface within the limit.
-  std::vector<Eigen::Vector3d> on_part;
-  std::vector<double> times;
-  on_part.reserve(run.cloud.points.size());
-  times.reserve(run.cloud.points.size());
-  for (const auto& p : run.cloud.points) {
-    if (p.part_triangle >= 0 && p.incidence <= settings.max_incidence) {
-      on_part.push_back(p.p_P);
-      times.push_back(p.t);
-    }
-  }
+  const scanner::PartPoints on_part =
+      scanner::pointsOnPart(run.cloud.points, settings.max_incidence);
   run.area_samples = sampling.samples.size();
-  run.area = scanner::areaCoverage(sampling, on_part, run.point_spacing, &times);
+  run.area = scanner::areaCoverage(sampling, on_part.p, run.point_spacing, &on_part.t);
   const std::vector<std::uint8_t> facing = scanner::facesTable(
       sampling, cell.part.X_RP, settings.max_incidence, scanner::laserWindow(optics).z_max);
   if (!facing.empty()) {

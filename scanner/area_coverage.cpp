@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <random>
 #include <stdexcept>
 #include <utility>
@@ -14,12 +15,13 @@ namespace scanplan::scanner {
 
 namespace {
 
-// nanoflann's view of the points.
+// nanoflann's view of some of the points (`index` into `points`).
 struct PointSet {
   const std::vector<Eigen::Vector3d>& points;
-  std::size_t kdtree_get_point_count() const { return points.size(); }
+  std::vector<std::uint32_t> index;
+  std::size_t kdtree_get_point_count() const { return index.size(); }
   double kdtree_get_pt(std::size_t i, std::size_t d) const {
-    return points[i][static_cast<Eigen::Index>(d)];
+    return points[index[i]][static_cast<Eigen::Index>(d)];
   }
   template <class Box>
   bool kdtree_get_bbox(Box&) const {
@@ -29,6 +31,83 @@ struct PointSet {
 
 using PointTree = nanoflann::
     KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, PointSet>, PointSet, 3>;
+
+// Points per slab at least: fewer points get one tree.
+constexpr std::size_t kSlabPoints = 100000;
+constexpr std::size_t kMaxSlabs = 16;
+
+// The points split into slabs along the axis they spread most along, about equal in count, each
+// with its own k-d tree over the points within it or within `radius` of it: every point within
+// `radius` of a query is in the tree of the slab the query falls in, so a search there finds
+// what one tree over all points finds. The trees are built in parallel; the slabs depend on the
+// points alone, not on the threads.
+class SlabTrees {
+ public:
+  SlabTrees(const std::vector<Eigen::Vector3d>& points, double radius) {
+    Eigen::AlignedBox3d box;
+    for (const Eigen::Vector3d& p : points) box.extend(p);
+    box.sizes().maxCoeff(&axis_);
+    const std::size_t slabs =
+        std::clamp<std::size_t>(points.size() / kSlabPoints, std::size_t{1}, kMaxSlabs);
+    bounds_ = splitAt(points, box, slabs);
+    std::vector<std::vector<std::uint32_t>> members(slabs);
+    const auto each = [&](auto&& f) {
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        const double x = points[i][axis_];
+        for (std::size_t k = slabOf(x - radius), last = slabOf(x + radius); k <= last; ++k) f(k, i);
+      }
+    };
+    std::vector<std::size_t> count(slabs, 0);
+    each([&](std::size_t k, std::size_t) { ++count[k]; });
+    for (std::size_t k = 0; k < slabs; ++k) members[k].reserve(count[k]);
+    each(
+        [&](std::size_t k, std::size_t i) { members[k].push_back(static_cast<std::uint32_t>(i)); });
+    sets_.reserve(slabs);
+    for (auto& m : members)
+      sets_.push_back(std::make_unique<PointSet>(PointSet{points, std::move(m)}));
+    trees_.resize(slabs);
+    tbb::parallel_for(std::size_t{0}, slabs, [&](std::size_t k) {
+      trees_[k] =
+          std::make_unique<PointTree>(3, *sets_[k], nanoflann::KDTreeSingleIndexAdaptorParams(16));
+    });
+  }
+  // The tree to search around `q`, and the point indices its results refer to.
+  const PointTree& tree(const Eigen::Vector3d& q) const { return *trees_[slabOf(q[axis_])]; }
+  const std::vector<std::uint32_t>& index(const Eigen::Vector3d& q) const {
+    return sets_[slabOf(q[axis_])]->index;
+  }
+
+ private:
+  // Slab boundaries at equal counts, from a histogram of the points along the axis.
+  std::vector<double> splitAt(const std::vector<Eigen::Vector3d>& points,
+                              const Eigen::AlignedBox3d& box,
+                              std::size_t slabs) const {
+    constexpr std::size_t kBins = 4096;
+    const double lo = box.min()[axis_], width = std::max(box.sizes()[axis_], 1e-12);
+    std::vector<std::size_t> bins(kBins, 0);
+    const auto bin = [&](double x) {
+      return std::min(kBins - 1, static_cast<std::size_t>((x - lo) / width * kBins));
+    };
+    for (const Eigen::Vector3d& p : points) ++bins[bin(p[axis_])];
+    std::vector<double> bounds;
+    std::size_t below = 0;
+    for (std::size_t b = 0; b < kBins && bounds.size() + 1 < slabs; ++b) {
+      below += bins[b];
+      if (below * slabs >= (bounds.size() + 1) * points.size())
+        bounds.push_back(lo + width * static_cast<double>(b + 1) / kBins);
+    }
+    return bounds;
+  }
+  std::size_t slabOf(double x) const {
+    return static_cast<std::size_t>(std::upper_bound(bounds_.begin(), bounds_.end(), x) -
+                                    bounds_.begin());
+  }
+
+  Eigen::Index axis_ = 0;
+  std::vector<double> bounds_;  // slab k holds x in [bounds_[k − 1], bounds_[k])
+  std::vector<std::unique_ptr<PointSet>> sets_;
+  std::vector<std::unique_ptr<PointTree>> trees_;
+};
 
 double triangleArea(const kinematics::TriangleMesh& mesh, std::size_t t, Eigen::Vector3d& n) {
   const Eigen::Vector3i& f = mesh.triangles[t];
@@ -97,25 +176,27 @@ AreaCoverage areaCoverage(const AreaSampling& sampling,
   out.radius = radius;
   out.covered.assign(sampling.samples.size(), 0);
   if (points.empty() || sampling.samples.empty() || !(radius >= 0.0)) return out;
-  const PointSet set{points};
-  const PointTree tree(3, set, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  const SlabTrees trees(points, radius);
   const double r2 = radius * radius;
   tbb::parallel_for(std::size_t{0}, sampling.samples.size(), [&](std::size_t i) {
+    const Eigen::Vector3d& q = sampling.samples[i].p;
     std::size_t nearest = 0;
-    double d2 = 0.0;
+    double d2 = std::numeric_limits<double>::infinity();
     nanoflann::KNNResultSet<double> result(1);
     result.init(&nearest, &d2);
-    tree.findNeighbors(result, sampling.samples[i].p.data(), nanoflann::SearchParams(10));
+    trees.tree(q).findNeighbors(result, q.data(), nanoflann::SearchParams(10));
     out.covered[i] = d2 <= r2 ? 1 : 0;
   });
   if (times && times->size() == points.size()) {
     out.first_time.assign(sampling.samples.size(), std::numeric_limits<double>::infinity());
     tbb::parallel_for(std::size_t{0}, sampling.samples.size(), [&](std::size_t i) {
       if (!out.covered[i]) return;
+      const Eigen::Vector3d& q = sampling.samples[i].p;
+      const std::vector<std::uint32_t>& index = trees.index(q);
       std::vector<std::pair<std::uint32_t, double>> near;
-      tree.radiusSearch(sampling.samples[i].p.data(), r2, near, nanoflann::SearchParams(10));
+      trees.tree(q).radiusSearch(q.data(), r2, near, nanoflann::SearchParams(10));
       for (const auto& item : near)
-        out.first_time[i] = std::min(out.first_time[i], (*times)[item.first]);
+        out.first_time[i] = std::min(out.first_time[i], (*times)[index[item.first]]);
     });
   }
   for (const std::uint8_t c : out.covered) out.covered_samples += c;

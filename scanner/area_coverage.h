@@ -49,9 +49,11 @@ struct AreaCoverage {
   std::vector<double> first_time;
 };
 
-/// The coverage of `sampling` by `points` (same frame): a k-d tree over the points (nanoflann),
-/// the nearest point of every sample. With `times` (one per point, s), also when each sample was
-/// first covered (every point within the radius searched). Deterministic; parallel over samples.
+/// The coverage of `sampling` by `points` (same frame): k-d trees over the points (nanoflann; a
+/// large cloud split into slabs along its longest side, one tree each, built in parallel, each
+/// holding the points within `radius` of its slab too), the nearest point of every sample. With
+/// `times` (one per point, s), also when each sample was first covered (every point within the
+/// radius searched). Deterministic, the same on any number of threads; parallel over samples.
 AreaCoverage areaCoverage(const AreaSampling& sampling,
                           const std::vector<Eigen::Vector3d>& points,
                           double radius,

@@ -5,6 +5,7 @@
 #include <utility>
 
 #include <scanplan/kinematics/units.h>
+#include <scanplan/scanner/detail/large_buffer.h>
 
 namespace scanplan::scanner {
 namespace {
@@ -64,6 +65,19 @@ PartCoverage computeCoverage(const kinematics::TriangleMesh& part,
     c.density_p95_per_mm2 = quantile(0.95);
   }
   return c;
+}
+
+PartPoints pointsOnPart(const std::vector<CloudPoint>& points, double max_incidence) {
+  PartPoints out;
+  detail::reserveLarge(out.p, points.size());
+  detail::reserveLarge(out.t, points.size());
+  for (const CloudPoint& p : points) {
+    if (p.part_triangle >= 0 && p.incidence <= max_incidence) {
+      out.p.push_back(p.p_P);
+      out.t.push_back(p.t);
+    }
+  }
+  return out;
 }
 
 double triangleDensityPerMm2(const kinematics::TriangleMesh& part,

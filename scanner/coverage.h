@@ -37,6 +37,15 @@ struct PartCoverage {
   double density_p95_per_mm2 = 0.0;
 };
 
+/// The points of a cloud on the part (part_triangle ≥ 0) that the laser met within
+/// `max_incidence` (rad) of the normal, the ones that count toward the area coverage, in the
+/// cloud's order: positions (part frame) and times.
+struct PartPoints {
+  std::vector<Eigen::Vector3d> p;
+  std::vector<double> t;
+};
+PartPoints pointsOnPart(const std::vector<CloudPoint>& points, double max_incidence);
+
 /// Counts the points per part triangle and derives the statistics. Points whose part_triangle
 /// is out of the mesh's range are ignored.
 PartCoverage computeCoverage(const kinematics::TriangleMesh& part,

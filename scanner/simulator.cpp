@@ -1,5 +1,6 @@
 #include <scanplan/scanner/simulator.h>
 
+#include <scanplan/scanner/detail/large_buffer.h>
 #include <scanplan/scanner/detail/random.h>
 #include <scanplan/scanner/embree_mesh.h>
 
@@ -100,6 +101,8 @@ constexpr std::size_t kPacket = 16;
 // simulate() runs the profiles in batches of about this many fan rays (see there): the
 // per-thread point buffers stay a few MB.
 constexpr std::size_t kBatchRays = std::size_t{1} << 15;
+// The most room (bytes) a run reserves for its cloud up front.
+constexpr std::size_t kReserveBytes = std::size_t{1} << 30;
 
 // The fields of a packet's rays that no cast changes (Embree writes only tfar and the hit):
 // set once per packet, when the thread's scratch is made.
@@ -955,18 +958,22 @@ SimulationStats ScanSimulator::Impl::profiles(const std::vector<ScanFrame>& fram
     const std::vector<CloudPoint>* points = nullptr;
     std::size_t begin = 0;
     std::size_t end = 0;
+    std::size_t offset = 0;  // where they go in the cloud
   };
   const std::size_t n = frames.size();
   const std::size_t batch = std::max<std::size_t>(1, kBatchRays / rays);
   const bool serial = tbb::this_task_arena::max_concurrency() == 1;
   tbb::enumerable_thread_specific<Output> outputs;
   std::vector<Span> spans(serial ? 0 : std::min(n, batch));
+  // Room for every ray's point at once where that stays within kReserveBytes (untouched room
+  // costs no memory): the cloud then never moves (each move copies it, serially).
+  if (n * rays <= kReserveBytes / sizeof(CloudPoint)) detail::reserveLarge(cloud.points, n * rays);
   for (std::size_t from = 0; from < n; from += batch) {
     const std::size_t to = std::min(n, from + batch);
     const std::size_t size = cloud.points.size();
     if (size + (to - from) * rays > cloud.points.capacity()) {
       const std::size_t projected = from == 0 ? 0 : size + (n - from) * size / from * 5 / 4;
-      cloud.points.reserve(std::max(size + (to - from) * rays, projected));
+      detail::reserveLarge(cloud.points, std::max(size + (to - from) * rays, projected));
     }
     if (serial) {
       Scratch& s = scratch.local();
@@ -987,11 +994,18 @@ SimulationStats ScanSimulator::Impl::profiles(const std::vector<ScanFrame>& fram
                           spans[i - from] = {&out.points, begin, out.points.size()};
                         }
                       });
+    // The batch's points in frame order, each frame's copied in parallel to its own place.
+    std::size_t total = cloud.points.size();
     for (std::size_t i = from; i < to; ++i) {
-      const Span& span = spans[i - from];
-      cloud.points.insert(cloud.points.end(), span.points->data() + span.begin,
-                          span.points->data() + span.end);
+      spans[i - from].offset = total;
+      total += spans[i - from].end - spans[i - from].begin;
     }
+    cloud.points.resize(total);
+    tbb::parallel_for(from, to, [&](std::size_t i) {
+      const Span& span = spans[i - from];
+      std::copy(span.points->data() + span.begin, span.points->data() + span.end,
+                cloud.points.data() + span.offset);
+    });
     for (Output& out : outputs) out.points.clear();
   }
   SimulationStats total;

@@ -3,6 +3,7 @@
 // on how the mesh is cut; the k-d tree agrees with a brute-force nearest point.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -126,6 +127,39 @@ TEST(AreaCoverage, NearestPointAgreesWithBruteForce) {
     covered += any ? 1 : 0;
   }
   EXPECT_EQ(c.covered_samples, covered);
+}
+
+TEST(AreaCoverage, ALargeCloudSplitIntoSlabsFindsWhatBruteForceFinds) {
+  // 350 000 points (several slabs, each with its own tree) scattered through the cube's box, a
+  // radius they cover about half the samples with: which samples are covered and when, against
+  // every point checked.
+  const TriangleMesh m = scanplan::test::centredCube(10 * kMm);
+  const AreaSampling s = sampleArea(m, 1.0 * kMm);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-6 * kMm, 6 * kMm), t(0.0, 100.0);
+  std::vector<Vector3d> points(350000);
+  std::vector<double> times(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    points[i] = Vector3d(u(rng), u(rng), u(rng));
+    times[i] = t(rng);
+  }
+  const double r = 0.1 * kMm;
+  const auto c = areaCoverage(s, points, r, &times);
+  std::size_t covered = 0;
+  for (std::size_t i = 0; i < s.samples.size(); ++i) {
+    double first = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < points.size(); ++k)
+      if ((points[k] - s.samples[i].p).squaredNorm() <= r * r) first = std::min(first, times[k]);
+    const bool any = std::isfinite(first);
+    ASSERT_EQ(c.covered[i] != 0, any) << "sample " << i;
+    if (any) {
+      ASSERT_EQ(c.first_time[i], first) << "sample " << i;
+    }
+    covered += any ? 1 : 0;
+  }
+  EXPECT_EQ(c.covered_samples, covered);
+  EXPECT_GT(covered, s.samples.size() / 4);
+  EXPECT_LT(covered, 3 * s.samples.size() / 4);
 }
 
 TEST(AreaCoverage, DoesNotDependOnHowTheMeshIsCut) {
