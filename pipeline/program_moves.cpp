@@ -85,47 +85,74 @@ TrajectorySample moveSample(const kinematics::CellModel& cell, double t, const A
   return s;
 }
 
-// Every pair of the cell beyond its d_low (f_C > 0, Eq. 8) and every joint within its limits,
-// at poses along the move. The poses advance by how far the nearest pair is from its d_low: a
-// point moves at most levers(j) metres per radian of axis j, so the next pose is at most 0.8 of
-// that margin (and at least kMinMotion) of motion further; at least every `check_step` rad on
-// the fastest axis when nothing is near. The validation proves the motion between them. When
-// blocked, `blocked_at` (if given) gets how far along the move's samples (0 to 1).
+// How far the nearest pair of the cell is beyond its d_low at a pose (m); nullopt when a pair
+// is not (f_C = 0, Eq. 8) or a joint is outside its limits.
+std::optional<double> poseMargin(const collision::Scene& scene,
+                                 collision::ClearanceEvaluator& clearance,
+                                 const AxisVector& x) {
+  const JointVector q = x.tail<kinematics::kNumJoints>();
+  if (!scene.cell().robot.withinLimits(q)) return std::nullopt;
+  const collision::ClearanceResult r = clearance.evaluate(x(0), q);
+  if (!(r.factor > 0.0)) return std::nullopt;
+  const auto& pairs = scene.pairs();
+  double margin = std::numeric_limits<double>::infinity();
+  for (std::size_t p = 0; p < pairs.size(); ++p)
+    margin = std::min(margin, r.pairs[p].distance - pairs[p].thresholds.d_low);
+  return margin;
+}
+
+// The margins at a move's samples (its own poses, `move.axes`), nullopt at the first that is
+// blocked; then `blocked_at` (if given) gets how far along the samples it is (0 to 1). A way is
+// checked at all its samples first: a blocked one is found before any pose between them is.
+std::optional<std::vector<double>> sampleMargins(const collision::Scene& scene,
+                                                 collision::ClearanceEvaluator& clearance,
+                                                 const kinematics::PtpMove& move,
+                                                 double* blocked_at = nullptr) {
+  std::vector<double> margins;
+  for (std::size_t k = 0; k < move.axes.size(); ++k) {
+    const std::optional<double> m = poseMargin(scene, clearance, move.axes[k]);
+    if (!m) {
+      if (blocked_at && move.axes.size() > 1)
+        *blocked_at = static_cast<double>(k) / static_cast<double>(move.axes.size() - 1);
+      return std::nullopt;
+    }
+    margins.push_back(*m);
+  }
+  return margins;
+}
+
+// Every pair of the cell beyond its d_low and every joint within its limits at poses between
+// a move's samples (clear themselves, with `margins` at them: sampleMargins()). The poses
+// advance by how far the nearest pair is from its d_low: a point moves at most levers(j)
+// metres per radian of axis j, so the next pose is at most 0.8 of that margin (and at least
+// kMinMotion) of motion further; at least every `check_step` rad on the fastest axis when
+// nothing is near. The validation proves the motion between them. When blocked, `blocked_at`
+// (if given) gets how far along the samples (0 to 1).
 constexpr double kMinMotion = 1.5e-3;  // m
 bool moveClear(const collision::Scene& scene,
                collision::ClearanceEvaluator& clearance,
                const kinematics::PtpMove& move,
+               const std::vector<double>& margins,
                const AxisVector& levers,
                double check_step,
                double* blocked_at = nullptr) {
-  const kinematics::CellModel& cell = scene.cell();
-  const auto& pairs = scene.pairs();
-  for (std::size_t k = 0; k < move.axes.size(); ++k) {
-    const AxisVector b = move.axes[k];
-    const AxisVector a = k == 0 ? b : move.axes[k - 1];
+  for (std::size_t k = 1; k < move.axes.size(); ++k) {
+    const AxisVector &a = move.axes[k - 1], &b = move.axes[k];
     const double travel = levers.dot((b - a).cwiseAbs());
     const double widest = (b - a).cwiseAbs().maxCoeff();
-    double u = k == 0 ? 1.0 : 0.0;
-    while (true) {
-      u = std::min(u, 1.0);
-      const AxisVector x = a + (b - a) * u;
-      const JointVector q = x.tail<kinematics::kNumJoints>();
-      const auto blocked = [&] {
-        if (blocked_at && move.axes.size() > 1)
-          *blocked_at = static_cast<double>(k) / static_cast<double>(move.axes.size() - 1);
-        return false;
-      };
-      if (!cell.robot.withinLimits(q)) return blocked();
-      const collision::ClearanceResult r = clearance.evaluate(x(0), q);
-      if (!(r.factor > 0.0)) return blocked();
-      if (u >= 1.0) break;
-      double margin = std::numeric_limits<double>::infinity();
-      for (std::size_t p = 0; p < pairs.size(); ++p)
-        margin = std::min(margin, r.pairs[p].distance - pairs[p].thresholds.d_low);
-      const double motion = std::max(0.8 * margin, kMinMotion);
-      double du = travel > 0.0 ? motion / travel : 1.0;
+    double margin = margins[k - 1];
+    for (double u = 0.0;;) {
+      double du = travel > 0.0 ? std::max(0.8 * margin, kMinMotion) / travel : 1.0;
       if (widest > 0.0) du = std::min(du, std::max(check_step / widest, kMinMotion / travel));
       u += du;
+      if (u >= 1.0) break;  // b: clear, a sample
+      const std::optional<double> m = poseMargin(scene, clearance, a + (b - a) * u);
+      if (!m) {
+        if (blocked_at)
+          *blocked_at = static_cast<double>(k) / static_cast<double>(move.axes.size() - 1);
+        return false;
+      }
+      margin = *m;
     }
   }
   return true;
@@ -228,9 +255,9 @@ Way backedOff(const kinematics::CellModel& cell,
   return way;
 }
 
-// The ways backed off by each retreat at the end `side` (the one the direct move was blocked
-// nearer) or at both, fastest first (ties in that order): the first clear one is the fastest
-// detour of them.
+// The ways backed off by each retreat at one end (`side` first: the one the direct move was
+// blocked nearer) or at both, fastest first (ties in that order): the first clear one is the
+// fastest detour of them.
 std::vector<Way> backedOffWays(const kinematics::CellModel& cell,
                                const kinematics::AxisLimits& limits,
                                const TrajectorySample& a,
@@ -241,7 +268,8 @@ std::vector<Way> backedOffWays(const kinematics::CellModel& cell,
                                Ends side) {
   std::vector<std::pair<double, Way>> timed;
   for (const double r : settings.retreats) {
-    for (const Ends ends : {side, Ends::kBoth}) {
+    const Ends other = side == Ends::kStart ? Ends::kEnd : Ends::kStart;
+    for (const Ends ends : {side, other, Ends::kBoth}) {
       if (ends != Ends::kBoth && !settings.one_sided) continue;
       Way way = backedOff(cell, a, b, v_a, v_b, r, ends);
       if (way.empty()) continue;
@@ -304,11 +332,20 @@ std::optional<std::vector<TrajectorySample>> runWay(const collision::Scene& scen
                                                     const MoveSettings& settings,
                                                     double* blocked_at = nullptr,
                                                     AxisVector* by_axis = nullptr) {
-  std::vector<TrajectorySample> out;
+  std::vector<kinematics::PtpMove> moves;
+  std::vector<std::vector<double>> margins;
   for (const Leg& leg : way) {
-    const kinematics::PtpMove move =
-        kinematics::ptpMove(leg.from, leg.to, leg.v_from, leg.v_to, limits, settings.max_step);
-    if (!moveClear(scene, clearance, move, levers, settings.check_step, blocked_at))
+    moves.push_back(
+        kinematics::ptpMove(leg.from, leg.to, leg.v_from, leg.v_to, limits, settings.max_step));
+    auto m = sampleMargins(scene, clearance, moves.back(), blocked_at);
+    if (!m) return std::nullopt;
+    margins.push_back(std::move(*m));
+  }
+  std::vector<TrajectorySample> out;
+  for (std::size_t l = 0; l < way.size(); ++l) {
+    const Leg& leg = way[l];
+    const kinematics::PtpMove& move = moves[l];
+    if (!moveClear(scene, clearance, move, margins[l], levers, settings.check_step, blocked_at))
       return std::nullopt;
     if (by_axis)
       *by_axis += kinematics::ptpTimeByAxis(leg.from, leg.to, leg.v_from, leg.v_to, limits);

@@ -2,7 +2,8 @@
 // The moves between the segments of a scan (ScanPath::breaks: the automatic scan's passes): each
 // a point-to-point move of all seven axes at the robot's and the table's own speed and
 // acceleration limits (kinematics/ptp_move.h), checked against the cell at every step. Where the
-// direct move is blocked the head backs off along its laser at both ends, only as far as needed.
+// direct move is blocked the head backs off along its laser at one end or both, only as far as
+// needed.
 
 #include <cstddef>
 #include <cstdint>
@@ -30,8 +31,8 @@ struct MoveSettings {
   double max_step = 0.1;
   /// Back-off distances tried, in order, when the direct move is blocked, m.
   std::vector<double> retreats{0.02, 0.05, 0.1, 0.15, 0.25};
-  /// Also try backing off at one end only (the one the direct move was blocked nearer): where
-  /// the other end is clear, the move then stops once less on its way. False: both ends always.
+  /// Also try backing off at one end only (either end): where the other end is clear, the move
+  /// then stops once less on its way. False: both ends always.
   bool one_sided = true;
   /// rad, the largest change of any axis between two poses at which the clearance is checked
   /// (nearer the cell the poses lie closer: at most half the distance to the nearest pair's
@@ -107,9 +108,10 @@ kinematics::Trajectory reversedSegment(const kinematics::Trajectory& segment);
 /// a joint whose range exceeds a turn likewise where the whole segment stays in its limits; then
 /// a move from each segment's end (at its end speed) to the next one's start (at its start
 /// speed). A move whose every checked pose keeps each pair of the cell beyond its d_low is taken;
-/// else the head backs off along −z_S by one of MoveSettings::retreats at the end the direct move
-/// was blocked nearer, or at both (inverse kinematics nearest the end poses), the fastest such
-/// move whose poses are clear, else it goes via MoveSettings::above. A segment no move
+/// else the head backs off along −z_S by one of MoveSettings::retreats at one end or at both
+/// (inverse kinematics nearest the end poses), the fastest such move whose poses are clear (each
+/// way checked at its samples first, then between them), else it goes via
+/// MoveSettings::above. A segment no move
 /// reaches is put off (the next one is tried from the same end) and tried again at the end of the
 /// program, forwards and then backwards; it is dropped only when neither is reached. The first
 /// segment is never dropped. The moves are planned in parallel (TBB); the result does not depend on
