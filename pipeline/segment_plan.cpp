@@ -1,4 +1,3 @@
-#include <cstdio>
 #include <scanplan/pipeline/segment_plan.h>
 
 #include <algorithm>
@@ -14,6 +13,7 @@
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <scanplan/kinematics/units.h>
 #include <scanplan/pipeline/certificate.h>
@@ -499,18 +499,21 @@ JoinedProgram joinBest(const ScanProblem& problem,
                        ProgramTimes& held_times) {
   const MoveSettings moves = moveSettings(problem);
   const double max_program = problem.auto_scan ? problem.auto_scan->max_program : 0.0;
-  auto T0 = Clock::now();
-  JoinedProgram joined = joinInOrder(*p.scene, runs, segs.size(), max_program, moves, run_order);
-  fprintf(stderr, "JOIN1 %.3f\n", since(T0)); T0 = Clock::now();
+  // The two joins run side by side: each plans its moves in parallel, and either one's serial
+  // stretches leave the cores to the other.
+  JoinedProgram joined, other;
   OrderedRuns held_runs = runs;
-  std::vector<HeldPass> held = holdTable(problem, p, p.path.path.own_durations, segs, held_runs);
-  fprintf(stderr, "HOLD %.3f\n", since(T0)); T0 = Clock::now();
-  if (held.empty()) return joined;
+  std::vector<HeldPass> held;
   std::vector<ScanPlan::Run> held_order;
-  JoinedProgram other =
-      joinInOrder(*p.scene, held_runs, segs.size(), max_program, moves, held_order);
-  fprintf(stderr, "JOIN2 %.3f\n", since(T0));
-  if (other.dropped.size() > joined.dropped.size() || !(other.times.total < joined.times.total))
+  tbb::parallel_invoke(
+      [&] { joined = joinInOrder(*p.scene, runs, segs.size(), max_program, moves, run_order); },
+      [&] {
+        held = holdTable(problem, p, p.path.path.own_durations, segs, held_runs);
+        if (!held.empty())
+          other = joinInOrder(*p.scene, held_runs, segs.size(), max_program, moves, held_order);
+      });
+  if (held.empty() || other.dropped.size() > joined.dropped.size() ||
+      !(other.times.total < joined.times.total))
     return joined;
   held_times.held = held.size();
   held_times.held_cost = applyHeld(problem, held, segs);
@@ -607,9 +610,7 @@ void planSegments(const ScanProblem& problem, const PlanOptions& options, ScanPl
   // The hand-written path, when there is one, runs first.
   const std::size_t fixed = p.auto_scan && kept[0] && !problem.path.elements.empty() ? 1 : 0;
   const std::vector<double>& own = p.path.path.own_durations;
-  fprintf(stderr, "SEGS %.3f\n", wall); auto T9 = Clock::now();
   const OrderedRuns runs = orderedRuns(p.scene->cell(), trajectories, own, kept, fixed);
-  fprintf(stderr, "ORDER %.3f\n", since(T9));
   ProgramTimes held;
   JoinedProgram joined = joinBest(problem, p, runs, segs, plan.order, held);
   plan.dropped.insert(plan.dropped.end(), joined.dropped.begin(), joined.dropped.end());
