@@ -50,18 +50,7 @@ class SlabTrees {
     const std::size_t slabs =
         std::clamp<std::size_t>(points.size() / kSlabPoints, std::size_t{1}, kMaxSlabs);
     bounds_ = splitAt(points, box, slabs);
-    std::vector<std::vector<std::uint32_t>> members(slabs);
-    const auto each = [&](auto&& f) {
-      for (std::size_t i = 0; i < points.size(); ++i) {
-        const double x = points[i][axis_];
-        for (std::size_t k = slabOf(x - radius), last = slabOf(x + radius); k <= last; ++k) f(k, i);
-      }
-    };
-    std::vector<std::size_t> count(slabs, 0);
-    each([&](std::size_t k, std::size_t) { ++count[k]; });
-    for (std::size_t k = 0; k < slabs; ++k) members[k].reserve(count[k]);
-    each(
-        [&](std::size_t k, std::size_t i) { members[k].push_back(static_cast<std::uint32_t>(i)); });
+    std::vector<std::vector<std::uint32_t>> members = sort(points, radius, slabs);
     sets_.reserve(slabs);
     for (auto& m : members)
       sets_.push_back(std::make_unique<PointSet>(PointSet{points, std::move(m)}));
@@ -78,6 +67,33 @@ class SlabTrees {
   }
 
  private:
+  // Each slab's points (within `radius` of it), ascending: chunks of the points sorted in
+  // parallel, then each slab's pieces joined in the chunks' order.
+  std::vector<std::vector<std::uint32_t>> sort(const std::vector<Eigen::Vector3d>& points,
+                                               double radius,
+                                               std::size_t slabs) const {
+    constexpr std::size_t kChunk = 1 << 16;
+    const std::size_t chunks = (points.size() + kChunk - 1) / kChunk;
+    std::vector<std::vector<std::vector<std::uint32_t>>> pieces(
+        chunks, std::vector<std::vector<std::uint32_t>>(slabs));
+    tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
+      for (std::size_t i = c * kChunk; i < std::min(points.size(), (c + 1) * kChunk); ++i) {
+        const double x = points[i][axis_];
+        for (std::size_t k = slabOf(x - radius), last = slabOf(x + radius); k <= last; ++k)
+          pieces[c][k].push_back(static_cast<std::uint32_t>(i));
+      }
+    });
+    std::vector<std::vector<std::uint32_t>> members(slabs);
+    tbb::parallel_for(std::size_t{0}, slabs, [&](std::size_t k) {
+      std::size_t count = 0;
+      for (const auto& piece : pieces) count += piece[k].size();
+      members[k].reserve(count);
+      for (const auto& piece : pieces)
+        members[k].insert(members[k].end(), piece[k].begin(), piece[k].end());
+    });
+    return members;
+  }
+
   // Slab boundaries at equal counts, from a histogram of the points along the axis.
   std::vector<double> splitAt(const std::vector<Eigen::Vector3d>& points,
                               const Eigen::AlignedBox3d& box,

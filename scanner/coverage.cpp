@@ -4,6 +4,8 @@
 #include <cmath>
 #include <utility>
 
+#include <tbb/parallel_for.h>
+
 #include <scanplan/kinematics/units.h>
 #include <scanplan/scanner/detail/large_buffer.h>
 
@@ -68,15 +70,34 @@ PartCoverage computeCoverage(const kinematics::TriangleMesh& part,
 }
 
 PartPoints pointsOnPart(const std::vector<CloudPoint>& points, double max_incidence) {
+  // Chunks counted in parallel, then each copied in parallel to its place.
+  constexpr std::size_t kChunk = 1 << 16;
+  const std::size_t chunks = (points.size() + kChunk - 1) / kChunk;
+  const auto counts = [&](const CloudPoint& p) {
+    return p.part_triangle >= 0 && p.incidence <= max_incidence;
+  };
+  std::vector<std::size_t> offset(chunks + 1, 0);
+  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
+    const auto end =
+        points.begin() + static_cast<std::ptrdiff_t>(std::min(points.size(), (c + 1) * kChunk));
+    offset[c + 1] = static_cast<std::size_t>(
+        std::count_if(points.begin() + static_cast<std::ptrdiff_t>(c * kChunk), end, counts));
+  });
+  for (std::size_t c = 0; c < chunks; ++c) offset[c + 1] += offset[c];
   PartPoints out;
-  detail::reserveLarge(out.p, points.size());
-  detail::reserveLarge(out.t, points.size());
-  for (const CloudPoint& p : points) {
-    if (p.part_triangle >= 0 && p.incidence <= max_incidence) {
-      out.p.push_back(p.p_P);
-      out.t.push_back(p.t);
+  detail::reserveLarge(out.p, offset.back());
+  detail::reserveLarge(out.t, offset.back());
+  out.p.resize(offset.back());
+  out.t.resize(offset.back());
+  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
+    std::size_t at = offset[c];
+    for (std::size_t i = c * kChunk; i < std::min(points.size(), (c + 1) * kChunk); ++i) {
+      if (!counts(points[i])) continue;
+      out.p[at] = points[i].p_P;
+      out.t[at] = points[i].t;
+      ++at;
     }
-  }
+  });
   return out;
 }
 
