@@ -161,12 +161,20 @@ std::vector<PairInfo> selectPairs(const std::vector<BodyInfo>& bodies,
   return pairs;
 }
 
+// A convex shape's mesh (shape frame) in its body's frame.
+kinematics::TriangleMesh inBody(const detail::CollisionShape& shape,
+                                kinematics::TriangleMesh mesh) {
+  for (Eigen::Vector3d& v : mesh.vertices) v = shape.X_BG * v;
+  return mesh;
+}
+
 // A robot link as the maps measure it: each mesh shape replaced by its convex hull, simplified
 // to at most `max_vertices` (a flat mesh, which has none, stays). `info` sums the meshes' triangles
 // and hull vertices and takes the largest margin.
 detail::BodyGeometry hullBody(const detail::BodyGeometry& body,
                               std::size_t max_vertices,
-                              MapHull& info) {
+                              MapHull& info,
+                              std::vector<kinematics::TriangleMesh>& meshes) {
   detail::BodyGeometry out;
   for (const detail::CollisionShape& shape : body.shapes) {
     const auto* model = dynamic_cast<const detail::MeshModel*>(shape.geometry.get());
@@ -185,6 +193,7 @@ detail::BodyGeometry hullBody(const detail::BodyGeometry& body,
     info.hull_vertices += hull->vertices.size();
     info.hull_margin = std::max(info.hull_margin, hullMargin(*hull, mesh).margin);
     out.shapes.push_back(detail::makeHullShape(shape, *hull));
+    meshes.push_back(inBody(shape, *hull));
   }
   return out;
 }
@@ -228,8 +237,10 @@ detail::BodyGeometry piecesBody(const detail::BodyGeometry& body,
       continue;
     }
     const StandIn standin = piecesOf(detail::meshOf(*model), config, info);
-    for (const kinematics::TriangleMesh& piece : standin.pieces)
+    for (const kinematics::TriangleMesh& piece : standin.pieces) {
       out.shapes.push_back(detail::makeHullShape(shape, piece));
+      info.standin.push_back(inBody(shape, piece));
+    }
     info.pieces += standin.pieces.size();
     info.piece_vertices += standin.vertices;
     info.pieces_fit = info.pieces_fit && standin.fits;
@@ -244,12 +255,15 @@ detail::BodyGeometry piecesBody(const detail::BodyGeometry& body,
 // What the maps measure for robot link `i` under the config: its hull, its pieces or its mesh.
 void chooseMapBody(const ClearanceConfig& config, detail::SceneGeometry& geometry, MapHull& info) {
   const auto i = static_cast<std::size_t>(info.body);
-  detail::BodyGeometry hulls = hullBody(geometry.bodies[i], config.hull_vertices, info);
+  std::vector<kinematics::TriangleMesh> hull_meshes;
+  detail::BodyGeometry hulls =
+      hullBody(geometry.bodies[i], config.hull_vertices, info, hull_meshes);
   if (info.mesh_triangles == 0) return;
   info.margin = info.hull_margin;
   if (config.link_meshes == LinkMeshes::kHull ||
       (config.link_meshes == LinkMeshes::kAuto && info.hull_margin <= config.max_hull_margin)) {
     info.used = true;
+    info.standin = std::move(hull_meshes);
     geometry.map_bodies[i] = std::move(hulls);
     return;
   }
@@ -259,6 +273,7 @@ void chooseMapBody(const ClearanceConfig& config, detail::SceneGeometry& geometr
     geometry.map_bodies[i] = std::move(pieces);
   } else {
     info.margin = 0.0;  // the mesh itself
+    info.standin.clear();
   }
 }
 

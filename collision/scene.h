@@ -84,6 +84,9 @@ struct MapHull {
   double fit_seconds = 0.0;  ///< wall time fitting (or loading) the pieces
   double margin = 0.0;       ///< m, an upper bound for what the maps measure (0 for the mesh)
   bool used = false;         ///< the maps measure the hull or the pieces (else the mesh)
+  /// Where `used`: what the maps measure, one closed convex mesh per hull or piece, in the
+  /// link's frame (m); empty otherwise. For pictures of the stand-in over the mesh.
+  std::vector<kinematics::TriangleMesh> standin;
 };
 
 /// What moves a body.

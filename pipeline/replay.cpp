@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include <scanplan/collision/scene.h>
 #include <scanplan/kinematics/shape.h>
 #include <scanplan/scanner/coverage.h>
 
@@ -50,6 +51,30 @@ void addBodies(const kinematics::CellModel& cell,
   for (const kinematics::Obstacle& o : cell.obstacles) {
     const int frame = o.carrier == kinematics::Carrier::kTable ? kReplayTableFrame : kReplayWorld;
     scene.bodies.push_back({o.name, frame, surfaces(o.shapes, tess), {}, {}});
+  }
+}
+
+// The maps' stand-ins for the robot's mesh links (hulls or convex pieces), one body per link,
+// each piece in a colour of its own.
+void addStandIns(const collision::Scene& collision_scene, ReplayScene& scene) {
+  static constexpr std::array<std::array<std::uint8_t, 3>, 6> kPieceColours = {
+      {{0, 114, 178}, {0, 158, 115}, {204, 121, 167}, {86, 180, 233}, {230, 159, 0}, {213, 94, 0}}};
+  for (const collision::MapHull& h : collision_scene.mapHulls()) {
+    if (!h.used || h.standin.empty()) continue;
+    const collision::BodyInfo& info = collision_scene.bodies()[static_cast<std::size_t>(h.body)];
+    if (info.link < 0 || info.motion != collision::BodyMotion::kRobotLink) continue;
+    ReplayBody body{info.name + " stand-in", info.link, {}, {}, {}, true};
+    for (std::size_t k = 0; k < h.standin.size(); ++k) {
+      const TriangleMesh& piece = h.standin[k];
+      const int base = static_cast<int>(body.mesh.vertices.size());
+      body.mesh.vertices.insert(body.mesh.vertices.end(), piece.vertices.begin(),
+                                piece.vertices.end());
+      for (const Eigen::Vector3i& t : piece.triangles) {
+        body.mesh.triangles.push_back(t + Eigen::Vector3i::Constant(base));
+        body.colours.push_back(kPieceColours[k % kPieceColours.size()]);
+      }
+    }
+    scene.bodies.push_back(std::move(body));
   }
 }
 
@@ -115,6 +140,7 @@ ReplayScene replayScene(const kinematics::CellModel& cell,
   tess.chord_tolerance = options.chord_tolerance;
   tess.max_segments = 48;
   addBodies(cell, part, tess, scene);
+  if (plan.prepared && plan.prepared->scene) addStandIns(*plan.prepared->scene, scene);
   scene.X_RP = cell.part.X_RP;
   const auto& samples = plan.trajectory->trajectory.samples;
   const std::size_t n = samples.size();

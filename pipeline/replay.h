@@ -33,6 +33,9 @@ struct ReplayBody {
   /// The part only, per triangle: s, when the first point of the cloud lands on it (its colour
   /// holds from then on); +infinity: never. Empty for other bodies and without a simulation.
   std::vector<float> covered_t;
+  /// A robot link's stand-in in the maps (its hull or its convex pieces, collision::MapHull),
+  /// coloured piece by piece, to draw over the link's mesh on request; in the link's frame.
+  bool standin = false;
 };
 
 struct ReplayFrame {

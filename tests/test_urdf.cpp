@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <random>
@@ -17,8 +18,10 @@
 #include <scanplan/config/robot_urdf.h>
 #include <scanplan/config/to_problem.h>
 #include <scanplan/kinematics/pose.h>
+#include <scanplan/kinematics/shape.h>
 #include <scanplan/kinematics/units.h>
 #include <scanplan/pipeline/plan_scan.h>
+#include <scanplan/pipeline/replay.h>
 #include "cli_support.h"
 #include "test_support.h"
 
@@ -295,6 +298,12 @@ class UrdfPackages : public test::Cli {
                 "<limit lower=\"0\" upper=\"0.02\" effort=\"1\" velocity=\"0.1\"/></joint>");
     test::writeFile(dir_ / "robot.urdf", urdf);
   }
+  // `robot import` of the scratch URDF into `out`.
+  test::Result importRobot(const fs::path& out) {
+    fs::create_directories(out.parent_path());
+    return scanplan({"robot", "import", (dir_ / "robot.urdf").string(), "-o", out.string(),
+                     "--package-path", (dir_ / "ws").string()});
+  }
   static void insertAfter(std::string& text, const std::string& at, const std::string& what) {
     const auto k = text.find(at);
     ASSERT_NE(k, std::string::npos) << at;
@@ -495,9 +504,7 @@ TEST_F(UrdfPackages, RobotImportWritesARobotFileWithTheSameModel) {
 // at most the branch and bound's 0.5 mm out, with the cube's 8 corners at most.
 TEST_F(UrdfPackages, RobotImportAndCheckReportWhatTheMapsMeasureForAMeshLink) {
   const fs::path out = dir_ / "out" / "robot.yaml";
-  fs::create_directories(out.parent_path());
-  const test::Result run = scanplan({"robot", "import", (dir_ / "robot.urdf").string(), "-o",
-                                     out.string(), "--package-path", (dir_ / "ws").string()});
+  const test::Result run = importRobot(out);
   ASSERT_EQ(run.exit_code, 0) << test::describe(run);
   EXPECT_TRUE(test::contains(run.out, "link mesh  convex stand-ins")) << run.out;
   EXPECT_TRUE(test::contains(run.out, "mesh 12 triangles")) << run.out;
@@ -584,6 +591,55 @@ TEST(Urdf, Irb2400WithItsTableCloseCrossesJ4Past180) {
   EXPECT_LT(step, deg(30.0)) << "J4 jumps";
   std::printf("IRB 2400, table 0.9 m out: %s; J4 %.1f … %.1f deg, largest step %.2f deg\n",
               plan.choice.why_chosen.c_str(), toDeg(lo), toDeg(hi), toDeg(step));
+}
+
+// What the maps measure for a mesh link, drawn over it: the replay (and cell.png) get a stand-in
+// body per mesh link the maps measure as a hull or pieces, in the link's frame, a colour per
+// piece. It holds the link's mesh (every mesh vertex inside a piece) and stands at most the
+// reported margin outside it (every stand-in vertex that near a mesh vertex: the cube's hull is
+// its corners).
+TEST_F(UrdfPackages, TheReplayShowsWhatTheMapsMeasureOverAMeshLink) {
+  const fs::path out = dir_ / "out" / "robot.yaml";
+  const test::Result run = importRobot(out);
+  ASSERT_EQ(run.exit_code, 0) << test::describe(run);
+  std::vector<std::string> overrides = test::kLightDemo;
+  overrides.push_back("simulation.enabled=false");
+  overrides.push_back("robot=" + out.string());
+  const pipeline::ScanProblem problem = config::toProblem(
+      config::loadJob(test::sourceDir() / "data/jobs/demo_rings.yaml", overrides));
+  const pipeline::ScanPlan plan = pipeline::planScan(problem);
+  ASSERT_TRUE(plan.planned()) << plan.reason;
+  const pipeline::ReplayScene scene = pipeline::replayScene(problem.cell, problem.part, plan);
+  const auto& hulls = plan.prepared->scene->mapHulls();
+  ASSERT_EQ(hulls.size(), 1u);
+  std::vector<const pipeline::ReplayBody*> standins;
+  for (const pipeline::ReplayBody& b : scene.bodies)
+    if (b.standin) standins.push_back(&b);
+  ASSERT_EQ(standins.size(), 1u);
+  const pipeline::ReplayBody& body = *standins.front();
+  ASSERT_EQ(body.frame, 3);
+  EXPECT_EQ(body.colours.size(), body.mesh.triangles.size());
+  // The link's mesh in its frame, from the robot file's shapes.
+  kinematics::TriangleMesh mesh;
+  for (const kinematics::Shape& shape : problem.cell.robot.definition().links[3].shapes) {
+    if (!std::holds_alternative<kinematics::MeshFile>(shape.geometry)) continue;
+    mesh = kinematics::shapeSurface(shape);
+  }
+  ASSERT_EQ(mesh.triangles.size(), 12u);
+  for (const Eigen::Vector3d& v : mesh.vertices) {  // inside the (one, convex) piece
+    for (const Eigen::Vector3i& t : body.mesh.triangles) {
+      const Eigen::Vector3d& a = body.mesh.vertices[static_cast<std::size_t>(t[0])];
+      const Eigen::Vector3d n = (body.mesh.vertices[static_cast<std::size_t>(t[1])] - a)
+                                    .cross(body.mesh.vertices[static_cast<std::size_t>(t[2])] - a)
+                                    .normalized();
+      EXPECT_LE(n.dot(v - a), 1e-9) << "a mesh vertex outside the stand-in";
+    }
+  }
+  for (const Eigen::Vector3d& w : body.mesh.vertices) {
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const Eigen::Vector3d& v : mesh.vertices) nearest = std::min(nearest, (v - w).norm());
+    EXPECT_LE(nearest, hulls.front().margin + 1e-9);
+  }
 }
 
 }  // namespace

@@ -110,6 +110,7 @@ void appendBody(std::string& out, const pipeline::ReplayBody& b) {
   ObjectWriter j(out);
   j.value("name", b.name);
   j.value("frame", b.frame);
+  if (b.standin) j.value("standin", true);
   j.base64("vertices", vertices);
   j.base64("triangles", triangles);
   if (!b.colours.empty()) {
@@ -266,7 +267,7 @@ const char* kStyle = R"(
 // The legend: what each colour means, in words for someone who has never seen scanplan; a click
 // on the title folds it. The viewer writes the density scale's numbers (#scale-mid, #scale-top)
 // from the scene's data.
-std::string legend(const std::string& title, const Json& classes, bool uncovered) {
+std::string legend(const std::string& title, const Json& classes, bool uncovered, bool standins) {
   std::string s =
       "<div id=\"legend\"><details open><summary><b>" + htmlText(title) + "</b></summary>";
   s += "<i style=\"background:#f39c34\"></i>robot arm <i style=\"background:#333a44\"></i>laser "
@@ -280,6 +281,10 @@ std::string legend(const std::string& title, const Json& classes, bool uncovered
   s += "<i style=\"background:#1f5fbf\"></i>latest scanned points <label><input "
        "type=\"checkbox\" id=\"all-points\">all</label><br>";
   s += "<i style=\"background:#ff2020\"></i>laser fan (while scanning)<br>";
+  if (standins) {
+    s += "<i style=\"background:#0072b2\"></i>what the maps measure for the link meshes (hulls "
+         "or convex pieces) <label><input type=\"checkbox\" id=\"standins\">show</label><br>";
+  }
   s += "<i style=\"background:#ff0000;border-radius:6px\"></i>glowing red, red tick on the time "
        "bar: closest approach<br>";
   if (uncovered) {
@@ -332,7 +337,9 @@ std::optional<std::string> replayHtml(const pipeline::ReplayScene& scene,
   html += "<title>scanplan replay: " + htmlText(title) + "</title>\n<style>";
   html += kStyle;
   html += "</style>\n</head>\n<body>\n<div id=\"view\"></div>\n";
-  html += legend(title, classes, !scene.uncovered.empty());
+  const bool standins = std::any_of(scene.bodies.begin(), scene.bodies.end(),
+                                    [](const pipeline::ReplayBody& b) { return b.standin; });
+  html += legend(title, classes, !scene.uncovered.empty(), standins);
   html +=
       "<div id=\"bar\"><button id=\"play\">▶ Play</button> <span id=\"track\"><input "
       "id=\"time\" type=\"range\" min=\"0\" max=\"0\" value=\"0\" step=\"1\"><span "

@@ -44,7 +44,7 @@
   const colourOf = (name, frame) =>
     name === 'scanner' ? 0x333a44 : name === 'table' ? 0x9a9a9a : name === 'part' ? 0xcccccc
       : frame >= 0 && frame <= 6 ? 0xf39c34 : 0x7f93a8;
-  const meshes = {}, bodyMeshes = [];  // by name; in D.bodies' order
+  const meshes = {}, bodyMeshes = [], standins = [];  // by name; in D.bodies' order
   for (const b of D.bodies) {
     const g = new THREE.BufferGeometry();
     const v = f32(b.vertices), t = u32(b.triangles);
@@ -72,6 +72,20 @@
     meshes[b.name] = mesh;
     bodyMeshes.push(mesh);
     (b.frame >= 0 ? carriers[b.frame] : scene).add(mesh);
+    if (b.standin) {  // a link's stand-in in the maps: over its mesh, see-through, on request
+      m.transparent = true;
+      m.opacity = 0.55;
+      m.depthWrite = false;
+      mesh.visible = false;
+      standins.push(mesh);
+    }
+  }
+  const standinBox = document.getElementById('standins');
+  if (standinBox) {
+    standinBox.addEventListener('change', () => {
+      for (const mesh of standins) mesh.visible = standinBox.checked;
+      render();
+    });
   }
 
   // The part's coverage as it grows: a triangle keeps its final colour (points/mm², viridis) from
