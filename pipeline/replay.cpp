@@ -14,17 +14,20 @@ namespace {
 
 using kinematics::TriangleMesh;
 
+// `m` appended to `out` (same frame).
+void append(TriangleMesh& out, const TriangleMesh& m) {
+  const int base = static_cast<int>(out.vertices.size());
+  out.vertices.insert(out.vertices.end(), m.vertices.begin(), m.vertices.end());
+  for (const Eigen::Vector3i& t : m.triangles)
+    out.triangles.push_back(t + Eigen::Vector3i::Constant(base));
+}
+
 // The shapes' surfaces merged into one mesh in their body frame.
 TriangleMesh surfaces(const std::vector<kinematics::Shape>& shapes,
                       const kinematics::TessellationOptions& options) {
   TriangleMesh out;
-  for (const kinematics::Shape& shape : shapes) {
-    const TriangleMesh m = kinematics::shapeSurface(shape, options);
-    const int base = static_cast<int>(out.vertices.size());
-    out.vertices.insert(out.vertices.end(), m.vertices.begin(), m.vertices.end());
-    for (const Eigen::Vector3i& t : m.triangles)
-      out.triangles.push_back(t + Eigen::Vector3i::Constant(base));
-  }
+  for (const kinematics::Shape& shape : shapes)
+    append(out, kinematics::shapeSurface(shape, options));
   return out;
 }
 
@@ -65,14 +68,8 @@ void addStandIns(const collision::Scene& collision_scene, ReplayScene& scene) {
     if (info.link < 0 || info.motion != collision::BodyMotion::kRobotLink) continue;
     ReplayBody body{info.name + " stand-in", info.link, {}, {}, {}, true};
     for (std::size_t k = 0; k < h.standin.size(); ++k) {
-      const TriangleMesh& piece = h.standin[k];
-      const int base = static_cast<int>(body.mesh.vertices.size());
-      body.mesh.vertices.insert(body.mesh.vertices.end(), piece.vertices.begin(),
-                                piece.vertices.end());
-      for (const Eigen::Vector3i& t : piece.triangles) {
-        body.mesh.triangles.push_back(t + Eigen::Vector3i::Constant(base));
-        body.colours.push_back(kPieceColours[k % kPieceColours.size()]);
-      }
+      append(body.mesh, h.standin[k]);
+      body.colours.resize(body.mesh.triangles.size(), kPieceColours[k % kPieceColours.size()]);
     }
     scene.bodies.push_back(std::move(body));
   }

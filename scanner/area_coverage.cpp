@@ -50,7 +50,7 @@ class SlabTrees {
     const std::size_t slabs =
         std::clamp<std::size_t>(points.size() / kSlabPoints, std::size_t{1}, kMaxSlabs);
     bounds_ = splitAt(points, box, slabs);
-    std::vector<std::vector<std::uint32_t>> members = sort(points, radius, slabs);
+    std::vector<std::vector<std::uint32_t>> members = slabMembers(points, radius, slabs);
     sets_.reserve(slabs);
     for (auto& m : members)
       sets_.push_back(std::make_unique<PointSet>(PointSet{points, std::move(m)}));
@@ -69,9 +69,9 @@ class SlabTrees {
  private:
   // Each slab's points (within `radius` of it), ascending: chunks of the points sorted in
   // parallel, then each slab's pieces joined in the chunks' order.
-  std::vector<std::vector<std::uint32_t>> sort(const std::vector<Eigen::Vector3d>& points,
-                                               double radius,
-                                               std::size_t slabs) const {
+  std::vector<std::vector<std::uint32_t>> slabMembers(const std::vector<Eigen::Vector3d>& points,
+                                                      double radius,
+                                                      std::size_t slabs) const {
     constexpr std::size_t kChunk = 1 << 16;
     const std::size_t chunks = (points.size() + kChunk - 1) / kChunk;
     std::vector<std::vector<std::vector<std::uint32_t>>> pieces(

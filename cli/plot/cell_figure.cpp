@@ -32,7 +32,7 @@ RenderRequest cellScene(const pipeline::ReplayScene& scene,
   r.width = r.height = 480;
   for (const pipeline::ReplayBody& b : scene.bodies) {
     const bool link_mesh = !b.standin && b.frame >= 0 && b.frame <= 6 && replaced.count(b.frame);
-    if (b.standin != standins && (b.standin || link_mesh)) continue;
+    if (standins ? link_mesh : b.standin) continue;
     const Eigen::Isometry3d X =
         b.frame < 0 ? Eigen::Isometry3d::Identity() : f.poses[static_cast<std::size_t>(b.frame)];
     const int base = static_cast<int>(r.vertices.size());
