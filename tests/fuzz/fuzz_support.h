@@ -4,8 +4,11 @@
 // and the one rule for exceptions: scanplan::InputError is the documented answer to bad input
 // and is ignored; anything else escapes to libFuzzer, which reports it as a crash.
 
+#include <signal.h>
+#include <sys/types.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -20,11 +23,32 @@ namespace scanplan::fuzz {
 
 namespace fs = std::filesystem;
 
+/// Removes the scratch folders of harnesses that are no longer running: libFuzzer may end a
+/// run without the exit handlers that remove a process's own folder.
+inline void removeStaleScratch() {
+  const std::string prefix = "scanplan-fuzz-";
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(fs::temp_directory_path(), ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind(prefix, 0) != 0) continue;
+    const std::string digits = name.substr(prefix.size());
+    if (digits.empty() || digits.size() > 9 ||
+        digits.find_first_not_of("0123456789") != std::string::npos)
+      continue;
+    const auto pid = static_cast<pid_t>(std::stol(digits));
+    if (pid == getpid() || kill(pid, 0) == 0 || errno != ESRCH) continue;
+    std::error_code remove_ec;
+    fs::remove_all(e.path(), remove_ec);
+  }
+}
+
 /// The scratch folder of this process: /tmp/scanplan-fuzz-<pid>/ with data/robots and
 /// data/parts linked in and data/jobs/* linked file by file (so a harness may add its input
-/// beside them). Removed at exit.
+/// beside them). Removed at exit; folders that earlier harnesses left behind are removed when
+/// it is made.
 inline const fs::path& scratch() {
   static const fs::path dir = [] {
+    removeStaleScratch();
     const fs::path d = fs::temp_directory_path() / ("scanplan-fuzz-" + std::to_string(getpid()));
     const fs::path data = fs::path(SCANPLAN_SOURCE_DIR) / "data";
     fs::remove_all(d);

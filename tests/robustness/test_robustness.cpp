@@ -14,6 +14,7 @@
 #include <map>
 #include <set>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include "tests/robustness/builders.h"
@@ -26,16 +27,31 @@ namespace {
 // An error message that echoes a whole hostile line or file is a finding too.
 constexpr std::size_t kMaxErrorBytes = 16 * 1024;
 
+fs::path scratchRootPath() {
+  return fs::temp_directory_path() / ("scanplan_robustness_" + std::to_string(::getpid()));
+}
+
 fs::path scratchRoot() {
   static const fs::path root = [] {
-    const fs::path dir =
-        fs::temp_directory_path() / ("scanplan_robustness_" + std::to_string(::getpid()));
+    const fs::path dir = scratchRootPath();
     fs::create_directories(dir);
     fs::permissions(dir, fs::perms::all & ~fs::perms::group_write & ~fs::perms::others_write);
     return dir;
   }();
   return root;
 }
+
+// The scratch root goes when the run ends, once its cases are gone (with
+// SCANPLAN_ROBUSTNESS_KEEP they stay, and so does the root).
+class ScratchRootRemoval : public ::testing::Environment {
+ public:
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove(scratchRootPath(), ec);  // only when empty
+  }
+};
+[[maybe_unused]] const ::testing::Environment* const kScratchRootRemoval =
+    ::testing::AddGlobalTestEnvironment(new ScratchRootRemoval);
 
 // An earlier run's OUT: a report, a trajectory, a program and a file of the user's.
 void makeExistingOut(const fs::path& out, bool read_only) {
