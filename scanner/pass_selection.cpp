@@ -5,6 +5,7 @@
 #include <queue>
 
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 
 #include <scanplan/kinematics/pose.h>
 #include <scanplan/kinematics/scan_path.h>
@@ -508,20 +509,29 @@ std::vector<TourStep> orderPasses(const std::vector<ScanPass>& passes,
     best = nearestNeighbour(passes, chosen, start, sphere);
   } else {
     // Nearest neighbour from up to 12 first passes spread over the chosen ones (each run is
-    // O(n²) transfers; from every pass it would be O(n³)).
-    double best_cost = 1e300;
+    // O(n²) transfers; from every pass it would be O(n³)), in parallel; the cheapest tour wins,
+    // the earliest start on a tie.
     const std::size_t step = std::max<std::size_t>(1, chosen.size() / 12);
-    for (std::size_t k = 0; k < chosen.size(); k += step) {
+    std::vector<std::size_t> firsts;
+    for (std::size_t k = 0; k < chosen.size(); k += step) firsts.push_back(k);
+    std::vector<std::vector<TourStep>> tours(firsts.size());
+    std::vector<double> costs(firsts.size(), 1e300);
+    tbb::parallel_for(std::size_t{0}, firsts.size(), [&](std::size_t i) {
+      const std::size_t k = firsts[i];
       std::vector<std::size_t> left = chosen;
       left.erase(left.begin() + static_cast<std::ptrdiff_t>(k));
       std::vector<TourStep> tour{{chosen[k], false, 0.0}};
       const auto rest =
           nearestNeighbour(passes, left, ends(passes[chosen[k]], false, {}).exit, sphere);
       tour.insert(tour.end(), rest.begin(), rest.end());
-      const double c = tourCost(passes, tour, start, sphere);
-      if (c < best_cost - 1e-12) {
-        best_cost = c;
-        best = std::move(tour);
+      costs[i] = tourCost(passes, tour, start, sphere);
+      tours[i] = std::move(tour);
+    });
+    double best_cost = 1e300;
+    for (std::size_t i = 0; i < tours.size(); ++i) {
+      if (costs[i] < best_cost - 1e-12) {
+        best_cost = costs[i];
+        best = std::move(tours[i]);
       }
     }
   }

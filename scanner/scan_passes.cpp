@@ -250,18 +250,18 @@ void addSpins(const PartOnTable& scene,
       }
     return std::pair{lo, hi};
   };
+  // Each spin and helix is made on its own (in parallel), kept in this order.
+  struct Job {
+    double e = 0.0, u = 0.0, turns = 0.0;  // turns > 0: a helix from u
+    int side = 1;
+  };
+  std::vector<Job> jobs;
   for (double e_deg : elevations) {
     const double e = deg(e_deg);
     const auto [lo, hi] = extent(e);
     const int lines = std::max(1, static_cast<int>(std::ceil((hi - lo) / spacing)));
-    for (int k = 0; k < lines; ++k) {
-      const double u = lo + (hi - lo) * (k + 0.5) / lines;
-      for (int side : {1, -1}) {
-        ScanPass pass;
-        if (spinPass(scene, housing, settings, e, u, side, span.reach + std::abs(u) + 0.05, pass))
-          out.push_back(std::move(pass));
-      }
-    }
+    for (int k = 0; k < lines; ++k)
+      for (int side : {1, -1}) jobs.push_back({e, lo + (hi - lo) * (k + 0.5) / lines, 0.0, side});
   }
   // Helices, where the extent takes more than one spin. At every azimuth the helix's turns lie
   // one spacing apart, shifted by the turned fraction of a spacing: the lowest is at most half a
@@ -272,15 +272,24 @@ void addSpins(const PartOnTable& scene,
     const double e = deg(e_deg);
     const auto [lo, hi] = extent(e);
     if (!(hi - lo > spacing)) continue;
-    const double u_first = lo - 0.5 * spacing, turns = 1.0 + (hi - lo) / spacing;
-    const double far =
-        span.reach + std::max(std::abs(u_first), std::abs(hi + 0.5 * spacing)) + 0.05;
-    for (int side : {1, -1}) {
-      ScanPass pass;
-      if (helixPass(scene, housing, settings, e, u_first, spacing, turns, side, far, pass))
-        out.push_back(std::move(pass));
-    }
+    for (int side : {1, -1})
+      jobs.push_back({e, lo - 0.5 * spacing, 1.0 + (hi - lo) / spacing, side});
   }
+  std::vector<ScanPass> made(jobs.size());
+  std::vector<std::uint8_t> ok(jobs.size(), 0);
+  tbb::parallel_for(std::size_t{0}, jobs.size(), [&](std::size_t i) {
+    const Job& j = jobs[i];
+    if (j.turns > 0.0) {
+      const double top = j.u + j.turns * spacing;  // the helix's last line, half a spacing up
+      const double far = span.reach + std::max(std::abs(j.u), std::abs(top)) + 0.05;
+      ok[i] = helixPass(scene, housing, settings, j.e, j.u, spacing, j.turns, j.side, far, made[i]);
+    } else {
+      ok[i] = spinPass(scene, housing, settings, j.e, j.u, j.side,
+                       span.reach + std::abs(j.u) + 0.05, made[i]);
+    }
+  });
+  for (std::size_t i = 0; i < jobs.size(); ++i)
+    if (ok[i]) out.push_back(std::move(made[i]));
 }
 
 // A strip's axes: v the view, u along the strip, w across; the part's extent on them.
@@ -384,9 +393,17 @@ void addStrips(const PartOnTable& scene,
                const PassSettings& settings,
                std::vector<ScanPass>& out) {
   const double spacing = 2.0 * settings.window.y_near * (1.0 - settings.overlap);
+  // Each strip is made on its own (in parallel), kept in this order.
+  struct Job {
+    StripAxes axes;
+    double elevation = 0.0, azimuth = 0.0, w = 0.0;
+    int k = 0, strips = 0, side = 1;
+  };
+  std::vector<Job> jobs;
   for (const auto& [v, u] : stripViews()) {
     const StripAxes a = stripAxes(scene.part(), v, u);
     const int strips = std::max(1, static_cast<int>(std::ceil((a.w_max - a.w_min) / spacing)));
+    const double e = std::asin(std::clamp(-v.z(), -1.0, 1.0));
     for (int k = 0; k < strips; ++k) {
       const double w = a.w_min + (a.w_max - a.w_min) * (k + 0.5) / strips;
       // The camera ahead of the laser turning counter-clockwise about the table axis (as in a
@@ -394,14 +411,20 @@ void addStrips(const PartOnTable& scene,
       // table brings it in front, so the wrist does not wind up from pass to pass.
       const Eigen::Vector3d centre = 0.5 * (a.u_min + a.u_max) * a.u + w * a.w;
       const int side = Eigen::Vector3d::UnitZ().cross(centre).dot(a.u) < 0.0 ? -1 : 1;
-      ScanPass pass;
-      if (!stripPass(scene, housing, settings, a, w, side, pass)) continue;
-      const double e = std::asin(std::clamp(-v.z(), -1.0, 1.0));
-      pass.label = fmt::format("strip view elevation {:.0f} deg azimuth {:.0f} deg, {} of {}",
-                               toDeg(e), toDeg(std::atan2(-v.y(), -v.x())), k + 1, strips);
-      out.push_back(std::move(pass));
+      jobs.push_back({a, e, std::atan2(-v.y(), -v.x()), w, k, strips, side});
     }
   }
+  std::vector<ScanPass> made(jobs.size());
+  std::vector<std::uint8_t> ok(jobs.size(), 0);
+  tbb::parallel_for(std::size_t{0}, jobs.size(), [&](std::size_t i) {
+    const Job& j = jobs[i];
+    if (!stripPass(scene, housing, settings, j.axes, j.w, j.side, made[i])) return;
+    made[i].label = fmt::format("strip view elevation {:.0f} deg azimuth {:.0f} deg, {} of {}",
+                                toDeg(j.elevation), toDeg(j.azimuth), j.k + 1, j.strips);
+    ok[i] = 1;
+  });
+  for (std::size_t i = 0; i < jobs.size(); ++i)
+    if (ok[i]) out.push_back(std::move(made[i]));
 }
 
 }  // namespace
