@@ -104,13 +104,16 @@ std::optional<double> poseMargin(const collision::Scene& scene,
 // The margins at a move's samples (its own poses, `move.axes`), nullopt at the first that is
 // blocked; then `blocked_at` (if given) gets how far along the samples it is (0 to 1). A way is
 // checked at all its samples first: a blocked one is found before any pose between them is.
+// `start`: the margin at the first sample when it is known (the end of the leg before).
 std::optional<std::vector<double>> sampleMargins(const collision::Scene& scene,
                                                  collision::ClearanceEvaluator& clearance,
                                                  const kinematics::PtpMove& move,
-                                                 double* blocked_at = nullptr) {
+                                                 double* blocked_at = nullptr,
+                                                 std::optional<double> start = std::nullopt) {
   std::vector<double> margins;
   for (std::size_t k = 0; k < move.axes.size(); ++k) {
-    const std::optional<double> m = poseMargin(scene, clearance, move.axes[k]);
+    const std::optional<double> m =
+        k == 0 && start ? start : poseMargin(scene, clearance, move.axes[k]);
     if (!m) {
       if (blocked_at && move.axes.size() > 1)
         *blocked_at = static_cast<double>(k) / static_cast<double>(move.axes.size() - 1);
@@ -337,7 +340,11 @@ std::optional<std::vector<TrajectorySample>> runWay(const collision::Scene& scen
   for (const Leg& leg : way) {
     moves.push_back(
         kinematics::ptpMove(leg.from, leg.to, leg.v_from, leg.v_to, limits, settings.max_step));
-    auto m = sampleMargins(scene, clearance, moves.back(), blocked_at);
+    // A leg starts where the one before ends: that pose is checked once.
+    const std::optional<double> start = margins.empty() || margins.back().empty()
+                                            ? std::nullopt
+                                            : std::optional<double>(margins.back().back());
+    auto m = sampleMargins(scene, clearance, moves.back(), blocked_at, start);
     if (!m) return std::nullopt;
     margins.push_back(std::move(*m));
   }
