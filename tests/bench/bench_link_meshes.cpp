@@ -1,23 +1,24 @@
-// Mesh links at speed: the demo map with the Adept Viper s650's own link
-// meshes (../shared/data/robots/viper_s650, 2 000 triangles a link) against the same map with
-// the bundled robot file's primitive links. Target: mesh links at most 3x the primitive links'
-// map CPU time. Side by side from one run, process CPU time (2 threads) per cell, best of RUNS,
-// the primitive and the hull map in turn:
-// - primitive links (data/robots/viper_s650.yaml);
-// - mesh links as simplified convex hulls (link_meshes: hull; the default, auto, takes a link's
-//   hull only where its margin is within 10 mm, none of the Viper's: they measure exactly);
-// - both again with the self pairs the mesh robot never brings into contact left out (what
-//   MoveIt's setup assistant disables by default; `scanplan robot check` lists them), so that
-//   the two robots are compared on the same pairs;
-// - mesh links measured exactly (link_meshes: exact, the path before), on every SUBSAMPLE-th
-//   time sample: it is ~100x slower. On those cells the hull map must never exceed the exact
-//   map (the hulls are conservative); how much lower it is is printed.
-// - mesh links as convex pieces within PIECE_MARGIN_MM (link_meshes: pieces; 2 mm unless given),
-//   fitted once and kept in $TMPDIR/scanplan_bench_pieces.
+// Mesh links at speed: the demo map with real link meshes against the same map with primitive
+// links. Target: mesh links at most 3x the primitive links' map CPU time. Side by side from one
+// run, process CPU time (2 threads) per cell, best of RUNS, the two maps in turn:
+// - the Adept Viper s650's own link meshes (../shared/data/robots/viper_s650, 2 000 triangles a
+//   link; skipped when absent) against the bundled robot file's primitive links:
+//   - as simplified convex hulls (link_meshes: hull);
+//   - both again with the self pairs the mesh robot never brings into contact left out (what
+//     MoveIt's setup assistant disables by default; `scanplan robot check` lists them), so that
+//     the two robots are compared on the same pairs;
+//   - as convex pieces within PIECE_MARGIN_MM (link_meshes: pieces; 2 mm unless given);
+// - the KUKA KR6 R700 sixx from its URDF: ROS-Industrial's collision meshes
+//   (data/robots/urdf/kuka_kr6_r700_sixx_meshes, Apache-2.0) as convex pieces against the
+//   primitive links of data/robots/urdf/kuka_kr6_r700_sixx.urdf;
+// - each against its meshes measured exactly (link_meshes: exact), on every SUBSAMPLE-th time
+//   sample: ~100x slower. On those cells the hull and piece maps must never exceed the exact map
+//   (they are conservative); how much lower they are is printed.
+// The pieces are fitted once and kept in $TMPDIR/scanplan_bench_pieces.
 // Usage (from the repository root):
-//   build/tests/bench/bench_link_meshes [JOB] [RUNS] [SUBSAMPLE] [PIECE_MARGIN_MM]
-// (JOB: a job with hand-written scan.paths; the automatic demo's path comes from the coverage
-// planner, which this bench does not run.)
+//   build/tests/bench/bench_link_meshes [JOB] [RUNS] [SUBSAMPLE] [PIECE_MARGIN_MM] [ROBOTS]
+// ROBOTS: all (default), viper or kuka. (JOB: a job with hand-written scan.paths; the automatic
+// demo's path comes from the coverage planner, which this bench does not run.)
 #include <unistd.h>
 
 #include <algorithm>
@@ -172,17 +173,66 @@ std::string conservative(const planner::ConfigMap& hull,
       100.0 * static_cast<double>(feasible_exact) / n);
 }
 
-int run(int argc, char** argv) {
-  const std::string job_file = argc > 1 ? argv[1] : "data/jobs/demo_rings.yaml";
-  const int runs = argc > 2 ? std::max(1, std::atoi(argv[2])) : 2;
-  const auto every = static_cast<std::size_t>(argc > 3 ? std::max(1, std::atoi(argv[3])) : 25);
-  const double piece_margin = argc > 4 ? mm(std::atof(argv[4])) : 0.002;
-  if (!fs::exists(kSharedData / "robots/viper_s650/link0.stl")) {
-    std::printf("bench_link_meshes: skipped: the Viper link meshes (%s) are absent\n",
-                (kSharedData / "robots/viper_s650").c_str());
-    return 0;
+// Convex pieces within `margin` (collision/link_standin.h) against the primitive links: the map's
+// CPU time, and on every `every`-th sample against the meshes measured exactly (`exact_sub`:
+// that map, measured before; computed here when null). The pieces are kept in a cache folder,
+// so that a second run skips the fitting. Returns whether the piece map is conservative.
+bool piecesSection(const std::string& robot,
+                   const Cell& primitive,
+                   const collision::Scene& prim_scene,
+                   const Cell& meshes,
+                   collision::ClearanceConfig config,
+                   int runs,
+                   std::size_t every,
+                   double margin,
+                   const Timed* exact_sub) {
+  collision::ClearanceConfig piece_config = config;
+  piece_config.link_meshes = collision::LinkMeshes::kPieces;
+  piece_config.piece_margin = margin;
+  piece_config.max_pieces = 256;
+  piece_config.piece_cache = fs::temp_directory_path() / "scanplan_bench_pieces";
+  const double start = bench::processCpuSeconds();
+  const collision::Scene piece_scene(meshes.cell, piece_config);
+  std::printf("%s: convex pieces within %.1f mm (cache %s), scene build CPU %.1f s:\n",
+              robot.c_str(), toMm(margin), piece_config.piece_cache.c_str(),
+              bench::processCpuSeconds() - start);
+  for (const collision::MapHull& h : piece_scene.mapHulls()) {
+    std::printf(
+        "  %-9s mesh %5zu triangles -> %3zu pieces, %4zu vertices, margin %4.2f mm%s, %s %.1f s\n",
+        piece_scene.bodies()[static_cast<std::size_t>(h.body)].name.c_str(), h.mesh_triangles,
+        h.pieces, h.piece_vertices, toMm(h.margin), h.pieces_fit ? "" : " (over the limits)",
+        h.from_cache ? "read" : "fitted", h.fit_seconds);
   }
-  const tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 2);
+  const auto [prim, pieces] = timeMaps(prim_scene, primitive, piece_scene, meshes, runs);
+  const double ratio = pieces.cpu / prim.cpu;
+  std::printf("full map, %zu cells x 8 branches, CPU time:\n", prim.map.cellsPerBranch());
+  std::printf("  primitive links              %s\n", perCell(prim).c_str());
+  std::printf("  mesh links (pieces)          %s   %.2fx primitive   target <= 3x: %s\n",
+              perCell(pieces).c_str(), ratio, ratio <= 3.0 ? "met" : "MISSED");
+  const kinematics::ScanPath sub = subsampled(meshes.path, every);
+  Timed exact_here, piece_sub;
+  if (!exact_sub) {
+    config.link_meshes = collision::LinkMeshes::kExact;
+    const collision::Scene exact_scene(meshes.cell, config);
+    mapOnce(exact_scene, meshes, sub, exact_here);
+    exact_sub = &exact_here;
+  }
+  mapOnce(piece_scene, meshes, sub, piece_sub);
+  std::printf("every %zu-th sample, %zu cells x 8 branches, CPU time:\n", every,
+              piece_sub.map.cellsPerBranch());
+  std::printf("  mesh links exactly           %s\n", perCell(*exact_sub).c_str());
+  std::printf("  mesh links (pieces)          %s   %.1fx faster than exactly\n",
+              perCell(piece_sub).c_str(), exact_sub->cpu / piece_sub.cpu);
+  bool ok = false;
+  std::printf("  piece map vs exact map: %s\n",
+              conservative(piece_sub.map, exact_sub->map, ok).c_str());
+  return ok;
+}
+
+// The Viper s650 with its own link meshes: as hulls, without the self pairs they never bring
+// into contact, as convex pieces; against the meshes measured exactly. Returns whether the hull
+// and the piece maps are conservative.
+bool viperSection(const std::string& job_file, int runs, std::size_t every, double piece_margin) {
   const fs::path dir = fs::temp_directory_path() / fmt::format("bench_link_meshes_{}", getpid());
   fs::create_directories(dir);
   const Cell primitive = loadCell(job_file, {});
@@ -198,7 +248,7 @@ int run(int argc, char** argv) {
   const collision::Scene hull_scene(meshes.cell, config);
   const double hull_load = bench::processCpuSeconds() - start;
   std::printf(
-      "bench_link_meshes: %s, 2 threads, best of %d; scene build CPU: primitive %.3f s, "
+      "Adept Viper s650, %s, 2 threads, best of %d; scene build CPU: primitive %.3f s, "
       "mesh links with hulls %.3f s (qhull, simplification, margins)\n",
       job_file.c_str(), runs, prim_load, hull_load);
   for (const collision::MapHull& h : hull_scene.mapHulls()) {
@@ -230,51 +280,58 @@ int run(int argc, char** argv) {
   std::printf("  mesh links (hulls)           %s   %.2fx primitive   target <= 3x: %s\n",
               perCell(hull2).c_str(), ratio2, ratio2 <= 3.0 ? "met" : "MISSED");
 
-  // Convex pieces within the margin (collision/link_standin.h), kept in a cache folder so that
-  // a second run skips the fitting.
-  collision::ClearanceConfig piece_config = config;
-  piece_config.link_meshes = collision::LinkMeshes::kPieces;
-  piece_config.piece_margin = piece_margin;
-  piece_config.max_pieces = 256;
-  piece_config.piece_cache = fs::temp_directory_path() / "scanplan_bench_pieces";
-  start = bench::processCpuSeconds();
-  const collision::Scene piece_scene(meshes.cell, piece_config);
-  std::printf("convex pieces within %.1f mm (cache %s), scene build CPU %.1f s:\n",
-              toMm(piece_margin), piece_config.piece_cache.c_str(),
-              bench::processCpuSeconds() - start);
-  for (const collision::MapHull& h : piece_scene.mapHulls()) {
-    std::printf(
-        "  %-6s mesh %5zu triangles -> %3zu pieces, %4zu vertices, margin %4.2f mm%s, %s %.1f s\n",
-        piece_scene.bodies()[static_cast<std::size_t>(h.body)].name.c_str(), h.mesh_triangles,
-        h.pieces, h.piece_vertices, toMm(h.margin), h.pieces_fit ? "" : " (over the limits)",
-        h.from_cache ? "read" : "fitted", h.fit_seconds);
-  }
-  const auto [prim3, pieces] = timeMaps(prim_scene, primitive, piece_scene, meshes, runs);
-  const double ratio3 = pieces.cpu / prim3.cpu;
-  std::printf("  primitive links              %s\n", perCell(prim3).c_str());
-  std::printf("  mesh links (pieces)          %s   %.2fx primitive   target <= 3x: %s\n",
-              perCell(pieces).c_str(), ratio3, ratio3 <= 3.0 ? "met" : "MISSED");
-
-  config.link_meshes = collision::LinkMeshes::kExact;
-  const collision::Scene exact_scene(meshes.cell, config);
+  collision::ClearanceConfig exact_config = config;
+  exact_config.link_meshes = collision::LinkMeshes::kExact;
+  const collision::Scene exact_scene(meshes.cell, exact_config);
   const kinematics::ScanPath sub = subsampled(meshes.path, every);
-  Timed hull_sub, exact_sub, piece_sub;
+  Timed hull_sub, exact_sub;
   mapOnce(hull_scene, meshes, sub, hull_sub);
-  mapOnce(piece_scene, meshes, sub, piece_sub);
   mapOnce(exact_scene, meshes, sub, exact_sub);
   std::printf("every %zu-th sample, %zu cells x 8 branches, CPU time:\n", every,
               hull_sub.map.cellsPerBranch());
   std::printf("  mesh links (hulls)           %s\n", perCell(hull_sub).c_str());
   std::printf("  mesh links exactly (before)  %s   %.1fx the hulls\n", perCell(exact_sub).c_str(),
               exact_sub.cpu / hull_sub.cpu);
-  std::printf("  mesh links (pieces)          %s   %.1fx the hulls\n", perCell(piece_sub).c_str(),
-              piece_sub.cpu / hull_sub.cpu);
-  bool ok = false, ok_pieces = false;
+  bool ok = false;
   std::printf("  hull map vs exact map: %s\n",
               conservative(hull_sub.map, exact_sub.map, ok).c_str());
-  std::printf("  piece map vs exact map: %s\n",
-              conservative(piece_sub.map, exact_sub.map, ok_pieces).c_str());
-  return ok && ok_pieces ? 0 : 1;
+  const bool ok_pieces = piecesSection("Adept Viper s650", primitive, prim_scene, meshes, config,
+                                       runs, every, piece_margin, &exact_sub);
+  return ok && ok_pieces;
+}
+
+// The KUKA KR6 R700 sixx from its URDF: primitive links (written from the datasheet) against
+// ROS-Industrial's collision meshes as convex pieces (both bundled in data/robots/urdf).
+bool kukaSection(const std::string& job_file, int runs, std::size_t every, double piece_margin) {
+  const fs::path urdf = fs::absolute("data/robots/urdf");
+  const Cell primitive =
+      loadCell(job_file, {"robot=" + (urdf / "kuka_kr6_r700_sixx.urdf").string()});
+  const Cell meshes =
+      loadCell(job_file, {"robot=" + (urdf / "kuka_kr6_r700_sixx_meshes.urdf").string()});
+  const collision::Scene prim_scene(primitive.cell, config::clearanceConfig(primitive.job));
+  std::printf("\nKUKA KR6 R700 sixx, %s, 2 threads, best of %d\n", job_file.c_str(), runs);
+  return piecesSection("KUKA KR6 R700 sixx", primitive, prim_scene, meshes,
+                       config::clearanceConfig(meshes.job), runs, every, piece_margin, nullptr);
+}
+
+int run(int argc, char** argv) {
+  const std::string job_file = argc > 1 ? argv[1] : "data/jobs/demo_rings.yaml";
+  const int runs = argc > 2 ? std::max(1, std::atoi(argv[2])) : 2;
+  const auto every = static_cast<std::size_t>(argc > 3 ? std::max(1, std::atoi(argv[3])) : 25);
+  const double piece_margin = argc > 4 ? mm(std::atof(argv[4])) : 0.002;
+  const std::string robots = argc > 5 ? argv[5] : "all";
+  const tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 2);
+  bool ok = true;
+  if (robots == "kuka") {
+    std::printf("bench_link_meshes: the Viper part left out (ROBOTS kuka)\n");
+  } else if (fs::exists(kSharedData / "robots/viper_s650/link0.stl")) {
+    ok = viperSection(job_file, runs, every, piece_margin) && ok;
+  } else {
+    std::printf("bench_link_meshes: the Viper part skipped: its link meshes (%s) are absent\n",
+                (kSharedData / "robots/viper_s650").c_str());
+  }
+  if (robots != "viper") ok = kukaSection(job_file, runs, every, piece_margin) && ok;
+  return ok ? 0 : 1;
 }
 
 }  // namespace
