@@ -1,7 +1,10 @@
 #include <scanplan/collision/clearance.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <limits>
 #include <optional>
+#include <vector>
 
 #include <scanplan/collision/fcl_geometry.h>
 #include <scanplan/kinematics/ramp.h>
@@ -21,6 +24,61 @@ namespace detail {
 
 namespace {
 
+// Above this many shape pairs (a link as convex pieces), the pairs are measured nearest first.
+constexpr std::size_t kSortedPairsAbove = 16;
+
+// shapesDistance() for many shape pairs: the pairs in the order of their bounding spheres' gap
+// (nearest first; ties in list order), so that the best found so far bounds the rest early; at
+// the first pair whose spheres lie at or beyond it, so do all the rest.
+ShapeDistance nearestFirstDistance(const std::vector<CollisionShape>& a_shapes,
+                                   const Eigen::Isometry3d& X_Wa,
+                                   const std::vector<CollisionShape>& b_shapes,
+                                   const Eigen::Isometry3d& X_Wb,
+                                   double bound,
+                                   bool witness,
+                                   bool closed_forms) {
+  std::vector<Eigen::Vector3d> c_b(b_shapes.size());
+  for (std::size_t j = 0; j < b_shapes.size(); ++j)
+    c_b[j] = X_Wb * (b_shapes[j].X_BG * b_shapes[j].centre_G);
+  struct Gap {
+    double gap;
+    std::uint32_t a, b;
+  };
+  std::vector<Gap> gaps;
+  gaps.reserve(a_shapes.size() * b_shapes.size());
+  double lower = kInf;  // over the shape pairs found beyond: first those beyond the bound
+  for (std::size_t i = 0; i < a_shapes.size(); ++i) {
+    const Eigen::Vector3d c_a = X_Wa * (a_shapes[i].X_BG * a_shapes[i].centre_G);
+    for (std::size_t j = 0; j < b_shapes.size(); ++j) {
+      const double gap = (c_a - c_b[j]).norm() - a_shapes[i].radius - b_shapes[j].radius;
+      if (gap >= bound)
+        lower = std::min(lower, gap);
+      else
+        gaps.push_back({gap, static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)});
+    }
+  }
+  std::sort(gaps.begin(), gaps.end(), [](const Gap& x, const Gap& y) {
+    return x.gap != y.gap ? x.gap < y.gap : (x.a != y.a ? x.a < y.a : x.b < y.b);
+  });
+  ShapeDistance best;
+  best.distance = bound;
+  best.beyond = true;
+  for (const Gap& g : gaps) {
+    if (g.gap >= best.distance) {
+      lower = std::min(lower, g.gap);  // the least of the rest
+      break;
+    }
+    const CollisionShape &sa = a_shapes[g.a], &sb = b_shapes[g.b];
+    const ShapeDistance d =
+        shapeDistance(sa, X_Wa * sa.X_BG, sb, X_Wb * sb.X_BG, best.distance, witness, closed_forms);
+    if (d.beyond) lower = std::min(lower, d.lower);
+    if (!d.beyond) best = d;
+    if (best.penetrating) return best;
+  }
+  best.lower = best.beyond ? std::max(bound, lower) : best.distance;
+  return best;
+}
+
 // Minimum over the pairs of two shape lists. Bounded: each shape pair is asked only for
 // distances below the best found so far (initially d_high), and a bounding-sphere test skips
 // shape pairs that cannot come closer than that.
@@ -32,6 +90,8 @@ ShapeDistance shapesDistance(const std::vector<CollisionShape>& a_shapes,
                              bool exact,
                              bool witness,
                              bool closed_forms) {
+  if (!exact && a_shapes.size() * b_shapes.size() > kSortedPairsAbove)
+    return nearestFirstDistance(a_shapes, X_Wa, b_shapes, X_Wb, bound, witness, closed_forms);
   ShapeDistance best;
   best.distance = bound;
   best.beyond = true;

@@ -747,6 +747,51 @@ double boxedDistance(const detail::BodyGeometry& a,
   return detail::bodyDistance(boxed(a), X_a, boxed(b), X_b, 1e9, true, false).distance;
 }
 
+// A body of many shapes (a link as convex pieces: more shape pairs than the list order is kept
+// for) is measured nearest pair first. The bounded distance must still be the least exact
+// distance over every shape pair when that is below the bound, and beyond it, its lower bound
+// must lie between the bound and the exact distance: checked on random poses, near and far.
+TEST(BodyDistance, ManyShapesNearestFirstAgreeWithEveryPairMeasuredExactly) {
+  std::mt19937 rng(41);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const auto body = [&](int shapes) {
+    detail::BodyGeometry b;
+    for (int i = 0; i < shapes; ++i) {
+      kinematics::Shape s;
+      if (i % 3 == 0) s.geometry = kinematics::Sphere{0.01 + 0.005 * (1.0 + u(rng))};
+      if (i % 3 == 1) s.geometry = kinematics::Capsule{0.008, 0.03};
+      if (i % 3 == 2) s.geometry = kinematics::Box{Eigen::Vector3d(0.02, 0.015, 0.03)};
+      s.X_BG = randomPose(rng, 0.05);
+      b.shapes.push_back(detail::makeCollisionShape(s));
+    }
+    return b;
+  };
+  const detail::BodyGeometry a = body(7), b = body(5);  // 35 shape pairs
+  int near = 0, far = 0;
+  for (int k = 0; k < 300; ++k) {
+    const Eigen::Isometry3d X_a = randomPose(rng, 0.02), X_b = randomPose(rng, 0.12);
+    double exact = std::numeric_limits<double>::infinity();
+    for (const auto& sa : a.shapes)
+      for (const auto& sb : b.shapes)
+        exact = std::min(exact,
+                         detail::exactShapeDistance(sa, X_a * sa.X_BG, sb, X_b * sb.X_BG).distance);
+    const double bound = 0.03;
+    const detail::ShapeDistance d = detail::bodyDistance(a, X_a, b, X_b, bound, false, false);
+    if (exact < bound - 1e-5) {
+      ASSERT_FALSE(d.beyond) << "pose " << k << ", exact " << exact;
+      EXPECT_NEAR(d.distance, exact, 2e-6) << "pose " << k;
+      ++near;
+    } else if (exact > bound + 1e-5) {
+      ASSERT_TRUE(d.beyond) << "pose " << k << ", exact " << exact;
+      EXPECT_GE(d.lower, bound) << "pose " << k;
+      EXPECT_LE(d.lower, exact + 2e-6) << "pose " << k;
+      ++far;
+    }
+  }
+  EXPECT_GT(near, 30);  // both cases were seen
+  EXPECT_GT(far, 30);
+}
+
 // ChainLevers bounds how far the distance of a pair with a robot link can change when the table
 // and the joints turn: checked against the exact distances of every such pair of the demo cell
 // (links, scanner, table, base; the part's bounding box stands in for its 31k triangles) before
