@@ -24,6 +24,37 @@ namespace detail {
 
 namespace {
 
+// The least distance over the shape pairs measured so far (below the bound), and the least lower
+// bound over the pairs found beyond it: what shapesDistance() and nearestFirstDistance() keep.
+struct Nearest {
+  ShapeDistance best;
+  double lower = kInf;
+
+  explicit Nearest(double bound) {
+    best.distance = bound;
+    best.beyond = true;
+  }
+  // Measures a pair below the best distance so far; true when the shapes touch (none is nearer).
+  bool measure(const CollisionShape& sa,
+               const Eigen::Isometry3d& X_Wsa,
+               const CollisionShape& sb,
+               const Eigen::Isometry3d& X_Wsb,
+               bool witness,
+               bool closed_forms) {
+    const ShapeDistance d =
+        shapeDistance(sa, X_Wsa, sb, X_Wsb, best.distance, witness, closed_forms);
+    if (d.beyond)
+      lower = std::min(lower, d.lower);
+    else
+      best = d;
+    return best.penetrating;
+  }
+  ShapeDistance result(double bound) {
+    best.lower = best.beyond ? std::max(bound, lower) : best.distance;
+    return best;
+  }
+};
+
 // Above this many shape pairs (a link as convex pieces), the pairs are measured nearest first.
 constexpr std::size_t kSortedPairsAbove = 16;
 
@@ -46,13 +77,13 @@ ShapeDistance nearestFirstDistance(const std::vector<CollisionShape>& a_shapes,
   };
   std::vector<Gap> gaps;
   gaps.reserve(a_shapes.size() * b_shapes.size());
-  double lower = kInf;  // over the shape pairs found beyond: first those beyond the bound
+  Nearest nearest(bound);
   for (std::size_t i = 0; i < a_shapes.size(); ++i) {
     const Eigen::Vector3d c_a = X_Wa * (a_shapes[i].X_BG * a_shapes[i].centre_G);
     for (std::size_t j = 0; j < b_shapes.size(); ++j) {
       const double gap = (c_a - c_b[j]).norm() - a_shapes[i].radius - b_shapes[j].radius;
       if (gap >= bound)
-        lower = std::min(lower, gap);
+        nearest.lower = std::min(nearest.lower, gap);
       else
         gaps.push_back({gap, static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)});
     }
@@ -60,23 +91,16 @@ ShapeDistance nearestFirstDistance(const std::vector<CollisionShape>& a_shapes,
   std::sort(gaps.begin(), gaps.end(), [](const Gap& x, const Gap& y) {
     return x.gap != y.gap ? x.gap < y.gap : (x.a != y.a ? x.a < y.a : x.b < y.b);
   });
-  ShapeDistance best;
-  best.distance = bound;
-  best.beyond = true;
   for (const Gap& g : gaps) {
-    if (g.gap >= best.distance) {
-      lower = std::min(lower, g.gap);  // the least of the rest
+    if (g.gap >= nearest.best.distance) {
+      nearest.lower = std::min(nearest.lower, g.gap);  // the least of the rest
       break;
     }
     const CollisionShape &sa = a_shapes[g.a], &sb = b_shapes[g.b];
-    const ShapeDistance d =
-        shapeDistance(sa, X_Wa * sa.X_BG, sb, X_Wb * sb.X_BG, best.distance, witness, closed_forms);
-    if (d.beyond) lower = std::min(lower, d.lower);
-    if (!d.beyond) best = d;
-    if (best.penetrating) return best;
+    if (nearest.measure(sa, X_Wa * sa.X_BG, sb, X_Wb * sb.X_BG, witness, closed_forms))
+      return nearest.best;
   }
-  best.lower = best.beyond ? std::max(bound, lower) : best.distance;
-  return best;
+  return nearest.result(bound);
 }
 
 // Minimum over the pairs of two shape lists. Bounded: each shape pair is asked only for
@@ -92,10 +116,8 @@ ShapeDistance shapesDistance(const std::vector<CollisionShape>& a_shapes,
                              bool closed_forms) {
   if (!exact && a_shapes.size() * b_shapes.size() > kSortedPairsAbove)
     return nearestFirstDistance(a_shapes, X_Wa, b_shapes, X_Wb, bound, witness, closed_forms);
-  ShapeDistance best;
-  best.distance = bound;
-  best.beyond = true;
-  double lower = kInf;  // over the shape pairs found beyond
+  Nearest nearest(bound);
+  ShapeDistance& best = nearest.best;
   for (const CollisionShape& sa : a_shapes) {
     // The shapes' poses only for the pairs that pass the broad phase (bounding spheres).
     std::optional<Eigen::Isometry3d> X_Wsa;
@@ -112,18 +134,13 @@ ShapeDistance shapesDistance(const std::vector<CollisionShape>& a_shapes,
       }
       const double spheres = (c_a - X_Wb * (sb.X_BG * sb.centre_G)).norm() - sa.radius - sb.radius;
       if (spheres >= best.distance) {
-        lower = std::min(lower, spheres);
+        nearest.lower = std::min(nearest.lower, spheres);
         continue;
       }
-      const ShapeDistance d =
-          shapeDistance(sa, shape_a(), sb, X_Wb * sb.X_BG, best.distance, witness, closed_forms);
-      if (d.beyond) lower = std::min(lower, d.lower);
-      if (!d.beyond) best = d;
-      if (best.penetrating) return best;
+      if (nearest.measure(sa, shape_a(), sb, X_Wb * sb.X_BG, witness, closed_forms)) return best;
     }
   }
-  best.lower = best.beyond ? std::max(bound, lower) : best.distance;
-  return best;
+  return nearest.result(bound);
 }
 
 }  // namespace

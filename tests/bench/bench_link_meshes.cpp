@@ -173,6 +173,15 @@ std::string conservative(const planner::ConfigMap& hull,
       100.0 * static_cast<double>(feasible_exact) / n);
 }
 
+// The primitive map's and a mesh map's CPU time a cell, and their ratio against the target.
+void printRatio(const char* mesh_label, const Timed& prim, const Timed& mesh) {
+  const double ratio = mesh.cpu / prim.cpu;
+  std::printf("  primitive links              %s\n", perCell(prim).c_str());
+  std::printf("  mesh links (%s)%*s%s   %.2fx primitive   target <= 3x: %s\n", mesh_label,
+              static_cast<int>(16 - std::string(mesh_label).size()), "", perCell(mesh).c_str(),
+              ratio, ratio <= 3.0 ? "met" : "MISSED");
+}
+
 // Convex pieces within `margin` (collision/link_standin.h) against the primitive links: the map's
 // CPU time, and on every `every`-th sample against the meshes measured exactly (`exact_sub`:
 // that map, measured before; computed here when null). The pieces are kept in a cache folder,
@@ -204,11 +213,8 @@ bool piecesSection(const std::string& robot,
         h.from_cache ? "read" : "fitted", h.fit_seconds);
   }
   const auto [prim, pieces] = timeMaps(prim_scene, primitive, piece_scene, meshes, runs);
-  const double ratio = pieces.cpu / prim.cpu;
   std::printf("full map, %zu cells x 8 branches, CPU time:\n", prim.map.cellsPerBranch());
-  std::printf("  primitive links              %s\n", perCell(prim).c_str());
-  std::printf("  mesh links (pieces)          %s   %.2fx primitive   target <= 3x: %s\n",
-              perCell(pieces).c_str(), ratio, ratio <= 3.0 ? "met" : "MISSED");
+  printRatio("pieces", prim, pieces);
   const kinematics::ScanPath sub = subsampled(meshes.path, every);
   Timed exact_here, piece_sub;
   if (!exact_sub) {
@@ -258,11 +264,8 @@ bool viperSection(const std::string& job_file, int runs, std::size_t every, doub
   }
 
   const auto [prim, hull] = timeMaps(prim_scene, primitive, hull_scene, meshes, runs);
-  const double ratio = hull.cpu / prim.cpu;
   std::printf("full map, %zu cells x 8 branches, CPU time:\n", prim.map.cellsPerBranch());
-  std::printf("  primitive links              %s\n", perCell(prim).c_str());
-  std::printf("  mesh links (hulls)           %s   %.2fx primitive   target <= 3x: %s\n",
-              perCell(hull).c_str(), ratio, ratio <= 3.0 ? "met" : "MISSED");
+  printRatio("hulls", prim, hull);
 
   std::string never;
   const auto rules = neverPairs(meshes.cell.robot, never);
@@ -273,12 +276,9 @@ bool viperSection(const std::string& job_file, int runs, std::size_t every, doub
   const collision::Scene prim_same(primitive.cell, prim_config);
   const collision::Scene hull_same(meshes.cell, hull_config);
   const auto [prim2, hull2] = timeMaps(prim_same, primitive, hull_same, meshes, runs);
-  const double ratio2 = hull2.cpu / prim2.cpu;
   std::printf("the same without the self pairs the meshes never bring into contact (%s):\n",
               never.c_str());
-  std::printf("  primitive links              %s\n", perCell(prim2).c_str());
-  std::printf("  mesh links (hulls)           %s   %.2fx primitive   target <= 3x: %s\n",
-              perCell(hull2).c_str(), ratio2, ratio2 <= 3.0 ? "met" : "MISSED");
+  printRatio("hulls", prim2, hull2);
 
   collision::ClearanceConfig exact_config = config;
   exact_config.link_meshes = collision::LinkMeshes::kExact;
