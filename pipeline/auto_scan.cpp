@@ -1,6 +1,7 @@
 #include <scanplan/pipeline/auto_scan.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <optional>
@@ -13,6 +14,7 @@
 #include <scanplan/kinematics/error.h>
 #include <scanplan/kinematics/ptp_move.h>
 #include <scanplan/kinematics/units.h>
+#include <scanplan/pipeline/cancel.h>
 #include <scanplan/pipeline/program_moves.h>
 #include <scanplan/planner/config_map.h>
 #include <scanplan/scanner/pass_selection.h>
@@ -40,6 +42,38 @@ constexpr double kCoverSeconds = 60.0;
 double since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
+
+// The automatic scan's progress over its steps: each step reports its own (done, total) into its
+// share of the whole (in thousandths), and every report first polls the cancel flag (throws
+// Cancelled). The shares follow the steps' wall times on the demo housing.
+class Steps {
+ public:
+  Steps(const std::atomic<bool>* cancel, const std::function<void(std::size_t, std::size_t)>& out)
+      : cancel_(cancel), out_(out) {}
+
+  void poll() const { pollCancel(cancel_); }
+
+  // The whole is done up to `fraction`.
+  void at(double fraction) const {
+    poll();
+    if (out_)
+      out_(static_cast<std::size_t>(std::lround(fraction * static_cast<double>(kWhole))), kWhole);
+  }
+
+  // The step from `from` to `to` of the whole, as a (done, total) report.
+  std::function<void(std::size_t, std::size_t)> step(double from, double to) const {
+    return [this, from, to](std::size_t done, std::size_t total) {
+      const double share =
+          static_cast<double>(done) / static_cast<double>(std::max<std::size_t>(1, total));
+      at(from + (to - from) * std::min(1.0, share));
+    };
+  }
+
+ private:
+  static constexpr std::size_t kWhole = 1000;
+  const std::atomic<bool>* cancel_;
+  const std::function<void(std::size_t, std::size_t)>& out_;
+};
 
 int raysPerProfile(const ScanProblem& p) {
   return p.simulation ? p.simulation->scanner.rays_per_profile : 200;
@@ -259,15 +293,17 @@ std::vector<scanner::SampleClass> certify(const scanner::PartOnTable& part,
 // sample an earlier strip covers getting none of its own; each appends its witness's sample to
 // `aimed_at`. At most `limit`. The strips are made and evaluated in parallel batches, ahead of
 // knowing whether an earlier strip of the batch covers their sample (then one is dropped): the
-// result is the same as one by one.
-std::vector<scanner::ScanPass> aimedStrips(const scanner::PartOnTable& part,
-                                           const scanner::PassSettings& pass,
-                                           const scanner::SampleIndex& index,
-                                           const std::vector<scanner::SampleClass>& classes,
-                                           const std::vector<Eigen::Isometry3d>& witnesses,
-                                           std::vector<std::uint8_t>& reached,
-                                           std::size_t limit,
-                                           std::vector<std::size_t>& aimed_at) {
+// result is the same as one by one. `report` gets the samples looked at of all.
+std::vector<scanner::ScanPass> aimedStrips(
+    const scanner::PartOnTable& part,
+    const scanner::PassSettings& pass,
+    const scanner::SampleIndex& index,
+    const std::vector<scanner::SampleClass>& classes,
+    const std::vector<Eigen::Isometry3d>& witnesses,
+    std::vector<std::uint8_t>& reached,
+    std::size_t limit,
+    std::vector<std::size_t>& aimed_at,
+    const std::function<void(std::size_t, std::size_t)>& report) {
   constexpr std::size_t kBatch = 16;
   std::vector<scanner::ScanPass> out;
   std::vector<std::size_t> batch;
@@ -289,6 +325,7 @@ std::vector<scanner::ScanPass> aimedStrips(const scanner::PartOnTable& part,
       out.push_back(std::move(strips[k]));
       aimed_at.push_back(batch[k]);
     }
+    report(i, classes.size());
   }
   return out;
 }
@@ -304,15 +341,18 @@ std::vector<scanner::ScanPass> aimedPasses(const scanner::PartOnTable& part,
                                            const std::vector<scanner::SampleClass>& classes,
                                            const std::vector<Eigen::Isometry3d>& witnesses,
                                            const std::vector<scanner::ScanPass>& general,
-                                           std::size_t limit) {
+                                           std::size_t limit,
+                                           const Steps& steps) {
   std::vector<std::uint8_t> reached(classes.size(), 0);
   for (const auto& p : general)
     for (std::uint32_t i : p.covers) reached[i] = 1;
   std::vector<std::size_t> aimed_at;
-  std::vector<scanner::ScanPass> out =
-      aimedStrips(part, pass, index, classes, witnesses, reached, limit, aimed_at);
+  std::vector<scanner::ScanPass> out = aimedStrips(part, pass, index, classes, witnesses, reached,
+                                                   limit, aimed_at, steps.step(0.14, 0.21));
   // Per witness, in parallel (then in witness order): the short strip and the arcs.
   std::vector<std::vector<scanner::ScanPass>> per_witness(aimed_at.size());
+  std::atomic<std::size_t> done{0};
+  const auto report = steps.step(0.21, 0.3);
   tbb::parallel_for(std::size_t{0}, aimed_at.size(), [&](std::size_t k) {
     const Eigen::Isometry3d& witness = witnesses[aimed_at[k]];
     scanner::ScanPass glance = scanner::aimedPass(part, pass, witness, 0.012);
@@ -326,11 +366,12 @@ std::vector<scanner::ScanPass> aimedPasses(const scanner::PartOnTable& part,
       stations = spin.X_RS.size();
       per_witness[k].push_back(std::move(spin));
     }
+    report(++done, aimed_at.size());
   });
   std::vector<scanner::ScanPass> more;
   for (auto& passes : per_witness)
     for (auto& p : passes) more.push_back(std::move(p));
-  scanner::evaluatePasses(more, part, pass, index);
+  scanner::evaluatePasses(more, part, pass, index, steps.step(0.3, 0.57));
   for (auto& p : more)
     if (!p.covers.empty()) out.push_back(std::move(p));
   return out;
@@ -340,12 +381,16 @@ std::vector<scanner::ScanPass> aimedPasses(const scanner::PartOnTable& part,
 std::vector<std::uint8_t> reachable(const ScanProblem& problem,
                                     const collision::Scene& scene,
                                     const scanner::TransferSphere& sphere,
-                                    const std::vector<scanner::ScanPass>& passes) {
+                                    const std::vector<scanner::ScanPass>& passes,
+                                    const std::function<void(std::size_t, std::size_t)>& report) {
   std::vector<std::uint8_t> ok(passes.size(), 0);
   tbb::enumerable_thread_specific<ReachCheck> checks(std::cref(problem), std::cref(scene),
                                                      std::cref(sphere));
-  tbb::parallel_for(std::size_t{0}, passes.size(),
-                    [&](std::size_t p) { ok[p] = checks.local()(passes[p]) ? 1 : 0; });
+  std::atomic<std::size_t> done{0};
+  tbb::parallel_for(std::size_t{0}, passes.size(), [&](std::size_t p) {
+    ok[p] = checks.local()(passes[p]) ? 1 : 0;
+    report(++done, passes.size());
+  });
   return ok;
 }
 
@@ -425,6 +470,7 @@ void improveCover(const std::vector<scanner::ScanPass>& passes,
                   const std::vector<std::uint8_t>& covered,
                   const std::vector<std::uint8_t>& reach,
                   const scanner::CoverSettings& cover,
+                  const Steps& steps,
                   scanner::CoverResult& chosen,
                   AutoScanReport& report) {
   scanner::CoverProblem problem;
@@ -450,6 +496,7 @@ void improveCover(const std::vector<scanner::ScanPass>& passes,
   scanner::CoverLimits limits;
   limits.node_limit = kCoverNodes;
   limits.max_nonzeros = kCoverNonzeros;
+  limits.poll = [&steps] { steps.poll(); };
   const scanner::CoverSolution best =
       scanner::solveCover(problem, chosen.chosen, kCoverSeconds, limits);
   report.greedy_cost = 0.0;
@@ -499,18 +546,18 @@ void checkPartSize(const ScanProblem& problem, const scanner::PassSettings& pass
 }
 
 // Every candidate: the general spins and strips, then passes aimed at what they miss; evaluated.
-std::vector<scanner::ScanPass> candidates(
-    const scanner::PartOnTable& part,
-    const scanner::PassSettings& pass,
-    const scanner::SampleIndex& index,
-    const std::vector<scanner::SampleClass>& classes,
-    const std::vector<Eigen::Isometry3d>& witnesses,
-    const std::function<void(std::size_t, std::size_t)>& progress,
-    std::size_t& aimed_count) {
+std::vector<scanner::ScanPass> candidates(const scanner::PartOnTable& part,
+                                          const scanner::PassSettings& pass,
+                                          const scanner::SampleIndex& index,
+                                          const std::vector<scanner::SampleClass>& classes,
+                                          const std::vector<Eigen::Isometry3d>& witnesses,
+                                          const Steps& steps,
+                                          std::size_t& aimed_count) {
   std::vector<scanner::ScanPass> passes = scanner::candidatePasses(part, pass);
-  scanner::evaluatePasses(passes, part, pass, index, progress);
+  steps.poll();
+  scanner::evaluatePasses(passes, part, pass, index, steps.step(0.0, 0.14));
   std::vector<scanner::ScanPass> aimed =
-      aimedPasses(part, pass, index, classes, witnesses, passes, kMaxAimed);
+      aimedPasses(part, pass, index, classes, witnesses, passes, kMaxAimed, steps);
   aimed_count = aimed.size();
   passes.insert(passes.end(), std::make_move_iterator(aimed.begin()),
                 std::make_move_iterator(aimed.end()));
@@ -570,6 +617,18 @@ void reportCover(const scanner::CoverResult& chosen,
   report.given_fraction = static_cast<double>(given_covered) / counted;
 }
 
+// The set cover's target (the job's with a margin), pass limit and estimate of a move.
+scanner::CoverSettings coverSettings(const ScanProblem& problem) {
+  const AutoScanSettings& settings = *problem.auto_scan;
+  scanner::CoverSettings cover;
+  // A margin over the target: the evaluation samples and points are coarser than the simulated
+  // cloud, which covers a little less than planned at the edges of each pass.
+  cover.target = std::min(1.0, settings.target_coverage + kTargetMargin);
+  cover.max_passes = settings.max_passes;
+  cover.pass_overhead = moveOverhead(problem);
+  return cover;
+}
+
 }  // namespace
 
 AutoScanPlan planAutoScan(const ScanProblem& problem,
@@ -577,6 +636,7 @@ AutoScanPlan planAutoScan(const ScanProblem& problem,
                           const kinematics::ScanPath& given,
                           const std::function<void(std::size_t, std::size_t)>& progress) {
   const auto start = Clock::now();
+  const Steps steps(problem.planning.termination.cancel, progress);
   const AutoScanSettings& settings = *problem.auto_scan;
   const scanner::PassSettings pass_settings = passSettings(problem, scene);
   const kinematics::RotaryTableModel& table = problem.cell.table;
@@ -595,23 +655,19 @@ AutoScanPlan planAutoScan(const ScanProblem& problem,
   std::vector<scanner::SampleClass> classes = certify(part, pass_settings, sampling, witnesses);
   const std::vector<std::uint8_t> covered = givenCoverage(given, X_RP, part, pass_settings, index);
   const std::vector<scanner::ScanPass> passes =
-      candidates(part, pass_settings, index, classes, witnesses, progress, report.aimed);
+      candidates(part, pass_settings, index, classes, witnesses, steps, report.aimed);
   report.candidates = passes.size();
 
   const scanner::TransferSphere sphere = transferSphere(problem, part.part());
-  const std::vector<std::uint8_t> reach = reachable(problem, scene, sphere, passes);
+  const std::vector<std::uint8_t> reach =
+      reachable(problem, scene, sphere, passes, steps.step(0.57, 0.67));
   for (std::size_t p = 0; p < passes.size(); ++p)
     if (!reach[p]) report.unreachable.push_back(passes[p].label);
   markOutOfReach(classes, passes, reach);
   std::vector<std::uint8_t> counts(classes.size());
   for (std::size_t i = 0; i < classes.size(); ++i)
     counts[i] = classes[i] == scanner::SampleClass::kScannable ? 1 : 0;
-  scanner::CoverSettings cover;
-  // A margin over the target: the evaluation samples and points are coarser than the simulated
-  // cloud, which covers a little less than planned at the edges of each pass.
-  cover.target = std::min(1.0, settings.target_coverage + kTargetMargin);
-  cover.max_passes = settings.max_passes;
-  cover.pass_overhead = moveOverhead(problem);
+  const scanner::CoverSettings cover = coverSettings(problem);
   // With a time limit, a pass is taken only while the program's estimate (its passes and a move
   // before each) stays within it.
   double estimate = 0.0;
@@ -622,10 +678,14 @@ AutoScanPlan planAutoScan(const ScanProblem& problem,
     estimate += cost;
     return true;
   };
-  scanner::CoverResult chosen = scanner::greedyCover(
-      passes, counts, covered, cover, accept, [&] { return since(start) < settings.time_budget; });
+  scanner::CoverResult chosen = scanner::greedyCover(passes, counts, covered, cover, accept, [&] {
+    steps.poll();
+    return since(start) < settings.time_budget;
+  });
+  steps.at(0.69);
   if (settings.max_program <= 0.0 && chosen.stop == "target reached")
-    improveCover(passes, counts, covered, reach, cover, chosen, report);
+    improveCover(passes, counts, covered, reach, cover, steps, chosen, report);
+  steps.at(0.95);
   reportCover(chosen, counts, covered, report);
   keepCertificate(sampling, X_RP, classes, report);
   if (chosen.chosen.empty()) {
@@ -647,6 +707,7 @@ AutoScanPlan planAutoScan(const ScanProblem& problem,
   const std::vector<scanner::TourStep> tour = scanner::orderPasses(cut.passes, pieces, at, sphere);
   report.transfer_time = scanner::tourTransferTime(cut.passes, tour, at, sphere);
   buildPasses(problem, cut.passes, tour, gains(cut.passes, chosen.counted, counts, covered), plan);
+  steps.at(1.0);
   report.seconds = since(start);
   return plan;
 }

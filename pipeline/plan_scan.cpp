@@ -43,9 +43,11 @@ void proveAndSimulate(const ScanProblem& problem, const PreparedScan& prepared, 
       return;
     }
   }
+  pollCancel(problem.planning.termination.cancel);
   if (problem.simulation) {
-    plan.simulation = simulateTrajectory(problem.cell, problem.part, problem.optics,
-                                         *problem.simulation, trajectory);
+    plan.simulation =
+        simulateTrajectory(problem.cell, problem.part, problem.optics, *problem.simulation,
+                           trajectory, problem.planning.termination.cancel);
     plan.times.simulation = plan.simulation->seconds;
     if (prepared.auto_scan && !prepared.auto_scan->classes.empty()) {
       plan.certificate =
@@ -197,7 +199,7 @@ void checkProblem(const ScanProblem& p) {
 namespace {
 
 void throwIfCancelled(const ScanProblem& problem) {
-  if (problem.planning.termination.cancelled()) throw Cancelled();
+  pollCancel(problem.planning.termination.cancel);
 }
 
 // `progress` that first polls the problem's cancel flag (throws Cancelled once it is set).
@@ -205,7 +207,7 @@ ProgressFn polling(const ScanProblem& problem, const ProgressFn& progress) {
   const std::atomic<bool>* cancel = problem.planning.termination.cancel;
   if (cancel == nullptr) return progress;
   return [cancel, progress](std::string_view stage, std::size_t done, std::size_t total) {
-    if (cancel->load(std::memory_order_relaxed)) throw Cancelled();
+    pollCancel(cancel);
     if (progress) progress(stage, done, total);
   };
 }

@@ -8,7 +8,6 @@
 #include <functional>
 #include <memory>
 #include <optional>
-#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -17,6 +16,7 @@
 #include <scanplan/collision/scene.h>
 #include <scanplan/kinematics/scan_path.h>
 #include <scanplan/pipeline/auto_scan.h>
+#include <scanplan/pipeline/cancel.h>
 #include <scanplan/pipeline/certificate.h>
 #include <scanplan/pipeline/problem.h>
 #include <scanplan/pipeline/program_moves.h>
@@ -37,13 +37,6 @@ namespace scanplan::pipeline {
 using ProgressFn = std::function<void(std::string_view stage, std::size_t done, std::size_t total)>;
 
 /// Per-call choices on top of the problem's settings.
-/// Thrown by planScan(), prepareScan(), scanPath() and planPrepared() once the problem's
-/// `planning.termination.cancel` is set: at the next point that polls it (every progress report
-/// of the automatic scan and the maps, between the stages, OMPL's iterations).
-struct Cancelled : std::runtime_error {
-  Cancelled() : std::runtime_error("cancelled") {}
-};
-
 struct PlanOptions {
   std::string method;    ///< empty: problem.planning.method
   bool compare = false;  ///< also run every other planner on the chosen branch

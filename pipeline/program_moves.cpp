@@ -12,6 +12,7 @@
 
 #include <scanplan/collision/clearance.h>
 #include <scanplan/kinematics/units.h>
+#include <scanplan/pipeline/cancel.h>
 
 namespace scanplan::pipeline {
 
@@ -128,7 +129,7 @@ std::optional<std::vector<double>> sampleMargins(const collision::Scene& scene,
 // a move's samples (clear themselves, with `margins` at them: sampleMargins()). The poses
 // advance by how far the nearest pair is from its d_low: a point moves at most levers(j)
 // metres per radian of axis j, so the next pose is at most 0.8 of that margin (and at least
-// kMinMotion) of motion further; at least every `check_step` rad on the fastest axis when
+// kMinMotion) of motion further; at least every `settings.check_step` rad on the fastest axis when
 // nothing is near. The validation proves the motion between them. When blocked, `blocked_at`
 // (if given) gets how far along the samples (0 to 1).
 constexpr double kMinMotion = 1.5e-3;  // m
@@ -137,8 +138,9 @@ bool moveClear(const collision::Scene& scene,
                const kinematics::PtpMove& move,
                const std::vector<double>& margins,
                const AxisVector& levers,
-               double check_step,
+               const MoveSettings& settings,
                double* blocked_at = nullptr) {
+  const double check_step = settings.check_step;
   for (std::size_t k = 1; k < move.axes.size(); ++k) {
     const AxisVector &a = move.axes[k - 1], &b = move.axes[k];
     const double travel = levers.dot((b - a).cwiseAbs());
@@ -149,6 +151,7 @@ bool moveClear(const collision::Scene& scene,
       if (widest > 0.0) du = std::min(du, std::max(check_step / widest, kMinMotion / travel));
       u += du;
       if (u >= 1.0) break;  // b: clear, a sample
+      pollCancel(settings.cancel);
       const std::optional<double> m = poseMargin(scene, clearance, a + (b - a) * u);
       if (!m) {
         if (blocked_at)
@@ -338,6 +341,7 @@ std::optional<std::vector<TrajectorySample>> runWay(const collision::Scene& scen
   std::vector<kinematics::PtpMove> moves;
   std::vector<std::vector<double>> margins;
   for (const Leg& leg : way) {
+    pollCancel(settings.cancel);
     moves.push_back(
         kinematics::ptpMove(leg.from, leg.to, leg.v_from, leg.v_to, limits, settings.max_step));
     // A leg starts where the one before ends: that pose is checked once.
@@ -352,7 +356,7 @@ std::optional<std::vector<TrajectorySample>> runWay(const collision::Scene& scen
   for (std::size_t l = 0; l < way.size(); ++l) {
     const Leg& leg = way[l];
     const kinematics::PtpMove& move = moves[l];
-    if (!moveClear(scene, clearance, move, margins[l], levers, settings.check_step, blocked_at))
+    if (!moveClear(scene, clearance, move, margins[l], levers, settings, blocked_at))
       return std::nullopt;
     if (by_axis)
       *by_axis += kinematics::ptpTimeByAxis(leg.from, leg.to, leg.v_from, leg.v_to, limits);

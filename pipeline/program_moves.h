@@ -5,6 +5,7 @@
 // direct move is blocked the head backs off along its laser at one end or both, only as far as
 // needed.
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -44,6 +45,9 @@ struct MoveSettings {
   /// m, the farthest point the table carries from its axis (the part): with the links' lengths
   /// it bounds how fast the cell's points move, which spaces the checked poses.
   double part_reach = 0.0;
+  /// Polled at every leg of every move tried: once set, joinSegments() throws Cancelled
+  /// (pipeline/cancel.h). nullptr: never.
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 /// The program's time split.

@@ -16,6 +16,7 @@
 #include <tbb/parallel_invoke.h>
 
 #include <scanplan/kinematics/units.h>
+#include <scanplan/pipeline/cancel.h>
 #include <scanplan/pipeline/certificate.h>
 #include <scanplan/planner/wrap_sheets.h>
 
@@ -47,6 +48,7 @@ void planSegment(const ScanProblem& problem,
                  const PreparedScan& p,
                  const PlanOptions& options,
                  Segment& seg) {
+  pollCancel(problem.planning.termination.cancel);
   seg.path = kinematics::slicePath(p.path.path, seg.begin, seg.end);
   seg.map = sliceMap(p.map, seg.begin, seg.end);
   const auto accept = [&](std::size_t b, const std::vector<double>& theta) {
@@ -268,6 +270,7 @@ void cutAt(double limit,
 // pointing down the table's axis.
 MoveSettings moveSettings(const ScanProblem& problem) {
   MoveSettings m;
+  m.cancel = problem.planning.termination.cancel;
   if (problem.part.vertices.empty()) return m;
   const Eigen::Vector3d centre = problem.part.bounds().center();
   double part = 0.0, head = 0.0;
@@ -384,6 +387,7 @@ std::vector<HeldPass> holdTable(const ScanProblem& problem,
   const kinematics::CellModel& cell = p.scene->cell();
   std::vector<HeldPass> held;
   for (std::size_t k = 1; k < runs.fast.size(); ++k) {
+    pollCancel(problem.planning.termination.cancel);
     const std::size_t s = runs.index[runs.order.order[k]];
     const Segment& seg = segs[s];
     if (!seg.build || seg.choice.sheet_map || seg.choice.theta.size() != seg.path.samples.size())

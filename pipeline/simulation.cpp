@@ -4,6 +4,7 @@
 #include <chrono>
 #include <vector>
 
+#include <scanplan/pipeline/cancel.h>
 #include <scanplan/planner/validation.h>
 
 namespace scanplan::pipeline {
@@ -62,7 +63,8 @@ SimulationRun simulateTrajectory(const kinematics::CellModel& cell,
                                  const kinematics::TriangleMesh& part,
                                  const scanner::LaserOptics& optics,
                                  const SimulationSettings& settings,
-                                 const kinematics::Trajectory& trajectory) {
+                                 const kinematics::Trajectory& trajectory,
+                                 const std::atomic<bool>* cancel) {
   const auto start = std::chrono::steady_clock::now();
   const kinematics::Trajectory dense = planner::densify(trajectory, 1.0 / settings.frame_rate_hz);
   std::vector<scanner::ScanFrame> frames;
@@ -72,7 +74,9 @@ SimulationRun simulateTrajectory(const kinematics::CellModel& cell,
   const scanner::ScanSimulator simulator(cell, part);
   SimulationRun run;
   run.frames = frames.size();
-  run.cloud = simulator.simulate(frames, optics, settings.scanner);
+  run.cloud =
+      simulator.simulate(frames, optics, settings.scanner, [cancel] { pollCancel(cancel); });
+  pollCancel(cancel);
   run.profile_images = profileImages(simulator, frames, run.cloud, optics, settings);
   run.coverage = scanner::computeCoverage(part, run.cloud.points, settings.coverage);
   run.point_spacing = settings.point_spacing > 0.0

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <utility>
@@ -35,11 +36,13 @@ struct SimulationRun {
 
 /// The scanner simulated along `trajectory`: a profile every 1/frame_rate_hz s while the path
 /// scans, with the settings' fan, cameras, noise and real-table error; the coverage per triangle
-/// and on area (the points on the part against area samples, scanner/area_coverage.h).
+/// and on area (the points on the part against area samples, scanner/area_coverage.h). Polls
+/// `cancel` (when set) before each batch of profiles: throws Cancelled (pipeline/cancel.h).
 SimulationRun simulateTrajectory(const kinematics::CellModel& cell,
                                  const kinematics::TriangleMesh& part,
                                  const scanner::LaserOptics& optics,
                                  const SimulationSettings& settings,
-                                 const kinematics::Trajectory& trajectory);
+                                 const kinematics::Trajectory& trajectory,
+                                 const std::atomic<bool>* cancel = nullptr);
 
 }  // namespace scanplan::pipeline

@@ -238,6 +238,7 @@ struct SearchContext {
   std::vector<std::size_t> column_of_set;
   std::vector<std::size_t> start;  // a cover reaching the target, handed over first; or empty
   bool start_given = false;
+  const std::function<void()>* poll = nullptr;  // CoverLimits::poll, when set
   std::size_t node_limit = 0;
   bool node_limit_hit = false;
   Clock::time_point deadline = Clock::time_point::max();
@@ -248,6 +249,7 @@ struct SearchContext {
 };
 
 void searchStep(glp_tree* tree, SearchContext& ctx) {
+  if (ctx.poll != nullptr) (*ctx.poll)();
   switch (glp_ios_reason(tree)) {
     case GLP_IHEUR: {
       // Called at each node whose LP solution is fractional, the first time after the root
@@ -300,6 +302,7 @@ void searchStep(glp_tree* tree, SearchContext& ctx) {
 // once glp_intopt() has returned.
 void searchCallback(glp_tree* tree, void* info) {
   auto& ctx = *static_cast<SearchContext*>(info);
+  if (ctx.error) return;  // stopping already
   try {
     searchStep(tree, ctx);
   } catch (...) {
@@ -453,6 +456,7 @@ SearchContext searchContext(const CoverProblem& problem,
   for (std::size_t j = 0; j < m.set_of_column.size(); ++j)
     ctx.column_of_set[m.set_of_column[j]] = j;
   ctx.node_limit = limits.node_limit;
+  if (limits.poll) ctx.poll = &limits.poll;
   return ctx;
 }
 
@@ -497,6 +501,7 @@ std::string searchWithGlpk(const CoverProblem& problem,
   glp_smcp smcp;
   glp_init_smcp(&smcp);
   smcp.msg_lev = GLP_MSG_OFF;
+  if (limits.poll) limits.poll();
   if (secondsLeft(t0, time_budget_s) <= 0.0) return "time limit";
   smcp.tm_lim = milliseconds(secondsLeft(t0, time_budget_s));
   const int lp_ret = glp_simplex(lp.get(), &smcp);

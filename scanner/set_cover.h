@@ -1,11 +1,12 @@
 #pragma once
-// Choosing scan passes by an integer programme (docs/automatic-scan.md): the weighted partial set cover
-// that greedyCover() (scanner/pass_selection.h) answers approximately, solved to optimality or
-// to a proven gap within a budget by GLPK's branch and cut, started from a feasible answer such
+// Choosing scan passes by an integer programme (docs/automatic-scan.md): the weighted partial set
+// cover that greedyCover() (scanner/pass_selection.h) answers approximately, solved to optimality
+// or to a proven gap within a budget by GLPK's branch and cut, started from a feasible answer such
 // as greedy's. GLPK stays behind this header.
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,10 @@ struct CoverLimits {
   /// Constraint-matrix nonzeros of the reduced model at most: a larger model is not handed to
   /// GLPK, and the (pruned) start is returned with status "start only: …" and no bound.
   std::size_t max_nonzeros = 200'000;
+  /// Called before the search and at every step of it (each node, each rounding of a node's
+  /// LP); an exception it throws (a cancelled plan) ends the search and leaves solveCover().
+  /// Empty: none.
+  std::function<void()> poll;
 };
 
 struct CoverSolution {

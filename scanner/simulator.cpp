@@ -231,6 +231,7 @@ struct ScanSimulator::Impl {
   SimulationStats profiles(const std::vector<ScanFrame>& frames,
                            const RunSetup& setup,
                            std::size_t rays,
+                           const std::function<void()>& poll,
                            SimulatedCloud& cloud) const;
   // Image mode (camera_image.h): the posed cell as an ImageScene, one profile's image, and
   // its points.
@@ -949,6 +950,7 @@ void addStats(SimulationStats& total, const SimulationStats& st) {
 SimulationStats ScanSimulator::Impl::profiles(const std::vector<ScanFrame>& frames,
                                               const RunSetup& setup,
                                               std::size_t rays,
+                                              const std::function<void()>& poll,
                                               SimulatedCloud& cloud) const {
   struct Output {
     std::vector<CloudPoint> points;
@@ -969,6 +971,7 @@ SimulationStats ScanSimulator::Impl::profiles(const std::vector<ScanFrame>& fram
   // costs no memory): the cloud then never moves (each move copies it, serially).
   if (n * rays <= kReserveBytes / sizeof(CloudPoint)) detail::reserveLarge(cloud.points, n * rays);
   for (std::size_t from = 0; from < n; from += batch) {
+    if (poll) poll();
     const std::size_t to = std::min(n, from + batch);
     const std::size_t size = cloud.points.size();
     if (size + (to - from) * rays > cloud.points.capacity()) {
@@ -1015,7 +1018,8 @@ SimulationStats ScanSimulator::Impl::profiles(const std::vector<ScanFrame>& fram
 
 SimulatedCloud ScanSimulator::simulate(const std::vector<ScanFrame>& frames,
                                        const LaserOptics& optics,
-                                       const SimulationSettings& settings) const {
+                                       const SimulationSettings& settings,
+                                       const std::function<void()>& poll) const {
   // The job validates these; a caller that did not gets an exception, not garbage.
   if (settings.rays_per_profile < 1 || !(settings.sigma_longitudinal >= 0.0) ||
       !(settings.sigma_orthogonal >= 0.0)) {
@@ -1040,7 +1044,7 @@ SimulatedCloud ScanSimulator::simulate(const std::vector<ScanFrame>& frames,
                                ? static_cast<std::size_t>(settings.image.columns)
                                : setup.directions.size();
   SimulatedCloud cloud;
-  cloud.stats = impl_->profiles(frames, setup, rays, cloud);
+  cloud.stats = impl_->profiles(frames, setup, rays, poll, cloud);
   cloud.stats.profiles = frames.size();
   return cloud;
 }

@@ -2,6 +2,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -161,10 +162,12 @@ class ScanSimulator {
   /// columns ≥ 1, thickness > 0, noise, threshold and reflectance ≥ 0), the camera rule is
   /// kPositive or kNegative and the back end is Embree. In image mode point i of a profile
   /// comes from image column CloudPoint::ray; σ_l and σ_o are not applied (the image has its
-  /// own noise).
+  /// own noise). `poll`, when set, is called before each batch of profiles (a few thousand
+  /// rays' worth); an exception it throws (a cancelled plan) leaves simulate().
   SimulatedCloud simulate(const std::vector<ScanFrame>& frames,
                           const LaserOptics& optics,
-                          const SimulationSettings& settings) const;
+                          const SimulationSettings& settings,
+                          const std::function<void()>& poll = {}) const;
 
   /// Image mode's camera image of one profile (`index` seeds its noise), as simulate() renders
   /// it with these settings (whatever settings.mode says), for a person to look at. Same

@@ -1,11 +1,18 @@
 // The automatic scan's program: each pass a segment planned on its own, joined by point-to-point
 // moves at the robot's limits (pipeline/program_moves.h). Checked on a synthetic part by the
 // validation of the whole program and by recomputing its time split and moves from the samples.
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <filesystem>
+#include <iterator>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
+#include <string_view>
+#include <thread>
+#include <utility>
 #include <vector>
 
 #include <unistd.h>
@@ -225,6 +232,67 @@ TEST_F(ProgramMoves, BackingOffAtOneEndIsNeverSlowerThanAtBoth) {
   const planner::ValidationReport report =
       planner::validateTrajectory(scene, one.trajectory, settings);
   EXPECT_TRUE(report.valid) << (report.violations.empty() ? "" : report.violations[0].what);
+}
+
+// Joining the passes polls the cancel flag at every leg of every move: set, it ends the join
+// with Cancelled; clear, the join is the same as without a flag.
+TEST_F(ProgramMoves, ACancelFlagEndsTheJoinWithCancelled) {
+  const pipeline::ScanPlan& plan = *plan_;
+  ASSERT_TRUE(plan.trajectory);
+  const std::vector<kinematics::Trajectory> runs = scanningRuns(plan.trajectory->trajectory);
+  ASSERT_GE(runs.size(), 2u);
+  const collision::Scene& scene = *plan.prepared->scene;
+  std::atomic<bool> cancel{true};
+  pipeline::MoveSettings settings;
+  settings.cancel = &cancel;
+  EXPECT_THROW(pipeline::joinSegments(scene, runs, settings), pipeline::Cancelled);
+  cancel = false;
+  const pipeline::JoinedProgram flagged = pipeline::joinSegments(scene, runs, settings);
+  const pipeline::JoinedProgram plain = pipeline::joinSegments(scene, runs, {});
+  EXPECT_EQ(flagged.times.moves, plain.times.moves);
+  EXPECT_EQ(flagged.trajectory.samples.size(), plain.trajectory.samples.size());
+  EXPECT_EQ(flagged.times.total, plain.times.total);
+}
+
+// The automatic scan reports its progress through all its steps (the candidates, the aimed
+// passes, the reach checks, the set cover and the tour): its last report says all is done and
+// comes before the map's first. It polls the cancel flag at every report: set at the first
+// report past 90 %, the plan ends with Cancelled before the map starts.
+TEST_F(ProgramMoves, TheAutomaticScanReportsAndPollsThroughItsSteps) {
+  pipeline::ScanProblem problem = *problem_;
+  std::atomic<bool> cancel{false};
+  problem.planning.termination.cancel = &cancel;
+  std::mutex mutex;  // reports come from worker threads
+  std::vector<std::pair<std::string, double>> seen;
+  const auto record = [&](std::string_view stage, std::size_t done, std::size_t total) {
+    const std::lock_guard<std::mutex> lock(mutex);
+    seen.emplace_back(std::string(stage), static_cast<double>(done) / static_cast<double>(total));
+  };
+  pipeline::prepareScan(problem, record);
+  const auto first_map =
+      std::find_if(seen.begin(), seen.end(), [](const auto& r) { return r.first == "map"; });
+  ASSERT_NE(first_map, seen.begin());
+  ASSERT_NE(first_map, seen.end());
+  EXPECT_EQ(std::prev(first_map)->first, "auto");
+  EXPECT_EQ(std::prev(first_map)->second, 1.0);
+  for (auto r = seen.begin(); r != first_map; ++r) EXPECT_EQ(r->first, "auto");
+  EXPECT_GE(std::count_if(seen.begin(), first_map, [](const auto& r) { return r.second > 0.5; }),
+            10);  // the steps after the candidates report too
+
+  seen.clear();
+  std::size_t after = 0;
+  EXPECT_THROW(
+      pipeline::prepareScan(problem,
+                            [&](std::string_view stage, std::size_t done, std::size_t total) {
+                              const std::lock_guard<std::mutex> lock(mutex);
+                              if (cancel) ++after;
+                              EXPECT_EQ(stage, "auto");
+                              if (10 * done > 9 * total) cancel = true;
+                            }),
+      pipeline::Cancelled);
+  EXPECT_TRUE(cancel);
+  // At most the reports already past their poll on the other threads.
+  EXPECT_LT(after, std::max(1u, std::thread::hardware_concurrency()));
 }
 
 TEST_F(ProgramMoves, AProgramTimeLimitKeepsTheBestCoverageThatFitsIt) {

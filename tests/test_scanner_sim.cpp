@@ -659,6 +659,34 @@ TEST(ScannerSimulation, NoiselessPointsLandOnTheDemoPart) {
   expectPointsOnPart(part.mesh, cloud, 5000);
 }
 
+// A poll runs at least every 100 000 rays without changing the cloud; what it throws leaves
+// simulate() and stops the run there.
+TEST(ScannerSimulation, APollRunsBetweenBatchesAndItsExceptionEndsTheRun) {
+  const CellModel cell = demoCell();
+  const kinematics::LoadedMesh part =
+      kinematics::loadMesh(cell.part.mesh.path, cell.part.mesh.options);
+  const scanner::ScanSimulator sim(cell, part.mesh);
+  const std::vector<ScanFrame> frames =
+      ringFrames(cell, Eigen::Vector3d(0.0, 0.0, 0.05), 0.23, deg(20.0), 300);
+  SimulationSettings settings;
+  settings.rays_per_profile = 1000;
+  const SimulatedCloud plain = run(sim, frames, settings);
+  std::size_t calls = 0;
+  const SimulatedCloud polled = sim.simulate(frames, demoOptics(), settings, [&] { ++calls; });
+  EXPECT_GE(calls, frames.size() * 1000 / 100'000);
+  ASSERT_EQ(polled.points.size(), plain.points.size());
+  ASSERT_FALSE(plain.points.empty());
+  EXPECT_EQ(polled.points.back().p_P, plain.points.back().p_P);
+  struct Stop {};
+  std::size_t k = 0;
+  EXPECT_THROW(sim.simulate(frames, demoOptics(), settings,
+                            [&] {
+                              if (++k == 2) throw Stop{};
+                            }),
+               Stop);
+  EXPECT_EQ(k, 2u);
+}
+
 TEST(ScannerSimulation, NoiselessPointsLandOnTheBunny) {
   const fs::path file = test::sharedDataDir() / "meshes/stlmodels_bunny.bin.stl";
   if (!fs::exists(file)) GTEST_SKIP() << file << " absent (shared test data)";

@@ -477,4 +477,32 @@ TEST(SetCover, LimitsKeepTheStart) {
   EXPECT_EQ(a.lower_bound, b.lower_bound);
 }
 
+// The poll runs before the search and at every step of it without changing the answer; what it
+// throws ends the search and leaves solveCover(), and GLPK is fit for the next call.
+TEST(SetCover, APollRunsAtEveryStepAndItsExceptionEndsTheSearch) {
+  std::mt19937 rng(5);
+  const CoverProblem p = randomProblem(rng, 24, 60, 0.95);
+  const std::vector<std::size_t> start = greedyStart(p);
+  const CoverSolution plain = solveCover(p, start, kBudget);
+  std::size_t calls = 0;
+  CoverLimits counting;
+  counting.poll = [&] { ++calls; };
+  const CoverSolution polled = solveCover(p, start, kBudget, counting);
+  EXPECT_EQ(polled.chosen, plain.chosen);
+  EXPECT_EQ(polled.lower_bound, plain.lower_bound);
+  EXPECT_GE(calls, polled.nodes + 1);  // before the search, then at least once a node
+  ASSERT_GE(calls, 3u);
+  struct Stop {};
+  for (const std::size_t at : {std::size_t{1}, std::size_t{2}, calls}) {
+    std::size_t k = 0;
+    CoverLimits stopping;
+    stopping.poll = [&] {
+      if (++k == at) throw Stop{};
+    };
+    EXPECT_THROW(solveCover(p, start, kBudget, stopping), Stop) << "thrown at call " << at;
+    EXPECT_EQ(k, at);  // not called again once it threw
+  }
+  EXPECT_EQ(solveCover(p, start, kBudget).chosen, plain.chosen);
+}
+
 }  // namespace
