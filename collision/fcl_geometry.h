@@ -119,6 +119,17 @@ ShapeDistance bodyDistance(const BodyGeometry& a,
                            bool witness,
                            bool closed_forms = true);
 
+/// The separation of two convex shapes (hulls, primitives) at world poses along the direction n
+/// (world, from a towards b; normalised here): min over b of n·b minus max over a of n·a, by
+/// their support points. A lower bound on their distance for every n, equal to it along the
+/// direction between their nearest points: the certificate shapeDistance() checks GJK's convex
+/// answers against. Throws std::invalid_argument for a mesh.
+double separationAlong(const CollisionShape& a,
+                       const Eigen::Isometry3d& X_Wa,
+                       const CollisionShape& b,
+                       const Eigen::Isometry3d& X_Wb,
+                       const Eigen::Vector3d& n);
+
 /// Plain fcl::distance between two shapes (no bound, FCL's own dispatch): the reference the
 /// bounded query must agree with.
 ShapeDistance exactShapeDistance(const CollisionShape& a,

@@ -16,6 +16,7 @@
 #include <fstream>
 #include <limits>
 #include <random>
+#include <stdexcept>
 #include <vector>
 
 #include <scanplan/collision/fcl_geometry.h>
@@ -177,6 +178,122 @@ TEST(LinkStandIn, DistancesSitWithinTheMarginBelowTheBlocks) {
     if (d_mesh > 0.0 && d_mesh < 0.02) ++near;
   }
   EXPECT_GT(near, 20) << "premise: probes near the block, outside it";
+}
+
+// Whether p lies inside the convex piece (on the inner side of every face, as its centroid).
+bool insideConvex(const TriangleMesh& piece, const Vector3d& p) {
+  Vector3d centroid = Vector3d::Zero();
+  for (const Vector3d& v : piece.vertices) centroid += v;
+  centroid /= static_cast<double>(piece.vertices.size());
+  for (const Eigen::Vector3i& t : piece.triangles) {
+    const Vector3d& a = piece.vertices[static_cast<std::size_t>(t[0])];
+    const Vector3d n = (piece.vertices[static_cast<std::size_t>(t[1])] - a)
+                           .cross(piece.vertices[static_cast<std::size_t>(t[2])] - a);
+    if (n.dot(p - a) * n.dot(centroid - a) < 0.0) return false;
+  }
+  return true;
+}
+
+// A probe about the L block: a box or a capsule at a world pose.
+struct Probe {
+  detail::CollisionShape shape;
+  Isometry3d X = Isometry3d::Identity();
+  bool box = false;
+};
+
+// `count` probes for each piece of the L block's stand-in, alternately capsules and boxes; each
+// `aligned` with the block's faces (unturned, or turned a quarter about x) or turned at random.
+// Calls visit(hull, distance to the piece's triangles with witness points, probe, index) for the
+// probes outside the piece (centre outside it, more than `least` from its triangles); returns
+// how many.
+template <class Visit>
+int probesOutsideThePieces(unsigned seed, int count, bool aligned, double least, Visit&& visit) {
+  const TriangleMesh mesh = lBlock();
+  const StandIn s = fitStandIn(mesh, {});
+  EXPECT_TRUE(s.fits);
+  detail::CollisionShape exact;
+  exact.geometry = detail::makeMeshModel(mesh);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int visited = 0;
+  for (const TriangleMesh& piece : s.pieces) {
+    const detail::CollisionShape hull = detail::makeHullShape(exact, piece);
+    detail::CollisionShape triangles;
+    triangles.geometry = detail::makeMeshModel(piece);
+    for (int i = 0; i < count; ++i) {
+      Probe probe;
+      probe.box = i % 2 == 1;
+      kinematics::Shape shape;
+      if (probe.box) {
+        shape.geometry = kinematics::Box{Vector3d(0.01 + 0.03 * std::abs(u(rng)), 0.012, 0.02)};
+      } else {
+        shape.geometry = kinematics::Capsule{0.002 + 0.006 * std::abs(u(rng)), 0.03};
+      }
+      probe.shape = detail::makeCollisionShape(shape);
+      if (!aligned) {
+        probe.X.linear() = Eigen::Quaterniond::UnitRandom().toRotationMatrix();
+      } else if (i % 4 == 3) {
+        probe.X.linear() = Eigen::AngleAxisd(0.5 * M_PI, Vector3d::UnitX()).matrix();
+      }
+      probe.X.translation() =
+          Vector3d(0.05, 0.05, 0.025) + Vector3d(0.09 * u(rng), 0.09 * u(rng), 0.06 * u(rng));
+      if (insideConvex(piece, probe.X.translation())) continue;  // the solid reads 0, its skin more
+      const detail::ShapeDistance d =
+          detail::exactShapeDistance(triangles, Isometry3d::Identity(), probe.shape, probe.X);
+      if (!(d.distance > least)) continue;
+      visit(hull, d, probe, i);
+      ++visited;
+    }
+  }
+  return visited;
+}
+
+// A piece's distance (GJK on its convex hull: FCL's where it certifies itself, else the shorter
+// of FCL's and libccd's) is the distance to its own triangles: never farther, and no shorter
+// than libccd's tolerance. Boxes with faces parallel to the pieces' (where FCL's GJK alone can
+// stop short) and capsules along the block's edges.
+TEST(LinkStandIn, PieceDistancesMatchTheirTrianglesOnAlignedProbes) {
+  const int measured = probesOutsideThePieces(
+      11, 150, true, 0.0,
+      [](const detail::CollisionShape& hull, const detail::ShapeDistance& d, const Probe& probe,
+         int i) {
+        const double d_hull =
+            detail::shapeDistance(hull, Isometry3d::Identity(), probe.shape, probe.X, 1e9, false)
+                .distance;
+        EXPECT_LE(d_hull, d.distance + 1e-9) << "probe " << i;
+        EXPECT_GE(d_hull, d.distance - 2e-5) << "probe " << i;
+      });
+  EXPECT_GT(measured, 200) << "premise: probes outside the pieces";
+}
+
+// The separation along any direction is a lower bound on the distance, and along the direction
+// of the nearest points it is the distance: the certificate GJK's convex answers are checked
+// against. On the L block's pieces, boxes and capsules at random poses, by the distance to the
+// pieces' triangles.
+TEST(LinkStandIn, SeparationBoundsTheDistanceAndMeetsItAlongTheNearestPoints) {
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const int measured = probesOutsideThePieces(
+      13, 100, false, 1e-4,
+      [&](const detail::CollisionShape& hull, const detail::ShapeDistance& d, const Probe& probe,
+          int i) {
+        const auto along = [&](const Vector3d& n) {
+          return detail::separationAlong(hull, Isometry3d::Identity(), probe.shape, probe.X, n);
+        };
+        for (int k = 0; k < 5; ++k)
+          EXPECT_LE(along(Vector3d(u(rng), u(rng), u(rng))), d.distance + 1e-9) << "probe " << i;
+        // Equal along the nearest points where the reference is exact: boxes, walked in the
+        // box's frame (for capsules it is libccd's GJK at the triangles: its witnesses stray).
+        if (probe.box) {
+          EXPECT_NEAR(along(d.p_b - d.p_a), d.distance, 1e-7) << "probe " << i;
+        }
+      });
+  EXPECT_GT(measured, 100) << "premise: probes outside the pieces";
+  detail::CollisionShape mesh;
+  mesh.geometry = detail::makeMeshModel(lBlock());
+  EXPECT_THROW(detail::separationAlong(mesh, Isometry3d::Identity(), mesh, Isometry3d::Identity(),
+                                       Vector3d::UnitX()),
+               std::invalid_argument);
 }
 
 TEST(LinkStandIn, ConvexMeshIsOnePiece) {
