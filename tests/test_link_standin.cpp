@@ -250,8 +250,9 @@ int probesOutsideThePieces(unsigned seed, int count, bool aligned, double least,
 
 // A piece's distance (GJK on its convex hull: FCL's where it certifies itself, else the shorter
 // of FCL's and libccd's) is the distance to its own triangles: never farther, and no shorter
-// than libccd's tolerance. Boxes with faces parallel to the pieces' (where FCL's GJK alone can
-// stop short) and capsules along the block's edges.
+// than libccd's tolerance; asked with a bound below it, beyond, with a lower bound no more than
+// the distance. Boxes with faces parallel to the pieces' (where FCL's GJK alone can stop short)
+// and capsules along the block's edges.
 TEST(LinkStandIn, PieceDistancesMatchTheirTrianglesOnAlignedProbes) {
   const int measured = probesOutsideThePieces(
       11, 150, true, 0.0,
@@ -262,6 +263,13 @@ TEST(LinkStandIn, PieceDistancesMatchTheirTrianglesOnAlignedProbes) {
                 .distance;
         EXPECT_LE(d_hull, d.distance + 1e-9) << "probe " << i;
         EXPECT_GE(d_hull, d.distance - 2e-5) << "probe " << i;
+        // Bounded below the distance: beyond, with a lower bound between the two.
+        const double bound = 0.5 * d.distance;
+        const detail::ShapeDistance beyond =
+            detail::shapeDistance(hull, Isometry3d::Identity(), probe.shape, probe.X, bound, false);
+        EXPECT_TRUE(beyond.beyond) << "probe " << i;
+        EXPECT_GE(beyond.lower, bound) << "probe " << i;
+        EXPECT_LE(beyond.lower, d.distance + 1e-9) << "probe " << i;
       });
   EXPECT_GT(measured, 200) << "premise: probes outside the pieces";
 }
