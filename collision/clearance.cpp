@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <limits>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include <scanplan/collision/fcl_geometry.h>
@@ -58,9 +59,47 @@ struct Nearest {
 // Above this many shape pairs (a link as convex pieces), the pairs are measured nearest first.
 constexpr std::size_t kSortedPairsAbove = 16;
 
+// The shapes' bounding-sphere centres in the world, into `centres`; returns a sphere holding all
+// their spheres (about the centres' mean).
+std::pair<Eigen::Vector3d, double> shapeCentres(const std::vector<CollisionShape>& shapes,
+                                                const Eigen::Isometry3d& X_W,
+                                                std::vector<Eigen::Vector3d>& centres) {
+  centres.resize(shapes.size());
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < shapes.size(); ++i) {
+    centres[i] = X_W * (shapes[i].X_BG * shapes[i].centre_G);
+    mean += centres[i];
+  }
+  mean /= static_cast<double>(std::max<std::size_t>(1, shapes.size()));
+  double radius = 0.0;
+  for (std::size_t i = 0; i < shapes.size(); ++i)
+    radius = std::max(radius, (centres[i] - mean).norm() + shapes[i].radius);
+  return {mean, radius};
+}
+
+// The shapes whose spheres come within `bound` of the sphere (centre, radius) holding the other
+// side, into `near`; the least gap of the others lowers `lower`.
+void shapesNear(const std::vector<CollisionShape>& shapes,
+                const std::vector<Eigen::Vector3d>& centres,
+                const std::pair<Eigen::Vector3d, double>& other,
+                double bound,
+                std::vector<std::uint32_t>& near,
+                double& lower) {
+  near.clear();
+  for (std::size_t i = 0; i < shapes.size(); ++i) {
+    const double gap = (centres[i] - other.first).norm() - shapes[i].radius - other.second;
+    if (gap >= bound)
+      lower = std::min(lower, gap);
+    else
+      near.push_back(static_cast<std::uint32_t>(i));
+  }
+}
+
 // shapesDistance() for many shape pairs: the pairs in the order of their bounding spheres' gap
 // (nearest first; ties in list order), so that the best found so far bounds the rest early; at
-// the first pair whose spheres lie at or beyond it, so do all the rest.
+// the first pair whose spheres lie at or beyond it, so do all the rest. A shape whose sphere lies
+// beyond the bound from the sphere holding the other side's takes no pair. The buffers are kept
+// per thread: a link of 150 pieces against one of 87 makes 13 050 pairs a query.
 ShapeDistance nearestFirstDistance(const std::vector<CollisionShape>& a_shapes,
                                    const Eigen::Isometry3d& X_Wa,
                                    const std::vector<CollisionShape>& b_shapes,
@@ -68,24 +107,26 @@ ShapeDistance nearestFirstDistance(const std::vector<CollisionShape>& a_shapes,
                                    double bound,
                                    bool witness,
                                    bool closed_forms) {
-  std::vector<Eigen::Vector3d> c_b(b_shapes.size());
-  for (std::size_t j = 0; j < b_shapes.size(); ++j)
-    c_b[j] = X_Wb * (b_shapes[j].X_BG * b_shapes[j].centre_G);
   struct Gap {
     double gap;
     std::uint32_t a, b;
   };
-  std::vector<Gap> gaps;
-  gaps.reserve(a_shapes.size() * b_shapes.size());
+  thread_local std::vector<Eigen::Vector3d> c_a, c_b;
+  thread_local std::vector<std::uint32_t> near_a, near_b;
+  thread_local std::vector<Gap> gaps;
   Nearest nearest(bound);
-  for (std::size_t i = 0; i < a_shapes.size(); ++i) {
-    const Eigen::Vector3d c_a = X_Wa * (a_shapes[i].X_BG * a_shapes[i].centre_G);
-    for (std::size_t j = 0; j < b_shapes.size(); ++j) {
-      const double gap = (c_a - c_b[j]).norm() - a_shapes[i].radius - b_shapes[j].radius;
+  const auto ball_a = shapeCentres(a_shapes, X_Wa, c_a);
+  const auto ball_b = shapeCentres(b_shapes, X_Wb, c_b);
+  shapesNear(a_shapes, c_a, ball_b, bound, near_a, nearest.lower);
+  shapesNear(b_shapes, c_b, ball_a, bound, near_b, nearest.lower);
+  gaps.clear();
+  for (const std::uint32_t i : near_a) {
+    for (const std::uint32_t j : near_b) {
+      const double gap = (c_a[i] - c_b[j]).norm() - a_shapes[i].radius - b_shapes[j].radius;
       if (gap >= bound)
         nearest.lower = std::min(nearest.lower, gap);
       else
-        gaps.push_back({gap, static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)});
+        gaps.push_back({gap, i, j});
     }
   }
   std::sort(gaps.begin(), gaps.end(), [](const Gap& x, const Gap& y) {
