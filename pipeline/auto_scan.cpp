@@ -48,6 +48,15 @@ double since(Clock::time_point start) {
 // Cancelled). The shares follow the steps' wall times on the demo housing.
 class Steps {
  public:
+  // Where each step ends, as a share of the whole.
+  static constexpr double kCandidates = 0.14;  // the general passes made and evaluated
+  static constexpr double kStrips = 0.21;      // the aimed strips
+  static constexpr double kArcs = 0.3;         // the aimed glances and arcs made
+  static constexpr double kAimed = 0.57;       // ... and evaluated
+  static constexpr double kReach = 0.67;       // the reach checks
+  static constexpr double kGreedy = 0.69;      // the greedy cover
+  static constexpr double kCover = 0.95;       // the set cover's programme; then the tour
+
   Steps(const std::atomic<bool>* cancel, const std::function<void(std::size_t, std::size_t)>& out)
       : cancel_(cancel), out_(out) {}
 
@@ -347,12 +356,13 @@ std::vector<scanner::ScanPass> aimedPasses(const scanner::PartOnTable& part,
   for (const auto& p : general)
     for (std::uint32_t i : p.covers) reached[i] = 1;
   std::vector<std::size_t> aimed_at;
-  std::vector<scanner::ScanPass> out = aimedStrips(part, pass, index, classes, witnesses, reached,
-                                                   limit, aimed_at, steps.step(0.14, 0.21));
+  std::vector<scanner::ScanPass> out =
+      aimedStrips(part, pass, index, classes, witnesses, reached, limit, aimed_at,
+                  steps.step(Steps::kCandidates, Steps::kStrips));
   // Per witness, in parallel (then in witness order): the short strip and the arcs.
   std::vector<std::vector<scanner::ScanPass>> per_witness(aimed_at.size());
   std::atomic<std::size_t> done{0};
-  const auto report = steps.step(0.21, 0.3);
+  const auto report = steps.step(Steps::kStrips, Steps::kArcs);
   tbb::parallel_for(std::size_t{0}, aimed_at.size(), [&](std::size_t k) {
     const Eigen::Isometry3d& witness = witnesses[aimed_at[k]];
     scanner::ScanPass glance = scanner::aimedPass(part, pass, witness, 0.012);
@@ -371,7 +381,7 @@ std::vector<scanner::ScanPass> aimedPasses(const scanner::PartOnTable& part,
   std::vector<scanner::ScanPass> more;
   for (auto& passes : per_witness)
     for (auto& p : passes) more.push_back(std::move(p));
-  scanner::evaluatePasses(more, part, pass, index, steps.step(0.3, 0.57));
+  scanner::evaluatePasses(more, part, pass, index, steps.step(Steps::kArcs, Steps::kAimed));
   for (auto& p : more)
     if (!p.covers.empty()) out.push_back(std::move(p));
   return out;
@@ -555,7 +565,7 @@ std::vector<scanner::ScanPass> candidates(const scanner::PartOnTable& part,
                                           std::size_t& aimed_count) {
   std::vector<scanner::ScanPass> passes = scanner::candidatePasses(part, pass);
   steps.poll();
-  scanner::evaluatePasses(passes, part, pass, index, steps.step(0.0, 0.14));
+  scanner::evaluatePasses(passes, part, pass, index, steps.step(0.0, Steps::kCandidates));
   std::vector<scanner::ScanPass> aimed =
       aimedPasses(part, pass, index, classes, witnesses, passes, kMaxAimed, steps);
   aimed_count = aimed.size();
@@ -660,7 +670,7 @@ AutoScanPlan planAutoScan(const ScanProblem& problem,
 
   const scanner::TransferSphere sphere = transferSphere(problem, part.part());
   const std::vector<std::uint8_t> reach =
-      reachable(problem, scene, sphere, passes, steps.step(0.57, 0.67));
+      reachable(problem, scene, sphere, passes, steps.step(Steps::kAimed, Steps::kReach));
   for (std::size_t p = 0; p < passes.size(); ++p)
     if (!reach[p]) report.unreachable.push_back(passes[p].label);
   markOutOfReach(classes, passes, reach);
@@ -682,10 +692,10 @@ AutoScanPlan planAutoScan(const ScanProblem& problem,
     steps.poll();
     return since(start) < settings.time_budget;
   });
-  steps.at(0.69);
+  steps.at(Steps::kGreedy);
   if (settings.max_program <= 0.0 && chosen.stop == "target reached")
     improveCover(passes, counts, covered, reach, cover, steps, chosen, report);
-  steps.at(0.95);
+  steps.at(Steps::kCover);
   reportCover(chosen, counts, covered, report);
   keepCertificate(sampling, X_RP, classes, report);
   if (chosen.chosen.empty()) {
