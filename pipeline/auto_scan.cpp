@@ -32,6 +32,7 @@ using Clock = std::chrono::steady_clock;
 constexpr std::size_t kMaxSamples = 400'000;  // evaluation samples at most (memory, time)
 constexpr std::size_t kMaxAimed = 600;        // witnesses aimed at, at most
 constexpr double kTargetMargin = 0.01;        // planned coverage over the target (see below)
+constexpr double kMeasuredMargin = 0.001;     // measured coverage kept over the target
 constexpr double kMaxStations = 5e6;          // probed strip stations of the candidates
 // The set-cover programme's search (improveCover): nodes, model size, and a time limit that is
 // only a safety net (the node and size limits decide, so the answer does not depend on speed).
@@ -49,13 +50,14 @@ double since(Clock::time_point start) {
 class Steps {
  public:
   // Where each step ends, as a share of the whole.
-  static constexpr double kCandidates = 0.14;  // the general passes made and evaluated
-  static constexpr double kStrips = 0.21;      // the aimed strips
-  static constexpr double kArcs = 0.3;         // the aimed glances and arcs made
-  static constexpr double kAimed = 0.57;       // ... and evaluated
-  static constexpr double kReach = 0.67;       // the reach checks
-  static constexpr double kGreedy = 0.69;      // the greedy cover
-  static constexpr double kCover = 0.95;       // the set cover's programme; then the tour
+  static constexpr double kCandidates = 0.12;  // the general passes made and evaluated
+  static constexpr double kStrips = 0.18;      // the aimed strips
+  static constexpr double kArcs = 0.26;        // the aimed glances and arcs made
+  static constexpr double kAimed = 0.49;       // ... and evaluated
+  static constexpr double kReach = 0.56;       // the reach checks
+  static constexpr double kGreedy = 0.57;      // the greedy cover
+  static constexpr double kCover = 0.86;       // the set cover's programme
+  static constexpr double kMeasured = 0.98;    // the chosen passes measured; then the tour
 
   Steps(const std::atomic<bool>* cancel, const std::function<void(std::size_t, std::size_t)>& out)
       : cancel_(cancel), out_(out) {}
@@ -588,29 +590,115 @@ std::vector<std::uint8_t> givenCoverage(const kinematics::ScanPath& given,
   return covered;
 }
 
-// How long a cut pass runs on past the stretch whose profiles covered a sample (s): the line
-// crosses the rest of the area the sample stands for (half a sample spacing) and the reach of
-// an evaluated point (eval_radius) at the pass's fastest line speed.
-double cutPad(const scanner::PassSettings& s, const AutoScanReport& report) {
-  const double line_speed = s.speed_safety * s.point_spacing * s.frame_rate;
-  return (0.5 * report.sample_spacing + s.eval_radius) / line_speed;
+// The radius the simulated cloud's area coverage is measured with, m (pipeline/simulation.cpp).
+double coverageRadius(const ScanProblem& p, const scanner::PassSettings& pass) {
+  if (!p.simulation) return pass.point_spacing;
+  if (p.simulation->point_spacing > 0.0) return p.simulation->point_spacing;
+  AutoScanSettings pitch;
+  pitch.point_spacing = 0.0;
+  return autoPointSpacing(pitch, p.optics, raysPerProfile(p));
 }
 
-// The chosen passes cut to what the others do not cover (scanner::cutToCover), split where a
-// move skipping a stretch that adds nothing saves more than a typical move costs.
-scanner::CutPasses cutChosen(const std::vector<scanner::ScanPass>& passes,
-                             const std::vector<std::uint8_t>& counts,
-                             const std::vector<std::uint8_t>& covered,
-                             const scanner::CoverSettings& cover,
-                             double pad,
-                             const scanner::CoverResult& chosen,
-                             AutoScanReport& report) {
+// The chosen passes as the scanner will measure them (scanner::measurePass: every profile, the
+// whole fan, on the area samples and radius the simulated cloud's coverage is judged by), cut to
+// what the others do not cover, split where a stretch that adds nothing takes longer than a
+// typical move, then whole pieces left out while the measured coverage stays at the job's target
+// and a margin. Fills the report's cut and measured figures; the pieces' covers are over
+// `measured.fine`.
+struct MeasuredCut {
+  scanner::AreaSampling fine;        ///< the simulation's area samples (R frame)
+  std::vector<std::uint8_t> counts;  ///< per fine sample: counts toward the target
+  std::vector<std::uint8_t> given;   ///< per fine sample: covered by the given paths
+  std::vector<scanner::ScanPass> pieces;
+};
+
+// The pieces left out whole (scanner::pruneToGoal, each costing its scanning and a typical
+// move) while the measured coverage of the counting fine samples, the given paths' included,
+// stays at the job's target and kMeasuredMargin. Fills the report's measured figures.
+std::vector<scanner::ScanPass> prunedPieces(const ScanProblem& problem,
+                                            std::vector<scanner::ScanPass> pieces,
+                                            const scanner::CoverSettings& cover,
+                                            const MeasuredCut& m,
+                                            AutoScanReport& report) {
+  std::size_t counted = 0, given = 0;
+  std::vector<std::uint8_t> open(m.counts.size(), 0);
+  for (std::size_t i = 0; i < m.counts.size(); ++i) {
+    counted += m.counts[i] ? 1u : 0u;
+    given += (m.counts[i] && m.given[i]) ? 1u : 0u;
+    open[i] = (m.counts[i] && !m.given[i]) ? 1 : 0;
+  }
+  const double goal = std::min(1.0, problem.auto_scan->target_coverage + kMeasuredMargin);
+  const double open_n = static_cast<double>(counted - given);
+  const double open_goal =
+      open_n > 0.0
+          ? std::clamp((goal * static_cast<double>(counted) - static_cast<double>(given)) / open_n,
+                       0.0, 1.0)
+          : 0.0;
+  std::vector<double> cost(pieces.size());
+  for (std::size_t k = 0; k < pieces.size(); ++k)
+    cost[k] = pieces[k].duration() + cover.pass_overhead;
+  const std::vector<std::size_t> kept = scanner::pruneToGoal(pieces, cost, open, open_goal);
+  std::vector<scanner::ScanPass> out;
+  std::vector<std::uint8_t> seen = m.given;
+  for (const std::size_t k : kept) {
+    for (const std::uint32_t i : pieces[k].covers) seen[i] = 1;
+    out.push_back(std::move(pieces[k]));
+  }
+  for (const scanner::ScanPass& p : pieces)
+    if (!p.X_RS.empty()) report.pruned_time += p.duration();  // the moved-from are empty
+  report.pruned = pieces.size() - out.size();
+  std::size_t have = 0;
+  for (std::size_t i = 0; i < seen.size(); ++i) have += (m.counts[i] && seen[i]) ? 1u : 0u;
+  report.measured_fraction =
+      counted > 0 ? static_cast<double>(have) / static_cast<double>(counted) : 0.0;
+  return out;
+}
+
+MeasuredCut measuredCut(const ScanProblem& problem,
+                        const scanner::PartOnTable& part,
+                        const scanner::PassSettings& pass_settings,
+                        const scanner::SampleIndex& index,
+                        const std::vector<scanner::SampleClass>& classes,
+                        const std::vector<std::uint8_t>& covered,
+                        const std::vector<scanner::ScanPass>& passes,
+                        const scanner::CoverResult& chosen,
+                        const scanner::CoverSettings& cover,
+                        const Steps& steps,
+                        AutoScanReport& report) {
+  MeasuredCut out;
+  const double radius = coverageRadius(problem, pass_settings);
+  const std::size_t most = problem.simulation ? problem.simulation->max_area_samples : 200'000;
+  out.fine = scanner::sampleArea(part.part(), 2.0 * radius, most);
+  const scanner::SampleIndex fine(out.fine);
+  std::vector<scanner::ScanPass> whole(chosen.chosen.size());
+  std::atomic<std::size_t> done{0};
+  const auto progress = steps.step(Steps::kCover, Steps::kMeasured);
+  tbb::parallel_for(std::size_t{0}, whole.size(), [&](std::size_t k) {
+    whole[k] = passes[chosen.chosen[k]];
+    scanner::measurePass(whole[k], part, pass_settings, fine, raysPerProfile(problem), radius);
+    progress(++done, whole.size());
+  });
+  // A fine sample counts as its nearest evaluation sample does, or when a pass measures it (as
+  // the certificate counts the simulated cloud's samples).
+  const std::size_t n = out.fine.samples.size();
+  out.counts.assign(n, 0);
+  out.given.assign(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t near = index.nearest(out.fine.samples[i].p);
+    out.counts[i] = classes[near] == scanner::SampleClass::kScannable ? 1 : 0;
+    out.given[i] = covered[near];
+  }
+  for (const scanner::ScanPass& pass : whole)
+    for (const std::uint32_t i : pass.covers) out.counts[i] = 1;
+  std::vector<std::size_t> all(whole.size());
+  for (std::size_t k = 0; k < all.size(); ++k) all[k] = k;
   scanner::CutPasses cut =
-      scanner::cutToCover(passes, chosen.chosen, counts, covered, cover.pass_overhead, pad);
+      scanner::cutToCover(whole, all, out.counts, out.given, cover.pass_overhead);
   report.cut_time = cut.cut_time;
   report.cut_dropped = cut.dropped;
   report.cut_split = cut.split;
-  return cut;
+  out.pieces = prunedPieces(problem, std::move(cut.passes), cover, out, report);
+  return out;
 }
 
 void reportCover(const scanner::CoverResult& chosen,
@@ -631,12 +719,33 @@ void reportCover(const scanner::CoverResult& chosen,
 scanner::CoverSettings coverSettings(const ScanProblem& problem) {
   const AutoScanSettings& settings = *problem.auto_scan;
   scanner::CoverSettings cover;
-  // A margin over the target: the evaluation samples and points are coarser than the simulated
-  // cloud, which covers a little less than planned at the edges of each pass.
+  // A margin over the target: the evaluation samples are coarser than the area the cloud is
+  // judged on, and the measured passes (measuredCut) then leave out what the target does not
+  // need of the cover; with no margin, the measured coverage often falls short of the target.
   cover.target = std::min(1.0, settings.target_coverage + kTargetMargin);
   cover.max_passes = settings.max_passes;
   cover.pass_overhead = moveOverhead(problem);
   return cover;
+}
+
+// The measured pieces in tour order (scanner::orderPasses, from where the given paths end) as
+// the plan's passes, each with its measured gain.
+void addTour(const ScanProblem& problem,
+             const MeasuredCut& measured,
+             const kinematics::ScanPath& given,
+             const scanner::TransferSphere& sphere,
+             AutoScanPlan& plan) {
+  std::vector<std::size_t> pieces(measured.pieces.size());
+  for (std::size_t k = 0; k < pieces.size(); ++k) pieces[k] = k;
+  std::optional<Eigen::Isometry3d> at;
+  if (!given.samples.empty()) at = problem.cell.part.X_RP * given.samples.back().X_PS;
+  const std::vector<scanner::TourStep> tour =
+      scanner::orderPasses(measured.pieces, pieces, at, sphere);
+  plan.report.transfer_time = scanner::tourTransferTime(measured.pieces, tour, at, sphere);
+  const auto counted = static_cast<std::size_t>(
+      std::count(measured.counts.begin(), measured.counts.end(), std::uint8_t{1}));
+  buildPasses(problem, measured.pieces, tour,
+              gains(measured.pieces, counted, measured.counts, measured.given), plan);
 }
 
 }  // namespace
@@ -706,17 +815,9 @@ AutoScanPlan planAutoScan(const ScanProblem& problem,
     report.seconds = since(start);
     return plan;
   }
-  // Each pass cut to what the others do not cover; split where a move skipping a stretch that
-  // adds nothing saves more than a typical move costs.
-  const scanner::CutPasses cut =
-      cutChosen(passes, counts, covered, cover, cutPad(pass_settings, report), chosen, report);
-  std::vector<std::size_t> pieces(cut.passes.size());
-  for (std::size_t k = 0; k < pieces.size(); ++k) pieces[k] = k;
-  std::optional<Eigen::Isometry3d> at;
-  if (!given.samples.empty()) at = X_RP * given.samples.back().X_PS;
-  const std::vector<scanner::TourStep> tour = scanner::orderPasses(cut.passes, pieces, at, sphere);
-  report.transfer_time = scanner::tourTransferTime(cut.passes, tour, at, sphere);
-  buildPasses(problem, cut.passes, tour, gains(cut.passes, chosen.counted, counts, covered), plan);
+  const MeasuredCut measured = measuredCut(problem, part, pass_settings, index, classes, covered,
+                                           passes, chosen, cover, steps, report);
+  addTour(problem, measured, given, sphere, plan);
   steps.at(1.0);
   report.seconds = since(start);
   return plan;

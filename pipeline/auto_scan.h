@@ -26,7 +26,7 @@ struct AutoPass {
   std::string label;        ///< what it is ("spin elevation 25 deg, line at 40 mm")
   double start_time = 0.0;  ///< s of scanning before it (its place on the map's time axis)
   double duration = 0.0;    ///< s of scanning
-  double gain = 0.0;        ///< share of the counted area it newly covers, as planned
+  double gain = 0.0;        ///< share of the counted area it newly covers, as measured
 };
 
 /// What the automatic planner did.
@@ -54,11 +54,19 @@ struct AutoScanReport {
   double cover_bound = 0.0;
   std::string cover_status;
   double cover_seconds = 0.0;
-  /// The chosen passes cut to what the others do not cover (scanner::cutToCover): the scanning
-  /// time left out, s; the passes left out whole; the extra pieces of passes split in two.
+  /// The chosen passes, as the scanner will measure them (scanner::measurePass), cut to what the
+  /// others do not cover (scanner::cutToCover): the scanning time left out, s; the passes left
+  /// out whole; the extra pieces of passes split in two.
   double cut_time = 0.0;
   std::size_t cut_dropped = 0;
   std::size_t cut_split = 0;
+  /// Then pieces left out while the measured coverage stays at the target (scanner::pruneToGoal):
+  /// how many, and their scanning time, s.
+  std::size_t pruned = 0;
+  double pruned_time = 0.0;
+  /// Of the counting area (the simulation's area samples), the share the passes kept measure:
+  /// the coverage the simulated cloud is expected to have.
+  double measured_fraction = 0.0;
   std::size_t aimed = 0;  ///< of the candidates, aimed at surfaces the others miss
   /// The certificate before simulation: the evaluation samples (part frame P) and why each can
   /// or cannot be scanned (kOutOfReach: every pass that sees it was refused by the reach check).

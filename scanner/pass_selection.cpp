@@ -142,6 +142,49 @@ CutPasses cutToCover(const std::vector<ScanPass>& passes,
   return out;
 }
 
+std::vector<std::size_t> pruneToGoal(const std::vector<ScanPass>& passes,
+                                     const std::vector<double>& cost,
+                                     const std::vector<std::uint8_t>& counts,
+                                     double goal) {
+  std::vector<std::uint32_t> mult(counts.size(), 0);  // kept passes covering each sample
+  for (const ScanPass& pass : passes)
+    for (const std::uint32_t i : pass.covers) mult[i] += counts[i] ? 1u : 0u;
+  std::size_t counted = 0, have = 0;
+  for (std::size_t i = 0; i < counts.size(); ++i) {
+    counted += counts[i] ? 1u : 0u;
+    have += (counts[i] && mult[i] > 0) ? 1u : 0u;
+  }
+  const auto need = static_cast<std::size_t>(std::ceil(goal * static_cast<double>(counted) - 1e-9));
+  std::vector<std::uint8_t> kept(passes.size(), 1);
+  const auto own = [&](std::size_t p) {
+    std::size_t n = 0;
+    for (const std::uint32_t i : passes[p].covers) n += (counts[i] && mult[i] == 1) ? 1u : 0u;
+    return n;
+  };
+  while (true) {
+    // The pass whose own samples cost the least coverage per second it takes.
+    std::size_t best = passes.size(), best_own = 0;
+    for (std::size_t p = 0; p < passes.size(); ++p) {
+      if (!kept[p] || !(cost[p] > 0.0)) continue;
+      const std::size_t n = own(p);
+      if (have < need + n) continue;
+      if (best == passes.size() ||
+          static_cast<double>(n) * cost[best] < static_cast<double>(best_own) * cost[p]) {
+        best = p;
+        best_own = n;
+      }
+    }
+    if (best == passes.size()) break;
+    kept[best] = 0;
+    for (const std::uint32_t i : passes[best].covers)
+      if (counts[i] && --mult[i] == 0) --have;
+  }
+  std::vector<std::size_t> out;
+  for (std::size_t p = 0; p < passes.size(); ++p)
+    if (kept[p]) out.push_back(p);
+  return out;
+}
+
 CoverResult greedyCover(const std::vector<ScanPass>& passes,
                         const std::vector<std::uint8_t>& counts,
                         std::vector<std::uint8_t> covered,

@@ -70,6 +70,16 @@ CutPasses cutToCover(const std::vector<ScanPass>& passes,
                      double split_gap,
                      double pad = 0.0);
 
+/// The passes kept when whole passes are left out while at least `goal` (a fraction) of the
+/// counting samples (`counts`) stay covered: each time the pass whose own samples (those no other
+/// kept pass covers) are fewest per second of its `cost` (s, > 0; a pass of no cost is kept), ties
+/// to the first. For a selection that covers more than it needs: the tail of a cover judged on
+/// finer samples than it was chosen on. Indices ascending. Deterministic.
+std::vector<std::size_t> pruneToGoal(const std::vector<ScanPass>& passes,
+                                     const std::vector<double>& cost,
+                                     const std::vector<std::uint8_t>& counts,
+                                     double goal);
+
 /// The safe sphere the connecting moves run on (R frame): no part of the head inside it can
 /// touch the part.
 struct TransferSphere {

@@ -573,6 +573,15 @@ void SampleIndex::near(const Eigen::Vector3d& p,
   }
 }
 
+void SampleIndex::within(const Eigen::Vector3d& p,
+                         double radius,
+                         std::vector<std::uint32_t>& out) const {
+  std::vector<std::pair<std::uint32_t, double>> found;
+  tree_->index.radiusSearch(p.data(), radius * radius, found,
+                            nanoflann::SearchParams(32, 0.f, false));
+  for (const auto& [i, d2] : found) out.push_back(i);
+}
+
 std::uint32_t SampleIndex::nearest(const Eigen::Vector3d& p) const {
   std::uint32_t index = 0;
   double d2 = 0.0;
@@ -582,13 +591,32 @@ std::uint32_t SampleIndex::nearest(const Eigen::Vector3d& p) const {
 
 namespace {
 
-// The measured points of one profile at head pose X (R frame), each with its winding normal.
+// Where time t falls on a pass (keys interpolated linearly in time, as it runs): the stretch
+// (from key k to key k + 1) and the share of it run; clamped to the pass. The search starts at
+// stretch `from` (times only grow).
+struct PassTime {
+  std::size_t stretch = 0;
+  double s = 0.0;
+};
+
+PassTime passTime(const ScanPass& pass, double t, std::size_t from = 0) {
+  std::size_t k = from;
+  while (k + 2 < pass.t.size() && pass.t[k + 1] < t) ++k;
+  const double span = pass.t[k + 1] - pass.t[k];
+  return {k, span > 0.0 ? std::clamp((t - pass.t[k]) / span, 0.0, 1.0) : 0.0};
+}
+
+// The measured points of one profile at head pose X (R frame), each with its winding normal. A
+// camera must see a point within max_incidence of its normal, or, with `camera_incidence` false,
+// merely from the front (as the scanner simulation has it).
 void profilePoints(const PartOnTable& scene,
                    const PassSettings& settings,
                    const std::vector<double>& fan,
                    const Eigen::Isometry3d& X,
-                   std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>& out) {
+                   std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>& out,
+                   bool camera_incidence = true) {
   const double cos_max = std::cos(settings.max_incidence);
+  const double cos_camera = camera_incidence ? cos_max : std::numeric_limits<double>::min();
   const auto& part = scene.part();
   for (const double alpha : fan) {
     const Eigen::Vector3d d_S(0.0, std::sin(alpha), std::cos(alpha));
@@ -605,7 +633,7 @@ void profilePoints(const PartOnTable& scene,
     const Eigen::Vector3d p = X.translation() + hit->distance * d;
     for (const Eigen::Vector3d& c_S : settings.cameras) {
       const Eigen::Vector3d c = X * c_S;
-      if (n.dot((c - p).normalized()) >= cos_max && scene.clear(p + 1e-5 * n, c)) {
+      if (n.dot((c - p).normalized()) >= cos_camera && scene.clear(p + 1e-5 * n, c)) {
         out.push_back({p, n});
         break;
       }
@@ -760,6 +788,52 @@ void evaluatePass(ScanPass& pass,
   if (timed) timePass(pass, settings, line_travel);
 }
 
+void measurePass(ScanPass& pass,
+                 const PartOnTable& scene,
+                 const PassSettings& settings,
+                 const SampleIndex& index,
+                 int rays,
+                 double radius) {
+  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> first(index.sampling().samples.size(), kNone);
+  std::vector<std::uint32_t> last(first.size(), 0);
+  pass.covers.clear();
+  pass.cover_first.clear();
+  pass.cover_last.clear();
+  if (pass.X_RS.size() < 2 || pass.t.size() != pass.X_RS.size() || !(settings.frame_rate > 0.0))
+    return;
+  const std::vector<double> fan = fanAngles(settings.window, rays);
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> points;
+  std::vector<std::uint32_t> near;
+  const double t0 = pass.t.front();
+  const auto profiles =
+      static_cast<std::size_t>(std::floor((pass.t.back() - t0) * settings.frame_rate + 1e-9)) + 1;
+  PassTime at;
+  for (std::size_t j = 0; j < profiles; ++j) {
+    at = passTime(pass, t0 + static_cast<double>(j) / settings.frame_rate, at.stretch);
+    const auto stretch = static_cast<std::uint32_t>(at.stretch);
+    points.clear();
+    profilePoints(
+        scene, settings, fan,
+        kinematics::interpolatePose(pass.X_RS[at.stretch], pass.X_RS[at.stretch + 1], at.s), points,
+        false);
+    for (const auto& point : points) {
+      near.clear();
+      index.within(point.first, radius, near);
+      for (std::uint32_t i : near) {
+        first[i] = std::min(first[i], stretch);
+        last[i] = std::max(last[i], stretch);
+      }
+    }
+  }
+  for (std::size_t i = 0; i < first.size(); ++i) {
+    if (first[i] == kNone) continue;
+    pass.covers.push_back(static_cast<std::uint32_t>(i));
+    pass.cover_first.push_back(first[i]);
+    pass.cover_last.push_back(last[i]);
+  }
+}
+
 void evaluatePasses(std::vector<ScanPass>& passes,
                     const PartOnTable& scene,
                     const PassSettings& settings,
@@ -788,12 +862,11 @@ ScanPass trimmedPass(const ScanPass& pass, std::size_t first, std::size_t last, 
   const bool spin = pass.azimuth.size() == pass.X_RS.size();
   // The pass at time t (keys interpolated linearly in time, as it runs) into out's keys.
   const auto add = [&](double t) {
-    std::size_t k = 0;
-    while (k + 2 < pass.t.size() && pass.t[k + 1] < t) ++k;
-    const double span = pass.t[k + 1] - pass.t[k];
-    const double s = span > 0.0 ? std::clamp((t - pass.t[k]) / span, 0.0, 1.0) : 0.0;
-    out.X_RS.push_back(kinematics::interpolatePose(pass.X_RS[k], pass.X_RS[k + 1], s));
-    if (spin) out.azimuth.push_back(pass.azimuth[k] + s * (pass.azimuth[k + 1] - pass.azimuth[k]));
+    const PassTime at = passTime(pass, t);
+    const std::size_t k = at.stretch;
+    out.X_RS.push_back(kinematics::interpolatePose(pass.X_RS[k], pass.X_RS[k + 1], at.s));
+    if (spin)
+      out.azimuth.push_back(pass.azimuth[k] + at.s * (pass.azimuth[k + 1] - pass.azimuth[k]));
     out.t.push_back(t);
   };
   const double from = std::max(pass.t.front(), pass.t[first] - std::max(pad, 0.0));

@@ -144,6 +144,8 @@ class SampleIndex {
             const Eigen::Vector3d& n,
             double radius,
             std::vector<std::uint32_t>& out) const;
+  /// Samples within `radius` of `p`, whatever their normals, appended to `out`.
+  void within(const Eigen::Vector3d& p, double radius, std::vector<std::uint32_t>& out) const;
   /// The sample nearest to `p`. Precondition: at least one sample.
   std::uint32_t nearest(const Eigen::Vector3d& p) const;
 
@@ -191,6 +193,22 @@ void evaluatePasses(std::vector<ScanPass>& passes,
                     const PassSettings& settings,
                     const SampleIndex& index,
                     const std::function<void(std::size_t, std::size_t)>& progress = {});
+
+/// Fills `pass.covers`, `cover_first` and `cover_last` with what the scanner measures as it runs
+/// the pass (keys and times unchanged): a profile every 1 / frame_rate s of the pass's time from
+/// its start (keys interpolated linearly in time), `rays` fan rays each, points as evaluatePass()
+/// finds them except that a camera need only see a point from its front (as the scanner
+/// simulation has it, scanner/simulator.h); a sample of `index` is covered when a point lies within
+/// `radius` of it (as the area coverage of a cloud counts it, scanner/area_coverage.h). A profile
+/// on stretch k (keys k to k + 1) counts for that stretch. With the whole fan and the simulation's
+/// area samples and radius, this is the coverage the simulated cloud will have, pass by pass,
+/// before any motion is planned. Deterministic.
+void measurePass(ScanPass& pass,
+                 const PartOnTable& scene,
+                 const PassSettings& settings,
+                 const SampleIndex& index,
+                 int rays,
+                 double radius);
 
 /// The pass turned about R's z by `angle` (rad): a spin started at another azimuth.
 ScanPass rotatedPass(const ScanPass& pass, double angle);

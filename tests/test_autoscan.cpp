@@ -226,6 +226,10 @@ TEST(AutoScan, ACubeOnTheTableIsCoveredExceptItsBottom) {
     if (p.part_triangle >= 0 && p.incidence <= deg(60.0)) points.push_back(p.p_P);
   const auto again = scanner::areaCoverage(sampling, points, sim.point_spacing);
   EXPECT_NEAR(again.covered_fraction, sim.area.covered_fraction, 0.01);
+  // The passes as measured before any motion was planned foretell the cloud's coverage.
+  ASSERT_TRUE(plan.certificate);
+  EXPECT_GE(report.measured_fraction, 0.98);
+  EXPECT_NEAR(report.measured_fraction, plan.certificate->covered_of_scannable, 0.005);
   std::filesystem::remove_all(dir);
 }
 

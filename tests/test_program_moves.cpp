@@ -63,8 +63,8 @@ class ProgramMoves : public ::testing::Test {
     dir_ = std::filesystem::temp_directory_path() /
            ("scanplan_test_program_moves_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir_);
-    problem_ =
-        std::make_unique<pipeline::ScanProblem>(boxProblem(writeBox(dir_ / "box.stl", 80, 60, 50)));
+    problem_ = std::make_unique<pipeline::ScanProblem>(
+        boxProblem(writeBox(dir_ / "box.stl", 100, 80, 70)));
     plan_ = std::make_unique<pipeline::ScanPlan>(pipeline::planScan(*problem_));
   }
   static void TearDownTestSuite() {

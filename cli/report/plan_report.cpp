@@ -175,6 +175,8 @@ Json autoScanJson(const pipeline::AutoScanReport& r) {
       {"transfer_estimate_s", r.transfer_time},
       {"cut",
        {{"scan_s", r.cut_time}, {"passes_left_out", r.cut_dropped}, {"passes_split", r.cut_split}}},
+      {"pruned", {{"passes", r.pruned}, {"scan_s", r.pruned_time}}},
+      {"measured_fraction", r.measured_fraction},
       {"seconds", r.seconds},
       {"set_cover",
        {{"greedy_s", r.greedy_cost},

@@ -66,8 +66,9 @@ std::string autoScanSummary(const pipeline::AutoScanReport& r) {
       100.0 * r.planned_fraction, r.counted, toMm(r.sample_spacing), r.stop);
   s += fmt::format(
       "           {:.1f} s scanning in the passes chosen, {:.1f} s cut from them ({} left out, {} "
-      "split){}\n",
-      r.scan_time, r.cut_time, r.cut_dropped, r.cut_split,
+      "split), {} more left out ({:.1f} s): {:.1f}% measured{}\n",
+      r.scan_time, r.cut_time, r.cut_dropped, r.cut_split, r.pruned, r.pruned_time,
+      100.0 * r.measured_fraction,
       r.unreachable.empty()
           ? std::string()
           : fmt::format("; {} candidates out of the arm's reach", r.unreachable.size()));
