@@ -32,7 +32,7 @@ using Clock = std::chrono::steady_clock;
 constexpr std::size_t kMaxSamples = 400'000;  // evaluation samples at most (memory, time)
 constexpr std::size_t kMaxAimed = 600;        // witnesses aimed at, at most
 constexpr double kTargetMargin = 0.01;        // planned coverage over the target (see below)
-constexpr double kMeasuredMargin = 0.001;     // measured coverage kept over the target
+constexpr double kMeasuredMargin = 0.0003;    // measured coverage kept over the target (below)
 constexpr double kMaxStations = 5e6;          // probed strip stations of the candidates
 // The set-cover programme's search (improveCover): nodes, model size, and a time limit that is
 // only a safety net (the node and size limits decide, so the answer does not depend on speed).
@@ -614,7 +614,11 @@ struct MeasuredCut {
 
 // The pieces left out whole (scanner::pruneToGoal, each costing its scanning and a typical
 // move) while the measured coverage of the counting fine samples, the given paths' included,
-// stays at the job's target and kMeasuredMargin. Fills the report's measured figures.
+// stays at the job's target and kMeasuredMargin. Fills the report's measured figures. The
+// simulated cloud has covered at least what was measured on every bench part (0.03–0.23 % more,
+// tests/bench/README.md): its passes run where they were measured, and its certificate counts as
+// scannable no area sample the measuring does not; the margin is for the profiles falling at
+// other instants and the joints interpolated between the trajectory's samples.
 std::vector<scanner::ScanPass> prunedPieces(const ScanProblem& problem,
                                             std::vector<scanner::ScanPass> pieces,
                                             const scanner::CoverSettings& cover,

@@ -14,7 +14,9 @@
 // The single-coverage bound: the covered area swept once at the requested spacing, covered area
 // / (line width at mid depth x point spacing x frame rate).
 // Coverage is measured by the simulation and recomputed independently here from the points
-// (another area sampling, its own nearest-point search); "delta" is the difference.
+// (another area sampling, its own nearest-point search); "delta" is the difference. "meas%" is
+// the coverage the automatic scan measured on its passes before any motion was planned
+// (AutoScanReport::measured_fraction), beside the cloud's "of_scan%".
 // Timing: cpu_s is the process's CPU time (both threads) of the whole pipeline for the part;
 // plan_s is the pipeline's own wall time of path, maps, plan and trajectory.
 #include <algorithm>
@@ -98,7 +100,7 @@ const std::map<std::string, double> kRecordedProgram{
 
 struct Row {
   std::string name, note;
-  double area_m2 = 0, scannable = 0, covered = 0, of_scannable = 0, delta = 0;
+  double area_m2 = 0, scannable = 0, covered = 0, of_scannable = 0, delta = 0, measured = 0;
   std::size_t passes = 0, dropped = 0;
   double program_s = 0, scanning_s = 0, moving_s = 0, bound_s = 0;
   double planning_s = 0, cpu_s = 0;
@@ -121,7 +123,10 @@ void fill(Row& r, const pipeline::ScanProblem& problem, const pipeline::ScanPlan
   r.status = std::string(pipeline::scanStatusName(plan.status));
   r.stages = plan.times;
   r.planning_s = plan.times.path + plan.times.map + plan.times.plan + plan.times.trajectory;
-  if (plan.prepared->auto_scan) r.passes = plan.order.empty() ? 0 : plan.order.size();
+  if (plan.prepared->auto_scan) {
+    r.passes = plan.order.empty() ? 0 : plan.order.size();
+    r.measured = plan.prepared->auto_scan->measured_fraction;
+  }
   r.dropped = plan.dropped.size();
   if (plan.trajectory) {
     r.program_s = plan.program.total;
@@ -162,17 +167,17 @@ Row run(const fs::path& job, const Part& part, const std::vector<std::string>& e
 }
 
 void printHeader() {
-  std::printf("%-24s %8s %8s %8s %6s %7s %6s %8s %8s %7s %7s %7s %5s %s\n", "part", "prog_s",
-              "scan_s", "move_s", "passes", "bound_s", "ratio", "of_scan%", "delta", "plan_s",
-              "cpu_s", "old_s", "valid", "note");
+  std::printf("%-24s %8s %8s %8s %6s %7s %6s %8s %7s %8s %7s %7s %7s %5s %s\n", "part", "prog_s",
+              "scan_s", "move_s", "passes", "bound_s", "ratio", "of_scan%", "meas%", "delta",
+              "plan_s", "cpu_s", "old_s", "valid", "note");
 }
 
 void print(const Row& r) {
   const auto old = kRecordedProgram.find(r.name);
   std::printf(
-      "%-24s %8.1f %8.1f %8.1f %6zu %7.1f %6.2f %8.1f %+8.2f %7.1f %7.1f %7s %5s %s\n",
+      "%-24s %8.1f %8.1f %8.1f %6zu %7.1f %6.2f %8.2f %7.2f %+8.2f %7.1f %7.1f %7s %5s %s\n",
       r.name.c_str(), r.program_s, r.scanning_s, r.moving_s, r.passes, r.bound_s, r.ratio(),
-      100 * r.of_scannable, 100 * r.delta, r.planning_s, r.cpu_s,
+      100 * r.of_scannable, 100 * r.measured, 100 * r.delta, r.planning_s, r.cpu_s,
       old == kRecordedProgram.end() ? "-" : std::to_string(std::lround(old->second)).c_str(),
       r.valid ? "yes" : "NO",
       r.status == "planned"
