@@ -60,6 +60,11 @@ struct AutoScanReport {
   double cut_time = 0.0;
   std::size_t cut_dropped = 0;
   std::size_t cut_split = 0;
+  /// Covers chosen again with a larger margin because the passes measured less than the target
+  /// (0: the first cover measured it), and whether the last of them, measuring the target,
+  /// replaced the first (else the first stands).
+  std::size_t rechosen = 0;
+  bool rechosen_kept = false;
   /// Then pieces left out while the measured coverage stays at the target (scanner::pruneToGoal):
   /// how many, and their scanning time, s.
   std::size_t pruned = 0;

@@ -93,6 +93,18 @@ TEST_P(AutoScanMatrix, EverySettingPlansAValidProgramOrSaysWhy) {
     EXPECT_LE(plan.dropped.size(), plan.order.size() / 10 + 1);
     EXPECT_GT(plan.program.scanning, 0.0);
     EXPECT_NEAR(plan.program.scanning + plan.program.moving, plan.program.total, 1e-9);
+    // The passes measure the target, or every larger margin was tried and none measured it
+    // (then the first cover stands); and the cloud covers what was measured, but for a sliver.
+    const pipeline::AutoScanReport& r = *plan.prepared->auto_scan;
+    if (r.measured_fraction < p.auto_scan->target_coverage) {
+      EXPECT_EQ(r.rechosen, 2u);
+      EXPECT_FALSE(r.rechosen_kept);
+    }
+    if (r.rechosen_kept) {
+      EXPECT_GE(r.measured_fraction, p.auto_scan->target_coverage);
+    }
+    ASSERT_TRUE(plan.certificate);
+    EXPECT_GE(plan.certificate->covered_of_scannable, r.measured_fraction - 0.003);
   }
   fs::remove_all(dir);
 }

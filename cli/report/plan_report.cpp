@@ -176,6 +176,7 @@ Json autoScanJson(const pipeline::AutoScanReport& r) {
       {"cut",
        {{"scan_s", r.cut_time}, {"passes_left_out", r.cut_dropped}, {"passes_split", r.cut_split}}},
       {"pruned", {{"passes", r.pruned}, {"scan_s", r.pruned_time}}},
+      {"covers_chosen_again", {{"tried", r.rechosen}, {"kept", r.rechosen_kept}}},
       {"measured_fraction", r.measured_fraction},
       {"seconds", r.seconds},
       {"set_cover",

@@ -66,9 +66,14 @@ std::string autoScanSummary(const pipeline::AutoScanReport& r) {
       100.0 * r.planned_fraction, r.counted, toMm(r.sample_spacing), r.stop);
   s += fmt::format(
       "           {:.1f} s scanning in the passes chosen, {:.1f} s cut from them ({} left out, {} "
-      "split), {} more left out ({:.1f} s): {:.1f}% measured{}\n",
+      "split), {} more left out ({:.1f} s): {:.1f}% measured{}{}\n",
       r.scan_time, r.cut_time, r.cut_dropped, r.cut_split, r.pruned, r.pruned_time,
       100.0 * r.measured_fraction,
+      r.rechosen == 0 ? std::string()
+      : r.rechosen_kept
+          ? fmt::format(" (the cover chosen again for a {}larger margin)",
+                        r.rechosen > 1 ? "still " : "")
+          : fmt::format(" ({} larger margins tried: none measures the target)", r.rechosen),
       r.unreachable.empty()
           ? std::string()
           : fmt::format("; {} candidates out of the arm's reach", r.unreachable.size()));
