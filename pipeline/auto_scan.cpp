@@ -647,12 +647,13 @@ std::vector<scanner::ScanPass> prunedPieces(const ScanProblem& problem,
   const std::vector<std::size_t> kept = scanner::pruneToGoal(pieces, cost, open, open_goal);
   std::vector<scanner::ScanPass> out;
   std::vector<std::uint8_t> seen = m.given;
+  report.pruned_time = 0.0;
+  for (const scanner::ScanPass& p : pieces) report.pruned_time += p.duration();
   for (const std::size_t k : kept) {
     for (const std::uint32_t i : pieces[k].covers) seen[i] = 1;
+    report.pruned_time -= pieces[k].duration();
     out.push_back(std::move(pieces[k]));
   }
-  for (const scanner::ScanPass& p : pieces)
-    if (!p.X_RS.empty()) report.pruned_time += p.duration();  // the moved-from are empty
   report.pruned = pieces.size() - out.size();
   std::size_t have = 0;
   for (std::size_t i = 0; i < seen.size(); ++i) have += (m.counts[i] && seen[i]) ? 1u : 0u;
