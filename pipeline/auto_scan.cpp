@@ -17,6 +17,7 @@
 #include <scanplan/kinematics/units.h>
 #include <scanplan/pipeline/cancel.h>
 #include <scanplan/pipeline/program_moves.h>
+#include <scanplan/pipeline/simulation.h>
 #include <scanplan/planner/config_map.h>
 #include <scanplan/scanner/pass_selection.h>
 #include <scanplan/scanner/scan_passes.h>
@@ -595,11 +596,7 @@ std::vector<std::uint8_t> givenCoverage(const kinematics::ScanPath& given,
 
 // The radius the simulated cloud's area coverage is measured with, m (pipeline/simulation.cpp).
 double coverageRadius(const ScanProblem& p, const scanner::PassSettings& pass) {
-  if (!p.simulation) return pass.point_spacing;
-  if (p.simulation->point_spacing > 0.0) return p.simulation->point_spacing;
-  AutoScanSettings pitch;
-  pitch.point_spacing = 0.0;
-  return autoPointSpacing(pitch, p.optics, raysPerProfile(p));
+  return p.simulation ? coverageSpacing(*p.simulation, p.optics) : pass.point_spacing;
 }
 
 // The chosen passes as the scanner will measure them (scanner::measurePass: every profile, the

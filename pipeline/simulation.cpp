@@ -59,6 +59,11 @@ std::vector<std::pair<std::uint32_t, scanner::ProfileImage>> profileImages(
 
 }  // namespace
 
+double coverageSpacing(const SimulationSettings& settings, const scanner::LaserOptics& optics) {
+  return settings.point_spacing > 0.0 ? settings.point_spacing
+                                      : midDepthPitch(optics, settings.scanner.rays_per_profile);
+}
+
 SimulationRun simulateTrajectory(const kinematics::CellModel& cell,
                                  const kinematics::TriangleMesh& part,
                                  const scanner::LaserOptics& optics,
@@ -79,9 +84,7 @@ SimulationRun simulateTrajectory(const kinematics::CellModel& cell,
   pollCancel(cancel);
   run.profile_images = profileImages(simulator, frames, run.cloud, optics, settings);
   run.coverage = scanner::computeCoverage(part, run.cloud.points, settings.coverage);
-  run.point_spacing = settings.point_spacing > 0.0
-                          ? settings.point_spacing
-                          : midDepthPitch(optics, settings.scanner.rays_per_profile);
+  run.point_spacing = coverageSpacing(settings, optics);
   run.sampling = scanner::sampleArea(part, 2.0 * run.point_spacing, settings.max_area_samples);
   const scanner::AreaSampling& sampling = run.sampling;
   // A point counts when it lies on the part and the laser met the surface within the limit.

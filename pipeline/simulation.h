@@ -34,6 +34,10 @@ struct SimulationRun {
   double seconds = 0.0;
 };
 
+/// m, the radius an area sample is covered within (SimulationRun::point_spacing): the settings'
+/// point spacing, or the line's point pitch at the middle of the depth window.
+double coverageSpacing(const SimulationSettings& settings, const scanner::LaserOptics& optics);
+
 /// The scanner simulated along `trajectory`: a profile every 1/frame_rate_hz s while the path
 /// scans, with the settings' fan, cameras, noise and real-table error; the coverage per triangle
 /// and on area (the points on the part against area samples, scanner/area_coverage.h). Polls

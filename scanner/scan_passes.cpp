@@ -606,6 +606,23 @@ PassTime passTime(const ScanPass& pass, double t, std::size_t from = 0) {
   return {k, span > 0.0 ? std::clamp((t - pass.t[k]) / span, 0.0, 1.0) : 0.0};
 }
 
+constexpr std::uint32_t kNoStretch = std::numeric_limits<std::uint32_t>::max();
+
+// The pass's covers from per-sample first and last covering stretches (kNoStretch: not covered).
+void setCovers(ScanPass& pass,
+               const std::vector<std::uint32_t>& first,
+               const std::vector<std::uint32_t>& last) {
+  pass.covers.clear();
+  pass.cover_first.clear();
+  pass.cover_last.clear();
+  for (std::size_t i = 0; i < first.size(); ++i) {
+    if (first[i] == kNoStretch) continue;
+    pass.covers.push_back(static_cast<std::uint32_t>(i));
+    pass.cover_first.push_back(first[i]);
+    pass.cover_last.push_back(last[i]);
+  }
+}
+
 // The measured points of one profile at head pose X (R frame), each with its winding normal. A
 // camera must see a point within max_incidence of its normal, or, with `camera_incidence` false,
 // merely from the front (as the scanner simulation has it).
@@ -724,9 +741,8 @@ void evaluatePass(ScanPass& pass,
                   const PassSettings& settings,
                   const SampleIndex& index) {
   const std::vector<double> fan = fanAngles(settings.window, settings.eval_rays);
-  // Per sample, the first and last stretch whose profiles cover it (kNone: none).
-  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
-  std::vector<std::uint32_t> first(index.sampling().samples.size(), kNone);
+  // Per sample, the first and last stretch whose profiles cover it (kNoStretch: none).
+  std::vector<std::uint32_t> first(index.sampling().samples.size(), kNoStretch);
   std::vector<std::uint32_t> last(first.size(), 0);
   std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> points;
   std::vector<std::uint32_t> near;
@@ -776,15 +792,7 @@ void evaluatePass(ScanPass& pass,
     }
     before_inv = a_inv;
   }
-  pass.covers.clear();
-  pass.cover_first.clear();
-  pass.cover_last.clear();
-  for (std::size_t i = 0; i < first.size(); ++i) {
-    if (first[i] == kNone) continue;
-    pass.covers.push_back(static_cast<std::uint32_t>(i));
-    pass.cover_first.push_back(first[i]);
-    pass.cover_last.push_back(last[i]);
-  }
+  setCovers(pass, first, last);
   if (timed) timePass(pass, settings, line_travel);
 }
 
@@ -794,12 +802,9 @@ void measurePass(ScanPass& pass,
                  const SampleIndex& index,
                  int rays,
                  double radius) {
-  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
-  std::vector<std::uint32_t> first(index.sampling().samples.size(), kNone);
+  std::vector<std::uint32_t> first(index.sampling().samples.size(), kNoStretch);
   std::vector<std::uint32_t> last(first.size(), 0);
-  pass.covers.clear();
-  pass.cover_first.clear();
-  pass.cover_last.clear();
+  setCovers(pass, {}, {});
   if (pass.X_RS.size() < 2 || pass.t.size() != pass.X_RS.size() || !(settings.frame_rate > 0.0))
     return;
   const std::vector<double> fan = fanAngles(settings.window, rays);
@@ -826,12 +831,7 @@ void measurePass(ScanPass& pass,
       }
     }
   }
-  for (std::size_t i = 0; i < first.size(); ++i) {
-    if (first[i] == kNone) continue;
-    pass.covers.push_back(static_cast<std::uint32_t>(i));
-    pass.cover_first.push_back(first[i]);
-    pass.cover_last.push_back(last[i]);
-  }
+  setCovers(pass, first, last);
 }
 
 void evaluatePasses(std::vector<ScanPass>& passes,
