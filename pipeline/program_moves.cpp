@@ -4,7 +4,9 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <optional>
+#include <unordered_map>
 
 #include <fmt/format.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -410,6 +412,58 @@ Move planMove(const collision::Scene& scene,
   return m;
 }
 
+// A move's ends and speeds, all seven axes of each: what planMove() depends on besides the cell
+// and the settings (the poses' X_PS follow from the axes).
+using MoveKey = std::array<double, 4 * kinematics::kNumAxes>;
+MoveKey moveKey(const TrajectorySample& a,
+                const TrajectorySample& b,
+                const AxisVector& v_a,
+                const AxisVector& v_b) {
+  MoveKey k;
+  const AxisVector xa = axesOf(a), xb = axesOf(b);
+  for (int j = 0; j < kinematics::kNumAxes; ++j) {
+    const auto at = [&](int block) {
+      return static_cast<std::size_t>(block * kinematics::kNumAxes + j);
+    };
+    k[at(0)] = xa(j);
+    k[at(1)] = xb(j);
+    k[at(2)] = v_a(j);
+    k[at(3)] = v_b(j);
+  }
+  return k;
+}
+
+}  // namespace
+
+struct MoveCache::Impl {
+  std::map<MoveKey, Move> moves;
+};
+MoveCache::MoveCache() : impl_(std::make_unique<Impl>()) {}
+MoveCache::~MoveCache() = default;
+std::size_t MoveCache::size() const { return impl_->moves.size(); }
+
+namespace {
+
+// planMove() through the cache, when there is one (its times count from a cached move's own
+// `from`: appendRun() moves them).
+Move cachedMove(const collision::Scene& scene,
+                collision::ClearanceEvaluator& clearance,
+                const kinematics::AxisLimits& limits,
+                const AxisVector& levers,
+                const TrajectorySample& a,
+                const TrajectorySample& b,
+                const AxisVector& v_a,
+                const AxisVector& v_b,
+                const MoveSettings& settings) {
+  if (!settings.cache) return planMove(scene, clearance, limits, levers, a, b, v_a, v_b, settings);
+  auto& moves = settings.cache->impl().moves;
+  const MoveKey key = moveKey(a, b, v_a, v_b);
+  if (const auto it = moves.find(key); it != moves.end()) return it->second;
+  Move m = planMove(scene, clearance, limits, levers, a, b, v_a, v_b, settings);
+  moves.emplace(key, m);
+  return m;
+}
+
 // Segment i's samples after the program so far, moved to start at t0.
 void appendSegment(const Trajectory& seg, double t0, std::vector<TrajectorySample>& samples) {
   const double s0 = seg.samples.front().t;
@@ -422,9 +476,14 @@ void appendSegment(const Trajectory& seg, double t0, std::vector<TrajectorySampl
 // A checked move and then segment i after it, at the end of the program. The move ends on the
 // segment's first pose: the segment's samples follow its last step. (Nothing to move: the segment
 // starts one step later, where the last one ended.)
-void appendRun(
-    Move move, const Trajectory& seg, std::size_t i, double max_step, JoinedProgram& out) {
+void appendRun(Move move,
+               const Trajectory& seg,
+               std::size_t from,
+               std::size_t i,
+               double max_step,
+               JoinedProgram& out) {
   auto& samples = out.trajectory.samples;
+  const double end = samples.back().t;
   ++out.times.moves;
   out.times.detours += move.detour ? 1u : 0u;
   out.times.moving_by_axis += move.by_axis;
@@ -433,6 +492,7 @@ void appendRun(
   const double t0 = m.empty() ? samples.back().t + max_step : m.back().t;
   samples.insert(samples.end(), m.begin(), m.empty() ? m.end() : m.end() - 1);
   out.start_times[i] = t0;
+  out.made.push_back({from, i, t0 - end});
   appendSegment(seg, t0, samples);
 }
 
@@ -443,6 +503,7 @@ void appendDeferred(const collision::Scene& scene,
                     const kinematics::AxisLimits& limits,
                     const AxisVector& levers,
                     const std::vector<Trajectory>& segments,
+                    std::size_t from,
                     std::size_t i,
                     const MoveSettings& settings,
                     JoinedProgram& out) {
@@ -451,10 +512,10 @@ void appendDeferred(const collision::Scene& scene,
   for (const bool backwards : {false, true}) {
     const Trajectory seg = unwound(cell, backwards ? reversedSegment(segments[i]) : segments[i],
                                    axesOf(samples.back()));
-    Move move = planMove(scene, clearance, limits, levers, samples.back(), seg.samples.front(),
-                         endSpeed(out.trajectory), startSpeed(seg), settings);
+    Move move = cachedMove(scene, clearance, limits, levers, samples.back(), seg.samples.front(),
+                           endSpeed(out.trajectory), startSpeed(seg), settings);
     if (!move.samples) continue;
-    appendRun(std::move(move), seg, i, settings.max_step, out);
+    appendRun(std::move(move), seg, from, i, settings.max_step, out);
     out.flipped[i] = backwards ? 1 : 0;
     return;
   }
@@ -462,6 +523,38 @@ void appendDeferred(const collision::Scene& scene,
       i,
       "no collision-free point-to-point move reaches it, from the pass before or from the end of "
       "the program, either way round: direct, backed off along the laser or via above the part");
+}
+
+// The moves between neighbouring segments, planned in parallel (those in the cache taken from
+// it, the new ones added to it).
+std::vector<Move> neighbourMoves(const collision::Scene& scene,
+                                 const kinematics::AxisLimits& limits,
+                                 const AxisVector& levers,
+                                 const std::vector<Trajectory>& unwrapped,
+                                 const MoveSettings& settings) {
+  std::vector<Move> moves(unwrapped.size());
+  std::vector<std::optional<MoveKey>> keys(unwrapped.size());  // of the moves planned anew
+  tbb::enumerable_thread_specific<collision::ClearanceEvaluator> evaluators(std::cref(scene));
+  tbb::parallel_for(std::size_t{1}, unwrapped.size(), [&](std::size_t i) {
+    const Trajectory &a = unwrapped[i - 1], &b = unwrapped[i];
+    if (a.samples.empty() || b.samples.empty()) return;
+    const TrajectorySample &from = a.samples.back(), &to = b.samples.front();
+    if (settings.cache) {
+      // Read only here: the new moves are added after the loop.
+      const auto& cached = settings.cache->impl().moves;
+      keys[i] = moveKey(from, to, endSpeed(a), startSpeed(b));
+      if (const auto it = cached.find(*keys[i]); it != cached.end()) {
+        moves[i] = it->second;
+        keys[i].reset();
+        return;
+      }
+    }
+    moves[i] = planMove(scene, evaluators.local(), limits, levers, from, to, endSpeed(a),
+                        startSpeed(b), settings);
+  });
+  for (std::size_t i = 1; i < unwrapped.size(); ++i)
+    if (keys[i]) settings.cache->impl().moves.emplace(*keys[i], moves[i]);
+  return moves;
 }
 
 }  // namespace
@@ -497,14 +590,7 @@ JoinedProgram joinSegments(const collision::Scene& scene,
                        ? segments[i]
                        : unwound(cell, segments[i], axesOf(unwrapped[i - 1].samples.back()));
   }
-  std::vector<Move> moves(segments.size());
-  tbb::enumerable_thread_specific<collision::ClearanceEvaluator> evaluators(std::cref(scene));
-  tbb::parallel_for(std::size_t{1}, segments.size(), [&](std::size_t i) {
-    const Trajectory &a = unwrapped[i - 1], &b = unwrapped[i];
-    if (a.samples.empty() || b.samples.empty()) return;
-    moves[i] = planMove(scene, evaluators.local(), limits, levers, a.samples.back(),
-                        b.samples.front(), endSpeed(a), startSpeed(b), settings);
-  });
+  std::vector<Move> moves = neighbourMoves(scene, limits, levers, unwrapped, settings);
   collision::ClearanceEvaluator clearance(scene);
   auto& samples = out.trajectory.samples;
   std::vector<std::size_t> deferred;  // segments no move reaches from the one before
@@ -523,8 +609,8 @@ JoinedProgram joinSegments(const collision::Scene& scene,
     if (last + 1 != i || !in_step) {
       // After a dropped segment: unwound and planned again from where the program ends.
       seg = unwound(cell, segments[i], axesOf(samples.back()));
-      move = planMove(scene, clearance, limits, levers, samples.back(), seg.samples.front(),
-                      endSpeed(out.trajectory), startSpeed(seg), settings);
+      move = cachedMove(scene, clearance, limits, levers, samples.back(), seg.samples.front(),
+                        endSpeed(out.trajectory), startSpeed(seg), settings);
     }
     // The next precomputed move starts from unwrapped[i]: usable only if that is what runs.
     in_step = axesOf(seg.samples.back()) == axesOf(unwrapped[i].samples.back());
@@ -532,11 +618,13 @@ JoinedProgram joinSegments(const collision::Scene& scene,
       deferred.push_back(i);
       continue;
     }
-    appendRun(std::move(move), seg, i, settings.max_step, out);
+    appendRun(std::move(move), seg, last, i, settings.max_step, out);
     last = i;
   }
-  for (const std::size_t i : deferred)
-    appendDeferred(scene, clearance, limits, levers, segments, i, settings, out);
+  for (const std::size_t i : deferred) {
+    appendDeferred(scene, clearance, limits, levers, segments, last, i, settings, out);
+    if (!std::isnan(out.start_times[i])) last = i;
+  }
   const ProgramTimes split = programTimes(out.trajectory);
   out.times.total = split.total;
   out.times.scanning = split.scanning;
@@ -581,19 +669,42 @@ class MoveCosts {
     ends_.push_back({endsOf(from, false), endsOf(from, true)});
     ends_.push_back({endsOf(to, false), endsOf(to, true)});
   }
+  // The moves in `known` costed at their measured time, either way round.
+  // Every other move costs its estimate plus what the known ones took beyond theirs on average
+  // (the moves that had to back off): a move not yet made may have to as well.
+  void setKnown(const std::vector<KnownMove>& known) {
+    double beyond = 0.0;
+    std::size_t moves = 0;
+    for (const KnownMove& m : known) {
+      const std::size_t k = key(m.from, m.from_reversed, m.to, m.to_reversed);
+      if (known_.count(k)) continue;  // made more than once: counted once
+      beyond += m.duration - (*this)(m.from, m.from_reversed, m.to, m.to_reversed);
+      ++moves;
+      known_[k] = m.duration;
+      known_[key(m.to, !m.to_reversed, m.from, !m.from_reversed)] = m.duration;
+    }
+    if (moves > 0) unknown_extra_ = std::max(0.0, beyond / static_cast<double>(moves));
+  }
   // From the end of (i, ri) to the start of (j, rj), s.
   double operator()(std::size_t i, bool ri, std::size_t j, bool rj) const {
+    if (!known_.empty())
+      if (const auto it = known_.find(key(i, ri, j, rj)); it != known_.end()) return it->second;
     const SegmentEnds& a = ends_[i][ri ? 1 : 0];
     const SegmentEnds& b = ends_[j][rj ? 1 : 0];
     kinematics::AxisVector to = b.in;
     if (continuous_) to(0) = a.out(0) + std::remainder(b.in(0) - a.out(0), kTwoPi);
-    return kinematics::ptpDuration(a.out, to, a.v_out, b.v_in, limits_);
+    return kinematics::ptpDuration(a.out, to, a.v_out, b.v_in, limits_) + unknown_extra_;
   }
 
  private:
+  std::size_t key(std::size_t i, bool ri, std::size_t j, bool rj) const {
+    return ((i * ends_.size() + j) << 2) | (ri ? 2u : 0u) | (rj ? 1u : 0u);
+  }
   bool continuous_;
   kinematics::AxisLimits limits_;
   std::vector<std::array<SegmentEnds, 2>> ends_;
+  std::unordered_map<std::size_t, double> known_;
+  double unknown_extra_ = 0.0;  // s
 };
 
 double tourCost(const MoveCosts& cost, const SegmentOrder& o) {
@@ -674,12 +785,109 @@ void twoOpt(const MoveCosts& cost, std::size_t fixed, SegmentOrder& o) {
   }
 }
 
+// The gain of taking the chain first … first+len−1 out of the tour (its own moves stay).
+double chainOutGain(const MoveCosts& cost,
+                    const SegmentOrder& o,
+                    std::size_t first,
+                    std::size_t len) {
+  const std::size_t n = o.order.size(), last = first + len - 1;
+  const auto c = [&](std::size_t a, std::size_t b) {
+    return cost(o.order[a], o.reversed[a] != 0, o.order[b], o.reversed[b] != 0);
+  };
+  double gain = 0.0;
+  if (first > 0) gain += c(first - 1, first);
+  if (last + 1 < n) gain += c(last, last + 1);
+  if (first > 0 && last + 1 < n) gain -= c(first - 1, last + 1);
+  return gain;
+}
+
+// Moves the chain first … first+len−1 into the gap before position `gap` (n: the end), reversed
+// as a whole when `flip`. The gap lies outside first … first+len.
+void moveChain(SegmentOrder& o, std::size_t first, std::size_t len, std::size_t gap, bool flip) {
+  const auto at = [](std::size_t k) { return static_cast<std::ptrdiff_t>(k); };
+  const auto shift = [&](auto& v) {
+    if (flip) std::reverse(v.begin() + at(first), v.begin() + at(first + len));
+    if (gap < first)
+      std::rotate(v.begin() + at(gap), v.begin() + at(first), v.begin() + at(first + len));
+    else
+      std::rotate(v.begin() + at(first), v.begin() + at(first + len), v.begin() + at(gap));
+  };
+  if (flip)
+    for (std::size_t k = first; k < first + len; ++k) o.reversed[k] ^= 1;
+  shift(o.order);
+  shift(o.reversed);
+}
+
+// What putting the chain head … tail (run as `rh`, `rt`) into the gap before position `gap` adds
+// to the tour (n: the end).
+double chainInCost(const MoveCosts& cost,
+                   const SegmentOrder& o,
+                   std::size_t gap,
+                   std::size_t head,
+                   bool rh,
+                   std::size_t tail,
+                   bool rt) {
+  const std::size_t n = o.order.size();
+  double in = 0.0;
+  if (gap > 0) in += cost(o.order[gap - 1], o.reversed[gap - 1] != 0, o.order[head], rh);
+  if (gap < n) in += cost(o.order[tail], rt, o.order[gap], o.reversed[gap] != 0);
+  if (gap > 0 && gap < n)
+    in -= cost(o.order[gap - 1], o.reversed[gap - 1] != 0, o.order[gap], o.reversed[gap] != 0);
+  return in;
+}
+
+// Or-opt: a chain of 1 to 3 segments moved elsewhere in the tour (after the fixed head), either
+// way round, where that shortens it. Until no such move does, or 50 sweeps.
+void orOpt(const MoveCosts& cost, std::size_t fixed, SegmentOrder& o) {
+  const std::size_t n = o.order.size();
+  for (int sweep = 0; sweep < 50; ++sweep) {
+    bool improved = false;
+    for (std::size_t len = 1; len <= 3; ++len)
+      for (std::size_t first = fixed; first + len <= n; ++first) {
+        const std::size_t last = first + len - 1;
+        const double out = chainOutGain(cost, o, first, len);
+        double best = 1e-9;
+        std::size_t best_gap = n + 1;
+        bool best_flip = false;
+        for (std::size_t gap = fixed; gap <= n; ++gap) {
+          if (gap >= first && gap <= last + 1) continue;
+          for (const bool flip : {false, true}) {
+            const std::size_t head = flip ? last : first, tail = flip ? first : last;
+            const bool rh = (o.reversed[head] != 0) != flip, rt = (o.reversed[tail] != 0) != flip;
+            const double gain = out - chainInCost(cost, o, gap, head, rh, tail, rt);
+            if (gain > best) {
+              best = gain;
+              best_gap = gap;
+              best_flip = flip;
+            }
+          }
+        }
+        if (best_gap > n) continue;
+        moveChain(o, first, len, best_gap, best_flip);
+        improved = true;
+      }
+    if (!improved) break;
+  }
+}
+
+// 2-opt and Or-opt in turn: each changes the tour only where that shortens it, so until a
+// round of both changes nothing, the tour then a local optimum of each.
+void localSearch(const MoveCosts& cost, std::size_t fixed, SegmentOrder& o) {
+  for (int round = 0; round < 20; ++round) {
+    const double before = tourCost(cost, o);
+    twoOpt(cost, fixed, o);
+    orOpt(cost, fixed, o);
+    if (!(tourCost(cost, o) < before - 1e-9)) break;
+  }
+}
+
 }  // namespace
 
 SegmentOrder orderSegments(const kinematics::CellModel& cell,
                            const std::vector<kinematics::Trajectory>& segments,
                            std::size_t fixed,
-                           const MoveSettings& settings) {
+                           const MoveSettings& settings,
+                           bool or_opt) {
   const std::size_t n = segments.size();
   fixed = std::min(fixed, n);
   if (n == 0) return {};
@@ -697,8 +905,24 @@ SegmentOrder orderSegments(const kinematics::CellModel& cell,
     }
     if (free == 0) break;
   }
-  twoOpt(cost, fixed, best);
+  if (or_opt)
+    localSearch(cost, fixed, best);
+  else
+    twoOpt(cost, fixed, best);
   return best;
+}
+
+SegmentOrder reorderSegments(const kinematics::CellModel& cell,
+                             const std::vector<kinematics::Trajectory>& segments,
+                             std::size_t fixed,
+                             const SegmentOrder& start,
+                             const std::vector<KnownMove>& known,
+                             const MoveSettings& settings) {
+  MoveCosts cost(cell, segments, settings);
+  cost.setKnown(known);
+  SegmentOrder o = start;
+  localSearch(cost, std::min(fixed, segments.size()), o);
+  return o;
 }
 
 double moveCost(const kinematics::CellModel& cell,

@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -20,6 +21,23 @@
 #include <scanplan/kinematics/trajectory.h>
 
 namespace scanplan::pipeline {
+
+/// Moves joinSegments() planned, for later joins of the same scene with the same settings: a
+/// move whose both ends (every axis) and speeds there are the same is taken from here, so a join
+/// of the same passes in another order plans only the moves that are new. One join at a time.
+class MoveCache {
+ public:
+  MoveCache();
+  ~MoveCache();
+  MoveCache(const MoveCache&) = delete;
+  MoveCache& operator=(const MoveCache&) = delete;
+  std::size_t size() const;
+  struct Impl;
+  Impl& impl() { return *impl_; }
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
 
 /// How the moves are made.
 struct MoveSettings {
@@ -48,6 +66,8 @@ struct MoveSettings {
   /// Polled at every leg of every move tried: once set, joinSegments() throws Cancelled
   /// (pipeline/cancel.h). nullptr: never.
   const std::atomic<bool>* cancel = nullptr;
+  /// Moves planned before, reused (and the new ones added). nullptr: none.
+  MoveCache* cache = nullptr;
 };
 
 /// The program's time split.
@@ -76,12 +96,28 @@ struct JoinedProgram {
   std::vector<double> start_times;
   /// Per input segment: 1 when it runs backwards (put off to the end and reached that way).
   std::vector<std::uint8_t> flipped;
+  /// The moves as made: into segment `to` from the end of segment `from` (input indices), s.
+  struct Made {
+    std::size_t from = 0, to = 0;
+    double duration = 0.0;
+  };
+  std::vector<Made> made;
 };
 
 /// An order to run segments in: `order[k]` runs k-th, backwards when `reversed[k]`.
 struct SegmentOrder {
   std::vector<std::size_t> order;
   std::vector<std::uint8_t> reversed;
+  bool operator==(const SegmentOrder&) const = default;
+};
+
+/// A move's time as measured (joinSegments()): from the end of segment `from` (run backwards
+/// when `from_reversed`) to the start of `to`, s. It stands for ptpDuration()'s estimate, and
+/// for the same move run the other way.
+struct KnownMove {
+  std::size_t from = 0, to = 0;
+  bool from_reversed = false, to_reversed = false;
+  double duration = 0.0;
 };
 
 /// The order that keeps the moves between `segments` short, each costed by ptpDuration() from
@@ -89,12 +125,25 @@ struct SegmentOrder {
 /// a whole turn the shorter way round when it turns without end. The first `fixed` segments run
 /// first, in order and forwards (hand-written paths); every other one may run either way (a pass
 /// run backwards covers what it covers forwards). Nearest neighbour from up to 12 first
-/// segments, then 2-opt (reversing a stretch of the tour and every segment in it) until no move
-/// shortens it or 50 sweeps. Deterministic.
+/// segments, then, in turn until neither shortens it, 2-opt (reversing a stretch of the tour and
+/// every segment in it) and Or-opt (a chain of one to three segments put in elsewhere, either way
+/// round; 2-opt alone when not `or_opt`). Deterministic.
 SegmentOrder orderSegments(const kinematics::CellModel& cell,
                            const std::vector<kinematics::Trajectory>& segments,
                            std::size_t fixed,
-                           const MoveSettings& settings = {});
+                           const MoveSettings& settings = {},
+                           bool or_opt = true);
+
+/// orderSegments()'s 2-opt and Or-opt from `start` (a permutation of the segments whose first
+/// `fixed` run first, forwards), with the moves in `known` costed at their measured time (a
+/// move that had to back off then costs what it took) and every other at its estimate plus the
+/// known moves' mean excess over theirs (it may have to back off too). Deterministic.
+SegmentOrder reorderSegments(const kinematics::CellModel& cell,
+                             const std::vector<kinematics::Trajectory>& segments,
+                             std::size_t fixed,
+                             const SegmentOrder& start,
+                             const std::vector<KnownMove>& known,
+                             const MoveSettings& settings = {});
 
 /// The time orderSegments() costs the move from the end of `from` (at its end speed) to the start
 /// of `to` (at its start speed) at: ptpDuration() under the moves' limits, the table the shorter

@@ -298,6 +298,8 @@ struct OrderedRuns {
   std::vector<std::size_t> index;                  // the kept segments' indices
   SegmentOrder order;                              // into index
   std::vector<kinematics::Trajectory> fast, slow;  // in the order they run, reversed as they run
+  std::vector<kinematics::Trajectory> forwards;    // fast, forwards, in index's order
+  std::size_t fixed = 0;                           // runs first, in order and forwards
 };
 
 // A segment's own duration: as planned, or its samples' span.
@@ -316,28 +318,38 @@ std::pair<kinematics::Trajectory, kinematics::Trajectory> runVersions(
   return {reversedSegment(t), reversedSegment(fast)};
 }
 
+// The runs' trajectories in their order (`runs.order` set).
+void arrange(const kinematics::CellModel& cell,
+             const std::vector<kinematics::Trajectory>& trajectories,
+             const std::vector<double>& own_durations,
+             OrderedRuns& runs) {
+  runs.fast.clear();
+  runs.slow.clear();
+  for (std::size_t k = 0; k < runs.order.order.size(); ++k) {
+    const std::size_t s = runs.index[runs.order.order[k]];
+    auto [slow, run] =
+        runVersions(cell, trajectories[s], ownDuration(own_durations, s, trajectories[s]),
+                    runs.order.reversed[k] != 0);
+    runs.slow.push_back(std::move(slow));
+    runs.fast.push_back(std::move(run));
+  }
+}
+
 OrderedRuns orderedRuns(const kinematics::CellModel& cell,
                         const std::vector<kinematics::Trajectory>& trajectories,
                         const std::vector<double>& own_durations,
                         const std::vector<std::uint8_t>& kept,
                         std::size_t fixed) {
   OrderedRuns out;
-  std::vector<kinematics::Trajectory> fast;
+  out.fixed = fixed;
   for (std::size_t s = 0; s < trajectories.size(); ++s) {
     if (!kept[s]) continue;
     out.index.push_back(s);
     const double own = ownDuration(own_durations, s, trajectories[s]);
-    fast.push_back(runVersions(cell, trajectories[s], own, false).second);
+    out.forwards.push_back(runVersions(cell, trajectories[s], own, false).second);
   }
-  out.order = orderSegments(cell, fast, fixed);
-  for (std::size_t k = 0; k < out.order.order.size(); ++k) {
-    const std::size_t s = out.index[out.order.order[k]];
-    auto [slow, run] =
-        runVersions(cell, trajectories[s], ownDuration(own_durations, s, trajectories[s]),
-                    out.order.reversed[k] != 0);
-    out.slow.push_back(std::move(slow));
-    out.fast.push_back(std::move(run));
-  }
+  out.order = orderSegments(cell, out.forwards, fixed);
+  arrange(cell, trajectories, own_durations, out);
   return out;
 }
 
@@ -466,11 +478,20 @@ JoinedProgram joinInOrder(const collision::Scene& scene,
                           std::size_t segments,
                           double max_program,
                           const MoveSettings& moves,
-                          std::vector<ScanPlan::Run>& run_order) {
+                          std::vector<ScanPlan::Run>& run_order,
+                          std::vector<KnownMove>* known = nullptr) {
   const std::vector<std::size_t>& index = runs.index;
   const SegmentOrder& order = runs.order;
   std::vector<kinematics::Trajectory> ordered;
   JoinedProgram joined = joinFastest(scene, runs, moves, ordered);
+  if (known) {
+    // The moves made, between the runs as they ran (a run put off to the end may run backwards).
+    known->clear();
+    const auto backwards = [&](std::size_t k) { return order.reversed[k] != joined.flipped[k]; };
+    for (const JoinedProgram::Made& m : joined.made)
+      known->push_back(
+          {order.order[m.from], order.order[m.to], backwards(m.from), backwards(m.to), m.duration});
+  }
   if (max_program > 0.0) cutAt(max_program, ordered, joined);
   JoinedProgram out;
   out.trajectory = std::move(joined.trajectory);
@@ -492,33 +513,86 @@ JoinedProgram joinInOrder(const collision::Scene& scene,
   return out;
 }
 
-// The program joined as planned and with the table held (holdTable()): the held one when it
-// drops no more passes and is shorter (the moves' estimate can miss a move that must back off).
-// Applies the held paths to `segs` when it is kept; `run_order` gets the kept program's order.
+// Whether program a is worse than b: it drops more segments, or as many and is longer.
+bool worseProgram(const JoinedProgram& a, const JoinedProgram& b) {
+  return a.dropped.size() != b.dropped.size() ? a.dropped.size() > b.dropped.size()
+                                              : !(a.times.total < b.times.total);
+}
+
+// The best program over orders of the same runs so far, and the moves its joins made.
+struct OrderSearch {
+  const ScanProblem& problem;
+  const PreparedScan& p;
+  const std::vector<kinematics::Trajectory>& trajectories;
+  const MoveSettings& moves;
+  std::size_t segments;
+  OrderedRuns runs;
+  JoinedProgram joined;
+  std::vector<ScanPlan::Run> run_order;
+  std::vector<KnownMove> known;
+
+  double maxProgram() const { return problem.auto_scan ? problem.auto_scan->max_program : 0.0; }
+  void joinFirst() {
+    joined = joinInOrder(*p.scene, runs, segments, maxProgram(), moves, run_order, &known);
+  }
+  // The runs in `order` joined (the moves it makes learnt): kept when the program is better.
+  void tryOrder(const SegmentOrder& order) {
+    if (order == runs.order) return;
+    pollCancel(problem.planning.termination.cancel);
+    OrderedRuns other_runs = runs;
+    other_runs.order = order;
+    arrange(p.scene->cell(), trajectories, p.path.path.own_durations, other_runs);
+    std::vector<ScanPlan::Run> other_order;
+    std::vector<KnownMove> made;
+    JoinedProgram other =
+        joinInOrder(*p.scene, other_runs, segments, maxProgram(), moves, other_order, &made);
+    known.insert(known.end(), made.begin(), made.end());
+    if (worseProgram(other, joined)) return;
+    runs = std::move(other_runs);
+    joined = std::move(other);
+    run_order = std::move(other_order);
+  }
+};
+
+// The program joined in the order of the shortest moves and in 2-opt's alone (the estimate
+// misses the moves that must back off: either may join shorter), then in rounds ordered again
+// with the moves made costed as they were (reorderSegments()), and with the table held
+// (holdTable()): the held one when it drops no more passes and is shorter. Applies the held
+// paths to `segs` when it is kept; `run_order` gets the kept program's order.
 JoinedProgram joinBest(const ScanProblem& problem,
                        const PreparedScan& p,
-                       const OrderedRuns& runs,
+                       const std::vector<kinematics::Trajectory>& trajectories,
+                       OrderedRuns runs,
                        std::vector<Segment>& segs,
                        std::vector<ScanPlan::Run>& run_order,
                        ProgramTimes& held_times) {
-  const MoveSettings moves = moveSettings(problem);
+  const kinematics::CellModel& cell = p.scene->cell();
+  MoveSettings moves = moveSettings(problem);
+  MoveCache cache;  // the joins share the moves they have in common
+  moves.cache = &cache;
   const double max_program = problem.auto_scan ? problem.auto_scan->max_program : 0.0;
-  // The two joins run side by side: each plans its moves in parallel, and either one's serial
-  // stretches leave the cores to the other.
-  JoinedProgram joined, other;
+  OrderSearch search{problem, p, trajectories, moves, segs.size(), std::move(runs), {}, {}, {}};
+  search.joinFirst();
+  // Without a move that backed off the estimate was right: nothing to learn.
+  if (search.joined.times.detours > 0)
+    search.tryOrder(orderSegments(cell, search.runs.forwards, search.runs.fixed, {}, false));
+  constexpr int kReorderRounds = 4;
+  for (int round = 0; round < kReorderRounds && search.joined.times.detours > 0; ++round) {
+    const SegmentOrder again = reorderSegments(cell, search.runs.forwards, search.runs.fixed,
+                                               search.runs.order, search.known);
+    if (again == search.runs.order) break;  // nothing learnt changes it
+    search.tryOrder(again);
+  }
+  runs = std::move(search.runs);
+  JoinedProgram joined = std::move(search.joined);
+  run_order = std::move(search.run_order);
   OrderedRuns held_runs = runs;
-  std::vector<HeldPass> held;
   std::vector<ScanPlan::Run> held_order;
-  tbb::parallel_invoke(
-      [&] { joined = joinInOrder(*p.scene, runs, segs.size(), max_program, moves, run_order); },
-      [&] {
-        held = holdTable(problem, p, p.path.path.own_durations, segs, held_runs);
-        if (!held.empty())
-          other = joinInOrder(*p.scene, held_runs, segs.size(), max_program, moves, held_order);
-      });
-  if (held.empty() || other.dropped.size() > joined.dropped.size() ||
-      !(other.times.total < joined.times.total))
-    return joined;
+  std::vector<HeldPass> held = holdTable(problem, p, p.path.path.own_durations, segs, held_runs);
+  if (held.empty()) return joined;
+  JoinedProgram other =
+      joinInOrder(*p.scene, held_runs, segs.size(), max_program, moves, held_order);
+  if (worseProgram(other, joined)) return joined;
   held_times.held = held.size();
   held_times.held_cost = applyHeld(problem, held, segs);
   run_order = std::move(held_order);
@@ -614,9 +688,10 @@ void planSegments(const ScanProblem& problem, const PlanOptions& options, ScanPl
   // The hand-written path, when there is one, runs first.
   const std::size_t fixed = p.auto_scan && kept[0] && !problem.path.elements.empty() ? 1 : 0;
   const std::vector<double>& own = p.path.path.own_durations;
-  const OrderedRuns runs = orderedRuns(p.scene->cell(), trajectories, own, kept, fixed);
+  OrderedRuns runs = orderedRuns(p.scene->cell(), trajectories, own, kept, fixed);
   ProgramTimes held;
-  JoinedProgram joined = joinBest(problem, p, runs, segs, plan.order, held);
+  JoinedProgram joined =
+      joinBest(problem, p, trajectories, std::move(runs), segs, plan.order, held);
   plan.dropped.insert(plan.dropped.end(), joined.dropped.begin(), joined.dropped.end());
   plan.choice = joinChoices(segs, kept);
   if (plan.choice.dp && plan.choice.chosen.method != "dp") plan.times.dp = plan.choice.dp->seconds;

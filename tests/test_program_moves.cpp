@@ -9,6 +9,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <random>
 #include <string>
 #include <string_view>
 #include <thread>
@@ -234,6 +235,53 @@ TEST_F(ProgramMoves, BackingOffAtOneEndIsNeverSlowerThanAtBoth) {
   EXPECT_TRUE(report.valid) << (report.violations.empty() ? "" : report.violations[0].what);
 }
 
+// Moves taken from the cache are the moves planned afresh: joined in another order with a
+// cache filled by the first order, the program is the same, sample for sample, as without it;
+// joined again in the first order, nothing new is planned.
+TEST_F(ProgramMoves, CachedMovesAreTheMovesPlannedAfresh) {
+  const pipeline::ScanPlan& plan = *plan_;
+  ASSERT_TRUE(plan.trajectory);
+  std::vector<kinematics::Trajectory> runs = scanningRuns(plan.trajectory->trajectory);
+  ASSERT_GE(runs.size(), 4u);
+  const collision::Scene& scene = *plan.prepared->scene;
+  pipeline::MoveCache cache;
+  pipeline::MoveSettings cached;
+  cached.cache = &cache;
+  const pipeline::JoinedProgram first = pipeline::joinSegments(scene, runs, cached);
+  const std::size_t planned = cache.size();
+  EXPECT_EQ(planned, first.times.moves);
+  const pipeline::JoinedProgram again = pipeline::joinSegments(scene, runs, cached);
+  EXPECT_EQ(cache.size(), planned);
+  ASSERT_EQ(again.trajectory.samples.size(), first.trajectory.samples.size());
+  // Another order: the two middle passes swapped, the others' moves still in the cache.
+  std::swap(runs[1], runs[2]);
+  const pipeline::JoinedProgram with = pipeline::joinSegments(scene, runs, cached);
+  const pipeline::JoinedProgram without = pipeline::joinSegments(scene, runs, {});
+  EXPECT_GT(cache.size(), planned);
+  ASSERT_EQ(with.trajectory.samples.size(), without.trajectory.samples.size());
+  for (std::size_t k = 0; k < with.trajectory.samples.size(); ++k) {
+    const auto &a = with.trajectory.samples[k], &b = without.trajectory.samples[k];
+    ASSERT_EQ(a.t, b.t) << k;
+    ASSERT_EQ(a.theta, b.theta) << k;
+    ASSERT_EQ(a.q, b.q) << k;
+  }
+  EXPECT_EQ(with.times.detours, without.times.detours);
+  // The moves made, listed as they run, take the program's time beside the passes.
+  ASSERT_TRUE(without.dropped.empty());
+  ASSERT_EQ(without.made.size(), without.times.moves);
+  double moved = 0.0;
+  for (const auto& m : without.made) moved += m.duration;
+  EXPECT_NEAR(
+      moved,
+      without.times.total -
+          [&] {
+            double scanning = 0.0;
+            for (const auto& r : runs) scanning += r.samples.back().t - r.samples.front().t;
+            return scanning;
+          }(),
+      1e-6);
+}
+
 // Joining the passes polls the cancel flag at every leg of every move: set, it ends the join
 // with Cancelled; clear, the join is the same as without a flag.
 TEST_F(ProgramMoves, ACancelFlagEndsTheJoinWithCancelled) {
@@ -454,4 +502,165 @@ TEST_F(ProgramMoves, AHeldPassStartsWhereTheTableStoodAfterThePassBefore) {
     ++checked;
   }
   EXPECT_GT(checked, 0u);
+}
+
+namespace {
+
+// A segment standing still at table angle `theta` with joints `q` for a second.
+kinematics::Trajectory standingSegment(double theta, const kinematics::JointVector& q) {
+  kinematics::Trajectory t;
+  for (const double time : {0.0, 1.0}) {
+    kinematics::TrajectorySample s;
+    s.t = time;
+    s.theta = theta;
+    s.q = q;
+    t.samples.push_back(s);
+  }
+  return t;
+}
+
+// The moves' time of running `segments` in `o`, each move costed by moveCost().
+double tourTime(const kinematics::CellModel& cell,
+                const std::vector<kinematics::Trajectory>& segments,
+                const pipeline::SegmentOrder& o) {
+  std::vector<kinematics::Trajectory> run;
+  for (std::size_t k = 0; k < o.order.size(); ++k)
+    run.push_back(o.reversed[k] ? pipeline::reversedSegment(segments[o.order[k]])
+                                : segments[o.order[k]]);
+  double total = 0.0;
+  for (std::size_t k = 1; k < run.size(); ++k)
+    total += pipeline::moveCost(cell, run[k - 1], run[k]);
+  return total;
+}
+
+// `o` with the chain first … first+len−1 put into the gap before position `gap` (reversed as a
+// whole when `flip`).
+pipeline::SegmentOrder relocated(const pipeline::SegmentOrder& o,
+                                 std::size_t first,
+                                 std::size_t len,
+                                 std::size_t gap,
+                                 bool flip) {
+  pipeline::SegmentOrder out;
+  const std::size_t n = o.order.size();
+  for (std::size_t k = 0; k <= n; ++k) {
+    if (k == gap)
+      for (std::size_t i = 0; i < len; ++i) {
+        const std::size_t c = flip ? first + len - 1 - i : first + i;
+        out.order.push_back(o.order[c]);
+        out.reversed.push_back(static_cast<std::uint8_t>(o.reversed[c] ^ (flip ? 1 : 0)));
+      }
+    if (k < n && (k < first || k >= first + len)) {
+      out.order.push_back(o.order[k]);
+      out.reversed.push_back(o.reversed[k]);
+    }
+  }
+  return out;
+}
+
+kinematics::CellModel tourCell() {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("scanplan_test_tour_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  kinematics::CellModel cell = boxProblem(writeBox(dir / "box.stl", 50, 50, 50)).cell;
+  std::filesystem::remove_all(dir);
+  return cell;
+}
+
+}  // namespace
+
+// Passes standing at table angles 0.3 rad apart, shuffled: no move can be shorter than one step
+// of the table, so running them in turn is optimal, and the search finds it.
+TEST(SegmentOrder, PassesAlongTheTableRunInTurn) {
+  const kinematics::CellModel cell = tourCell();
+  std::vector<double> angles;
+  for (int k = 0; k < 10; ++k) angles.push_back(0.3 * k);
+  std::mt19937 rng(5);
+  std::shuffle(angles.begin(), angles.end(), rng);
+  std::vector<kinematics::Trajectory> segments;
+  for (const double a : angles)
+    segments.push_back(standingSegment(a, kinematics::JointVector::Zero()));
+  const pipeline::SegmentOrder o = pipeline::orderSegments(cell, segments, 0);
+  const double step =
+      pipeline::moveCost(cell, standingSegment(0.0, kinematics::JointVector::Zero()),
+                         standingSegment(0.3, kinematics::JointVector::Zero()));
+  EXPECT_NEAR(tourTime(cell, segments, o), 9.0 * step, 1e-9);
+}
+
+// On random passes (table and joints apart, each moving) the order is a local optimum of the
+// search's own moves: no pass or chain of two taken out and put in elsewhere, either way round,
+// and no stretch reversed gives shorter moves (each tour recosted from scratch).
+TEST(SegmentOrder, NoPassMovedElsewhereOrStretchReversedShortensTheMoves) {
+  const kinematics::CellModel cell = tourCell();
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 3; ++trial) {
+    std::vector<kinematics::Trajectory> segments;
+    for (int k = 0; k < 30; ++k) {
+      kinematics::JointVector q;
+      for (int j = 0; j < kinematics::kNumJoints; ++j) q(j) = 0.6 * u(rng);
+      kinematics::Trajectory t = standingSegment(2.5 * u(rng), q);
+      t.samples.back().theta += 0.5 * u(rng);  // it turns the table
+      t.samples.back().q(0) += 0.5 * u(rng);
+      t.samples.back().q(4) += 0.5 * u(rng);
+      segments.push_back(t);
+    }
+    const pipeline::SegmentOrder o = pipeline::orderSegments(cell, segments, 0);
+    const double found = tourTime(cell, segments, o);
+    const std::size_t n = o.order.size();
+    for (std::size_t len = 1; len <= 2; ++len)
+      for (std::size_t first = 0; first + len <= n; ++first)
+        for (std::size_t gap = 0; gap <= n; ++gap) {
+          if (gap >= first && gap <= first + len) continue;
+          for (const bool flip : {false, true}) {
+            const pipeline::SegmentOrder other = relocated(o, first, len, gap, flip);
+            EXPECT_GE(tourTime(cell, segments, other), found - 1e-9)
+                << "trial " << trial << " chain " << first << "+" << len << " to " << gap;
+          }
+        }
+    for (std::size_t k = 1; k < n; ++k)
+      for (std::size_t m = k + 1; m < n; ++m) {
+        pipeline::SegmentOrder other = o;
+        for (std::size_t i = k; i <= m; ++i) {
+          other.order[i] = o.order[k + m - i];
+          other.reversed[i] = o.reversed[k + m - i] ^ 1;
+        }
+        EXPECT_GE(tourTime(cell, segments, other), found - 1e-9) << "reversed " << k << "…" << m;
+      }
+  }
+}
+
+// A move the join measured far slower than its estimate (it had to back off) is left out of the
+// order searched again, and the order's own moves are costed as they were measured.
+TEST(SegmentOrder, AMoveMeasuredSlowIsLeftOutWhenOrderedAgain) {
+  const kinematics::CellModel cell = tourCell();
+  std::vector<kinematics::Trajectory> segments;
+  for (int k = 0; k < 10; ++k)
+    segments.push_back(standingSegment(0.3 * k, kinematics::JointVector::Zero()));
+  const pipeline::SegmentOrder in_turn = pipeline::orderSegments(cell, segments, 0);
+  ASSERT_EQ(in_turn.order.size(), 10u);
+  // Every move of that order as measured: all as estimated, but the one into the sixth pass.
+  std::vector<pipeline::KnownMove> known;
+  std::size_t slow_from = 0, slow_to = 0;
+  for (std::size_t k = 1; k < 10; ++k) {
+    pipeline::KnownMove m{in_turn.order[k - 1], in_turn.order[k], in_turn.reversed[k - 1] != 0,
+                          in_turn.reversed[k] != 0, 0.0};
+    m.duration = pipeline::moveCost(cell, segments[m.from], segments[m.to]);
+    if (k == 5) {
+      m.duration = 100.0;
+      slow_from = m.from;
+      slow_to = m.to;
+    }
+    known.push_back(m);
+  }
+  const pipeline::SegmentOrder again = pipeline::reorderSegments(cell, segments, 0, in_turn, known);
+  EXPECT_FALSE(again == in_turn);
+  for (std::size_t k = 1; k < again.order.size(); ++k) {
+    const std::size_t a = again.order[k - 1], b = again.order[k];
+    EXPECT_FALSE((a == slow_from && b == slow_to) || (a == slow_to && b == slow_from))
+        << "the slow move is still made, at " << k;
+  }
+  // A permutation of the passes.
+  std::vector<std::size_t> sorted = again.order;
+  std::sort(sorted.begin(), sorted.end());
+  for (std::size_t k = 0; k < sorted.size(); ++k) EXPECT_EQ(sorted[k], k);
 }
