@@ -441,6 +441,7 @@ struct MoveCache::Impl {
 MoveCache::MoveCache() : impl_(std::make_unique<Impl>()) {}
 MoveCache::~MoveCache() = default;
 std::size_t MoveCache::size() const { return impl_->moves.size(); }
+void MoveCache::merge(MoveCache& other) { impl_->moves.merge(other.impl_->moves); }
 
 namespace {
 

@@ -32,6 +32,8 @@ class MoveCache {
   MoveCache(const MoveCache&) = delete;
   MoveCache& operator=(const MoveCache&) = delete;
   std::size_t size() const;
+  /// Takes in the moves of `other` it does not hold (`other` keeps the rest).
+  void merge(MoveCache& other);
   struct Impl;
   Impl& impl() { return *impl_; }
 

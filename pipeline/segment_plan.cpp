@@ -572,10 +572,28 @@ JoinedProgram joinBest(const ScanProblem& problem,
   moves.cache = &cache;
   const double max_program = problem.auto_scan ? problem.auto_scan->max_program : 0.0;
   OrderSearch search{problem, p, trajectories, moves, segs.size(), std::move(runs), {}, {}, {}};
-  search.joinFirst();
-  // Without a move that backed off the estimate was right: nothing to learn.
-  if (search.joined.times.detours > 0)
-    search.tryOrder(orderSegments(cell, search.runs.forwards, search.runs.fixed, {}, false));
+  // 2-opt's order alone joined beside it (its own cache, merged after): a move that takes long
+  // in one join then leaves the other core to the other join.
+  MoveCache cache2;
+  MoveSettings moves2 = moves;
+  moves2.cache = &cache2;
+  OrderSearch search2{problem, p, trajectories, moves2, segs.size(), search.runs, {}, {}, {}};
+  search2.runs.order = orderSegments(cell, search.runs.forwards, search.runs.fixed, {}, false);
+  const bool two = !(search2.runs.order == search.runs.order);
+  if (two) arrange(cell, trajectories, p.path.path.own_durations, search2.runs);
+  tbb::parallel_invoke([&] { search.joinFirst(); },
+                       [&] {
+                         if (two) search2.joinFirst();
+                       });
+  cache.merge(cache2);
+  if (two) {
+    search.known.insert(search.known.end(), search2.known.begin(), search2.known.end());
+    if (!worseProgram(search2.joined, search.joined)) {
+      search.runs = std::move(search2.runs);
+      search.joined = std::move(search2.joined);
+      search.run_order = std::move(search2.run_order);
+    }
+  }
   constexpr int kReorderRounds = 4;
   for (int round = 0; round < kReorderRounds && search.joined.times.detours > 0; ++round) {
     const SegmentOrder again = reorderSegments(cell, search.runs.forwards, search.runs.fixed,
