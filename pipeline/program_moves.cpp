@@ -445,22 +445,14 @@ void MoveCache::merge(MoveCache& other) { impl_->moves.merge(other.impl_->moves)
 
 namespace {
 
-// planMove() through the cache, when there is one (its times count from a cached move's own
-// `from`: appendRun() moves them).
-Move cachedMove(const collision::Scene& scene,
-                collision::ClearanceEvaluator& clearance,
-                const kinematics::AxisLimits& limits,
-                const AxisVector& levers,
-                const TrajectorySample& a,
-                const TrajectorySample& b,
-                const AxisVector& v_a,
-                const AxisVector& v_b,
-                const MoveSettings& settings) {
-  if (!settings.cache) return planMove(scene, clearance, limits, levers, a, b, v_a, v_b, settings);
+// The move `key` names, from the cache when it holds it, else `plan()` (added to the cache when
+// there is one). A cached move's times count from its own `from`: appendRun() moves them.
+template <class Plan>
+Move cachedMove(const MoveSettings& settings, const MoveKey& key, Plan plan) {
+  if (!settings.cache) return plan();
   auto& moves = settings.cache->impl().moves;
-  const MoveKey key = moveKey(a, b, v_a, v_b);
   if (const auto it = moves.find(key); it != moves.end()) return it->second;
-  Move m = planMove(scene, clearance, limits, levers, a, b, v_a, v_b, settings);
+  Move m = plan();
   moves.emplace(key, m);
   return m;
 }
@@ -513,8 +505,11 @@ void appendDeferred(const collision::Scene& scene,
   for (const bool backwards : {false, true}) {
     const Trajectory seg = unwound(cell, backwards ? reversedSegment(segments[i]) : segments[i],
                                    axesOf(samples.back()));
-    Move move = cachedMove(scene, clearance, limits, levers, samples.back(), seg.samples.front(),
-                           endSpeed(out.trajectory), startSpeed(seg), settings);
+    const TrajectorySample &a = samples.back(), &b = seg.samples.front();
+    const AxisVector v_a = endSpeed(out.trajectory), v_b = startSpeed(seg);
+    Move move = cachedMove(settings, moveKey(a, b, v_a, v_b), [&] {
+      return planMove(scene, clearance, limits, levers, a, b, v_a, v_b, settings);
+    });
     if (!move.samples) continue;
     appendRun(std::move(move), seg, from, i, settings.max_step, out);
     out.flipped[i] = backwards ? 1 : 0;
@@ -610,8 +605,11 @@ JoinedProgram joinSegments(const collision::Scene& scene,
     if (last + 1 != i || !in_step) {
       // After a dropped segment: unwound and planned again from where the program ends.
       seg = unwound(cell, segments[i], axesOf(samples.back()));
-      move = cachedMove(scene, clearance, limits, levers, samples.back(), seg.samples.front(),
-                        endSpeed(out.trajectory), startSpeed(seg), settings);
+      const TrajectorySample &a = samples.back(), &b = seg.samples.front();
+      const AxisVector v_a = endSpeed(out.trajectory), v_b = startSpeed(seg);
+      move = cachedMove(settings, moveKey(a, b, v_a, v_b), [&] {
+        return planMove(scene, clearance, limits, levers, a, b, v_a, v_b, settings);
+      });
     }
     // The next precomputed move starts from unwrapped[i]: usable only if that is what runs.
     in_step = axesOf(seg.samples.back()) == axesOf(unwrapped[i].samples.back());
