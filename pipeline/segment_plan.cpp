@@ -535,22 +535,28 @@ struct OrderSearch {
   void joinFirst() {
     joined = joinInOrder(*p.scene, runs, segments, maxProgram(), moves, run_order, &known);
   }
-  // The runs in `order` joined (the moves it makes learnt): kept when the program is better.
+  // A search of the same runs in `order`, with `with` (not joined yet).
+  OrderSearch inOrder(const SegmentOrder& order, const MoveSettings& with) const {
+    OrderSearch o{problem, p, trajectories, with, segments, runs, {}, {}, {}};
+    o.runs.order = order;
+    arrange(p.scene->cell(), trajectories, p.path.path.own_durations, o.runs);
+    return o;
+  }
+  // Another order's joined program taken when it is not worse; the moves it made learnt.
+  void adopt(OrderSearch& other) {
+    known.insert(known.end(), other.known.begin(), other.known.end());
+    if (worseProgram(other.joined, joined)) return;
+    runs = std::move(other.runs);
+    joined = std::move(other.joined);
+    run_order = std::move(other.run_order);
+  }
+  // The runs in `order` joined: kept when the program is better.
   void tryOrder(const SegmentOrder& order) {
     if (order == runs.order) return;
     pollCancel(problem.planning.termination.cancel);
-    OrderedRuns other_runs = runs;
-    other_runs.order = order;
-    arrange(p.scene->cell(), trajectories, p.path.path.own_durations, other_runs);
-    std::vector<ScanPlan::Run> other_order;
-    std::vector<KnownMove> made;
-    JoinedProgram other =
-        joinInOrder(*p.scene, other_runs, segments, maxProgram(), moves, other_order, &made);
-    known.insert(known.end(), made.begin(), made.end());
-    if (worseProgram(other, joined)) return;
-    runs = std::move(other_runs);
-    joined = std::move(other);
-    run_order = std::move(other_order);
+    OrderSearch other = inOrder(order, moves);
+    other.joinFirst();
+    adopt(other);
   }
 };
 
@@ -570,30 +576,21 @@ JoinedProgram joinBest(const ScanProblem& problem,
   MoveSettings moves = moveSettings(problem);
   MoveCache cache;  // the joins share the moves they have in common
   moves.cache = &cache;
-  const double max_program = problem.auto_scan ? problem.auto_scan->max_program : 0.0;
   OrderSearch search{problem, p, trajectories, moves, segs.size(), std::move(runs), {}, {}, {}};
   // 2-opt's order alone joined beside it (its own cache, merged after): a move that takes long
   // in one join then leaves the other core to the other join.
   MoveCache cache2;
   MoveSettings moves2 = moves;
   moves2.cache = &cache2;
-  OrderSearch search2{problem, p, trajectories, moves2, segs.size(), search.runs, {}, {}, {}};
-  search2.runs.order = orderSegments(cell, search.runs.forwards, search.runs.fixed, {}, false);
-  const bool two = !(search2.runs.order == search.runs.order);
-  if (two) arrange(cell, trajectories, p.path.path.own_durations, search2.runs);
+  OrderSearch plain = search.inOrder(
+      orderSegments(cell, search.runs.forwards, search.runs.fixed, {}, false), moves2);
+  const bool two = !(plain.runs.order == search.runs.order);
   tbb::parallel_invoke([&] { search.joinFirst(); },
                        [&] {
-                         if (two) search2.joinFirst();
+                         if (two) plain.joinFirst();
                        });
   cache.merge(cache2);
-  if (two) {
-    search.known.insert(search.known.end(), search2.known.begin(), search2.known.end());
-    if (!worseProgram(search2.joined, search.joined)) {
-      search.runs = std::move(search2.runs);
-      search.joined = std::move(search2.joined);
-      search.run_order = std::move(search2.run_order);
-    }
-  }
+  if (two) search.adopt(plain);
   constexpr int kReorderRounds = 4;
   for (int round = 0; round < kReorderRounds && search.joined.times.detours > 0; ++round) {
     const SegmentOrder again = reorderSegments(cell, search.runs.forwards, search.runs.fixed,
@@ -609,7 +606,7 @@ JoinedProgram joinBest(const ScanProblem& problem,
   std::vector<HeldPass> held = holdTable(problem, p, p.path.path.own_durations, segs, held_runs);
   if (held.empty()) return joined;
   JoinedProgram other =
-      joinInOrder(*p.scene, held_runs, segs.size(), max_program, moves, held_order);
+      joinInOrder(*p.scene, held_runs, segs.size(), search.maxProgram(), moves, held_order);
   if (worseProgram(other, joined)) return joined;
   held_times.held = held.size();
   held_times.held_cost = applyHeld(problem, held, segs);
