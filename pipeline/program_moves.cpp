@@ -2,15 +2,19 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <map>
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <unordered_map>
 
 #include <fmt/format.h>
-#include <tbb/enumerable_thread_specific.h>
+#include <tbb/collaborative_call_once.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <scanplan/collision/clearance.h>
 #include <scanplan/kinematics/units.h>
@@ -104,66 +108,117 @@ std::optional<double> poseMargin(const collision::Scene& scene,
   return margin;
 }
 
-// The margins at a move's samples (its own poses, `move.axes`), nullopt at the first that is
-// blocked; then `blocked_at` (if given) gets how far along the samples it is (0 to 1). A way is
-// checked at all its samples first: a blocked one is found before any pose between them is.
-// `start`: the margin at the first sample when it is known (the end of the leg before).
+// The lowest i in [0, n) for which `clear(i, stop)` is false; n when there is none. The calls run
+// in parallel (a move's slow check spread over the threads the other moves left idle); none above
+// a failing one already found is started, and `stop()` tells a running one that its answer is no
+// longer needed. Every one below the answer runs to its end: the answer does not depend on the
+// threads.
+template <class Clear>
+std::size_t firstBlocked(std::size_t n, Clear clear) {
+  std::atomic<std::size_t> first{n};
+  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+    const auto stop = [&] { return first.load(std::memory_order_relaxed) < i; };
+    if (stop() || clear(i, stop)) return;
+    for (std::size_t seen = first.load(); i < seen && !first.compare_exchange_weak(seen, i);) {
+    }
+  });
+  return first.load();
+}
+
+// The margins at a move's samples (its own poses, `move.axes`), nullopt when one is blocked;
+// then `blocked_at` (if given) gets how far along the samples the first blocked one is (0 to 1).
+// A way is checked at all its samples first: a blocked one is found before any pose between them
+// is. `start`: the margin at the first sample when it is known (the end of the leg before).
 std::optional<std::vector<double>> sampleMargins(const collision::Scene& scene,
-                                                 collision::ClearanceEvaluator& clearance,
                                                  const kinematics::PtpMove& move,
                                                  double* blocked_at = nullptr,
                                                  std::optional<double> start = std::nullopt) {
-  std::vector<double> margins;
-  for (std::size_t k = 0; k < move.axes.size(); ++k) {
+  const std::size_t n = move.axes.size();
+  std::vector<double> margins(n);
+  const std::size_t blocked = firstBlocked(n, [&](std::size_t k, const auto&) {
+    collision::ClearanceEvaluator clearance(scene);
     const std::optional<double> m =
         k == 0 && start ? start : poseMargin(scene, clearance, move.axes[k]);
-    if (!m) {
-      if (blocked_at && move.axes.size() > 1)
-        *blocked_at = static_cast<double>(k) / static_cast<double>(move.axes.size() - 1);
-      return std::nullopt;
-    }
-    margins.push_back(*m);
-  }
-  return margins;
+    if (m) margins[k] = *m;
+    return m.has_value();
+  });
+  if (blocked == n) return margins;
+  if (blocked_at && n > 1) *blocked_at = static_cast<double>(blocked) / static_cast<double>(n - 1);
+  return std::nullopt;
 }
 
-// Every pair of the cell beyond its d_low and every joint within its limits at poses between
-// a move's samples (clear themselves, with `margins` at them: sampleMargins()). The poses
-// advance by how far the nearest pair is from its d_low: a point moves at most levers(j)
-// metres per radian of axis j, so the next pose is at most 0.8 of that margin (and at least
-// kMinMotion) of motion further; at least every `settings.check_step` rad on the fastest axis when
-// nothing is near. The validation proves the motion between them. When blocked, `blocked_at`
-// (if given) gets how far along the samples (0 to 1).
+// A stretch of a leg between two poses found clear: from u0 to u1 of the span between the leg's
+// samples `a` and `b`, with the margins m0 and m1 there. The span starts `along` the leg's samples
+// (0 to 1) and takes `length` of it.
+struct Stretch {
+  const AxisVector* a;
+  const AxisVector* b;
+  double u0, u1, m0, m1;
+  double along, length;
+};
+
+// Whether a stretch is clear without a look inside: a point of the cell moves at most levers(j)
+// metres per radian of axis j, so at most `travel` over the stretch, and no pair can close a gap
+// of m0 at one end and m1 at the other before the motion reaches m0 + m1 (0.8 of it is taken).
+// At most `settings.check_step` rad on the fastest axis too; a stretch of kMinMotion of motion or
+// less is not split.
 constexpr double kMinMotion = 1.5e-3;  // m
-bool moveClear(const collision::Scene& scene,
-               collision::ClearanceEvaluator& clearance,
-               const kinematics::PtpMove& move,
-               const std::vector<double>& margins,
+bool certified(const Stretch& s, const AxisVector& levers, double check_step) {
+  const AxisVector d = (*s.b - *s.a).cwiseAbs() * (s.u1 - s.u0);
+  const double travel = levers.dot(d);
+  return travel <= kMinMotion || (d.maxCoeff() <= check_step && travel <= 0.8 * (s.m0 + s.m1));
+}
+
+// Every pair of the cell beyond its d_low and every joint within its limits at the poses between
+// the samples of a way's legs (clear themselves, with `margins` at them: sampleMargins()). Each
+// span between samples is halved until its stretches are certified(): the poses at the middles
+// are checked a level at a time, every stretch of the way at once and in parallel, so a blocked
+// way is found at the coarsest level that meets the obstacle. The validation proves the motion
+// between the poses. When blocked, `blocked_at` (if given) gets where the first blocked pose of
+// that level lies along the first leg's samples (0 to 1; the direct move has one leg).
+bool legsClear(const collision::Scene& scene,
+               const std::vector<kinematics::PtpMove>& legs,
+               const std::vector<std::vector<double>>& margins,
                const AxisVector& levers,
                const MoveSettings& settings,
                double* blocked_at = nullptr) {
-  const double check_step = settings.check_step;
-  for (std::size_t k = 1; k < move.axes.size(); ++k) {
-    const AxisVector &a = move.axes[k - 1], &b = move.axes[k];
-    const double travel = levers.dot((b - a).cwiseAbs());
-    const double widest = (b - a).cwiseAbs().maxCoeff();
-    double margin = margins[k - 1];
-    for (double u = 0.0;;) {
-      double du = travel > 0.0 ? std::max(0.8 * margin, kMinMotion) / travel : 1.0;
-      if (widest > 0.0) du = std::min(du, std::max(check_step / widest, kMinMotion / travel));
-      u += du;
-      if (u >= 1.0) break;  // b: clear, a sample
-      pollCancel(settings.cancel);
-      const std::optional<double> m = poseMargin(scene, clearance, a + (b - a) * u);
-      if (!m) {
-        if (blocked_at)
-          *blocked_at = static_cast<double>(k) / static_cast<double>(move.axes.size() - 1);
-        return false;
-      }
-      margin = *m;
-    }
+  std::vector<Stretch> open;
+  for (std::size_t l = 0; l < legs.size(); ++l) {
+    const auto& axes = legs[l].axes;
+    const double length = 1.0 / static_cast<double>(std::max<std::size_t>(1, axes.size() - 1));
+    for (std::size_t k = 0; k + 1 < axes.size(); ++k)
+      open.push_back({&axes[k], &axes[k + 1], 0.0, 1.0, margins[l][k], margins[l][k + 1],
+                      static_cast<double>(k) * length, length});
   }
-  return true;
+  for (;;) {
+    std::erase_if(open,
+                  [&](const Stretch& s) { return certified(s, levers, settings.check_step); });
+    if (open.empty()) return true;
+    std::vector<double> middle(open.size());
+    const std::size_t blocked = firstBlocked(open.size(), [&](std::size_t i, const auto&) {
+      pollCancel(settings.cancel);
+      const Stretch& s = open[i];
+      collision::ClearanceEvaluator clearance(scene);
+      const auto m = poseMargin(scene, clearance, *s.a + (*s.b - *s.a) * (0.5 * (s.u0 + s.u1)));
+      if (m) middle[i] = *m;
+      return m.has_value();
+    });
+    if (blocked < open.size()) {
+      const Stretch& s = open[blocked];
+      if (blocked_at) *blocked_at = s.along + s.length * 0.5 * (s.u0 + s.u1);
+      return false;
+    }
+    std::vector<Stretch> halves;
+    halves.reserve(2 * open.size());
+    for (std::size_t i = 0; i < open.size(); ++i) {
+      Stretch lo = open[i], hi = open[i];
+      lo.u1 = hi.u0 = 0.5 * (open[i].u0 + open[i].u1);
+      lo.m1 = hi.m0 = middle[i];
+      halves.push_back(lo);
+      halves.push_back(hi);
+    }
+    open = std::move(halves);
+  }
 }
 
 // How far a point of the cell can move per radian of each axis, m: for the table the farthest
@@ -329,14 +384,12 @@ Way viaAbove(const kinematics::CellModel& cell,
   return {back[0], {a1, a2, z, z}, {a2, b2, z, z}, {b2, b1, z, z}, back[2]};
 }
 
-// The samples of a way after `a` (its first sample, `a` itself, left out); nullopt when a leg
-// is blocked.
+// The samples of a way after its first (the move's start, at t = 0, left out); nullopt when a
+// leg is blocked.
 std::optional<std::vector<TrajectorySample>> runWay(const collision::Scene& scene,
-                                                    collision::ClearanceEvaluator& clearance,
                                                     const kinematics::AxisLimits& limits,
                                                     const AxisVector& levers,
                                                     const Way& way,
-                                                    double t_a,
                                                     const MoveSettings& settings,
                                                     double* blocked_at = nullptr,
                                                     AxisVector* by_axis = nullptr) {
@@ -350,19 +403,18 @@ std::optional<std::vector<TrajectorySample>> runWay(const collision::Scene& scen
     const std::optional<double> start = margins.empty() || margins.back().empty()
                                             ? std::nullopt
                                             : std::optional<double>(margins.back().back());
-    auto m = sampleMargins(scene, clearance, moves.back(), blocked_at, start);
+    auto m = sampleMargins(scene, moves.back(), blocked_at, start);
     if (!m) return std::nullopt;
     margins.push_back(std::move(*m));
   }
+  if (!legsClear(scene, moves, margins, levers, settings, blocked_at)) return std::nullopt;
   std::vector<TrajectorySample> out;
   for (std::size_t l = 0; l < way.size(); ++l) {
     const Leg& leg = way[l];
     const kinematics::PtpMove& move = moves[l];
-    if (!moveClear(scene, clearance, move, margins[l], levers, settings, blocked_at))
-      return std::nullopt;
     if (by_axis)
       *by_axis += kinematics::ptpTimeByAxis(leg.from, leg.to, leg.v_from, leg.v_to, limits);
-    const double t0 = out.empty() ? t_a : out.back().t;
+    const double t0 = out.empty() ? 0.0 : out.back().t;
     for (std::size_t k = 1; k < move.t.size(); ++k)
       out.push_back(moveSample(scene.cell(), t0 + move.t[k], move.axes[k]));
   }
@@ -372,13 +424,11 @@ std::optional<std::vector<TrajectorySample>> runWay(const collision::Scene& scen
 // A checked move from `a` (the end of one segment, moving at v_a) to `b` (the start of the
 // next, moving at v_b): direct, else the fastest clear back-off, else via above the part.
 struct Move {
-  std::optional<std::vector<TrajectorySample>> samples;  // times from `from`
-  double from = 0.0;                                     // s, the time of `a` they count from
+  std::optional<std::vector<TrajectorySample>> samples;  // times from `a`'s: 0
   bool detour = false;
   AxisVector by_axis = AxisVector::Zero();  // s of it by the axis that set it
 };
 Move planMove(const collision::Scene& scene,
-              collision::ClearanceEvaluator& clearance,
               const kinematics::AxisLimits& limits,
               const AxisVector& levers,
               const TrajectorySample& a,
@@ -388,16 +438,15 @@ Move planMove(const collision::Scene& scene,
               const MoveSettings& settings) {
   const kinematics::CellModel& cell = scene.cell();
   Move m;
-  m.from = a.t;
   double blocked_at = 0.5;
-  m.samples = runWay(scene, clearance, limits, levers, {{axesOf(a), axesOf(b), v_a, v_b}}, a.t,
-                     settings, &blocked_at, &m.by_axis);
+  m.samples = runWay(scene, limits, levers, {{axesOf(a), axesOf(b), v_a, v_b}}, settings,
+                     &blocked_at, &m.by_axis);
   if (m.samples) return m;
   m.detour = true;
   const Ends side = blocked_at < 0.5 ? Ends::kStart : Ends::kEnd;
   for (const Way& way : backedOffWays(cell, limits, a, b, v_a, v_b, settings, side)) {
     m.by_axis.setZero();
-    m.samples = runWay(scene, clearance, limits, levers, way, a.t, settings, nullptr, &m.by_axis);
+    m.samples = runWay(scene, limits, levers, way, settings, nullptr, &m.by_axis);
     if (m.samples) return m;
   }
   if (settings.above) {
@@ -405,7 +454,7 @@ Move planMove(const collision::Scene& scene,
       const Way way = viaAbove(cell, *settings.above, a, b, v_a, v_b, r);
       if (way.empty()) continue;
       m.by_axis.setZero();
-      m.samples = runWay(scene, clearance, limits, levers, way, a.t, settings, nullptr, &m.by_axis);
+      m.samples = runWay(scene, limits, levers, way, settings, nullptr, &m.by_axis);
       if (m.samples) return m;
     }
   }
@@ -436,25 +485,75 @@ MoveKey moveKey(const TrajectorySample& a,
 }  // namespace
 
 struct MoveCache::Impl {
-  std::map<MoveKey, Move> moves;
+  struct Entry {
+    tbb::collaborative_once_flag once;
+    Move move;
+  };
+  std::mutex mutex;  // guards the map; each entry is planned once, by whoever asks first
+  std::map<MoveKey, std::unique_ptr<Entry>> moves;
 };
 MoveCache::MoveCache() : impl_(std::make_unique<Impl>()) {}
 MoveCache::~MoveCache() = default;
-std::size_t MoveCache::size() const { return impl_->moves.size(); }
-void MoveCache::merge(MoveCache& other) { impl_->moves.merge(other.impl_->moves); }
+std::size_t MoveCache::size() const {
+  const std::lock_guard lock(impl_->mutex);
+  return impl_->moves.size();
+}
 
 namespace {
 
 // The move `key` names, from the cache when it holds it, else `plan()` (added to the cache when
-// there is one). A cached move's times count from its own `from`: appendRun() moves them.
+// there is one). A move asked for while another thread plans it is waited for, the waiting thread
+// helping with that planning's parallel checks. The planning is isolated: a thread waiting in its
+// parallel checks takes no other move's work meanwhile (which would hold this move up).
 template <class Plan>
 Move cachedMove(const MoveSettings& settings, const MoveKey& key, Plan plan) {
-  if (!settings.cache) return plan();
-  auto& moves = settings.cache->impl().moves;
-  if (const auto it = moves.find(key); it != moves.end()) return it->second;
-  Move m = plan();
-  moves.emplace(key, m);
-  return m;
+  if (!settings.cache) return tbb::this_task_arena::isolate(plan);
+  MoveCache::Impl& cache = settings.cache->impl();
+  MoveCache::Impl::Entry* entry = nullptr;
+  {
+    const std::lock_guard lock(cache.mutex);
+    auto& slot = cache.moves[key];
+    if (!slot) slot = std::make_unique<MoveCache::Impl::Entry>();
+    entry = slot.get();
+  }
+  tbb::collaborative_call_once(entry->once, [&] { entry->move = plan(); });
+  return entry->move;
+}
+
+// The checked move from `a` to `b` (planMove()), from the cache when it holds it: a function of
+// the key alone, whichever thread plans it first. Its times count from 0 (appendRun() moves
+// them). With a table that turns without end, whole turns of it change nothing: the move is
+// planned with the table at `a` brought into [−π, π] (both ends turned alike) and turned back
+// after, so a move met again some turns on is planned once and the same each time. The table's
+// angles and speeds are snapped to a fine grid (2^-36 rad, 2^-30 rad/s), which the rounding of
+// those turns cannot move them off, and the poses' scanner frames follow from the axes.
+Move moveBetween(const collision::Scene& scene,
+                 const kinematics::AxisLimits& limits,
+                 const AxisVector& levers,
+                 const TrajectorySample& a,
+                 const TrajectorySample& b,
+                 AxisVector v_a,
+                 AxisVector v_b,
+                 const MoveSettings& settings) {
+  const kinematics::CellModel& cell = scene.cell();
+  const double turn = (cell.table.continuous ? std::round(a.theta / kTwoPi) : 0.0) * kTwoPi;
+  const auto snap = [](double x, int bits) {
+    return std::ldexp(std::round(std::ldexp(x, bits)), -bits);
+  };
+  const auto canonical = [&](const TrajectorySample& s) {
+    AxisVector x = axesOf(s);
+    x(0) = snap(x(0) - turn, 36);
+    return moveSample(cell, 0.0, x);
+  };
+  const TrajectorySample ca = canonical(a), cb = canonical(b);
+  v_a(0) = snap(v_a(0), 30);
+  v_b(0) = snap(v_b(0), 30);
+  Move move = cachedMove(settings, moveKey(ca, cb, v_a, v_b), [&] {
+    return planMove(scene, limits, levers, ca, cb, v_a, v_b, settings);
+  });
+  if (move.samples && turn != 0.0)
+    for (TrajectorySample& s : *move.samples) s.theta += turn;
+  return move;
 }
 
 // Segment i's samples after the program so far, moved to start at t0.
@@ -481,7 +580,7 @@ void appendRun(Move move,
   out.times.detours += move.detour ? 1u : 0u;
   out.times.moving_by_axis += move.by_axis;
   auto& m = *move.samples;
-  for (auto& x : m) x.t += samples.back().t - move.from;
+  for (auto& x : m) x.t += samples.back().t;
   const double t0 = m.empty() ? samples.back().t + max_step : m.back().t;
   samples.insert(samples.end(), m.begin(), m.empty() ? m.end() : m.end() - 1);
   out.start_times[i] = t0;
@@ -492,7 +591,6 @@ void appendRun(Move move,
 // A segment no move reached from the one before it, tried once more at the end of the program,
 // run forwards and then backwards; dropped when neither is reached.
 void appendDeferred(const collision::Scene& scene,
-                    collision::ClearanceEvaluator& clearance,
                     const kinematics::AxisLimits& limits,
                     const AxisVector& levers,
                     const std::vector<Trajectory>& segments,
@@ -507,9 +605,7 @@ void appendDeferred(const collision::Scene& scene,
                                    axesOf(samples.back()));
     const TrajectorySample &a = samples.back(), &b = seg.samples.front();
     const AxisVector v_a = endSpeed(out.trajectory), v_b = startSpeed(seg);
-    Move move = cachedMove(settings, moveKey(a, b, v_a, v_b), [&] {
-      return planMove(scene, clearance, limits, levers, a, b, v_a, v_b, settings);
-    });
+    Move move = moveBetween(scene, limits, levers, a, b, v_a, v_b, settings);
     if (!move.samples) continue;
     appendRun(std::move(move), seg, from, i, settings.max_step, out);
     out.flipped[i] = backwards ? 1 : 0;
@@ -529,27 +625,12 @@ std::vector<Move> neighbourMoves(const collision::Scene& scene,
                                  const std::vector<Trajectory>& unwrapped,
                                  const MoveSettings& settings) {
   std::vector<Move> moves(unwrapped.size());
-  std::vector<std::optional<MoveKey>> keys(unwrapped.size());  // of the moves planned anew
-  tbb::enumerable_thread_specific<collision::ClearanceEvaluator> evaluators(std::cref(scene));
   tbb::parallel_for(std::size_t{1}, unwrapped.size(), [&](std::size_t i) {
     const Trajectory &a = unwrapped[i - 1], &b = unwrapped[i];
     if (a.samples.empty() || b.samples.empty()) return;
-    const TrajectorySample &from = a.samples.back(), &to = b.samples.front();
-    if (settings.cache) {
-      // Read only here: the new moves are added after the loop.
-      const auto& cached = settings.cache->impl().moves;
-      keys[i] = moveKey(from, to, endSpeed(a), startSpeed(b));
-      if (const auto it = cached.find(*keys[i]); it != cached.end()) {
-        moves[i] = it->second;
-        keys[i].reset();
-        return;
-      }
-    }
-    moves[i] = planMove(scene, evaluators.local(), limits, levers, from, to, endSpeed(a),
-                        startSpeed(b), settings);
+    moves[i] = moveBetween(scene, limits, levers, a.samples.back(), b.samples.front(), endSpeed(a),
+                           startSpeed(b), settings);
   });
-  for (std::size_t i = 1; i < unwrapped.size(); ++i)
-    if (keys[i]) settings.cache->impl().moves.emplace(*keys[i], moves[i]);
   return moves;
 }
 
@@ -587,7 +668,6 @@ JoinedProgram joinSegments(const collision::Scene& scene,
                        : unwound(cell, segments[i], axesOf(unwrapped[i - 1].samples.back()));
   }
   std::vector<Move> moves = neighbourMoves(scene, limits, levers, unwrapped, settings);
-  collision::ClearanceEvaluator clearance(scene);
   auto& samples = out.trajectory.samples;
   std::vector<std::size_t> deferred;  // segments no move reaches from the one before
   std::size_t last = 0;               // the segment the program ends with
@@ -607,9 +687,7 @@ JoinedProgram joinSegments(const collision::Scene& scene,
       seg = unwound(cell, segments[i], axesOf(samples.back()));
       const TrajectorySample &a = samples.back(), &b = seg.samples.front();
       const AxisVector v_a = endSpeed(out.trajectory), v_b = startSpeed(seg);
-      move = cachedMove(settings, moveKey(a, b, v_a, v_b), [&] {
-        return planMove(scene, clearance, limits, levers, a, b, v_a, v_b, settings);
-      });
+      move = moveBetween(scene, limits, levers, a, b, v_a, v_b, settings);
     }
     // The next precomputed move starts from unwrapped[i]: usable only if that is what runs.
     in_step = axesOf(seg.samples.back()) == axesOf(unwrapped[i].samples.back());
@@ -621,7 +699,7 @@ JoinedProgram joinSegments(const collision::Scene& scene,
     last = i;
   }
   for (const std::size_t i : deferred) {
-    appendDeferred(scene, clearance, limits, levers, segments, last, i, settings, out);
+    appendDeferred(scene, limits, levers, segments, last, i, settings, out);
     if (!std::isnan(out.start_times[i])) last = i;
   }
   const ProgramTimes split = programTimes(out.trajectory);

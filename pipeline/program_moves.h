@@ -23,8 +23,10 @@
 namespace scanplan::pipeline {
 
 /// Moves joinSegments() planned, for later joins of the same scene with the same settings: a
-/// move whose both ends (every axis) and speeds there are the same is taken from here, so a join
-/// of the same passes in another order plans only the moves that are new. One join at a time.
+/// move whose both ends (every axis; the table's up to whole turns when it turns without end) and
+/// speeds there are the same is taken from here, so a join of the same passes in another order
+/// plans only the moves that are new. Joins may share it from several threads: each move is
+/// planned once.
 class MoveCache {
  public:
   MoveCache();
@@ -32,8 +34,6 @@ class MoveCache {
   MoveCache(const MoveCache&) = delete;
   MoveCache& operator=(const MoveCache&) = delete;
   std::size_t size() const;
-  /// Takes in the moves of `other` it does not hold (`other` keeps the rest).
-  void merge(MoveCache& other);
   struct Impl;
   Impl& impl() { return *impl_; }
 

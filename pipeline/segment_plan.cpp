@@ -577,19 +577,14 @@ JoinedProgram joinBest(const ScanProblem& problem,
   MoveCache cache;  // the joins share the moves they have in common
   moves.cache = &cache;
   OrderSearch search{problem, p, trajectories, moves, segs.size(), std::move(runs), {}, {}, {}};
-  // 2-opt's order alone joined beside it (its own cache, merged after): a move that takes long
-  // in one join then leaves the other core to the other join.
-  MoveCache cache2;
-  MoveSettings moves2 = moves;
-  moves2.cache = &cache2;
+  // 2-opt's order alone joined beside it, sharing the cache: a move both need is planned once.
   OrderSearch plain = search.inOrder(
-      orderSegments(cell, search.runs.forwards, search.runs.fixed, {}, false), moves2);
+      orderSegments(cell, search.runs.forwards, search.runs.fixed, {}, false), moves);
   const bool two = !(plain.runs.order == search.runs.order);
   tbb::parallel_invoke([&] { search.joinFirst(); },
                        [&] {
                          if (two) plain.joinFirst();
                        });
-  cache.merge(cache2);
   if (two) search.adopt(plain);
   constexpr int kReorderRounds = 4;
   for (int round = 0; round < kReorderRounds && search.joined.times.detours > 0; ++round) {

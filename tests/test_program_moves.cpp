@@ -19,6 +19,8 @@
 #include <unistd.h>
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_invoke.h>
 
 #include <scanplan/collision/clearance.h>
 #include <scanplan/config/job.h>
@@ -235,6 +237,25 @@ TEST_F(ProgramMoves, BackingOffAtOneEndIsNeverSlowerThanAtBoth) {
   EXPECT_TRUE(report.valid) << (report.violations.empty() ? "" : report.violations[0].what);
 }
 
+// Move settings with a cache of their own.
+struct WithCache {
+  pipeline::MoveCache cache;
+  pipeline::MoveSettings settings;
+  WithCache() { settings.cache = &cache; }
+};
+
+// The same program, sample for sample, with the same moves backed off.
+void expectSameJoin(const pipeline::JoinedProgram& a, const pipeline::JoinedProgram& b) {
+  ASSERT_EQ(a.trajectory.samples.size(), b.trajectory.samples.size());
+  for (std::size_t k = 0; k < a.trajectory.samples.size(); ++k) {
+    const auto &x = a.trajectory.samples[k], &y = b.trajectory.samples[k];
+    ASSERT_EQ(x.t, y.t) << k;
+    ASSERT_EQ(x.theta, y.theta) << k;
+    ASSERT_EQ(x.q, y.q) << k;
+  }
+  EXPECT_EQ(a.times.detours, b.times.detours);
+}
+
 // Moves taken from the cache are the moves planned afresh: joined in another order with a
 // cache filled by the first order, the program is the same, sample for sample, as without it;
 // joined again in the first order, nothing new is planned.
@@ -244,28 +265,19 @@ TEST_F(ProgramMoves, CachedMovesAreTheMovesPlannedAfresh) {
   std::vector<kinematics::Trajectory> runs = scanningRuns(plan.trajectory->trajectory);
   ASSERT_GE(runs.size(), 4u);
   const collision::Scene& scene = *plan.prepared->scene;
-  pipeline::MoveCache cache;
-  pipeline::MoveSettings cached;
-  cached.cache = &cache;
-  const pipeline::JoinedProgram first = pipeline::joinSegments(scene, runs, cached);
-  const std::size_t planned = cache.size();
+  WithCache c;
+  const pipeline::JoinedProgram first = pipeline::joinSegments(scene, runs, c.settings);
+  const std::size_t planned = c.cache.size();
   EXPECT_EQ(planned, first.times.moves);
-  const pipeline::JoinedProgram again = pipeline::joinSegments(scene, runs, cached);
-  EXPECT_EQ(cache.size(), planned);
+  const pipeline::JoinedProgram again = pipeline::joinSegments(scene, runs, c.settings);
+  EXPECT_EQ(c.cache.size(), planned);
   ASSERT_EQ(again.trajectory.samples.size(), first.trajectory.samples.size());
   // Another order: the two middle passes swapped, the others' moves still in the cache.
   std::swap(runs[1], runs[2]);
-  const pipeline::JoinedProgram with = pipeline::joinSegments(scene, runs, cached);
+  const pipeline::JoinedProgram with = pipeline::joinSegments(scene, runs, c.settings);
   const pipeline::JoinedProgram without = pipeline::joinSegments(scene, runs, {});
-  EXPECT_GT(cache.size(), planned);
-  ASSERT_EQ(with.trajectory.samples.size(), without.trajectory.samples.size());
-  for (std::size_t k = 0; k < with.trajectory.samples.size(); ++k) {
-    const auto &a = with.trajectory.samples[k], &b = without.trajectory.samples[k];
-    ASSERT_EQ(a.t, b.t) << k;
-    ASSERT_EQ(a.theta, b.theta) << k;
-    ASSERT_EQ(a.q, b.q) << k;
-  }
-  EXPECT_EQ(with.times.detours, without.times.detours);
+  EXPECT_GT(c.cache.size(), planned);
+  expectSameJoin(with, without);
   // The moves made, listed as they run, take the program's time beside the passes.
   ASSERT_TRUE(without.dropped.empty());
   ASSERT_EQ(without.made.size(), without.times.moves);
@@ -280,6 +292,60 @@ TEST_F(ProgramMoves, CachedMovesAreTheMovesPlannedAfresh) {
             return scanning;
           }(),
       1e-6);
+}
+
+// With a table that turns without end, a move met again whole turns on is the same move turned:
+// the passes joined once more two turns further plan nothing new, and every sample is the first
+// join's with the table two turns on and the same joints.
+TEST_F(ProgramMoves, AMoveWholeTableTurnsOnIsPlannedOnceAndTheSame) {
+  const pipeline::ScanPlan& plan = *plan_;
+  ASSERT_TRUE(plan.trajectory);
+  ASSERT_TRUE(plan.prepared->scene->cell().table.continuous);
+  std::vector<kinematics::Trajectory> runs = scanningRuns(plan.trajectory->trajectory);
+  const collision::Scene& scene = *plan.prepared->scene;
+  WithCache c;
+  const pipeline::JoinedProgram first = pipeline::joinSegments(scene, runs, c.settings);
+  const std::size_t planned = c.cache.size();
+  ASSERT_GT(planned, 0u);
+  constexpr double kTurns = 2.0 * 6.283185307179586;
+  for (auto& run : runs)
+    for (auto& s : run.samples) s.theta += kTurns;
+  const pipeline::JoinedProgram turned = pipeline::joinSegments(scene, runs, c.settings);
+  EXPECT_EQ(c.cache.size(), planned);
+  ASSERT_EQ(turned.trajectory.samples.size(), first.trajectory.samples.size());
+  for (std::size_t k = 0; k < first.trajectory.samples.size(); ++k) {
+    const auto &a = first.trajectory.samples[k], &b = turned.trajectory.samples[k];
+    ASSERT_NEAR(b.theta - a.theta, kTurns, 1e-9) << k;
+    ASSERT_EQ(a.q, b.q) << k;
+    ASSERT_NEAR(a.t, b.t, 1e-9) << k;
+  }
+}
+
+// The moves do not depend on the threads: the passes joined on one thread, on all of them, and
+// in two orders at once sharing one cache give the same samples as each order joined alone.
+TEST_F(ProgramMoves, TheMovesAreTheSameOnOneThreadAndOnMany) {
+  const pipeline::ScanPlan& plan = *plan_;
+  ASSERT_TRUE(plan.trajectory);
+  const std::vector<kinematics::Trajectory> runs = scanningRuns(plan.trajectory->trajectory);
+  ASSERT_GE(runs.size(), 4u);
+  std::vector<kinematics::Trajectory> swapped = runs;
+  std::swap(swapped[1], swapped[2]);
+  const collision::Scene& scene = *plan.prepared->scene;
+  pipeline::JoinedProgram one, one_swapped;
+  {
+    const tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+    one = pipeline::joinSegments(scene, runs, {});
+    one_swapped = pipeline::joinSegments(scene, swapped, {});
+  }
+  expectSameJoin(pipeline::joinSegments(scene, runs, {}), one);
+  pipeline::MoveCache cache;
+  pipeline::MoveSettings shared;
+  shared.cache = &cache;
+  pipeline::JoinedProgram a, b;
+  tbb::parallel_invoke([&] { a = pipeline::joinSegments(scene, runs, shared); },
+                       [&] { b = pipeline::joinSegments(scene, swapped, shared); });
+  expectSameJoin(a, one);
+  expectSameJoin(b, one_swapped);
 }
 
 // Joining the passes polls the cancel flag at every leg of every move: set, it ends the join
