@@ -13,7 +13,6 @@
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_invoke.h>
 
 #include <scanplan/kinematics/units.h>
 #include <scanplan/pipeline/cancel.h>
@@ -577,15 +576,15 @@ JoinedProgram joinBest(const ScanProblem& problem,
   MoveCache cache;  // the joins share the moves they have in common
   moves.cache = &cache;
   OrderSearch search{problem, p, trajectories, moves, segs.size(), std::move(runs), {}, {}, {}};
-  // 2-opt's order alone joined beside it, sharing the cache: a move both need is planned once.
+  // Then 2-opt's order alone, its moves in common taken from the cache. (Each join plans its
+  // moves on every core; two joins side by side would wait on the moves both need.)
+  search.joinFirst();
   OrderSearch plain = search.inOrder(
       orderSegments(cell, search.runs.forwards, search.runs.fixed, {}, false), moves);
-  const bool two = !(plain.runs.order == search.runs.order);
-  tbb::parallel_invoke([&] { search.joinFirst(); },
-                       [&] {
-                         if (two) plain.joinFirst();
-                       });
-  if (two) search.adopt(plain);
+  if (!(plain.runs.order == search.runs.order)) {
+    plain.joinFirst();
+    search.adopt(plain);
+  }
   constexpr int kReorderRounds = 4;
   for (int round = 0; round < kReorderRounds && search.joined.times.detours > 0; ++round) {
     const SegmentOrder again = reorderSegments(cell, search.runs.forwards, search.runs.fixed,
