@@ -689,6 +689,19 @@ void boundRefinement(const std::vector<collision::PairInfo>& pairs,
       toMm(resolution)));
 }
 
+// f(k) for every k in [0, n), in parallel, each k a task of its own: the costly poses and
+// intervals (near contact, refined deep) come in runs of neighbours, which chunks of neighbours
+// would leave to one thread.
+template <class F>
+void eachInParallel(std::size_t n, const F& f) {
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, n, 1),
+      [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t k = r.begin(); k != r.end(); ++k) f(k);
+      },
+      tbb::simple_partitioner());
+}
+
 ClearanceSweep sweepClearance(const collision::Scene& scene,
                               const std::vector<kinematics::TrajectorySample>& samples,
                               double resolution) {
@@ -703,13 +716,12 @@ ClearanceSweep sweepClearance(const collision::Scene& scene,
       [&] { return collision::ClearanceEvaluator(scene); });
   std::vector<PoseCheck>& checks = sweep.checks;
   checks.resize(n);
-  tbb::parallel_for(std::size_t{0}, n,
-                    [&](std::size_t k) { checks[k] = checkPose(evaluators.local(), poses[k]); });
+  eachInParallel(n, [&](std::size_t k) { checks[k] = checkPose(evaluators.local(), poses[k]); });
   boundRefinement(pairs, bodies, poses, checks, resolution);
   std::vector<int> all_pairs(pairs.size());
   std::iota(all_pairs.begin(), all_pairs.end(), 0);
   sweep.intervals.resize(n - 1);
-  tbb::parallel_for(std::size_t{0}, n - 1, [&](std::size_t k) {
+  eachInParallel(n - 1, [&](std::size_t k) {
     IntervalRefiner refiner(pairs, bodies, resolution, evaluators.local(), sweep.intervals[k]);
     refiner.refine(poses[k], checks[k], poses[k + 1], checks[k + 1], all_pairs, 0);
   });

@@ -8,6 +8,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -986,17 +987,22 @@ SimulationStats ScanSimulator::Impl::profiles(const std::vector<ScanFrame>& fram
       }
       continue;
     }
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(from, to),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-                        Scratch& s = scratch.local();
-                        Output& out = outputs.local();
-                        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                          const std::size_t begin = out.points.size();
-                          profile(frames[i], static_cast<std::uint32_t>(i), setup, s, out.points,
-                                  out.stats);
-                          spans[i - from] = {&out.points, begin, out.points.size()};
-                        }
-                      });
+    // The room the batch may fill is touched by one thread while the rest cast.
+    tbb::parallel_invoke([&] { detail::touchRoom(cloud.points, size, size + (to - from) * rays); },
+                         [&] {
+                           tbb::parallel_for(
+                               tbb::blocked_range<std::size_t>(from, to),
+                               [&](const tbb::blocked_range<std::size_t>& range) {
+                                 Scratch& s = scratch.local();
+                                 Output& out = outputs.local();
+                                 for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                                   const std::size_t begin = out.points.size();
+                                   profile(frames[i], static_cast<std::uint32_t>(i), setup, s,
+                                           out.points, out.stats);
+                                   spans[i - from] = {&out.points, begin, out.points.size()};
+                                 }
+                               });
+                         });
     // The batch's points in frame order, each frame's copied in parallel to its own place.
     std::size_t total = cloud.points.size();
     for (std::size_t i = from; i < to; ++i) {

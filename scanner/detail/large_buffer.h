@@ -6,6 +6,7 @@
 // half the simulation's time on the demo). 2 MiB pages make them 512 times fewer. Only advice:
 // where the kernel gives no huge pages, nothing changes.
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -27,6 +28,20 @@ inline void adviseHugePages(void* data, std::size_t bytes) {
   (void)data;
   (void)bytes;
 #endif
+}
+
+/// Writes a byte in every page of v's room for elements [from, to) (clipped to its capacity,
+/// none constructed there yet): the room's first-touch page faults are taken here, by the thread
+/// that calls this, while the others work (measured on a virtual machine: 0.25 s of faults for
+/// the demo's 173 MB cloud, which do not get faster on more threads).
+template <class T>
+void touchRoom(std::vector<T>& v, std::size_t from, std::size_t to) {
+  constexpr std::size_t kPage = 4096;
+  auto* base = reinterpret_cast<volatile unsigned char*>(v.data());
+  const std::size_t end = std::min(to, v.capacity()) * sizeof(T);
+  for (std::size_t at = std::max(from, v.size()) * sizeof(T); at < end;
+       at = (at / kPage + 1) * kPage)
+    base[at] = 0;
 }
 
 /// v.reserve(n), the new room advised huge pages when it moved.
