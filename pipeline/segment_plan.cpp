@@ -585,7 +585,7 @@ JoinedProgram joinBest(const ScanProblem& problem,
     plain.joinFirst();
     search.adopt(plain);
   }
-  constexpr int kReorderRounds = 4;
+  constexpr int kReorderRounds = 8;
   for (int round = 0; round < kReorderRounds && search.joined.times.detours > 0; ++round) {
     const SegmentOrder again = reorderSegments(cell, search.runs.forwards, search.runs.fixed,
                                                search.runs.order, search.known);
