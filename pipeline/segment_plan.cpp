@@ -534,9 +534,9 @@ struct OrderSearch {
   void joinFirst() {
     joined = joinInOrder(*p.scene, runs, segments, maxProgram(), moves, run_order, &known);
   }
-  // A search of the same runs in `order`, with `with` (not joined yet).
-  OrderSearch inOrder(const SegmentOrder& order, const MoveSettings& with) const {
-    OrderSearch o{problem, p, trajectories, with, segments, runs, {}, {}, {}};
+  // A search of the same runs in `order` (not joined yet).
+  OrderSearch inOrder(const SegmentOrder& order) const {
+    OrderSearch o{problem, p, trajectories, moves, segments, runs, {}, {}, {}};
     o.runs.order = order;
     arrange(p.scene->cell(), trajectories, p.path.path.own_durations, o.runs);
     return o;
@@ -553,7 +553,7 @@ struct OrderSearch {
   void tryOrder(const SegmentOrder& order) {
     if (order == runs.order) return;
     pollCancel(problem.planning.termination.cancel);
-    OrderSearch other = inOrder(order, moves);
+    OrderSearch other = inOrder(order);
     other.joinFirst();
     adopt(other);
   }
@@ -579,12 +579,7 @@ JoinedProgram joinBest(const ScanProblem& problem,
   // Then 2-opt's order alone, its moves in common taken from the cache. (Each join plans its
   // moves on every core; two joins side by side would wait on the moves both need.)
   search.joinFirst();
-  OrderSearch plain = search.inOrder(
-      orderSegments(cell, search.runs.forwards, search.runs.fixed, {}, false), moves);
-  if (!(plain.runs.order == search.runs.order)) {
-    plain.joinFirst();
-    search.adopt(plain);
-  }
+  search.tryOrder(orderSegments(cell, search.runs.forwards, search.runs.fixed, {}, false));
   constexpr int kReorderRounds = 8;
   for (int round = 0; round < kReorderRounds && search.joined.times.detours > 0; ++round) {
     const SegmentOrder again = reorderSegments(cell, search.runs.forwards, search.runs.fixed,
