@@ -23,11 +23,12 @@ struct Line {
 };
 
 // One body of a pair as the levers see it: its link (world and table bodies count as link 0)
-// and its shapes as primitives (a mesh as its bounding box) in that link's DH frame; a table
-// body's at θ = 0, with the table axis to sweep them about.
+// and its shapes as primitives (a mesh as its bounding box), a convex polytope as its vertices,
+// in that link's DH frame; a table body's at θ = 0, with the table axis to sweep them about.
 struct Side {
   int link = 0;
   std::vector<Primitive> shapes;
+  std::vector<Eigen::Vector3d> points;  ///< convex polytopes' vertices: their hull is the shape
   std::optional<Line> table_axis;
 };
 
@@ -55,6 +56,11 @@ Side sideOf(const Scene& scene, std::size_t body) {
     }
   }
   for (const detail::CollisionShape& s : scene.geometry().map_bodies[body].shapes) {
+    if (s.geometry->getNodeType() == fcl::GEOM_CONVEX) {  // a point's reach is convex in it
+      for (const Eigen::Vector3d& v : static_cast<const fcl::Convexd&>(*s.geometry).getVertices())
+        side.points.push_back(X_link_body * s.X_BG * v);
+      continue;
+    }
     Primitive p = s.primitive ? *s.primitive : *s.bounding_box;
     p.X_W = X_link_body * s.X_BG * p.X_W;
     side.shapes.push_back(p);
@@ -83,22 +89,23 @@ std::vector<Eigen::Vector3d> spanPoints(const Primitive& p, double& pad) {
 // `on_axis`: a capsule or cylinder whose ends all measure 0 turns into itself and counts 0.
 template <class Measure>
 double reach(const Side& side, Measure&& measure, bool on_axis_is_still) {
+  const auto farthest = [&](const Eigen::Vector3d& x) {
+    if (!side.table_axis) return measure(x);
+    const Line& axis = *side.table_axis;
+    const Eigen::Vector3d centre = axis.o + (x - axis.o).dot(axis.u) * axis.u;
+    return measure(centre) + (x - centre).norm();
+  };
   double out = 0.0;
   for (const Primitive& p : side.shapes) {
     double pad = 0.0, far = 0.0;
-    for (const Eigen::Vector3d& x : spanPoints(p, pad)) {
-      if (!side.table_axis) {
-        far = std::max(far, measure(x));
-        continue;
-      }
-      const Line& axis = *side.table_axis;
-      const Eigen::Vector3d centre = axis.o + (x - axis.o).dot(axis.u) * axis.u;
-      far = std::max(far, measure(centre) + (x - centre).norm());
-    }
+    for (const Eigen::Vector3d& x : spanPoints(p, pad)) far = std::max(far, farthest(x));
     const bool still =
         on_axis_is_still && !side.table_axis && p.kind != Primitive::Kind::kBox && far < 1e-12;
     if (!still) out = std::max(out, far + pad);
   }
+  // A polytope's points reach no farther than its vertices (a distance from a line, from a
+  // point, and the table's sweep are convex).
+  for (const Eigen::Vector3d& x : side.points) out = std::max(out, farthest(x));
   return out;
 }
 

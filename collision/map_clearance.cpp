@@ -41,6 +41,9 @@ int depthOf(const Scene& scene, std::size_t p, bool with_link) {
 // SelfPairGrid's erosion: its bins' bounds lie at most this far below the distance (2, 4 and
 // 8 mm measured on the demo map: 4 and 8 the same, 2 a little worse).
 constexpr double kGridErosion = 0.004;  // m
+// Its erosion for the fine pairs, whose factor is their bins' bound: at most twice this nearer
+// than the pair is (0.5 mm: on the KR6 R700's pieces, the same feasible share as exactly).
+constexpr double kFineErosion = 0.0005;  // m
 
 // The most any point within r of c (a body's frame) moves from pose `from` to pose `to`.
 double motionBound(const Eigen::Vector3d& c,
@@ -71,7 +74,13 @@ std::uint8_t travelClass(const ChainLevers& levers, std::size_t p) {
 }  // namespace
 
 MapClearance::MapClearance(const Scene& scene, std::size_t branches, MapClearanceOptions options)
-    : scene_(&scene), options_(options), levers_(scene), grid_(scene, levers_, kGridErosion) {
+    : scene_(&scene),
+      options_(options),
+      levers_(scene),
+      grid_(scene,
+            levers_,
+            kGridErosion,
+            options.skip && !options.exact_distances ? kFineErosion : 0.0) {
   for (const detail::BodyGeometry& body : scene.geometry().map_bodies) {
     const auto [c, r] = detail::boundingSphere(body);
     centre_.push_back(c);
@@ -240,7 +249,15 @@ double MapClearance::pairFactor(std::size_t p, double travel) {
     if (shared_factor_[p] < 0.0) shared_factor_[p] = sharedFactor(p);
     return seen = shared_factor_[p];
   }
+  if (grid_.fine(p)) return seen = fineFactor(p, slot);
   return seen = linkFactor(p, slot, *q_, travel);
+}
+
+double MapClearance::fineFactor(std::size_t p, std::size_t slot) {
+  const double lower = grid_.lower(p, *q_) - kMargin;
+  if (lower == -kInf) return requery(p, slot, *q_);  // a joint outside its limits
+  const PairThresholds& t = scene_->pairs()[p].thresholds;
+  return lower >= t.d_high ? 1.0 : rampFactor(lower, t.d_low, t.d_high, t.gamma);
 }
 
 void MapClearance::findTwin(std::size_t branch, const kinematics::JointVector& q) {

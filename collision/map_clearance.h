@@ -47,7 +47,9 @@ struct MapClearanceOptions {
 ///   cell, bound its distance from above: below d_low still, the factor is 0 without a query.
 /// - The arm's own pairs with one or two joints between them: before a query, SelfPairGrid's
 ///   bound for the bin of those joints; at or above d_high the pair is 1, and its memory is
-///   anchored there.
+///   anchored there. A fine pair of them (measured as a stand-in: a link mesh as its convex
+///   pieces or hull) takes its factor from that bound alone, never from a query: its
+///   factor is then at most that of a distance 1 mm nearer (SelfPairGrid), never more.
 /// - Branches share: a pair's factor depends only on the joints up to its last link placed per
 ///   branch, so a branch takes it from one scored before at the same cell with the same values
 ///   of those joints (FLIP and NOFLIP share J1–J3), and the DH frames the same way. Links are
@@ -55,8 +57,9 @@ struct MapClearanceOptions {
 /// - The zero pair first: each branch asks first the pair that zeroed its last factor; a zero
 ///   again ends the call before the pairs ahead of it are measured (on the demo with hull links,
 ///   where most cells are zero, this takes 40 % off the map).
-/// Every factor equals the plain query's (a 1e-6 m margin covers GJK's tolerance), so the
-/// maps do not depend on the skipping, nor on which cells a thread saw before. One per thread.
+/// Every factor but a fine pair's equals the plain query's (a 1e-6 m margin covers GJK's
+/// tolerance), and a fine pair's depends on its joints alone, so the maps do not depend on which
+/// cells a thread saw before. One per thread.
 class MapClearance {
  public:
   MapClearance(const Scene& scene, std::size_t branches, MapClearanceOptions options = {});
@@ -111,6 +114,9 @@ class MapClearance {
   /// Adds the step from the branch's last call to (θ, q) to each of its travel sums.
   void addTravel(Travel& travel, const kinematics::JointVector& q) const;
   double sharedFactor(std::size_t pair);
+  /// A fine pair's factor (SelfPairGrid::fine): its bin's bound's, q outside the limits
+  /// measured.
+  double fineFactor(std::size_t pair, std::size_t slot);
   double linkFactor(std::size_t pair,
                     std::size_t slot,
                     const kinematics::JointVector& q,

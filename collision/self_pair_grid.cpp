@@ -23,17 +23,41 @@ std::size_t slotOf(std::uint64_t stored, std::size_t mask) {
   return static_cast<std::size_t>(h ^ (h >> 32)) & mask;
 }
 
+// Whether the maps measure the pair as a stand-in: some shape of its bodies is a convex
+// polytope (a link mesh's hull or pieces) and none a mesh (measured exactly, as asked).
+bool standInPair(const Scene& scene, std::size_t p) {
+  const auto& bodies = scene.geometry().map_bodies;
+  bool convex = false, mesh = false;
+  for (const int body : {scene.pairs()[p].a, scene.pairs()[p].b}) {
+    for (const detail::CollisionShape& s : bodies[static_cast<std::size_t>(body)].shapes) {
+      convex = convex || s.geometry->getNodeType() == fcl::GEOM_CONVEX;
+      mesh = mesh || s.geometry->getObjectType() == fcl::OT_BVH;
+    }
+  }
+  return convex && !mesh;
+}
+
 }  // namespace
 
-SelfPairGrid::SelfPairGrid(const Scene& scene, const ChainLevers& levers, double erosion)
-    : scene_(&scene), grids_(scene.pairs().size()) {
-  if (!(erosion > 0.0) || !std::isfinite(erosion)) {
+SelfPairGrid::SelfPairGrid(const Scene& scene,
+                           const ChainLevers& levers,
+                           double erosion,
+                           double fine_erosion)
+    : scene_(&scene), grids_(scene.pairs().size()), coarse_(grids_.size()) {
+  if (!(erosion > 0.0) || !std::isfinite(erosion) || !(fine_erosion >= 0.0) ||
+      !std::isfinite(fine_erosion)) {
     throw std::invalid_argument("collision::SelfPairGrid: erosion must be positive");
   }
   const kinematics::RobotModel& robot = scene.cell().robot;
   for (std::size_t p = 0; p < grids_.size(); ++p) {
     if (!levers.covers(p) || !scene.armPair(p)) continue;
-    grids_[p] = gridOf(robot, levers.weights(p), scene.pairs()[p].thresholds.d_high, erosion);
+    const bool fine = fine_erosion > 0.0 && standInPair(scene, p);
+    grids_[p] = gridOf(robot, levers.weights(p), scene.pairs()[p].thresholds.d_high,
+                       fine ? fine_erosion : erosion);
+    grids_[p].fine = fine && grids_[p].dims > 0;
+    if (!grids_[p].fine) continue;
+    grids_[p].max_bins = kMaxFineBins;
+    coarse_[p] = gridOf(robot, levers.weights(p), scene.pairs()[p].thresholds.d_high, erosion);
   }
 }
 
@@ -54,40 +78,49 @@ SelfPairGrid::Grid SelfPairGrid::gridOf(const kinematics::RobotModel& robot,
       grid.width[k] = scale * 2.0 * erosion / (grid.dims * w[k]);
       grid.per_width[k] = 1.0 / grid.width[k];
       grid.origin[k] = joint.min;
+      grid.weight[k] = w[k];
       grid.bins[k] = binsAlong(joint.max - joint.min, grid.width[k]);
       count *= static_cast<double>(grid.bins[k]);
     }
     if (count < 0x1p62) break;
   }
-  grid.erosion = 0.0;
-  for (std::size_t k = 0; k < w.size(); ++k) grid.erosion += w[k] * 0.5 * grid.width[k];
-  grid.erosion = grid.erosion * (1.0 + 1e-9) + 1e-12;  // the bin centre's rounding
-  grid.cap = d_high + grid.erosion + 1e-6;
+  double reach = 0.0;  // Σ w_k·h_k, the most a bin's centre takes off its bound
+  for (std::size_t k = 0; k < w.size(); ++k) reach += w[k] * 0.5 * grid.width[k];
+  grid.cap = d_high + reach * (1.0 + 1e-9) + 1e-6;
+  grid.far = d_high + 1e-6;
   grid.keys.assign(1024, 0);
-  grid.bounds.assign(1024, 0.0);
+  grid.centre.assign(1024, 0.0);
   return grid;
 }
 
 bool SelfPairGrid::keyOf(const Grid& grid,
                          const kinematics::JointVector& q,
-                         std::uint64_t& key) const {
+                         std::uint64_t& key,
+                         double& offset) const {
   std::uint64_t out = 0;
+  offset = 0.0;
   for (std::size_t k = 0; k < grid.width.size(); ++k) {
     if (grid.width[k] == 0.0) continue;
     const double b = (q(static_cast<int>(k)) - grid.origin[k]) * grid.per_width[k];
     if (!(b >= 0.0 && b < static_cast<double>(grid.bins[k]))) return false;
     // b ≥ 0: truncation is floor.
-    out = out * static_cast<std::uint64_t>(grid.bins[k]) + static_cast<std::uint64_t>(b);
+    const auto bin = static_cast<std::uint64_t>(b);
+    out = out * static_cast<std::uint64_t>(grid.bins[k]) + bin;
+    // The centre as measure() places it.
+    const double c = grid.origin[k] + (static_cast<double>(bin) + 0.5) * grid.width[k];
+    offset += grid.weight[k] * std::abs(q(static_cast<int>(k)) - c);
   }
+  // The centre's rounding, and the bound's own (ChainLevers sums in another order).
+  offset = offset * (1.0 + 1e-9) + 1e-12;
   key = out;
   return true;
 }
 
-double SelfPairGrid::measure(std::size_t p,
-                             const Grid& grid,
-                             std::uint64_t key,
-                             kinematics::JointVector q) const {
-  // The bin's centre: the key's digits, last joint first.
+double SelfPairGrid::measure(std::size_t p, const Grid& grid, std::uint64_t key) const {
+  kinematics::JointVector q = kinematics::JointVector::Zero();
+  // The bin's centre: the key's digits, last joint first. The other joints do not move the pair
+  // (weight 0) and stay at 0, so that the bound does not depend on which q came first, not even
+  // by a rounding.
   for (std::size_t k = grid.width.size(); k-- > 0;) {
     if (grid.width[k] == 0.0) continue;
     const auto bins = static_cast<std::uint64_t>(grid.bins[k]);
@@ -109,41 +142,52 @@ double SelfPairGrid::measure(std::size_t p,
   const detail::ShapeDistance d = detail::bodyDistance(
       bodies[static_cast<std::size_t>(pair.a)], place(a), bodies[static_cast<std::size_t>(pair.b)],
       place(b), grid.cap, false, false);
-  return d.lower - grid.erosion;
+  return d.lower;
 }
 
 void SelfPairGrid::grow(Grid& grid) {
   std::vector<std::uint64_t> keys(grid.keys.size() * 2, 0);
-  std::vector<double> bounds(keys.size(), 0.0);
+  std::vector<double> centre(keys.size(), 0.0);
   const std::size_t mask = keys.size() - 1;
   for (std::size_t i = 0; i < grid.keys.size(); ++i) {
     if (grid.keys[i] == 0) continue;
     std::size_t slot = slotOf(grid.keys[i], mask);
     while (keys[slot] != 0) slot = (slot + 1) & mask;
     keys[slot] = grid.keys[i];
-    bounds[slot] = grid.bounds[i];
+    centre[slot] = grid.centre[i];
   }
   grid.keys = std::move(keys);
-  grid.bounds = std::move(bounds);
+  grid.centre = std::move(centre);
 }
 
 double SelfPairGrid::lower(std::size_t p, const kinematics::JointVector& q) {
   Grid& grid = grids_[p];
+  if (grid.fine) {  // far by the coarse bins: no fine bin measured
+    const double far = binLower(p, coarse_[p], q);
+    if (far >= coarse_[p].far) return far;
+  }
+  return binLower(p, grid, q);
+}
+
+double SelfPairGrid::binLower(std::size_t p, Grid& grid, const kinematics::JointVector& q) {
   std::uint64_t key = 0;
-  if (!keyOf(grid, q, key)) return -kInf;
+  double offset = 0.0;
+  if (!keyOf(grid, q, key, offset)) return -kInf;
   const std::uint64_t stored = key + 1;
   const std::size_t mask = grid.keys.size() - 1;
   std::size_t slot = slotOf(stored, mask);
   for (; grid.keys[slot] != 0; slot = (slot + 1) & mask) {
-    if (grid.keys[slot] == stored) return grid.bounds[slot];
+    if (grid.keys[slot] == stored) return grid.centre[slot] - offset;
   }
-  if (grid.used >= kMaxBins) return -kInf;
-  const double bound = measure(p, grid, key, q);
+  if (grid.used >= grid.max_bins && !grid.fine) return -kInf;
+  const double centre = measure(p, grid, key);
   ++measured_;
-  grid.keys[slot] = stored;
-  grid.bounds[slot] = bound;
-  if (++grid.used * 2 > grid.keys.size()) grow(grid);
-  return bound;
+  if (grid.used < grid.max_bins) {
+    grid.keys[slot] = stored;
+    grid.centre[slot] = centre;
+    if (++grid.used * 2 > grid.keys.size()) grow(grid);
+  }
+  return centre - offset;
 }
 
 }  // namespace scanplan::collision

@@ -14,6 +14,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <numbers>
 #include <random>
@@ -24,8 +25,11 @@
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
+#include <scanplan/collision/chain_levers.h>
+#include <scanplan/collision/clearance.h>
 #include <scanplan/collision/map_clearance.h>
 #include <scanplan/collision/scene.h>
+#include <scanplan/collision/self_pair_grid.h>
 #include <scanplan/config/job.h>
 #include <scanplan/config/spec.h>
 #include <scanplan/kinematics/error.h>
@@ -688,12 +692,14 @@ TEST(ConfigMap, MotionBoundSkippingChangesNoValue) {
   EXPECT_GT(clearance_limited, 100);  // the clearance layer is exercised, not all 1
 }
 
-// A robot whose links are meshes (each the union of the demo robot's shapes of
-// that link, tessellated: link1 and link2 are non-convex) maps with the hulls no higher than
-// with the exact meshes, cell by cell, and lower somewhere; motion-bound skipping still changes
-// no value.
-TEST_F(MapJob, MeshLinksMapAsHullsConservativelyAndSkippingStaysExact) {
+// The demo robot with its links as meshes (each the union of its shapes of that link,
+// tessellated: link1 and link2 are non-convex), written into dir; returns the robot file.
+fs::path writeMeshRobot(const fs::path& dir) {
   const config::JobSpec primitive = shortDemoJob();
+  const auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir / name, std::ios::binary | std::ios::trunc) << text;
+    return dir / name;
+  };
   std::ifstream viper(test::sourceDir() / "data/robots/viper_s650.yaml");
   std::string robot((std::istreambuf_iterator<char>(viper)), std::istreambuf_iterator<char>());
   robot = robot.substr(0, robot.find("\nlinks:") + 1);  // the kinematics, then mesh links
@@ -718,7 +724,27 @@ TEST_F(MapJob, MeshLinksMapAsHullsConservativelyAndSkippingStaysExact) {
     robot += fmt::format("  - {{name: {}, shapes: [{{type: mesh, file: {}, units: m}}]}}\n",
                          link.name, file.string());
   }
-  const fs::path robot_file = write("mesh_robot.yaml", robot);
+  return write("mesh_robot.yaml", robot);
+}
+
+// Every threshold of the config `by` farther (m): with it a plain map is one of distances `by`
+// nearer.
+collision::ClearanceConfig raised(collision::ClearanceConfig config, double by) {
+  config.defaults.d_low += by;
+  config.defaults.d_high += by;
+  for (collision::PairRule& rule : config.rules) {
+    if (rule.d_low >= 0.0) rule.d_low += by;
+    if (rule.d_high >= 0.0) rule.d_high += by;
+  }
+  return config;
+}
+
+// A robot whose links are meshes (writeMeshRobot) maps with the hulls no higher than with the
+// exact meshes, cell by cell, and lower somewhere; motion-bound skipping changes no value but
+// the fine self pairs' (SelfPairGrid), which lie between the plain map's and that of distances
+// 1 mm nearer.
+TEST_F(MapJob, MeshLinksMapAsHullsConservativelyAndSkippingStaysExact) {
+  const fs::path robot_file = writeMeshRobot(dir_);
   const config::JobSpec job = shortDemoJob({"robot=" + robot_file.string()});
   const kinematics::CellModel cell = config::buildCell(job);
   const kinematics::ScanPath path = jobPath(job, cell);
@@ -794,7 +820,19 @@ TEST_F(MapJob, MeshLinksMapAsHullsConservativelyAndSkippingStaysExact) {
   EXPECT_GT(lower, 0u) << "premise: the hulls are conservative somewhere";
   EXPECT_LT(lower, hull_map.f.size());
   request.motion_bounds = false;
-  EXPECT_TRUE(sameMap(hull_map, planner::buildConfigMap(hulls, settings, path, request)));
+  const ConfigMap plain = planner::buildConfigMap(hulls, settings, path, request);
+  collision::ClearanceConfig hull_config = config;
+  hull_config.link_meshes = collision::LinkMeshes::kHull;
+  const collision::Scene nearer(cell, raised(hull_config, 0.00101));
+  const ConfigMap plain_nearer = planner::buildConfigMap(nearer, settings, path, request);
+  std::size_t binned = 0;
+  for (std::size_t i = 0; i < hull_map.f.size(); ++i) {
+    ASSERT_LE(hull_map.clearance[i], plain.clearance[i] + 1e-6) << "cell " << i;
+    ASSERT_GE(hull_map.clearance[i], plain_nearer.clearance[i] - 1e-6) << "cell " << i;
+    binned += hull_map.clearance[i] < plain.clearance[i] - 1e-6f ? 1u : 0u;
+  }
+  EXPECT_GT(binned, 0u) << "premise: a fine pair's bins take something off";
+  EXPECT_TRUE(sameBytes(hull_map.joint, plain.joint));
 
   // The default map (convex pieces where the hull is loose) is no higher than the exact one
   // anywhere, and no lower than the hull map: each link's clearance within its margin.
@@ -808,6 +846,56 @@ TEST_F(MapJob, MeshLinksMapAsHullsConservativelyAndSkippingStaysExact) {
     above_hull += auto_map.clearance[i] > hull_map.clearance[i] + 1e-3f ? 1u : 0u;
   }
   EXPECT_GT(above_hull, 0u) << "premise: the pieces are tighter than the hulls somewhere";
+}
+
+// SelfPairGrid's fine pairs: the arm's own pairs with one or two joints between them measured as
+// stand-ins (here the links' hulls). A bin's bound holds at every configuration in it and lies
+// within twice the fine erosion of the distance there, below d_high; with the meshes measured
+// exactly no pair is fine.
+TEST_F(MapJob, AFinePairsBoundLiesWithinTwiceTheFineErosionOfItsDistance) {
+  const config::JobSpec job = shortDemoJob({"robot=" + writeMeshRobot(dir_).string()});
+  const kinematics::CellModel cell = config::buildCell(job);
+  collision::ClearanceConfig config = config::clearanceConfig(job);
+  config.link_meshes = collision::LinkMeshes::kExact;
+  const collision::Scene exact(cell, config);
+  const collision::ChainLevers exact_levers(exact);
+  const collision::SelfPairGrid exact_grid(exact, exact_levers, 0.004, 0.0005);
+  config.link_meshes = collision::LinkMeshes::kHull;
+  const collision::Scene scene(cell, config);
+  const collision::ChainLevers levers(scene);
+  constexpr double kFine = 0.0005;
+  collision::SelfPairGrid grid(scene, levers, 0.004, kFine);
+  std::size_t fine = 0;
+  for (std::size_t p = 0; p < scene.pairs().size(); ++p) {
+    fine += grid.fine(p) ? 1u : 0u;
+    EXPECT_FALSE(exact_grid.fine(p)) << "pair " << p;
+    if (grid.fine(p)) {
+      EXPECT_TRUE(grid.covers(p) && scene.armPair(p)) << "pair " << p;
+    }
+  }
+  ASSERT_GE(fine, 4u);  // link2-link4, link4-link6, link4-scanner, …
+  collision::ClearanceEvaluator evaluator(scene, true, collision::Geometry::kMap);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> hair(-2e-3, 2e-3);
+  std::size_t checked = 0, near = 0;
+  for (int k = 0; k < 400; ++k) {
+    kinematics::JointVector q = test::randomJoints(cell.robot, rng);
+    if (k % 2 == 1) q = q.unaryExpr([&](double v) { return v + hair(rng); });
+    const collision::ClearanceResult r = evaluator.evaluate(0.1 * k, q, {.bounded = false});
+    for (std::size_t p = 0; p < scene.pairs().size(); ++p) {
+      const double lower =
+          grid.fine(p) ? grid.lower(p, q) : -std::numeric_limits<double>::infinity();
+      if (!std::isfinite(lower)) continue;  // not fine, or a joint a hair outside its limits
+      const double d = r.pairs[p].distance;
+      ASSERT_LE(lower, d + 1e-9) << "pair " << p << " at sample " << k;
+      ++checked;
+      if (d >= scene.pairs()[p].thresholds.d_high) continue;
+      ASSERT_GE(lower, d - 2.0 * kFine * 1.001) << "pair " << p << " at sample " << k;
+      ++near;
+    }
+  }
+  EXPECT_GT(checked, 400u * fine * 9 / 10);
+  EXPECT_GT(near, 100u);  // the second check is not vacuous
 }
 
 TEST(ConfigMap, LayersAreByteIdenticalForOneAndTwoThreads) {
