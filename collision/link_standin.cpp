@@ -8,6 +8,7 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <numbers>
 #include <sstream>
 #include <system_error>
 #include <utility>
@@ -306,6 +307,43 @@ StandIn fitStandIn(const kinematics::TriangleMesh& mesh, const StandInOptions& o
     out.pieces.push_back(std::move(p.hull));
   }
   out.fits = out.margin <= options.margin && out.pieces.size() <= options.max_pieces;
+  return out;
+}
+
+std::optional<AxisCylinder> axisCylinder(const kinematics::TriangleMesh& mesh,
+                                         const Eigen::Vector3d& o,
+                                         const Eigen::Vector3d& u,
+                                         double tolerance,
+                                         double give_up) {
+  if (mesh.triangles.empty() || mesh.vertices.empty()) return std::nullopt;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo, radius = 0.0;
+  for (const Eigen::Vector3d& v : mesh.vertices) {
+    const double t = (v - o).dot(u);
+    lo = std::min(lo, t);
+    hi = std::max(hi, t);
+    radius = std::max(radius, (v - o - t * u).norm());
+  }
+  if (!(hi > lo) || !(radius > 0.0)) return std::nullopt;
+  AxisCylinder out;
+  out.radius = radius;
+  out.length = hi - lo;
+  out.X_MC.translation() = o + 0.5 * (lo + hi) * u;
+  out.X_MC.linear() = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), u).matrix();
+  // The prism's faces touch the circle: its corners lie 1/cos(π/n) out.
+  const double corner = radius / std::cos(std::numbers::pi / kCylinderSides);
+  std::vector<Eigen::Vector3d> corners;
+  for (int i = 0; i < kCylinderSides; ++i) {
+    const double a = 2.0 * std::numbers::pi * i / kCylinderSides;
+    for (const double z : {-0.5 * out.length, 0.5 * out.length})
+      corners.push_back(out.X_MC * Eigen::Vector3d(corner * std::cos(a), corner * std::sin(a), z));
+  }
+  auto prism = convexHullOf(corners);
+  if (!prism) return std::nullopt;
+  out.prism = std::move(*prism);
+  const auto solid = detail::makeMeshModel(mesh);
+  detail::PointSolidDistance distance(*solid);
+  out.margin =
+      detail::surfaceBound(out.prism, distance, tolerance, kMaxQueries, give_up, give_up).margin;
   return out;
 }
 

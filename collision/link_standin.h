@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Geometry>
+
 #include <scanplan/kinematics/mesh.h>
 
 namespace scanplan::collision {
@@ -36,6 +38,33 @@ struct StandIn {
 /// mesh should be closed and outward (inside is decided by ray parity); at max_pieces it stops
 /// and returns what it has with `fits` false. Deterministic.
 StandIn fitStandIn(const kinematics::TriangleMesh& mesh, const StandInOptions& options);
+
+/// A cylinder about a line that holds a mesh: a link round about its own joint's axis (a
+/// flange) stands in as it, and turning that joint does not move it (ChainLevers: weight 0).
+struct AxisCylinder {
+  Eigen::Isometry3d X_MC = Eigen::Isometry3d::Identity();  ///< in the mesh's frame: centred, z
+                                                           ///< along the line
+  double radius = 0.0;                                     ///< m
+  double length = 0.0;                                     ///< m
+  /// A closed convex prism of kCylinderSides sides around the cylinder (mesh frame), what
+  /// pictures draw and what the margin is measured on.
+  kinematics::TriangleMesh prism;
+  /// m: an upper bound on how far the prism (so the cylinder) stands outside the mesh's solid:
+  /// at most `give_up` when that is certain (the measuring then stops: the bound may be loose up
+  /// to it), else above it.
+  double margin = 0.0;
+};
+inline constexpr int kCylinderSides = 96;
+
+/// The narrowest cylinder about the line through o along the unit u (mesh frame) that holds
+/// the mesh's vertices (so the mesh: the cylinder is convex), and its margin, measured as the
+/// pieces' are, within `tolerance`, until it is certainly at most `give_up` or above it.
+/// std::nullopt for an empty mesh or a line it does not surround.
+std::optional<AxisCylinder> axisCylinder(const kinematics::TriangleMesh& mesh,
+                                         const Eigen::Vector3d& o,
+                                         const Eigen::Vector3d& u,
+                                         double tolerance,
+                                         double give_up);
 
 /// The cache key of a mesh's stand-in: a hash of its vertices, triangles and the options, and
 /// the fitting method's version, as hex.

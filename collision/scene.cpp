@@ -22,6 +22,9 @@
 namespace scanplan::collision {
 namespace {
 
+// The cylinder margin is measured as the pieces' is (StandInOptions::tolerance).
+constexpr double kCylinderTolerance = 2.5e-4;  // m
+
 bool matches(const std::string& pattern, const BodyInfo& body) {
   if (pattern == "robot") return body.motion == BodyMotion::kRobotLink;
   if (pattern == "obstacles") {
@@ -252,13 +255,67 @@ detail::BodyGeometry piecesBody(const detail::BodyGeometry& body,
   return out;
 }
 
-// What the maps measure for robot link `i` under the config: its hull, its pieces or its mesh.
-void chooseMapBody(const ClearanceConfig& config, detail::SceneGeometry& geometry, MapHull& info) {
+// A line in a link's frame: a point on it and its unit direction.
+struct Axis {
+  Eigen::Vector3d o, u;
+};
+
+// The axis link k (1–6) turns about, joint k's (z_{k−1}), in the link's DH frame, as ChainLevers
+// sees it; none for the base.
+std::optional<Axis> ownAxis(const kinematics::RobotModel& robot, int k) {
+  if (k < 1 || k > kinematics::kNumJoints) return std::nullopt;
+  const kinematics::DhJoint& dh = robot.joint(k - 1);
+  const Eigen::Isometry3d M =
+      Eigen::Translation3d(dh.a, 0.0, dh.d) * Eigen::AngleAxisd(dh.alpha, Eigen::Vector3d::UnitX());
+  const Eigen::Isometry3d M_inv = M.inverse();
+  return Axis{M_inv.translation(), M_inv.linear().col(2)};
+}
+
+// A link of one mesh that is round about its own joint's axis within piece_margin (a flange),
+// as that cylinder: into `out`, true. Turning the joint does not move it, and its distances
+// are closed forms against primitives, GJK on a cylinder against polytopes.
+bool cylinderBody(const detail::BodyGeometry& body,
+                  const Axis& axis,
+                  const ClearanceConfig& config,
+                  MapHull& info,
+                  detail::BodyGeometry& out) {
+  if (body.shapes.size() != 1) return false;
+  const detail::CollisionShape& shape = body.shapes.front();
+  const auto* model = dynamic_cast<const detail::MeshModel*>(shape.geometry.get());
+  if (!model) return false;
+  const Eigen::Isometry3d X_GB = shape.X_BG.inverse();
+  const auto c = axisCylinder(detail::meshOf(*model), X_GB * axis.o, X_GB.linear() * axis.u,
+                              kCylinderTolerance, config.piece_margin);
+  if (!c || !(c->margin <= config.piece_margin)) return false;
+  kinematics::Shape cylinder;
+  cylinder.geometry = kinematics::Cylinder{c->radius, c->length};
+  cylinder.X_BG = shape.X_BG * c->X_MC;
+  out.shapes = {detail::makeCollisionShape(cylinder)};
+  info.used = info.cylinder = true;
+  info.margin = c->margin;
+  info.cylinder_radius = c->radius;
+  info.cylinder_length = c->length;
+  info.standin = {inBody(shape, c->prism)};
+  return true;
+}
+
+// What the maps measure for robot link `i` under the config: a cylinder about its joint's axis,
+// its hull, its pieces or its mesh.
+void chooseMapBody(const ClearanceConfig& config,
+                   const std::optional<Axis>& axis,
+                   detail::SceneGeometry& geometry,
+                   MapHull& info) {
   const auto i = static_cast<std::size_t>(info.body);
   std::vector<kinematics::TriangleMesh> hull_meshes;
   detail::BodyGeometry hulls =
       hullBody(geometry.bodies[i], config.hull_vertices, info, hull_meshes);
   if (info.mesh_triangles == 0) return;
+  detail::BodyGeometry round;
+  if (axis && config.link_meshes != LinkMeshes::kHull &&
+      cylinderBody(geometry.bodies[i], *axis, config, info, round)) {
+    geometry.map_bodies[i] = std::move(round);
+    return;
+  }
   info.margin = info.hull_margin;
   if (config.link_meshes == LinkMeshes::kHull ||
       (config.link_meshes == LinkMeshes::kAuto && info.hull_margin <= config.max_hull_margin)) {
@@ -330,7 +387,7 @@ Scene::Scene(const kinematics::CellModel& cell, const ClearanceConfig& config)
     if (bodies_[i].motion != BodyMotion::kRobotLink) continue;
     MapHull info;
     info.body = static_cast<int>(i);
-    chooseMapBody(config, *geometry_, info);
+    chooseMapBody(config, ownAxis(cell.robot, bodies_[i].link), *geometry_, info);
     if (info.mesh_triangles > 0) map_hulls_.push_back(info);
   }
 }
@@ -351,7 +408,7 @@ std::vector<MapHull> robotMapLinks(const kinematics::RobotModel& robot,
   for (std::size_t i = 0; i < geometry.bodies.size(); ++i) {
     MapHull info;
     info.body = static_cast<int>(i);
-    chooseMapBody(config, geometry, info);
+    chooseMapBody(config, ownAxis(robot, static_cast<int>(i)), geometry, info);
     if (info.mesh_triangles > 0) out.push_back(info);
     if (progress) progress(i + 1, geometry.bodies.size());
   }

@@ -34,9 +34,12 @@ struct PairRule {
 
 /// How the configuration maps see robot link meshes.
 enum class LinkMeshes {
-  kAuto,    ///< per link: its hull where that stands within max_hull_margin of the mesh, else
-            ///< its convex pieces where they fit piece_margin and max_pieces, else its mesh
-  kPieces,  ///< as their convex pieces (collision/link_standin.h), whatever their margin
+  kAuto,    ///< per link: a cylinder about its own joint axis where that stands within
+            ///< piece_margin of the mesh, else its hull where that stands within
+            ///< max_hull_margin, else its convex pieces where they fit piece_margin and
+            ///< max_pieces, else its mesh
+  kPieces,  ///< a cylinder about the joint axis as kAuto, else their convex pieces
+            ///< (collision/link_standin.h), whatever their margin
   kHull,    ///< as their convex hulls: fast, conservative by each hull's margin (MapHull)
   kExact,   ///< as the meshes themselves: exact, slow for heavy meshes
 };
@@ -84,6 +87,11 @@ struct MapHull {
   double fit_seconds = 0.0;  ///< wall time fitting (or loading) the pieces
   double margin = 0.0;       ///< m, an upper bound for what the maps measure (0 for the mesh)
   bool used = false;         ///< the maps measure the hull or the pieces (else the mesh)
+  /// The maps measure a cylinder about the link's own joint axis (round about it, within
+  /// piece_margin: a flange), which turning that joint does not move; standin: its prism.
+  bool cylinder = false;
+  double cylinder_radius = 0.0;  ///< m
+  double cylinder_length = 0.0;  ///< m
   /// Where `used`: what the maps measure, one closed convex mesh per hull or piece, in the
   /// link's frame (m); empty otherwise. For pictures of the stand-in over the mesh.
   std::vector<kinematics::TriangleMesh> standin;

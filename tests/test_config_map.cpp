@@ -834,18 +834,78 @@ TEST_F(MapJob, MeshLinksMapAsHullsConservativelyAndSkippingStaysExact) {
   EXPECT_GT(binned, 0u) << "premise: a fine pair's bins take something off";
   EXPECT_TRUE(sameBytes(hull_map.joint, plain.joint));
 
-  // The default map (convex pieces where the hull is loose) is no higher than the exact one
-  // anywhere, and no lower than the hull map: each link's clearance within its margin.
+  // The default map (a cylinder for a round link, convex pieces where the hull is loose) is no
+  // higher than the exact one anywhere, and no lower than the exact map of distances nearer by
+  // the largest margin and the fine pairs' 1 mm.
   request.motion_bounds = true;
   const ConfigMap auto_map = planner::buildConfigMap(automatic, settings, path, request);
+  double margin = 0.0;
+  for (const collision::MapHull& h : automatic.mapHulls()) margin = std::max(margin, h.margin);
+  collision::ClearanceConfig exact_config = config;
+  exact_config.link_meshes = collision::LinkMeshes::kExact;
+  const collision::Scene exact_nearer(cell, raised(exact_config, margin + 0.00101));
+  const ConfigMap exact_nearer_map = planner::buildConfigMap(exact_nearer, settings, path, request);
   std::size_t above_hull = 0;
   for (std::size_t i = 0; i < auto_map.f.size(); ++i) {
     ASSERT_LE(auto_map.clearance[i], exact_map.clearance[i] + 1e-6) << "cell " << i;
     ASSERT_LE(auto_map.f[i], exact_map.f[i] + 1e-6) << "cell " << i;
-    ASSERT_GE(auto_map.clearance[i], hull_map.clearance[i] - 1e-6) << "cell " << i;
+    ASSERT_GE(auto_map.clearance[i], exact_nearer_map.clearance[i] - 1e-6) << "cell " << i;
     above_hull += auto_map.clearance[i] > hull_map.clearance[i] + 1e-3f ? 1u : 0u;
   }
   EXPECT_GT(above_hull, 0u) << "premise: the pieces are tighter than the hulls somewhere";
+}
+
+// A link round about its own joint's axis (the mesh robot's link 6, its flange cylinder on the
+// J6 axis, tessellated) stands in as a cylinder about that axis within the margin: the maps see
+// it never farther than the mesh and at most its margin nearer, and turning J6 does not move it.
+TEST_F(MapJob, ARoundLinkStandsInAsACylinderThatItsJointDoesNotMove) {
+  const config::JobSpec job = shortDemoJob({"robot=" + writeMeshRobot(dir_).string()});
+  const kinematics::CellModel cell = config::buildCell(job);
+  collision::ClearanceConfig config = config::clearanceConfig(job);
+  // The other links as their meshes, measured alike by both evaluators (and without the minutes
+  // of fitting pieces).
+  config.max_pieces = 1;
+  const collision::Scene scene(cell, config);
+  const int link6 = scene.bodyIndex("link6");
+  const collision::MapHull* round = nullptr;
+  for (const collision::MapHull& h : scene.mapHulls()) round = h.body == link6 ? &h : round;
+  ASSERT_NE(round, nullptr);
+  EXPECT_TRUE(round->cylinder && round->used);
+  EXPECT_LE(round->margin, 0.002);
+  ASSERT_EQ(round->standin.size(), 1u);  // its prism, for the pictures
+  const collision::ChainLevers levers(scene);
+  collision::ClearanceEvaluator map(scene, true, collision::Geometry::kMap);
+  collision::ClearanceEvaluator exact(scene, true, collision::Geometry::kExact);
+  std::mt19937 rng(3);
+  std::size_t pairs = 0, near = 0;
+  for (std::size_t p = 0; p < scene.pairs().size(); ++p) {
+    const collision::PairInfo& pair = scene.pairs()[p];
+    if (pair.a != link6 && pair.b != link6) continue;
+    ++pairs;
+    if (pair.a == scene.bodyIndex("link4") || pair.b == scene.bodyIndex("link4")) {
+      EXPECT_EQ(levers.weights(p)[5], 0.0);  // J6 turns link 6 about itself
+      EXPECT_GT(levers.weights(p)[4], 0.0);
+    }
+  }
+  ASSERT_GT(pairs, 0u);
+  for (int k = 0; k < 150; ++k) {
+    const kinematics::JointVector q = test::randomJoints(cell.robot, rng);
+    // Distances below 5 cm, each to GJK's tolerance (1e-6 m).
+    const collision::ClearanceResult m = map.evaluate(0.2 * k, q, {.bound = 0.05});
+    const collision::ClearanceResult e = exact.evaluate(0.2 * k, q, {.bound = 0.05});
+    for (std::size_t p = 0; p < scene.pairs().size(); ++p) {
+      const collision::PairInfo& pair = scene.pairs()[p];
+      if ((pair.a != link6 && pair.b != link6) || e.pairs[p].beyond_bound) continue;
+      ASSERT_FALSE(m.pairs[p].beyond_bound) << "pair " << p;
+      ASSERT_LE(m.pairs[p].distance, e.pairs[p].distance + 2e-6) << "pair " << p;
+      ASSERT_GE(m.pairs[p].distance, e.pairs[p].distance - round->margin - 2e-6)
+          << scene.bodies()[static_cast<std::size_t>(pair.a)].name << "-"
+          << scene.bodies()[static_cast<std::size_t>(pair.b)].name << " r "
+          << round->cylinder_radius << " L " << round->cylinder_length;
+      ++near;
+    }
+  }
+  EXPECT_GT(near, 10u);  // pairs near enough for the margin to matter
 }
 
 // SelfPairGrid's fine pairs: the arm's own pairs with one or two joints between them measured as

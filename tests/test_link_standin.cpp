@@ -12,9 +12,11 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <numbers>
 #include <random>
 #include <stdexcept>
 #include <vector>
@@ -309,6 +311,41 @@ TEST(LinkStandIn, ConvexMeshIsOnePiece) {
   EXPECT_TRUE(s.fits);
   EXPECT_EQ(s.pieces.size(), 1u);
   EXPECT_EQ(s.vertices, 8u);
+}
+
+// A round mesh (a disk tessellated within 0.1 mm, tilted off the axes) stands in as the
+// cylinder about its own axis: it holds every vertex, and its margin is certified within the
+// 2 mm asked and no less than its prism's corners stand out; about an axis 10 mm off, or for a
+// cube, it stands farther out than that.
+TEST(LinkStandIn, ARoundMeshStandsInAsACylinderAboutItsAxis) {
+  kinematics::Shape disk;
+  disk.geometry = kinematics::Cylinder{0.03, 0.02};
+  disk.X_BG = Isometry3d(Eigen::AngleAxisd(0.7, Vector3d(1, 2, 3).normalized()));
+  disk.X_BG.translation() = Vector3d(0.01, -0.02, 0.05);
+  const TriangleMesh mesh = kinematics::shapeSurface(disk);
+  const Vector3d o = disk.X_BG.translation(), u = disk.X_BG.linear().col(2);
+  const auto c = axisCylinder(mesh, o, u, 2.5e-4, 0.002);
+  ASSERT_TRUE(c);
+  EXPECT_NEAR(c->radius, 0.03, 1e-9);
+  EXPECT_NEAR(c->length, 0.02, 1e-9);
+  for (const Vector3d& v : mesh.vertices) {
+    const Vector3d local = c->X_MC.inverse() * v;
+    EXPECT_LE(local.head<2>().norm(), c->radius + 1e-12);
+    EXPECT_LE(std::abs(local.z()), 0.5 * c->length + 1e-12);
+  }
+  // The prism's corners lie this far outside the circle, so outside the disk's solid.
+  const double corners = 0.03 / std::cos(std::numbers::pi / kCylinderSides) - 0.03;
+  EXPECT_GE(c->margin, corners - 1e-12);
+  EXPECT_LE(c->margin, 0.002);
+  const Vector3d off = u.unitOrthogonal();
+  const auto shifted = axisCylinder(mesh, o + 0.01 * off, u, 2.5e-4, 0.002);
+  ASSERT_TRUE(shifted);
+  EXPECT_GT(shifted->margin, 0.002);
+  const auto cube =
+      axisCylinder(test::centredCube(0.04), Vector3d::Zero(), Vector3d::UnitZ(), 2.5e-4, 0.002);
+  ASSERT_TRUE(cube);
+  EXPECT_NEAR(cube->radius, 0.02 * std::sqrt(2.0), 1e-12);
+  EXPECT_GT(cube->margin, 0.002);  // its rim stands 8.3 mm out beside the faces
 }
 
 TEST(LinkStandIn, TheCacheGivesBackTheSamePiecesAndRefusesOthers) {

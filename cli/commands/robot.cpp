@@ -147,7 +147,10 @@ Json mapLinksJson(const std::vector<std::string>& names,
     link["pieces_fit"] = h.pieces_fit;
     link["pieces_from_cache"] = h.from_cache;
     link["fit_seconds"] = h.fit_seconds;
-    link["maps_measure"] = !h.used ? "mesh" : h.pieces > 0 ? "pieces" : "hull";
+    link["maps_measure"] = !h.used        ? "mesh"
+                           : h.cylinder   ? "cylinder"
+                           : h.pieces > 0 ? "pieces"
+                                          : "hull";
     link["margin_mm"] = toMm(h.margin);
     out.push_back(std::move(link));
   }

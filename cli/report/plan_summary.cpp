@@ -105,6 +105,12 @@ namespace {
 std::string linkMeshLine(const std::string& name, const collision::MapHull& h) {
   std::string text = fmt::format("  {:<8} mesh {} triangles, hull of {} vertices {:.1f} mm out",
                                  name, h.mesh_triangles, h.hull_vertices, toMm(h.hull_margin));
+  if (h.cylinder) {
+    return text + fmt::format(
+                      "; round about its joint's axis: a cylinder of {:.1f} mm radius, {:.1f} mm "
+                      "long, at most {:.1f} mm out: the maps measure the cylinder\n",
+                      toMm(h.cylinder_radius), toMm(h.cylinder_length), toMm(h.margin));
+  }
   if (h.pieces > 0) {
     const std::string margin =
         h.used ? fmt::format(" at most {:.1f} mm out", toMm(h.margin)) : std::string();

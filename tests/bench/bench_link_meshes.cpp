@@ -206,11 +206,17 @@ bool piecesSection(const std::string& robot,
               robot.c_str(), toMm(margin), piece_config.piece_cache.c_str(),
               bench::processCpuSeconds() - start);
   for (const collision::MapHull& h : piece_scene.mapHulls()) {
+    const char* name = piece_scene.bodies()[static_cast<std::size_t>(h.body)].name.c_str();
+    if (h.cylinder) {
+      std::printf(
+          "  %-9s mesh %5zu triangles -> a cylinder about its joint axis, margin %4.2f mm\n", name,
+          h.mesh_triangles, toMm(h.margin));
+      continue;
+    }
     std::printf(
         "  %-9s mesh %5zu triangles -> %3zu pieces, %4zu vertices, margin %4.2f mm%s, %s %.1f s\n",
-        piece_scene.bodies()[static_cast<std::size_t>(h.body)].name.c_str(), h.mesh_triangles,
-        h.pieces, h.piece_vertices, toMm(h.margin), h.pieces_fit ? "" : " (over the limits)",
-        h.from_cache ? "read" : "fitted", h.fit_seconds);
+        name, h.mesh_triangles, h.pieces, h.piece_vertices, toMm(h.margin),
+        h.pieces_fit ? "" : " (over the limits)", h.from_cache ? "read" : "fitted", h.fit_seconds);
   }
   const auto [prim, pieces] = timeMaps(prim_scene, primitive, piece_scene, meshes, runs);
   std::printf("full map, %zu cells x 8 branches, CPU time:\n", prim.map.cellsPerBranch());
