@@ -958,6 +958,38 @@ TEST_F(MapJob, AFinePairsBoundLiesWithinTwiceTheFineErosionOfItsDistance) {
   EXPECT_GT(near, 100u);  // the second check is not vacuous
 }
 
+// A map whose fine pairs read bins (the mesh robot's links as hulls) is the same to the byte on
+// one thread and on two: a bin's bound depends on its joints alone, not on which cells a thread
+// saw before.
+TEST_F(MapJob, AMapWithFinePairsIsByteIdenticalForOneAndTwoThreads) {
+  const config::JobSpec job = shortDemoJob({"robot=" + writeMeshRobot(dir_).string()});
+  const kinematics::CellModel cell = config::buildCell(job);
+  collision::ClearanceConfig config = config::clearanceConfig(job);
+  config.link_meshes = collision::LinkMeshes::kHull;
+  const collision::Scene scene(cell, config);
+  const planner::ConstraintSettings settings = config::constraintSettings(job);
+  const kinematics::ScanPath path = jobPath(job, cell);
+  planner::MapRequest request;
+  request.angle_step = deg(10.0);
+  request.branches = allBranches();
+  ConfigMap one, two;
+  {
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    one = planner::buildConfigMap(scene, settings, path, request);
+  }
+  {
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
+    two = planner::buildConfigMap(scene, settings, path, request);
+  }
+  EXPECT_TRUE(sameMap(one, two));
+  request.motion_bounds = false;
+  std::size_t binned = 0;  // premise: the fine pairs' bins decide some cells
+  const ConfigMap plain = planner::buildConfigMap(scene, settings, path, request);
+  for (std::size_t i = 0; i < one.f.size(); ++i)
+    binned += one.clearance[i] < plain.clearance[i] - 1e-6f ? 1u : 0u;
+  EXPECT_GT(binned, 0u);
+}
+
 TEST(ConfigMap, LayersAreByteIdenticalForOneAndTwoThreads) {
   const DemoMap& demo = demoMap();
   ConfigMap one, two;
