@@ -69,7 +69,7 @@ RgbImage cellPicture(const pipeline::ReplayScene& scene,
     RenderRequest s = cellScene(scene, f, true);
     s.scale_bar = r.scale_bar;
     ViewRow& second = grid.rows.emplace_back();
-    second.title = "what the maps measure: each link mesh's hull or convex pieces (a colour each)";
+    second.title = "what the maps measure: each link mesh's hull, convex pieces or cylinder (a colour each)";
     second.views = renderScenes(s, partViewRotations());
   }
   grid.legend = {{Rgb{243, 156, 52}, "robot"},
