@@ -135,15 +135,22 @@ double lever(const kinematics::RobotModel& robot, const Side& side, int k) {
   if (j < k) return reachFromOrigin(side) + chainLength(robot, j, k - 1);
   const kinematics::DhJoint& dh = robot.joint(k - 1);
   if (j == k) {  // z_{k−1} seen from frame k
-    const Eigen::Isometry3d M = Eigen::Translation3d(dh.a, 0.0, dh.d) *
-                                Eigen::AngleAxisd(dh.alpha, Eigen::Vector3d::UnitX());
-    const Eigen::Isometry3d M_inv = M.inverse();
-    return reachFromLine(side, Line{M_inv.translation(), M_inv.linear().col(2)});
+    const auto [o, u] = detail::ownJointAxis(robot, k);
+    return reachFromLine(side, Line{o, u});
   }
   return std::abs(dh.a) + chainLength(robot, k, j) + reachFromOrigin(side);
 }
 
 }  // namespace
+
+std::pair<Eigen::Vector3d, Eigen::Vector3d> detail::ownJointAxis(
+    const kinematics::RobotModel& robot, int k) {
+  const kinematics::DhJoint& dh = robot.joint(k - 1);
+  const Eigen::Isometry3d M =
+      Eigen::Translation3d(dh.a, 0.0, dh.d) * Eigen::AngleAxisd(dh.alpha, Eigen::Vector3d::UnitX());
+  const Eigen::Isometry3d M_inv = M.inverse();
+  return {M_inv.translation(), M_inv.linear().col(2)};
+}
 
 // A body's bounding sphere in its frame: the shapes' spheres' mean centre, and the radius
 // reaching around them all.

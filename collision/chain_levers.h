@@ -24,6 +24,10 @@ inline double turn(double a, double b) {
 /// A body's bounding sphere in its frame: the mean of its shapes' sphere centres, and the radius
 /// reaching around them all.
 std::pair<Eigen::Vector3d, double> boundingSphere(const BodyGeometry& body);
+/// The axis link k (1–6) turns about, joint k's (z_{k−1}), in the link's own DH frame: a point
+/// on it and its unit direction.
+std::pair<Eigen::Vector3d, Eigen::Vector3d> ownJointAxis(const kinematics::RobotModel& robot,
+                                                         int k);
 }  // namespace detail
 
 /// Joint-difference motion bounds for the pairs with a robot link: how much

@@ -12,6 +12,7 @@
 
 #include <fmt/format.h>
 
+#include <scanplan/collision/chain_levers.h>
 #include <scanplan/collision/convex_hull.h>
 #include <scanplan/collision/fcl_geometry.h>
 #include <scanplan/collision/link_standin.h>
@@ -260,15 +261,11 @@ struct Axis {
   Eigen::Vector3d o, u;
 };
 
-// The axis link k (1–6) turns about, joint k's (z_{k−1}), in the link's DH frame, as ChainLevers
-// sees it; none for the base.
+// The axis link k turns about (detail::ownJointAxis, as ChainLevers sees it); none for the base.
 std::optional<Axis> ownAxis(const kinematics::RobotModel& robot, int k) {
   if (k < 1 || k > kinematics::kNumJoints) return std::nullopt;
-  const kinematics::DhJoint& dh = robot.joint(k - 1);
-  const Eigen::Isometry3d M =
-      Eigen::Translation3d(dh.a, 0.0, dh.d) * Eigen::AngleAxisd(dh.alpha, Eigen::Vector3d::UnitX());
-  const Eigen::Isometry3d M_inv = M.inverse();
-  return Axis{M_inv.translation(), M_inv.linear().col(2)};
+  const auto [o, u] = detail::ownJointAxis(robot, k);
+  return Axis{o, u};
 }
 
 // A link of one mesh that is round about its own joint's axis within piece_margin (a flange),
